@@ -1,0 +1,8 @@
+"""gonio: a virtual gonioreflectometer with a hardware driver layer.
+
+Subpackages: :mod:`gonio.params` (BRDF parametrizations), :mod:`gonio.brdf`
+(analytic BRDF models). Conventions (frames, units, angles) are in
+``docs/conventions.md``.
+"""
+
+__version__ = "0.1.0"
