@@ -15,9 +15,9 @@ from gonio.errors import GonioError
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from gonio import demo
+    from gonio.demo import render
 
-    print(demo.render())
+    print(render())
     return 0
 
 

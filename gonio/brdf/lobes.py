@@ -31,9 +31,13 @@ def xi_equation_12() -> float:
 
 
 def power_cosine(cos_psi: ArrayLike, n: ArrayLike) -> FloatArray:
-    """F_B = cos^n ψ, the Phong / Blinn lobe (0 where cos ψ < 0)."""
-    c = np.maximum(np.asarray(cos_psi, dtype=np.float64), 0.0)
-    return np.asarray(np.power(c, np.asarray(n, dtype=np.float64)), dtype=np.float64)
+    """F_B = cos^n ψ, the Phong / Blinn lobe (0 where cos ψ < 0, even for n = 0)."""
+    raw = np.asarray(cos_psi, dtype=np.float64)
+    nn = np.asarray(n, dtype=np.float64)
+    value = np.power(np.maximum(raw, 0.0), nn)
+    if np.any(nn == 0.0):  # 0⁰ = 1 would leave the lobe at 1 behind the horizon of ψ
+        value = np.where(raw < 0.0, 0.0, value)
+    return np.asarray(value, dtype=np.float64)
 
 
 def cosine_quadratic(
@@ -50,8 +54,9 @@ def cosine_quadratic(
     t = xn * (c - 1.0) + 1.0
     if cut:
         t = np.maximum(t, 0.0)
-    value = t * t
-    return np.asarray(np.where(c < 0.0, 0.0, value), dtype=np.float64)
+        if np.all(xn >= 1.0):  # then t < 0, cut to 0, wherever cos ψ < 0
+            return np.asarray(t * t, dtype=np.float64)
+    return np.asarray(np.where(c < 0.0, 0.0, t * t), dtype=np.float64)
 
 
 def zero_crossing_cos(n: ArrayLike, xi: ArrayLike = XI_29_64) -> FloatArray:
@@ -64,10 +69,18 @@ def zero_crossing_cos(n: ArrayLike, xi: ArrayLike = XI_29_64) -> FloatArray:
 
 
 def schlick(cos_psi: ArrayLike, n: ArrayLike) -> FloatArray:
-    """F_S = cos ψ / (n − n cos ψ + cos ψ), Schlick's approximation (seed 003 eq. 4)."""
-    c = np.maximum(np.asarray(cos_psi, dtype=np.float64), 0.0)
+    """F_S = cos ψ / (n − n cos ψ + cos ψ), Schlick's approximation (seed 003 eq. 4).
+
+    0 where cos ψ < 0; the 0/0 at cos ψ = 0 with n = 0 is taken as its limit 1 = cos⁰ψ.
+    """
+    raw = np.asarray(cos_psi, dtype=np.float64)
+    c = np.maximum(raw, 0.0)
     nn = np.asarray(n, dtype=np.float64)
-    return np.asarray(c / (nn - nn * c + c), dtype=np.float64)
+    if not np.any(nn == 0.0):  # n > 0: the denominator is ≥ min(n, 1) > 0
+        return np.asarray(c / (nn - nn * c + c), dtype=np.float64)
+    den = nn - nn * c + c
+    value = np.where(den > 0.0, c / np.where(den > 0.0, den, 1.0), 1.0)
+    return np.asarray(np.where(raw < 0.0, 0.0, value), dtype=np.float64)
 
 
 def epicentre_limit_cos(n: ArrayLike) -> FloatArray:

@@ -1,0 +1,40 @@
+"""`gonio demo`: the most complete end-to-end path that exists so far.
+
+The four parametrizations on named direction pairs (coordinates and round-trip
+error), then seed 003's lobe comparison.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gonio import params
+from gonio.params.cases import NAMED_PAIRS, roundtrip_error
+
+#: Coordinates printed in degrees (the rest are unitless norms).
+_ANGLE = {"theta_i", "phi_i", "theta_o", "phi_o", "theta_h", "phi_h", "theta_d", "phi_d", "phi_k"}
+
+
+def parametrization_table() -> str:
+    lines = [
+        "Parametrizations on named direction pairs "
+        "(angles in degrees, norms unitless; err = ‖ω' − ω‖ after forward and inverse)"
+    ]
+    for name in params.names():
+        p = params.get(name)
+        header = "".join(f"{c + ('°' if c in _ANGLE else ''):>12}" for c in p.names)
+        lines += ["", f"{name:<20}{header}{'err':>10}"]
+        for label, (wi, wo) in NAMED_PAIRS.items():
+            c = p.forward(wi, wo)
+            a, b = p.inverse(c)
+            err = float(roundtrip_error(wi, wo, a, b))
+            shown = [np.degrees(v) if n in _ANGLE else v for n, v in zip(p.names, c, strict=True)]
+            cells = "".join(f"{v:12.6f}" for v in shown)
+            lines.append(f"  {label:<18}{cells}{err:10.1e}")
+    return "\n".join(lines)
+
+
+def render() -> str:
+    from gonio.brdf import lobe_study
+
+    return "\n\n".join([parametrization_table(), lobe_study.render_summary()])

@@ -1,0 +1,84 @@
+"""How precisely each parametrization can carry a direction pair, and how precisely it does.
+
+`error_envelope` is the closed-form estimate derived in docs/parametrizations.md: a
+component recovered as sqrt(t²) from a difference of O(1) float64 quantities is known
+to about c·ε/(t + sqrt(c·ε)) (c·ε/t when t ≫ √(c·ε), √(c·ε) at t = 0), where t is
+the smallest direction z (orthographic) or hz = (ωi·n + ωo·n)/2 (hybrid); spherical
+and Rusinkiewicz keep a few ε everywhere.
+
+`extreme_study` measures the float64 round trip near each named extreme and, with
+the mpmath reference (`gonio.params.exact`, test extra), the bound float64
+coordinates impose there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.params import cases, get
+from gonio.types import FloatArray
+
+EPS = float(np.finfo(np.float64).eps)  # 2⁻⁵², one ulp of 1
+#: Multiples of ε in the envelope: a few roundings in the O(1) terms (see the docs).
+FLOOR_ULPS = 8.0
+SQRT_ULPS = 8.0
+
+
+def error_envelope(name: str, wi: FloatArray, wo: FloatArray) -> FloatArray:
+    """Estimated round-trip error of ``name`` at each pair (radians, ≈ Euclidean)."""
+    wi, wo = np.asarray(wi, np.float64), np.asarray(wo, np.float64)
+    floor = FLOOR_ULPS * EPS * np.ones(np.broadcast_shapes(wi.shape[:-1], wo.shape[:-1]))
+    if name in ("spherical", "rusinkiewicz"):
+        return floor
+    if name == "orthographic":
+        t = np.minimum(wi[..., 2], wo[..., 2])
+    elif name == "hybrid":
+        t = 0.5 * (wi[..., 2] + wo[..., 2])
+    else:
+        raise KeyError(name)
+    ce = SQRT_ULPS * EPS
+    return np.asarray(floor + ce / (np.maximum(t, 0.0) + np.sqrt(ce)), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class ExtremeRow:
+    """One cell of the accuracy study: worst cases over ``samples`` pairs."""
+
+    parametrization: str
+    extreme: str
+    distance: float
+    samples: int
+    measured: float  # worst float64 round-trip error
+    bound: float  # worst error float64 coordinates impose (mpmath), NaN if not computed
+
+    @property
+    def ratio(self) -> float:
+        return self.measured / self.bound if self.bound > 0 else float("nan")
+
+
+def measured_errors(name: str, wi: FloatArray, wo: FloatArray) -> FloatArray:
+    """The float64 round-trip error of ``name`` at each pair."""
+    p = get(name)
+    a, b = p.inverse(p.forward(wi, wo))
+    return cases.roundtrip_error(wi, wo, a, b)
+
+
+def extreme_study(
+    names: list[str], samples: int = 32, seed: int = 0, with_bound: bool = True
+) -> list[ExtremeRow]:
+    """Worst measured error (and bound) per parametrization, extreme and distance."""
+    rows = []
+    for extreme in cases.EXTREMES:
+        for distance in cases.DISTANCES:
+            wi, wo = cases.near(extreme, distance, samples, seed)
+            for name in names:
+                measured = float(measured_errors(name, wi, wo).max())
+                bound = float("nan")
+                if with_bound:
+                    from gonio.params import exact
+
+                    bound = float(exact.roundtrip_bounds(name, wi, wo).max())
+                rows.append(ExtremeRow(name, extreme, distance, samples, measured, bound))
+    return rows

@@ -1,0 +1,47 @@
+"""Hypothesis strategies for direction pairs over the whole closed hemisphere.
+
+Angles are drawn with extra weight on the extremes: exactly 0 and π/2, and values
+1e-12, 1e-9, 1e-6 away from them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import strategies as st
+
+from gonio.params.cases import direction
+
+HALF_PI = float(np.pi / 2)
+OFFSETS = (0.0, 1e-12, 1e-9, 1e-6)
+
+polar_angle = st.one_of(
+    st.floats(0.0, HALF_PI),
+    st.sampled_from([*OFFSETS, *(HALF_PI - o for o in OFFSETS)]),
+)
+azimuth = st.one_of(st.floats(0.0, 2 * np.pi, exclude_max=True), st.sampled_from([0.0, np.pi]))
+
+
+@st.composite
+def unit_direction(draw: st.DrawFn) -> np.ndarray:
+    return direction(draw(polar_angle), draw(azimuth))
+
+
+@st.composite
+def pair(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray]:
+    """A pair anywhere in the closed domain, often at or near an extreme."""
+    wi = draw(unit_direction())
+    kind = draw(st.sampled_from(["free", "retro", "mirror", "opposite"]))
+    if kind == "free":
+        return wi, draw(unit_direction())
+    offset = draw(st.sampled_from(OFFSETS))
+    target = {"retro": wi, "mirror": wi * [-1, -1, 1], "opposite": wi * [-1, -1, 1]}[kind]
+    if kind == "opposite":  # the opposite direction exists in the hemisphere only on the horizon
+        wi = direction(HALF_PI - offset, draw(azimuth))
+        target = direction(HALF_PI, np.arctan2(-wi[1], -wi[0]))
+    theta = np.arccos(np.clip(target[2], -1, 1)) + draw(st.sampled_from([-1, 1])) * offset
+    phi = np.arctan2(target[1], target[0]) + draw(st.floats(-1e-6, 1e-6))
+    return wi, direction(np.clip(theta, 0.0, HALF_PI), phi)
+
+
+def batch(pairs: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
