@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from gonio.errors import DomainError
-from gonio.types import ArrayLike, FloatArray
+from gonio.types import ArrayLike, BoolArray, FloatArray
 
 TWO_PI = 2.0 * np.pi
 
@@ -26,8 +26,7 @@ def as_coordinates(coords: ArrayLike, size: int) -> FloatArray:
 def components(a: FloatArray) -> tuple[FloatArray, ...]:
     """The last axis split into contiguous 1-d component arrays (leading axes flattened,
     so that the math never meets numpy scalars)."""
-    flat = a.reshape(-1, a.shape[-1])
-    return tuple(np.ascontiguousarray(flat[:, j]) for j in range(a.shape[-1]))
+    return tuple(np.ascontiguousarray(a.reshape(-1, a.shape[-1]).T))
 
 
 def stack(lead: tuple[int, ...], *parts: FloatArray) -> FloatArray:
@@ -38,14 +37,34 @@ def stack(lead: tuple[int, ...], *parts: FloatArray) -> FloatArray:
 def azimuth(y: FloatArray, x: FloatArray) -> FloatArray:
     """atan2(y, x) wrapped to [0, 2π); 0 where x = y = 0 (signed zeros included)."""
     # Adding +0.0 turns -0.0 into +0.0, so atan2(-0.0, -0.0) cannot give -π.
-    phi = np.arctan2(y + 0.0, x + 0.0)
-    return wrap_two_pi(phi)
+    return wrap_two_pi_in_place(np.arctan2(y + 0.0, x + 0.0))
 
 
-def wrap_two_pi(phi: FloatArray) -> FloatArray:
-    """Angles in [-2π, 4π) wrapped to [0, 2π) (values that round to 2π become 0)."""
-    phi = np.where(phi < 0.0, phi + TWO_PI, phi)
-    return np.where(phi >= TWO_PI, phi - TWO_PI, phi)
+def plane_polar(x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(‖(x, y)‖, azimuth) of tangent vectors; the azimuth is 0 where the norm is 0,
+    also when x² + y² underflows for a nonzero vector (|x|, |y| below ~1e-154)."""
+    r = x * x
+    r += y * y
+    np.sqrt(r, out=r)
+    phi = wrap_two_pi_in_place(np.arctan2(y, x))  # signed zeros are settled below
+    zero = r == 0.0
+    if np.any(zero):
+        phi[zero] = 0.0
+    return r, phi
+
+
+def subset(parts: tuple[FloatArray, ...], mask: BoolArray) -> tuple[FloatArray, ...]:
+    """The rows of each component array where ``mask``."""
+    return tuple(p[mask] for p in parts)
+
+
+def wrap_two_pi_in_place(phi: FloatArray) -> FloatArray:
+    """Angles in [-2π, 4π) wrapped to [0, 2π), in place (pass a temporary): values that
+    round to 2π become 0, and -0.0 becomes 0.0."""
+    np.add(phi, TWO_PI, out=phi, where=phi < 0.0)
+    np.subtract(phi, TWO_PI, out=phi, where=phi >= TWO_PI)
+    phi += 0.0
+    return phi
 
 
 def wrap_pi(phi: FloatArray) -> FloatArray:

@@ -21,9 +21,11 @@ from gonio.params import cases, get
 from gonio.types import FloatArray
 
 EPS = float(np.finfo(np.float64).eps)  # 2⁻⁵², one ulp of 1
-#: Multiples of ε in the envelope: a few roundings in the O(1) terms (see the docs).
-FLOOR_ULPS = 8.0
-SQRT_ULPS = 8.0
+#: Multiples of ε in the envelope: a few roundings in the O(1) terms (see the docs);
+#: calibrated on 4.8 million pairs near the horizon (elevations 0 and 1e-17 … 1e-2),
+#: where the worst measured errors reach 0.77 of it.
+FLOOR_ULPS = 16.0
+SQRT_ULPS = 16.0
 
 
 def error_envelope(name: str, wi: FloatArray, wo: FloatArray) -> FloatArray:
@@ -52,9 +54,11 @@ class ExtremeRow:
     samples: int
     measured: float  # worst float64 round-trip error
     bound: float  # worst error float64 coordinates impose (mpmath), NaN if not computed
+    pair_ratio: float  # worst measured / bound taken pair by pair, NaN if not computed
 
     @property
     def ratio(self) -> float:
+        """Worst measured over worst bound in the cell."""
         return self.measured / self.bound if self.bound > 0 else float("nan")
 
 
@@ -74,11 +78,17 @@ def extreme_study(
         for distance in cases.DISTANCES:
             wi, wo = cases.near(extreme, distance, samples, seed)
             for name in names:
-                measured = float(measured_errors(name, wi, wo).max())
-                bound = float("nan")
+                errors = measured_errors(name, wi, wo)
+                bound = pair_ratio = float("nan")
                 if with_bound:
                     from gonio.params import exact
 
-                    bound = float(exact.roundtrip_bounds(name, wi, wo).max())
-                rows.append(ExtremeRow(name, extreme, distance, samples, measured, bound))
+                    bounds = exact.roundtrip_bounds(name, wi, wo)
+                    bound = float(bounds.max())
+                    pair_ratio = float(np.max(errors / bounds))
+                rows.append(
+                    ExtremeRow(
+                        name, extreme, distance, samples, float(errors.max()), bound, pair_ratio
+                    )
+                )
     return rows

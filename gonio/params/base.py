@@ -13,7 +13,7 @@ from typing import ClassVar, NoReturn
 
 import numpy as np
 
-from gonio.directions import as_direction_pair
+from gonio.directions import pair_components
 from gonio.errors import DomainError
 from gonio.params._arrays import as_coordinates, components, stack
 from gonio.types import ArrayLike, BoolArray, FloatArray
@@ -22,6 +22,10 @@ from gonio.types import ArrayLike, BoolArray, FloatArray
 #: pair can lie outside the exact domain by a few ulps; `valid` accepts them and
 #: `inverse` projects them onto the domain (directions with z ≥ 0, exactly).
 DOMAIN_TOLERANCE = 64.0 * np.finfo(np.float64).eps
+
+#: Coordinates larger than this in magnitude are never valid (radii are ≤ 1, and an
+#: azimuth of 1e100 rad has no digits left modulo 2π); it keeps squares from overflowing.
+COORDINATE_LIMIT = 1e100
 
 Parts = tuple[FloatArray, ...]
 
@@ -46,9 +50,13 @@ class Parametrization(ABC):
 
     # -- public API -------------------------------------------------------------------
     def forward(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
-        """Coordinates (..., 4) of unit directions ``wi``, ``wo`` (..., 3), z ≥ 0."""
-        a, b = as_direction_pair(wi, wo)
-        return stack(a.shape[:-1], *self._forward(components(a), components(b)))
+        """Coordinates (..., 4) of unit directions ``wi``, ``wo`` (..., 3), z ≥ 0.
+
+        Raises ``DomainError`` for directions that are not finite unit vectors in the
+        closed upper hemisphere (`gonio.directions.pair_components`).
+        """
+        lead, a, b = pair_components(wi, wo)
+        return stack(lead, *self._forward(a, b))
 
     def inverse(self, coords: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Directions (wi, wo), each (..., 3), of coordinates (..., 4).
@@ -61,16 +69,17 @@ class Parametrization(ABC):
     def valid(self, coords: ArrayLike) -> BoolArray:
         """True where the coordinates map to two directions in the closed upper hemisphere.
 
-        Azimuths are periodic: any finite value is accepted. The domain is closed up to
-        `DOMAIN_TOLERANCE` (see there); non-finite coordinates are never valid.
+        Azimuths are periodic: any value up to `COORDINATE_LIMIT` in magnitude is
+        accepted. The domain is closed up to `DOMAIN_TOLERANCE` (see there); non-finite
+        coordinates are never valid.
         """
         c = as_coordinates(coords, 4)
         return self._valid_parts(components(c)).reshape(c.shape[:-1])
 
     def forward_iso(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
         """Isotropic coordinates (..., 3): the pair's azimuth rotated out (see `iso_symmetry`)."""
-        a, b = as_direction_pair(wi, wo)
-        return stack(a.shape[:-1], *self._reduce(self._forward(components(a), components(b))))
+        lead, a, b = pair_components(wi, wo)
+        return stack(lead, *self._reduce(self._forward(a, b)))
 
     def inverse_iso(self, coords3: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """A direction pair with the given isotropic coordinates (..., 3).
@@ -89,22 +98,26 @@ class Parametrization(ABC):
         return f"<parametrization {self.name!r}: {', '.join(self.names)}>"
 
     # -- shared machinery -------------------------------------------------------------
+    @staticmethod
+    def _usable(parts: Parts) -> BoolArray:
+        """Finite and below `COORDINATE_LIMIT` in magnitude (NaN compares False)."""
+        ok = np.abs(parts[0]) <= COORDINATE_LIMIT
+        for p in parts[1:]:
+            ok &= np.abs(p) <= COORDINATE_LIMIT
+        return ok
+
     def _valid_parts(self, parts: Parts) -> BoolArray:
         # The mask comes from the inverse itself, so `valid` and `inverse` never disagree.
-        finite = np.isfinite(parts[0])
-        for p in parts[1:]:
-            finite &= np.isfinite(p)
-        _, ok = self._inverse(tuple(np.where(finite, p, 0.0) for p in parts))
-        return np.asarray(ok & finite, dtype=np.bool_)
+        usable = self._usable(parts)
+        _, ok = self._inverse(tuple(np.where(usable, p, 0.0) for p in parts))
+        return np.asarray(ok & usable, dtype=np.bool_)
 
     def _checked_inverse(
         self, parts: Parts, lead: tuple[int, ...]
     ) -> tuple[FloatArray, FloatArray]:
-        finite = np.isfinite(parts[0])
-        for p in parts[1:]:
-            finite &= np.isfinite(p)
-        if not finite.all():  # checked first, so that the math below never meets inf/NaN
-            self._raise_invalid(parts, lead, finite)
+        usable = self._usable(parts)
+        if not usable.all():  # checked first: the math below never meets inf, NaN, overflow
+            self._raise_invalid(parts, lead, usable)
         out, ok = self._inverse(parts)
         if not ok.all():
             self._raise_invalid(parts, lead, ok)

@@ -145,6 +145,26 @@ def away(n: int, seed: int = 0) -> Pair:
     return generic(rng, n), generic(rng, n)
 
 
+def near_horizon(n: int, seed: int = 0) -> Pair:
+    """``n`` pairs crossing the √ε regime: ωi at an elevation log-uniform in 1e-10 … 1e-5;
+    ωo (by quarters, at random) also near the horizon at any azimuth, near
+    retro-reflection, near the opposite direction, or generic."""
+    rng = np.random.default_rng(seed)
+    e1, e2 = 10 ** rng.uniform(-10, -5, n), 10 ** rng.uniform(-10, -5, n)
+    phi = _phi(rng, n)
+    twist = 10 ** rng.uniform(-8, -2, n) * rng.choice([-1.0, 1.0], n)
+    partners = np.stack(
+        [
+            elevated(e2, _phi(rng, n)),
+            elevated(e2, phi + twist),
+            elevated(e2, phi + np.pi + twist),
+            generic(rng, n),
+        ]
+    )
+    wo = partners[rng.integers(0, 4, n), np.arange(n)]
+    return elevated(e1, phi), np.asarray(wo, dtype=np.float64)
+
+
 #: Named single pairs for the demo table: (ωi, ωo).
 NAMED_PAIRS: dict[str, Pair] = {
     "generic": (direction(np.radians(30), 0.3), direction(np.radians(50), 2.5)),

@@ -39,9 +39,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from gonio.params._arrays import TWO_PI, azimuth
+from gonio.params._arrays import TWO_PI, plane_polar, subset
+from gonio.params._compensated import exact_halfway_and_back, norm
 from gonio.params.base import DOMAIN_TOLERANCE, Parametrization, Parts
-from gonio.params.orthographic import halfway_and_back, plane_polar, relative_azimuth_iso
+from gonio.params.orthographic import (
+    dd_azimuth,
+    near_horizon,
+    relative_azimuth_iso,
+)
 from gonio.types import BoolArray, FloatArray
 
 
@@ -70,8 +75,23 @@ class Hybrid(Parametrization):
     iso_symmetry = "rotation about n (φh rotated out) and reciprocity (φk − φh folded to [0, π))"
 
     def _forward(self, wi: Parts, wo: Parts) -> Parts:
-        hx, hy, _, kx, ky, kz = halfway_and_back(wi, wo)
-        return (*plane_polar(hx, hy), np.sqrt(kx * kx + ky * ky + kz * kz), azimuth(ky, kx))
+        (xi, yi, zi), (xo, yo, zo) = wi, wo
+        # 2h̄ and 2k: the azimuths do not see the factor, the norms are halved (exactly).
+        hbar, phi_h = plane_polar(xi + xo, yi + yo)
+        kbar, phi_k = plane_polar(xi - xo, yi - yo)
+        kz = zi - zo
+        kbar *= kbar
+        kz *= kz
+        kbar += kz
+        knorm = np.sqrt(kbar, out=kbar)
+        hbar *= 0.5
+        knorm *= 0.5
+        sel = near_horizon(wi, wo)
+        if np.any(sel):
+            h = exact_halfway_and_back(subset(wi, sel), subset(wo, sel))
+            hbar[sel], knorm[sel] = norm(h[0], h[1]), norm(h[3], h[4], h[5])
+            phi_h[sel], phi_k[sel] = dd_azimuth(h[0], h[1]), dd_azimuth(h[3], h[4])
+        return hbar, phi_h, knorm, phi_k
 
     def _inverse(self, c: Parts) -> tuple[Parts, BoolArray]:
         c0, c1, c2, c3 = c
@@ -96,14 +116,23 @@ class Hybrid(Parametrization):
         # put kz on the domain's edge and keep ‖k‖ through ‖k̄‖. Within it, keep θk
         # (there ‖k̄‖ = ‖k‖ hz/N is the accurate one) and only clip the z components.
         far = np.abs(kz) - hz > CLAMP_THRESHOLD
-        if np.any(far):
+        any_far = bool(np.any(far))
+        if any_far:
             e = hz[far]
             kz[far] = np.copysign(e, kz[far])
             kbar[far] = np.sqrt(np.maximum((c2[far] - e) * (c2[far] + e), 0.0))
         hx, hy = c0 * ch, c0 * sh
         kx, ky = kbar * ck, kbar * sk
         zi, zo = np.maximum(hz + kz, 0.0), np.maximum(hz - kz, 0.0)
-        return (hx + kx, hy + ky, zi, hx - kx, hy - ky, zo), ok
+        out = (hx + kx, hy + ky, zi, hx - kx, hy - ky, zo)
+        if any_far:
+            # h·k = 0 no longer holds exactly there (z may also have been negative within
+            # the domain tolerance): put each direction back on the unit sphere.
+            for x, y, z in (out[:3], out[3:]):
+                length = np.sqrt(x[far] ** 2 + y[far] ** 2 + z[far] ** 2)
+                length[length == 0.0] = 1.0  # only for rows `ok` rejects (e.g. ‖k‖ < 0)
+                x[far], y[far], z[far] = x[far] / length, y[far] / length, z[far] / length
+        return out, ok
 
     def _reduce(self, c: Parts) -> Parts:
         return c[0], c[2], relative_azimuth_iso(c[1], c[3])

@@ -28,33 +28,39 @@ from typing import ClassVar
 
 import numpy as np
 
-from gonio.params._arrays import TWO_PI, azimuth, wrap_pi
-from gonio.params._compensated import norm_defect
+from gonio.params._arrays import TWO_PI, azimuth, plane_polar, subset, wrap_pi
+from gonio.params._compensated import exact_halfway_and_back
 from gonio.params.base import DOMAIN_TOLERANCE, Parametrization, Parts
 from gonio.params.spherical import HALF_PI, clamp_theta, theta_in_range
 from gonio.types import BoolArray, FloatArray
 
 #: ‖ωi + ωo‖² below which h and k are recomputed from the exactly normalized directions.
 NEAR_OPPOSITE = 0.25
+#: ‖ωi + ωo‖ below the noise of that recomputation (a few ε²): the directions are
+#: opposite, h = 0.
+OPPOSITE = 16.0 * np.finfo(np.float64).eps ** 2
 
 
-def _normalize_exactly(
-    mask: BoolArray, directions: tuple[FloatArray, ...], sums: tuple[FloatArray, ...]
-) -> None:
-    """Replace, where ``mask``, h = ωi + ωo and k = ωi − ωo by those of ω/‖ω‖.
+def _normalize_exactly(mask: BoolArray, wi: Parts, wo: Parts, sums: Parts) -> None:
+    """Replace, where ``mask``, h = ωi + ωo and k = ωi − ωo by those of ω/‖ω‖, in place.
 
     A float64 direction is unit only to about ε, and near opposite directions the
     bisector ĥ of the pair moves by that defect divided by ‖h‖; the mirror of ωi about
-    a bisector off by ε/‖h‖ misses ωo by as much. With d = ‖ω‖² − 1 known to ε²,
-    ω/‖ω‖ = ω (1 − d/2) to O(ε²), and the correction is added to the exact sum.
+    a bisector off by ε/‖h‖ misses ωo by as much. From the exactly normalized pair h is
+    known to a few ε² (`exact_halfway_and_back`); its part along k, which is 0 for unit
+    vectors, is then removed, so that ĥ ⊥ ωi holds however small ‖h‖ is and the mirror
+    of ωi about ĥ is ωo to a few ε². Below that noise, h = 0.
     """
-    xi, yi, zi, xo, yo, zo = (c[mask] for c in directions)
-    hx, hy, hz, kx, ky, kz = sums
-    di = 0.5 * norm_defect(xi, yi, zi)
-    do = 0.5 * norm_defect(xo, yo, zo)
-    for h, k, a, b in ((hx, kx, xi, xo), (hy, ky, yi, yo), (hz, kz, zi, zo)):
-        h[mask] = h[mask] - (di * a + do * b)
-        k[mask] = k[mask] - (di * a - do * b)
+    parts = exact_halfway_and_back(subset(wi, mask), subset(wo, mask))
+    h = [2.0 * (hi + lo) for hi, lo in parts[:3]]
+    k = [2.0 * (hi + lo) for hi, lo in parts[3:]]
+    along = (h[0] * k[0] + h[1] * k[1] + h[2] * k[2]) / (k[0] * k[0] + k[1] * k[1] + k[2] * k[2])
+    h = [a - along * b for a, b in zip(h, k, strict=True)]
+    opposite = h[0] * h[0] + h[1] * h[1] + h[2] * h[2] < OPPOSITE * OPPOSITE
+    for target, value in zip(sums[:3], h, strict=True):
+        target[mask] = np.where(opposite, 0.0, value)
+    for target, value in zip(sums[3:], k, strict=True):
+        target[mask] = value
 
 
 class Rusinkiewicz(Parametrization):
@@ -73,20 +79,19 @@ class Rusinkiewicz(Parametrization):
         kx, ky, kz = xi - xo, yi - yo, zi - zo
         near_opposite = hx * hx + hy * hy + hz * hz < NEAR_OPPOSITE
         if np.any(near_opposite):
-            _normalize_exactly(near_opposite, (xi, yi, zi, xo, yo, zo), (hx, hy, hz, kx, ky, kz))
-        hbar2 = hx * hx + hy * hy
-        hbar = np.sqrt(hbar2)
+            _normalize_exactly(near_opposite, wi, wo, (hx, hy, hz, kx, ky, kz))
+        hbar, phi_h = plane_polar(hx, hy)  # φh = 0 where h̄ = 0, underflow included
+        hbar2 = hbar * hbar
         hnorm = np.sqrt(hbar2 + hz * hz)
         knorm = np.sqrt(kx * kx + ky * ky + kz * kz)
         theta_h = np.arctan2(hbar, hz)
-        phi_h = azimuth(hy, hx)
         theta_d = np.arctan2(knorm, hnorm)
         # d̂'s tangent part is k in the h-frame: (k·e1, k·e2) with e1 = rot_z(φh) rot_y(θh) x,
         # e2 = rot_z(φh) y, both scaled here by ‖h̄‖‖h‖ > 0. With h̄ = 0 the frame is the
         # sample frame (φh = 0, θh = 0) and φd is k's azimuth.
         d_x = hz * (kx * hx + ky * hy) - hbar2 * kz
         d_y = (ky * hx - kx * hy) * hnorm
-        pole = hbar2 == 0.0
+        pole = hbar == 0.0
         if np.any(pole):
             d_x[pole], d_y[pole] = kx[pole], ky[pole]
         phi_d = azimuth(d_y, d_x)

@@ -17,7 +17,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from gonio.params._arrays import TWO_PI, azimuth, wrap_two_pi
+from gonio.params._arrays import TWO_PI, plane_polar, wrap_two_pi_in_place
 from gonio.params.base import DOMAIN_TOLERANCE, Parametrization, Parts
 from gonio.types import BoolArray, FloatArray
 
@@ -26,7 +26,8 @@ HALF_PI = 0.5 * np.pi
 
 def polar(x: FloatArray, y: FloatArray, z: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(θ, φ) of unit vectors: θ = atan2(‖(x, y)‖, z), φ = azimuth (0 where θ = 0)."""
-    return np.arctan2(np.sqrt(x * x + y * y), z), azimuth(y, x)
+    r, phi = plane_polar(x, y)
+    return np.arctan2(r, z), phi
 
 
 def theta_in_range(theta: FloatArray) -> BoolArray:
@@ -64,4 +65,4 @@ class Spherical(Parametrization):
         return (*out, np.cos(to)), ok
 
     def _reduce(self, c: Parts) -> Parts:
-        return c[0], c[2], wrap_two_pi(c[3] - c[1])
+        return c[0], c[2], wrap_two_pi_in_place(c[3] - c[1])

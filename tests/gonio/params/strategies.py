@@ -1,7 +1,8 @@
 """Hypothesis strategies for direction pairs over the whole closed hemisphere.
 
-Angles are drawn with extra weight on the extremes: exactly 0 and π/2, and values
-1e-12, 1e-9, 1e-6 away from them.
+Angles are drawn with extra weight on the extremes: exactly 0 and π/2, values 1e-12,
+1e-9, 1e-6 away from them, and offsets spread log-uniformly over 1e-17 … 1e-2 (which
+crosses the √ε ≈ 1e-8 where precision changes regime near the horizon).
 """
 
 from __future__ import annotations
@@ -14,9 +15,11 @@ from gonio.params.cases import direction
 HALF_PI = float(np.pi / 2)
 OFFSETS = (0.0, 1e-12, 1e-9, 1e-6)
 
+offset = st.one_of(st.sampled_from(OFFSETS), st.floats(-17.0, -2.0).map(lambda e: 10.0**e))
 polar_angle = st.one_of(
     st.floats(0.0, HALF_PI),
-    st.sampled_from([*OFFSETS, *(HALF_PI - o for o in OFFSETS)]),
+    offset,
+    offset.map(lambda o: HALF_PI - o),
 )
 azimuth = st.one_of(st.floats(0.0, 2 * np.pi, exclude_max=True), st.sampled_from([0.0, np.pi]))
 
@@ -33,12 +36,12 @@ def pair(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray]:
     kind = draw(st.sampled_from(["free", "retro", "mirror", "opposite"]))
     if kind == "free":
         return wi, draw(unit_direction())
-    offset = draw(st.sampled_from(OFFSETS))
+    off = draw(offset)
     target = {"retro": wi, "mirror": wi * [-1, -1, 1], "opposite": wi * [-1, -1, 1]}[kind]
     if kind == "opposite":  # the opposite direction exists in the hemisphere only on the horizon
-        wi = direction(HALF_PI - offset, draw(azimuth))
+        wi = direction(HALF_PI - off, draw(azimuth))
         target = direction(HALF_PI, np.arctan2(-wi[1], -wi[0]))
-    theta = np.arccos(np.clip(target[2], -1, 1)) + draw(st.sampled_from([-1, 1])) * offset
+    theta = np.arccos(np.clip(target[2], -1, 1)) + draw(st.sampled_from([-1, 1])) * off
     phi = np.arctan2(target[1], target[0]) + draw(st.floats(-1e-6, 1e-6))
     return wi, direction(np.clip(theta, 0.0, HALF_PI), phi)
 

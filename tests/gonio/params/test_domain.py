@@ -69,20 +69,28 @@ def test_valid_coordinates_come_back_and_invalid_ones_have_no_pair(name: str) ->
 
 
 def candidate_min_z(name: str, c: np.ndarray) -> np.ndarray:
-    """The smaller z of the unique direction pair with these isotropic coordinates,
-    built without any clamping (hybrid: from the appendix with θk's quadrant)."""
+    """The smaller z of the unique direction pair with these isotropic coordinates (φh = 0),
+    built from the definitions without any clamping and without the closed forms."""
     a, b, rel = c[:, 0], c[:, 1], c[:, 2]
-    if name == "hybrid":
+    if name == "hybrid":  # the appendix, θk with its quadrant
         z = 1 - a * a - b * b
         hz = np.sqrt(np.maximum(z, 0))
         cos_a = a * np.cos(rel)
         kz = -b * cos_a / np.sqrt(hz * hz + cos_a * cos_a)
         return np.where(z < 0, z, hz - np.abs(kz))
-    if name == "orthographic":
-        longest2 = a * a + b * b + 2 * a * b * np.abs(np.cos(rel))
-        return 1 - longest2
+    if name == "orthographic":  # ω̄ = h̄ ± k̄ as vectors; a direction needs ‖ω̄‖ ≤ 1
+        h = np.stack([a, np.zeros_like(a)], 1)
+        k = np.stack([b * np.cos(rel), b * np.sin(rel)], 1)
+        return 1 - np.maximum(np.sum((h + k) ** 2, 1), np.sum((h - k) ** 2, 1))
+    # rusinkiewicz: rotate d̂ and its mirror by explicit matrices rot_y(θh)
     th, td = a, b
-    return np.cos(th) * np.cos(td) - np.sin(th) * np.sin(td) * np.abs(np.cos(rel))
+    d = np.stack([np.sin(td) * np.cos(rel), np.sin(td) * np.sin(rel), np.cos(td)], 1)
+    ry = np.zeros((len(th), 3, 3))
+    ry[:, 0, 0], ry[:, 0, 2], ry[:, 1, 1] = np.cos(th), np.sin(th), 1.0
+    ry[:, 2, 0], ry[:, 2, 2] = -np.sin(th), np.cos(th)
+    wi = np.einsum("nij,nj->ni", ry, d)
+    wo = np.einsum("nij,nj->ni", ry, d * [-1, -1, 1])
+    return np.minimum(wi[:, 2], wo[:, 2])
 
 
 def test_spherical_domain_is_the_whole_box() -> None:
