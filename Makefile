@@ -37,6 +37,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/extremes.py
+	$(BIN)/python benchmarks/bus.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis

@@ -1,7 +1,8 @@
 """The ``gonio`` command line: one parser, one subcommand per job.
 
-Errors a user can cause (``GonioError``) become one line on stderr and exit code 2;
-anything else is a bug and keeps its traceback.
+Errors a user can cause (``GonioError``, and ``DriverError`` from the hardware layer)
+become one line on stderr and exit code 2; anything else is a bug and keeps its
+traceback. Ctrl-C exits with code 130 and one line.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from gonio import __version__
+from drivers.base import DriverError
+from gonio import __version__, motors_cli
 from gonio.errors import GonioError
 
 
@@ -36,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
         "and the seed-003 lobe comparison.",
     )
     demo.set_defaults(func=_cmd_demo)
+    motors_cli.add_parser(sub)
     return parser
 
 
@@ -47,7 +50,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     try:
         return int(args.func(args))
-    except GonioError as exc:
+    except KeyboardInterrupt:
+        print("gonio: interrupted", file=sys.stderr)
+        return 130
+    except (GonioError, DriverError) as exc:
         print(f"gonio: error: {exc}", file=sys.stderr)
         return 2
 

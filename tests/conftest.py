@@ -1,8 +1,18 @@
-"""Suite-wide settings: hypothesis profiles (derandomized under CI)."""
+"""Suite-wide settings (hypothesis profiles, derandomized under CI) and the fixtures
+shared by tests/sim and tests/drivers: a virtual clock and emulated Dynamixel buses."""
+
+from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterator
+from typing import Any
 
+import pytest
+from dynamixel_sdk import port_handler
 from hypothesis import HealthCheck, settings
+
+from sim.dxl_clock import ManualClock
+from sim.dxl_emulator import DxlEmulator
 
 settings.register_profile(
     "dev", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow]
@@ -16,3 +26,45 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.load_profile("ci" if os.environ.get("CI") else "dev")
+
+
+#: The SDK's packet timeouts scale with LATENCY_TIMER (ms). Tests pin it to the SDK's
+#: default: the SDK busy-waits for replies in the test's thread while the emulator
+#: serves from another thread of the same process, so under CPU load much shorter
+#: timeouts (4-8 ms) turned into flaky failures, and the few expected timeouts cost
+#: only ~35 ms each.
+TEST_LATENCY_TIMER = 16
+
+
+@pytest.fixture
+def clock() -> ManualClock:
+    return ManualClock()
+
+
+@pytest.fixture
+def emulator(clock: ManualClock) -> Iterator[Callable[..., DxlEmulator]]:
+    """Factory: a started emulator (fast by default: no wire time, no return delay, the
+    test's ManualClock); stopped after the test, which fails if serving raised."""
+    started: list[DxlEmulator] = []
+
+    def make(ids: tuple[int, ...] = (1,), **kwargs: Any) -> DxlEmulator:
+        kwargs.setdefault("clock", clock)
+        kwargs.setdefault("wire_time", False)
+        kwargs.setdefault("return_delay", False)
+        emu = DxlEmulator(ids=ids, **kwargs)
+        emu.start()
+        started.append(emu)
+        return emu
+
+    yield make
+    for emu in started:
+        emu.stop()
+    for emu in started:
+        assert emu.error is None, f"the emulator raised while serving: {emu.error!r}"
+
+
+@pytest.fixture
+def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
+    """Pin the SDK's LATENCY_TIMER for the test (and restore it after)."""
+    monkeypatch.setattr(port_handler, "LATENCY_TIMER", TEST_LATENCY_TIMER)
+    return TEST_LATENCY_TIMER

@@ -1,0 +1,416 @@
+"""One serial port to a Dynamixel bus, through the unmodified ROBOTIS SDK.
+
+`DynamixelLink` owns a ``PortHandler`` and a Protocol 2.0 ``PacketHandler`` and turns
+their result codes into exceptions: every transaction is retried a bounded number of
+times on communication failures, then raises `CommError` naming the port, the motor
+and the SDK's result; a status packet with the alert bit makes it read the motor's
+Hardware Error Status and raise `MotorFault` with the named bits. The port is locked
+while open (two programs on one bus would interleave packets) and always released:
+also after Ctrl-C in the middle of a transaction, which would otherwise leave the
+SDK's ``is_using`` flag set and every later call failing with "port is in use".
+
+Latency: the SDK waits 2 × ``port_handler.LATENCY_TIMER`` + 2 ms plus the wire time of
+the *reply* for a status packet. That budget must cover the USB adapter's own latency
+timer (FTDI default 16 ms; 1 ms after the udev rule in docs/hardware.md) and also what
+the SDK leaves out: the wire time of the instruction itself and of a packet without
+reply still leaving the adapter before it (a SYNC_WRITE of goals just before a
+SYNC_READ poll: 6 ms at 57 600 baud). The link sets LATENCY_TIMER to the adapter's
+latency (read from sysfs when it can, else the SDK's conservative 16 ms) plus half the
+wire time of `OUTBOUND_MARGIN_BYTES` at the bus rate.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import os
+import re
+import time
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import Any, TypeVar
+
+import dynamixel_sdk as sdk
+import serial
+from dynamixel_sdk import port_handler as sdk_port
+
+from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
+from drivers.dynamixel.control_table import Item, decode_hardware_error, item
+
+#: Result codes worth another attempt (noise, a lost byte, a late reply).
+RETRYABLE = frozenset(
+    {sdk.COMM_RX_TIMEOUT, sdk.COMM_RX_CORRUPT, sdk.COMM_TX_FAIL, sdk.COMM_RX_FAIL}
+)
+ALERT = 0x80
+#: The error numbers of a status packet, in words (Protocol 2.0).
+STATUS_ERRORS = {
+    1: "result fail (the motor could not carry out the instruction)",
+    2: "instruction error (undefined instruction, or ACTION without REG_WRITE)",
+    3: "CRC error (the packet was corrupted on the way)",
+    4: "data range error (value outside the item's range)",
+    5: "data length error (fewer bytes than the item needs)",
+    6: "data limit error (value outside the motor's configured limit)",
+    7: "access error (read-only item, or an EEPROM item written with torque on)",
+}
+DEFAULT_LATENCY_MS = 16.0  # the SDK's own default, safe for an unconfigured FTDI adapter
+#: Outbound bytes the SDK's reply timeout does not count: the instruction and a
+#: preceding packet without reply (a 4-axis SYNC_READ is 18 bytes, a 4-axis SYNC_WRITE
+#: of goals 34), with room for larger buses.
+OUTBOUND_MARGIN_BYTES = 96
+
+
+#: Bytes' worth of line time a late reply may still need after a timeout (`_drain`).
+DRAIN_BYTES = 192
+
+
+def sdk_latency_timer(adapter_ms: float, baud: int) -> float:
+    """The value for the SDK's LATENCY_TIMER (ms): the adapter's latency plus half the
+    wire time of `OUTBOUND_MARGIN_BYTES` (the SDK doubles it), at least 1 ms."""
+    return max(1.0, adapter_ms + 0.5 * 1000.0 * 10 * OUTBOUND_MARGIN_BYTES / baud)
+
+
+T = TypeVar("T")
+
+
+def adapter_latency_ms(port: str) -> float | None:
+    """The USB-serial adapter's latency timer in ms, from sysfs (Linux), or None."""
+    try:
+        name = Path(os.path.realpath(port)).name
+    except OSError:
+        return None
+    if not re.fullmatch(r"tty(USB|ACM)\d+", name):
+        return None
+    sysfs = Path("/sys/bus/usb-serial/devices") / name / "latency_timer"
+    try:
+        return float(sysfs.read_text().strip())
+    except (OSError, ValueError):
+        return None
+
+
+class DynamixelLink(Resource):
+    """A Protocol 2.0 bus on ``port`` at ``baud``; a context manager.
+
+    ``names`` maps motor IDs to axis names for error messages; ``retries`` is the number
+    of extra attempts per transaction; ``latency_ms`` is the USB adapter's latency timer
+    (default: read from sysfs, else 16 ms; 0 for a pty);
+    ``raise_alerts=False`` lets a diagnostic tool read a faulted motor (the alert bit is
+    then ignored; read Hardware Error Status to see it).
+    """
+
+    def __init__(
+        self,
+        port: str,
+        baud: int = 57_600,
+        *,
+        retries: int = 3,
+        latency_ms: float | None = None,
+        names: Mapping[int, str] | None = None,
+        raise_alerts: bool = True,
+    ) -> None:
+        if retries < 0:
+            raise ValueError("retries must be ≥ 0")
+        self.port_name = port
+        self.baud = baud
+        self.retries = retries
+        self.latency_ms = latency_ms
+        self.names = dict(names or {})
+        self.raise_alerts = raise_alerts
+        self._port: Any = None
+        self._packets: Any = sdk.PacketHandler(2.0)
+
+    # -- opening and releasing -----------------------------------------------------------
+    @property
+    def is_open(self) -> bool:
+        return self._port is not None
+
+    def open(self) -> None:
+        """Open and lock the port at the configured baud; `CommError` if it cannot."""
+        if self._port is not None:
+            return
+        adapter = self.latency_ms
+        if adapter is None:
+            adapter = adapter_latency_ms(self.port_name)
+        # The SDK reads this module-level constant for every packet timeout.
+        sdk_port.LATENCY_TIMER = sdk_latency_timer(
+            DEFAULT_LATENCY_MS if adapter is None else adapter, self.baud
+        )
+        handler = sdk.PortHandler(self.port_name)
+        handler.baudrate = self.baud
+        try:
+            ok = handler.setBaudRate(self.baud)  # opens the port
+        except (serial.SerialException, OSError) as exc:
+            raise CommError(self._open_failure(exc), port=self.port_name) from None
+        if not ok:
+            raise CommError(
+                f"{self.port_name}: baud rate {self.baud} is not one the Dynamixel SDK supports",
+                port=self.port_name,
+            )
+        try:
+            fcntl.flock(handler.ser.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handler.closePort()
+            raise CommError(
+                f"{self.port_name} is busy: another program holds it open (close it first)",
+                port=self.port_name,
+            ) from None
+        self._port = handler
+
+    def _open_failure(self, exc: BaseException) -> str:
+        code = getattr(exc, "errno", None)
+        if code == errno.ENOENT or not os.path.exists(self.port_name):
+            return f"{self.port_name} does not exist: is the USB adapter plugged in?"
+        if code in (errno.EACCES, errno.EPERM):
+            return f"no permission to open {self.port_name}: add your user to the 'dialout' group"
+        if code == errno.EBUSY:
+            return f"{self.port_name} is busy: another program holds it open"
+        return f"cannot open {self.port_name}: {exc}"
+
+    def close(self) -> None:
+        """Release the port; safe to call twice and after an interrupted transaction."""
+        handler, self._port = self._port, None
+        if handler is None:
+            return
+        handler.is_using = False
+        with contextlib.suppress(serial.SerialException, OSError):
+            handler.closePort()
+
+    def _drain(self) -> None:
+        """After a failed attempt: let a late reply finish arriving, then discard it.
+
+        Clearing at once is not enough: a reply that missed the SDK's timeout would land
+        in the next transaction, which reads only the ID, so a late PING status would
+        be taken for the data of the READ after it.
+        """
+        if self._port is None:
+            return
+        quiet = (2.0 * float(sdk_port.LATENCY_TIMER) + 2.0) / 1000.0 + 10 * DRAIN_BYTES / self.baud
+        for _ in range(5):  # a bus that never goes quiet: give up after 5 periods
+            time.sleep(quiet)
+            if not self._port.getBytesAvailable():
+                break
+            self._port.clearPort()
+
+    def reset(self) -> None:
+        """Forget a transaction cut short (Ctrl-C): clear the SDK's busy flag and any
+        half-received bytes, so the next transaction starts clean."""
+        if self._port is not None:
+            self._port.is_using = False
+            with contextlib.suppress(serial.SerialException, OSError):
+                self._port.clearPort()
+
+    # -- transactions ----------------------------------------------------------------------
+    def _handler(self) -> Any:
+        if self._port is None:
+            raise CommError(f"{self.port_name} is not open", port=self.port_name)
+        return self._port
+
+    def who(self, motor_id: int) -> str:
+        name = self.names.get(motor_id)
+        return f"motor {motor_id}" + (f" (axis {name!r})" if name else "")
+
+    def _attempt(self, what: str, motor_id: int | None, call: Callable[[], tuple[T, int]]) -> T:
+        """Run ``call`` (returning (value, SDK result)) with retries; CommError at the end."""
+        handler = self._handler()
+        result = sdk.COMM_SUCCESS
+        for _ in range(self.retries + 1):
+            try:
+                value, result = call()
+            except (serial.SerialException, OSError) as exc:
+                raise CommError(
+                    f"{self.port_name}: {what} failed: {exc}",
+                    port=self.port_name,
+                    motor_id=motor_id,
+                ) from None
+            finally:
+                # An interrupted call would leave the SDK's busy flag set for good.
+                handler.is_using = False
+            if result == sdk.COMM_SUCCESS:
+                return value
+            if result not in RETRYABLE:
+                break
+            self._drain()
+        target = f" to {self.who(motor_id)}" if motor_id is not None else ""
+        raise CommError(
+            f"{self.port_name}: {what}{target} failed after {self.retries + 1} attempts: "
+            f"{self._packets.getTxRxResult(result)} (SDK result {result})",
+            port=self.port_name,
+            motor_id=motor_id,
+            result=result,
+        )
+
+    def _check_status(self, motor_id: int, error: int, what: str) -> None:
+        """Alert bit → MotorFault with the named hardware error; other errors → DriverError."""
+        if error & ALERT and self.raise_alerts:
+            raise self.fault(motor_id)
+        if error & 0x7F:
+            reason = STATUS_ERRORS.get(error & 0x7F, f"error number {error & 0x7F}")
+            raise DriverError(f"{self.who(motor_id)} refused {what}: {reason}")
+
+    def fault(self, motor_id: int) -> MotorFault:
+        """The `MotorFault` of a motor whose status carried the alert bit."""
+        flags = self.hardware_error(motor_id)
+        return MotorFault(
+            f"{self.who(motor_id)} reports a hardware error: {', '.join(flags) or 'unknown'}"
+            " (its torque is off if the error is in its Shutdown mask; `gonio motors reboot`"
+            " clears it once the cause is removed)",
+            motor_id=motor_id,
+            axis=self.names.get(motor_id),
+            flags=flags,
+        )
+
+    def hardware_error(self, motor_id: int) -> tuple[str, ...]:
+        """The named bits of a motor's Hardware Error Status (no alert check)."""
+        reg = item("hardware_error_status")
+        value = self._attempt(
+            f"reading {reg.name}",
+            motor_id,
+            lambda: self._read_raw(motor_id, reg.address, reg.size)[:2],
+        )
+        return decode_hardware_error(int.from_bytes(bytes(value), "little"))
+
+    def _read_raw(self, motor_id: int, address: int, length: int) -> tuple[list[int], int, int]:
+        data, result, error = self._packets.readTxRx(self._handler(), motor_id, address, length)
+        return data, result, error
+
+    def ping(self, motor_id: int) -> int:
+        """The model number of ``motor_id``; CommError if it does not answer."""
+        model, error = self._attempt(
+            "ping",
+            motor_id,
+            lambda: self._pair(self._packets.ping(self._handler(), motor_id)),
+        )
+        self._check_status(motor_id, error, "a ping")
+        return int(model)
+
+    @staticmethod
+    def _pair(triple: tuple[Any, int, int]) -> tuple[tuple[Any, int], int]:
+        value, result, error = triple
+        return (value, error), result
+
+    def scan(self) -> dict[int, tuple[int, int]]:
+        """Every motor answering a broadcast ping: {id: (model number, firmware)}."""
+        handler = self._handler()
+        try:
+            found, result = self._packets.broadcastPing(handler)
+        finally:
+            handler.is_using = False
+        if result not in (sdk.COMM_SUCCESS, sdk.COMM_RX_TIMEOUT):
+            raise CommError(
+                f"{self.port_name}: broadcast ping failed: {self._packets.getTxRxResult(result)}",
+                port=self.port_name,
+                result=result,
+            )
+        return {int(k): (int(v[0]), int(v[1])) for k, v in found.items()}
+
+    def read(self, motor_id: int, name: str) -> int:
+        """The value of control-table item ``name`` of ``motor_id`` (signed where the item is)."""
+        reg = item(name)
+        data, error = self._attempt(
+            f"reading {name}",
+            motor_id,
+            lambda: self._pair(self._read_raw(motor_id, reg.address, reg.size)),
+        )
+        self._check_status(motor_id, error, f"reading {name}")
+        return reg.decode(bytes(data))
+
+    def write(self, motor_id: int, name: str, value: int) -> None:
+        """Write ``value`` to item ``name``; refused before sending if out of its range."""
+        reg = self._writable(name, value)
+        payload = list(reg.encode(value))
+        error = self._attempt(
+            f"writing {name}",
+            motor_id,
+            lambda: self._swap(
+                self._packets.writeTxRx(self._handler(), motor_id, reg.address, reg.size, payload)
+            ),
+        )
+        self._check_status(motor_id, error, f"writing {name} = {value}")
+
+    @staticmethod
+    def _swap(pair: tuple[int, int]) -> tuple[int, int]:
+        result, error = pair
+        return error, result
+
+    @staticmethod
+    def _writable(name: str, value: int) -> Item:
+        reg = item(name)
+        if not reg.writable:
+            raise DriverError(f"{name} is read-only")
+        if not reg.in_range(value):
+            raise LimitError(f"{name} = {value} is outside the range the motors accept")
+        return reg
+
+    def sync_write(self, name: str, values: Mapping[int, int]) -> None:
+        """One SYNC_WRITE of item ``name``: {motor id: value} (no status packets come back)."""
+        if not values:
+            return
+        reg = item(name)
+        for value in values.values():
+            self._writable(name, value)
+        group = sdk.GroupSyncWrite(self._handler(), self._packets, reg.address, reg.size)
+        for motor_id, value in values.items():
+            group.addParam(motor_id, list(reg.encode(value)))
+        self._attempt(f"sync-writing {name}", None, lambda: (None, group.txPacket()))
+
+    def sync_read(
+        self, ids: Iterable[int], first: str, last: str, *, alerts: bool = True
+    ) -> dict[int, bytes]:
+        """One SYNC_READ of the bytes from item ``first`` through item ``last``.
+
+        Returns {motor id: raw bytes}; with ``alerts``, a reply with the alert bit raises
+        `MotorFault` (other error bits always raise).
+        """
+        start, end = item(first), item(last)
+        length = end.address + end.size - start.address
+        ids = list(ids)
+        group = _AlertAwareSyncRead(self._handler(), self._packets, start.address, length)
+        for motor_id in ids:
+            group.addParam(motor_id)
+        try:
+            self._attempt(f"sync-reading {first}…{last}", None, lambda: (None, group.read()))
+        except CommError as exc:
+            if group.failed is None:
+                raise
+            raise CommError(
+                f"{exc}; no answer from {self.who(group.failed)}",
+                port=self.port_name,
+                motor_id=group.failed,
+                result=exc.result,
+            ) from None
+        for motor_id in ids:
+            error = group.errors[motor_id] if alerts else group.errors[motor_id] & ~ALERT
+            self._check_status(motor_id, error, f"sync-reading {first}…{last}")
+        return {motor_id: bytes(group.data_dict[motor_id]) for motor_id in ids}
+
+    def reboot(self, motor_id: int) -> None:
+        """Reboot a motor (clears its hardware error; torque comes back off)."""
+        error = self._attempt(
+            "reboot", motor_id, lambda: self._swap(self._packets.reboot(self._handler(), motor_id))
+        )
+        if error & 0x7F:
+            self._check_status(motor_id, error & 0x7F, "a reboot")
+
+
+class _AlertAwareSyncRead(sdk.GroupSyncRead):  # type: ignore[misc]
+    """The SDK's GroupSyncRead, keeping each status packet's error byte (the SDK drops it,
+    and with it the alert bit) and naming the motor that did not answer."""
+
+    errors: dict[int, int]
+    failed: int | None = None
+
+    def read(self) -> int:
+        self.errors = {}
+        self.failed = None
+        result = self.txPacket()
+        if result != sdk.COMM_SUCCESS:
+            return int(result)
+        for motor_id in self.data_dict:
+            data, result, error = self.ph.readRx(self.port, motor_id, self.data_length)
+            if result != sdk.COMM_SUCCESS:
+                self.failed = motor_id
+                return int(result)
+            self.data_dict[motor_id] = data
+            self.errors[motor_id] = error
+        self.last_result = True
+        return int(sdk.COMM_SUCCESS)

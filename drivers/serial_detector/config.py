@@ -1,0 +1,196 @@
+"""The configuration of a serial detector: :class:`SerialDetectorConfig`, its validation,
+and the helpers that check command templates and regular expressions."""
+
+from __future__ import annotations
+
+import math
+import numbers
+import re
+import string
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+from drivers.serial_detector.errors import SerialDetectorValueError
+
+#: The fields a command template may use. Exposures are rounded to the nearest unit.
+EXPOSURE_FIELDS = frozenset({"exposure_s", "exposure_ms", "exposure_us"})
+QUERY_FIELDS = EXPOSURE_FIELDS | {"averages"}
+_LINE_ENDINGS = ("\n", "\r\n", "\r")
+_SAMPLE_FIELDS: Mapping[str, float | int] = {
+    "exposure_s": 0.125,
+    "exposure_ms": 125,
+    "exposure_us": 125_000,
+    "averages": 4,
+}
+
+
+@dataclass(frozen=True)
+class SerialDetectorConfig:
+    """How to talk to one line-based detector (see ``docs/serial_detector.md``).
+
+    Command templates (``query``, ``set_exposure``, ``init``) are ``str.format``
+    templates; the fields are ``exposure_s`` (float, seconds), ``exposure_ms`` and
+    ``exposure_us`` (ints, rounded), and in ``query`` also ``averages`` (int). Regular
+    expressions: ``response`` must match the whole answer line (stripped); the others
+    (``reset_banner``, ``command_ack``, ``error_reply``, ``saturated_status``) match
+    anywhere in a line unless anchored.
+    """
+
+    port: str
+    baud: int = 115200
+    #: Sent once per sample, or once per measurement when ``device_averaging``.
+    query: str = "MEAS {exposure_ms:d}"
+    #: Sent before a query when the formatted command differs from the last one sent.
+    set_exposure: str | None = None
+    #: The answer to a query. Named groups: ``value`` (required); optional ``status``
+    #: (saturated when it matches ``saturated_status``), ``saturated`` (saturated when
+    #: it took part in the match and is not empty, 0, false, no, off) and ``std`` (the
+    #: device's standard deviation, with ``device_averaging``).
+    response: str = r"(?P<value>\S+)"
+    line_ending: str = "\n"
+    #: The margin on every deadline: a query waits exposure (× averages with device
+    #: averaging) plus this; a command acknowledgement waits this.
+    timeout_s: float = 1.0
+    #: Malformed lines tolerated per sample (the query is sent again, at most this many
+    #: more times, when a deadline passes after a malformed line).
+    retries: int = 2
+    #: Counts at or above which a sample is saturated.
+    full_scale: float | None = None
+    #: A line the device prints after a reset or reboot, e.g. ``"^READY"``.
+    reset_banner: str | None = None
+    #: Commands sent after opening and after a reset (no template fields).
+    init: tuple[str, ...] = ()
+    #: After opening, wait up to this long for ``reset_banner`` (an Arduino reboots
+    #: when the port opens); without a banner pattern, wait exactly this long.
+    settle_s: float = 0.0
+    #: If set, every ``init`` and ``set_exposure`` command must be answered by a line
+    #: matching it (e.g. ``"^OK"``); if not, no answer is read.
+    command_ack: str | None = None
+    #: A line the device sends to refuse a command, e.g. ``"^ERR"``: fails at once.
+    error_reply: str | None = None
+    #: With a ``status`` group in ``response``: a status matching this is saturation.
+    saturated_status: str | None = None
+    #: Send one query with ``{averages}`` and let the device average.
+    device_averaging: bool = False
+    #: Longest line accepted; longer input is discarded up to the next line ending.
+    max_line_bytes: int = 1024
+
+    def __post_init__(self) -> None:
+        port = self.port if isinstance(self.port, str) else repr(self.port)
+
+        def bad(message: str) -> SerialDetectorValueError:
+            return SerialDetectorValueError(
+                f"serial detector {port}: invalid configuration: {message}",
+                port=port,
+                kind="invalid",
+            )
+
+        if not isinstance(self.port, str) or not self.port.strip():
+            raise bad("port must be a non-empty string such as '/dev/ttyACM0'")
+        baud, retries, max_line = (
+            _as_int(self.baud),
+            _as_int(self.retries),
+            _as_int(self.max_line_bytes),
+        )
+        timeout, settle = _as_real(self.timeout_s), _as_real(self.settle_s)
+        if baud is None or baud <= 0:
+            raise bad(f"baud must be a positive integer, got {self.baud!r}")
+        if self.line_ending not in _LINE_ENDINGS:
+            raise bad(f"line_ending must be one of {_LINE_ENDINGS!r}, got {self.line_ending!r}")
+        if timeout is None or not (0 < timeout < math.inf):
+            raise bad(f"timeout_s must be a positive number of seconds, got {self.timeout_s!r}")
+        if settle is None or not (0 <= settle < math.inf):
+            raise bad(f"settle_s must be ≥ 0 seconds, got {self.settle_s!r}")
+        if retries is None or retries < 0:
+            raise bad(f"retries must be an integer ≥ 0, got {self.retries!r}")
+        full_scale = None if self.full_scale is None else _as_real(self.full_scale)
+        if self.full_scale is not None and (full_scale is None or not 0 < full_scale < math.inf):
+            raise bad(f"full_scale must be a positive number or None, got {self.full_scale!r}")
+        if max_line is None or max_line < 16:
+            raise bad(f"max_line_bytes must be an integer ≥ 16, got {self.max_line_bytes!r}")
+        if isinstance(self.init, str):
+            raise bad("init must be a sequence of commands, not one string")
+        object.__setattr__(self, "init", tuple(self.init))
+
+        query_fields = _template_fields(self.query, QUERY_FIELDS, "query", bad)
+        if self.device_averaging and "averages" not in query_fields:
+            raise bad("device_averaging needs an {averages} field in query")
+        if self.set_exposure is not None:
+            _template_fields(self.set_exposure, EXPOSURE_FIELDS, "set_exposure", bad)
+        for command in self.init:
+            _template_fields(command, frozenset(), "init command", bad)
+
+        response = _compile(self.response, "response", bad)
+        if response is None or "value" not in response.groupindex:
+            raise bad(f"response {self.response!r} needs a named group (?P<value>...)")
+        for name in ("reset_banner", "command_ack", "error_reply", "saturated_status"):
+            _compile(getattr(self, name), name, bad)
+        if self.saturated_status is not None and "status" not in response.groupindex:
+            raise bad("saturated_status needs a named group (?P<status>...) in response")
+
+    @property
+    def template_fields(self) -> frozenset[str]:
+        """The fields used by ``query`` and ``set_exposure``."""
+        fields = _template_fields(self.query, QUERY_FIELDS, "query", _unreachable)
+        if self.set_exposure is not None:
+            fields |= _template_fields(
+                self.set_exposure, EXPOSURE_FIELDS, "set_exposure", _unreachable
+            )
+        return fields
+
+
+def _as_real(x: object) -> float | None:
+    """``x`` as a float if it is a real number (numpy scalars included, bool not)."""
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        return None
+    return float(x)
+
+
+def _as_int(x: object) -> int | None:
+    """``x`` as an int if it is an integer (numpy integers included, bool not)."""
+    if isinstance(x, bool) or not isinstance(x, numbers.Integral):
+        return None
+    return int(x)
+
+
+_BadConfig = Callable[[str], Exception]
+
+
+def _unreachable(message: str) -> Exception:  # pragma: no cover - validated before
+    return AssertionError(message)
+
+
+def _template_fields(
+    template: object, allowed: frozenset[str], what: str, bad: _BadConfig
+) -> frozenset[str]:
+    """The field names of a command template, checked; ``bad(message)`` builds the error."""
+    if not isinstance(template, str):
+        raise bad(f"{what} must be a string, got {template!r}")
+    try:
+        names = {name for _, name, _, _ in string.Formatter().parse(template) if name is not None}
+    except ValueError as exc:
+        raise bad(f"{what} {template!r} is not a valid template: {exc}") from exc
+    unknown = names - allowed
+    if unknown:
+        fields = ", ".join("{" + name + "}" for name in sorted(allowed)) or "none"
+        raise bad(f"{what} {template!r} uses {sorted(unknown)}; allowed fields: {fields}")
+    try:
+        sample = template.format(**_SAMPLE_FIELDS)
+    except (ValueError, TypeError, KeyError, IndexError) as exc:
+        raise bad(f"{what} {template!r} cannot be formatted: {exc}") from exc
+    if "\r" in sample or "\n" in sample:
+        raise bad(f"{what} {template!r} must not contain a line ending")
+    if not sample.isascii():
+        raise bad(f"{what} {template!r} must be ASCII")
+    return frozenset(names)
+
+
+def _compile(pattern: object, what: str, bad: _BadConfig) -> re.Pattern[str] | None:
+    if pattern is None:
+        return None
+    if not isinstance(pattern, str):
+        raise bad(f"{what} must be a regular expression string, got {pattern!r}")
+    try:
+        return re.compile(pattern)
+    except re.error as exc:
+        raise bad(f"{what} {pattern!r} is not a valid regular expression: {exc}") from exc

@@ -1,0 +1,378 @@
+"""The driver: :class:`SerialDetector`, a :class:`drivers.base.Detector` on a line-based
+serial protocol (see the package docstring and ``docs/serial_detector.md``)."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import re
+import statistics
+import time
+from collections import deque
+from typing import Any
+
+import serial
+
+from drivers.base import Reading, Resource
+from drivers.serial_detector.config import SerialDetectorConfig, _as_int, _as_real
+from drivers.serial_detector.errors import (
+    _OPEN_ERRORS,
+    SerialDetectorError,
+    _open_reason,
+)
+from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote
+
+log = logging.getLogger("drivers.serial_detector")  # one logger for the package
+
+_FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
+#: Failures after which nothing more is owed by the device: no resync needed.
+_ANSWERED = frozenset({"reset", "device", "value", "invalid"})
+
+
+class SerialDetector(_LineIO, Resource):
+    """A :class:`drivers.base.Detector` on a line-based serial protocol.
+
+    Use it as a context manager (``with SerialDetector(config) as det: det.measure(0.1)``)
+    or call :meth:`open` and :meth:`close`. Reading lines from the port, raw I/O and the
+    error messages come from :class:`~drivers.serial_detector.lines._LineIO`.
+    """
+
+    def __init__(self, config: SerialDetectorConfig) -> None:
+        if not isinstance(config, SerialDetectorConfig):
+            raise TypeError(f"config must be a SerialDetectorConfig, got {type(config).__name__}")
+        self._config = config
+        self._response = re.compile(config.response)
+        self._banner = _compile_optional(config.reset_banner)
+        self._ack = _compile_optional(config.command_ack)
+        self._error_reply = _compile_optional(config.error_reply)
+        self._saturated_status = _compile_optional(config.saturated_status)
+        self._fields = config.template_fields
+        self._serial: Any = None
+        self._rx = bytearray()  # the line being received
+        self._lines: deque[_Line] = deque()  # complete lines not yet consumed
+        self._discarding = 0  # >0: bytes of an over-long/stale line dropped so far
+        self._last_rx = -math.inf  # monotonic time of the last byte received
+        self._needs_init = False
+        self._needs_resync = False
+        self._reopen = False  # closed by the driver after an I/O error: reopen on next call
+        self._exposure_command: str | None = None  # the last set_exposure sent
+        self._resets = 0
+
+    # -- properties ---------------------------------------------------------------
+
+    @property
+    def config(self) -> SerialDetectorConfig:
+        return self._config
+
+    @property
+    def port(self) -> str:
+        return self._config.port
+
+    @property
+    def is_open(self) -> bool:
+        return self._serial is not None
+
+    @property
+    def resets(self) -> int:
+        """How many device resets the driver has noticed since it was created."""
+        return self._resets
+
+    def __repr__(self) -> str:
+        state = "open" if self.is_open else "closed"
+        return f"SerialDetector(port={self.port!r}, {state})"
+
+    # -- open / close -------------------------------------------------------------
+
+    def open(self) -> None:
+        """Open the port, wait for the device to settle and send the init commands.
+
+        Does nothing if already open. On any failure the port is closed again.
+        """
+        if self._serial is not None:
+            return
+        cfg = self._config
+        try:
+            self._serial = serial.serial_for_url(
+                cfg.port,
+                baudrate=cfg.baud,
+                timeout=_POLL_S,
+                write_timeout=cfg.timeout_s,
+                exclusive=True,
+            )
+        except _OPEN_ERRORS as exc:
+            raise self._error(f"cannot open the port: {_open_reason(exc)}", "open") from exc
+        self._reopen = False
+        self._clear_input_state()
+        log.debug("%s: opened at %d baud", cfg.port, cfg.baud)
+        try:
+            self._settle()
+            self._initialize()
+        except BaseException:
+            self._release()
+            raise
+
+    def close(self) -> None:
+        """Release the port (idempotent). Unsent bytes are dropped, not waited for."""
+        self._reopen = False
+        self._release()
+
+    def _release(self) -> None:
+        port, self._serial = self._serial, None
+        self._needs_init = False
+        self._needs_resync = False
+        self._exposure_command = None
+        self._clear_input_state()
+        if port is None:
+            return
+        # A USB serial close() waits up to 30 s for unsent output; drop it instead.
+        with contextlib.suppress(Exception):
+            port.reset_output_buffer()
+        try:
+            port.close()
+        except Exception as exc:  # nothing more can be done; the fd is gone either way
+            log.debug("%s: error while closing: %s", self.port, exc)
+        log.debug("%s: closed", self.port)
+
+    # -- measuring ----------------------------------------------------------------
+
+    def measure(self, exposure_s: float, averages: int = 1) -> Reading:
+        """Expose for ``exposure_s`` seconds, ``averages`` times, and return the mean.
+
+        ``std`` is the sample standard deviation (ddof 1; 0 for one sample). With
+        ``device_averaging`` it is the device's ``std`` group, or NaN if the device
+        does not report one, and ``raw`` holds the device's mean only.
+        """
+        exposure_s, averages = self._check_arguments(exposure_s, averages)
+        if self._serial is None:
+            if not self._reopen:
+                raise self._error(
+                    "the port is not open (use `with SerialDetector(config) as det:` "
+                    "or call open() first)",
+                    "closed",
+                )
+            log.info("%s: reopening the port after an I/O error", self.port)
+            self.open()
+        try:
+            if self._needs_resync:
+                self._resync()
+            self._drain()
+            if self._needs_init:
+                self._initialize()
+            self._apply_exposure(exposure_s)
+            if self._config.device_averaging:
+                reading = self._device_averaged(exposure_s, averages)
+            else:
+                reading = self._host_averaged(exposure_s, averages)
+        except BaseException as exc:
+            answered = isinstance(exc, SerialDetectorError) and exc.kind in _ANSWERED
+            if not answered and self._serial is not None:
+                # A late answer to the interrupted query may still come (after a timeout,
+                # malformed lines, Ctrl-C): listen it out before the next query.
+                self._needs_resync = True
+            raise
+        log.debug("%s: %s", self.port, reading)
+        return reading
+
+    def _check_arguments(self, exposure_s: object, averages: object) -> tuple[float, int]:
+        exposure, n = _as_real(exposure_s), _as_int(averages)
+        if exposure is None or not (0 < exposure < math.inf):
+            raise self._invalid(
+                f"exposure_s must be a positive finite number of seconds, got {exposure_s!r}"
+            )
+        if n is None or n < 1:
+            raise self._invalid(f"averages must be an integer ≥ 1, got {averages!r}")
+        for name, scale, unit in (("exposure_ms", 1e3, "ms"), ("exposure_us", 1e6, "µs")):
+            if name in self._fields and round(exposure * scale) < 1:
+                raise self._invalid(
+                    f"exposure_s={exposure!r} rounds to 0 {unit}, below the resolution "
+                    f"of the command templates"
+                )
+        return exposure, n
+
+    def _values(self, exposure_s: float, averages: int) -> dict[str, float | int]:
+        return {
+            "exposure_s": exposure_s,
+            "exposure_ms": round(exposure_s * 1e3),
+            "exposure_us": round(exposure_s * 1e6),
+            "averages": averages,
+        }
+
+    def _host_averaged(self, exposure_s: float, averages: int) -> Reading:
+        command = self._config.query.format(**self._values(exposure_s, averages))
+        budget = exposure_s + self._config.timeout_s
+        samples: list[float] = []
+        saturated = False
+        for _ in range(averages):
+            value, match = self._query(command, budget)
+            samples.append(value)
+            saturated = saturated or self._is_saturated(value, match)
+        std = statistics.stdev(samples) if len(samples) > 1 else 0.0
+        return Reading(
+            value=statistics.fmean(samples),
+            std=std,
+            n=len(samples),
+            saturated=saturated,
+            raw=tuple(samples),
+        )
+
+    def _device_averaged(self, exposure_s: float, averages: int) -> Reading:
+        command = self._config.query.format(**self._values(exposure_s, averages))
+        budget = exposure_s * averages + self._config.timeout_s
+        value, match = self._query(command, budget)
+        std = math.nan
+        std_text = match.groupdict().get("std")
+        if std_text is not None:
+            parsed = _number(std_text)
+            if parsed is None or not math.isfinite(parsed) or parsed < 0:
+                line = match.string
+                raise self._error(
+                    f"the device's standard deviation {std_text!r} in {_quote(line)} "
+                    f"is not a finite number ≥ 0",
+                    "value",
+                    line,
+                )
+            std = parsed
+        return Reading(
+            value=value,
+            std=std,
+            n=averages,
+            saturated=self._is_saturated(value, match),
+            raw=(value,),
+        )
+
+    def _is_saturated(self, value: float, match: re.Match[str]) -> bool:
+        full_scale = self._config.full_scale
+        if full_scale is not None and value >= full_scale:
+            return True
+        groups = match.groupdict()
+        flag = groups.get("saturated")
+        if flag is not None and flag.strip().lower() not in _FALSE_WORDS:
+            return True
+        status = groups.get("status")
+        return (
+            status is not None
+            and self._saturated_status is not None
+            and self._saturated_status.search(status) is not None
+        )
+
+    # -- the conversation -----------------------------------------------------------
+
+    def _query(self, command: str, budget_s: float) -> tuple[float, re.Match[str]]:
+        """Send ``command`` and return the value of the first answer that matches
+        ``response``. A malformed line is counted and the driver keeps listening (the
+        real answer may follow a stray line); if the deadline passes after a malformed
+        line, the query is sent again (at most ``retries`` more times)."""
+        cfg = self._config
+        malformed: list[_Line] = []
+        for attempt in range(cfg.retries + 1):
+            if attempt:
+                log.warning(
+                    "%s: no valid answer to %r after %s; asking again",
+                    self.port,
+                    command,
+                    malformed[-1].quoted(),
+                )
+                self._drain()
+            self._send(command)
+            deadline = time.monotonic() + budget_s
+            heard = False
+            while (line := self._next_line(deadline)) is not None:
+                self._check_unsolicited(line, command)
+                if not line.overflow:
+                    if line.text == command.strip():  # the device echoes commands
+                        continue
+                    match = self._response.fullmatch(line.text)
+                    if match is not None:
+                        value = _number(match.group("value"))
+                        if value is not None:
+                            if not math.isfinite(value):
+                                raise self._error(
+                                    f"the device answered a non-finite value "
+                                    f"{match.group('value')!r} in {_quote(line.text)} "
+                                    f"to {command!r}",
+                                    "value",
+                                    line.text,
+                                )
+                            return value, match
+                heard = True
+                malformed.append(line)
+                log.warning("%s: malformed answer to %r: %s", self.port, command, line.quoted())
+                if len(malformed) > cfg.retries:
+                    raise self._malformed(command, malformed)
+            if not malformed:
+                raise self._timeout(command, budget_s, "answer")
+        if not heard:
+            raise self._timeout(
+                command,
+                budget_s,
+                "answer",
+                f"after {len(malformed)} malformed line(s), the last {malformed[-1].quoted()}",
+            )
+        raise self._malformed(command, malformed)
+
+    def _command(self, command: str) -> None:
+        """Send an init or set-exposure command and, with ``command_ack``, wait for it."""
+        self._send(command)
+        if self._ack is None:
+            return
+        cfg = self._config
+        deadline = time.monotonic() + cfg.timeout_s
+        malformed: list[_Line] = []
+        while (line := self._next_line(deadline)) is not None:
+            self._check_unsolicited(line, command)
+            if not line.overflow:
+                if line.text == command.strip():
+                    continue
+                if self._ack.search(line.text):
+                    return
+            malformed.append(line)
+            log.warning("%s: unexpected answer to %r: %s", self.port, command, line.quoted())
+            if len(malformed) > cfg.retries:
+                raise self._malformed(command, malformed, expected="an acknowledgement")
+        raise self._timeout(command, cfg.timeout_s, "acknowledgement")
+
+    def _check_unsolicited(self, line: _Line, command: str) -> None:
+        """Raise on a reset banner or an error reply received while waiting."""
+        if line.overflow:
+            return
+        if self._banner is not None and self._banner.search(line.text):
+            self._note_reset()
+            raise self._error(
+                f"device reset during a reading: it printed {_quote(line.text)} while the "
+                f"driver waited for the answer to {command!r}; it will be re-initialized on "
+                f"the next call",
+                "reset",
+                line.text,
+            )
+        if self._error_reply is not None and self._error_reply.search(line.text):
+            raise self._error(
+                f"the device refused {command!r}: {_quote(line.text)}", "device", line.text
+            )
+
+    def _initialize(self) -> None:
+        self._needs_init = True
+        self._exposure_command = None
+        for command in self._config.init:
+            self._command(command)
+        self._needs_init = False
+
+    def _apply_exposure(self, exposure_s: float) -> None:
+        template = self._config.set_exposure
+        if template is None:
+            return
+        command = template.format(**self._values(exposure_s, 1))
+        if command == self._exposure_command:
+            return
+        self._exposure_command = None
+        self._command(command)
+        self._exposure_command = command
+
+    def _note_reset(self) -> None:
+        self._resets += 1
+        self._needs_init = True
+        self._exposure_command = None
+
+
+def _compile_optional(pattern: str | None) -> re.Pattern[str] | None:
+    return None if pattern is None else re.compile(pattern)

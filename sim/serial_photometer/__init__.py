@@ -1,0 +1,51 @@
+"""A simulated line-based photometer served on a pseudo-terminal.
+
+It speaks the protocol of ``docs/serial_detector.md`` (the Arduino example) so that
+:class:`drivers.serial_detector.SerialDetector` can be exercised, byte for byte, on a
+real tty without hardware, and faults can be injected (malformed lines, silence, a reset
+in the middle of a reading, slow answers, bytes without a line ending).
+
+Protocol (commands end with ``\\n``, ``\\r`` or ``\\r\\n``; answers end with ``\\r\\n``
+like an Arduino's ``println``):
+
+==================  ============================================================
+``EXP <ms>``        set the integration time (1 … 60000 ms) → ``OK``
+``GAIN <g>``        set the gain (1 … 64) → ``OK``
+``MEAS``            one exposure at the set time → ``VAL <counts> <OK|SAT>``
+``MEAS <ms>``       one exposure of ``<ms>`` → ``VAL <counts> <OK|SAT>``
+``MEAS <ms> <n>``   the mean of ``n`` exposures → ``VAL <mean> <OK|SAT> <std>``
+``ID?``             → ``gonio-sim photometer 1.0``
+anything else       → ``ERR <reason>``
+==================  ============================================================
+
+After a reset the device prints ``READY gonio-sim photometer 1.0`` and forgets its
+exposure and gain. Commands are processed one after the other, each taking its
+exposure time (plus ``reply_delay_s``), as on a real single-threaded device.
+
+``python -m sim.serial_photometer`` prints the pty path and serves until Ctrl-C.
+
+The package: :mod:`~sim.serial_photometer.protocol` (the device's fixed lines and the
+matching driver configuration), :mod:`~sim.serial_photometer.server` (the pty and the
+serving thread), :mod:`~sim.serial_photometer.device` (the photometer: its settings,
+faults and answers) and :mod:`~sim.serial_photometer.cli` (the command line).
+"""
+
+from sim.serial_photometer.cli import main
+from sim.serial_photometer.device import SerialPhotometer
+from sim.serial_photometer.device import Signal as Signal
+from sim.serial_photometer.protocol import (
+    BANNER,
+    MALFORMED_LINE,
+    RESPONSE,
+    default_config,
+)
+from sim.serial_photometer.protocol import IDENTITY as IDENTITY
+
+__all__ = [
+    "BANNER",
+    "MALFORMED_LINE",
+    "RESPONSE",
+    "SerialPhotometer",
+    "default_config",
+    "main",
+]

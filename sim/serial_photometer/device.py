@@ -1,0 +1,282 @@
+"""The simulated photometer itself: its settings, the faults a test injects, and how it
+answers each command (see the package docstring for the protocol)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+import random
+import statistics
+import termios
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from drivers.serial_detector import SerialDetectorConfig
+from sim.serial_photometer.protocol import (
+    BANNER,
+    IDENTITY,
+    MALFORMED_LINE,
+    _int_in,
+    _line,
+    default_config,
+)
+from sim.serial_photometer.server import _Event, _PtyServer
+
+Signal = float | Callable[[float], float]
+
+
+@dataclass
+class _Faults:
+    malformed: int = 0
+    silent: bool = False
+    reset_next: bool = False
+    slow_s: float = 0.0
+    garbage: int = 0
+    inject: deque[str] = field(default_factory=deque)
+
+
+class SerialPhotometer(_PtyServer):
+    """A photometer on a pseudo-terminal.
+
+    ``signal`` is a constant rate in counts per second (the reading is rate × exposure)
+    or a callable taking the exposure in seconds and returning the counts of one
+    exposure. Gaussian noise of ``noise_std`` counts (from ``random.Random(seed)``) and
+    ``dark`` counts are added, the sum is multiplied by the gain, and readings at or
+    above ``full_scale`` are clipped to it with the status ``SAT`` (``None``: no
+    clipping). ``reply_delay_s`` is added to every answer. With ``reset_on_open`` the
+    device reboots when a host opens the port (as an Arduino does when DTR rises) and
+    prints its banner ``boot_s`` later. ``echo`` echoes every command line.
+
+    The pty and the serving thread come from :class:`~sim.serial_photometer.server._PtyServer`.
+    """
+
+    def __init__(
+        self,
+        signal: Signal = 20_000.0,
+        *,
+        noise_std: float = 0.0,
+        dark: float = 0.0,
+        full_scale: float | None = 65535.0,
+        reply_delay_s: float = 0.0,
+        default_exposure_ms: int = 10,
+        reset_on_open: bool = False,
+        boot_s: float = 0.0,
+        echo: bool = False,
+        seed: int = 0,
+    ) -> None:
+        if not callable(signal) and not math.isfinite(signal):
+            raise ValueError(f"signal must be finite or a callable, got {signal!r}")
+        if noise_std < 0 or reply_delay_s < 0 or boot_s < 0:
+            raise ValueError("noise_std, reply_delay_s and boot_s must be ≥ 0")
+        if full_scale is not None and not full_scale > 0:
+            raise ValueError(f"full_scale must be > 0 or None, got {full_scale!r}")
+        if reset_on_open and not hasattr(termios, "TIOCPKT"):  # pragma: no cover
+            raise ValueError("reset_on_open needs TIOCPKT, not available on this system")
+        self._signal = signal
+        self._noise_std = noise_std
+        self._dark = dark
+        self._full_scale = full_scale
+        self._reply_delay_s = reply_delay_s
+        self._default_exposure_ms = default_exposure_ms
+        self._reset_on_open = reset_on_open
+        self._boot_s = boot_s
+        self._echo = echo
+        self._rng = random.Random(seed)
+
+        self._lock = threading.Lock()
+        self._faults = _Faults()
+        self._exposure_ms = default_exposure_ms
+        self._gain = 1
+        self._busy_until = 0.0
+        self._events: list[_Event] = []
+        self._seq = itertools.count()
+        self._commands: list[str] = []
+        self._resets = 0
+
+        self._inbuf = bytearray()
+        self._skipping = False  # inside a command line that was too long
+        self._outbuf = bytearray()
+        self._master: int | None = None
+        self._slave: int | None = None
+        self._wake: tuple[int, int] | None = None
+        self._thread: threading.Thread | None = None
+        self._stopping = threading.Event()
+        self._path: str | None = None
+        self._error: BaseException | None = None
+
+    # -- configuration -------------------------------------------------------------
+
+    def config(self, **overrides: Any) -> SerialDetectorConfig:
+        """:func:`default_config` for this device's path."""
+        return default_config(self.path, **overrides)
+
+    # -- inspection ---------------------------------------------------------------
+
+    @property
+    def commands(self) -> list[str]:
+        """Every command line received so far, in order."""
+        with self._lock:
+            return list(self._commands)
+
+    @property
+    def exposure_ms(self) -> int:
+        with self._lock:
+            return self._exposure_ms
+
+    @property
+    def gain(self) -> int:
+        with self._lock:
+            return self._gain
+
+    @property
+    def resets(self) -> int:
+        """How many times the device has rebooted."""
+        with self._lock:
+            return self._resets
+
+    def clear_commands(self) -> None:
+        with self._lock:
+            self._commands.clear()
+
+    # -- fault injection ------------------------------------------------------------
+
+    def malformed(self, count: int = 1) -> None:
+        """Answer the next ``count`` measurements with :data:`MALFORMED_LINE`."""
+        with self._lock:
+            self._faults.malformed += count
+
+    def inject(self, *lines: str) -> None:
+        """Answer the next measurements with these lines, verbatim (e.g. ``"VAL nan OK"``)."""
+        with self._lock:
+            self._faults.inject.extend(lines)
+
+    def silent(self) -> None:
+        """Ignore every command until :meth:`clear`."""
+        with self._lock:
+            self._faults.silent = True
+
+    def reset_mid_read(self) -> None:
+        """Reboot half-way through the next measurement instead of answering it."""
+        with self._lock:
+            self._faults.reset_next = True
+
+    def slow(self, seconds: float) -> None:
+        """Delay every answer by ``seconds`` more, until :meth:`clear`."""
+        with self._lock:
+            self._faults.slow_s = seconds
+
+    def garbage_without_newline(self, nbytes: int) -> None:
+        """Answer the next measurement with ``nbytes`` digits and no line ending."""
+        with self._lock:
+            self._faults.garbage = nbytes
+
+    def unsolicited(self, line: str) -> None:
+        """Send ``line`` now, unasked (a debug print, a stray message)."""
+        self._schedule(time.monotonic(), _line(line))
+
+    def reboot(self) -> None:
+        """Reset now: forget the settings and print the banner after ``boot_s``."""
+        with self._lock:
+            self._reset_locked(time.monotonic())
+        self._wakeup()
+
+    def clear(self) -> None:
+        """Remove every fault."""
+        with self._lock:
+            self._faults = _Faults()
+
+    # -- the protocol ---------------------------------------------------------------
+
+    def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
+        """Reboot: pending answers are lost, settings return to their defaults."""
+        self._events.clear()
+        self._exposure_ms = self._default_exposure_ms
+        self._gain = 1
+        self._busy_until = now + (0.0 if banner_now else self._boot_s)
+        self._resets += 1
+        self._schedule_locked(self._busy_until, _line(BANNER))
+
+    def _handle(self, line: str, now: float) -> None:
+        with self._lock:
+            self._commands.append(line)
+            if self._echo:
+                self._output_locked(_line(line))
+            faults = self._faults
+            if faults.silent:
+                return
+            start = max(now, self._busy_until)
+            delay = self._reply_delay_s + faults.slow_s
+            words = line.split()
+            name, args = words[0].upper(), words[1:]
+            if name == "MEAS":
+                self._measure_locked(args, start, delay)
+                return
+            if name == "EXP" and len(args) == 1 and _int_in(args[0], 1, 60_000):
+                self._exposure_ms = int(args[0])
+                answer = "OK"
+            elif name == "GAIN" and len(args) == 1 and _int_in(args[0], 1, 64):
+                self._gain = int(args[0])
+                answer = "OK"
+            elif name in ("EXP", "GAIN"):
+                answer = f"ERR bad argument: {line}"
+            elif name == "ID?" and not args:
+                answer = IDENTITY
+            else:
+                answer = f"ERR unknown command: {line}"
+            self._busy_until = start + delay
+            self._schedule_locked(self._busy_until, _line(answer))
+
+    def _measure_locked(self, args: list[str], start: float, delay: float) -> None:
+        if len(args) > 2 or not all(_int_in(a, 1, 60_000) for a in args[:1]):
+            self._schedule_locked(start + delay, _line(f"ERR bad argument: MEAS {' '.join(args)}"))
+            return
+        if len(args) == 2 and not _int_in(args[1], 1, 10_000):
+            self._schedule_locked(start + delay, _line(f"ERR bad averages: {args[1]}"))
+            return
+        exposure_ms = int(args[0]) if args else self._exposure_ms
+        count = int(args[1]) if len(args) == 2 else 1
+        duration = exposure_ms / 1000 * count
+        faults = self._faults
+        if faults.reset_next:
+            faults.reset_next = False
+            self._busy_until = start + duration / 2
+            self._schedule_locked(self._busy_until, reset=True)
+            return
+        done = start + duration + delay
+        self._busy_until = done
+        if faults.garbage:
+            data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
+            faults.garbage = 0
+        elif faults.inject:
+            data = _line(faults.inject.popleft())
+        elif faults.malformed:
+            faults.malformed -= 1
+            data = _line(MALFORMED_LINE)
+        else:
+            data = _line(self._answer_locked(exposure_ms / 1000, count))
+        self._schedule_locked(done, data)
+
+    def _answer_locked(self, exposure_s: float, count: int) -> str:
+        values: list[float] = []
+        saturated = False
+        for _ in range(count):
+            signal = self._signal
+            try:
+                counts = float(signal(exposure_s)) if callable(signal) else signal * exposure_s
+            except Exception as exc:  # a test's signal ran out of values, say
+                return f"ERR signal failed: {type(exc).__name__}"
+            if self._noise_std:
+                counts += self._rng.gauss(0.0, self._noise_std)
+            counts = (counts + self._dark) * self._gain
+            if self._full_scale is not None and counts >= self._full_scale:
+                counts, saturated = self._full_scale, True
+            values.append(counts)
+        status = "SAT" if saturated else "OK"
+        if count == 1:
+            return f"VAL {values[0]!r} {status}"
+        mean, std = statistics.fmean(values), statistics.stdev(values)
+        return f"VAL {mean!r} {status} {std!r}"

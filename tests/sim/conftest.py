@@ -1,0 +1,100 @@
+"""Fixtures for the simulated backend: raw links and SDK ports on emulated buses
+(the `clock`, `emulator` and `latency_timer` fixtures are in tests/conftest.py)."""
+
+from __future__ import annotations
+
+import os
+import select
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import dynamixel_sdk as sdk
+import pytest
+
+from drivers.dynamixel.protocol import Packet, PacketReader
+from sim.dxl_emulator import DxlEmulator
+from sim.dxl_tty import set_raw
+
+
+class RawLink:
+    """The host end of an emulated bus, byte by byte (the tty set raw at ``baud``)."""
+
+    def __init__(self, path: str, baud: int) -> None:
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY)
+        self.set_baud(baud)
+
+    def set_baud(self, baud: int) -> None:
+        set_raw(self.fd, baud)
+
+    def send(self, data: bytes) -> None:
+        os.write(self.fd, data)
+
+    def recv(self, timeout: float = 0.2, *, until: int | None = None) -> bytes:
+        """Bytes arriving within ``timeout`` s (returns early once ``until`` bytes came)."""
+        out = bytearray()
+        deadline = time.monotonic() + timeout
+        while until is None or len(out) < until:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            ready, _, _ = select.select([self.fd], [], [], left)
+            if ready:
+                out += os.read(self.fd, 4096)
+        return bytes(out)
+
+    def transact(self, data: bytes, expect: int, timeout: float = 0.5) -> bytes:
+        """Send ``data`` and return the ``expect`` bytes of the answer (fewer on timeout)."""
+        self.send(data)
+        return self.recv(timeout, until=expect)
+
+    def packets(self, data: bytes, timeout: float = 0.05) -> list[Packet]:
+        """Send ``data`` and parse everything that comes back within ``timeout`` s."""
+        self.send(data)
+        reader = PacketReader()
+        reader.feed(self.recv(timeout))
+        out: list[Packet] = []
+        while (packet := reader.next_packet()) is not None:
+            out.append(packet)
+        return out
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+
+@pytest.fixture
+def raw_link() -> Iterator[Callable[[DxlEmulator], RawLink]]:
+    """Factory: a raw host link to an emulator, at the emulator's rate."""
+    links: list[RawLink] = []
+
+    def make(emu: DxlEmulator, baud: int | None = None) -> RawLink:
+        link = RawLink(emu.path, baud or emu.baud)
+        links.append(link)
+        return link
+
+    yield make
+    for link in links:
+        link.close()
+
+
+@pytest.fixture
+def sdk_port(latency_timer: int) -> Iterator[Callable[[DxlEmulator], Any]]:
+    """Factory: an open SDK PortHandler on an emulator, at the emulator's rate."""
+    ports: list[Any] = []
+
+    def make(emu: DxlEmulator, baud: int | None = None) -> Any:
+        port = sdk.PortHandler(emu.path)
+        assert port.openPort()
+        assert port.setBaudRate(baud or emu.baud)
+        ports.append(port)
+        return port
+
+    yield make
+    for port in ports:
+        port.closePort()
+
+
+@pytest.fixture
+def ph() -> Any:
+    """The SDK's Protocol 2.0 packet handler."""
+    return sdk.PacketHandler(2.0)
