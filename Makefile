@@ -38,6 +38,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/extremes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/planner.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis

@@ -38,6 +38,23 @@ AXES = [
     for i in range(1, 5)
 ]
 RETURN_DELAY_S = 250 * 2e-6  # the motors' default Return Delay Time
+#: Data bytes of one poll per motor: Moving (122) … Present Position (132-135).
+POLL_DATA = 14
+
+
+def sync_read_bytes(motors: int) -> int:
+    """A SYNC_READ instruction: header 4, ID, LEN 2, INST, address 2, length 2, one byte
+    per motor ID, CRC 2 (no stuffing: none of these bytes can form FF FF FD)."""
+    return 4 + 1 + 2 + 1 + 2 + 2 + motors + 2
+
+
+def status_bytes(data: int) -> int:
+    """A status packet: header 4, ID, LEN 2, 0x55, ERR, the data, CRC 2 (unstuffed)."""
+    return 4 + 1 + 2 + 1 + 1 + data + 2
+
+
+#: Bytes on the line for one poll of the 4 axes: 18 + 4 × 25 = 118.
+POLL_BYTES = sync_read_bytes(len(AXES)) + len(AXES) * status_bytes(POLL_DATA)
 
 
 def timed(fn, repeat: int) -> float:
@@ -55,7 +72,11 @@ def measure(baud: int, repeat: int) -> dict[str, float]:
         DynamixelBus(emu.path, AXES, baud=baud, latency_ms=4.0) as bus,
     ):
         poll = timed(bus.positions, repeat)
+        emu.reset_stats()
         here = bus.positions()
+        stats = emu.stats
+        if stats.bytes_in + stats.bytes_out != POLL_BYTES:
+            raise AssertionError(f"a poll moved {stats.bytes_in + stats.bytes_out} bytes")
 
         emu.reset_stats()
         hold = timed(lambda: (bus.move_to(here), bus.wait_settled(2.0)), repeat)
@@ -71,11 +92,10 @@ def measure(baud: int, repeat: int) -> dict[str, float]:
             bus.wait_settled(2.0)
 
         small = timed(small_move, max(10, repeat // 5))
-    poll_bytes = 14 + 4 * (11 + 14)  # SYNC_READ instruction + 4 status packets of 14 data bytes
     return {
         "poll_ms": poll * 1e3,
-        "poll_min_ms": (poll_bytes * 10 / baud + 4 * RETURN_DELAY_S) * 1e3,
-        "poll_bytes": poll_bytes,
+        "poll_min_ms": (POLL_BYTES * 10 / baud + len(AXES) * RETURN_DELAY_S) * 1e3,
+        "poll_bytes": POLL_BYTES,
         "hold_ms": hold * 1e3,
         "hold_bytes": hold_bytes,
         "hold_min_ms": (hold_bytes * 10 / baud + hold_packets_out * RETURN_DELAY_S) * 1e3,
@@ -94,11 +114,11 @@ def main() -> None:
     print("| --- | ---: | ---: |")
     lines = [
         ("SYNC_READ poll (Moving … Present Position), ms", "poll_ms", ".2f"),
-        ("  theoretical minimum, ms", "poll_min_ms", ".2f"),
-        ("  bytes on the line", "poll_bytes", ".0f"),
-        ("hold step (SYNC_WRITE goals + settle polls), ms", "hold_ms", ".2f"),
-        ("  theoretical minimum, ms", "hold_min_ms", ".2f"),
-        ("  bytes on the line per step", "hold_bytes", ".0f"),
+        ("poll: theoretical minimum (bytes × 10 / baud + return delays), ms", "poll_min_ms", ".2f"),
+        ("poll: bytes on the line", "poll_bytes", ".0f"),
+        ("hold step (SYNC_WRITE of goals + settle polls), ms", "hold_ms", ".2f"),
+        ("hold step: theoretical minimum, ms", "hold_min_ms", ".2f"),
+        ("hold step: bytes on the line", "hold_bytes", ".0f"),
         ("move 0.02 rad and settle, ms", "small_ms", ".1f"),
     ]
     for label, key, fmt in lines:

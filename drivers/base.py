@@ -152,7 +152,9 @@ class MotorBus(Protocol):
         ...
 
     def wait_settled(self, timeout_s: float) -> None:
-        """Block until every axis has stopped moving; `CommError` on timeout."""
+        """Block until every axis has stopped moving at its goal. On timeout, tell every
+        axis to hold where it is and raise `MotionTimeout` (`CommError` only when the
+        bus itself fails, `MotorFault` when a motor reports a hardware error)."""
         ...
 
     def positions(self) -> dict[str, float]:
@@ -160,7 +162,7 @@ class MotorBus(Protocol):
         ...
 
     def stop(self) -> None:
-        """Hold every axis where it is now."""
+        """Hold every axis where it is now (also a faulted axis's neighbours)."""
         ...
 
     def torque(self, on: bool) -> None:

@@ -1,17 +1,23 @@
-"""`gonio motors scan | status | reboot`: look at a Dynamixel bus without a rig file.
+"""`gonio motors scan | status | reboot`: look at a Dynamixel bus, with or without a
+rig file.
 
 Every command opens the port, does its job through `drivers.dynamixel.link`, and
-releases the port; driver errors become one line (see `gonio.cli`).
+releases the port; driver errors become one line (see `gonio.cli`). Given ``--rig``,
+`status` takes the port, rate and IDs from the rig file (flags still override) and
+adds each motor's axis and its joint angle.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from drivers.base import CommError, DriverError
+from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import BAUD_RATES, MODELS, RAD_PER_TICK
 from drivers.dynamixel.link import DynamixelLink
+from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
 DEFAULT_SCAN_BAUDS = (57_600, 1_000_000)
@@ -56,9 +62,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     scan.set_defaults(func=cmd_scan)
 
     status = cmds.add_parser("status", help="positions, temperatures, voltages, error flags")
-    status.add_argument("--port", required=True)
-    status.add_argument("--ids", type=motor_ids, required=True, help="e.g. 1,2,3 or 1-4")
-    status.add_argument("--baud", type=baud_rate, default=57_600)
+    status.add_argument("--rig", type=Path, help="a rig file: port, rate, IDs and axes")
+    status.add_argument("--port", help="serial port (default: the rig file's)")
+    status.add_argument("--ids", type=motor_ids, help="e.g. 1,2,3 or 1-4 (default: the rig's)")
+    status.add_argument("--baud", type=baud_rate, help="default: the rig's, else 57600")
     status.set_defaults(func=cmd_status)
 
     reboot = cmds.add_parser("reboot", help="reboot motors (clears hardware errors)")
@@ -86,15 +93,35 @@ def cmd_scan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _status_target(args: argparse.Namespace) -> tuple[str, int, list[int], dict[int, AxisConfig]]:
+    """(port, baud, IDs, axis of each ID) from the flags and the rig file."""
+    axes: dict[int, AxisConfig] = {}
+    port, baud, ids = args.port, args.baud, args.ids
+    if args.rig is not None:
+        from gonio.rig.model import Rig
+
+        rig = Rig.from_yaml(args.rig)
+        axes = {a.motor_id: a for a in rig.bus_axes()}
+        port = port or rig.spec.bus.port
+        baud = baud or rig.spec.bus.baud
+        ids = ids or sorted(axes)
+    if port is None or ids is None:
+        raise ConfigError("motors status: give --port and --ids, or --rig RIG.yaml")
+    return port, baud or 57_600, ids, axes
+
+
 def cmd_status(args: argparse.Namespace) -> int:
+    port, baud, ids, axes = _status_target(args)
     missing = 0
     header = (
         f"{'ID':>3}  {'model':<12} {'position':>9} {'(deg)':>9}  {'moving':>6} "
         f"{'torque':>6} {'temp °C':>7} {'volt V':>6}  errors"
     )
-    with DynamixelLink(args.port, args.baud, retries=1, raise_alerts=False) as link:
+    if axes:
+        header += f"  {'axis':<20} {'joint (deg)':>11}"
+    with DynamixelLink(port, baud, retries=1, raise_alerts=False) as link:
         print(header)
-        for motor_id in args.ids:
+        for motor_id in ids:
             try:
                 model = MODELS.get(link.ping(motor_id), "unknown")
                 errors = link.hardware_error(motor_id)
@@ -108,6 +135,13 @@ def cmd_status(args: argparse.Namespace) -> int:
                     f"{link.read(motor_id, 'present_input_voltage') / 10:>6.1f}  "
                     f"{', '.join(errors) or 'none'}"
                 )
+                if motor_id in axes:
+                    axis = axes[motor_id]
+                    joint = math.degrees(axis.to_rad(ticks))
+                    inside = "" if axis.contains(axis.to_rad(ticks)) else "  OUTSIDE LIMITS"
+                    row += f"  {axis.name:<20} {joint:>11.2f}{inside}"
+                elif axes:
+                    row += f"  {'(not in the rig)':<20}"
             except CommError:
                 missing += 1
                 row = f"{motor_id:>3}  no answer"

@@ -28,7 +28,14 @@ from types import FrameType, TracebackType
 from typing import Self
 
 from drivers.dynamixel.control_table import BAUD_RATES
-from drivers.dynamixel.protocol import BROADCAST_ID, CRCError, Packet, PacketReader, StatusError
+from drivers.dynamixel.protocol import (
+    BROADCAST_ID,
+    CorruptPacket,
+    CRCError,
+    Packet,
+    PacketReader,
+    StatusError,
+)
 from sim.dxl_clock import Clock, ManualClock, ScaledClock
 from sim.dxl_faults import Fault, FaultBook
 from sim.dxl_instructions import FastChain, Reply, Response, handle
@@ -44,14 +51,16 @@ BITS_PER_BYTE = 10
 
 @dataclass
 class BusStats:
-    """Traffic counters: packets and bytes each way, host packets with a bad CRC, and
-    host packets per instruction name (e.g. ``instructions["SYNC_READ"]``)."""
+    """Traffic counters: packets and bytes each way, host packets with a bad CRC or with
+    an unstuffed FF FF FD, and host packets per instruction name (e.g.
+    ``instructions["SYNC_READ"]``)."""
 
     packets_in: int = 0
     packets_out: int = 0
     bytes_in: int = 0
     bytes_out: int = 0
     crc_errors: int = 0
+    stuffing_errors: int = 0
     instructions: Counter[str] = field(default_factory=Counter)
 
 
@@ -259,8 +268,8 @@ class DxlEmulator:
         """Serve the next complete packet in ``reader`` (False when there is none)."""
         try:
             packet = reader.next_packet()
-        except CRCError as exc:
-            self._on_crc_error(exc.packet_id, arrived)
+        except CorruptPacket as exc:
+            self._on_corrupt(exc, arrived)
             return True
         if packet is None:
             return False
@@ -280,11 +289,16 @@ class DxlEmulator:
         size = 10 + len(packet.params)
         self._transmit(responses, arrived, size)
 
-    def _on_crc_error(self, packet_id: int, arrived: float) -> None:
-        """A host packet with a bad CRC: the addressed motor answers CRC error (3)."""
+    def _on_corrupt(self, exc: CorruptPacket, arrived: float) -> None:
+        """A host packet with a bad CRC, or with FF FF FD not followed by the stuffing FD:
+        the addressed motor answers CRC error (3) and executes nothing."""
+        packet_id = exc.packet_id
         with self._lock:
             self._stats.packets_in += 1
-            self._stats.crc_errors += 1
+            if isinstance(exc, CRCError):
+                self._stats.crc_errors += 1
+            else:
+                self._stats.stuffing_errors += 1
             responses: list[Response] = [
                 Reply(m, m.id, m.status_error(StatusError.CRC), b"", m.baud, m.return_delay)
                 for m in self._listening()
@@ -412,4 +426,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    # Started with `&` from a non-interactive shell, the process inherits SIGINT ignored
+    # and Python then installs no KeyboardInterrupt handler: restore it, so Ctrl-C (or
+    # `kill -INT`) stops the emulator as its banner promises.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     sys.exit(main())

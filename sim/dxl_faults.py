@@ -26,6 +26,9 @@ class Fault(Enum):
     CORRUPT_CRC = "corrupt_crc"  #: the status packet's CRC is wrong
     WRONG_ID = "wrong_id"  #: the status packet carries another ID (ID + 128 mod 253)
     GARBAGE = "garbage"  #: noise bytes arrive before the status packet
+    #: the motor's previous status packet arrives again just before this one: a late
+    #: reply the host had given up on (nothing extra if the motor has not answered yet)
+    STALE = "stale"
     SILENT = "silent"  #: the whole bus is unplugged until cleared
     # Hardware alerts: latch a Hardware Error Status bit (REBOOT clears it).
     INPUT_VOLTAGE = "input_voltage"
@@ -40,7 +43,9 @@ class Fault(Enum):
         return next((bit for bit, name in HARDWARE_ERROR_BITS.items() if name == self.value), None)
 
 
-REPLY_FAULTS = frozenset({Fault.NO_REPLY, Fault.CORRUPT_CRC, Fault.WRONG_ID, Fault.GARBAGE})
+REPLY_FAULTS = frozenset(
+    {Fault.NO_REPLY, Fault.CORRUPT_CRC, Fault.WRONG_ID, Fault.GARBAGE, Fault.STALE}
+)
 
 
 @dataclass
@@ -62,6 +67,8 @@ class FaultBook:
 
     def __init__(self) -> None:
         self._queues: dict[EmulatedMotor, list[_Pending]] = {}
+        #: Each motor's last status packet as it left (clean), for `Fault.STALE`.
+        self._last: dict[EmulatedMotor, bytes] = {}
 
     def add(self, motor: EmulatedMotor, fault: Fault, count: int | None) -> None:
         if fault not in REPLY_FAULTS:
@@ -94,13 +101,16 @@ class FaultBook:
             return None
         packet_id = _wrong_id(response.packet_id) if fault is Fault.WRONG_ID else response.packet_id
         raw = status_packet(packet_id, response.error, response.params)
+        stale = self._last.get(response.motor, b"") if fault is Fault.STALE else b""
+        self._last[response.motor] = raw
         if fault is Fault.CORRUPT_CRC:
             raw = _corrupt(raw)
-        return NOISE + raw if fault is Fault.GARBAGE else raw
+        return stale + (NOISE + raw if fault is Fault.GARBAGE else raw)
 
     def _encode_chain(self, chain: FastChain) -> bytes | None:
         """A fast-read chain: a lost block truncates it, a wrong ID shows in its block,
-        a corrupt CRC spoils the packet CRC, garbage precedes the packet."""
+        a corrupt CRC spoils the packet CRC, garbage precedes the packet (a stale reply
+        has no effect here)."""
         blocks: list[tuple[int, int, bytes]] = []
         noise, corrupt = b"", False
         for block in chain.blocks:

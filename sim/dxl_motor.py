@@ -295,12 +295,10 @@ class EmulatedMotor:
         return it.decode(bytes(self._mem[it.address : it.address + it.size]))
 
     def _put(self, name: str, value: int) -> None:
+        """Store ``value`` in item ``name``; ValueError (nothing stored) if the register
+        cannot hold it (e.g. 2³¹ in a signed 4-byte item)."""
         it = BY_NAME[name]
-        try:
-            raw = it.encode(value)
-        except OverflowError:
-            raise ValueError(f"{value} does not fit {name} ({it.size} bytes)") from None
-        self._mem[it.address : it.address + it.size] = raw
+        self._mem[it.address : it.address + it.size] = it.encode(value)
 
     def _reset_ram(self, position: float) -> None:
         self._mem[EEPROM_END:] = _DEFAULTS[EEPROM_END:]

@@ -32,7 +32,8 @@ settings.load_profile("ci" if os.environ.get("CI") else "dev")
 #: default: the SDK busy-waits for replies in the test's thread while the emulator
 #: serves from another thread of the same process, so under CPU load much shorter
 #: timeouts (4-8 ms) turned into flaky failures, and the few expected timeouts cost
-#: only ~35 ms each.
+#: only ~35 ms each. The SDK's global is what plain SDK ports use; a `DynamixelLink`
+#: never reads or writes it (its port has its own timer: pass ``latency_ms``).
 TEST_LATENCY_TIMER = 16
 
 

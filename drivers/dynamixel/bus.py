@@ -7,21 +7,36 @@ back in one SYNC_READ, whose status packets also carry each motor's alert bit. S
   goals are also clamped to the motor's own position limits (written to its EEPROM in
   position mode), so the motor refuses what the software would;
 - torque is only enabled after each goal is set to the present position (no jump);
-- leaving the context (normally, on an exception, or on Ctrl-C in the middle of a
-  transaction) makes every axis hold where it is and releases the port;
-- a settle that does not finish in time holds the axes and raises `MotionTimeout`.
+- `stop` holds every axis that answers at its present position clamped to its limits,
+  reading positions *without* raising on alert bits: one faulted motor never keeps the
+  others moving;
+- leaving the context (normally, on an exception — a `MotorFault` of one axis included
+  — or on Ctrl-C in the middle of a transaction) makes every axis hold where it is and
+  releases the port; the exception that left the block is the one raised;
+- a settle that does not finish in time holds the axes and raises `MotionTimeout`;
+- `reboot` clears faulted motors and brings them back holding, configured.
 
-EEPROM items (operating mode, drive mode, position limits) are written only when they
-differ, and only with torque off.
+EEPROM items (operating mode, drive mode, position limits) are read first and written
+only when they differ; only the motors that need such a write have their torque turned
+off (and read back off) before it, so opening a configured bus never drops an arm.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
+from types import TracebackType
 
-from drivers.base import DriverError, Health, LimitError, MotionTimeout, MotorFault, Resource
+from drivers.base import (
+    CommError,
+    DriverError,
+    Health,
+    LimitError,
+    MotionTimeout,
+    MotorFault,
+    Resource,
+)
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import (
     MODELS,
@@ -43,7 +58,8 @@ class DynamixelBus(Resource):
     ``baud`` is the motors' rate (factory default 57 600; see docs/hardware.md to move
     to 1 Mbps); ``retries`` extra attempts per transaction; ``settle_ticks`` how close
     (in motor ticks) an axis must be to its goal to count as settled; ``configure``
-    writes operating mode, drive mode, position limits and profiles on open.
+    writes operating mode, drive mode, position limits and profiles on open;
+    ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again.
     """
 
     def __init__(
@@ -57,6 +73,7 @@ class DynamixelBus(Resource):
         settle_ticks: int = 2,
         poll_interval_s: float = 0.002,
         configure: bool = True,
+        reboot_timeout_s: float = 2.0,
     ) -> None:
         if not axes:
             raise ValueError("a bus needs at least one axis")
@@ -75,6 +92,7 @@ class DynamixelBus(Resource):
         self.settle_ticks = settle_ticks
         self.poll_interval_s = poll_interval_s
         self.configure = configure
+        self.reboot_timeout_s = reboot_timeout_s
         self.models: dict[str, str] = {}
         self._goals: dict[str, int] = {}
 
@@ -106,32 +124,72 @@ class DynamixelBus(Resource):
             raise
 
     def close(self) -> None:
-        """Hold every axis where it is (best effort) and release the port."""
-        if not self._link.is_open:
+        """Hold every axis that answers where it is and release the port (always). If an
+        axis could not be told to hold, raise that error once the port is released."""
+        problem = self._release()
+        if problem is not None:
+            raise problem
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Hold and release; the exception leaving the block (if any) is the one that
+        propagates, with a failure to hold added to it as a note."""
+        problem = self._release()
+        if problem is None:
             return
-        self._link.reset()
+        if exc is None:
+            raise problem
+        exc.add_note(f"and on release: {problem}")
+
+    def _release(self) -> DriverError | None:
+        if not self._link.is_open:
+            return None
         try:
+            self._link.reset()
             self.stop()
-        except DriverError:
-            pass  # the port is released below whatever the motors say
+        except DriverError as exc:
+            return exc
         finally:
             self._link.close()
+        return None
 
     def _configure(self) -> None:
+        """EEPROM first (read; torque off, read back off and write only where it differs),
+        then the RAM profiles."""
         link = self._link
         ids = {a.motor_id: a for a in self._axes.values()}
-        link.sync_write("torque_enable", dict.fromkeys(ids, 0))
+        changes: dict[int, dict[str, int]] = {}
         for motor_id, axis in ids.items():
             wanted = {"operating_mode": axis.operating_mode, "drive_mode": 0}
             if axis.mode == "position":
                 low, high = axis.tick_limits()
                 wanted |= {"min_position_limit": low, "max_position_limit": high}
-            for name, value in wanted.items():
-                if link.read(motor_id, name) != value:  # EEPROM wears: write only changes
+            # EEPROM wears, and writing it needs torque off: change only what differs.
+            differ = {n: v for n, v in wanted.items() if link.read(motor_id, n) != v}
+            if differ:
+                changes[motor_id] = differ
+        if changes:
+            link.sync_write("torque_enable", dict.fromkeys(changes, 0))
+            for motor_id in changes:
+                if link.read(motor_id, "torque_enable") != 0:
+                    raise DriverError(
+                        f"{link.who(motor_id)} did not turn its torque off; its EEPROM "
+                        f"({', '.join(changes[motor_id])}) was not written"
+                    )
+            for motor_id, differ in changes.items():
+                for name, value in differ.items():
                     link.write(motor_id, name, value)
-        profiles = {m: a.profile_registers() for m, a in ids.items()}
-        link.sync_write("profile_acceleration", {m: p[1] for m, p in profiles.items()})
-        link.sync_write("profile_velocity", {m: p[0] for m, p in profiles.items()})
+        self._write_profiles(list(ids))
+
+    def _write_profiles(self, motor_ids: Sequence[int]) -> None:
+        by_id = {a.motor_id: a for a in self._axes.values()}
+        profiles = {m: by_id[m].profile_registers() for m in motor_ids}
+        self._link.sync_write("profile_acceleration", {m: p[1] for m, p in profiles.items()})
+        self._link.sync_write("profile_velocity", {m: p[0] for m, p in profiles.items()})
 
     # -- motion ------------------------------------------------------------------------
     def _axis(self, name: str) -> AxisConfig:
@@ -153,11 +211,7 @@ class DynamixelBus(Resource):
                     f"outside its limits [{axis.min_rad:.6f}, {axis.max_rad:.6f}] rad; "
                     "nothing was sent"
                 )
-            ticks = axis.to_ticks(float(angle))
-            if axis.mode == "position":
-                low, high = axis.tick_limits()
-                ticks = min(max(ticks, low), high)
-            goals[name] = ticks
+            goals[name] = _within(axis, axis.to_ticks(float(angle)))
         self._link.sync_write(
             "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
         )
@@ -197,23 +251,59 @@ class DynamixelBus(Resource):
             if not pending:
                 return
             if time.monotonic() >= deadline:
-                self.stop()
                 detail = ", ".join(
                     f"{n} {'moving' if m else 'stopped'} {abs(d)} ticks from its goal"
                     for n, (m, d) in pending.items()
                 )
-                raise MotionTimeout(
-                    f"axes did not settle within {timeout_s:g} s ({detail}); holding them"
-                )
+                message = f"axes did not settle within {timeout_s:g} s ({detail})"
+                try:
+                    self.stop()
+                except DriverError as exc:  # the timeout is still what the caller gets
+                    raise MotionTimeout(f"{message}; holding them failed: {exc}") from exc
+                raise MotionTimeout(f"{message}; holding them")
             time.sleep(self.poll_interval_s)
 
     def stop(self) -> None:
-        """Hold every axis at its present position."""
-        state = self._state()
-        self._link.sync_write(
-            "goal_position", {self._axes[n].motor_id: t for n, (_, t) in state.items()}
-        )
-        self._goals = {n: t for n, (_, t) in state.items()}
+        """Hold every axis that answers at its present position (clamped to its limits).
+
+        Positions are read without raising on alert bits, so a faulted motor does not
+        keep the others moving; if the group read fails (a motor does not answer), the
+        axes are read one by one and the ones that answer are held. Then `CommError`
+        names any axis that could not be held.
+        """
+        self._hold(list(self._axes))
+
+    def _hold(self, names: Sequence[str]) -> None:
+        """Goal := present position (within limits) for ``names``, in one SYNC_WRITE."""
+        axes = [self._axes[n] for n in names]
+        present: dict[str, int] = {}
+        missing: dict[str, DriverError] = {}
+        try:
+            raw = self._link.sync_read(
+                [a.motor_id for a in axes], _PRESENT.name, _PRESENT.name, alerts=False
+            )
+            present = {a.name: _PRESENT.decode(raw[a.motor_id]) for a in axes}
+        except DriverError:
+            for axis in axes:  # hold whoever answers
+                try:
+                    present[axis.name] = self._link.read(axis.motor_id, _PRESENT.name, alerts=False)
+                except DriverError as exc:
+                    missing[axis.name] = exc
+        goals = {name: _within(self._axes[name], ticks) for name, ticks in present.items()}
+        if goals:
+            self._link.sync_write(
+                "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
+            )
+            self._goals.update(goals)
+        if missing:
+            first, cause = next(iter(missing.items()))
+            raise CommError(
+                f"could not hold {', '.join(missing)} (may still be moving; "
+                f"{', '.join(goals) or 'no other axis'} held): {cause}",
+                port=self.port,
+                motor_id=self._axes[first].motor_id,
+                result=cause.result if isinstance(cause, CommError) else None,
+            )
 
     def torque(self, on: bool) -> None:
         """Enable (after setting each goal to the present position) or disable torque."""
@@ -221,6 +311,51 @@ class DynamixelBus(Resource):
         if on:
             self.stop()
         self._link.sync_write("torque_enable", dict.fromkeys(ids, 1 if on else 0))
+
+    # -- recovery ----------------------------------------------------------------------
+    def reboot(self, axes: Iterable[str] | None = None) -> tuple[str, ...]:
+        """Reboot the motors reporting a hardware error (or those of ``axes``), wait for
+        them to answer again, restore their RAM configuration (profile velocity and
+        acceleration; EEPROM survives a reboot) and leave them holding where they are
+        with torque on. Returns the axes rebooted.
+
+        A motor whose error is still there after the reboot raises `MotorFault` (remove
+        the cause first: load, heat, supply). In extended position mode a reboot loses
+        the multi-turn count (the motor comes back within one turn), so re-home such an
+        axis before trusting its angle.
+        """
+        link = self._link
+        if axes is None:
+            ids = [a.motor_id for a in self._axes.values()]
+            status = "hardware_error_status"
+            errors = link.sync_read(ids, status, status, alerts=False)
+            names = [n for n, a in self._axes.items() if errors[a.motor_id][0]]
+        else:
+            names = list(dict.fromkeys(self._axis(n).name for n in axes))
+        if not names:
+            return ()
+        motor_ids = [self._axes[n].motor_id for n in names]
+        for motor_id in motor_ids:
+            link.reboot(motor_id)
+        deadline = time.monotonic() + self.reboot_timeout_s
+        for motor_id in motor_ids:
+            while True:  # the status leaves before the motor restarts
+                try:
+                    link.ping(motor_id)
+                    break
+                except CommError:
+                    if time.monotonic() >= deadline:
+                        raise
+                    time.sleep(self.poll_interval_s)
+            if link.hardware_error(motor_id):
+                raise link.fault(motor_id)
+        self._write_profiles(motor_ids)
+        self._hold(names)
+        link.sync_write("torque_enable", dict.fromkeys(motor_ids, 1))
+        for motor_id in motor_ids:  # read back: the motor holds, or we say so
+            if link.read(motor_id, "torque_enable") != 1:
+                raise DriverError(f"{link.who(motor_id)} did not turn its torque back on")
+        return tuple(names)
 
     # -- condition ---------------------------------------------------------------------
     def health(self) -> dict[str, Health]:
@@ -251,3 +386,10 @@ class DynamixelBus(Resource):
                     axis=name,
                     flags=h.error_flags,
                 )
+
+
+def _within(axis: AxisConfig, ticks: int) -> int:
+    """``ticks`` clamped to the axis's limits in motor ticks (in position mode also the
+    motor's own Min/Max Position Limit, beyond which it would refuse the goal)."""
+    low, high = axis.tick_limits()
+    return min(max(ticks, low), high)

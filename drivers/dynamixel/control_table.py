@@ -35,11 +35,16 @@ class Item:
 
     def encode(self, value: int) -> bytes:
         """``value`` as the register's little-endian bytes (two's complement if signed);
-        ValueError if it does not fit."""
+        ValueError if the register cannot hold it: a signed 4-byte item takes
+        −2³¹ … 2³¹−1 (not the unsigned 2³¹ … 2³²−1 that would read back negative), an
+        unsigned one 0 … 2³²−1."""
         try:
-            return int(value).to_bytes(self.size, "little", signed=self.signed and value < 0)
+            return int(value).to_bytes(self.size, "little", signed=self.signed)
         except OverflowError:
-            raise ValueError(f"{self.name} = {value} does not fit in {self.size} bytes") from None
+            kind = "signed" if self.signed else "unsigned"
+            raise ValueError(
+                f"{self.name} = {value} does not fit in {self.size} {kind} bytes"
+            ) from None
 
     def decode(self, raw: bytes | int) -> int:
         """The register's value from its bytes, or from the SDK's unsigned integer."""

@@ -1,22 +1,34 @@
 """One serial port to a Dynamixel bus, through the unmodified ROBOTIS SDK.
 
-`DynamixelLink` owns a ``PortHandler`` and a Protocol 2.0 ``PacketHandler`` and turns
-their result codes into exceptions: every transaction is retried a bounded number of
-times on communication failures, then raises `CommError` naming the port, the motor
-and the SDK's result; a status packet with the alert bit makes it read the motor's
-Hardware Error Status and raise `MotorFault` with the named bits. The port is locked
-while open (two programs on one bus would interleave packets) and always released:
-also after Ctrl-C in the middle of a transaction, which would otherwise leave the
-SDK's ``is_using`` flag set and every later call failing with "port is in use".
+`DynamixelLink` owns a port handler and a Protocol 2.0 packet handler (the SDK's
+classes with the corrections of :mod:`drivers.dynamixel.sdk_boundary`: byte stuffing
+on send, true reply lengths, a per-port latency timer) and turns their result codes
+into exceptions: every transaction is retried a bounded number of times on
+communication failures, then raises `CommError` naming the port, the motor and the
+SDK's result; a status whose data is not as long as requested (a late or stale reply)
+counts as a corrupt packet and is retried; a status packet with the alert bit makes it
+read the motor's Hardware Error Status and raise `MotorFault` with the named bits. The
+port is locked while open (two programs on one bus would interleave packets) and
+always released: also after Ctrl-C in the middle of a transaction, which would
+otherwise leave the SDK's ``is_using`` flag set and every later call failing with
+"port is in use", and a reply still on its way arriving in the next transaction.
 
-Latency: the SDK waits 2 × ``port_handler.LATENCY_TIMER`` + 2 ms plus the wire time of
-the *reply* for a status packet. That budget must cover the USB adapter's own latency
-timer (FTDI default 16 ms; 1 ms after the udev rule in docs/hardware.md) and also what
-the SDK leaves out: the wire time of the instruction itself and of a packet without
-reply still leaving the adapter before it (a SYNC_WRITE of goals just before a
-SYNC_READ poll: 6 ms at 57 600 baud). The link sets LATENCY_TIMER to the adapter's
+EEPROM: the link remembers each motor's Torque Enable as far as it knows it (written
+with a status, read, or just rebooted = exact; sent by SYNC_WRITE = 1 presumed on, 0
+unknown) and refuses, before sending, to write an EEPROM item to a motor whose torque
+is known or presumed on (`DriverError`): turn torque off and read it back first.
+
+Latency: the SDK waits 2 × LATENCY_TIMER + 2 ms plus the wire time of the *reply* for a
+status packet. That budget must cover the USB adapter's own latency timer (FTDI
+default 16 ms; 1 ms after the udev rule in docs/hardware.md) and also what the SDK
+leaves out: the wire time of the instruction itself and of a packet without reply
+still leaving the adapter before it (a SYNC_WRITE of goals just before a SYNC_READ
+poll: 6 ms at 57 600 baud). The link sets its port's latency timer to the adapter's
 latency (read from sysfs when it can, else the SDK's conservative 16 ms) plus half the
-wire time of `OUTBOUND_MARGIN_BYTES` at the bus rate.
+wire time of `OUTBOUND_MARGIN_BYTES` at the bus rate. The SDK keeps LATENCY_TIMER as a
+process-wide global of ``dynamixel_sdk.port_handler``; the link neither reads nor
+writes it (each port has its own), so two buses with different rates or adapters
+never change each other's timeouts.
 """
 
 from __future__ import annotations
@@ -33,10 +45,10 @@ from typing import Any, TypeVar
 
 import dynamixel_sdk as sdk
 import serial
-from dynamixel_sdk import port_handler as sdk_port
 
 from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
-from drivers.dynamixel.control_table import Item, decode_hardware_error, item
+from drivers.dynamixel.control_table import Area, Item, decode_hardware_error, item
+from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
 RETRYABLE = frozenset(
@@ -65,8 +77,8 @@ DRAIN_BYTES = 192
 
 
 def sdk_latency_timer(adapter_ms: float, baud: int) -> float:
-    """The value for the SDK's LATENCY_TIMER (ms): the adapter's latency plus half the
-    wire time of `OUTBOUND_MARGIN_BYTES` (the SDK doubles it), at least 1 ms."""
+    """The latency timer (ms) for the SDK's reply timeouts: the adapter's latency plus
+    half the wire time of `OUTBOUND_MARGIN_BYTES` (the SDK doubles it), at least 1 ms."""
     return max(1.0, adapter_ms + 0.5 * 1000.0 * 10 * OUTBOUND_MARGIN_BYTES / baud)
 
 
@@ -117,25 +129,32 @@ class DynamixelLink(Resource):
         self.names = dict(names or {})
         self.raise_alerts = raise_alerts
         self._port: Any = None
-        self._packets: Any = sdk.PacketHandler(2.0)
+        self._packets: Any = PacketHandler()
+        #: Torque Enable per motor as far as the link knows (True also when presumed on
+        #: after a SYNC_WRITE; absent when unknown).
+        self._torque: dict[int, bool] = {}
+        #: A transaction was cut short (Ctrl-C, a serial error): a reply may be on its way.
+        self._interrupted = False
 
     # -- opening and releasing -----------------------------------------------------------
     @property
     def is_open(self) -> bool:
         return self._port is not None
 
+    @property
+    def latency_timer_ms(self) -> float:
+        """The latency timer (ms) of this link's reply timeouts (SDK: 2 × it + 2 ms +
+        the reply's wire time)."""
+        adapter = self.latency_ms
+        if adapter is None:
+            adapter = adapter_latency_ms(self.port_name)
+        return sdk_latency_timer(DEFAULT_LATENCY_MS if adapter is None else adapter, self.baud)
+
     def open(self) -> None:
         """Open and lock the port at the configured baud; `CommError` if it cannot."""
         if self._port is not None:
             return
-        adapter = self.latency_ms
-        if adapter is None:
-            adapter = adapter_latency_ms(self.port_name)
-        # The SDK reads this module-level constant for every packet timeout.
-        sdk_port.LATENCY_TIMER = sdk_latency_timer(
-            DEFAULT_LATENCY_MS if adapter is None else adapter, self.baud
-        )
-        handler = sdk.PortHandler(self.port_name)
+        handler = Port(self.port_name, self.latency_timer_ms)
         handler.baudrate = self.baud
         try:
             ok = handler.setBaudRate(self.baud)  # opens the port
@@ -155,6 +174,8 @@ class DynamixelLink(Resource):
                 port=self.port_name,
             ) from None
         self._port = handler
+        self._torque.clear()
+        self._interrupted = False
 
     def _open_failure(self, exc: BaseException) -> str:
         code = getattr(exc, "errno", None)
@@ -182,22 +203,32 @@ class DynamixelLink(Resource):
         in the next transaction, which reads only the ID, so a late PING status would
         be taken for the data of the READ after it.
         """
-        if self._port is None:
+        port = self._port
+        if port is None:
             return
-        quiet = (2.0 * float(sdk_port.LATENCY_TIMER) + 2.0) / 1000.0 + 10 * DRAIN_BYTES / self.baud
-        for _ in range(5):  # a bus that never goes quiet: give up after 5 periods
-            time.sleep(quiet)
-            if not self._port.getBytesAvailable():
-                break
-            self._port.clearPort()
+        quiet = (2.0 * port.latency_timer + 2.0) / 1000.0 + 10 * DRAIN_BYTES / self.baud
+        with contextlib.suppress(serial.SerialException, OSError):
+            for _ in range(5):  # a bus that never goes quiet: give up after 5 periods
+                time.sleep(quiet)
+                if not port.getBytesAvailable():
+                    break
+                port.clearPort()
 
     def reset(self) -> None:
-        """Forget a transaction cut short (Ctrl-C): clear the SDK's busy flag and any
-        half-received bytes, so the next transaction starts clean."""
-        if self._port is not None:
-            self._port.is_using = False
+        """Forget a transaction cut short (Ctrl-C): clear the SDK's busy flag and, as after
+        a failed attempt, let a reply still on its way arrive and discard it (`_drain`),
+        so the next transaction starts clean. Without an interrupted transaction nothing
+        can be on its way: the input is just cleared."""
+        port = self._port
+        if port is None:
+            return
+        port.is_using = False
+        if self._interrupted:
+            self._interrupted = False
+            self._drain()
+        else:
             with contextlib.suppress(serial.SerialException, OSError):
-                self._port.clearPort()
+                port.clearPort()
 
     # -- transactions ----------------------------------------------------------------------
     def _handler(self) -> Any:
@@ -215,7 +246,9 @@ class DynamixelLink(Resource):
         result = sdk.COMM_SUCCESS
         for _ in range(self.retries + 1):
             try:
+                self._interrupted = True  # until the call returns normally
                 value, result = call()
+                self._interrupted = False
             except (serial.SerialException, OSError) as exc:
                 raise CommError(
                     f"{self.port_name}: {what} failed: {exc}",
@@ -239,9 +272,12 @@ class DynamixelLink(Resource):
             result=result,
         )
 
-    def _check_status(self, motor_id: int, error: int, what: str) -> None:
-        """Alert bit → MotorFault with the named hardware error; other errors → DriverError."""
-        if error & ALERT and self.raise_alerts:
+    def _check_status(
+        self, motor_id: int, error: int, what: str, alerts: bool | None = None
+    ) -> None:
+        """Alert bit → MotorFault with the named hardware error (unless ``alerts`` is False,
+        default: ``raise_alerts``); other errors → DriverError."""
+        if error & ALERT and (self.raise_alerts if alerts is None else alerts):
             raise self.fault(motor_id)
         if error & 0x7F:
             reason = STATUS_ERRORS.get(error & 0x7F, f"error number {error & 0x7F}")
@@ -252,8 +288,9 @@ class DynamixelLink(Resource):
         flags = self.hardware_error(motor_id)
         return MotorFault(
             f"{self.who(motor_id)} reports a hardware error: {', '.join(flags) or 'unknown'}"
-            " (its torque is off if the error is in its Shutdown mask; `gonio motors reboot`"
-            " clears it once the cause is removed)",
+            " (its torque is off if the error is in its Shutdown mask; a reboot —"
+            " `DynamixelBus.reboot()` or `gonio motors reboot` — clears it once the cause"
+            " is removed)",
             motor_id=motor_id,
             axis=self.names.get(motor_id),
             flags=flags,
@@ -262,16 +299,25 @@ class DynamixelLink(Resource):
     def hardware_error(self, motor_id: int) -> tuple[str, ...]:
         """The named bits of a motor's Hardware Error Status (no alert check)."""
         reg = item("hardware_error_status")
-        value = self._attempt(
-            f"reading {reg.name}",
-            motor_id,
-            lambda: self._read_raw(motor_id, reg.address, reg.size)[:2],
-        )
-        return decode_hardware_error(int.from_bytes(bytes(value), "little"))
+        data, error = self._read_exact(motor_id, reg, f"reading {reg.name}")
+        self._check_status(motor_id, error, f"reading {reg.name}", alerts=False)
+        return decode_hardware_error(data[0])
 
-    def _read_raw(self, motor_id: int, address: int, length: int) -> tuple[list[int], int, int]:
-        data, result, error = self._packets.readTxRx(self._handler(), motor_id, address, length)
-        return data, result, error
+    def _read_exact(self, motor_id: int, reg: Item, what: str) -> tuple[bytes, int]:
+        """(data, status error) of a READ of ``reg``, with retries. A status without an
+        error number whose data is not exactly ``reg.size`` bytes (a late reply to
+        another instruction, a short packet) is a corrupt packet: retried, then
+        `CommError`."""
+
+        def call() -> tuple[tuple[bytes, int], int]:
+            data, result, error = self._packets.readTxRx(
+                self._handler(), motor_id, reg.address, reg.size
+            )
+            if result == sdk.COMM_SUCCESS and not error & 0x7F and len(data) != reg.size:
+                result = sdk.COMM_RX_CORRUPT
+            return (bytes(data), error), result
+
+        return self._attempt(what, motor_id, call)
 
     def ping(self, motor_id: int) -> int:
         """The model number of ``motor_id``; CommError if it does not answer."""
@@ -292,7 +338,9 @@ class DynamixelLink(Resource):
         """Every motor answering a broadcast ping: {id: (model number, firmware)}."""
         handler = self._handler()
         try:
+            self._interrupted = True  # until the call returns normally
             found, result = self._packets.broadcastPing(handler)
+            self._interrupted = False
         finally:
             handler.is_using = False
         if result not in (sdk.COMM_SUCCESS, sdk.COMM_RX_TIMEOUT):
@@ -303,20 +351,35 @@ class DynamixelLink(Resource):
             )
         return {int(k): (int(v[0]), int(v[1])) for k, v in found.items()}
 
-    def read(self, motor_id: int, name: str) -> int:
-        """The value of control-table item ``name`` of ``motor_id`` (signed where the item is)."""
+    def read(self, motor_id: int, name: str, *, alerts: bool | None = None) -> int:
+        """The value of control-table item ``name`` of ``motor_id`` (signed where the item
+        is). ``alerts=False`` reads a faulted motor without raising `MotorFault`."""
         reg = item(name)
-        data, error = self._attempt(
-            f"reading {name}",
-            motor_id,
-            lambda: self._pair(self._read_raw(motor_id, reg.address, reg.size)),
-        )
-        self._check_status(motor_id, error, f"reading {name}")
-        return reg.decode(bytes(data))
+        data, error = self._read_exact(motor_id, reg, f"reading {name}")
+        self._check_status(motor_id, error, f"reading {name}", alerts)
+        value = reg.decode(data)
+        if name == "torque_enable":
+            self._torque[motor_id] = bool(value)
+        return value
+
+    def torque_known_on(self, motor_id: int) -> bool:
+        """True when the link has turned (or seen) ``motor_id``'s torque on and has not
+        seen it go off since (a SYNC_WRITE of 0 leaves it unknown: read it back)."""
+        return self._torque.get(motor_id, False)
+
+    def _check_eeprom(self, motor_id: int, reg: Item, value: int) -> None:
+        if reg.area is Area.EEPROM and self.torque_known_on(motor_id):
+            raise DriverError(
+                f"{self.who(motor_id)}: refusing to write {reg.name} = {value} while its "
+                "torque is on (EEPROM items are written only with torque off: turn torque "
+                "off and read it back first); nothing was sent"
+            )
 
     def write(self, motor_id: int, name: str, value: int) -> None:
-        """Write ``value`` to item ``name``; refused before sending if out of its range."""
+        """Write ``value`` to item ``name``; refused before sending if out of its range, or
+        if it is an EEPROM item and the motor's torque is known to be on."""
         reg = self._writable(name, value)
+        self._check_eeprom(motor_id, reg, value)
         payload = list(reg.encode(value))
         error = self._attempt(
             f"writing {name}",
@@ -325,6 +388,8 @@ class DynamixelLink(Resource):
                 self._packets.writeTxRx(self._handler(), motor_id, reg.address, reg.size, payload)
             ),
         )
+        if name == "torque_enable" and not error & 0x7F:
+            self._torque[motor_id] = bool(value)
         self._check_status(motor_id, error, f"writing {name} = {value}")
 
     @staticmethod
@@ -346,11 +411,18 @@ class DynamixelLink(Resource):
         if not values:
             return
         reg = item(name)
-        for value in values.values():
+        for motor_id, value in values.items():
             self._writable(name, value)
+            self._check_eeprom(motor_id, reg, value)
         group = sdk.GroupSyncWrite(self._handler(), self._packets, reg.address, reg.size)
         for motor_id, value in values.items():
             group.addParam(motor_id, list(reg.encode(value)))
+        if name == "torque_enable":  # no status comes back: on is presumed, off unknown
+            for motor_id, value in values.items():
+                if value:
+                    self._torque[motor_id] = True
+                else:
+                    self._torque.pop(motor_id, None)
         self._attempt(f"sync-writing {name}", None, lambda: (None, group.txPacket()))
 
     def sync_read(
@@ -372,8 +444,9 @@ class DynamixelLink(Resource):
         except CommError as exc:
             if group.failed is None:
                 raise
+            how = "no answer from" if exc.result == sdk.COMM_RX_TIMEOUT else "a bad reply from"
             raise CommError(
-                f"{exc}; no answer from {self.who(group.failed)}",
+                f"{exc}; {how} {self.who(group.failed)}",
                 port=self.port_name,
                 motor_id=group.failed,
                 result=exc.result,
@@ -384,17 +457,21 @@ class DynamixelLink(Resource):
         return {motor_id: bytes(group.data_dict[motor_id]) for motor_id in ids}
 
     def reboot(self, motor_id: int) -> None:
-        """Reboot a motor (clears its hardware error; torque comes back off)."""
+        """Reboot a motor (clears its hardware error; torque comes back off). The status
+        leaves before the motor restarts: `ping` it until it answers again."""
         error = self._attempt(
             "reboot", motor_id, lambda: self._swap(self._packets.reboot(self._handler(), motor_id))
         )
         if error & 0x7F:
             self._check_status(motor_id, error & 0x7F, "a reboot")
+        self._torque[motor_id] = False
 
 
 class _AlertAwareSyncRead(sdk.GroupSyncRead):  # type: ignore[misc]
     """The SDK's GroupSyncRead, keeping each status packet's error byte (the SDK drops it,
-    and with it the alert bit) and naming the motor that did not answer."""
+    and with it the alert bit), refusing a status whose data is not ``data_length``
+    bytes (a late reply to another instruction) as corrupt, and naming the motor that
+    did not answer or answered wrong."""
 
     errors: dict[int, int]
     failed: int | None = None
@@ -407,6 +484,8 @@ class _AlertAwareSyncRead(sdk.GroupSyncRead):  # type: ignore[misc]
             return int(result)
         for motor_id in self.data_dict:
             data, result, error = self.ph.readRx(self.port, motor_id, self.data_length)
+            if result == sdk.COMM_SUCCESS and not error & 0x7F and len(data) != self.data_length:
+                result = sdk.COMM_RX_CORRUPT
             if result != sdk.COMM_SUCCESS:
                 self.failed = motor_id
                 return int(result)

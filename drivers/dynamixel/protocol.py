@@ -8,7 +8,8 @@ LEN counts INST (or, in a status packet, 0x55 and the ERROR byte), the parameter
 after stuffing, and the two CRC bytes. The CRC is CRC-16 with polynomial 0x8005
 (x¹⁶ + x¹⁵ + x² + 1), initial value 0, no reflection, over every byte from the header
 to the last parameter. Stuffing: inside INST and PARAM, each FF FF FD is followed by an
-extra FD so that it cannot be mistaken for a header; the receiver removes it.
+extra FD so that it cannot be mistaken for a header; the receiver removes it, and a
+packet in which FF FF FD is *not* followed by FD is corrupt (`StuffingError`).
 
 This is our own codec: the driver uses the unmodified ``dynamixel-sdk``; this module
 serves the bus emulator and the tests that check the SDK's bytes.
@@ -90,12 +91,18 @@ def stuff(body: bytes) -> bytes:
 
 
 def unstuff(body: bytes) -> bytes:
-    """Remove the FD that `stuff` inserted after each FF FF FD."""
+    """Remove the FD that `stuff` inserted after each FF FF FD.
+
+    ValueError if an FF FF FD is not followed by that FD (the sender did not stuff: the
+    bytes cannot be trusted to mean what they seem).
+    """
     out = bytearray()
     i = 0
     while i < len(body):
         out.append(body[i])
         if body[i] == 0xFD and len(out) >= 3 and out[-3] == 0xFF and out[-2] == 0xFF:
+            if i + 1 >= len(body) or body[i + 1] != 0xFD:
+                raise ValueError(f"FF FF FD at byte {i - 2} is not followed by the stuffing FD")
             i += 1  # skip the stuffed FD
         i += 1
     return bytes(out)
@@ -134,19 +141,31 @@ class Packet:
         return self.instruction == STATUS
 
 
-class CRCError(ValueError):
-    """A complete packet whose CRC does not match (``packet_id`` says from whom)."""
+class CorruptPacket(ValueError):
+    """A complete packet that cannot be trusted (``packet_id`` says from whom)."""
+
+    def __init__(self, packet_id: int, reason: str) -> None:
+        super().__init__(f"{reason} in a packet with ID {packet_id}")
+        self.packet_id = packet_id
+
+
+class CRCError(CorruptPacket):
+    """A complete packet whose CRC does not match."""
 
     def __init__(self, packet_id: int) -> None:
-        super().__init__(f"CRC mismatch in a packet with ID {packet_id}")
-        self.packet_id = packet_id
+        super().__init__(packet_id, "CRC mismatch")
+
+
+class StuffingError(CorruptPacket):
+    """A complete packet with a good CRC but an unstuffed FF FF FD in its body."""
 
 
 class PacketReader:
     """Splits a byte stream into packets, resynchronizing on the header after noise.
 
     ``feed(data)`` appends bytes; ``next_packet()`` returns the next complete packet (or
-    None) and raises `CRCError` for a complete packet with a bad CRC (after discarding it).
+    None) and raises `CRCError` for a complete packet with a bad CRC, `StuffingError` for
+    one with an unstuffed FF FF FD (after discarding it).
     """
 
     #: The longest packet accepted (LEN is 16 bits, but nothing here needs more).
@@ -198,7 +217,10 @@ class PacketReader:
             packet_id = raw[4]
             if crc16(raw[:-2]) != (raw[-2] | (raw[-1] << 8)):
                 raise CRCError(packet_id)
-            body = unstuff(raw[7:-2])
+            try:
+                body = unstuff(raw[7:-2])
+            except ValueError as exc:
+                raise StuffingError(packet_id, str(exc)) from None
             if body[0] == STATUS:
                 return Packet(packet_id, STATUS, body[2:], error=body[1] if len(body) > 1 else 0)
             return Packet(packet_id, body[0], body[1:])

@@ -63,6 +63,17 @@ def test_signed_registers_convert_from_the_sdks_unsigned_values() -> None:
 def test_values_that_do_not_fit_are_value_errors() -> None:
     with pytest.raises(ValueError, match="does not fit"):
         item("led").encode(300)
+    position, current, moving = item("goal_position"), item("goal_current"), item("moving")
+    for value in (1 << 31, (1 << 32) - 1, -(1 << 31) - 1):  # not a signed 32-bit value
+        with pytest.raises(ValueError, match="goal_position"):
+            position.encode(value)
+    assert position.encode((1 << 31) - 1) == b"\xff\xff\xff\x7f"
+    assert position.encode(-(1 << 31)) == b"\x00\x00\x00\x80"
+    with pytest.raises(ValueError, match="does not fit"):
+        current.encode(40_000)  # signed 16-bit
+    with pytest.raises(ValueError, match="does not fit"):
+        moving.encode(-1)  # unsigned
+    assert item("model_number").encode(65_535) == b"\xff\xff"
     assert not item("operating_mode").in_range(2)
     assert item("operating_mode").in_range(16)
     assert not item("drive_mode").in_range(2)  # bit 1 is unused

@@ -3,12 +3,14 @@ point of a transaction; the port must come back released and the motors holding.
 
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
 import textwrap
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -16,12 +18,20 @@ from drivers.dynamixel.control_table import RAD_PER_TICK
 from drivers.dynamixel.link import DynamixelLink
 from sim.dxl_emulator import DxlEmulator
 
+ROOT = Path(__file__).resolve().parents[2]
+#: The child imports only the installed-or-on-PYTHONPATH packages (not the tests), and
+#: runs in an empty directory: nothing depends on where pytest was started.
 CHILD = textwrap.dedent(
     """
-    import sys
+    import math, sys
+    from drivers.dynamixel.axis import AxisConfig
     from drivers.dynamixel.bus import DynamixelBus
-    from tests.drivers.test_dynamixel import axes
-    with DynamixelBus(sys.argv[1], axes(), latency_ms=16) as bus:
+    axes = [
+        AxisConfig(f"axis{i}", i, -1.0, 1.0, zero_offset_rad=-math.pi,
+                   profile_velocity_rad_s=4.0, profile_acceleration_rad_s2=40.0)
+        for i in (1, 2, 3)
+    ]
+    with DynamixelBus(sys.argv[1], axes, latency_ms=16) as bus:
         bus.move_to({"axis1": 0.5, "axis2": -0.5})
         print("ready", flush=True)
         while True:
@@ -32,11 +42,14 @@ CHILD = textwrap.dedent(
 
 @pytest.mark.parametrize("delay_s", [0.05, 0.13, 0.21])
 def test_sigint_in_a_child_process_leaves_the_port_free(
-    emulator: Callable[..., DxlEmulator], delay_s: float
+    emulator: Callable[..., DxlEmulator], delay_s: float, tmp_path: Path
 ) -> None:
     emu = emulator(ids=(1, 2, 3), clock=time.monotonic)
+    path = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
     child = subprocess.Popen(
         [sys.executable, "-c", CHILD, emu.path],
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": path},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

@@ -10,6 +10,7 @@ from drivers.dynamixel.protocol import (
     CRCError,
     Instruction,
     PacketReader,
+    StuffingError,
     crc16,
     instruction_packet,
     parse,
@@ -59,6 +60,22 @@ def test_stuffing_inserts_and_removes_fd() -> None:
     packet = instruction_packet(1, Instruction.WRITE, bytes.fromhex("FF FF FD 01"))
     assert packet == bytes.fromhex("FF FF FD 00 01 08 00 03 FF FF FD FD 01 C1 0E")
     assert parse(packet).params == bytes.fromhex("FF FF FD 01")
+
+
+def test_an_unstuffed_header_in_a_body_is_refused() -> None:
+    for body in ("03 FF FF FD 01", "03 FF FF FD", "FF FF FD FD FF FF FD 00"):
+        with pytest.raises(ValueError, match="not followed by the stuffing FD"):
+            unstuff(bytes.fromhex(body))
+    head = bytes.fromhex("FF FF FD 00 01 08 00 03 FF FF FD 01 00")  # LEN 8, not stuffed
+    crc = crc16(head)
+    reader = PacketReader()
+    reader.feed(head + bytes([crc & 0xFF, crc >> 8]) + instruction_packet(1, Instruction.PING))
+    with pytest.raises(StuffingError) as err:
+        reader.next_packet()
+    assert err.value.packet_id == 1
+    packet = reader.next_packet()  # the next packet is still found
+    assert packet is not None
+    assert packet.instruction == Instruction.PING
 
 
 @given(st.binary(max_size=64))

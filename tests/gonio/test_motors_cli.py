@@ -11,6 +11,7 @@ from sim.dxl_emulator import DxlEmulator
 from sim.dxl_faults import Fault
 
 GONIO = Path(sys.executable).with_name("gonio")
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 Emulator = Callable[..., DxlEmulator]
 
 
@@ -77,3 +78,40 @@ def test_errors_are_one_line_without_traceback(emulator: Emulator) -> None:
         assert r.returncode == 2, (args, r.stdout, r.stderr)
         assert "Traceback" not in r.stderr
         assert message in r.stderr
+
+
+def test_status_with_a_rig_file_names_axes_and_joint_angles(
+    emulator: Emulator, tmp_path: Path
+) -> None:
+    """--rig supplies the IDs (and the rate); each row gains its axis and joint angle:
+    light_elevation has its zero at −180°, so tick 2048 (180° of motor) is joint 0°."""
+    import yaml
+
+    emu = emulator(ids=(1, 2, 3, 4))
+    emu.motors[3].set("present_position", 3072)  # 270° of motor: joint +90°, past 85°
+    rig = yaml.safe_load((CONFIGS / "rigs" / "arch.yaml").read_text())
+    rig["bus"] = {"port": emu.path, "baud": 57_600}
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(rig), encoding="utf-8")
+    r = gonio("motors", "status", "--rig", str(path))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].split()[-3:] == ["axis", "joint", "(deg)"]
+    rows = {line.split()[0]: line for line in lines[1:]}
+    assert set(rows) == {"1", "2", "3", "4"}
+    assert rows["1"].split()[-2:] == ["light_elevation", "0.00"]
+    assert rows["3"].split()[-4:] == ["detector_elevation", "90.00", "OUTSIDE", "LIMITS"]
+    # Flags override the rig: only motor 2.
+    r = gonio("motors", "status", "--rig", str(path), "--ids", "2")
+    assert [line.split()[0] for line in r.stdout.splitlines()[1:]] == ["2"]
+
+
+def test_status_needs_a_port_and_ids_or_a_rig() -> None:
+    r = gonio("motors", "status", "--port", "/dev/ttyUSB9")
+    assert r.returncode == 2
+    assert r.stderr.strip() == (
+        "gonio: error: motors status: give --port and --ids, or --rig RIG.yaml"
+    )
+    r = gonio("motors", "status", "--rig", "/nowhere/rig.yaml")
+    assert r.returncode == 2
+    assert "/nowhere/rig.yaml: cannot read the file" in r.stderr

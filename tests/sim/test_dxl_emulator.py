@@ -433,6 +433,55 @@ def test_fast_sync_read_with_a_lost_block_is_truncated(emulator: Emulator, raw_l
     assert len(reply) == 8 + 8  # header and ID 1's block; the LEN still promises ID 2's
 
 
+def test_a_stale_reply_comes_before_the_answer(emulator: Emulator, raw_link: Link) -> None:
+    emu = emulator((1,))
+    link = raw_link(emu)
+    ping = instruction_packet(1, Instruction.PING)
+    emu.inject(Fault.STALE, motor_id=1)  # nothing answered yet: nothing stale to send
+    assert link.transact(ping, 14) == PING_1
+    answer = status_packet(1, 0, hx("00 08 00 00"))  # Present Position 2048
+    emu.inject(Fault.STALE, motor_id=1)
+    assert link.transact(read_packet(1, 132, 4), 14 + 15) == PING_1 + answer
+
+
+# -- byte stuffing ------------------------------------------------------------------------
+
+#: -131073 (FF FF FD FF little endian) into Homing Offset (address 20).
+HEADER_VALUE = hx("FF FF FD FF")
+
+
+def test_a_stuffed_write_is_unstuffed_and_the_status_stuffed(
+    emulator: Emulator, raw_link: Link
+) -> None:
+    emu = emulator((1,), record=True)
+    link = raw_link(emu)
+    packet = write_packet(1, 20, HEADER_VALUE)
+    assert hx("FF FF FD FD FF") in packet  # our codec stuffs
+    assert [p.error for p in link.packets(packet)] == [0]
+    assert emu.motors[1].get("homing_offset") == -131073
+    reply = link.transact(read_packet(1, 20, 4), 16)
+    assert hx("55 00 FF FF FD FD FF") in reply  # the status is stuffed too
+    assert parse(reply).params == HEADER_VALUE
+
+
+def test_an_unstuffed_header_inside_a_packet_is_a_corrupt_packet(
+    emulator: Emulator, raw_link: Link
+) -> None:
+    """FF FF FD must be followed by the stuffing FD; a packet with a valid CRC but an
+    unstuffed FF FF FD (what the SDK sends, see test_sdk_against_emulator) is refused
+    like a corrupt one: CRC error, nothing written."""
+    emu = emulator((1,))
+    link = raw_link(emu)
+    body = bytes([Instruction.WRITE, 20, 0]) + HEADER_VALUE
+    head = hx("FF FF FD 00 01") + (len(body) + 2).to_bytes(2, "little") + body
+    crc = crc16(head)
+    unstuffed = head + bytes([crc & 0xFF, crc >> 8])
+    replies = link.packets(unstuffed)
+    assert [(p.id, p.error) for p in replies] == [(1, StatusError.CRC)]
+    assert emu.motors[1].get("homing_offset") == 0
+    assert (emu.stats.stuffing_errors, emu.stats.crc_errors) == (1, 0)
+
+
 # -- statistics, transcript, lifecycle ----------------------------------------------------
 
 

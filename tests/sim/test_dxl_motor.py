@@ -55,6 +55,22 @@ def test_defaults_follow_the_control_table_and_the_constructor(clock: ManualCloc
     assert motor.get("torque_enable") == 0
 
 
+def test_the_backdoor_refuses_values_a_register_cannot_hold(motor: EmulatedMotor) -> None:
+    too_big = [
+        ("goal_position", 1 << 31),
+        ("goal_position", (1 << 32) - 1),
+        ("present_velocity", -(1 << 31) - 1),
+        ("led", 256),
+        ("moving", -1),
+    ]
+    for name, value in too_big:
+        with pytest.raises(ValueError, match=name):
+            motor.set(name, value)
+    assert motor.get("goal_position") == 2048  # nothing was stored
+    motor.set("goal_position", -(1 << 31))
+    assert motor.get("goal_position") == -(1 << 31)
+
+
 def test_reads_of_any_range_inside_the_table(motor: EmulatedMotor) -> None:
     whole = motor.read(0, TABLE_SIZE)
     assert len(whole) == TABLE_SIZE

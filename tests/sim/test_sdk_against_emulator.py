@@ -188,6 +188,27 @@ def test_bulk_write_then_bulk_read(emulator: Emulator, sdk_port: Port, ph: Any) 
     assert (reader.getData(1, LED, 1), reader.getData(2, 84, 2)) == (0, 900)
 
 
+def test_the_sdk_does_not_stuff_what_it_sends_but_unstuffs_what_it_receives(
+    emulator: Emulator, sdk_port: Port, ph: Any
+) -> None:
+    """dynamixel-sdk 4.x: ``txPacket`` ignores what ``addStuffing`` returns, and that is
+    a new, longer list whenever stuffing is needed, so FF FF FD in the parameters goes
+    out unstuffed; the emulator refuses it as corrupt (our link sends it stuffed, see
+    tests/drivers/test_dynamixel_safety.py). Statuses are stuffed and the SDK reads
+    them correctly."""
+    emu = emulator((1,), record=True)
+    port = sdk_port(emu)
+    header_value = -131073 & 0xFFFFFFFF  # FF FF FD FF
+    assert ph.write4ByteTxRx(port, 1, 20, header_value) == (COMM_SUCCESS, StatusError.CRC)
+    sent = [data for direction, data in emu.transcript if direction == "rx"]
+    assert bytes.fromhex("14 00 FF FF FD FF") in sent[-1]  # not stuffed
+    assert emu.motors[1].get("homing_offset") == 0
+    emu.motors[1].set("homing_offset", -131073)
+    assert ph.read4ByteTxRx(port, 1, 20) == (header_value, COMM_SUCCESS, 0)
+    received = [data for direction, data in emu.transcript if direction == "tx"]
+    assert bytes.fromhex("FF FF FD FD FF") in received[-1]
+
+
 # -- faults as the SDK sees them ----------------------------------------------------------
 
 
@@ -328,3 +349,25 @@ def test_cli_exits_cleanly_on_sigterm() -> None:
         assert proc.stdout.readline().startswith("serving 1 motors on /dev/")
         os.kill(proc.pid, signal.SIGTERM)
         assert proc.wait(timeout=5) == 0
+
+
+def test_the_cli_stops_on_sigint_even_when_started_with_it_ignored() -> None:
+    """Started with ``&`` from a non-interactive shell, a program inherits SIGINT
+    ignored, and Python then installs no KeyboardInterrupt handler; the emulator's CLI
+    restores it, so SIGINT still stops it."""
+    command = f"trap '' INT; exec {sys.executable} -m sim.dxl_emulator --ids 1"
+    with subprocess.Popen(
+        ["sh", "-c", command],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    ) as proc:
+        try:
+            assert proc.stdout is not None
+            select.select([proc.stdout], [], [], 10)
+            assert proc.stdout.readline().startswith("serving 1 motors on /dev/")
+            proc.send_signal(signal.SIGINT)
+            assert proc.wait(timeout=3) == 0
+        finally:
+            proc.kill()

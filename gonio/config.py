@@ -1,0 +1,117 @@
+"""YAML configuration files read into pydantic models, with one-line errors.
+
+Files are parsed with PyYAML's safe loader (no object construction). Any mistake —
+unreadable file, not YAML, wrong shape, a field out of range, an unknown field — raises
+`ConfigError` whose message is one line naming the file, the line when known, the field
+path and what was expected, e.g.::
+
+    configs/plans/quick.yaml:7: sampling.counts.hbar: Input should be greater than 0 (got -3)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic_core import ErrorDetails
+
+from gonio.errors import GonioError
+
+M = TypeVar("M", bound=BaseModel)
+
+
+class ConfigError(GonioError):
+    """A configuration file that cannot be used; the message is one line."""
+
+
+class Strict(BaseModel):
+    """Base of every configuration model: unknown fields are mistakes, values are frozen."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def read_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
+    """(data, node tree) of a YAML file; ConfigError if it cannot be read or parsed."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ConfigError(f"{path}: cannot read the file: {reason}") from None
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{where}: not valid YAML: {problem}") from None
+    return data, node
+
+
+def line_of(node: yaml.Node | None, loc: Sequence[int | str]) -> int | None:
+    """The 1-based line of the value at ``loc`` in a composed YAML tree (or of the
+    deepest existing parent), None without a tree."""
+    line = None if node is None else node.start_mark.line + 1
+    for key in loc:
+        if isinstance(node, yaml.MappingNode):
+            match = next((v for k, v in node.value if k.value == str(key)), None)
+            if match is None:  # a missing field: point at its parent mapping
+                break
+            node = match
+        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and key < len(node.value):
+            node = node.value[key]
+        else:
+            break
+        line = node.start_mark.line + 1
+    return line
+
+
+#: Marks a validator's message that names the field it is about (see `field_error`).
+_FIELD_MARK = "@field "
+
+
+def field_error(path: str, message: str) -> ValueError:
+    """An error for a model validator to raise about the field at the dotted ``path``
+    (relative to the model it validates), so the one-line message names that field
+    and its line in the file rather than the model's."""
+    return ValueError(f"{_FIELD_MARK}{path}: {message}")
+
+
+def located(error: ErrorDetails) -> tuple[tuple[int | str, ...], str]:
+    """(field path, message) of one pydantic error, the path extended by `field_error`."""
+    loc = tuple(error["loc"])
+    message = str(error["msg"]).removeprefix("Value error, ")
+    if message.startswith(_FIELD_MARK):
+        path, _, message = message.removeprefix(_FIELD_MARK).partition(": ")
+        loc += tuple(int(p) if p.isdigit() else p for p in path.split("."))
+        return loc, message
+    got = error.get("input")
+    shown = "" if error["type"] == "missing" or isinstance(got, dict) else f" (got {got!r})"
+    return loc, f"{message}{shown}"
+
+
+def describe(error: ErrorDetails) -> str:
+    """'field.path: message (got …)' for one pydantic error."""
+    loc, message = located(error)
+    return f"{'.'.join(str(p) for p in loc) or '(top level)'}: {message}"
+
+
+def load(path: str | Path, model: type[M]) -> M:
+    """Read ``path`` and validate it as ``model``; `ConfigError` on any mistake."""
+    path = Path(path)
+    data, node = read_yaml(path)
+    if not isinstance(data, dict):
+        kind = "empty" if data is None else type(data).__name__
+        raise ConfigError(f"{path}: expected a mapping of fields at the top level, got {kind}")
+    try:
+        return model.model_validate(data, context={"path": path})
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        line = line_of(node, located(first)[0])
+        where = f"{path}:{line}" if line is not None else str(path)
+        more = exc.error_count() - 1
+        extra = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
+        raise ConfigError(f"{where}: {describe(first)}{extra}") from None

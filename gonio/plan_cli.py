@@ -1,0 +1,41 @@
+"""`gonio plan PLAN.yaml [--rig RIG.yaml] [-o plan.csv] [--plot coverage.png]`."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from gonio.planner.plan import build, load_plan, render_summary
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    plan = sub.add_parser(
+        "plan",
+        help="turn a plan file into ordered motor targets, with counts and durations",
+        description="Place targets uniformly in the plan's parametrization, keep what the "
+        "rig can reach, order them for the motors and predict the duration. Nothing moves.",
+    )
+    plan.add_argument("plan", type=Path, help="the plan file (YAML)")
+    plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
+    plan.add_argument("-o", "--output", type=Path, help="write the ordered targets as CSV")
+    plan.add_argument("--plot", type=Path, help="draw the plan's coverage (needs matplotlib)")
+    plan.set_defaults(func=cmd_plan)
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    if args.plot is not None:
+        from gonio.plots import require_matplotlib
+
+        require_matplotlib()
+    spec, rig = load_plan(args.plan, args.rig)
+    plan = build(spec, rig, where=str(args.plan))
+    print(render_summary(plan))
+    if args.output is not None:
+        plan.write_csv(args.output)
+        print(f"wrote {len(plan)} targets to {args.output}")
+    if args.plot is not None:
+        from gonio.plots.coverage import plot_coverage
+
+        plot_coverage(plan, args.plot)
+        print(f"drew the coverage in {args.plot}")
+    return 0

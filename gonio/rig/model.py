@@ -1,0 +1,280 @@
+"""`Rig`: a validated rig file turned into kinematics, constraints and motor axes.
+
+Joint angles are radians, in the order of the rig file's ``axes``. Directions are
+sample-frame unit vectors (z = normal). `solve` gives, for each pair, the joint angles
+to measure it (the candidate nearest the previous pose, or the home pose), the pair
+actually measured (rotated about the normal for isotropic plans, where the sample
+rotation stage stays home) and, for refused pairs, why (`Reason`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from pathlib import Path
+
+import numpy as np
+
+from drivers.dynamixel.axis import AxisConfig
+from gonio.config import ConfigError, load
+from gonio.rig import constraints, inverse
+from gonio.rig.kinematics import apply, apply_transposed, chain_rotation, rotate_z
+from gonio.rig.schema import RigSpec
+from gonio.rig.travel import TravelModel
+from gonio.types import BoolArray, FloatArray
+
+
+class Reason(IntEnum):
+    """Why a pair is refused (0: it is not). "limit" in the issue's words covers
+    THETA_MAX and AXIS_LIMIT."""
+
+    OK = 0
+    THETA_MAX = 1  # beyond the usable polar angle of the light or the detector
+    BLIND_SPOT = 2  # source and detector closer than the minimum separation
+    FOOTPRINT = 3  # the lit area leaves the sample or the detector's view
+    AXIS_LIMIT = 4  # no inverse-kinematics solution inside the axes' limits
+    COLLISION = 5  # every solution inside the limits hits a keep-out box
+
+    @property
+    def label(self) -> str:
+        return self.name.lower()
+
+
+#: What each closed-form type needs the chains to be: (axis name, rotation axis).
+_EXPECTED_CHAINS = {
+    "arch": {
+        "light": [("light_elevation", (0, 1, 0))],
+        "detector": [("detector_azimuth", (0, 0, 1)), ("detector_elevation", (0, 1, 0))],
+        "sample": [("sample_rotation", (0, 0, 1))],
+    },
+    "in_plane": {
+        "light": [("light_arm", (0, 1, 0))],
+        "detector": [("detector_arm", (0, 1, 0))],
+        "sample": [("sample_tilt", (1, 0, 0)), ("sample_rotation", (0, 0, 1))],
+    },
+}
+
+
+#: Direction pairs probed when a rig is loaded, to refuse a rig that can measure nothing.
+PROBE_PAIRS = 4096
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Per pair: joint angles (N, A), the pair measured (N, 3) each, the refusal reason
+    (N,) and every candidate (N, K, A) with its usability (N, K) for a later choice."""
+
+    angles: FloatArray
+    wi: FloatArray
+    wo: FloatArray
+    reasons: np.ndarray
+    candidates: FloatArray
+    usable: BoolArray
+
+    @property
+    def ok(self) -> BoolArray:
+        return np.asarray(self.reasons == Reason.OK, dtype=np.bool_)
+
+
+class Rig:
+    """A rig: forward and inverse kinematics, constraints, and its motor axes."""
+
+    def __init__(self, spec: RigSpec, source: Path | None = None) -> None:
+        self.spec = spec
+        self.source = source
+        self._check_chains()
+        self.axes: tuple[str, ...] = tuple(spec.axes)
+        a = list(spec.axes.values())
+        self.limits = np.radians([[s.min_deg, s.max_deg] for s in a])
+        self.velocity = np.radians([s.max_velocity_deg_s for s in a])
+        self.acceleration = np.radians([s.max_acceleration_deg_s2 for s in a])
+        self.travel = TravelModel(self.velocity, self.acceleration)
+        self.home = np.clip(np.zeros(len(a)), self.limits[:, 0], self.limits[:, 1])
+        c = spec.constraints
+        self.theta_max = math.radians(c.theta_max_deg)
+        self.min_separation = math.radians(c.min_separation_deg)
+        self._collisions = [
+            (
+                box.name,
+                {
+                    self.axes.index(n): (math.radians(lo), math.radians(hi))
+                    for n, (lo, hi) in box.ranges_deg.items()
+                },
+            )
+            for box in c.collisions
+        ]
+        self._rotation_index = self.axes.index("sample_rotation")
+        self.motor_axes = self._motor_axes()
+        self._check_something_reachable()
+
+    @classmethod
+    def from_yaml(cls, path: str | Path) -> Rig:
+        return cls(load(path, RigSpec), Path(path))
+
+    def _check_chains(self) -> None:
+        where = str(self.source) if self.source else "rig"
+        for chain, expected in _EXPECTED_CHAINS[self.spec.type].items():
+            spec = getattr(self.spec, chain)
+            got = [(n, tuple(round(c, 9) for c in self.spec.axes[n].axis)) for n in spec.axes]
+            if got != [(n, tuple(float(c) for c in v)) for n, v in expected]:
+                wanted = ", ".join(f"{n} about {v}" for n, v in expected)
+                raise ConfigError(f"{where}: {chain}.axes: a {self.spec.type} rig needs {wanted}")
+            if chain != "sample" and tuple(spec.pointing) != (0.0, 0.0, 1.0):
+                raise ConfigError(
+                    f"{where}: {chain}.pointing: a {self.spec.type} rig points along (0, 0, 1)"
+                )
+
+    def _check_something_reachable(self) -> None:
+        """`ConfigError` if the constraints refuse every one of `PROBE_PAIRS` direction
+        pairs spread over the hemisphere (a rig that can measure nothing)."""
+        rng = np.random.default_rng(0)
+        z = rng.uniform(0.0, 1.0, (2, PROBE_PAIRS))
+        phi = rng.uniform(0.0, 2.0 * np.pi, (2, PROBE_PAIRS))
+        r = np.sqrt(1.0 - z * z)
+        w = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
+        for isotropic in (False, True):
+            reasons = self.solve(w[0], w[1], isotropic=isotropic).reasons
+            if np.any(reasons == Reason.OK):
+                return
+        where = str(self.source) if self.source else "rig"
+        counts = ", ".join(
+            f"{r.label.replace('_', ' ')} {n}"
+            for r in Reason
+            if r != Reason.OK and (n := int(np.count_nonzero(reasons == r)))
+        )
+        raise ConfigError(
+            f"{where}: constraints: leave no direction pair measurable (of {PROBE_PAIRS} pairs "
+            f"spread over the hemisphere, refused: {counts}); expected constraints that "
+            "leave some of the hemisphere reachable"
+        )
+
+    # -- kinematics --------------------------------------------------------------------
+    def _chain(self, chain: str, angles: FloatArray) -> FloatArray:
+        names = getattr(self.spec, chain).axes
+        return chain_rotation(
+            [np.asarray(self.spec.axes[n].axis) for n in names],
+            [angles[..., self.axes.index(n)] for n in names],
+        )
+
+    def forward(self, angles: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Sample-frame (ωi, ωo) of joint angles (..., A) (any chain, no closed form)."""
+        angles = np.asarray(angles, dtype=np.float64)
+        sample = self._chain("sample", angles)
+        light = apply(self._chain("light", angles), np.asarray(self.spec.light.pointing))
+        detector = apply(self._chain("detector", angles), np.asarray(self.spec.detector.pointing))
+        return apply_transposed(sample, light), apply_transposed(sample, detector)
+
+    def candidates(self, wi: FloatArray, wo: FloatArray) -> FloatArray:
+        """Every closed-form solution (N, K, A), wrapped into the limits where possible."""
+        solved = inverse.SOLVERS[self.spec.type](wi, wo)
+        raw = np.stack([solved[n] for n in self.axes], axis=-1)
+        lo, hi = self.limits[:, 0], self.limits[:, 1]
+        centre = 0.5 * (lo + hi)
+        best = raw.copy()
+        best_gap = np.full(raw.shape, np.inf)
+        for turns in (-1, 0, 1):
+            shifted = raw + 2.0 * np.pi * turns
+            inside = (shifted >= lo) & (shifted <= hi)
+            gap = np.where(inside, np.abs(shifted - centre), np.inf)
+            take = gap < best_gap
+            best = np.where(take, shifted, best)
+            best_gap = np.where(take, gap, best_gap)
+        return np.asarray(best, dtype=np.float64)
+
+    def _within_limits(self, angles: FloatArray) -> BoolArray:
+        lo, hi = self.limits[:, 0], self.limits[:, 1]
+        return np.asarray(np.all((angles >= lo) & (angles <= hi), axis=-1), dtype=np.bool_)
+
+    def _collides(self, angles: FloatArray) -> BoolArray:
+        hit = np.zeros(angles.shape[:-1], dtype=np.bool_)
+        for _, box in self._collisions:
+            hit |= constraints.in_box(angles, box)
+        return hit
+
+    def travel_time(self, p: FloatArray, q: FloatArray) -> FloatArray:
+        """Time (s) to move every axis from p to q at once (`TravelModel.time`)."""
+        return self.travel.time(p, q)
+
+    def solve(
+        self,
+        wi: FloatArray,
+        wo: FloatArray,
+        *,
+        isotropic: bool = False,
+        previous: FloatArray | None = None,
+    ) -> Solution:
+        """Joint angles and refusal reasons for pairs (N, 3); see the module docstring."""
+        wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
+        wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
+        cand = self.candidates(wi, wo)
+        if isotropic:
+            # The pair may turn about the normal: keep the rotation stage home and measure
+            # the turned pair instead (ω' = R_z(ψ) ω for the candidate's ψ).
+            cand[..., self._rotation_index] = self.home[self._rotation_index]
+        limits_ok = self._within_limits(cand)
+        usable = limits_ok & ~self._collides(cand)
+        start = self.home if previous is None else np.asarray(previous, dtype=np.float64)
+        cost = np.where(usable, self.travel_time(start, cand), np.inf)
+        pick = np.argmin(cost, axis=1)
+        rows = np.arange(len(wi))
+        angles = cand[rows, pick]
+
+        reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
+        theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
+        c = self.spec.constraints
+        checks = [
+            (Reason.THETA_MAX, theta_max),
+            (Reason.BLIND_SPOT, constraints.separation(wi, wo) < self.min_separation),
+            (
+                Reason.FOOTPRINT,
+                ~constraints.footprint_ok(
+                    wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
+                ),
+            ),
+            (Reason.AXIS_LIMIT, ~limits_ok.any(axis=1)),
+            (Reason.COLLISION, ~usable.any(axis=1)),
+        ]
+        for reason, refused in reversed(checks):  # the first check that fails wins
+            reasons[refused] = reason
+
+        measured_wi, measured_wo = wi, wo
+        if isotropic:
+            raw_psi = inverse.SOLVERS[self.spec.type](wi, wo)["sample_rotation"][rows, pick]
+            turn = raw_psi - self.home[self._rotation_index]
+            measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
+        return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
+
+    def reachable(
+        self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False
+    ) -> tuple[BoolArray, np.ndarray]:
+        """(mask, reasons) for pairs (N, 3): True where the rig can measure the pair."""
+        solution = self.solve(wi, wo, isotropic=isotropic)
+        return solution.ok, solution.reasons
+
+    # -- motors ------------------------------------------------------------------------
+    def bus_axes(self) -> list[AxisConfig]:
+        """The axes as `drivers.dynamixel.axis.AxisConfig` for a `DynamixelBus`."""
+        return list(self.motor_axes)
+
+    def _motor_axes(self) -> tuple[AxisConfig, ...]:
+        out = []
+        for name, s in self.spec.axes.items():
+            try:
+                config = AxisConfig(
+                    name=name,
+                    motor_id=s.motor_id,
+                    min_rad=math.radians(s.min_deg),
+                    max_rad=math.radians(s.max_deg),
+                    gear_ratio=s.gear_ratio,
+                    zero_offset_rad=math.radians(s.zero_offset_deg),
+                    direction=s.direction,
+                    mode=s.mode,
+                    profile_velocity_rad_s=math.radians(s.max_velocity_deg_s),
+                    profile_acceleration_rad_s2=math.radians(s.max_acceleration_deg_s2),
+                )
+            except ValueError as exc:
+                where = str(self.source) if self.source else "rig"
+                raise ConfigError(f"{where}: axes.{name}: {exc}") from None
+            out.append(config)
+        return tuple(out)

@@ -1,0 +1,130 @@
+"""The rig file (YAML), validated: axes, kinematic chains, physical constraints.
+
+Angles in the file are degrees (fields say ``_deg``), lengths millimetres (``_mm``),
+times seconds. Everything is converted to radians once, in `gonio.rig.model`.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from gonio.config import Strict, field_error
+
+Vector = tuple[float, float, float]
+
+
+class AxisSpec(Strict):
+    """One revolute axis: its rotation axis in the parent frame, range, motor and dynamics.
+
+    The joint angle is the kinematic variable (0 = the chain's home pose); the motor
+    drives it as joint = zero_offset + direction · motor angle / gear_ratio.
+    """
+
+    axis: Vector
+    min_deg: float
+    max_deg: float
+    motor_id: int = Field(ge=0, le=252)
+    gear_ratio: float = Field(1.0, gt=0)
+    direction: Literal[1, -1] = 1
+    zero_offset_deg: float = 0.0
+    mode: Literal["position", "extended_position"] = "position"
+    max_velocity_deg_s: float = Field(gt=0)
+    max_acceleration_deg_s2: float = Field(gt=0)
+
+    @field_validator("axis")
+    @classmethod
+    def _unit_axis(cls, v: Vector) -> Vector:
+        norm = sum(c * c for c in v) ** 0.5
+        if not norm > 0:
+            raise ValueError("a rotation axis must not be the zero vector")
+        return (v[0] / norm, v[1] / norm, v[2] / norm)
+
+    @model_validator(mode="after")
+    def _ordered_limits(self) -> AxisSpec:
+        if not self.min_deg < self.max_deg:
+            raise field_error(
+                "max_deg", f"expected more than min_deg ({self.min_deg}), got {self.max_deg}"
+            )
+        return self
+
+
+class ChainSpec(Strict):
+    """A chain of axes from the lab frame outward, and the unit vector that the last
+    frame points along (for the light and the detector: toward the source / sensor)."""
+
+    axes: list[str] = Field(min_length=1)
+    pointing: Vector = (0.0, 0.0, 1.0)
+
+
+class CollisionSpec(Strict):
+    """A keep-out box in joint space: a collision when every listed axis is in its range."""
+
+    name: str
+    ranges_deg: dict[str, tuple[float, float]] = Field(min_length=1)
+
+
+class ConstraintSpec(Strict):
+    theta_max_deg: float = Field(80.0, gt=0, le=90)
+    min_separation_deg: float = Field(8.0, ge=0, lt=180)
+    collisions: tuple[CollisionSpec, ...] = ()
+    beam_diameter_mm: float = Field(gt=0)
+    sample_diameter_mm: float = Field(gt=0)
+    detector_fov_mm: float = Field(gt=0)
+
+
+class BusSpec(Strict):
+    port: str = "/dev/ttyUSB0"
+    baud: int = 57_600
+
+
+class RigSpec(Strict):
+    """A whole rig: its type (which closed-form inverse kinematics applies), its axes and
+    the chains of the light, the detector and the sample holder (sample → lab)."""
+
+    name: str
+    type: Literal["arch", "in_plane"]
+    axes: dict[str, AxisSpec] = Field(min_length=1)
+    light: ChainSpec
+    detector: ChainSpec
+    sample: ChainSpec
+    constraints: ConstraintSpec
+    settle_s: float = Field(0.2, ge=0)
+    bus: BusSpec = BusSpec()
+
+    @model_validator(mode="after")
+    def _known_axes(self) -> RigSpec:
+        for chain in ("light", "detector", "sample"):
+            for i, name in enumerate(getattr(self, chain).axes):
+                if name not in self.axes:
+                    raise field_error(f"{chain}.axes.{i}", f"{name!r} is not one of the axes")
+        for b, box in enumerate(self.constraints.collisions):
+            where = f"constraints.collisions.{b}.ranges_deg"
+            for name, (lo, hi) in box.ranges_deg.items():
+                if name not in self.axes:
+                    raise field_error(
+                        f"{where}.{name}", f"collision {box.name!r} names unknown axis {name!r}"
+                    )
+                if not lo < hi:
+                    raise field_error(
+                        f"{where}.{name}",
+                        f"collision {box.name!r}: expected [low, high], got [{lo}, {hi}]",
+                    )
+        seen: dict[int, str] = {}
+        for name, axis in self.axes.items():
+            if axis.motor_id in seen:
+                raise field_error(
+                    f"axes.{name}.motor_id",
+                    f"motor ID {axis.motor_id} is already used by {seen[axis.motor_id]}",
+                )
+            seen[axis.motor_id] = name
+        expected = {"arch": ARCH_AXES, "in_plane": IN_PLANE_AXES}[self.type]
+        if set(self.axes) != set(expected):
+            raise field_error("axes", f"a {self.type!r} rig has the axes {', '.join(expected)}")
+        return self
+
+
+#: The axes each closed-form rig type expects (the chains say how they are connected).
+ARCH_AXES = ("light_elevation", "detector_azimuth", "detector_elevation", "sample_rotation")
+IN_PLANE_AXES = ("light_arm", "detector_arm", "sample_tilt", "sample_rotation")

@@ -1,0 +1,73 @@
+"""`TravelModel`: how long the rig's axes take to move between two poses.
+
+Each axis follows a trapezoidal profile (accelerate at a, cruise at v, decelerate at a)
+and all axes start together, so a move takes its slowest axis's time:
+
+    t_j(d) = 2 √(d / a_j)            if d < v_j² / a_j  (never reaches cruise speed)
+           = d / v_j + v_j / a_j      otherwise
+
+with d = |Δθ_j| (rad), v in rad/s, a in rad/s². Each t_j is increasing, concave and
+zero at zero, so the move time is a metric on joint space (the triangle inequality
+holds), which the ordering's lower bound relies on.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.types import ArrayLike, FloatArray
+
+
+@dataclass(frozen=True)
+class TravelModel:
+    """Per-axis maximum velocity (rad/s) and acceleration (rad/s²), shape (A,)."""
+
+    velocity: FloatArray
+    acceleration: FloatArray
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.velocity, dtype=np.float64)
+        a = np.asarray(self.acceleration, dtype=np.float64)
+        if v.shape != a.shape or v.ndim != 1 or np.any(v <= 0) or np.any(a <= 0):
+            raise ValueError("velocity and acceleration must be positive, one per axis")
+        object.__setattr__(self, "velocity", v)
+        object.__setattr__(self, "acceleration", a)
+
+    def time(self, p: ArrayLike, q: ArrayLike) -> FloatArray:
+        """Move time (s) from poses p to q (..., A), broadcast over leading axes."""
+        d = np.abs(np.asarray(q, dtype=np.float64) - np.asarray(p, dtype=np.float64))
+        v, a = self.velocity, self.acceleration
+        t = np.where(d < v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
+        return np.asarray(np.max(t, axis=-1), dtype=np.float64)
+
+    def reach(self, t: float) -> FloatArray:
+        """Per-axis largest |Δθ| (rad) covered within t seconds: t(p, q) ≤ t exactly when
+        |q_j − p_j| ≤ reach(t)_j on every axis."""
+        v, a = self.velocity, self.acceleration
+        return np.asarray(
+            np.where(t < 2.0 * v / a, a * t * t / 4.0, v * (t - v / a)), dtype=np.float64
+        )
+
+    def scalar(self) -> Callable[[Sequence[float], Sequence[float]], float]:
+        """`time` for two single poses as plain Python floats: the local search calls it
+        millions of times, where a numpy call's overhead would dominate."""
+        axes = [
+            (float(v), float(a), float(v * v / a), float(v / a))
+            for v, a in zip(self.velocity, self.acceleration, strict=True)
+        ]
+        sqrt = math.sqrt
+
+        def time(p: Sequence[float], q: Sequence[float]) -> float:
+            worst = 0.0
+            for (v, a, knee, ramp), x, y in zip(axes, p, q, strict=True):
+                d = x - y if x > y else y - x
+                t = 2.0 * sqrt(d / a) if d < knee else d / v + ramp
+                if t > worst:
+                    worst = t
+            return worst
+
+        return time

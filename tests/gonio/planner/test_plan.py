@@ -1,0 +1,242 @@
+"""`gonio.planner.build`: counts that add up, targets that are valid, reachable and
+measured as planned, arrival times that follow from the moves and the dwell, a CSV
+that round-trips, exposures that follow the expected signal."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gonio import brdf, params
+from gonio.config import ConfigError
+from gonio.planner import build, load_plan, sampling
+from gonio.planner import plan as plan_module
+from gonio.planner.plan import Plan, hms, render_summary
+from gonio.planner.schema import PlanSpec
+from gonio.rig.model import Reason
+from tests.gonio.rig.helpers import RIGS
+
+PLANS = Path(__file__).resolve().parents[3] / "configs" / "plans"
+
+
+def spec(**fields: Any) -> PlanSpec:
+    data: dict[str, Any] = {"name": "test", "sampling": {"strategy": "sobol", "target": 300}}
+    data.update(fields)
+    return PlanSpec.model_validate(data)
+
+
+@pytest.fixture(scope="module")
+def plans() -> dict[str, Plan]:
+    """One small plan per (rig, isotropic), built once."""
+    out = {}
+    for rig in RIGS:
+        for iso in (True, False):
+            out[f"{rig}-{'iso' if iso else 'aniso'}"] = build(spec(isotropic=iso), RIGS[rig])
+    return out
+
+
+KEYS = ["arch-iso", "arch-aniso", "in_plane-iso", "in_plane-aniso"]
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_counts_add_up(plans: dict[str, Plan], key: str) -> None:
+    s = plans[key].summary
+    assert s.requested == s.invalid + sum(s.refused.values()) + s.kept
+    assert s.kept == len(plans[key]) == 300  # a target count is met exactly
+    assert s.invalid > 0  # the hybrid box is larger than its domain
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_targets_are_valid_reachable_and_measured_as_planned(
+    plans: dict[str, Plan], key: str
+) -> None:
+    plan = plans[key]
+    rig, p = plan.rig, params.get("hybrid")
+    lo, hi = rig.limits[:, 0], rig.limits[:, 1]
+    assert np.all((plan.angles >= lo) & (plan.angles <= hi))
+    # The pair the chosen pose measures is the planned one (rotated about the normal
+    # for isotropic plans): the same coordinates to 1e-10.
+    wi, wo = rig.forward(plan.angles)
+    np.testing.assert_allclose(wi, plan.wi, atol=1e-12)
+    np.testing.assert_allclose(wo, plan.wo, atol=1e-12)
+    if plan.spec.isotropic:
+        assert p.valid_iso(plan.coords).all()
+        got = p.forward_iso(plan.wi, plan.wo)
+        d = np.abs(got - plan.coords)
+        d[:, 2] = np.minimum(d[:, 2], np.pi - d[:, 2])  # the folded azimuth wraps at π
+        assert d.max() < 1e-10
+        # The sample stays home: only the arms move.
+        assert np.all(plan.angles[:, rig.axes.index("sample_rotation")] == 0.0)
+    else:
+        assert p.valid(plan.coords).all()
+        wi_planned, wo_planned = p.inverse(plan.coords)
+        np.testing.assert_allclose(plan.wi, wi_planned, atol=1e-10)
+        np.testing.assert_allclose(plan.wo, wo_planned, atol=1e-10)
+        assert np.ptp(plan.angles[:, rig.axes.index("sample_rotation")]) > np.pi
+    ok, _ = rig.reachable(plan.wi, plan.wo)
+    assert ok.all()
+    assert not rig._collides(plan.angles).any()
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_arrival_times_follow_moves_and_dwell(plans: dict[str, Plan], key: str) -> None:
+    plan = plans[key]
+    rig = plan.rig
+    previous = np.vstack([rig.home[None, :], plan.angles[:-1]])
+    np.testing.assert_allclose(plan.travel_s, rig.travel_time(previous, plan.angles), rtol=1e-12)
+    dwell = rig.spec.settle_s + plan.exposure_s * plan.averages
+    np.testing.assert_allclose(np.diff(plan.arrival_s), dwell[:-1] + plan.travel_s[1:], rtol=1e-9)
+    assert plan.arrival_s[0] == pytest.approx(plan.travel_s[0])
+    s = plan.summary
+    assert s.total_s == pytest.approx(plan.arrival_s[-1] + dwell[-1])
+    assert s.travel_s <= s.naive_travel_s
+    assert s.lower_bound_travel_s <= s.travel_s * (1 + 1e-9)
+
+
+def test_same_seed_same_plan() -> None:
+    a = build(spec(), RIGS["arch"])
+    b = build(spec(), RIGS["arch"])
+    assert np.array_equal(a.coords, b.coords)
+    assert np.array_equal(a.angles, b.angles)
+    c = build(spec(sampling={"strategy": "sobol", "target": 300, "seed": 9}), RIGS["arch"])
+    assert not np.array_equal(a.coords, c.coords)
+
+
+@pytest.mark.parametrize("strategy", ["sobol", "halton", "random"])
+def test_sequence_strategies_keep_the_first_points_that_fit(strategy: str) -> None:
+    """The kept targets are exactly the first `target` usable points of the sequence in
+    generation order: uniform in the coordinates, nothing chosen by hand."""
+    s = spec(sampling={"strategy": strategy, "target": 200, "seed": 3})
+    plan = build(s, RIGS["in_plane"])
+
+    stream = sampling.Sequence(strategy, 3, 3)
+    batches = -(-plan.summary.requested // plan_module.BATCH)
+    unit = np.vstack([stream.draw(plan_module.BATCH) for _ in range(batches)])
+    drawn = sampling.to_box(
+        unit[: plan.summary.requested],
+        params.get("hybrid").iso_bounds,
+        np.ones(3),
+    )
+    kept = plan_module._kept(s, RIGS["in_plane"], drawn)
+    assert kept.sum() == 200 and kept[-1]
+    assert sorted(map(tuple, plan.coords)) == sorted(map(tuple, drawn[kept]))
+
+
+def test_grid_counts_place_every_cell() -> None:
+    s = spec(sampling={"strategy": "grid", "counts": {"hbar": 6, "k": 5, "phi_k_minus_phi_h": 4}})
+    plan = build(s, RIGS["arch"])
+    assert plan.summary.requested == 120
+    assert plan.summary.grid_shape == (6, 5, 4)
+    # Cell centres: hbar at (i + 1/2)/6.
+    hbar = np.unique(plan.coords[:, 0])
+    assert np.allclose(hbar * 6 - 0.5, np.round(hbar * 6 - 0.5))
+
+
+def test_grid_target_reaches_the_target() -> None:
+    plan = build(spec(sampling={"strategy": "stratified", "target": 400, "seed": 1}), RIGS["arch"])
+    assert plan.summary.kept >= 400 * 0.8
+    shape = plan.summary.grid_shape
+    assert shape is not None and len(set(shape)) == 1
+
+
+def test_warp_densifies_near_the_specular_peak() -> None:
+    flat = build(spec(sampling={"strategy": "sobol", "target": 600}), RIGS["arch"])
+    warped = build(
+        spec(sampling={"strategy": "sobol", "target": 600, "warps": {"hbar": {"power": 2}}}),
+        RIGS["arch"],
+    )
+    assert np.mean(warped.coords[:, 0] < 0.2) > 1.8 * np.mean(flat.coords[:, 0] < 0.2)
+
+
+def test_unreachable_target_count_is_a_config_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(plan_module, "MAX_DRAWN", 8192)
+    with pytest.raises(ConfigError, match=r"^here: sampling.target: only \d+ of 100000"):
+        build(spec(sampling={"strategy": "random", "target": 100_000}), RIGS["arch"], where="here")
+
+
+def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
+    plan = plans["arch-aniso"]
+    path = tmp_path / "plan.csv"
+    plan.write_csv(path)
+    with path.open(encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(plan)
+    assert list(rows[0])[:5] == ["index", "hbar", "phi_h", "k", "phi_k"]
+    for name in ("wi_x", "wo_z", "light_elevation_rad", "sample_rotation_rad", "arrival_s"):
+        assert name in rows[0]
+    got = np.array([[float(r[f"{a}_rad"]) for a in plan.rig.axes] for r in rows])
+    assert np.array_equal(got, plan.angles)  # repr floats: exact
+    coords = np.array([[float(r[n]) for n in plan.coordinate_names] for r in rows])
+    assert np.array_equal(coords, plan.coords)
+    assert [int(r["index"]) for r in rows] == list(range(len(plan)))
+    np.testing.assert_allclose([float(r["arrival_s"]) for r in rows], plan.arrival_s, atol=5e-4)
+
+
+def test_adaptive_exposure_follows_the_expected_signal() -> None:
+    adapt = {
+        "material": {"name": "cook_torrance", "alpha": 0.2, "fresnel": "schlick", "f0": 0.04},
+        "min_s": 0.02,
+        "max_s": 0.5,
+        "max_averages": 4,
+    }
+    plan = build(spec(exposure={"seconds": 0.1, "averages": 1, "adapt": adapt}), RIGS["arch"])
+
+    model = brdf.create("cook_torrance", alpha=0.2, fresnel="schlick", f0=0.04)
+    signal = model.eval(plan.wi, plan.wo) * plan.wi[:, 2]
+    assert plan.exposure_s.min() >= 0.02 and plan.exposure_s.max() <= 0.5
+    assert plan.averages.min() >= 1 and plan.averages.max() <= 4
+    # Inside the clip range the exposure is exactly base × median / signal.
+    inside = (plan.exposure_s > 0.02) & (plan.exposure_s < 0.5)
+    assert inside.sum() > 50
+    ref = float(np.median(signal[signal > 0]))
+    np.testing.assert_allclose(plan.exposure_s[inside], 0.1 * ref / signal[inside], rtol=1e-9)
+    # Dark targets at the maximum exposure average more; bright ones do not.
+    assert plan.averages[plan.exposure_s == 0.5].max() > 1
+    assert np.all(plan.averages[plan.exposure_s < 0.5] == 1)
+
+
+def test_constant_exposure_without_adapt(plans: dict[str, Plan]) -> None:
+    plan = plans["arch-iso"]
+    assert np.all(plan.exposure_s == 0.1) and np.all(plan.averages == 1)
+
+
+@pytest.mark.parametrize("name", ["quick", "isotropic_hybrid", "anisotropic"])
+def test_shipped_plans_build(name: str) -> None:
+    s, rig = load_plan(PLANS / f"{name}.yaml")
+    plan = build(s, rig)
+    assert len(plan) > 0
+    assert plan.summary.travel_s <= 1.3 * plan.summary.lower_bound_travel_s
+    text = render_summary(plan)
+    for line in ("requested", "outside the domain", "refused: blind spot", "kept"):
+        assert line in text
+    assert hms(plan.summary.total_s) in text
+
+
+def test_shipped_plan_sizes() -> None:
+    """The shipped plans are what the README says: ≈ 500, ≈ 5 000 and anisotropic."""
+    sizes = {}
+    for name in ("quick", "isotropic_hybrid", "anisotropic"):
+        s, rig = load_plan(PLANS / f"{name}.yaml")
+        sizes[name] = (s, rig)
+    assert sizes["quick"][0].sampling.target == 500
+    assert sizes["isotropic_hybrid"][0].sampling.target == 5000
+    assert not sizes["anisotropic"][0].isotropic
+
+
+def test_rig_override(tmp_path: Path) -> None:
+    _, rig = load_plan(PLANS / "quick.yaml", PLANS.parent / "rigs" / "in_plane.yaml")
+    assert rig.spec.type == "in_plane"
+
+
+def test_hms() -> None:
+    assert hms(0) == "0:00:00"
+    assert hms(3599.6) == "1:00:00"
+    assert hms(90061) == "25:01:01"
+
+
+def test_reason_labels_cover_the_summary(plans: dict[str, Plan]) -> None:
+    assert set(plans["arch-iso"].summary.refused) == {r.label for r in Reason if r != Reason.OK}

@@ -1,0 +1,290 @@
+"""Bad plan files: one line naming the file, the line, the field path and what is
+expected; exit code 2 from `gonio plan`; no traceback; nothing constructed by YAML."""
+
+from __future__ import annotations
+
+import copy
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from gonio.cli import main
+
+CONFIGS = Path(__file__).resolve().parents[3] / "configs"
+QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())
+ARCH = str(CONFIGS / "rigs" / "arch.yaml")
+GONIO = Path(sys.executable).with_name("gonio")
+
+
+def write(tmp_path: Path, data: Any, name: str = "bad-plan.yaml") -> Path:
+    path = tmp_path / name
+    if isinstance(data, dict):
+        data.setdefault("rig", ARCH)
+    text = data if isinstance(data, str) else yaml.safe_dump(data, sort_keys=False)
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def edit(change: Callable[[dict[str, Any]], object]) -> dict[str, Any]:
+    data = copy.deepcopy(QUICK)
+    data["rig"] = ARCH
+    change(data)
+    return data
+
+
+def line_of_key(path: Path, *keys: str) -> int:
+    """1-based line of the value of the nested key (the key's line, or the next for a
+    block value), as block-style YAML writes it."""
+    lines = path.read_text().splitlines()
+    at = 0
+    for key in keys:
+        at = next(i for i in range(at, len(lines)) if lines[i].lstrip().startswith(f"{key}:"))
+    return at + 1 + lines[at].rstrip().endswith(":")
+
+
+def run_plan(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(["plan", *args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def grid(counts: dict[str, int]) -> Callable[[dict[str, Any]], object]:
+    return lambda d: d.update(sampling={"strategy": "grid", "counts": counts})
+
+
+GOOD_COUNTS = {"hbar": 4, "k": 4, "phi_k_minus_phi_h": 4}
+
+# (id, change, field path, keys locating the line, expected words)
+CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...], str]] = [
+    (
+        "unknown-parametrization",
+        lambda d: d.update(parametrization="polar"),
+        "parametrization",
+        ("parametrization",),
+        "unknown parametrization 'polar'; expected one of spherical, rusinkiewicz, "
+        "orthographic, hybrid",
+    ),
+    (
+        "negative-count",
+        grid({**GOOD_COUNTS, "k": -3}),
+        "sampling.counts.k",
+        ("sampling", "counts", "k"),
+        "expected a positive number of points, got -3",
+    ),
+    (
+        "count-of-an-unknown-coordinate",
+        grid({**GOOD_COUNTS, "theta": 3}),
+        "sampling.counts.theta",
+        ("sampling", "counts", "theta"),
+        "not a coordinate; the coordinates of isotropic hybrid are hbar, k, phi_k_minus_phi_h",
+    ),
+    (
+        "count-missing",
+        grid({"hbar": 4, "k": 4}),
+        "sampling.counts",
+        ("sampling", "counts"),
+        "expected a count for phi_k_minus_phi_h as well",
+    ),
+    (
+        "anisotropic-counts-need-four",
+        lambda d: (d.update(isotropic=False), grid(GOOD_COUNTS)(d)),
+        "sampling.counts.phi_k_minus_phi_h",
+        ("sampling", "counts", "phi_k_minus_phi_h"),
+        "the coordinates of hybrid are hbar, phi_h, k, phi_k",
+    ),
+    (
+        "zero-target",
+        lambda d: d["sampling"].update(target=0),
+        "sampling.target",
+        ("sampling", "target"),
+        "greater than 0 (got 0)",
+    ),
+    (
+        "counts-and-target",
+        lambda d: d["sampling"].update(strategy="grid", counts=GOOD_COUNTS),
+        "sampling",
+        ("sampling",),
+        "give exactly one of counts (per coordinate) or target (a total)",
+    ),
+    (
+        "counts-with-a-sequence",
+        lambda d: d.update(sampling={"strategy": "sobol", "counts": GOOD_COUNTS}),
+        "sampling.counts",
+        ("sampling", "counts"),
+        "counts apply to grid and stratified sampling, not sobol",
+    ),
+    (
+        "unknown-strategy",
+        lambda d: d["sampling"].update(strategy="latin"),
+        "sampling.strategy",
+        ("sampling", "strategy"),
+        "Input should be 'grid', 'stratified', 'sobol', 'halton' or 'random' (got 'latin')",
+    ),
+    (
+        "negative-warp",
+        lambda d: d["sampling"].update(warps={"hbar": {"power": -1}}),
+        "sampling.warps.hbar.power",
+        ("sampling", "warps", "hbar", "power"),
+        "greater than 0 (got -1)",
+    ),
+    (
+        "warp-of-an-unknown-coordinate",
+        lambda d: d["sampling"].update(warps={"theta_h": {"power": 2}}),
+        "sampling.warps.theta_h",
+        ("sampling", "warps", "theta_h"),
+        "not a coordinate",
+    ),
+    (
+        "exposure-range-inverted",
+        lambda d: d["exposure"].update(
+            adapt={"material": {"name": "lambert"}, "min_s": 2.0, "max_s": 1.0}
+        ),
+        "exposure.adapt.min_s",
+        ("exposure", "adapt", "min_s"),
+        "expected at most max_s (1.0), got 2.0",
+    ),
+    (
+        "unknown-material",
+        lambda d: d["exposure"].update(
+            adapt={"material": {"name": "velvet"}, "min_s": 0.1, "max_s": 1.0}
+        ),
+        "exposure.adapt.material",
+        ("exposure", "adapt", "material"),
+        "unknown BRDF model 'velvet'",
+    ),
+    (
+        "bad-material-parameter",
+        lambda d: d["exposure"].update(
+            adapt={"material": {"name": "cook_torrance", "alpha": -1}, "min_s": 0.1, "max_s": 1}
+        ),
+        "exposure.adapt.material",
+        ("exposure", "adapt", "material"),
+        "parameter alpha must lie in",
+    ),
+    (
+        "negative-exposure",
+        lambda d: d["exposure"].update(seconds=-0.1),
+        "exposure.seconds",
+        ("exposure", "seconds"),
+        "greater than 0 (got -0.1)",
+    ),
+    (
+        "unknown-field",
+        lambda d: d.update(colour="red"),
+        "colour",
+        ("colour",),
+        "Extra inputs are not permitted",
+    ),
+    (
+        "missing-sampling",
+        lambda d: d.pop("sampling"),
+        "sampling",
+        (),
+        "Field required",
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "keys", "expected"), [c[1:] for c in CASES], ids=[c[0] for c in CASES]
+)
+def test_invalid_field(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    change: Callable[[dict[str, Any]], object],
+    field: str,
+    keys: tuple[str, ...],
+    expected: str,
+) -> None:
+    path = write(tmp_path, edit(change))
+    code, out, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert out == ""
+    line = line_of_key(path, *keys) if keys else 1
+    assert err.startswith(f"gonio: error: {path}:{line}: {field}: "), err
+    assert expected in err
+    assert err.count("\n") == 1
+
+
+def test_not_yaml(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, "name: x\nsampling: {strategy: sobol, target: 3\n")
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert re.match(rf"gonio: error: {re.escape(str(path))}:\d+: not valid YAML: ", err), err
+
+
+def test_yaml_cannot_construct_objects(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    marker = tmp_path / "constructed"
+    path = write(tmp_path, f"name: !!python/object/apply:os.system ['touch {marker}']\n")
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert "not valid YAML" in err
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize(("text", "kind"), [("- a\n- b\n", "list"), ("", "empty"), ("3\n", "int")])
+def test_not_a_mapping(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, kind: str
+) -> None:
+    path = write(tmp_path, text)
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert (
+        err == f"gonio: error: {path}: expected a mapping of fields at the top level, got {kind}\n"
+    )
+
+
+def test_missing_plan_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_plan(capsys, str(tmp_path / "nowhere.yaml"))
+    assert code == 2
+    assert err.startswith(f"gonio: error: {tmp_path / 'nowhere.yaml'}: cannot read the file")
+
+
+def test_missing_rig_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, edit(lambda d: d.update(rig="no-such-rig.yaml")))
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert err.startswith(f"gonio: error: {tmp_path / 'no-such-rig.yaml'}: cannot read the file")
+
+
+def test_no_rig_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    data = edit(lambda d: d.pop("rig"))
+    path = tmp_path / "plan.yaml"
+    path.write_text(yaml.safe_dump(data), encoding="utf-8")
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert err == f"gonio: error: {path}: rig: no rig file named; give one here or with --rig\n"
+    # --rig supplies it.
+    code, out, _ = run_plan(capsys, str(path), "--rig", ARCH)
+    assert code == 0 and "kept" in out
+
+
+def test_rig_that_reaches_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rig = yaml.safe_load(Path(ARCH).read_text())
+    rig["constraints"]["beam_diameter_mm"] = 40  # wider than the 30 mm sample
+    rig_path = tmp_path / "rig.yaml"
+    rig_path.write_text(yaml.safe_dump(rig), encoding="utf-8")
+    plan = write(tmp_path, edit(lambda d: None))
+    code, _, err = run_plan(capsys, str(plan), "--rig", str(rig_path))
+    assert code == 2
+    assert err.startswith(f"gonio: error: {rig_path}: constraints: leave no direction pair")
+    assert "footprint" in err and err.count("\n") == 1
+
+
+def test_real_process_exit_code_and_no_traceback(tmp_path: Path) -> None:
+    path = write(tmp_path, edit(lambda d: d.update(parametrization="polar")))
+    r = subprocess.run(
+        [str(GONIO), "plan", str(path)],
+        capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert r.returncode == 2
+    assert r.stdout == ""
+    assert "Traceback" not in r.stderr
+    assert r.stderr.count("\n") == 1
+    assert f"{path}:" in r.stderr and "parametrization: unknown parametrization" in r.stderr

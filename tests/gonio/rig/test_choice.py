@@ -1,0 +1,101 @@
+"""Among several inverse-kinematics solutions, `solve` takes the usable one with the
+shortest travel time (`TravelModel.time`, the slowest axis's trapezoidal move) from
+``previous`` (the home pose by default)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+from tests.gonio.rig.helpers import RIGS, column, direction
+
+#: (rig, wi, wo, number of usable candidates): pairs with several usable solutions. The
+#: arch with the light within 5° of the normal has four (light ±θi, detector ±θo); the
+#: in-plane rig has two (the plane's normal m or −m).
+SEVERAL = [
+    ("arch", direction(3.0, 40.0), direction(40.0, 200.0), 4),
+    ("in_plane", direction(30.0, 20.0), direction(50.0, 200.0), 2),
+    ("in_plane", direction(45.0, 10.0), direction(30.0, 100.0), 2),
+]
+
+
+def solve_one(rig: Rig, wi: FloatArray, wo: FloatArray, previous: FloatArray | None) -> FloatArray:
+    return rig.solve(wi[None], wo[None], previous=previous).angles[0]
+
+
+@pytest.mark.parametrize(("name", "wi", "wo", "count"), SEVERAL)
+def test_previous_pose_decides_between_solutions(
+    name: str, wi: FloatArray, wo: FloatArray, count: int
+) -> None:
+    rig = RIGS[name]
+    solution = rig.solve(wi[None], wo[None])
+    candidates = solution.candidates[0]
+    assert solution.usable[0].sum() == count
+    assert len({tuple(np.round(c, 9)) for c in candidates[solution.usable[0]]}) == count
+    # Standing on a solution: that one is taken (travel 0), whichever it is.
+    for k in np.flatnonzero(solution.usable[0]):
+        assert np.array_equal(solve_one(rig, wi, wo, candidates[k]), candidates[k])
+    # Near a solution (every axis 2° off): still that one.
+    for k in np.flatnonzero(solution.usable[0]):
+        near = candidates[k] + np.radians(2.0)
+        assert np.array_equal(solve_one(rig, wi, wo, near), candidates[k])
+
+
+@pytest.mark.parametrize(("name", "wi", "wo", "count"), SEVERAL)
+def test_default_start_is_home(name: str, wi: FloatArray, wo: FloatArray, count: int) -> None:
+    rig = RIGS[name]
+    solution = rig.solve(wi[None], wo[None])
+    times = rig.travel.time(rig.home, solution.candidates[0])
+    assert np.array_equal(solution.angles[0], solution.candidates[0, np.argmin(times)])
+    assert np.array_equal(solve_one(rig, wi, wo, rig.home), solution.angles[0])
+
+
+@pytest.mark.parametrize("name", list(RIGS))
+def test_pick_is_the_fastest_usable_move(name: str) -> None:
+    """Random starting poses: the pick is the argmin of the travel time over the usable
+    candidates (a brute-force check); the nearest candidate in joint distance is
+    sometimes another one, so the time model, not the distance, is what decides."""
+    rig = RIGS[name]
+    rng = np.random.default_rng(5)
+    differs = 0
+    for name_, wi, wo, _ in SEVERAL:
+        if name_ != name:
+            continue
+        base = rig.solve(wi[None], wo[None])
+        usable = base.candidates[0][base.usable[0]]
+        for _ in range(200):
+            start = rng.uniform(rig.limits[:, 0], rig.limits[:, 1])
+            picked = solve_one(rig, wi, wo, start)
+            times = rig.travel.time(start, usable)
+            assert rig.travel.time(start, picked) == times.min()
+            assert any(np.array_equal(picked, c) for c in usable)
+            distance = np.linalg.norm(usable - start, axis=1)
+            differs += not np.array_equal(usable[np.argmin(distance)], picked)
+    assert differs > 0
+
+
+def test_unusable_solution_is_never_picked() -> None:
+    """Arch, detector opposite the light: only one of the four solutions is usable (the
+    others need the azimuth in the ±179° gap or the light at −30°); even starting on an
+    unusable one, the usable one is taken."""
+    rig = RIGS["arch"]
+    wi, wo = direction(30.0, 0.0), direction(40.0, 180.0)
+    solution = rig.solve(wi[None], wo[None])
+    assert solution.usable[0].tolist() == [False, False, True, False]
+    for start in solution.candidates[0]:
+        assert np.array_equal(solve_one(rig, wi, wo, start), solution.candidates[0, 2])
+    assert solution.candidates[0, 2, column(rig, "detector_elevation")] < 0.0
+
+
+def test_batch_shares_one_previous_pose() -> None:
+    """``previous`` (A,) applies to every pair of a batch: each row picks as alone."""
+    rig = RIGS["arch"]
+    wi = np.stack([p[1] for p in SEVERAL[:1]] * 3)
+    wo = np.stack([p[2] for p in SEVERAL[:1]] * 3)
+    first = rig.solve(wi[:1], wo[:1])
+    for k in range(4):
+        start = first.candidates[0, k]
+        batch = rig.solve(wi, wo, previous=start)
+        assert all(np.array_equal(row, start) for row in batch.angles)
