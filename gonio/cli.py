@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 
 from drivers.base import DriverError
-from gonio import __version__, motors_cli, plan_cli
+from gonio import __version__, motors_cli, plan_cli, simulate_cli
 from gonio.errors import GonioError
 
 
@@ -39,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.set_defaults(func=_cmd_demo)
     plan_cli.add_parser(sub)
+    simulate_cli.add_parser(sub)
     motors_cli.add_parser(sub)
     return parser
 

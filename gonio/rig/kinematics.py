@@ -14,23 +14,41 @@ import numpy as np
 
 from gonio.types import FloatArray
 
+_EYE = np.eye(3)
+
+
+def skew(axis: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(K, K²) of a unit ``axis``: K v = axis × v."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return k, k @ k
+
 
 def rotation(axis: FloatArray, angle: FloatArray) -> FloatArray:
     """Rotation matrices (..., 3, 3) about the unit ``axis`` (3,) by ``angle`` (...) rad
     (Rodrigues: I + sin θ K + (1 − cos θ) K²)."""
+    return rotation_of(skew(axis), angle)
+
+
+def rotation_of(k: tuple[FloatArray, FloatArray], angle: FloatArray) -> FloatArray:
+    """`rotation` from the axis's precomputed (K, K²)."""
     theta = np.asarray(angle, dtype=np.float64)
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    k2 = k @ k
     s = np.sin(theta)[..., None, None]
     c = (1.0 - np.cos(theta))[..., None, None]
-    return np.asarray(np.eye(3) + s * k + c * k2, dtype=np.float64)
+    return np.asarray(_EYE + s * k[0] + c * k[1], dtype=np.float64)
 
 
 def chain_rotation(axes: list[FloatArray], angles: list[FloatArray]) -> FloatArray:
     """R = R(a₁, θ₁) … R(aₙ, θₙ), shape broadcast(angles) + (3, 3)."""
-    out = rotation(axes[0], angles[0])
-    for axis, angle in zip(axes[1:], angles[1:], strict=True):
-        out = out @ rotation(axis, angle)
+    return chain_rotation_of([skew(a) for a in axes], angles)
+
+
+def chain_rotation_of(
+    skews: list[tuple[FloatArray, FloatArray]], angles: list[FloatArray]
+) -> FloatArray:
+    """`chain_rotation` from each axis's precomputed (K, K²)."""
+    out = rotation_of(skews[0], angles[0])
+    for k, angle in zip(skews[1:], angles[1:], strict=True):
+        out = out @ rotation_of(k, angle)
     return out
 
 

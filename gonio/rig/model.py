@@ -19,7 +19,7 @@ import numpy as np
 from drivers.dynamixel.axis import AxisConfig
 from gonio.config import ConfigError, load
 from gonio.rig import constraints, inverse
-from gonio.rig.kinematics import apply, apply_transposed, chain_rotation, rotate_z
+from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
@@ -105,6 +105,14 @@ class Rig:
             for box in c.collisions
         ]
         self._rotation_index = self.axes.index("sample_rotation")
+        self._chains = {
+            chain: (
+                [self.axes.index(n) for n in getattr(spec, chain).axes],
+                [skew(np.asarray(spec.axes[n].axis)) for n in getattr(spec, chain).axes],
+            )
+            for chain in ("light", "detector", "sample")
+        }
+        self._pointing = {c: np.asarray(getattr(spec, c).pointing) for c in ("light", "detector")}
         self.motor_axes = self._motor_axes()
         self._check_something_reachable()
 
@@ -151,18 +159,15 @@ class Rig:
 
     # -- kinematics --------------------------------------------------------------------
     def _chain(self, chain: str, angles: FloatArray) -> FloatArray:
-        names = getattr(self.spec, chain).axes
-        return chain_rotation(
-            [np.asarray(self.spec.axes[n].axis) for n in names],
-            [angles[..., self.axes.index(n)] for n in names],
-        )
+        columns, skews = self._chains[chain]
+        return chain_rotation_of(skews, [angles[..., c] for c in columns])
 
     def forward(self, angles: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Sample-frame (ωi, ωo) of joint angles (..., A) (any chain, no closed form)."""
         angles = np.asarray(angles, dtype=np.float64)
         sample = self._chain("sample", angles)
-        light = apply(self._chain("light", angles), np.asarray(self.spec.light.pointing))
-        detector = apply(self._chain("detector", angles), np.asarray(self.spec.detector.pointing))
+        light = apply(self._chain("light", angles), self._pointing["light"])
+        detector = apply(self._chain("detector", angles), self._pointing["detector"])
         return apply_transposed(sample, light), apply_transposed(sample, detector)
 
     def candidates(self, wi: FloatArray, wo: FloatArray) -> FloatArray:

@@ -41,16 +41,23 @@ def test_unknown_command_is_a_usage_error_without_traceback() -> None:
     assert "invalid choice: 'frobnicate'" in r.stderr
 
 
-def test_demo_prints_both_tables() -> None:
+def test_demo_runs_the_simulated_job_and_prints_the_tables() -> None:
     r = run("demo")
     assert r.returncode == 0, r.stderr
-    out = r.stdout
+    job, _, tables = r.stdout.partition("Parametrizations on named direction pairs")
+    # The main job: the quick plan measured on the simulated rig, calibrated, checked.
+    assert "plan 'quick': isotropic hybrid, sobol, rig 'arch-4axis'" in job
+    assert "simulated plan 'quick' on rig 'arch-4axis', scene 'matte'" in job
+    targets = next(line for line in job.splitlines() if line.strip().startswith("targets"))
+    assert targets.split()[-1] == "500"
+    error = next(line for line in job.splitlines() if "recovered BRDF error" in line)
+    assert float(error.split()[3].rstrip("%")) < 1.0  # median error with sensor noise, %
     for name in ("spherical", "rusinkiewicz", "orthographic", "hybrid"):
-        assert name in out
-    assert "opposite grazing" in out
-    assert "F_VOL" in out
+        assert name in tables
+    assert "opposite grazing" in tables
+    assert "F_VOL" in tables
     # Every round-trip error printed is small: no configuration changes in the demo.
-    errors = [float(line.split()[-1]) for line in out.splitlines() if line.startswith("  ")][:36]
+    errors = [float(line.split()[-1]) for line in tables.splitlines() if line.startswith("  ")][:36]
     assert len(errors) == 36
     assert max(errors) < 1e-7
 

@@ -1,0 +1,72 @@
+"""The radiometric chain, forward (the simulator) and inverse (the acquisition engine).
+
+Sources (`CollimatedSource`, `PointSource`) and `DetectorOptics` are validated frozen
+dataclasses (mm, W/m², W/sr, sr). Directions are sample-frame unit vectors (..., 3),
+z = normal, pointing away from the surface: wi toward the light, wo toward the detector.
+
+* ideal chain (`chain`): `irradiance`, `prefactor` K, `view_weight` c,
+  `geometric_factor` G = K c Ω, `radiant_power` Φ = f G, `brdf_from_power` f = Φ / G,
+  `electrons` / `power_from_electrons`, `signal_rate`;
+* calibration (`calibration`): `ReferenceCalibration` against a Lambertian standard;
+* effects: `footprint_fraction` (collimated beam against sample and field of view),
+  `point_source_power` (spatial integration for a proximal point source),
+  `aperture_integral` (angular integration over the aperture), combined in
+  `detector_power`.
+
+Formulas, assumptions and measured accuracies: docs/radiometry.md.
+"""
+
+from gonio.radiometry.aperture import aperture_integral, cap_half_angle, weight_for
+from gonio.radiometry.calibration import (
+    ReferenceCalibration,
+    SourceKind,
+    relative_geometry,
+    source_kind,
+)
+from gonio.radiometry.chain import (
+    ELEMENTARY_CHARGE,
+    CollimatedSource,
+    DetectorOptics,
+    PointSource,
+    Source,
+    brdf_from_power,
+    electrons,
+    geometric_factor,
+    irradiance,
+    power_from_electrons,
+    prefactor,
+    radiant_power,
+    signal_rate,
+    view_weight,
+)
+from gonio.radiometry.footprint import footprint_fraction, seen_fits_sample
+from gonio.radiometry.forward import detector_power
+from gonio.radiometry.spatial import point_source_power
+
+__all__ = [
+    "ELEMENTARY_CHARGE",
+    "CollimatedSource",
+    "DetectorOptics",
+    "PointSource",
+    "ReferenceCalibration",
+    "Source",
+    "SourceKind",
+    "aperture_integral",
+    "brdf_from_power",
+    "cap_half_angle",
+    "detector_power",
+    "electrons",
+    "footprint_fraction",
+    "geometric_factor",
+    "irradiance",
+    "point_source_power",
+    "power_from_electrons",
+    "prefactor",
+    "radiant_power",
+    "relative_geometry",
+    "seen_fits_sample",
+    "signal_rate",
+    "source_kind",
+    "view_weight",
+    "weight_for",
+]

@@ -1,0 +1,155 @@
+"""`SimDetector` and `SimLightSource`: a detector that measures the scene's material
+through the real radiometric chain, at the pose the motors are really in.
+
+Implements `drivers.base.Detector` (and `LightSource`). Each `measure` reads the pose
+(joint angles) from a callable — `SimMotorBus.true_positions` in a simulated run, the
+read-back positions of a real `DynamixelBus` in a rehearsal — turns it into the sample
+frame's (ωi, ωo) with the rig's forward kinematics, computes the power reaching the
+detector (`sim.chain`), the expected electrons of each exposure, and reads them out
+through the sensor (`sim.sensor`) with the random stream of the current sample index
+(`sample_index`, set by the instrument; it counts up after each measurement), so any
+sample can be recomputed alone. Time passes through ``wait``: a virtual clock's
+``advance`` in a simulation, a scaled sleep in a rehearsal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from drivers.base import DetectorError, Reading
+from gonio.rig.model import Rig
+from sim import sensor
+from sim.chain import Chain, Target
+from sim.scene import Scene
+from sim.streams import Streams
+
+#: Stream indices of reference-target and dark readings start here, far above any
+#: plan's sample indices, so calibration readings never share numbers with samples.
+CALIBRATION_INDEX = 1 << 40
+
+
+class SimLightSource:
+    """A switchable source (on at start); off, the detector sees only its own dark signal."""
+
+    def __init__(self) -> None:
+        self._on = True
+
+    @property
+    def is_on(self) -> bool:
+        return self._on
+
+    def on(self) -> None:
+        self._on = True
+
+    def off(self) -> None:
+        self._on = False
+
+
+def sensor_of(scene: Scene) -> tuple[sensor.SensorSpec, sensor.SensorEffects]:
+    """The scene's sensor and the sensor effects it lists."""
+    d, e = scene.detector, scene.effects
+    spec = sensor.SensorSpec(
+        full_well_e=d.full_well_e,
+        adc_bits=d.adc_bits,
+        read_noise_e=d.read_noise_e,
+        dark_current_e_s=d.dark_current_e_s,
+    )
+    effects = sensor.SensorEffects(
+        shot_noise=e.shot_noise is not None,
+        read_noise=e.read_noise is not None,
+        dark_current=e.dark_current is not None,
+        quantization=e.quantization is not None,
+        saturation=e.saturation is not None,
+    )
+    return spec, effects
+
+
+class SimDetector:
+    """A simulated detector looking at the scene from the pose ``pose()`` returns."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        rig: Rig,
+        pose: Callable[[], Mapping[str, float]],
+        *,
+        now: Callable[[], float],
+        wait: Callable[[float], object],
+        streams: Streams,
+        light: SimLightSource | None = None,
+    ) -> None:
+        self.scene = scene
+        self.rig = rig
+        self.chain = Chain(scene)
+        self.sensor, self.sensor_effects = sensor_of(scene)
+        self._pose = pose
+        self._now = now
+        self._wait = wait
+        self.streams = streams
+        self.light = light or SimLightSource()
+        self.exposure_range = scene.detector.exposure_range_s
+        self.readout_s = scene.detector.readout_s
+        #: What is on the stage: the material or the reference standard.
+        self.target: Target = "sample"
+        #: The sample index whose random stream the next measurement uses.
+        self.sample_index = 0
+        self._prepared: dict[tuple[float, ...], float] = {}
+        #: Measurements that found their pose prepared.
+        self.prepared_hits = 0
+
+    def prepare(self, poses: np.ndarray) -> None:
+        """Compute, in one vectorized pass, the sample's geometric power at joint poses
+        (N, A) the run expects to measure at; `measure` then looks a pose up instead of
+        evaluating the chain for it alone. Only an exactly equal pose is a hit: anything
+        else is computed as usual, so the readings do not depend on this."""
+        poses = np.asarray(poses, dtype=np.float64).reshape(-1, len(self.rig.axes))
+        wi, wo = self.rig.forward(poses)
+        power = self.chain.geometric_power(wi, wo, "sample")
+        self._prepared = dict(zip(map(tuple, poses.tolist()), power.tolist(), strict=True))
+
+    def _pose_angles(self) -> tuple[float, ...]:
+        pose = self._pose()
+        try:
+            return tuple(float(pose[name]) for name in self.rig.axes)
+        except KeyError as exc:
+            raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
+
+    def geometry(self) -> tuple[np.ndarray, np.ndarray]:
+        """(ωi, ωo), each (1, 3), of the present pose."""
+        return self.rig.forward(np.array([self._pose_angles()], dtype=np.float64))
+
+    def _geometric_power(self) -> np.ndarray:
+        angles = self._pose_angles()
+        if self.target == "sample" and angles in self._prepared:
+            self.prepared_hits += 1
+            return np.array([self._prepared[angles]])
+        wi, wo = self.rig.forward(np.array([angles], dtype=np.float64))
+        return self.chain.geometric_power(wi, wo, self.target)
+
+    def measure(self, exposure_s: float, averages: int = 1) -> Reading:
+        """Expose ``averages`` times for ``exposure_s`` s each; the mean in counts."""
+        lo, hi = self.exposure_range
+        if not lo <= exposure_s <= hi:
+            raise DetectorError(
+                f"exposure {exposure_s!r} s is outside the detector's range [{lo:g}, {hi:g}] s"
+            )
+        if int(averages) != averages or averages < 1:
+            raise DetectorError(f"averages must be a positive integer, got {averages!r}")
+        averages = int(averages)
+        geometric = self._geometric_power()
+        period = exposure_s + self.readout_s
+        t_mid = np.asarray(
+            self._now() + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
+            dtype=np.float64,
+        )
+        power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
+        signal = self.chain.electrons(power, np.array([exposure_s]))
+        index = np.array([self.sample_index], dtype=np.int64)
+        counts, saturated = sensor.read_out(
+            signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams, index
+        )
+        self._wait(period * averages)
+        self.sample_index += 1
+        return sensor.readings(counts, saturated)[0]
