@@ -1,12 +1,14 @@
 """`gonio simulate PLAN.yaml --scene SCENE.yaml`: measure a plan on the simulated rig.
 
 The plan is measured target by target through the driver protocols (`SimMotorBus`,
-`SimDetector`: what the acquisition engine will drive), the reference standard and a
-dark frame are read at the 0°/45° geometry, and the readings are carried back to BRDF
-values through the calibration, with directions recomputed from the read-back motor
-angles. The summary says how long the real rig would take, how long the simulation
-took, and how far the recovered BRDF is from the scene's model at the pairs measured:
-what a plan and a set of effects cost in accuracy, before any hardware moves.
+`SimDetector`: what the acquisition engine will drive); the reference standard is read
+at the 0°/45° geometry before and after (its exposure halved until it does not
+saturate), with a dark frame; the readings are carried back to BRDF values through the
+calibration, the source's drift divided out by interpolating the two reference readings
+in time, with directions recomputed from the read-back motor angles. The summary says
+how long the real rig would take, how long the simulation took, and how far the
+recovered BRDF is from the scene's model at the pairs measured: what a plan and a set
+of effects cost in accuracy, before any hardware moves.
 """
 
 from __future__ import annotations
@@ -60,7 +62,9 @@ class Result:
     scene: Scene
     run: SimRun
     wall_s: float
-    reference_counts: float
+    reference_counts: float  # the first reading of the reference standard
+    reference_exposure_s: float
+    reference_change: float  # last / first reference signal rate − 1 (the drift seen)
     dark_rate: float  # counts/s with the light off
     brdf: FloatArray  # recovered at the read-back pairs
     truth: FloatArray  # the scene's model at the pairs actually measured
@@ -79,33 +83,59 @@ def reference_pose(rig: Rig) -> FloatArray:
     return np.asarray(solution.angles[0], dtype=np.float64)
 
 
+def _reference(
+    inst: SimulatedInstrument, k: int, pose: list[float], exposure: float, shortest: float
+) -> tuple[float, float]:
+    """(counts, exposure s) of the reference standard, the exposure halved until the
+    reading does not saturate; `GonioError` if even ``shortest`` saturates."""
+    while True:
+        reading = inst.measure_reference(k, pose, exposure)
+        if not reading.saturated:
+            return reading.value, exposure
+        if exposure <= shortest:
+            raise GonioError(
+                f"the reference standard saturates the detector even at {shortest:g} s: "
+                "lower the source's power or the detector's aperture"
+            )
+        exposure = max(exposure / 2, shortest)
+
+
 def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
     """Measure ``plan`` in ``scene`` and recover the BRDF (see the module docstring)."""
     rig = plan.rig
+    shortest, longest = scene.detector.exposure_range_s
+    exposure = float(np.clip(np.median(plan.exposure_s), shortest, longest))
     started = time.perf_counter()
     with SimulatedInstrument(scene, rig, seed=seed) as inst:
         pose = reference_pose(rig).tolist()
-        exposure = float(np.median(plan.exposure_s))
-        exposure = float(np.clip(exposure, *scene.detector.exposure_range_s))
-        reference = inst.measure_reference(0, pose, exposure)
+        first, exposure = _reference(inst, 0, pose, exposure, shortest)
+        t_first = inst.clock.now - exposure / 2  # the middle of the exposure
         inst.light.off()
-        dark = inst.measure_reference(1, pose, exposure)
+        dark = inst.measure_reference(1, pose, exposure).value
         inst.light.on()
         run = inst.run(plan)
+        last = inst.measure_reference(2, pose, exposure).value
+        t_last = inst.clock.now - exposure / 2
     wall = time.perf_counter() - started
-    dark_rate = dark.value / exposure
+    dark_rate = dark / exposure
     wi_ref, wo_ref = rig.forward(np.asarray(pose))
     kind: Literal["collimated", "point"] = scene.source.kind
     calibration = radiometry.ReferenceCalibration.from_counts(
-        scene.reference.albedo, reference.value, exposure, wi_ref, wo_ref, kind,
-        dark_counts=dark.value,
-    )  # fmt: skip
+        scene.reference.albedo, first, exposure, wi_ref, wo_ref, kind, dark_counts=dark
+    )
     wi, wo = rig.forward(run.read_back)  # directions come from the read-back angles
     recovered = calibration.brdf_from_counts(
         run.value, run.exposure_s, wi, wo, dark_counts=dark_rate * run.exposure_s
     )
+    # The source drifts: scale by the reference's rate interpolated to each target.
+    change = (last - dark) / (first - dark) - 1.0
+    middle = (run.settled_s + run.end_s) / 2  # of each target's exposures
+    when = (middle - t_first) / (t_last - t_first)
+    recovered = recovered / (1.0 + change * when)
     truth = Chain(scene).models["sample"](run.wi, run.wo)
-    return Result(plan, scene, run, wall, reference.value, dark_rate, recovered, truth, wi, wo)
+    return Result(
+        plan, scene, run, wall, first, exposure, change, dark_rate, recovered, truth, wi, wo
+    )
 
 
 def render(result: Result) -> str:
@@ -123,7 +153,9 @@ def render(result: Result) -> str:
         f"(1/{run.instrument_time_s / max(result.wall_s, 1e-9):,.0f} of the instrument time)",
         f"  {'saturated readings':<24}{int(run.saturated.sum()):>10}",
         f"  {'reference standard':<24}{result.reference_counts:>10.1f}   counts "
-        f"(albedo {scene.reference.albedo:g}, 0°/45°; dark {result.dark_rate:.1f} counts/s)",
+        f"(albedo {scene.reference.albedo:g}, 0°/45°, {result.reference_exposure_s:g} s; "
+        f"dark {result.dark_rate:.1f} counts/s; {100 * result.reference_change:+.3f} % "
+        "by the end, divided out)",
     ]
     if error.size:
         q50, q95 = np.percentile(error, [50, 95])
@@ -132,7 +164,25 @@ def render(result: Result) -> str:
             f"95th percentile {100 * q95:.3f} %, max {100 * error.max():.3f} % "
             f"(vs the model at the pairs measured, {error.size} unsaturated targets)"
         )
+    lines += _point_source_note(result)
     return "\n".join(lines)
+
+
+def _point_source_note(result: Result) -> list[str]:
+    """A point source's ideal chain assumes the detector's spot lies on the sample."""
+    scene = result.scene
+    if scene.source.kind != "point" or scene.effects.footprint is not None:
+        return []
+    fov, sample = scene.detector.fov_diameter_mm, scene.sample.diameter_mm
+    beyond = int(np.count_nonzero(fov > sample * result.run.wo[:, 2]))
+    if not beyond:
+        return []
+    limit = math.degrees(math.acos(min(fov / sample, 1.0)))
+    return [
+        f"  note: {beyond} targets see past the sample's edge (θo > {limit:.1f}°); the "
+        "ideal point-source chain counts that area as lit sample: list the footprint "
+        "effect to model it"
+    ]
 
 
 def write_csv(result: Result, path: Path) -> None:

@@ -12,8 +12,8 @@ Effects, each computed only when the scene lists it:
   spot (with ``aperture_integration`` too, the aperture average nested inside the spot
   integral: exact, and slow — about 40 ms a pair at the default orders);
 - ``source_drift``: the source's power × (1 + rate·t/3600 + amplitude·sin(2πt/P + φ))
-  at the middle of each exposure;
-- ``stray_light``: + a constant power while the source is on.
+  at the middle of each exposure (never below 0);
+- ``stray_light``: + a constant power while the source is on (drifting with it).
 
 The sensor (`sim.sensor`) turns the expected electrons into counts.
 """
@@ -93,12 +93,12 @@ class Chain:
         if spec is None:
             return np.ones_like(np.asarray(t, dtype=np.float64))
         phase = math.radians(spec.phase_deg)
-        return np.asarray(
+        factor = (
             1.0
             + spec.rate_per_hour * t / 3600.0
-            + spec.amplitude * np.sin(2.0 * math.pi * t / spec.period_s + phase),
-            dtype=np.float64,
+            + spec.amplitude * np.sin(2.0 * math.pi * t / spec.period_s + phase)
         )
+        return np.asarray(np.maximum(factor, 0.0), dtype=np.float64)  # a lamp dims to dark
 
     def power(
         self,
@@ -111,11 +111,11 @@ class Chain:
         t_mid = np.asarray(t_mid, dtype=np.float64)
         if not light_on:
             return np.zeros_like(t_mid)
-        power = np.asarray(geometric, dtype=np.float64)[:, None] * self.drift(t_mid)
+        power = np.asarray(geometric, dtype=np.float64)[:, None]
         stray = self.effects.stray_light
-        if stray is not None:
+        if stray is not None:  # light from the source: it drifts with the source
             power = power + stray.power_w
-        return np.asarray(power, dtype=np.float64)
+        return np.asarray(power * self.drift(t_mid), dtype=np.float64)
 
     def electrons(self, power: FloatArray, exposure_s: FloatArray) -> FloatArray:
         """Expected signal electrons (N, A) of exposures of ``exposure_s`` (N,) s (checked

@@ -6,10 +6,11 @@ Implements `drivers.base.Detector` (and `LightSource`). Each `measure` reads the
 read-back positions of a real `DynamixelBus` in a rehearsal — turns it into the sample
 frame's (ωi, ωo) with the rig's forward kinematics, computes the power reaching the
 detector (`sim.chain`), the expected electrons of each exposure, and reads them out
-through the sensor (`sim.sensor`) with the random stream of the current sample index
-(`sample_index`, set by the instrument; it counts up after each measurement), so any
-sample can be recomputed alone. Time passes through ``wait``: a virtual clock's
-``advance`` in a simulation, a scaled sleep in a rehearsal.
+through the sensor (`sim.sensor`) with the random streams of the current sample index
+(`sample_index`, set by the instrument for each target; a second measurement of the
+same sample continues its streams), so any sample can be recomputed alone. Time passes
+through ``wait``: a virtual clock's ``advance`` in a simulation, a scaled sleep in a
+rehearsal.
 """
 
 from __future__ import annotations
@@ -93,8 +94,10 @@ class SimDetector:
         self.readout_s = scene.detector.readout_s
         #: What is on the stage: the material or the reference standard.
         self.target: Target = "sample"
-        #: The sample index whose random stream the next measurement uses.
+        #: The sample index whose random streams the next measurement uses (set by the
+        #: instrument for each target; measuring a sample again continues its streams).
         self.sample_index = 0
+        self._draws: dict[int, int] = {}  # draws used so far per sample index
         self._prepared: dict[tuple[float, ...], float] = {}
         #: Measurements that found their pose prepared.
         self.prepared_hits = 0
@@ -147,9 +150,11 @@ class SimDetector:
         power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
         signal = self.chain.electrons(power, np.array([exposure_s]))
         index = np.array([self.sample_index], dtype=np.int64)
+        start = self._draws.get(self.sample_index, 0)
+        self._draws[self.sample_index] = start + averages
         counts, saturated = sensor.read_out(
-            signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams, index
-        )
+            signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams,
+            index, start=start,
+        )  # fmt: skip
         self._wait(period * averages)
-        self.sample_index += 1
         return sensor.readings(counts, saturated)[0]

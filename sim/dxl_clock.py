@@ -42,6 +42,14 @@ class ManualClock:
             self._now += float(seconds)
             return self._now
 
+    def advance_to(self, t: float) -> float:
+        """Set the time to ``t`` (not before now) exactly, and return it."""
+        with self._lock:
+            if t < self._now:
+                raise ValueError(f"a clock cannot go backwards (from {self._now} s to {t} s)")
+            self._now = float(t)
+            return self._now
+
 
 class ScaledClock:
     """`time.monotonic` sped up by ``speedup`` (> 0), starting at 0 s when created."""

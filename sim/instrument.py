@@ -176,8 +176,7 @@ def rehearsal(
     )
     for axis, home in zip(axes, rig.home, strict=True):
         motor = emulator.motors[axis.motor_id]
-        if axis.mode == "extended_position":
-            motor.set("operating_mode", 4)
+        motor.set("operating_mode", axis.operating_mode)
         motor.set("present_position", axis.to_ticks(float(home)))
     light = SimLightSource()
     with emulator:

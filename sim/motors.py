@@ -52,7 +52,12 @@ def profile_position(
 
 
 class PositionModel:
-    """Encoder quantization, backlash and repeatability of the rig's axes (radians)."""
+    """Encoder quantization, backlash and repeatability of the rig's axes (radians).
+
+    The repeatability error is downstream of the encoder (a belt, a worm, a coupling):
+    the encoder never sees it. Each axis draws a new one when it moves and keeps it
+    while it stays put.
+    """
 
     def __init__(self, rig: Rig, spec: PositionErrorSpec, streams: streams_module.Streams):
         self.spec = spec
@@ -70,17 +75,18 @@ class PositionModel:
         steps = np.round((angles - self.zero) / self.tick)
         return np.asarray(self.zero + steps * self.tick, dtype=np.float64)
 
-    def joint_error(self, direction: FloatArray, index: np.ndarray | int) -> FloatArray:
-        """(N, A) joint minus encoder angle after moves in ``direction`` (N, A) (sign of
-        the last move per axis, 0 if it has not moved) for samples ``index``."""
-        direction = np.atleast_2d(direction)
-        error = -0.5 * self.backlash * direction
-        if self.sigma > 0:
-            n = self.streams.normal(
-                np.atleast_1d(index), streams_module.POSITION, direction.shape[1]
-            )
-            error = error + self.sigma * n
-        return np.asarray(error, dtype=np.float64)
+    def backlash_error(self, direction: FloatArray) -> FloatArray:
+        """Joint minus encoder angle from backlash, after last moves in ``direction``
+        (sign per axis, 0 before any move): the joint lags half the backlash behind."""
+        return np.asarray(-0.5 * self.backlash * np.asarray(direction), dtype=np.float64)
+
+    def repeatability_draw(self, index: np.ndarray, axes: int, start: int = 0) -> FloatArray:
+        """(N, A) repeatability errors of a move made for samples ``index``; ``start`` is
+        the draw offset of a sample's second, third … move."""
+        if self.sigma == 0:
+            return np.zeros((len(index), axes))
+        n = self.streams.normal(index, streams_module.POSITION, axes, start=start)
+        return np.asarray(self.sigma * n, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -90,7 +96,7 @@ class MotorState:
 
     encoder: tuple[float, ...]
     direction: tuple[float, ...]
-    error: tuple[float, ...]
+    repeatability: tuple[float, ...]
 
 
 class SimMotorBus(Resource):
@@ -122,12 +128,16 @@ class SimMotorBus(Resource):
         self._start = home.copy()  # where the present profile started
         self._goal = home.copy()  # where the motors are going (encoder ticks if quantized)
         self._t0 = self._end = clock.now
-        self._error = np.zeros(len(home))  # joint − encoder for the present move
+        self._settled_at = self._end
         self._direction = np.zeros(len(home))  # sign of each axis's last move
+        self._repeat = np.zeros(len(home))  # each axis's repeatability error
+        self._error = np.zeros(len(home))  # joint − encoder
+        self._moves: dict[int, int] = {}  # moves made so far per sample index
         self._open = False
         self._torque = True
-        #: The sample index whose stream draws the next move's repeatability error; the
-        #: instrument sets it before each move (otherwise moves are counted from 0).
+        #: The sample index whose stream draws the next move's repeatability errors (set
+        #: by the instrument before each target's move; a second move for the same
+        #: sample continues that stream).
         self.sample_index = 0
 
     # -- Resource / MotorBus ----------------------------------------------------------
@@ -172,12 +182,20 @@ class SimMotorBus(Resource):
         if self._model is not None:
             goal = np.clip(self._model.quantize(goal), self._lo, self._hi)
         step = np.sign(goal - here)
-        self._direction = np.where(step != 0, step, self._direction)
+        moved = step != 0
+        self._direction = np.where(moved, step, self._direction)
         self._start, self._goal, self._t0 = here, goal, self.clock.now
         self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
+        self._settled_at = self._end + self.settle_s
         if self._model is not None:
-            self._error = self._model.joint_error(self._direction, self.sample_index)[0]
-        self.sample_index += 1
+            k = self._moves.get(self.sample_index, 0)
+            self._moves[self.sample_index] = k + 1
+            axes = len(goal)
+            draw = self._model.repeatability_draw(
+                np.array([self.sample_index]), axes, start=k * axes
+            )[0]
+            self._repeat = np.where(moved, draw, self._repeat)
+            self._error = self._model.backlash_error(self._direction) + self._repeat
 
     def _present_encoder(self) -> FloatArray:
         now = self.clock.now
@@ -190,26 +208,30 @@ class SimMotorBus(Resource):
         return self._end
 
     def wait_settled(self, timeout_s: float) -> None:
-        """Advance the clock to the end of the motion plus the settle time; past
-        ``timeout_s`` hold where the axes are and raise `MotionTimeout`."""
+        """Advance the clock to the end of the motion plus the settle time (at once if
+        that has passed); if that is more than ``timeout_s`` away, hold the axes where
+        they are after ``timeout_s`` and raise `MotionTimeout`."""
         self._check_open()
-        remaining = self.motion_end() - self.clock.now
+        remaining = self._settled_at - self.clock.now
         if remaining > timeout_s:
             self.clock.advance(timeout_s)
             self.stop()
             raise MotionTimeout(
-                f"axes did not settle within {timeout_s:g} s (the move needs "
-                f"{remaining:.3f} s more); holding them"
+                f"axes did not settle within {timeout_s:g} s (the move and the settle "
+                f"time need {remaining:.3f} s more); holding them"
             )
-        self.clock.advance(max(remaining, 0.0) + self.settle_s)
+        if remaining > 0:
+            self.clock.advance_to(self._settled_at)
 
     def positions(self) -> dict[str, float]:
         """The encoder's reading of each axis (rad)."""
+        self._check_open()
         return dict(zip(self._names, self._present_encoder().tolist(), strict=True))
 
     def true_positions(self) -> dict[str, float]:
         """Where the joints really are (rad): the encoder reading plus backlash and
         repeatability (equal to `positions` without the position_error effect)."""
+        self._check_open()
         true = self._present_encoder() + self._error
         return dict(zip(self._names, true.tolist(), strict=True))
 
@@ -218,21 +240,23 @@ class SimMotorBus(Resource):
         return MotorState(
             tuple(self._present_encoder().tolist()),
             tuple(self._direction.tolist()),
-            tuple(self._error.tolist()),
+            tuple(self._repeat.tolist()),
         )
 
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
         self._start, self._goal, self._t0 = here, here.copy(), self.clock.now
-        self._end = self._t0
+        self._end = self._settled_at = self._t0
         self._direction = np.array(state.direction, dtype=np.float64)
-        self._error = np.array(state.error, dtype=np.float64)
+        self._repeat = np.array(state.repeatability, dtype=np.float64)
+        backlash = self._model.backlash_error(self._direction) if self._model else 0.0
+        self._error = backlash + self._repeat
 
     def stop(self) -> None:
         here = self._present_encoder()
         self._start, self._goal, self._t0 = here, here, self.clock.now
-        self._end = self._t0
+        self._end = self._settled_at = self._t0
 
     def torque(self, on: bool) -> None:
         self._check_open()
@@ -241,4 +265,5 @@ class SimMotorBus(Resource):
         self._torque = bool(on)
 
     def health(self) -> dict[str, Health]:
+        self._check_open()
         return {n: Health(temperature_c=35.0, voltage_v=12.0) for n in self._names}

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from drivers.base import Reading
+from gonio.errors import DomainError
 from sim.streams import DARK, READ, SHOT, Streams
 
 __all__ = ["SensorEffects", "SensorSpec", "Summary", "read_out", "readings", "summarize"]
@@ -61,7 +62,7 @@ class SensorSpec:
         if isinstance(self.adc_bits, bool) or not isinstance(self.adc_bits, int | np.integer):
             raise TypeError(f"adc_bits must be an int, got {self.adc_bits!r}")
         if not 1 <= self.adc_bits <= MAX_ADC_BITS:
-            raise ValueError(f"adc_bits must be in [1, {MAX_ADC_BITS}], got {self.adc_bits}")
+            raise DomainError(f"adc_bits must be in [1, {MAX_ADC_BITS}], got {self.adc_bits}")
         _check_real("full_well_e", self.full_well_e, positive=True)
         _check_real("read_noise_e", self.read_noise_e)
         _check_real("dark_current_e_s", self.dark_current_e_s)
@@ -82,7 +83,7 @@ def _check_real(name: str, value: object, *, positive: bool = False) -> None:
         raise TypeError(f"{name} must be a number, got {value!r}")
     number = float(value)
     if not math.isfinite(number) or number < 0.0 or (positive and number == 0.0):
-        raise ValueError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {value}")
+        raise DomainError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {value}")
 
 
 @dataclass(frozen=True)
@@ -130,46 +131,49 @@ def read_out(
     effects: SensorEffects,
     streams: Streams,
     index: ArrayLike,
+    *,
+    start: int = 0,
 ) -> tuple[FloatArray, BoolArray]:
     """What the sensor reports for A exposures of each of N samples.
 
     ``signal_e`` (N, A): expected signal electrons of each exposure; ``exposure_s`` (N,)
     or a scalar: seconds per exposure; ``index`` (N,) (or a scalar when N = 1): the
-    samples' indices, which key their random streams (draw a of a stream goes to exposure
-    a). Returns ``counts`` (N, A) float64 and ``saturated`` (N, A) bool. Only the effects
-    in ``effects`` are applied (see the module docstring); with none, ``counts`` is
+    samples' indices, which key their random streams (draw ``start`` + a of a stream goes
+    to exposure a: a sample measured again continues its streams with ``start`` past the
+    draws already used). Returns ``counts`` (N, A) float64 and ``saturated`` (N, A) bool.
+    Only the effects in ``effects`` are applied (see the module docstring); with none, ``counts`` is
     ``signal_e / gain`` exactly and ``saturated`` is all False.
     """
     signal = np.asarray(signal_e, dtype=np.float64)
     if signal.ndim != 2:
-        raise ValueError(f"signal_e must have shape (N, A), got {signal.shape}")
+        raise DomainError(f"signal_e must have shape (N, A), got {signal.shape}")
     n, a = signal.shape
     if signal.size and not (signal.min() >= 0.0 and signal.max() < math.inf):
-        raise ValueError("signal_e must be finite and >= 0")
+        raise DomainError("signal_e must be finite and >= 0")
     t = np.asarray(exposure_s, dtype=np.float64)
     if t.shape not in ((), (n,)):
-        raise ValueError(f"exposure_s must be a scalar or have shape ({n},), got {t.shape}")
+        raise DomainError(f"exposure_s must be a scalar or have shape ({n},), got {t.shape}")
     if t.size and not (t.min() >= 0.0 and t.max() < math.inf):
-        raise ValueError("exposure_s must be finite and >= 0")
+        raise DomainError("exposure_s must be finite and >= 0")
     idx = np.asarray(index)
     if idx.ndim == 0 and n == 1:
         idx = idx.reshape(1)
     if idx.shape != (n,):
-        raise ValueError(f"index must have shape ({n},), got {idx.shape}")
+        raise DomainError(f"index must have shape ({n},), got {idx.shape}")
 
     full_well = float(spec.full_well_e)
     cap = _poisson_cap(full_well) if effects.saturation else math.inf
     electrons = signal
     if effects.shot_noise:
         mean = np.minimum(signal, cap) if signal.size and signal.max() > cap else signal
-        electrons = streams.poisson(idx, SHOT, mean)
+        electrons = streams.poisson(idx, SHOT, mean, start=start)
     if effects.dark_current:
         dark = np.empty((n, a))
         dark[:] = (float(spec.dark_current_e_s) * t).reshape(-1, 1)
         if effects.shot_noise:
             if dark.size and dark.max() > cap:
                 np.minimum(dark, cap, out=dark)
-            dark = streams.poisson(idx, DARK, dark)
+            dark = streams.poisson(idx, DARK, dark, start=start)
         electrons = electrons + dark
     if effects.saturation:
         saturated = electrons >= full_well
@@ -177,7 +181,7 @@ def read_out(
     else:
         saturated = np.zeros((n, a), dtype=bool)
     if effects.read_noise:
-        electrons = electrons + float(spec.read_noise_e) * streams.normal(idx, READ, a)
+        electrons = electrons + float(spec.read_noise_e) * streams.normal(idx, READ, a, start=start)
     counts = electrons / spec.gain_e_per_count
     if effects.quantization:
         top = float(spec.max_count)
@@ -216,10 +220,10 @@ def summarize(counts: ArrayLike, saturated: ArrayLike) -> Summary:
     c = np.asarray(counts, dtype=np.float64)
     s = np.asarray(saturated, dtype=bool)
     if c.ndim != 2 or s.shape != c.shape:
-        raise ValueError(f"counts and saturated must both be (N, A), got {c.shape}, {s.shape}")
+        raise DomainError(f"counts and saturated must both be (N, A), got {c.shape}, {s.shape}")
     n, a = c.shape
     if a == 0:
-        raise ValueError("a reading needs at least one exposure (A >= 1)")
+        raise DomainError("a reading needs at least one exposure (A >= 1)")
     value = c.mean(axis=1) if a > 1 else c[:, 0].copy()
     std = c.std(axis=1, ddof=1) if a > 1 else np.zeros(n)
     return Summary(value, std, np.full(n, a, dtype=np.int64), np.asarray(s.any(axis=1)))

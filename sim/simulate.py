@@ -22,11 +22,12 @@ from sim.scene import Scene
 from sim.streams import Streams
 
 
-def _last_nonzero(step: FloatArray) -> FloatArray:
-    """Per column, the last nonzero value of ``step`` up to each row (0 before any)."""
-    rows = np.arange(len(step))[:, None]
-    last = np.maximum.accumulate(np.where(step != 0, rows, -1), axis=0)
-    filled = np.take_along_axis(step, np.maximum(last, 0), axis=0)
+def _carry(values: FloatArray, where: np.ndarray) -> FloatArray:
+    """Per column, ``values`` of the last row up to each row where ``where`` holds (0
+    before the first)."""
+    rows = np.arange(len(values))[:, None]
+    last = np.maximum.accumulate(np.where(where, rows, -1), axis=0)
+    filled = np.take_along_axis(values, np.maximum(last, 0), axis=0)
     return np.asarray(np.where(last >= 0, filled, 0.0), dtype=np.float64)
 
 
@@ -44,8 +45,12 @@ def planned_poses(
         goal = np.clip(model.quantize(goal), rig.limits[:, 0], rig.limits[:, 1])
     previous = np.vstack([rig.home[None, :], goal[:-1]])
     if spec is not None:
+        # Each axis keeps the direction and the repeatability draw of its last move.
+        step = np.sign(goal - previous)
+        moved = step != 0
         index = np.arange(len(goal), dtype=np.int64)
-        error = model.joint_error(_last_nonzero(np.sign(goal - previous)), index)
+        draws = model.repeatability_draw(index, goal.shape[1])
+        error = model.backlash_error(_carry(step, moved)) + _carry(draws, moved)
     return goal, goal + error, previous
 
 
@@ -57,14 +62,15 @@ def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
     index = np.arange(n, dtype=np.int64)
     goal, true, previous = planned_poses(plan, scene, streams)
 
-    # Virtual time: move, settle, then `averages` exposures (+ readout) per target.
+    # Virtual time: move, settle, then `averages` exposures (+ readout) per target, added
+    # up in the order the instrument's clock adds them (so the times agree bit for bit).
     travel = rig.travel_time(previous, goal)
     readout = scene.detector.readout_s
     period = plan.exposure_s + readout
     busy = period * plan.averages
-    steps = np.stack([travel + rig.spec.settle_s, busy], axis=1).ravel()
-    clock = np.cumsum(steps).reshape(n, 2)
-    settled, end = clock[:, 0], clock[:, 1]
+    settle = np.full(n, rig.spec.settle_s)
+    clock = np.cumsum(np.stack([travel, settle, busy], axis=1).ravel()).reshape(n, 3)
+    settled, end = clock[:, 1], clock[:, 2]
 
     wi, wo = rig.forward(true)
     chain = Chain(scene)

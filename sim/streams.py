@@ -61,6 +61,8 @@ import numpy as np
 import scipy.special as sc
 from numpy.typing import ArrayLike, NDArray
 
+from gonio.errors import DomainError
+
 __all__ = [
     "APERTURE",
     "CHANNELS",
@@ -188,7 +190,7 @@ class Streams:
         if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
             raise TypeError(f"seed must be an int, got {type(seed).__name__}")
         if seed < 0:
-            raise ValueError(f"seed must be >= 0, got {seed}")
+            raise DomainError(f"seed must be >= 0, got {seed}")
         self._seed = int(seed)
         state = np.random.SeedSequence(self._seed).generate_state(1, np.uint64)
         self._root_seed = np.asarray(state[:1], dtype=np.uint64)
@@ -273,7 +275,7 @@ class Streams:
         lam_arr = np.asarray(lam, dtype=np.float64)
         idx_shape = np.shape(index)
         if lam_arr.ndim != len(idx_shape) + 1 or lam_arr.shape[:-1] != idx_shape:
-            raise ValueError(
+            raise DomainError(
                 f"lam must have shape index.shape + (size,) = {idx_shape} + (size,), "
                 f"got {lam_arr.shape}"
             )
@@ -291,7 +293,7 @@ class Streams:
         reproducible."""
         idx, _ = _indices(index)
         if idx.shape != (1,):
-            raise ValueError("generator() takes one sample index")
+            raise DomainError("generator() takes one sample index")
         _check_channel(channel)
         seq = np.random.SeedSequence(self._seed, spawn_key=(int(idx[0]), int(channel)))
         return np.random.Generator(np.random.PCG64(seq))
@@ -303,7 +305,7 @@ def _indices(index: ArrayLike) -> tuple[NDArray[np.integer], tuple[int, ...]]:
     if arr.dtype.kind not in "iu":
         raise TypeError(f"sample indices must be integers, got dtype {arr.dtype}")
     if arr.ndim > 1:
-        raise ValueError(f"sample indices must be a scalar or 1-d, got shape {arr.shape}")
+        raise DomainError(f"sample indices must be a scalar or 1-d, got shape {arr.shape}")
     flat = arr.reshape(-1)
     if flat.size <= _SMALL:
         bad = [i for i in flat.tolist() if not 0 <= i <= MAX_INDEX]
@@ -312,7 +314,7 @@ def _indices(index: ArrayLike) -> tuple[NDArray[np.integer], tuple[int, ...]]:
     else:
         bad = []
     if bad:
-        raise ValueError(f"sample indices must be in [0, {MAX_INDEX}], got {bad[:3]}")
+        raise DomainError(f"sample indices must be in [0, {MAX_INDEX}], got {bad[:3]}")
     return flat, arr.shape
 
 
@@ -328,14 +330,14 @@ def _open_uniforms(words: list[int] | U64Array) -> list[float] | FloatArray:
 
 def _check_count(name: str, value: int) -> None:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
-        raise ValueError(f"{name} must be an int >= 0, got {value!r}")
+        raise DomainError(f"{name} must be an int >= 0, got {value!r}")
 
 
 def _check_channel(channel: int) -> None:
     if isinstance(channel, bool) or not isinstance(channel, int | np.integer):
         raise TypeError(f"channel must be an int, got {type(channel).__name__}")
     if not 0 <= channel <= MAX_CHANNEL:
-        raise ValueError(f"channel must be in [0, {MAX_CHANNEL}], got {channel}")
+        raise DomainError(f"channel must be in [0, {MAX_CHANNEL}], got {channel}")
 
 
 # -- the same construction in Python ints (for a few words at a time) -------------------
@@ -407,7 +409,7 @@ def poisson_ppf(u: ArrayLike, lam: ArrayLike) -> FloatArray:
     if u_arr.shape != lam_arr.shape:
         u_arr, lam_arr = np.broadcast_arrays(u_arr, lam_arr)
     if u_arr.size and not (u_arr.min() > 0.0 and u_arr.max() < 1.0):
-        raise ValueError("Poisson quantiles need u in the open interval (0, 1)")
+        raise DomainError("Poisson quantiles need u in the open interval (0, 1)")
     _check_lam(lam_arr)
     return _poisson_ppf(u_arr, lam_arr)
 
@@ -415,7 +417,7 @@ def poisson_ppf(u: ArrayLike, lam: ArrayLike) -> FloatArray:
 def _check_lam(lam: FloatArray) -> None:
     if lam.size and not (lam.min() >= 0.0 and lam.max() <= _MAX_LAM):  # also catches NaN
         bad = lam[~((lam >= 0.0) & (lam <= _MAX_LAM))]
-        raise ValueError(f"Poisson means must be finite and in [0, 2**52], got {bad[:3]}")
+        raise DomainError(f"Poisson means must be finite and in [0, 2**52], got {bad[:3]}")
 
 
 def _poisson_ppf(u: FloatArray, lam: FloatArray) -> FloatArray:

@@ -126,10 +126,13 @@ def test_stop_torque_and_closed_bus() -> None:
             b.move_to(pose(rig, TARGET))
         b.torque(True)
         b.move_to(pose(rig, TARGET))
-    # Leaving the context stops the motion.
-    end = b.positions()
-    clock.advance(30.0)
-    assert b.positions() == end
+    # Leaving the context stops the motion; a closed bus answers nothing.
+    with pytest.raises(DriverError, match="not open"):
+        b.positions()
+    with b:
+        end = b.positions()
+        clock.advance(30.0)
+        assert b.positions() == end
 
 
 @pytest.mark.parametrize("name", list(RIGS))
@@ -189,7 +192,8 @@ def test_repeatability_statistics_and_per_sample_reproducibility() -> None:
     with bus(rig, spec=spec, seed=11) as b:
         for i in range(2000):
             b.sample_index = i
-            b.move_to(pose(rig, [0.2 * (-1) ** i, 0.3, 0.1, 0.4 * (-1) ** i]))
+            sign = (-1) ** i
+            b.move_to(pose(rig, [0.2 * sign, 0.3 * sign, 0.1 * sign, 0.4 * sign]))
             b.wait_settled(60.0)
             errors.append(
                 np.array(list(b.true_positions().values())) - list(b.positions().values())
@@ -204,3 +208,41 @@ def test_repeatability_statistics_and_per_sample_reproducibility() -> None:
         b.wait_settled(60.0)
         alone = np.array(list(b.true_positions().values())) - list(b.positions().values())
     np.testing.assert_array_equal(alone, e[1234])
+
+
+def test_an_axis_that_stays_put_keeps_its_error() -> None:
+    """Only the axes that move draw a new repeatability error (and may change backlash
+    side); commanding the pose the motors are at changes nothing."""
+    rig = RIGS["arch"]
+    spec = PositionErrorSpec(ticks=False, backlash_deg=0.1, repeatability_deg=0.05)
+    with bus(rig, spec=spec, seed=3) as b:
+        b.sample_index = 0
+        b.move_to(pose(rig, [0.3, 0.2, 0.4, 0.5]))
+        b.wait_settled(60.0)
+        first = np.array(list(b.true_positions().values()))
+        b.sample_index = 1
+        b.move_to({"light_elevation": 0.6})
+        b.wait_settled(60.0)
+        second = np.array(list(b.true_positions().values()))
+        b.sample_index = 2
+        b.move_to(pose(rig, [0.6, 0.2, 0.4, 0.5]))  # where the motors already are
+        b.wait_settled(60.0)
+        third = np.array(list(b.true_positions().values()))
+    assert second[0] != first[0] + 0.3  # the light moved: a new error
+    np.testing.assert_array_equal(second[1:], first[1:])
+    np.testing.assert_array_equal(third, second)
+
+
+def test_settle_time_counts_against_the_timeout_and_is_paid_once() -> None:
+    rig = RIGS["arch"]
+    clock = ManualClock()
+    with SimMotorBus(rig, clock, settle_s=5.0) as b:
+        b.move_to({"light_elevation": 0.01})
+        with pytest.raises(MotionTimeout, match="the move and the settle time"):
+            b.wait_settled(1.0)
+        assert clock.now == 1.0
+        b.move_to({"light_elevation": 0.02})
+        b.wait_settled(10.0)
+        settled = clock.now
+        b.wait_settled(10.0)  # already settled: no more time passes
+        assert clock.now == settled
