@@ -164,8 +164,26 @@ def render(result: Result) -> str:
             f"95th percentile {100 * q95:.3f} %, max {100 * error.max():.3f} % "
             f"(vs the model at the pairs measured, {error.size} unsaturated targets)"
         )
-    lines += _point_source_note(result)
+    lines += _point_source_note(result) + _size_note(result)
     return "\n".join(lines)
+
+
+def _size_note(result: Result) -> list[str]:
+    """The rig file's sizes decide what the plan refuses; the scene's, what is measured."""
+    scene, c = result.scene, result.plan.rig.spec.constraints
+    pairs = [
+        ("sample diameter", scene.sample.diameter_mm, c.sample_diameter_mm),
+        ("field of view", scene.detector.fov_diameter_mm, c.detector_fov_mm),
+    ]
+    if scene.source.kind == "collimated":
+        pairs.append(("beam diameter", scene.source.beam_diameter_mm, c.beam_diameter_mm))
+    differ = [f"{name} {a:g} mm (rig {b:g} mm)" for name, a, b in pairs if a != b]
+    if not differ:
+        return []
+    return [
+        f"  note: the scene's {', '.join(differ)} differ from the rig file's, which the "
+        "plan's footprint refusals used"
+    ]
 
 
 def _point_source_note(result: Result) -> list[str]:

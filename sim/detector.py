@@ -57,14 +57,7 @@ def sensor_of(scene: Scene) -> tuple[sensor.SensorSpec, sensor.SensorEffects]:
         read_noise_e=d.read_noise_e,
         dark_current_e_s=d.dark_current_e_s,
     )
-    effects = sensor.SensorEffects(
-        shot_noise=e.shot_noise is not None,
-        read_noise=e.read_noise is not None,
-        dark_current=e.dark_current is not None,
-        quantization=e.quantization is not None,
-        saturation=e.saturation is not None,
-    )
-    return spec, effects
+    return spec, sensor.SensorEffects.from_names(e.names())
 
 
 class SimDetector:

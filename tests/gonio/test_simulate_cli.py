@@ -88,3 +88,19 @@ def test_drift_is_divided_out_with_the_two_reference_readings() -> None:
     # time, so interpolating the reference removes it to rounding.
     assert 0.05 < result.reference_change < 0.07
     np.testing.assert_allclose(result.brdf, result.truth, rtol=1e-9)
+
+
+def test_notes_when_the_scene_and_the_rig_disagree() -> None:
+    from gonio.simulate_cli import render
+    from sim.scene import Scene
+
+    spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
+    plan = build(spec, rig)
+    base = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml")
+    result = simulate_plan(plan, base)
+    text = render(result)
+    assert "see past the sample's edge (θo > 33.6°)" in text
+    assert "differ from the rig file's" not in text
+    bigger = Scene.model_validate({**base.model_dump(), "sample": {"diameter_mm": 40}})
+    text = render(simulate_plan(plan, bigger))
+    assert "the scene's sample diameter 40 mm (rig 30 mm) differ from the rig file's" in text
