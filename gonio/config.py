@@ -10,6 +10,7 @@ path and what was expected, e.g.::
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TypeVar
@@ -30,7 +31,7 @@ class ConfigError(GonioError):
 class Strict(BaseModel):
     """Base of every configuration model: unknown fields are mistakes, values are frozen."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 def read_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
@@ -48,7 +49,30 @@ def read_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
         where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         raise ConfigError(f"{where}: not valid YAML: {problem}") from None
+    if node is not None:
+        _refuse_duplicate_keys(path, node)
     return data, node
+
+
+def _refuse_duplicate_keys(path: Path, node: yaml.Node) -> None:
+    """`ConfigError` at the second occurrence of a key in any mapping (PyYAML would keep
+    the last value silently)."""
+    stack = [node]
+    while stack:
+        n = stack.pop()
+        if isinstance(n, yaml.MappingNode):
+            seen: set[str] = set()
+            for key, value in n.value:
+                if isinstance(key, yaml.ScalarNode):
+                    if key.value in seen:
+                        raise ConfigError(
+                            f"{path}:{key.start_mark.line + 1}: {key.value}: this key is "
+                            "given twice in the same mapping; expected each key once"
+                        )
+                    seen.add(key.value)
+                stack.append(value)
+        elif isinstance(n, yaml.SequenceNode):
+            stack.extend(n.value)
 
 
 def line_of(node: yaml.Node | None, loc: Sequence[int | str]) -> int | None:
@@ -97,6 +121,18 @@ def describe(error: ErrorDetails) -> str:
     """'field.path: message (got …)' for one pydantic error."""
     loc, message = located(error)
     return f"{'.'.join(str(p) for p in loc) or '(top level)'}: {message}"
+
+
+def check_output(path: Path, option: str) -> None:
+    """`ConfigError` unless a file can be written at ``path`` (checked before long work,
+    so a typo in an output path costs nothing)."""
+    if path.is_dir():
+        raise ConfigError(f"{option} {path}: is a directory; expected a file name")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise ConfigError(f"{option} {path}: the folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ConfigError(f"{option} {path}: the folder {parent} is not writable")
 
 
 def load(path: str | Path, model: type[M]) -> M:

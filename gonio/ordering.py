@@ -107,9 +107,11 @@ def mst_lower_bound(model: TravelModel, points: FloatArray) -> tuple[float, bool
     the moves between different components, and every such move has an end outside the
     largest component: those points are the only ones queried, so the late stages,
     where one component holds nearly everything, stay cheap. The k-d tree's box query in
-    `_scaled` coordinates is exactly "moves ≤ T". If the pairs of a stage would not fit
-    in memory, the bound so far is returned: w(forest) + (components − 1)·T is still a
-    lower bound on any path (exact = False).
+    `_scaled` coordinates is exactly "moves ≤ T". If the first stage's pairs would not
+    fit in memory, it starts at a quarter of T, and so on. If a later stage's would not,
+    the bound so far is returned: every remaining MST edge joins two components and is
+    longer than the last threshold T' fully considered, so w(forest) + (components − 1)·T'
+    is still a lower bound on any path (exact = False).
     """
     n = len(points)
     if n <= 1:
@@ -124,7 +126,12 @@ def mst_lower_bound(model: TravelModel, points: FloatArray) -> tuple[float, bool
         radius = 1.0 + 1e-12
         if first:
             if tree.count_neighbors(tree, radius, p=np.inf) > 2 * MAX_PAIRS + n:
-                return weight + (components - 1) * threshold / 1.5, False
+                # Nothing is settled yet: start lower (at a small enough threshold only
+                # the points themselves are within reach).
+                threshold /= 4.0
+                if threshold < 1e-12:  # millions of coincident poses: no useful bound
+                    return 0.0, False
+                continue
             pairs = tree.query_pairs(radius, p=np.inf, output_type="ndarray")
             u, v = pairs[:, 0], pairs[:, 1]
         else:
@@ -361,17 +368,16 @@ def order_targets(
     *,
     method: Method = "auto",
     time_budget_s: float = 20.0,
-    seed: int = 0,
     lower_bound: bool = True,
 ) -> Ordering:
     """Order ``targets`` (N, A) joint angles (rad) for the shortest travel from ``start``.
 
     ``method``: "given" improves the order given (e.g. a serpentine), "nearest" starts
     from nearest neighbour, "auto" starts from whichever of the two is shorter. The
-    improvement stops at ``time_budget_s`` seconds of wall time. ``seed`` is accepted
-    for reproducible tie-breaking; the search itself is deterministic.
+    improvement stops at ``time_budget_s`` seconds of wall time from the call (the
+    construction, O(n log n), always runs to the end). The search is deterministic.
+    With ``lower_bound`` the MST bound over the start and the targets is computed too.
     """
-    del seed  # deterministic: kept in the signature so plans can pin it
     targets = np.asarray(targets, dtype=np.float64)
     start = np.asarray(start, dtype=np.float64)
     n = len(targets)

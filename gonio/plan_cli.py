@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from gonio.config import check_output
 from gonio.planner.plan import build, load_plan, render_summary
 
 
@@ -23,9 +24,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    if args.output is not None:
+        check_output(args.output, "-o")
     if args.plot is not None:
         from gonio.plots import require_matplotlib
 
+        check_output(args.plot, "--plot")
         require_matplotlib()
     spec, rig = load_plan(args.plan, args.rig)
     plan = build(spec, rig, where=str(args.plan))

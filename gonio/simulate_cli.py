@@ -24,6 +24,7 @@ from typing import Literal
 import numpy as np
 
 from gonio import radiometry
+from gonio.config import check_output
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan, build, hms, load_plan
 from gonio.rig.model import Reason, Rig
@@ -227,6 +228,8 @@ def write_csv(result: Result, path: Path) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    if args.output is not None:
+        check_output(args.output, "-o")
     spec, rig = load_plan(args.plan, args.rig)
     scene = load_scene(args.scene)
     if args.no_effects:

@@ -9,14 +9,16 @@ plus settle and exposure. Nothing here moves a motor.
 from __future__ import annotations
 
 import csv
+import math
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from gonio import params
-from gonio.config import ConfigError, load
-from gonio.ordering import Method, Ordering, order_targets
+from gonio.config import ConfigError, line_of, load, read_yaml
+from gonio.ordering import Method, Ordering, mst_lower_bound, order_targets
 from gonio.planner import poses, sampling
 from gonio.planner.exposure import exposures
 from gonio.planner.schema import PlanSpec
@@ -42,6 +44,9 @@ class Summary:
     ordering_s: float  # time spent ordering (wall clock)
     lower_bound_exact: bool = True  # False: memory forced a weaker bound than the MST
     grid_shape: tuple[int, ...] | None = None
+    target: int | None = None  # the kept targets asked for, if the plan gave a number
+    bound_wall_s: float = 0.0  # time spent on the lower bound (wall clock)
+    converged: bool = True  # the local search ended with no improving move left
 
     @property
     def total_s(self) -> float:
@@ -64,6 +69,7 @@ class Plan:
     rig: Rig
     coordinate_names: tuple[str, ...]
     coords: FloatArray  # (N, d) the planned coordinates
+    generated: np.ndarray  # (N,) each target's position among the points placed
     wi: FloatArray  # (N, 3) the pair measured (sample frame)
     wo: FloatArray
     angles: FloatArray  # (N, A) in rig.axes order
@@ -73,16 +79,18 @@ class Plan:
     arrival_s: FloatArray  # predicted time of arrival at each target
     summary: Summary
     rejected: dict[str, FloatArray] = field(default_factory=dict)  # reason → coords
-    ordering: Ordering | None = None  # how the order was found
+    ordering: Ordering | None = None  # the first ordering (on the solutions nearest home)
 
     def __len__(self) -> int:
         return len(self.coords)
 
     def write_csv(self, path: str | Path) -> None:
-        """One row per target: index, coordinates, ωi, ωo, joint angles (rad), exposure,
-        averages, predicted arrival (s from the start)."""
+        """One row per target in measuring order: index, its position among the points
+        placed (generation order), coordinates, ωi, ωo, joint angles (rad), exposure,
+        averages, predicted arrival (s from the start). Floats are written exactly."""
         header = [
             "index",
+            "generated",
             *self.coordinate_names,
             "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z",
             *(f"{a}_rad" for a in self.rig.axes),
@@ -94,8 +102,9 @@ class Plan:
             for i in range(len(self)):
                 row = [*self.coords[i], *self.wi[i], *self.wo[i], *self.angles[i]]
                 out.writerow(
-                    [i, *(repr(float(v)) for v in row), repr(float(self.exposure_s[i])),
-                     int(self.averages[i]), f"{self.arrival_s[i]:.3f}"]
+                    [i, int(self.generated[i]), *(repr(float(v)) for v in row),
+                     repr(float(self.exposure_s[i])), int(self.averages[i]),
+                     repr(float(self.arrival_s[i]))]
                 )  # fmt: skip
 
 
@@ -107,6 +116,9 @@ def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[Pla
         if spec.rig is None:
             raise ConfigError(f"{path}: rig: no rig file named; give one here or with --rig")
         rig_path = path.parent / spec.rig
+        if Path(rig_path).is_dir():
+            line = line_of(read_yaml(path)[1], ("rig",))
+            raise ConfigError(f"{path}:{line}: rig: {rig_path} is a folder; expected a rig file")
     return spec, Rig.from_yaml(rig_path)
 
 
@@ -119,9 +131,14 @@ def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int,
         [spec.sampling.warps[n].power if n in spec.sampling.warps else 1.0 for n in names]
     )
     s = spec.sampling
+    if s.target is not None and s.target > MAX_DRAWN:
+        raise ConfigError(
+            f"{where}: sampling.target: expected at most {MAX_DRAWN:,} targets, got {s.target:,}"
+        )
     if s.strategy in ("grid", "stratified"):
         if s.counts is not None:
             shape = tuple(s.counts[n] for n in names)
+            field = "sampling.counts"
         else:
             assert s.target is not None
             pilot = sampling.to_box(
@@ -129,6 +146,13 @@ def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int,
             )
             rate = max(_kept(spec, rig, pilot).mean(), 1.0 / BATCH)
             shape = sampling.grid_shape_for((s.target / rate) ** (1.0 / len(names)), len(names))
+            field = "sampling.target"
+        cells = math.prod(shape)
+        if cells > MAX_DRAWN:
+            raise ConfigError(
+                f"{where}: {field}: a {'×'.join(map(str, shape))} grid is {cells:,} points; "
+                f"expected at most {MAX_DRAWN:,}"
+            )
         jitter = np.random.default_rng(s.seed) if s.strategy == "stratified" else None
         unit = sampling.grid(shape, jitter=jitter)
         return sampling.to_box(unit, bounds, powers), shape
@@ -198,23 +222,39 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
     else:
         given, targets = np.arange(sel.size), solution.angles[sel]
         method = "auto"
+    # Order on each target's solution nearest home, then let every target take the
+    # solution that suits its neighbours (`poses.choose`), improve the order on those
+    # poses with what is left of the budget, and choose again.
+    started = time.perf_counter()
     result = order_targets(
-        rig.travel, targets, rig.home, method=method,
-        time_budget_s=spec.time_budget_s, seed=spec.sampling.seed,
+        rig.travel, targets, rig.home, method=method, time_budget_s=spec.time_budget_s,
+        lower_bound=False,
     )  # fmt: skip
-    order = given[result.order]
-
-    chosen = sel[order]
+    chosen = sel[given[result.order]]
+    angles, _ = poses.choose(
+        solution.candidates[chosen], solution.usable[chosen], rig.home, rig.travel_time
+    )
+    left = max(spec.time_budget_s - (time.perf_counter() - started), 0.0)
+    again = order_targets(
+        rig.travel, angles, rig.home, method="given", time_budget_s=left, lower_bound=False
+    )
+    chosen = chosen[again.order]
     angles, travel = poses.choose(
         solution.candidates[chosen], solution.usable[chosen], rig.home, rig.travel_time
     )
+    ordering_s = time.perf_counter() - started
+    # The bound: the MST over the poses measured (any order of these poses is at least
+    # this long). Generation order gets the same choice of solutions, for a fair ratio.
+    bound, exact = mst_lower_bound(rig.travel, np.vstack([angles, rig.home[None, :]]))
+    bound_wall_s = time.perf_counter() - started - ordering_s
+    _, naive = poses.choose(
+        solution.candidates[sel], solution.usable[sel], rig.home, rig.travel_time
+    )
+    order = np.searchsorted(sel, chosen)  # positions in generation order
     mwi, mwo = rig.forward(angles)  # the pair the chosen pose measures
     exposure, averages = exposures(spec.exposure, mwi, mwo)
     dwell = rig.spec.settle_s + exposure * averages
     arrival = np.cumsum(travel) + np.concatenate([[0.0], np.cumsum(dwell)[:-1]])
-    naive = rig.travel_time(
-        np.vstack([rig.home[None, :], solution.angles[sel][:-1]]), solution.angles[sel]
-    )
     summary = Summary(
         requested=len(coords),
         invalid=int(np.count_nonzero(~valid)),
@@ -222,11 +262,14 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         kept=int(kept_idx.size),
         travel_s=float(travel.sum()),
         naive_travel_s=float(naive.sum()),
-        lower_bound_travel_s=float(result.lower_bound_s),
+        lower_bound_travel_s=bound,
         dwell_s=float(dwell.sum()),
-        ordering_s=result.order_wall_s,
-        lower_bound_exact=result.lower_bound_exact,
+        ordering_s=ordering_s,
+        lower_bound_exact=exact,
         grid_shape=shape,
+        target=spec.sampling.target,
+        bound_wall_s=bound_wall_s,
+        converged=result.converged and again.converged,
     )
     rejected = {
         ("outside_domain" if r < 0 else Reason(r).label): coords[reasons == r]
@@ -238,6 +281,7 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         rig=rig,
         coordinate_names=names,
         coords=coords[kept_idx][order],
+        generated=kept_idx[order],
         wi=mwi,
         wo=mwo,
         angles=angles,
@@ -272,7 +316,12 @@ def render_summary(plan: Plan) -> str:
     for label, count in s.refused.items():
         lines.append(f"  {'refused: ' + label.replace('_', ' '):<26}{count:>9}")
     lines += [
-        f"  {'kept':<26}{s.kept:>9}",
+        f"  {'kept':<26}{s.kept:>9}"
+        + (
+            f"   (target {s.target}: a grid keeps the cells that fall in the domain)"
+            if s.target is not None and s.grid_shape is not None and s.kept != s.target
+            else ""
+        ),
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
         f"settle + exposure {hms(s.dwell_s)})",

@@ -23,29 +23,20 @@ def skew(axis: FloatArray) -> tuple[FloatArray, FloatArray]:
     return k, k @ k
 
 
-def rotation(axis: FloatArray, angle: FloatArray) -> FloatArray:
-    """Rotation matrices (..., 3, 3) about the unit ``axis`` (3,) by ``angle`` (...) rad
-    (Rodrigues: I + sin θ K + (1 − cos θ) K²)."""
-    return rotation_of(skew(axis), angle)
-
-
 def rotation_of(k: tuple[FloatArray, FloatArray], angle: FloatArray) -> FloatArray:
-    """`rotation` from the axis's precomputed (K, K²)."""
+    """Rotation matrices (..., 3, 3) by ``angle`` (...) rad about the unit axis whose
+    (K, K²) are given (Rodrigues: I + sin θ K + (1 − cos θ) K²)."""
     theta = np.asarray(angle, dtype=np.float64)
     s = np.sin(theta)[..., None, None]
     c = (1.0 - np.cos(theta))[..., None, None]
     return np.asarray(_EYE + s * k[0] + c * k[1], dtype=np.float64)
 
 
-def chain_rotation(axes: list[FloatArray], angles: list[FloatArray]) -> FloatArray:
-    """R = R(a₁, θ₁) … R(aₙ, θₙ), shape broadcast(angles) + (3, 3)."""
-    return chain_rotation_of([skew(a) for a in axes], angles)
-
-
 def chain_rotation_of(
     skews: list[tuple[FloatArray, FloatArray]], angles: list[FloatArray]
 ) -> FloatArray:
-    """`chain_rotation` from each axis's precomputed (K, K²)."""
+    """R = R(a₁, θ₁) … R(aₙ, θₙ), shape broadcast(angles) + (3, 3), from each axis's
+    (K, K²) (`skew`)."""
     out = rotation_of(skews[0], angles[0])
     for k, angle in zip(skews[1:], angles[1:], strict=True):
         out = out @ rotation_of(k, angle)

@@ -170,8 +170,19 @@ class Rig:
         detector = apply(self._chain("detector", angles), self._pointing["detector"])
         return apply_transposed(sample, light), apply_transposed(sample, detector)
 
-    def candidates(self, wi: FloatArray, wo: FloatArray) -> FloatArray:
-        """Every closed-form solution (N, K, A), wrapped into the limits where possible."""
+    def candidates(
+        self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False
+    ) -> tuple[FloatArray, FloatArray]:
+        """Every closed-form solution (N, K', A), and the sample rotation ψ (N, K') each
+        was solved with.
+
+        An axis whose range is narrower than a turn takes the one representative of its
+        angle inside the range (the one nearest the range's centre if several are on
+        its edges). An axis with a range of a turn or more (an extended-position stage)
+        offers each solution at −2π, 0 and +2π (out-of-range ones are refused later), so
+        that the move nearest the previous pose can use the whole range. With
+        ``isotropic`` the sample rotation stays home (see `solve`).
+        """
         solved = inverse.SOLVERS[self.spec.type](wi, wo)
         raw = np.stack([solved[n] for n in self.axes], axis=-1)
         lo, hi = self.limits[:, 0], self.limits[:, 1]
@@ -185,7 +196,22 @@ class Rig:
             take = gap < best_gap
             best = np.where(take, shifted, best)
             best_gap = np.where(take, gap, best_gap)
-        return np.asarray(best, dtype=np.float64)
+        variants = [best]
+        for j in np.flatnonzero(hi - lo >= 2.0 * np.pi):
+            if isotropic and j == self._rotation_index:
+                continue
+            widened = []
+            for v in variants:
+                for turns in (-1, 0, 1):
+                    w = v.copy()
+                    w[..., j] = raw[..., j] + 2.0 * np.pi * turns
+                    widened.append(w)
+            variants = widened
+        cand = np.concatenate(variants, axis=1)
+        if isotropic:
+            cand[..., self._rotation_index] = self.home[self._rotation_index]
+        psi = np.tile(raw[..., self._rotation_index], (1, len(variants)))
+        return np.asarray(cand, dtype=np.float64), np.asarray(psi, dtype=np.float64)
 
     def _within_limits(self, angles: FloatArray) -> BoolArray:
         lo, hi = self.limits[:, 0], self.limits[:, 1]
@@ -212,11 +238,9 @@ class Rig:
         """Joint angles and refusal reasons for pairs (N, 3); see the module docstring."""
         wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
-        cand = self.candidates(wi, wo)
-        if isotropic:
-            # The pair may turn about the normal: keep the rotation stage home and measure
-            # the turned pair instead (ω' = R_z(ψ) ω for the candidate's ψ).
-            cand[..., self._rotation_index] = self.home[self._rotation_index]
+        # Isotropic: the pair may turn about the normal, so the rotation stage stays home
+        # and the turned pair is measured instead (ω' = R_z(ψ) ω for the candidate's ψ).
+        cand, psi = self.candidates(wi, wo, isotropic=isotropic)
         limits_ok = self._within_limits(cand)
         usable = limits_ok & ~self._collides(cand)
         start = self.home if previous is None else np.asarray(previous, dtype=np.float64)
@@ -245,8 +269,7 @@ class Rig:
 
         measured_wi, measured_wo = wi, wo
         if isotropic:
-            raw_psi = inverse.SOLVERS[self.spec.type](wi, wo)["sample_rotation"][rows, pick]
-            turn = raw_psi - self.home[self._rotation_index]
+            turn = psi[rows, pick] - self.home[self._rotation_index]
             measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
         return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
 

@@ -77,6 +77,24 @@ def test_mst_bound_stays_a_bound_when_memory_runs_out(monkeypatch: pytest.Monkey
     assert 0.0 < weak <= exact_bound
 
 
+@pytest.mark.parametrize("limit", [0, 10, 300])
+def test_weak_bound_never_exceeds_the_mst(monkeypatch: pytest.MonkeyPatch, limit: int) -> None:
+    """Points on a line plus tight clusters (the typical move is tiny, most moves are
+    long): however little memory the stages get, the bound stays below the MST."""
+    model = MODELS["arch"]
+    rng = np.random.default_rng(8)
+    line = np.linspace(0.0, 3.0, 201)[:, None] * np.array([1.0, 0.0, 0.0, 0.0])
+    centres = rng.uniform(-2, 2, (20, 4))
+    clusters = (centres[:, None, :] + rng.normal(0, 1e-4, (20, 10, 4))).reshape(-1, 4)
+    points = np.vstack([line, clusters])
+    exact, is_exact = mst_lower_bound(model, points)
+    assert is_exact
+    monkeypatch.setattr(ordering, "MAX_PAIRS", limit)
+    weak, flag = mst_lower_bound(model, points)
+    assert not flag
+    assert 0.0 <= weak <= exact
+
+
 @pytest.mark.parametrize("name", list(MODELS))
 @pytest.mark.parametrize("method", ["given", "nearest", "auto"])
 def test_order_is_a_permutation_timed_as_reported(name: str, method: str) -> None:

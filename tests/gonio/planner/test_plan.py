@@ -154,8 +154,28 @@ def test_warp_densifies_near_the_specular_peak() -> None:
 
 def test_unreachable_target_count_is_a_config_error(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(plan_module, "MAX_DRAWN", 8192)
-    with pytest.raises(ConfigError, match=r"^here: sampling.target: only \d+ of 100000"):
-        build(spec(sampling={"strategy": "random", "target": 100_000}), RIGS["arch"], where="here")
+    with pytest.raises(ConfigError, match=r"^here: sampling.target: only \d+ of 8000"):
+        build(spec(sampling={"strategy": "random", "target": 8000}), RIGS["arch"], where="here")
+
+
+@pytest.mark.parametrize(
+    ("sampling", "field"),
+    [
+        ({"strategy": "sobol", "target": 5_000_000}, "sampling.target: expected at most"),
+        (
+            {"strategy": "stratified", "target": 4_000_000},
+            r"sampling.target: a \d+×\d+×\d+ grid is [\d,]+ points; expected at most",
+        ),
+        (
+            {"strategy": "grid", "counts": {"hbar": 1000, "k": 1000, "phi_k_minus_phi_h": 10}},
+            "sampling.counts: a 1000×1000×10 grid is 10,000,000 points; expected at most",
+        ),
+    ],
+    ids=["sequence", "grid-from-target", "grid-counts"],
+)
+def test_plans_too_large_are_refused_before_any_work(sampling: dict[str, Any], field: str) -> None:
+    with pytest.raises(ConfigError, match=f"^here: {field}"):
+        build(spec(sampling=sampling), RIGS["arch"], where="here")
 
 
 def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
@@ -165,7 +185,7 @@ def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
     with path.open(encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == len(plan)
-    assert list(rows[0])[:5] == ["index", "hbar", "phi_h", "k", "phi_k"]
+    assert list(rows[0])[:6] == ["index", "generated", "hbar", "phi_h", "k", "phi_k"]
     for name in ("wi_x", "wo_z", "light_elevation_rad", "sample_rotation_rad", "arrival_s"):
         assert name in rows[0]
     got = np.array([[float(r[f"{a}_rad"]) for a in plan.rig.axes] for r in rows])
@@ -173,7 +193,8 @@ def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
     coords = np.array([[float(r[n]) for n in plan.coordinate_names] for r in rows])
     assert np.array_equal(coords, plan.coords)
     assert [int(r["index"]) for r in rows] == list(range(len(plan)))
-    np.testing.assert_allclose([float(r["arrival_s"]) for r in rows], plan.arrival_s, atol=5e-4)
+    assert [float(r["arrival_s"]) for r in rows] == plan.arrival_s.tolist()
+    assert sorted(int(r["generated"]) for r in rows) == sorted(plan.generated.tolist())
 
 
 def test_adaptive_exposure_follows_the_expected_signal() -> None:

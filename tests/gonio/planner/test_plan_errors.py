@@ -288,3 +288,60 @@ def test_real_process_exit_code_and_no_traceback(tmp_path: Path) -> None:
     assert "Traceback" not in r.stderr
     assert r.stderr.count("\n") == 1
     assert f"{path}:" in r.stderr and "parametrization: unknown parametrization" in r.stderr
+
+
+def test_duplicate_key_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, f"name: a\nrig: {ARCH}\nname: b\nsampling: {{strategy: sobol}}\n")
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert err == (
+        f"gonio: error: {path}:3: name: this key is given twice in the same mapping; "
+        "expected each key once\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        (lambda d: d["exposure"].update(seconds=float("inf")), "exposure.seconds"),
+        (lambda d: d["sampling"].update(warps={"hbar": {"power": float("nan")}}),
+         "sampling.warps.hbar.power"),
+        (lambda d: d.update(time_budget_s=float("inf")), "time_budget_s"),
+    ],
+    ids=["infinite-exposure", "nan-warp", "infinite-budget"],
+)  # fmt: skip
+def test_infinities_and_nans_are_refused(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    change: Callable[[dict[str, Any]], object],
+    field: str,
+) -> None:
+    path = write(tmp_path, edit(change))
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    assert f": {field}: Input should be a finite number" in err
+
+
+def test_rig_that_is_a_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write(tmp_path, edit(lambda d: d.update(rig=str(tmp_path))))
+    code, _, err = run_plan(capsys, str(path))
+    assert code == 2
+    line = line_of_key(path, "rig")
+    assert err == f"gonio: error: {path}:{line}: rig: {tmp_path} is a folder; expected a rig file\n"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["-o", "{tmp}"], "-o {tmp}: is a directory; expected a file name"),
+        (["--plot", "{tmp}/none/c.png"], "--plot {tmp}/none/c.png: the folder {tmp}/none does not"),
+    ],
+    ids=["output-is-a-folder", "plot-folder-missing"],
+)
+def test_output_paths_are_checked_before_planning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
+    plan = CONFIGS / "plans" / "quick.yaml"
+    code, out, err = run_plan(capsys, str(plan), *(a.format(tmp=tmp_path) for a in args))
+    assert code == 2 and out == ""
+    assert err.startswith("gonio: error: " + message.format(tmp=tmp_path))

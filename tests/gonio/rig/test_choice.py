@@ -13,11 +13,12 @@ from tests.gonio.rig.helpers import RIGS, column, direction
 
 #: (rig, wi, wo, number of usable candidates): pairs with several usable solutions. The
 #: arch with the light within 5° of the normal has four (light ±θi, detector ±θo); the
-#: in-plane rig has two (the plane's normal m or −m).
+#: in-plane rig has two (the plane's normal m or −m), and a third where the sample
+#: rotation of one of them is within 20° of ±180°: the ±200° stage reaches it both ways.
 SEVERAL = [
     ("arch", direction(3.0, 40.0), direction(40.0, 200.0), 4),
-    ("in_plane", direction(30.0, 20.0), direction(50.0, 200.0), 2),
-    ("in_plane", direction(45.0, 10.0), direction(30.0, 100.0), 2),
+    ("in_plane", direction(30.0, 20.0), direction(50.0, 200.0), 3),
+    ("in_plane", direction(45.0, 10.0), direction(30.0, 100.0), 3),
 ]
 
 
@@ -83,10 +84,12 @@ def test_unusable_solution_is_never_picked() -> None:
     rig = RIGS["arch"]
     wi, wo = direction(30.0, 0.0), direction(40.0, 180.0)
     solution = rig.solve(wi[None], wo[None])
-    assert solution.usable[0].tolist() == [False, False, True, False]
+    usable = np.flatnonzero(solution.usable[0])
+    assert len(usable) == 1  # of 12: 4 solutions × the rotation stage at ψ − 2π, ψ, ψ + 2π
+    only = solution.candidates[0, usable[0]]
     for start in solution.candidates[0]:
-        assert np.array_equal(solve_one(rig, wi, wo, start), solution.candidates[0, 2])
-    assert solution.candidates[0, 2, column(rig, "detector_elevation")] < 0.0
+        assert np.array_equal(solve_one(rig, wi, wo, start), only)
+    assert only[column(rig, "detector_elevation")] < 0.0
 
 
 def test_batch_shares_one_previous_pose() -> None:
@@ -95,7 +98,17 @@ def test_batch_shares_one_previous_pose() -> None:
     wi = np.stack([p[1] for p in SEVERAL[:1]] * 3)
     wo = np.stack([p[2] for p in SEVERAL[:1]] * 3)
     first = rig.solve(wi[:1], wo[:1])
-    for k in range(4):
-        start = first.candidates[0, k]
+    for start in first.candidates[0][first.usable[0]]:
         batch = rig.solve(wi, wo, previous=start)
         assert all(np.array_equal(row, start) for row in batch.angles)
+
+
+def test_an_extended_stage_uses_its_whole_range() -> None:
+    """The sample rotation (±200°) standing at 190°: a pair that needs ψ = 190° ≡ −170°
+    is measured without moving it, not after a 360° turn."""
+    rig = RIGS["arch"]
+    previous = np.radians([20.0, 30.0, 40.0, 190.0])
+    wi, wo = rig.forward(previous)
+    angles = rig.solve(wi[None], wo[None], previous=previous).angles[0]
+    np.testing.assert_allclose(angles, previous, atol=1e-12)
+    assert float(rig.travel.time(previous, angles)) < 1e-5
