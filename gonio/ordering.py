@@ -277,7 +277,7 @@ def _improve(path: _Path, neighbours: np.ndarray, deadline: float) -> tuple[int,
             if g1 <= EPSILON:
                 break
             j = int(pos[c])
-            if c == b or j == path.n + 1:
+            if c == b:  # (c is never E: E is in no neighbour list)
                 continue
             d = int(nodes[j + 1])
             if d == a:
@@ -334,7 +334,7 @@ def _improve(path: _Path, neighbours: np.ndarray, deadline: float) -> tuple[int,
                             (c, int(nodes[j + 1]) if j <= path.n else -1, j),
                             (int(nodes[j - 1]) if j >= 1 else -1, c, j - 1),
                         ):
-                            if x < 0 or y < 0 or x == E or y == S:
+                            if x < 0 or y < 0:  # S first and E last: never between
                                 continue
                             if i <= pos[x] < i + length or i <= pos[y] < i + length:
                                 continue

@@ -21,17 +21,15 @@ The sensor (`sim.sensor`) turns the expected electrons into counts.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Literal
 
 import numpy as np
 
 from gonio import brdf, radiometry
-from gonio.types import FloatArray
+from gonio.types import BrdfEval, FloatArray
 from sim.scene import LUMINANCE, CollimatedSpec, Scene
 
 Target = Literal["sample", "reference"]
-BrdfEval = Callable[[FloatArray, FloatArray], FloatArray]
 
 
 def band_eval(model: brdf.BRDF, band: str) -> BrdfEval:
@@ -59,10 +57,6 @@ class Chain:
             "reference": band_eval(brdf.create("lambert", albedo=scene.reference.albedo), d.band),
         }
         self.effects = scene.effects
-
-    @property
-    def collimated(self) -> bool:
-        return isinstance(self.source, radiometry.CollimatedSource)
 
     def geometric_power(
         self, wi: FloatArray, wo: FloatArray, target: Target = "sample"

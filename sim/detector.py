@@ -112,10 +112,6 @@ class SimDetector:
         except KeyError as exc:
             raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
 
-    def geometry(self) -> tuple[np.ndarray, np.ndarray]:
-        """(ωi, ωo), each (1, 3), of the present pose."""
-        return self.rig.forward(np.array([self._pose_angles()], dtype=np.float64))
-
     def _geometric_power(self) -> np.ndarray:
         angles = self._pose_angles()
         if self.target == "sample" and angles in self._prepared:

@@ -203,10 +203,6 @@ class SimMotorBus(Resource):
             return self._goal.copy()
         return profile_position(self._start, self._goal, self._v, self._a, now - self._t0)
 
-    def motion_end(self) -> float:
-        """Virtual time (s) at which the present profiles end."""
-        return self._end
-
     def wait_settled(self, timeout_s: float) -> None:
         """Advance the clock to the end of the motion plus the settle time (at once if
         that has passed); if that is more than ``timeout_s`` away, hold the axes where

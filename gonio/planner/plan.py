@@ -11,7 +11,7 @@ from __future__ import annotations
 import csv
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +78,6 @@ class Plan:
     travel_s: FloatArray  # move into each target
     arrival_s: FloatArray  # predicted time of arrival at each target
     summary: Summary
-    rejected: dict[str, FloatArray] = field(default_factory=dict)  # reason → coords
     ordering: Ordering | None = None  # the first ordering (on the solutions nearest home)
 
     def __len__(self) -> int:
@@ -159,6 +158,7 @@ def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int,
     assert s.target is not None
     stream = sampling.Sequence(s.strategy, len(names), s.seed)
     drawn: list[FloatArray] = []
+    usable: list[np.ndarray] = []
     kept = 0
     while kept < s.target:
         if sum(len(d) for d in drawn) >= MAX_DRAWN:
@@ -167,10 +167,11 @@ def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int,
                 f"after {MAX_DRAWN} points; lower the target or relax the rig's constraints"
             )
         batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
-        kept += int(_kept(spec, rig, batch).sum())
+        usable.append(_kept(spec, rig, batch))
+        kept += int(usable[-1].sum())
         drawn.append(batch)
     points = np.concatenate(drawn)
-    keep = np.cumsum(_kept(spec, rig, points))
+    keep = np.cumsum(np.concatenate(usable))
     last = int(np.searchsorted(keep, s.target)) + 1  # the point that completes the target
     return points[:last], None
 
@@ -271,11 +272,6 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         bound_wall_s=bound_wall_s,
         converged=result.converged and again.converged,
     )
-    rejected = {
-        ("outside_domain" if r < 0 else Reason(r).label): coords[reasons == r]
-        for r in np.unique(reasons)
-        if r != Reason.OK
-    }
     return Plan(
         spec=spec,
         rig=rig,
@@ -290,7 +286,6 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         travel_s=travel,
         arrival_s=arrival,
         summary=summary,
-        rejected=rejected,
         ordering=result,
     )
 

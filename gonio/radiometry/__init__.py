@@ -17,18 +17,14 @@ Formulas, assumptions and measured accuracies: docs/radiometry.md.
 """
 
 from gonio.radiometry.aperture import aperture_integral, cap_half_angle, weight_for
-from gonio.radiometry.calibration import (
-    ReferenceCalibration,
-    SourceKind,
-    relative_geometry,
-    source_kind,
-)
+from gonio.radiometry.calibration import ReferenceCalibration, relative_geometry
 from gonio.radiometry.chain import (
     ELEMENTARY_CHARGE,
     CollimatedSource,
     DetectorOptics,
     PointSource,
     Source,
+    SourceKind,
     brdf_from_power,
     electrons,
     geometric_factor,
@@ -37,6 +33,7 @@ from gonio.radiometry.chain import (
     prefactor,
     radiant_power,
     signal_rate,
+    source_kind,
     view_weight,
 )
 from gonio.radiometry.footprint import footprint_fraction, seen_fits_sample

@@ -22,17 +22,15 @@ to 1e-4 (the cos weight has a √ endpoint singularity in cos ψ there).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Literal, TypeAlias
 
 import numpy as np
 
 from gonio.errors import DomainError
 from gonio.radiometry._checks import direction_pair, positive
-from gonio.radiometry.chain import CollimatedSource, PointSource, Source
-from gonio.types import ArrayLike, FloatArray
+from gonio.radiometry.chain import Source, source_kind
+from gonio.types import ArrayLike, BrdfEval, FloatArray
 
-BrdfEval = Callable[[FloatArray, FloatArray], FloatArray]
 Weight: TypeAlias = Literal["cos", "one"]
 
 #: Default quadrature order: (Gauss-Legendre nodes in cos ψ, trapezoid nodes in azimuth).
@@ -42,11 +40,7 @@ _BLOCK = 1 << 17
 
 def weight_for(source: Source) -> Weight:
     """The aperture weight of a source type: "cos" (collimated) or "one" (point)."""
-    if isinstance(source, CollimatedSource):
-        return "cos"
-    if isinstance(source, PointSource):
-        return "one"
-    raise DomainError(f"source must be a CollimatedSource or a PointSource, got {source!r}")
+    return "cos" if source_kind(source) == "collimated" else "one"
 
 
 def cap_half_angle(aperture_sr: float) -> float:

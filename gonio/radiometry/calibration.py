@@ -16,27 +16,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, TypeAlias
+from typing import TypeAlias
 
 import numpy as np
 
 from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction, direction_pair, positive, spread
-from gonio.radiometry.chain import CollimatedSource, PointSource, Source, signal_rate
+from gonio.radiometry.chain import SourceKind, signal_rate
 from gonio.types import ArrayLike, FloatArray
 
-SourceKind: TypeAlias = Literal["collimated", "point"]
 #: A grey value or an RGB triple.
 Channels: TypeAlias = float | tuple[float, float, float]
-
-
-def source_kind(source: Source) -> SourceKind:
-    """The kind of a source: "collimated" or "point"."""
-    if isinstance(source, CollimatedSource):
-        return "collimated"
-    if isinstance(source, PointSource):
-        return "point"
-    raise DomainError(f"source must be a CollimatedSource or a PointSource, got {source!r}")
 
 
 def relative_geometry(kind: SourceKind, wi: ArrayLike, wo: ArrayLike) -> FloatArray:

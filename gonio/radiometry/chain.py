@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TypeAlias
+from typing import Literal, TypeAlias
 
 import numpy as np
 
@@ -93,10 +93,18 @@ class DetectorOptics:
             raise DomainError(f"DetectorOptics.aperture_sr must be ≤ 2π, got {self.aperture_sr}")
 
 
+SourceKind: TypeAlias = Literal["collimated", "point"]
+
+
 def _check_source(source: object) -> Source:
     if not isinstance(source, CollimatedSource | PointSource):
         raise DomainError(f"source must be a CollimatedSource or a PointSource, got {source!r}")
     return source
+
+
+def source_kind(source: Source) -> SourceKind:
+    """The kind of a source: "collimated" or "point"."""
+    return "collimated" if isinstance(_check_source(source), CollimatedSource) else "point"
 
 
 def _check_optics(optics: object) -> DetectorOptics:

@@ -21,8 +21,6 @@ error is second order in the cap's half-angle α.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from gonio.errors import DomainError
@@ -40,9 +38,7 @@ from gonio.radiometry.chain import (
 from gonio.radiometry.footprint import footprint_fraction
 from gonio.radiometry.spatial import DEFAULT_ORDER as SPATIAL_ORDER
 from gonio.radiometry.spatial import point_source_power
-from gonio.types import ArrayLike, FloatArray
-
-BrdfEval = Callable[[FloatArray, FloatArray], FloatArray]
+from gonio.types import ArrayLike, BrdfEval, FloatArray
 
 
 def detector_power(

@@ -19,7 +19,6 @@ nodes in β; along each ray `order[1]` Gauss-Legendre nodes in ρ ∈ [0, R(β)]
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
@@ -27,9 +26,7 @@ from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic
 from gonio.radiometry.chain import DetectorOptics, PointSource
-from gonio.types import ArrayLike, FloatArray
-
-BrdfEval = Callable[[FloatArray, FloatArray], FloatArray]
+from gonio.types import ArrayLike, BrdfEval, FloatArray
 
 #: Default quadrature order: (Gauss-Legendre nodes per azimuth piece, radial nodes).
 DEFAULT_ORDER = (8, 12)
