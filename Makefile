@@ -39,7 +39,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes.py
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/planner.py
-	$(BIN)/python benchmarks/sim.py
+	$(BIN)/python benchmarks/simulator.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis

@@ -23,7 +23,7 @@ from _machine import describe
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
-from sim.dxl_emulator import DxlEmulator
+from sim.dynamixel.emulator import DxlEmulator
 
 AXES = [
     AxisConfig(

@@ -13,13 +13,13 @@ import numpy as np
 
 from gonio.planner.plan import Plan
 from gonio.types import FloatArray
-from sim import sensor
-from sim.chain import Chain
-from sim.detector import sensor_of
-from sim.motors import PositionModel
+from sim.devices.detector import sensor_of
+from sim.devices.motors import PositionModel
+from sim.physics import sensor
+from sim.physics.optics import SceneOptics
+from sim.physics.streams import Streams
 from sim.record import SimRun
 from sim.scene import Scene
-from sim.streams import Streams
 
 
 def _carry(values: FloatArray, where: np.ndarray) -> FloatArray:
@@ -73,7 +73,7 @@ def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
     settled, end = clock[:, 1], clock[:, 2]
 
     wi, wo = rig.forward(true)
-    chain = Chain(scene)
+    chain = SceneOptics(scene)
     geometric = chain.geometric_power(wi, wo)
     sensor_spec, sensor_effects = sensor_of(scene)
     value = np.empty(n)

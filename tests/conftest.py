@@ -11,8 +11,8 @@ import pytest
 from dynamixel_sdk import port_handler
 from hypothesis import HealthCheck, settings
 
-from sim.dxl_clock import ManualClock
-from sim.dxl_emulator import DxlEmulator
+from sim.clock import ManualClock
+from sim.dynamixel.emulator import DxlEmulator
 
 settings.register_profile(
     "dev", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow]

@@ -18,9 +18,9 @@ import numpy as np
 
 from gonio import params
 from gonio.config import ConfigError, line_of, load, read_yaml
-from gonio.ordering import Method, Ordering, mst_lower_bound, order_targets
 from gonio.planner import poses, sampling
 from gonio.planner.exposure import exposures
+from gonio.planner.ordering import Method, Ordering, mst_lower_bound, order_targets
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray

@@ -18,7 +18,9 @@ Formulas, assumptions and measured accuracies: docs/radiometry.md.
 
 from gonio.radiometry.aperture import aperture_integral, cap_half_angle, weight_for
 from gonio.radiometry.calibration import ReferenceCalibration, relative_geometry
-from gonio.radiometry.chain import (
+from gonio.radiometry.footprint import footprint_fraction, seen_fits_sample
+from gonio.radiometry.forward import detector_power
+from gonio.radiometry.ideal import (
     ELEMENTARY_CHARGE,
     CollimatedSource,
     DetectorOptics,
@@ -36,8 +38,6 @@ from gonio.radiometry.chain import (
     source_kind,
     view_weight,
 )
-from gonio.radiometry.footprint import footprint_fraction, seen_fits_sample
-from gonio.radiometry.forward import detector_power
 from gonio.radiometry.spatial import point_source_power
 
 __all__ = [

@@ -28,7 +28,7 @@ import numpy as np
 
 from gonio.errors import DomainError
 from gonio.radiometry._checks import direction_pair, positive
-from gonio.radiometry.chain import Source, source_kind
+from gonio.radiometry.ideal import Source, source_kind
 from gonio.types import ArrayLike, BrdfEval, FloatArray
 
 Weight: TypeAlias = Literal["cos", "one"]

@@ -3,7 +3,7 @@ the instrument's constants.
 
 A reference of albedo ρ (f = ρ/π) measured at (wi_ref, wo_ref) gives a dark-subtracted
 signal rate s_ref (counts/s). The signal rate is s = f · G · R · g_adc / q, with
-G = K c Ω the geometric factor of `gonio.radiometry.chain`; every instrument constant
+G = K c Ω the geometric factor of `gonio.radiometry.ideal`; every instrument constant
 (E0 or I, D or F, Ω, responsivity R, ADC gain) is common to both readings, so
 
     f(wi, wo) = (ρ/π) · (s / s_ref) · (g(wi_ref, wo_ref) / g(wi, wo))
@@ -22,7 +22,7 @@ import numpy as np
 
 from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction, direction_pair, positive, spread
-from gonio.radiometry.chain import SourceKind, signal_rate
+from gonio.radiometry.ideal import SourceKind, signal_rate
 from gonio.types import ArrayLike, FloatArray
 
 #: A grey value or an RGB triple.

@@ -27,7 +27,8 @@ from gonio.errors import DomainError
 from gonio.radiometry._checks import direction_pair, positive, spread
 from gonio.radiometry.aperture import DEFAULT_ORDER as APERTURE_ORDER
 from gonio.radiometry.aperture import aperture_integral, weight_for
-from gonio.radiometry.chain import (
+from gonio.radiometry.footprint import footprint_fraction
+from gonio.radiometry.ideal import (
     CollimatedSource,
     DetectorOptics,
     Source,
@@ -35,7 +36,6 @@ from gonio.radiometry.chain import (
     radiant_power_checked,
     view_weight_checked,
 )
-from gonio.radiometry.footprint import footprint_fraction
 from gonio.radiometry.spatial import DEFAULT_ORDER as SPATIAL_ORDER
 from gonio.radiometry.spatial import point_source_power
 from gonio.types import ArrayLike, BrdfEval, FloatArray

@@ -25,7 +25,7 @@ import numpy as np
 from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic
-from gonio.radiometry.chain import DetectorOptics, PointSource
+from gonio.radiometry.ideal import DetectorOptics, PointSource
 from gonio.types import ArrayLike, BrdfEval, FloatArray
 
 #: Default quadrature order: (Gauss-Legendre nodes per azimuth piece, radial nodes).

@@ -50,7 +50,7 @@ class AxisSpec(Strict):
         return self
 
 
-class ChainSpec(Strict):
+class KinematicChainSpec(Strict):
     """A chain of axes from the lab frame outward, and the unit vector that the last
     frame points along (for the light and the detector: toward the source / sensor)."""
 
@@ -86,9 +86,9 @@ class RigSpec(Strict):
     name: str
     type: Literal["arch", "in_plane"]
     axes: dict[str, AxisSpec] = Field(min_length=1)
-    light: ChainSpec
-    detector: ChainSpec
-    sample: ChainSpec
+    light: KinematicChainSpec
+    detector: KinematicChainSpec
+    sample: KinematicChainSpec
     constraints: ConstraintSpec
     settle_s: float = Field(0.2, ge=0)
     bus: BusSpec = BusSpec()

@@ -22,8 +22,8 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK
 from drivers.dynamixel.link import DynamixelLink, sdk_latency_timer
-from sim.dxl_emulator import DxlEmulator
-from sim.dxl_faults import Fault
+from sim.dynamixel.emulator import DxlEmulator
+from sim.dynamixel.faults import Fault
 
 Emulator = Callable[..., DxlEmulator]
 ROOT = Path(__file__).resolve().parents[2]
@@ -400,7 +400,7 @@ def emulator_process() -> Iterator[str]:
     """A real-time emulator (wire time and return delays on) in its own process, so that
     its timing does not share a GIL with the SDK's busy-waiting reads."""
     proc = subprocess.Popen(
-        [sys.executable, "-m", "sim.dxl_emulator", "--ids", "1-4", "--baud", "57600"],
+        [sys.executable, "-m", "sim.dynamixel.emulator", "--ids", "1-4", "--baud", "57600"],
         cwd=ROOT,
         stdout=subprocess.PIPE,
         text=True,

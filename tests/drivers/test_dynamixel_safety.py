@@ -23,10 +23,10 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK, item
 from drivers.dynamixel.link import DynamixelLink, sdk_latency_timer
-from drivers.dynamixel.protocol import Instruction, Packet, PacketReader
-from sim.dxl_clock import ManualClock
-from sim.dxl_emulator import DxlEmulator
-from sim.dxl_faults import Fault
+from sim.clock import ManualClock
+from sim.dynamixel.emulator import DxlEmulator
+from sim.dynamixel.faults import Fault
+from sim.dynamixel.protocol import Instruction, Packet, PacketReader
 from tests.drivers.test_dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]

@@ -12,9 +12,9 @@ from typing import Any
 import dynamixel_sdk as sdk
 import pytest
 
-from drivers.dynamixel.protocol import Packet, PacketReader
-from sim.dxl_emulator import DxlEmulator
-from sim.dxl_tty import set_raw
+from sim.dynamixel.emulator import DxlEmulator
+from sim.dynamixel.protocol import Packet, PacketReader
+from sim.dynamixel.tty import set_raw
 
 
 class RawLink:

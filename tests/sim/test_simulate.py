@@ -14,10 +14,10 @@ from gonio.planner import build
 from gonio.planner.plan import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
-from sim.chain import Chain
-from sim.detector import CALIBRATION_INDEX
-from sim.dxl_clock import ManualClock
-from sim.instrument import SimulatedInstrument
+from sim.clock import ManualClock
+from sim.devices.detector import CALIBRATION_INDEX
+from sim.devices.instrument import SimulatedInstrument
+from sim.physics.optics import SceneOptics
 from sim.scene import Scene, load_scene
 from sim.simulate import simulate
 from tests.gonio.rig.helpers import RIGS
@@ -145,7 +145,7 @@ def test_no_effects_counts_to_brdf_recovers_the_model(
         scene.reference.albedo, ref.value, 0.01, wi_ref, wo_ref, kind
     )
     measured = calibration.brdf_from_counts(run.value, run.exposure_s, run.wi, run.wo)
-    expected = Chain(scene).models["sample"](run.wi, run.wo)
+    expected = SceneOptics(scene).models["sample"](run.wi, run.wo)
     assert np.all(expected > 0)
     np.testing.assert_allclose(measured, expected, rtol=1e-12)
     assert scene.material.model().is_rgb  # the detector's band reduced RGB to one value

@@ -1,0 +1,149 @@
+"""`SimDetector` and `SimLightSource`: a detector that measures the scene's material
+through the real radiometric chain, at the pose the motors are really in.
+
+Implements `drivers.base.Detector` (and `LightSource`). Each `measure` reads the pose
+(joint angles) from a callable — `SimMotorBus.true_positions` in a simulated run, the
+read-back positions of a real `DynamixelBus` in a rehearsal — turns it into the sample
+frame's (ωi, ωo) with the rig's forward kinematics, computes the power reaching the
+detector (`sim.physics.optics`), the expected electrons of each exposure, and reads them out
+through the sensor (`sim.physics.sensor`) with the random streams of the current sample index
+(`sample_index`, set by the instrument for each target; a second measurement of the
+same sample continues its streams), so any sample can be recomputed alone. Time passes
+through ``wait``: a virtual clock's ``advance`` in a simulation, a scaled sleep in a
+rehearsal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from drivers.base import DetectorError, Reading
+from gonio.rig.model import Rig
+from sim.physics import sensor
+from sim.physics.optics import SceneOptics, Target
+from sim.physics.streams import Streams
+from sim.scene import Scene
+
+#: Stream indices of reference-target and dark readings start here, far above any
+#: plan's sample indices, so calibration readings never share numbers with samples.
+CALIBRATION_INDEX = 1 << 40
+
+
+class SimLightSource:
+    """A switchable source (on at start); off, the detector sees only its own dark signal."""
+
+    def __init__(self) -> None:
+        self._on = True
+
+    @property
+    def is_on(self) -> bool:
+        return self._on
+
+    def on(self) -> None:
+        self._on = True
+
+    def off(self) -> None:
+        self._on = False
+
+
+def sensor_of(scene: Scene) -> tuple[sensor.SensorSpec, sensor.SensorEffects]:
+    """The scene's sensor and the sensor effects it lists."""
+    d, e = scene.detector, scene.effects
+    spec = sensor.SensorSpec(
+        full_well_e=d.full_well_e,
+        adc_bits=d.adc_bits,
+        read_noise_e=d.read_noise_e,
+        dark_current_e_s=d.dark_current_e_s,
+    )
+    return spec, sensor.SensorEffects.from_names(e.names())
+
+
+class SimDetector:
+    """A simulated detector looking at the scene from the pose ``pose()`` returns."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        rig: Rig,
+        pose: Callable[[], Mapping[str, float]],
+        *,
+        now: Callable[[], float],
+        wait: Callable[[float], object],
+        streams: Streams,
+        light: SimLightSource | None = None,
+    ) -> None:
+        self.scene = scene
+        self.rig = rig
+        self.chain = SceneOptics(scene)
+        self.sensor, self.sensor_effects = sensor_of(scene)
+        self._pose = pose
+        self._now = now
+        self._wait = wait
+        self.streams = streams
+        self.light = light or SimLightSource()
+        self.exposure_range = scene.detector.exposure_range_s
+        self.readout_s = scene.detector.readout_s
+        #: What is on the stage: the material or the reference standard.
+        self.target: Target = "sample"
+        #: The sample index whose random streams the next measurement uses (set by the
+        #: instrument for each target; measuring a sample again continues its streams).
+        self.sample_index = 0
+        self._draws: dict[int, int] = {}  # draws used so far per sample index
+        self._prepared: dict[tuple[float, ...], float] = {}
+        #: Measurements that found their pose prepared.
+        self.prepared_hits = 0
+
+    def prepare(self, poses: np.ndarray) -> None:
+        """Compute, in one vectorized pass, the sample's geometric power at joint poses
+        (N, A) the run expects to measure at; `measure` then looks a pose up instead of
+        evaluating the chain for it alone. Only an exactly equal pose is a hit: anything
+        else is computed as usual, so the readings do not depend on this."""
+        poses = np.asarray(poses, dtype=np.float64).reshape(-1, len(self.rig.axes))
+        wi, wo = self.rig.forward(poses)
+        power = self.chain.geometric_power(wi, wo, "sample")
+        self._prepared = dict(zip(map(tuple, poses.tolist()), power.tolist(), strict=True))
+
+    def _pose_angles(self) -> tuple[float, ...]:
+        pose = self._pose()
+        try:
+            return tuple(float(pose[name]) for name in self.rig.axes)
+        except KeyError as exc:
+            raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
+
+    def _geometric_power(self) -> np.ndarray:
+        angles = self._pose_angles()
+        if self.target == "sample" and angles in self._prepared:
+            self.prepared_hits += 1
+            return np.array([self._prepared[angles]])
+        wi, wo = self.rig.forward(np.array([angles], dtype=np.float64))
+        return self.chain.geometric_power(wi, wo, self.target)
+
+    def measure(self, exposure_s: float, averages: int = 1) -> Reading:
+        """Expose ``averages`` times for ``exposure_s`` s each; the mean in counts."""
+        lo, hi = self.exposure_range
+        if not lo <= exposure_s <= hi:
+            raise DetectorError(
+                f"exposure {exposure_s!r} s is outside the detector's range [{lo:g}, {hi:g}] s"
+            )
+        if int(averages) != averages or averages < 1:
+            raise DetectorError(f"averages must be a positive integer, got {averages!r}")
+        averages = int(averages)
+        geometric = self._geometric_power()
+        period = exposure_s + self.readout_s
+        t_mid = np.asarray(
+            self._now() + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
+            dtype=np.float64,
+        )
+        power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
+        signal = self.chain.electrons(power, np.array([exposure_s]))
+        index = np.array([self.sample_index], dtype=np.int64)
+        start = self._draws.get(self.sample_index, 0)
+        self._draws[self.sample_index] = start + averages
+        counts, saturated = sensor.read_out(
+            signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams,
+            index, start=start,
+        )  # fmt: skip
+        self._wait(period * averages)
+        return sensor.readings(counts, saturated)[0]

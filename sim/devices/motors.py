@@ -1,0 +1,265 @@
+"""`SimMotorBus`: the rig's axes as virtual motors on a virtual clock.
+
+Implements `drivers.base.MotorBus`. Nothing sleeps: `wait_settled` advances the clock to
+the end of the slowest axis's trapezoidal profile (the rig file's velocity and
+acceleration; `gonio.rig.travel`) plus the rig's settle time, so a simulated run reports
+the hours the real rig would take in the seconds it computes.
+
+Positions: each axis moves from where it is to its goal; a new goal starts a new
+profile from the present position (at rest: blending is not modelled). With the
+scene's ``position_error`` effect the motor goes to the goal rounded to its encoder
+tick (4096 per motor revolution, through the gear), `positions` reads that tick back
+(what the encoder sees), and the joint itself (`true_positions`, what the light and
+the detector really see) is off by half the backlash against the direction of the last
+move plus a Gaussian repeatability error drawn once per move from the sample's random
+stream (`sim.physics.streams`, channel POSITION), so a resumed run moves exactly as an
+uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from drivers.base import DriverError, Health, LimitError, MotionTimeout, Resource
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+from sim.clock import ManualClock
+from sim.physics import streams as streams_module
+from sim.scene import PositionErrorSpec
+
+
+def profile_position(
+    start: FloatArray, goal: FloatArray, v: FloatArray, a: FloatArray, elapsed: float
+) -> FloatArray:
+    """Where trapezoidal profiles (rest to rest, per axis) from ``start`` to ``goal`` are
+    after ``elapsed`` seconds (rad); at the goal once each profile has ended."""
+    d = np.abs(goal - start)
+    sign = np.sign(goal - start)
+    t_acc = np.minimum(v / a, np.sqrt(d / a))  # time spent accelerating
+    v_peak = a * t_acc
+    cruise = np.where(v_peak > 0, d / np.where(v_peak > 0, v_peak, 1.0) - t_acc, 0.0)
+    total = 2.0 * t_acc + cruise
+    t = np.minimum(elapsed, total)
+    accelerating = 0.5 * a * t * t
+    cruising = 0.5 * a * t_acc**2 + v_peak * (t - t_acc)
+    braking = d - 0.5 * a * (total - t) ** 2
+    s = np.where(t < t_acc, accelerating, np.where(t < t_acc + cruise, cruising, braking))
+    return np.asarray(np.where(t >= total, goal, start + sign * s), dtype=np.float64)
+
+
+class PositionModel:
+    """Encoder quantization, backlash and repeatability of the rig's axes (radians).
+
+    The repeatability error is downstream of the encoder (a belt, a worm, a coupling):
+    the encoder never sees it. Each axis draws a new one when it moves and keeps it
+    while it stays put.
+    """
+
+    def __init__(self, rig: Rig, spec: PositionErrorSpec, streams: streams_module.Streams):
+        self.spec = spec
+        self.streams = streams
+        axes = rig.bus_axes()
+        self.tick = np.array([a.resolution_rad for a in axes])
+        self.zero = np.array([a.zero_offset_rad for a in axes])
+        self.backlash = math.radians(spec.backlash_deg)
+        self.sigma = math.radians(spec.repeatability_deg)
+
+    def quantize(self, angles: FloatArray) -> FloatArray:
+        """The nearest encoder tick (joint angle, rad) of each axis."""
+        if not self.spec.ticks:
+            return np.asarray(angles, dtype=np.float64)
+        steps = np.round((angles - self.zero) / self.tick)
+        return np.asarray(self.zero + steps * self.tick, dtype=np.float64)
+
+    def backlash_error(self, direction: FloatArray) -> FloatArray:
+        """Joint minus encoder angle from backlash, after last moves in ``direction``
+        (sign per axis, 0 before any move): the joint lags half the backlash behind."""
+        return np.asarray(-0.5 * self.backlash * np.asarray(direction), dtype=np.float64)
+
+    def repeatability_draw(self, index: np.ndarray, axes: int, start: int = 0) -> FloatArray:
+        """(N, A) repeatability errors of a move made for samples ``index``; ``start`` is
+        the draw offset of a sample's second, third … move."""
+        if self.sigma == 0:
+            return np.zeros((len(index), axes))
+        n = self.streams.normal(index, streams_module.POSITION, axes, start=start)
+        return np.asarray(self.sigma * n, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class MotorState:
+    """What a resumed run needs of the motors: encoder angles at rest, the direction of
+    each axis's last move (for backlash) and the joints' present error (rad)."""
+
+    encoder: tuple[float, ...]
+    direction: tuple[float, ...]
+    repeatability: tuple[float, ...]
+
+
+class SimMotorBus(Resource):
+    """Virtual motors for the axes of ``rig`` (see the module docstring)."""
+
+    def __init__(
+        self,
+        rig: Rig,
+        clock: ManualClock,
+        *,
+        position_error: PositionErrorSpec | None = None,
+        streams: streams_module.Streams | None = None,
+        settle_s: float | None = None,
+    ) -> None:
+        self.rig = rig
+        self.clock = clock
+        self.settle_s = rig.spec.settle_s if settle_s is None else float(settle_s)
+        self._names = rig.axes
+        self._index = {n: i for i, n in enumerate(self._names)}
+        self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
+        self._v, self._a = rig.velocity, rig.acceleration
+        self._travel = rig.travel.scalar()  # one move's time with Python floats: no numpy overhead
+        self._model = (
+            PositionModel(rig, position_error, streams or streams_module.Streams(0))
+            if position_error is not None
+            else None
+        )
+        home = np.asarray(rig.home, dtype=np.float64)
+        self._start = home.copy()  # where the present profile started
+        self._goal = home.copy()  # where the motors are going (encoder ticks if quantized)
+        self._t0 = self._end = clock.now
+        self._settled_at = self._end
+        self._direction = np.zeros(len(home))  # sign of each axis's last move
+        self._repeat = np.zeros(len(home))  # each axis's repeatability error
+        self._error = np.zeros(len(home))  # joint − encoder
+        self._moves: dict[int, int] = {}  # moves made so far per sample index
+        self._open = False
+        self._torque = True
+        #: The sample index whose stream draws the next move's repeatability errors (set
+        #: by the instrument before each target's move; a second move for the same
+        #: sample continues that stream).
+        self.sample_index = 0
+
+    # -- Resource / MotorBus ----------------------------------------------------------
+    @property
+    def axes(self) -> tuple[str, ...]:
+        return self._names
+
+    def open(self) -> None:
+        self._open = True
+
+    def close(self) -> None:
+        if self._open:
+            self.stop()
+        self._open = False
+
+    def _check_open(self) -> None:
+        if not self._open:
+            raise DriverError("the simulated bus is not open (use it as a context manager)")
+
+    def move_to(self, targets: Mapping[str, float]) -> None:
+        """Start moving the named axes (rad); `LimitError` before anything moves if a
+        target is outside its axis's limits or not finite."""
+        self._check_open()
+        goal = self._present_encoder()
+        for name, angle in targets.items():
+            if name not in self._index:
+                raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(self._names)}")
+            i = self._index[name]
+            value = float(angle)
+            if not (math.isfinite(value) and self._lo[i] <= value <= self._hi[i]):
+                raise LimitError(
+                    f"axis {name!r}: target {angle!r} rad is outside its limits "
+                    f"[{self._lo[i]:.6f}, {self._hi[i]:.6f}] rad; nothing moved"
+                )
+            goal[i] = value
+        if not self._torque:
+            raise DriverError("torque is off: call torque(True) before moving")
+        self._start_move(goal)
+
+    def _start_move(self, goal: FloatArray) -> None:
+        here = self._present_encoder()
+        if self._model is not None:
+            goal = np.clip(self._model.quantize(goal), self._lo, self._hi)
+        step = np.sign(goal - here)
+        moved = step != 0
+        self._direction = np.where(moved, step, self._direction)
+        self._start, self._goal, self._t0 = here, goal, self.clock.now
+        self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
+        self._settled_at = self._end + self.settle_s
+        if self._model is not None:
+            k = self._moves.get(self.sample_index, 0)
+            self._moves[self.sample_index] = k + 1
+            axes = len(goal)
+            draw = self._model.repeatability_draw(
+                np.array([self.sample_index]), axes, start=k * axes
+            )[0]
+            self._repeat = np.where(moved, draw, self._repeat)
+            self._error = self._model.backlash_error(self._direction) + self._repeat
+
+    def _present_encoder(self) -> FloatArray:
+        now = self.clock.now
+        if now >= self._end:  # at rest (the common case: read after settling)
+            return self._goal.copy()
+        return profile_position(self._start, self._goal, self._v, self._a, now - self._t0)
+
+    def wait_settled(self, timeout_s: float) -> None:
+        """Advance the clock to the end of the motion plus the settle time (at once if
+        that has passed); if that is more than ``timeout_s`` away, hold the axes where
+        they are after ``timeout_s`` and raise `MotionTimeout`."""
+        self._check_open()
+        remaining = self._settled_at - self.clock.now
+        if remaining > timeout_s:
+            self.clock.advance(timeout_s)
+            self.stop()
+            raise MotionTimeout(
+                f"axes did not settle within {timeout_s:g} s (the move and the settle "
+                f"time need {remaining:.3f} s more); holding them"
+            )
+        if remaining > 0:
+            self.clock.advance_to(self._settled_at)
+
+    def positions(self) -> dict[str, float]:
+        """The encoder's reading of each axis (rad)."""
+        self._check_open()
+        return dict(zip(self._names, self._present_encoder().tolist(), strict=True))
+
+    def true_positions(self) -> dict[str, float]:
+        """Where the joints really are (rad): the encoder reading plus backlash and
+        repeatability (equal to `positions` without the position_error effect)."""
+        self._check_open()
+        true = self._present_encoder() + self._error
+        return dict(zip(self._names, true.tolist(), strict=True))
+
+    def snapshot(self) -> MotorState:
+        """The motors' state (at rest: call after `wait_settled`)."""
+        return MotorState(
+            tuple(self._present_encoder().tolist()),
+            tuple(self._direction.tolist()),
+            tuple(self._repeat.tolist()),
+        )
+
+    def restore(self, state: MotorState) -> None:
+        """Put the motors, at rest, in a `snapshot`'s state."""
+        here = np.array(state.encoder, dtype=np.float64)
+        self._start, self._goal, self._t0 = here, here.copy(), self.clock.now
+        self._end = self._settled_at = self._t0
+        self._direction = np.array(state.direction, dtype=np.float64)
+        self._repeat = np.array(state.repeatability, dtype=np.float64)
+        backlash = self._model.backlash_error(self._direction) if self._model else 0.0
+        self._error = backlash + self._repeat
+
+    def stop(self) -> None:
+        here = self._present_encoder()
+        self._start, self._goal, self._t0 = here, here, self.clock.now
+        self._end = self._settled_at = self._t0
+
+    def torque(self, on: bool) -> None:
+        self._check_open()
+        if not on:
+            self.stop()
+        self._torque = bool(on)
+
+    def health(self) -> dict[str, Health]:
+        self._check_open()
+        return {n: Health(temperature_c=35.0, voltage_v=12.0) for n in self._names}

@@ -1,0 +1,443 @@
+"""One emulated X-series motor: its control-table memory, the write rules, and its motion.
+
+The memory is the table of :mod:`drivers.dynamixel.control_table` (addresses 0-146,
+little endian); writes go through :mod:`sim.dynamixel.rules` and a rejected write changes
+nothing. Motion follows :mod:`sim.dynamixel.motion` on the motor's clock; derived registers
+(Present Position, Present Velocity, Moving, Moving Status, trajectories, Realtime
+Tick) are computed whenever they are read.
+
+Position frames (e-manual): Present Position = s·shaft + Homing Offset, with s = −1 in
+reverse Drive Mode (the offset's sign is not reversed); position mode ignores an offset
+outside ±1,024. Present Position is brought back within one turn when torque goes on
+in position mode, when the mode changes to position mode, and on reboot.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from drivers.dynamixel.control_table import (
+    BAUD_RATES,
+    BY_NAME,
+    DRIVE_MODE_REVERSE,
+    EEPROM_END,
+    ITEMS,
+    OPERATING_MODES,
+    TABLE_SIZE,
+    TICKS_PER_REV,
+)
+from sim.clock import Clock
+from sim.dynamixel.motion import (
+    INF,
+    TICKS_PER_S2_PER_ACCELERATION_UNIT,
+    TICKS_PER_S_PER_VELOCITY_UNIT,
+    ProfileType,
+    Trajectory,
+    at_rest,
+    move,
+    move_timed,
+    spin,
+)
+from sim.dynamixel.protocol import ALERT, StatusError
+from sim.dynamixel.rules import MULTI_TURN, POSITION, check_write
+
+#: Drive Mode bit 2: time-based profile (Profile Velocity/Acceleration in ms).
+DRIVE_MODE_TIME_BASED = 0x04
+#: Drive Mode bit 3: writing a goal while torque is off turns torque on.
+DRIVE_MODE_TORQUE_ON_BY_GOAL = 0x08
+
+VELOCITY = OPERATING_MODES["velocity"]
+#: Position mode ignores a Homing Offset outside ±1,024 (e-manual).
+_POSITION_MODE_HOMING_LIMIT = 1024
+
+#: Present Input Voltage (0.1 V) and Present Temperature (°C) of a healthy motor.
+NOMINAL_VOLTAGE = 120
+NOMINAL_TEMPERATURE = 30
+
+
+def _defaults() -> bytearray:
+    mem = bytearray(TABLE_SIZE)
+    for it in ITEMS:
+        mem[it.address : it.address + it.size] = it.encode(it.default)
+    return mem
+
+
+_DEFAULTS = bytes(_defaults())
+
+
+def _wrap32(value: int) -> int:
+    """``value`` as a signed 32-bit register would hold it."""
+    return ((value + (1 << 31)) % (1 << 32)) - (1 << 31)
+
+
+def baud_code(bps: int) -> int:
+    """The Baud Rate register value for ``bps`` (ValueError if the X-series has none)."""
+    for code, rate in BAUD_RATES.items():
+        if rate == bps:
+            return code
+    rates = sorted(BAUD_RATES.values())
+    raise ValueError(f"{bps} baud is not an X-series rate; use one of {rates}")
+
+
+class EmulatedMotor:
+    """An X-series motor's memory and motion, driven by a clock (seconds).
+
+    ``position`` is where the motor starts (ticks, Present Position). Every public
+    method holds ``lock`` (one lock shared by an emulator's motors; by default a
+    private RLock), so a bus thread and a test can use the motor at the same time.
+    """
+
+    def __init__(
+        self,
+        motor_id: int = 1,
+        *,
+        model: int = 1020,
+        firmware: int = 46,
+        baud: int = 57_600,
+        position: int = 2048,
+        clock: Clock = time.monotonic,
+        lock: threading.RLock | None = None,
+    ) -> None:
+        self._clock = clock
+        self._lock = lock if lock is not None else threading.RLock()
+        self._mem = bytearray(_DEFAULTS)
+        now = clock()
+        self._boot = now
+        self._t0 = now
+        self._traj: Trajectory = at_rest(position)
+        self._kind = ProfileType.STEP
+        self._registered: tuple[int, bytes] | None = None
+        self._put("model_number", model)
+        self._put("firmware_version", firmware)
+        self._put("id", motor_id)
+        self._put("baud_rate", baud_code(baud))
+        self._reset_ram(position)
+
+    # -- identity and bus settings (plain register reads) -------------------------------
+
+    @property
+    def id(self) -> int:
+        return self._raw("id")
+
+    @property
+    def secondary_id(self) -> int | None:
+        """The Secondary (shadow) ID, or None when disabled (≥ 253)."""
+        value = self._raw("secondary_id")
+        return value if value <= 252 else None
+
+    @property
+    def model(self) -> int:
+        return self._raw("model_number")
+
+    @property
+    def firmware(self) -> int:
+        return self._raw("firmware_version")
+
+    @property
+    def baud(self) -> int:
+        """The rate the motor listens and speaks at (bits/s)."""
+        return BAUD_RATES[self._raw("baud_rate")]
+
+    @property
+    def protocol(self) -> int:
+        return self._raw("protocol_type")
+
+    @property
+    def status_return_level(self) -> int:
+        return self._raw("status_return_level")
+
+    @property
+    def return_delay(self) -> float:
+        """Return Delay Time in seconds (register × 2 µs)."""
+        return self._raw("return_delay_time") * 2e-6
+
+    @property
+    def hardware_error(self) -> int:
+        """Hardware Error Status (bit numbers as in `HARDWARE_ERROR_BITS`)."""
+        return self._raw("hardware_error_status")
+
+    @property
+    def in_shutdown(self) -> bool:
+        """True when a latched hardware error is in the Shutdown mask (REBOOT clears it)."""
+        return bool(self.hardware_error & self._raw("shutdown"))
+
+    def status_error(self, error: int = StatusError.NONE) -> int:
+        """The ERROR byte of a status packet: ``error`` plus ALERT if a hardware error is set."""
+        return int(error) | (ALERT if self.hardware_error else 0)
+
+    @property
+    def shaft_position(self) -> float:
+        """The physical shaft angle (ticks, counter-clockwise seen from the front), which
+        Homing Offset and the reverse bit of Drive Mode map to Present Position."""
+        with self._lock:
+            position, _ = self._traj.at(self._clock() - self._t0)
+            return self._to_shaft(position)
+
+    # -- host-facing access ---------------------------------------------------------------
+
+    def read(self, address: int, length: int) -> bytes:
+        """``length`` bytes from ``address`` (IndexError outside the table)."""
+        if length < 1 or address < 0 or address + length > TABLE_SIZE:
+            raise IndexError(f"read of {length} bytes at {address} is outside 0..{TABLE_SIZE}")
+        with self._lock:
+            self._refresh()
+            return bytes(self._mem[address : address + length])
+
+    def write(self, address: int, data: bytes, *, via_secondary: bool = False) -> StatusError:
+        """Apply a WRITE of ``data`` at ``address`` under the control-table rules."""
+        with self._lock:
+            error = self.check_write(address, data, via_secondary=via_secondary)
+            if error:
+                return error
+            self._apply(address, bytes(data))
+            return StatusError.NONE
+
+    def check_write(self, address: int, data: bytes, *, via_secondary: bool = False) -> StatusError:
+        """The error a WRITE would get, without applying it."""
+        with self._lock:
+            return check_write(
+                self._mem, address, data, shutdown=self.in_shutdown, via_secondary=via_secondary
+            )
+
+    def get(self, name: str) -> int:
+        """A register's value by control-table name (derived registers are up to date)."""
+        with self._lock:
+            self._refresh()
+            return self._raw(name)
+
+    def set(self, name: str, value: int) -> None:
+        """Backdoor: store ``value`` in a register with no rules and no side effects.
+
+        Setting ``present_position`` places the motor there at rest. Other derived
+        registers are recomputed on the next read, so setting them has no lasting effect.
+        """
+        with self._lock:
+            if name == "present_position":
+                self._t0 = self._clock()
+                self._traj = at_rest(value)
+            self._put(name, value)
+
+    # -- instructions other than READ / WRITE ---------------------------------------------
+
+    def reg_write(self, address: int, data: bytes) -> StatusError:
+        """REG_WRITE: check now, apply on ACTION (Registered Instruction = 1 meanwhile)."""
+        with self._lock:
+            error = self.check_write(address, data)
+            if not error:
+                self._registered = (address, bytes(data))
+                self._put("registered_instruction", 1)
+            return error
+
+    def action(self) -> StatusError:
+        """ACTION: apply the registered write (Instruction error if there is none)."""
+        with self._lock:
+            if self._registered is None:
+                return StatusError.INSTRUCTION
+            address, data = self._registered
+            self._registered = None
+            self._put("registered_instruction", 0)
+            return self.write(address, data)
+
+    def reboot(self) -> None:
+        """REBOOT: EEPROM kept, RAM to defaults (torque off, errors cleared), Present
+        Position back within one turn (the multi-turn count is lost), tick restarts."""
+        with self._lock:
+            now = self._clock()
+            position, _ = self._traj.at(now - self._t0)
+            self._boot = now
+            self._registered = None
+            self._reset_ram(self._one_turn(position))
+
+    def factory_reset(self, option: int) -> StatusError:
+        """FACTORY_RESET: 0xFF everything, 0x01 all but ID, 0x02 all but ID and baud rate;
+        then reboot. Another option → Data Range error."""
+        if option not in (0xFF, 0x01, 0x02):
+            return StatusError.DATA_RANGE
+        with self._lock:
+            shaft = self.shaft_position
+            keep_id, keep_baud = self.id, self._raw("baud_rate")
+            model, firmware = self.model, self.firmware
+            self._mem[:] = _DEFAULTS
+            self._put("model_number", model)
+            self._put("firmware_version", firmware)
+            if option in (0x01, 0x02):
+                self._put("id", keep_id)
+            if option == 0x02:
+                self._put("baud_rate", keep_baud)
+            self._t0 = self._clock()
+            self._traj = at_rest(self._from_shaft(shaft))
+            self.reboot()
+        return StatusError.NONE
+
+    def clear_multi_turn(self) -> StatusError:
+        """CLEAR (option 1): Present Position back within one turn; Result Fail if moving."""
+        with self._lock:
+            now = self._clock()
+            if self._traj.running(now - self._t0):
+                return StatusError.RESULT_FAIL
+            position, _ = self._traj.at(now - self._t0)
+            self._hold(self._one_turn(position), now)
+            return StatusError.NONE
+
+    def raise_alert(self, bit: int) -> None:
+        """Latch hardware error ``bit``; if it is in the Shutdown mask, torque goes off."""
+        with self._lock:
+            self._put("hardware_error_status", self.hardware_error | (1 << bit))
+            if self.in_shutdown:
+                self._torque_off()
+
+    # -- internals ------------------------------------------------------------------------
+
+    def _raw(self, name: str) -> int:
+        it = BY_NAME[name]
+        return it.decode(bytes(self._mem[it.address : it.address + it.size]))
+
+    def _put(self, name: str, value: int) -> None:
+        """Store ``value`` in item ``name``; ValueError (nothing stored) if the register
+        cannot hold it (e.g. 2³¹ in a signed 4-byte item)."""
+        it = BY_NAME[name]
+        self._mem[it.address : it.address + it.size] = it.encode(value)
+
+    def _reset_ram(self, position: float) -> None:
+        self._mem[EEPROM_END:] = _DEFAULTS[EEPROM_END:]
+        self._put("goal_pwm", self._raw("pwm_limit"))
+        self._put("goal_current", self._raw("current_limit"))
+        self._put("present_input_voltage", NOMINAL_VOLTAGE)
+        self._put("present_temperature", NOMINAL_TEMPERATURE)
+        self._kind = ProfileType.STEP
+        self._hold(position, self._clock())
+        self._put("goal_position", _wrap32(round(position)))
+
+    def _apply(self, address: int, data: bytes) -> None:
+        now = self._clock()
+        position, _ = self._traj.at(now - self._t0)
+        before = {name: self._raw(name) for name in _WATCHED}
+        shaft = self._to_shaft(position)
+        self._mem[address : address + len(data)] = data
+        touched = {it.name for it in ITEMS if address <= it.address < address + len(data)}
+        changed = {name for name in _WATCHED if self._raw(name) != before[name]}
+
+        if changed & {"homing_offset", "drive_mode", "operating_mode"}:
+            self._hold(self._from_shaft(shaft), now)
+        if "operating_mode" in changed:
+            self._put("profile_velocity", 0)
+            self._put("profile_acceleration", 0)
+            self._put("goal_pwm", self._raw("pwm_limit"))
+            if self._raw("operating_mode") == POSITION:
+                self._hold(self._one_turn(self._position(now)), now)
+        if "torque_enable" in changed:
+            if self._raw("torque_enable"):
+                self._torque_on(now)
+            else:
+                self._torque_off()
+        mode = self._raw("operating_mode")
+        if "goal_position" in touched and mode in (POSITION, *MULTI_TURN):
+            self._goal_update(now, self._start_move)
+        if "goal_velocity" in touched and mode == VELOCITY:
+            self._goal_update(now, self._start_spin)
+
+    def _goal_update(self, now: float, start: Callable[[float], None]) -> None:
+        if not self._raw("torque_enable"):
+            if not self._raw("drive_mode") & DRIVE_MODE_TORQUE_ON_BY_GOAL or self.in_shutdown:
+                return  # accepted, not executed
+            self._put("torque_enable", 1)
+        start(now)
+
+    def _start_move(self, now: float) -> None:
+        position, velocity = self._traj.at(now - self._t0)
+        goal = self._raw("goal_position")
+        pv, pa = self._raw("profile_velocity"), self._raw("profile_acceleration")
+        limit = self._raw("velocity_limit")
+        time_based = bool(self._raw("drive_mode") & DRIVE_MODE_TIME_BASED)
+        if time_based and pv:
+            traj = move_timed(position, goal, pv / 1000.0, pa / 1000.0)
+        else:
+            # Profile Velocity 0: as fast as the Velocity Limit allows (0 too: a step).
+            v = min(pv, limit) if pv and limit else (pv or limit)
+            v_max = v * TICKS_PER_S_PER_VELOCITY_UNIT if v else INF
+            a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa and not time_based else INF
+            traj = move(position, velocity, goal, v_max, a_max, None if pv else ProfileType.STEP)
+        self._t0, self._traj, self._kind = now, traj, traj.kind
+
+    def _start_spin(self, now: float) -> None:
+        position, velocity = self._traj.at(now - self._t0)
+        pa = self._raw("profile_acceleration")
+        a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa else INF
+        goal = self._raw("goal_velocity") * TICKS_PER_S_PER_VELOCITY_UNIT
+        self._t0, self._traj = now, spin(position, velocity, goal, a_max)
+        self._kind = self._traj.kind
+
+    def _torque_on(self, now: float) -> None:
+        """Torque on: position mode wraps to one turn; the goal becomes the present position."""
+        position = self._position(now)
+        if self._raw("operating_mode") == POSITION:
+            position = self._one_turn(position)
+        self._hold(position, now)
+        self._put("goal_position", _wrap32(round(position)))
+
+    def _torque_off(self) -> None:
+        now = self._clock()
+        self._put("torque_enable", 0)
+        self._hold(self._position(now), now)
+
+    def _position(self, now: float) -> float:
+        return self._traj.at(now - self._t0)[0]
+
+    def _hold(self, position: float, now: float) -> None:
+        self._t0, self._traj = now, at_rest(position)
+
+    def _homing(self) -> int:
+        offset = self._raw("homing_offset")
+        if self._raw("operating_mode") == POSITION and abs(offset) > _POSITION_MODE_HOMING_LIMIT:
+            return 0
+        return offset
+
+    def _sign(self) -> int:
+        return -1 if self._raw("drive_mode") & DRIVE_MODE_REVERSE else 1
+
+    def _to_shaft(self, position: float) -> float:
+        return self._sign() * (position - self._homing())
+
+    def _from_shaft(self, shaft: float) -> float:
+        return self._sign() * shaft + self._homing()
+
+    def _one_turn(self, position: float) -> float:
+        homing = self._homing()
+        return homing + (position - homing) % TICKS_PER_REV
+
+    def _refresh(self) -> None:
+        now = self._clock()
+        elapsed = now - self._t0
+        traj = self._traj
+        position, velocity = traj.at(elapsed)
+        running = traj.running(elapsed) and not traj.endless
+        if not running and not traj.endless and traj.segments:
+            self._hold(traj.target, now)
+        present = _wrap32(round(position))
+        speed = _wrap32(round(velocity / TICKS_PER_S_PER_VELOCITY_UNIT))
+        moving = running or abs(speed) > self._raw("moving_threshold")
+        status = int(self._kind)
+        if running:
+            status |= 0x02
+        mode = self._raw("operating_mode")
+        torque = self._raw("torque_enable")
+        if (
+            mode in (POSITION, *MULTI_TURN)
+            and torque
+            and not running
+            and present == self._raw("goal_position")
+        ):
+            status |= 0x01
+        self._put("present_position", present)
+        self._put("present_velocity", speed)
+        self._put("moving", int(moving))
+        self._put("moving_status", status)
+        self._put("velocity_trajectory", speed if running or traj.endless else 0)
+        self._put("position_trajectory", present)
+        self._put("realtime_tick", int((now - self._boot) * 1000) % 32768)
+
+
+#: Registers whose change has side effects beyond the stored bytes.
+_WATCHED = ("homing_offset", "drive_mode", "operating_mode", "torque_enable")

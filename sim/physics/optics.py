@@ -1,0 +1,118 @@
+"""The simulated measurement's forward chain: geometry and time → radiant power at the
+detector → expected photo-electrons, with the scene's optical effects.
+
+The ideal chain is `gonio.radiometry`'s: Φ = K(source, ωi) · f(ωi, ωo) · c(ωo) · Ω.
+Effects, each computed only when the scene lists it:
+
+- ``aperture_integration``: K · ∫cap f(ωi, ω) c(ω) dω over the detector's solid angle
+  instead of K · f · c · Ω (a sharp peak is lowered and widened);
+- ``footprint``: for a collimated beam, × the part of the lit ellipse that is on the
+  sample and in the detector's view; for a point source, the power integrated over the
+  seen part of the sample with the irradiance and the incidence varying across the
+  spot (with ``aperture_integration`` too, the aperture average nested inside the spot
+  integral: exact, and slow — about 40 ms a pair at the default orders);
+- ``source_drift``: the source's power × (1 + rate·t/3600 + amplitude·sin(2πt/P + φ))
+  at the middle of each exposure (never below 0);
+- ``stray_light``: + a constant power while the source is on (drifting with it).
+
+The sensor (`sim.physics.sensor`) turns the expected electrons into counts.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from gonio import brdf, radiometry
+from gonio.types import BrdfEval, FloatArray
+from sim.scene import LUMINANCE, CollimatedSpec, Scene
+
+Target = Literal["sample", "reference"]
+
+
+def band_eval(model: brdf.BRDF, band: str) -> BrdfEval:
+    """f(ωi, ωo) as the detector's band sees it (one value per pair)."""
+    if not model.is_rgb:
+        return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
+    weights = np.asarray(LUMINANCE) if band == "luminance" else np.eye(3)["rgb".index(band)]
+    return lambda wi, wo: np.asarray(model.eval(wi, wo) @ weights, dtype=np.float64)
+
+
+class SceneOptics:
+    """The scene's chain, vectorized over pairs (N, 3) and exposures (N, A)."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        s, d = scene.source, scene.detector
+        self.source: radiometry.Source = (
+            radiometry.CollimatedSource(s.irradiance_w_m2, s.beam_diameter_mm)
+            if isinstance(s, CollimatedSpec)
+            else radiometry.PointSource(s.intensity_w_sr, s.distance_mm)
+        )
+        self.optics = radiometry.DetectorOptics(d.aperture_sr, d.fov_diameter_mm)
+        self.models: dict[Target, BrdfEval] = {
+            "sample": band_eval(scene.material.model(), d.band),
+            "reference": band_eval(brdf.create("lambert", albedo=scene.reference.albedo), d.band),
+        }
+        self.effects = scene.effects
+
+    def geometric_power(
+        self, wi: FloatArray, wo: FloatArray, target: Target = "sample"
+    ) -> FloatArray:
+        """Radiant power (W, shape (N,)) from the source at its nominal strength, before
+        drift and stray light (`gonio.radiometry.detector_power` with the scene's
+        optical effects)."""
+        e = self.effects
+        aperture = e.aperture_integration
+        return np.asarray(
+            radiometry.detector_power(
+                self.source,
+                self.optics,
+                self.models[target],
+                wi,
+                wo,
+                footprint=e.footprint is not None,
+                aperture_integration=aperture is not None,
+                sample_diameter_mm=self.scene.sample.diameter_mm,
+                aperture_order=aperture.order if aperture is not None else 6,
+            ),
+            dtype=np.float64,
+        )
+
+    def drift(self, t: FloatArray) -> FloatArray:
+        """The source's relative power at virtual times t (s): 1 without drift."""
+        spec = self.effects.source_drift
+        if spec is None:
+            return np.ones_like(np.asarray(t, dtype=np.float64))
+        phase = math.radians(spec.phase_deg)
+        factor = (
+            1.0
+            + spec.rate_per_hour * t / 3600.0
+            + spec.amplitude * np.sin(2.0 * math.pi * t / spec.period_s + phase)
+        )
+        return np.asarray(np.maximum(factor, 0.0), dtype=np.float64)  # a lamp dims to dark
+
+    def power(
+        self,
+        geometric: FloatArray,
+        t_mid: FloatArray,
+        *,
+        light_on: bool = True,
+    ) -> FloatArray:
+        """Power (W, (N, A)) during each exposure, whose middles are at ``t_mid`` (N, A)."""
+        t_mid = np.asarray(t_mid, dtype=np.float64)
+        if not light_on:
+            return np.zeros_like(t_mid)
+        power = np.asarray(geometric, dtype=np.float64)[:, None]
+        stray = self.effects.stray_light
+        if stray is not None:  # light from the source: it drifts with the source
+            power = power + stray.power_w
+        return np.asarray(power * self.drift(t_mid), dtype=np.float64)
+
+    def electrons(self, power: FloatArray, exposure_s: FloatArray) -> FloatArray:
+        """Expected signal electrons (N, A) of exposures of ``exposure_s`` (N,) s (checked
+        positive by the caller; the responsivity by the scene): Φ t R / q."""
+        rate = self.scene.detector.responsivity_a_w / radiometry.ELEMENTARY_CHARGE
+        return np.asarray(power * (np.asarray(exposure_s)[:, None] * rate), dtype=np.float64)
