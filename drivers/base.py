@@ -1,17 +1,76 @@
-"""The interfaces every backend implements, and the driver error hierarchy.
+"""The device contract every backend implements, its values and its errors.
 
-The acquisition engine talks to hardware only through these small protocols (in the
-manner of ophyd's ``Movable`` / ``Readable``): real backends (Dynamixel over serial, a
-serial detector) and simulated ones satisfy the same ones. Units: radians, seconds,
-degrees Celsius, volts.
+The acquisition engine talks to an instrument only through the small protocols here
+(in the manner of ophyd's ``Movable`` / ``Readable``): `MotorBus`, `Detector`,
+`LightSource` and `Clock`. The real backends (`drivers.dynamixel.DynamixelBus`,
+`drivers.serial_detector.SerialDetector`, `drivers.light.SerialLightSwitch`) and the
+simulated ones (`sim.devices`) follow the same rules, and one contract suite
+(``tests/drivers/contract/``) runs every rule against every backend. Units: radians,
+seconds, degrees Celsius, volts; detector values in the detector's counts.
+
+The rules, in one place
+-----------------------
+Lifecycle (all devices)
+    A device is a context manager: entering calls ``open()``, leaving calls ``close()``
+    (also on an exception or Ctrl-C). ``open()`` on an open device does nothing.
+    ``close()`` is idempotent, never raises for a device that is already closed, and
+    releases the port whatever state the device is in; a motor bus tells every axis to
+    hold before it releases its port. On a closed device every other call raises
+    `DeviceClosed` and sends nothing.
+
+Motion (`MotorBus`)
+    * ``move_to`` checks every target against its axis's configured limits first: one
+      target outside them (or not finite) raises `LimitError`, an unknown axis
+      `DriverError`, and nothing is sent. With torque off it raises `TorqueOff` and
+      nothing is sent. It returns as soon as the goals are sent.
+    * ``wait_settled(timeout_s)`` returns once every axis has stopped moving at its goal
+      (within the backend's position tolerance). It does **not** wait the rig's
+      mechanical settle dwell (``settle_s`` in the rig file): the caller does, with
+      ``Clock.sleep``, and the planner's predicted time counts the dwell exactly once
+      per target, after the move.
+    * Any fault raised while axes may move — `MotorFault`, `MotionTimeout`,
+      `CommError` from ``move_to``, ``wait_settled`` or ``positions`` — leaves every
+      answering axis already told to hold at its present position before it
+      propagates: code that catches the fault inside the ``with`` block never leaves
+      the healthy arms running. If an axis could not be told to hold, the exception
+      says so in a note.
+    * ``stop()`` holds every axis that answers at its present position, clamped to its
+      limits, also right after a fault (a faulted motor's alert never prevents holding
+      its neighbours); it raises `CommError` naming the axes it could not reach, and
+      never raises `MotorFault`.
+    * ``positions()`` are read back from the devices (encoders), never the goals.
+
+Measuring (`Detector`)
+    ``measure(exposure_s, averages)`` exposes ``averages`` times and returns one
+    `Reading` stamped with the clock's time at the start and the end of the exposures.
+    An exposure outside the detector's range or ``averages`` < 1 raises
+    `DetectorError` before anything is exposed. A saturated reading is returned, not
+    raised: ``Reading.saturated`` says so.
+
+Light (`LightSource`)
+    ``on()`` / ``off()`` switch the source and return once it is switched; ``is_on``
+    is the state last commanded and acknowledged.
+
+Time (`Clock`)
+    ``now()`` is seconds on a monotonic clock; ``sleep(s)`` lets ``s`` seconds pass on
+    that clock. `SystemClock` is real time; the simulator's clocks are virtual
+    (`sim.clock`). Every backend built for one run shares one clock.
+
+Simulation only (`Simulated`)
+    What only a simulation has — which sample's random streams the next move and
+    reading use, whether the stage shows the sample or the reference standard, the
+    true joint angles, snapshots for resume — sits behind the optional `Simulated`
+    protocol. The engine uses it only when a backend offers it (``isinstance(x,
+    Simulated)``), never by poking attributes.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Protocol, Self, runtime_checkable
+from typing import Any, Literal, Protocol, Self, runtime_checkable
 
 # -- errors ---------------------------------------------------------------------------
 
@@ -60,9 +119,24 @@ class LimitError(DriverError):
     """A command outside an axis's configured limits; nothing was sent."""
 
 
+class TorqueOff(DriverError):
+    """A move was commanded with torque off; nothing was sent."""
+
+
+class DeviceClosed(DriverError):
+    """The device is not open (or was closed); nothing was sent."""
+
+
 class DetectorError(DriverError):
     """The detector did not answer, answered nonsense, or was reset mid-read."""
 
+
+class LightError(DriverError):
+    """The light source did not acknowledge a switch, or cannot be switched."""
+
+
+#: The errors that mean axes may have been moving when they were raised.
+MOTION_FAULTS = (MotorFault, MotionTimeout, CommError)
 
 # -- values ---------------------------------------------------------------------------
 
@@ -86,14 +160,51 @@ class Reading:
 
     ``value`` is the mean signal in the detector's units (counts), ``std`` the standard
     deviation of the ``n`` raw samples averaged (0 for one sample), ``saturated`` whether
-    any sample hit the full scale, ``raw`` the individual samples.
+    any sample hit the full scale, ``started_s`` / ``ended_s`` the clock's time (s) when
+    the first exposure began and the last one ended (readout included), ``raw`` the
+    individual samples.
     """
 
     value: float
     std: float
     n: int
     saturated: bool
+    started_s: float
+    ended_s: float
     raw: tuple[float, ...] = field(default_factory=tuple)
+
+    @property
+    def middle_s(self) -> float:
+        """The middle of the measurement (s): where a drifting source is sampled."""
+        return 0.5 * (self.started_s + self.ended_s)
+
+
+# -- time -------------------------------------------------------------------------------
+
+
+@runtime_checkable
+class Clock(Protocol):
+    """Seconds on a monotonic clock, and a way to let time pass on it."""
+
+    def now(self) -> float:
+        """The time (s); never goes backwards."""
+        ...
+
+    def sleep(self, seconds: float) -> None:
+        """Let ``seconds`` (≥ 0) pass on this clock."""
+        ...
+
+
+class SystemClock:
+    """Real time: `time.monotonic` and `time.sleep`."""
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds < 0:
+            raise ValueError(f"cannot sleep a negative time ({seconds} s)")
+        time.sleep(seconds)
 
 
 # -- a shared shape ----------------------------------------------------------------------
@@ -126,16 +237,15 @@ class Resource:
 # -- protocols ------------------------------------------------------------------------
 
 
-@runtime_checkable
-class MotorBus(Protocol):
-    """A set of motor axes moved together. A context manager: entering opens the
-    connection (and checks the motors), leaving stops them and releases it, also on
-    an exception or Ctrl-C."""
+class Device(Protocol):
+    """The lifecycle every device shares (see the module docstring)."""
 
     @property
-    def axes(self) -> tuple[str, ...]:
-        """The axis names, in configuration order."""
-        ...
+    def is_open(self) -> bool: ...
+
+    def open(self) -> None: ...
+
+    def close(self) -> None: ...
 
     def __enter__(self) -> Self: ...
 
@@ -146,27 +256,40 @@ class MotorBus(Protocol):
         tb: TracebackType | None,
     ) -> None: ...
 
+
+class MotorBus(Device, Protocol):
+    """A set of motor axes moved together (rules: the module docstring)."""
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        """The axis names, in configuration order."""
+        ...
+
+    def limits(self) -> dict[str, tuple[float, float]]:
+        """Each axis's configured range (rad), inclusive."""
+        ...
+
     def move_to(self, targets: Mapping[str, float]) -> None:
-        """Command axis positions (radians); returns at once. Raises `LimitError`
-        before anything is sent if a target is outside its axis's limits."""
+        """Send goals (rad) for the named axes; returns at once. `LimitError` or
+        `TorqueOff` before anything is sent."""
         ...
 
     def wait_settled(self, timeout_s: float) -> None:
-        """Block until every axis has stopped moving at its goal. On timeout, tell every
-        axis to hold where it is and raise `MotionTimeout` (`CommError` only when the
-        bus itself fails, `MotorFault` when a motor reports a hardware error)."""
+        """Block until every axis has stopped at its goal (not the settle dwell). On
+        timeout every axis is held and `MotionTimeout` raised; `MotorFault` and
+        `CommError` also hold every answering axis before they propagate."""
         ...
 
     def positions(self) -> dict[str, float]:
-        """Positions read back from the devices (radians)."""
+        """Positions read back from the devices (rad)."""
         ...
 
     def stop(self) -> None:
-        """Hold every axis where it is now (also a faulted axis's neighbours)."""
+        """Hold every answering axis where it is now (`CommError` names any not held)."""
         ...
 
     def torque(self, on: bool) -> None:
-        """Enable or disable holding torque on every axis."""
+        """Enable (holding the present position) or disable torque on every axis."""
         ...
 
     def health(self) -> dict[str, Health]:
@@ -174,18 +297,21 @@ class MotorBus(Protocol):
         ...
 
 
-@runtime_checkable
-class Detector(Protocol):
+class Detector(Device, Protocol):
     """Something that measures the light reaching it."""
+
+    @property
+    def exposure_range_s(self) -> tuple[float, float]:
+        """The shortest and longest exposure (s) it accepts."""
+        ...
 
     def measure(self, exposure_s: float, averages: int = 1) -> Reading:
         """Expose for ``exposure_s`` seconds, ``averages`` times, and return the mean."""
         ...
 
 
-@runtime_checkable
-class LightSource(Protocol):
-    """An optional switchable source."""
+class LightSource(Device, Protocol):
+    """A switchable source."""
 
     @property
     def is_on(self) -> bool: ...
@@ -193,3 +319,33 @@ class LightSource(Protocol):
     def on(self) -> None: ...
 
     def off(self) -> None: ...
+
+
+#: What is on the stage of a simulated instrument.
+StageTarget = Literal["sample", "reference"]
+
+
+@runtime_checkable
+class Simulated(Protocol):
+    """What only a simulated backend offers (optional; see the module docstring)."""
+
+    def begin_sample(self, index: int) -> None:
+        """The next moves and readings belong to sample ``index`` (its random streams,
+        its injected faults); measuring a sample again continues its streams."""
+        ...
+
+    def show(self, target: StageTarget) -> None:
+        """Put the sample or the reference standard on the stage."""
+        ...
+
+    def true_positions(self) -> dict[str, float]:
+        """Where the joints really are (rad), errors included."""
+        ...
+
+    def snapshot(self) -> Any:
+        """The state a resumed run restores (between targets, at rest)."""
+        ...
+
+    def restore(self, state: Any) -> None:
+        """Continue from a `snapshot`."""
+        ...

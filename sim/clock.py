@@ -1,8 +1,10 @@
-"""Clocks for the emulated motors: a manual one for tests and a scaled one for demos.
+"""The simulator's clocks: virtual time for simulated runs and tests, and real time sped
+up for rehearsals. Both implement `drivers.base.Clock` (``now()``, ``sleep(s)``) and are
+also plain callables returning seconds, the form the emulated motors read.
 
-A clock is any zero-argument callable returning seconds as a float that never goes
-backwards; the motors read it to place their motion profiles in time. The default is
-`time.monotonic`.
+A `TimeSource` is any zero-argument callable returning seconds as a float that never goes
+backwards; the emulated motors read one to place their motion profiles in time (default
+`time.monotonic`).
 """
 
 from __future__ import annotations
@@ -11,12 +13,13 @@ import threading
 import time
 from collections.abc import Callable
 
-#: A source of time in seconds (monotonic).
-Clock = Callable[[], float]
+#: A source of time in seconds (monotonic), as the emulated motors read it.
+TimeSource = Callable[[], float]
 
 
 class ManualClock:
-    """Virtual time (seconds) that moves only when `advance` is called.
+    """Virtual time (seconds) that moves only when `sleep` / `advance` is called: a
+    simulated run reports the hours the real rig would take in the seconds it computes.
 
     Thread-safe: the emulator's serving thread reads it while a test advances it.
     """
@@ -29,10 +32,13 @@ class ManualClock:
         with self._lock:
             return self._now
 
-    @property
     def now(self) -> float:
         """The current virtual time (s)."""
         return self()
+
+    def sleep(self, seconds: float) -> None:
+        """Let ``seconds`` (≥ 0) pass: the time moves on at once."""
+        self.advance(seconds)
 
     def advance(self, seconds: float) -> float:
         """Move time forward by ``seconds`` (≥ 0) and return the new time."""
@@ -52,7 +58,8 @@ class ManualClock:
 
 
 class ScaledClock:
-    """`time.monotonic` sped up by ``speedup`` (> 0), starting at 0 s when created."""
+    """`time.monotonic` sped up by ``speedup`` (> 0), starting at 0 s when created;
+    ``sleep(s)`` sleeps s / speedup real seconds."""
 
     def __init__(self, speedup: float = 1.0) -> None:
         if not speedup > 0:
@@ -62,3 +69,11 @@ class ScaledClock:
 
     def __call__(self) -> float:
         return (time.monotonic() - self._origin) * self.speedup
+
+    def now(self) -> float:
+        return self()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds < 0:
+            raise ValueError(f"cannot sleep a negative time ({seconds} s)")
+        time.sleep(seconds / self.speedup)

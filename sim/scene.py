@@ -25,6 +25,7 @@ from pydantic import (
 from gonio import brdf
 from gonio.config import Strict, field_error, load
 from gonio.errors import GonioError
+from sim.faults import FaultRule
 
 #: Rec. 709 luminance weights: how a grey detector sees an RGB material.
 LUMINANCE = (0.2126, 0.7152, 0.0722)
@@ -188,12 +189,25 @@ class Scene(Strict):
     sample: SampleSpec
     reference: ReferenceSpec = Field(default_factory=ReferenceSpec)
     effects: EffectsSpec = Field(default_factory=EffectsSpec)
+    faults: tuple[FaultRule, ...] = ()  # injected faults (`sim.faults`)
     seed: int = Field(0, ge=0)
 
     @field_validator("effects", mode="before")
     @classmethod
     def _none_is_empty(cls, v: Any) -> Any:
         return {} if v is None else v
+
+    @field_validator("faults", mode="before")
+    @classmethod
+    def _no_faults(cls, v: Any) -> Any:
+        return () if v is None else v
+
+    def with_faults(self, *rules: FaultRule | dict[str, Any]) -> Scene:
+        """The same scene with these injected faults instead of its own."""
+        faults = tuple(
+            r if isinstance(r, FaultRule) else FaultRule.model_validate(r) for r in rules
+        )
+        return self.model_copy(update={"faults": faults})
 
     def with_effects(self, effects: EffectsSpec | dict[str, Any] | list[str]) -> Scene:
         """The same scene with another set of effects."""

@@ -1,18 +1,25 @@
 """Suite-wide settings (hypothesis profiles, derandomized under CI) and the fixtures
-shared by tests/sim and tests/drivers: a virtual clock and emulated Dynamixel buses."""
+shared across packages: the shipped rigs, a virtual clock and emulated Dynamixel buses."""
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 from dynamixel_sdk import port_handler
 from hypothesis import HealthCheck, settings
 
+from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
+
+#: The shipped configuration files.
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+#: The shipped rigs by short name (the files in configs/rigs).
+RIG_FILES = {"arch": CONFIGS / "rigs" / "arch.yaml", "in_plane": CONFIGS / "rigs" / "in_plane.yaml"}
 
 settings.register_profile(
     "dev", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow]
@@ -35,6 +42,18 @@ settings.load_profile("ci" if os.environ.get("CI") else "dev")
 #: only ~35 ms each. The SDK's global is what plain SDK ports use; a `DynamixelLink`
 #: never reads or writes it (its port has its own timer: pass ``latency_ms``).
 TEST_LATENCY_TIMER = 16
+
+
+@pytest.fixture(scope="session")
+def rigs() -> dict[str, Rig]:
+    """The shipped rigs, loaded once per session."""
+    return {name: Rig.from_yaml(path) for name, path in RIG_FILES.items()}
+
+
+@pytest.fixture(params=list(RIG_FILES))
+def rig(request: pytest.FixtureRequest, rigs: dict[str, Rig]) -> Rig:
+    """Each shipped rig in turn."""
+    return rigs[request.param]
 
 
 @pytest.fixture

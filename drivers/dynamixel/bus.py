@@ -13,7 +13,11 @@ back in one SYNC_READ, whose status packets also carry each motor's alert bit. S
 - leaving the context (normally, on an exception — a `MotorFault` of one axis included
   — or on Ctrl-C in the middle of a transaction) makes every axis hold where it is and
   releases the port; the exception that left the block is the one raised;
-- a settle that does not finish in time holds the axes and raises `MotionTimeout`;
+- any fault while axes may move (`MotorFault`, `MotionTimeout`, `CommError` from
+  `move_to`, `wait_settled` or `positions`) holds every answering axis before it
+  propagates, so code that catches it inside the ``with`` block leaves no arm running;
+- with torque off `move_to` raises `TorqueOff`; on a closed bus every call but `close`
+  raises `DeviceClosed` (the contract in `drivers.base`);
 - `reboot` clears faulted motors and brings them back holding, configured.
 
 EEPROM items (operating mode, drive mode, position limits) are read first and written
@@ -25,17 +29,21 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from types import TracebackType
 
 from drivers.base import (
+    MOTION_FAULTS,
     CommError,
+    DeviceClosed,
     DriverError,
     Health,
     LimitError,
     MotionTimeout,
     MotorFault,
     Resource,
+    TorqueOff,
 )
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import (
@@ -95,6 +103,7 @@ class DynamixelBus(Resource):
         self.reboot_timeout_s = reboot_timeout_s
         self.models: dict[str, str] = {}
         self._goals: dict[str, int] = {}
+        self._torque_on = False
 
     # -- lifecycle ---------------------------------------------------------------------
     @property
@@ -105,8 +114,25 @@ class DynamixelBus(Resource):
     def port(self) -> str:
         return self._link.port_name
 
+    @property
+    def is_open(self) -> bool:
+        return bool(self._link.is_open)
+
+    def limits(self) -> dict[str, tuple[float, float]]:
+        """Each axis's configured range (rad)."""
+        return {n: (a.min_rad, a.max_rad) for n, a in self._axes.items()}
+
+    def _check_open(self) -> None:
+        if not self._link.is_open:
+            raise DeviceClosed(
+                f"the Dynamixel bus on {self.port} is not open (use it as a context manager)"
+            )
+
     def open(self) -> None:
-        """Open the port, check every motor answers and is healthy, configure, hold."""
+        """Open the port, check every motor answers and is healthy, configure, hold.
+        Does nothing if the bus is already open."""
+        if self._link.is_open:
+            return
         self._link.open()
         try:
             for axis in self._axes.values():
@@ -155,7 +181,20 @@ class DynamixelBus(Resource):
             return exc
         finally:
             self._link.close()
+            self._torque_on = False
         return None
+
+    @contextmanager
+    def _holding_on_fault(self) -> Iterator[None]:
+        """Hold every answering axis before a motion fault propagates (the contract)."""
+        try:
+            yield
+        except MOTION_FAULTS as exc:
+            try:
+                self.stop()
+            except DriverError as problem:
+                exc.add_note(f"and holding the axes: {problem}")
+            raise
 
     def _configure(self) -> None:
         """EEPROM first (read; torque off, read back off and write only where it differs),
@@ -201,7 +240,9 @@ class DynamixelBus(Resource):
             ) from None
 
     def move_to(self, targets: Mapping[str, float]) -> None:
-        """Command axis angles (rad) in one SYNC_WRITE; returns at once."""
+        """Command axis angles (rad) in one SYNC_WRITE; returns at once. `LimitError`
+        (a target outside its limits or not finite) and `TorqueOff` send nothing."""
+        self._check_open()
         goals: dict[str, int] = {}
         for name, angle in targets.items():
             axis = self._axis(name)
@@ -212,9 +253,12 @@ class DynamixelBus(Resource):
                     "nothing was sent"
                 )
             goals[name] = _within(axis, axis.to_ticks(float(angle)))
-        self._link.sync_write(
-            "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
-        )
+        if not self._torque_on:
+            raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
+        with self._holding_on_fault():
+            self._link.sync_write(
+                "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
+            )
         self._goals.update(goals)
 
     def _state(self) -> dict[str, tuple[bool, int]]:
@@ -233,13 +277,24 @@ class DynamixelBus(Resource):
 
     def positions(self) -> dict[str, float]:
         """Axis angles (rad) read back from the motors."""
-        return {name: self._axes[name].to_rad(ticks) for name, (_, ticks) in self._state().items()}
+        self._check_open()
+        with self._holding_on_fault():
+            state = self._state()
+        return {name: self._axes[name].to_rad(ticks) for name, (_, ticks) in state.items()}
 
     def wait_settled(self, timeout_s: float) -> None:
-        """Return once no axis is moving and each is within ``settle_ticks`` of its goal.
+        """Return once no axis is moving and each is within ``settle_ticks`` of its goal
+        (the rig's settle dwell is the caller's: `drivers.base`).
 
-        On timeout every axis is told to hold and `MotionTimeout` names the laggards.
+        On timeout, on a motor's fault and on a failed poll, every answering axis is
+        told to hold before `MotionTimeout` (naming the laggards), `MotorFault` or
+        `CommError` propagates.
         """
+        self._check_open()
+        with self._holding_on_fault():
+            self._wait_settled(timeout_s)
+
+    def _wait_settled(self, timeout_s: float) -> None:
         deadline = time.monotonic() + timeout_s
         while True:
             state = self._state()
@@ -255,12 +310,9 @@ class DynamixelBus(Resource):
                     f"{n} {'moving' if m else 'stopped'} {abs(d)} ticks from its goal"
                     for n, (m, d) in pending.items()
                 )
-                message = f"axes did not settle within {timeout_s:g} s ({detail})"
-                try:
-                    self.stop()
-                except DriverError as exc:  # the timeout is still what the caller gets
-                    raise MotionTimeout(f"{message}; holding them failed: {exc}") from exc
-                raise MotionTimeout(f"{message}; holding them")
+                raise MotionTimeout(
+                    f"axes did not settle within {timeout_s:g} s ({detail}); holding them"
+                )
             time.sleep(self.poll_interval_s)
 
     def stop(self) -> None:
@@ -269,8 +321,9 @@ class DynamixelBus(Resource):
         Positions are read without raising on alert bits, so a faulted motor does not
         keep the others moving; if the group read fails (a motor does not answer), the
         axes are read one by one and the ones that answer are held. Then `CommError`
-        names any axis that could not be held.
+        names any axis that could not be held. Never raises `MotorFault`.
         """
+        self._check_open()
         self._hold(list(self._axes))
 
     def _hold(self, names: Sequence[str]) -> None:
@@ -307,10 +360,13 @@ class DynamixelBus(Resource):
 
     def torque(self, on: bool) -> None:
         """Enable (after setting each goal to the present position) or disable torque."""
+        self._check_open()
         ids = [a.motor_id for a in self._axes.values()]
         if on:
             self.stop()
+        self._torque_on = False  # until the motors have been told
         self._link.sync_write("torque_enable", dict.fromkeys(ids, 1 if on else 0))
+        self._torque_on = bool(on)
 
     # -- recovery ----------------------------------------------------------------------
     def reboot(self, axes: Iterable[str] | None = None) -> tuple[str, ...]:
@@ -324,6 +380,7 @@ class DynamixelBus(Resource):
         the multi-turn count (the motor comes back within one turn), so re-home such an
         axis before trusting its angle.
         """
+        self._check_open()
         link = self._link
         if axes is None:
             ids = [a.motor_id for a in self._axes.values()]
@@ -360,6 +417,7 @@ class DynamixelBus(Resource):
     # -- condition ---------------------------------------------------------------------
     def health(self) -> dict[str, Health]:
         """Temperature (°C), input voltage (V) and hardware error flags per axis."""
+        self._check_open()
         ids = [a.motor_id for a in self._axes.values()]
         status = "hardware_error_status"
         errors = self._link.sync_read(ids, status, status, alerts=False)

@@ -14,10 +14,11 @@ from typing import Any
 
 import serial
 
-from drivers.base import Reading, Resource
+from drivers.base import Clock, Reading, Resource, SystemClock
 from drivers.serial_detector.config import SerialDetectorConfig, _as_int, _as_real
 from drivers.serial_detector.errors import (
     _OPEN_ERRORS,
+    SerialDetectorClosed,
     SerialDetectorError,
     _open_reason,
 )
@@ -36,12 +37,28 @@ class SerialDetector(_LineIO, Resource):
     Use it as a context manager (``with SerialDetector(config) as det: det.measure(0.1)``)
     or call :meth:`open` and :meth:`close`. Reading lines from the port, raw I/O and the
     error messages come from :class:`~drivers.serial_detector.lines._LineIO`.
+
+    ``clock`` stamps every reading (real time by default); ``exposure_range_s`` is the
+    range the instrument allows (the rig file's), checked before anything is sent.
     """
 
-    def __init__(self, config: SerialDetectorConfig) -> None:
+    def __init__(
+        self,
+        config: SerialDetectorConfig,
+        *,
+        clock: Clock | None = None,
+        exposure_range_s: tuple[float, float] = (0.0, math.inf),
+    ) -> None:
         if not isinstance(config, SerialDetectorConfig):
             raise TypeError(f"config must be a SerialDetectorConfig, got {type(config).__name__}")
+        lo, hi = (float(x) for x in exposure_range_s)
+        if not 0.0 <= lo <= hi:
+            raise ValueError(
+                f"exposure_range_s must be [min, max] with 0 ≤ min ≤ max, got {lo}, {hi}"
+            )
         self._config = config
+        self._clock: Clock = clock or SystemClock()
+        self._exposure_range = (lo, hi)
         self._response = re.compile(config.response)
         self._banner = _compile_optional(config.reset_banner)
         self._ack = _compile_optional(config.command_ack)
@@ -72,6 +89,10 @@ class SerialDetector(_LineIO, Resource):
     @property
     def is_open(self) -> bool:
         return self._serial is not None
+
+    @property
+    def exposure_range_s(self) -> tuple[float, float]:
+        return self._exposure_range
 
     @property
     def resets(self) -> int:
@@ -143,16 +164,18 @@ class SerialDetector(_LineIO, Resource):
         ``device_averaging`` it is the device's ``std`` group, or NaN if the device
         does not report one, and ``raw`` holds the device's mean only.
         """
+        if self._serial is None and not self._reopen:
+            raise SerialDetectorClosed(
+                f"serial detector {self.port}: the port is not open (use "
+                "`with SerialDetector(config) as det:` or call open() first)",
+                port=self.port,
+                kind="closed",
+            )
         exposure_s, averages = self._check_arguments(exposure_s, averages)
         if self._serial is None:
-            if not self._reopen:
-                raise self._error(
-                    "the port is not open (use `with SerialDetector(config) as det:` "
-                    "or call open() first)",
-                    "closed",
-                )
             log.info("%s: reopening the port after an I/O error", self.port)
             self.open()
+        started = self._clock.now()
         try:
             if self._needs_resync:
                 self._resync()
@@ -161,9 +184,9 @@ class SerialDetector(_LineIO, Resource):
                 self._initialize()
             self._apply_exposure(exposure_s)
             if self._config.device_averaging:
-                reading = self._device_averaged(exposure_s, averages)
+                reading = self._device_averaged(exposure_s, averages, started)
             else:
-                reading = self._host_averaged(exposure_s, averages)
+                reading = self._host_averaged(exposure_s, averages, started)
         except BaseException as exc:
             answered = isinstance(exc, SerialDetectorError) and exc.kind in _ANSWERED
             if not answered and self._serial is not None:
@@ -179,6 +202,11 @@ class SerialDetector(_LineIO, Resource):
         if exposure is None or not (0 < exposure < math.inf):
             raise self._invalid(
                 f"exposure_s must be a positive finite number of seconds, got {exposure_s!r}"
+            )
+        lo, hi = self._exposure_range
+        if not lo <= exposure <= hi:
+            raise self._invalid(
+                f"exposure {exposure!r} s is outside the detector's range [{lo:g}, {hi:g}] s"
             )
         if n is None or n < 1:
             raise self._invalid(f"averages must be an integer ≥ 1, got {averages!r}")
@@ -198,7 +226,7 @@ class SerialDetector(_LineIO, Resource):
             "averages": averages,
         }
 
-    def _host_averaged(self, exposure_s: float, averages: int) -> Reading:
+    def _host_averaged(self, exposure_s: float, averages: int, started: float) -> Reading:
         command = self._config.query.format(**self._values(exposure_s, averages))
         budget = exposure_s + self._config.timeout_s
         samples: list[float] = []
@@ -213,10 +241,12 @@ class SerialDetector(_LineIO, Resource):
             std=std,
             n=len(samples),
             saturated=saturated,
+            started_s=started,
+            ended_s=self._clock.now(),
             raw=tuple(samples),
         )
 
-    def _device_averaged(self, exposure_s: float, averages: int) -> Reading:
+    def _device_averaged(self, exposure_s: float, averages: int, started: float) -> Reading:
         command = self._config.query.format(**self._values(exposure_s, averages))
         budget = exposure_s * averages + self._config.timeout_s
         value, match = self._query(command, budget)
@@ -238,6 +268,8 @@ class SerialDetector(_LineIO, Resource):
             std=std,
             n=averages,
             saturated=self._is_saturated(value, match),
+            started_s=started,
+            ended_s=self._clock.now(),
             raw=(value,),
         )
 

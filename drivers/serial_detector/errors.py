@@ -7,7 +7,7 @@ import errno
 import os
 from typing import Literal
 
-from drivers.base import DetectorError
+from drivers.base import DetectorError, DeviceClosed
 
 try:  # POSIX only; tcflush failures on a vanished device raise termios.error
     import termios
@@ -43,6 +43,10 @@ class SerialDetectorError(DetectorError):
         self.port = port
         self.kind: ErrorKind = kind
         self.line = line
+
+
+class SerialDetectorClosed(SerialDetectorError, DeviceClosed):
+    """``measure()`` on a detector that is not open; nothing was sent."""
 
 
 class SerialDetectorValueError(SerialDetectorError, ValueError):

@@ -48,10 +48,11 @@ def simulated_job() -> str:
     from gonio.cli import simulate as simulate_cli
     from gonio.planner.plan import build, load_plan, render_summary
     from sim.scene import load_scene
+    from sim.session import simulate_plan
 
     spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
     plan = build(spec, rig)
-    result = simulate_cli.simulate_plan(plan, load_scene(CONFIGS / "scenes" / "matte.yaml"))
+    result = simulate_plan(plan, load_scene(CONFIGS / "scenes" / "matte.yaml"))
     return "\n\n".join([render_summary(plan), simulate_cli.render(result)])
 
 

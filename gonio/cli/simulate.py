@@ -1,14 +1,9 @@
-"""`gonio simulate PLAN.yaml --scene SCENE.yaml`: measure a plan on the simulated rig.
+"""`gonio simulate PLAN.yaml --scene SCENE.yaml`: measure a plan on the simulated rig
+(`sim.session.simulate_plan`) and print what it cost and how accurate it was.
 
-The plan is measured target by target through the driver protocols (`SimMotorBus`,
-`SimDetector`: what the acquisition engine will drive); the reference standard is read
-at the 0°/45° geometry before and after (its exposure halved until it does not
-saturate), with a dark frame; the readings are carried back to BRDF values through the
-calibration, the source's drift divided out by interpolating the two reference readings
-in time, with directions recomputed from the read-back motor angles. The summary says
-how long the real rig would take, how long the simulation took, and how far the
-recovered BRDF is from the scene's model at the pairs measured: what a plan and a set
-of effects cost in accuracy, before any hardware moves.
+The summary says how long the real rig would take, how long the simulation took, and
+how far the recovered BRDF is from the scene's model at the pairs measured: what a plan
+and a set of effects cost in accuracy, before any hardware moves.
 """
 
 from __future__ import annotations
@@ -16,26 +11,14 @@ from __future__ import annotations
 import argparse
 import csv
 import math
-import time
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 
-from gonio import radiometry
 from gonio.config import check_output
-from gonio.errors import GonioError
-from gonio.planner.plan import Plan, build, hms, load_plan
-from gonio.rig.model import Reason, Rig
-from gonio.types import FloatArray
-from sim.devices.instrument import SimulatedInstrument
-from sim.physics.optics import SceneOptics
-from sim.record import SimRun
-from sim.scene import Scene, load_scene
-
-#: The calibration geometry: light at the normal, detector 45° away (the classic 0°/45°).
-REFERENCE_GEOMETRY_DEG = (0.0, 45.0)
+from gonio.planner.plan import build, hms, load_plan
+from sim.scene import load_scene
+from sim.session import Result, simulate_plan
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -53,90 +36,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument("--no-effects", action="store_true", help="ignore the scene's effects")
     p.add_argument("-o", "--output", type=Path, help="write one row per target as CSV")
     p.set_defaults(func=cmd_simulate)
-
-
-@dataclass(frozen=True)
-class Result:
-    """A simulated run with its calibration and the BRDF it recovers."""
-
-    plan: Plan
-    scene: Scene
-    run: SimRun
-    wall_s: float
-    reference_counts: float  # the first reading of the reference standard
-    reference_exposure_s: float
-    reference_change: float  # last / first reference signal rate − 1 (the drift seen)
-    dark_rate: float  # counts/s with the light off
-    brdf: FloatArray  # recovered at the read-back pairs
-    truth: FloatArray  # the scene's model at the pairs actually measured
-    wi: FloatArray  # from the read-back angles
-    wo: FloatArray
-
-
-def reference_pose(rig: Rig) -> FloatArray:
-    """Joint angles of the 0°/45° calibration geometry on ``rig``."""
-    ti, to = (math.radians(a) for a in REFERENCE_GEOMETRY_DEG)
-    wi = np.array([[math.sin(ti), 0.0, math.cos(ti)]])
-    wo = np.array([[-math.sin(to), 0.0, math.cos(to)]])
-    solution = rig.solve(wi, wo)
-    if solution.reasons[0] not in (Reason.OK, Reason.BLIND_SPOT, Reason.FOOTPRINT):
-        raise GonioError(f"rig {rig.spec.name!r} cannot reach the 0°/45° reference geometry")
-    return np.asarray(solution.angles[0], dtype=np.float64)
-
-
-def _reference(
-    inst: SimulatedInstrument, k: int, pose: list[float], exposure: float, shortest: float
-) -> tuple[float, float]:
-    """(counts, exposure s) of the reference standard, the exposure halved until the
-    reading does not saturate; `GonioError` if even ``shortest`` saturates."""
-    while True:
-        reading = inst.measure_reference(k, pose, exposure)
-        if not reading.saturated:
-            return reading.value, exposure
-        if exposure <= shortest:
-            raise GonioError(
-                f"the reference standard saturates the detector even at {shortest:g} s: "
-                "lower the source's power or the detector's aperture"
-            )
-        exposure = max(exposure / 2, shortest)
-
-
-def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
-    """Measure ``plan`` in ``scene`` and recover the BRDF (see the module docstring)."""
-    rig = plan.rig
-    shortest, longest = scene.detector.exposure_range_s
-    exposure = float(np.clip(np.median(plan.exposure_s), shortest, longest))
-    started = time.perf_counter()
-    with SimulatedInstrument(scene, rig, seed=seed) as inst:
-        pose = reference_pose(rig).tolist()
-        first, exposure = _reference(inst, 0, pose, exposure, shortest)
-        t_first = inst.clock.now - exposure / 2  # the middle of the exposure
-        inst.light.off()
-        dark = inst.measure_reference(1, pose, exposure).value
-        inst.light.on()
-        run = inst.run(plan)
-        last = inst.measure_reference(2, pose, exposure).value
-        t_last = inst.clock.now - exposure / 2
-    wall = time.perf_counter() - started
-    dark_rate = dark / exposure
-    wi_ref, wo_ref = rig.forward(np.asarray(pose))
-    kind: Literal["collimated", "point"] = scene.source.kind
-    calibration = radiometry.ReferenceCalibration.from_counts(
-        scene.reference.albedo, first, exposure, wi_ref, wo_ref, kind, dark_counts=dark
-    )
-    wi, wo = rig.forward(run.read_back)  # directions come from the read-back angles
-    recovered = calibration.brdf_from_counts(
-        run.value, run.exposure_s, wi, wo, dark_counts=dark_rate * run.exposure_s
-    )
-    # The source drifts: scale by the reference's rate interpolated to each target.
-    change = (last - dark) / (first - dark) - 1.0
-    middle = (run.settled_s + run.end_s) / 2  # of each target's exposures
-    when = (middle - t_first) / (t_last - t_first)
-    recovered = recovered / (1.0 + change * when)
-    truth = SceneOptics(scene).models["sample"](run.wi, run.wo)
-    return Result(
-        plan, scene, run, wall, first, exposure, change, dark_rate, recovered, truth, wi, wo
-    )
 
 
 def render(result: Result) -> str:

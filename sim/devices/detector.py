@@ -1,16 +1,17 @@
 """`SimDetector` and `SimLightSource`: a detector that measures the scene's material
 through the real radiometric chain, at the pose the motors are really in.
 
-Implements `drivers.base.Detector` (and `LightSource`). Each `measure` reads the pose
-(joint angles) from a callable — `SimMotorBus.true_positions` in a simulated run, the
-read-back positions of a real `DynamixelBus` in a rehearsal — turns it into the sample
-frame's (ωi, ωo) with the rig's forward kinematics, computes the power reaching the
-detector (`sim.physics.optics`), the expected electrons of each exposure, and reads them out
-through the sensor (`sim.physics.sensor`) with the random streams of the current sample index
-(`sample_index`, set by the instrument for each target; a second measurement of the
-same sample continues its streams), so any sample can be recomputed alone. Time passes
-through ``wait``: a virtual clock's ``advance`` in a simulation, a scaled sleep in a
-rehearsal.
+Implements `drivers.base.Detector` (and `LightSource`), every rule of the contract.
+Each `measure` reads the pose (joint angles) from a callable — `SimMotorBus.true_positions`
+in a simulated run, the read-back positions of a real `DynamixelBus` in a rehearsal —
+turns it into the sample frame's (ωi, ωo) with the rig's forward kinematics, computes
+the power reaching the detector (`sim.physics.optics`), the expected electrons of each
+exposure, and reads them out through the sensor (`sim.physics.sensor`) with the random
+streams of the sample named by `begin_sample` (a second measurement of the same sample
+continues its streams), so any sample can be recomputed alone. Time passes on the
+``clock`` (`drivers.base.Clock`): virtual in a simulation, scaled real time in a
+rehearsal. Injected ``detector_error`` and ``saturated`` faults (`sim.faults`) apply to
+the first measurement of their samples.
 """
 
 from __future__ import annotations
@@ -19,32 +20,49 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from drivers.base import DetectorError, Reading
+from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource
 from gonio.rig.model import Rig
+from sim.faults import FaultInjector
 from sim.physics import sensor
 from sim.physics.optics import SceneOptics, Target
 from sim.physics.streams import Streams
 from sim.scene import Scene
 
-#: Stream indices of reference-target and dark readings start here, far above any
-#: plan's sample indices, so calibration readings never share numbers with samples.
-CALIBRATION_INDEX = 1 << 40
+DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
 
 
-class SimLightSource:
-    """A switchable source (on at start); off, the detector sees only its own dark signal."""
+class SimLightSource(Resource):
+    """A switchable source (on at start); off, the detector sees only its own dark
+    signal. ``is_on`` can be read when closed; switching needs it open."""
 
     def __init__(self) -> None:
         self._on = True
+        self._open = False
+
+    @property
+    def is_open(self) -> bool:
+        return self._open
 
     @property
     def is_on(self) -> bool:
         return self._on
 
+    def open(self) -> None:
+        self._open = True
+
+    def close(self) -> None:
+        self._open = False
+
+    def _check_open(self) -> None:
+        if not self._open:
+            raise DeviceClosed("the simulated light source is not open")
+
     def on(self) -> None:
+        self._check_open()
         self._on = True
 
     def off(self) -> None:
+        self._check_open()
         self._on = False
 
 
@@ -60,7 +78,7 @@ def sensor_of(scene: Scene) -> tuple[sensor.SensorSpec, sensor.SensorEffects]:
     return spec, sensor.SensorEffects.from_names(e.names())
 
 
-class SimDetector:
+class SimDetector(Resource):
     """A simulated detector looking at the scene from the pose ``pose()`` returns."""
 
     def __init__(
@@ -69,31 +87,55 @@ class SimDetector:
         rig: Rig,
         pose: Callable[[], Mapping[str, float]],
         *,
-        now: Callable[[], float],
-        wait: Callable[[float], object],
+        clock: Clock,
         streams: Streams,
         light: SimLightSource | None = None,
+        faults: FaultInjector | None = None,
     ) -> None:
         self.scene = scene
         self.rig = rig
         self.chain = SceneOptics(scene)
         self.sensor, self.sensor_effects = sensor_of(scene)
         self._pose = pose
-        self._now = now
-        self._wait = wait
+        self._clock = clock
         self.streams = streams
+        self._faults = faults or FaultInjector((), streams)
         self.light = light or SimLightSource()
         self.exposure_range = scene.detector.exposure_range_s
         self.readout_s = scene.detector.readout_s
-        #: What is on the stage: the material or the reference standard.
-        self.target: Target = "sample"
-        #: The sample index whose random streams the next measurement uses (set by the
-        #: instrument for each target; measuring a sample again continues its streams).
-        self.sample_index = 0
+        self._target: Target = "sample"  # what is on the stage
+        self._sample = 0  # whose random streams the next measurement uses
+        self._open = False
         self._draws: dict[int, int] = {}  # draws used so far per sample index
         self._prepared: dict[tuple[float, ...], float] = {}
         #: Measurements that found their pose prepared.
         self.prepared_hits = 0
+
+    # -- Resource / Detector -------------------------------------------------------
+    @property
+    def is_open(self) -> bool:
+        return self._open
+
+    @property
+    def exposure_range_s(self) -> tuple[float, float]:
+        return self.exposure_range
+
+    def open(self) -> None:
+        self._open = True
+
+    def close(self) -> None:
+        self._open = False
+
+    # -- what only a simulation has ------------------------------------------------
+    def begin_sample(self, index: int) -> None:
+        """The next measurements use sample ``index``'s random streams and faults."""
+        self._sample = int(index)
+
+    def show(self, target: Target) -> None:
+        """Put the sample or the reference standard on the stage."""
+        if target not in ("sample", "reference"):
+            raise ValueError(f"expected 'sample' or 'reference', got {target!r}")
+        self._target = target
 
     def prepare(self, poses: np.ndarray) -> None:
         """Compute, in one vectorized pass, the sample's geometric power at joint poses
@@ -114,14 +156,16 @@ class SimDetector:
 
     def _geometric_power(self) -> np.ndarray:
         angles = self._pose_angles()
-        if self.target == "sample" and angles in self._prepared:
+        if self._target == "sample" and angles in self._prepared:
             self.prepared_hits += 1
             return np.array([self._prepared[angles]])
         wi, wo = self.rig.forward(np.array([angles], dtype=np.float64))
-        return self.chain.geometric_power(wi, wo, self.target)
+        return self.chain.geometric_power(wi, wo, self._target)
 
     def measure(self, exposure_s: float, averages: int = 1) -> Reading:
         """Expose ``averages`` times for ``exposure_s`` s each; the mean in counts."""
+        if not self._open:
+            raise DeviceClosed("the simulated detector is not open (use it as a context manager)")
         lo, hi = self.exposure_range
         if not lo <= exposure_s <= hi:
             raise DetectorError(
@@ -130,20 +174,28 @@ class SimDetector:
         if int(averages) != averages or averages < 1:
             raise DetectorError(f"averages must be a positive integer, got {averages!r}")
         averages = int(averages)
+        start = self._draws.get(self._sample, 0)
+        fault = self._faults.fired(self._sample, start, DETECTOR_KINDS) if self._faults else None
+        if fault is not None and fault.kind == "detector_error":
+            self._draws[self._sample] = start + averages
+            raise DetectorError(f"the detector did not answer (injected at sample {self._sample})")
         geometric = self._geometric_power()
         period = exposure_s + self.readout_s
+        started = self._clock.now()
         t_mid = np.asarray(
-            self._now() + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
+            started + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
             dtype=np.float64,
         )
         power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
         signal = self.chain.electrons(power, np.array([exposure_s]))
-        index = np.array([self.sample_index], dtype=np.int64)
-        start = self._draws.get(self.sample_index, 0)
-        self._draws[self.sample_index] = start + averages
+        index = np.array([self._sample], dtype=np.int64)
+        self._draws[self._sample] = start + averages
         counts, saturated = sensor.read_out(
             signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams,
             index, start=start,
         )  # fmt: skip
-        self._wait(period * averages)
-        return sensor.readings(counts, saturated)[0]
+        if fault is not None:  # saturated: the sensor's top code, flagged
+            counts = np.full_like(counts, float(self.sensor.max_count))
+            saturated = np.ones_like(saturated)
+        self._clock.sleep(period * averages)
+        return sensor.readings(counts, saturated, started, self._clock.now())[0]

@@ -1,37 +1,40 @@
-"""The simulated instrument: virtual motors and a virtual detector sharing one virtual
-clock and one run seed, and a rehearsal mode that drives the real `DynamixelBus`
-against the byte-level emulator with the simulated detector.
+"""The simulated instrument: virtual motors, detector and light sharing one virtual
+clock, one run seed and the scene's injected faults; and a rehearsal mode that drives
+the real `DynamixelBus` against the byte-level emulator with the simulated detector.
 
-`SimulatedInstrument.run(plan)` measures a plan target by target through the
-`drivers.base` protocols (`move_to`, `wait_settled`, `positions`, `measure`), as the
-acquisition engine does; `sim.simulate.simulate` computes the same run vectorized.
+`SimulatedInstrument` is the simulated backend as the engine sees it: `devices()` gives
+the `gonio.acquire.Devices` (the `drivers.base` contract), and the instrument itself is
+their `drivers.base.Simulated` side (which sample comes next, sample or reference on the
+stage, the true joint angles, snapshots for resume). `run(plan)` measures a plan target
+by target through `gonio.acquire.measure`, the same step the engine takes;
+`sim.simulate.simulate` computes the same run vectorized.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from drivers.base import Reading, Resource
+from drivers.base import Resource, StageTarget
 from drivers.dynamixel.bus import DynamixelBus
+from gonio.acquire.devices import Devices
+from gonio.acquire.measure import measure_target
+from gonio.errors import GonioError
 from gonio.planner.plan import Plan
 from gonio.rig.model import Rig
-from gonio.types import FloatArray
 from sim.clock import ManualClock, ScaledClock
-from sim.devices.detector import CALIBRATION_INDEX, SimDetector, SimLightSource
+from sim.devices.detector import SimDetector, SimLightSource
 from sim.devices.motors import MotorState, SimMotorBus
 from sim.dynamixel.emulator import DxlEmulator
+from sim.faults import FaultInjector
 from sim.physics.streams import Streams
 from sim.record import SimRun
 from sim.scene import Scene
 from sim.simulate import planned_poses
-
-#: How long a simulated move may take before `wait_settled` gives up (s).
-MOVE_TIMEOUT_S = 600.0
 
 
 @dataclass(frozen=True)
@@ -43,68 +46,84 @@ class InstrumentState:
 
 
 class SimulatedInstrument(Resource):
-    """`SimMotorBus` + `SimDetector` + `SimLightSource` on one `ManualClock`."""
+    """`SimMotorBus` + `SimDetector` + `SimLightSource` on one `ManualClock`; the
+    scene's ``faults`` are injected (``faults=False`` ignores them)."""
 
     def __init__(
-        self, scene: Scene, rig: Rig, *, seed: int | None = None, clock: ManualClock | None = None
+        self,
+        scene: Scene,
+        rig: Rig,
+        *,
+        seed: int | None = None,
+        clock: ManualClock | None = None,
+        faults: bool = True,
     ) -> None:
         self.scene = scene
         self.rig = rig
         self.seed = scene.seed if seed is None else int(seed)
         self.clock = clock or ManualClock()
         self.streams = Streams(self.seed)
+        for k, rule in enumerate(scene.faults if faults else ()):
+            if rule.axis is not None and rule.axis not in rig.axes:
+                raise GonioError(
+                    f"scene {scene.name!r}: faults.{k}.axis: {rule.axis!r} is not an axis of "
+                    f"rig {rig.spec.name!r} ({', '.join(rig.axes)})"
+                )
+        injector = FaultInjector(scene.faults if faults else (), self.streams)
         self.bus = SimMotorBus(
-            rig, self.clock, position_error=scene.effects.position_error, streams=self.streams
+            rig,
+            self.clock,
+            position_error=scene.effects.position_error,
+            streams=self.streams,
+            faults=injector,
         )
         self.light = SimLightSource()
         self.detector = SimDetector(
             scene,
             rig,
             self.bus.true_positions,
-            now=self.clock,
-            wait=self.clock.advance,
+            clock=self.clock,
             streams=self.streams,
             light=self.light,
+            faults=injector,
         )
+        self._devices = Devices(self.bus, self.detector, self.clock, self.light, self)
+
+    def devices(self) -> Devices:
+        """The backend as the engine drives it (open it with ``with``)."""
+        return self._devices
 
     def open(self) -> None:
-        self.bus.open()
+        self._devices.__enter__()
 
     def close(self) -> None:
-        self.bus.close()
+        self._devices.__exit__(None, None, None)
 
-    def state(self) -> InstrumentState:
+    # -- drivers.base.Simulated ------------------------------------------------------
+    def begin_sample(self, index: int) -> None:
+        self.bus.begin_sample(index)
+        self.detector.begin_sample(index)
+
+    def show(self, target: StageTarget) -> None:
+        self.detector.show(target)
+
+    def true_positions(self) -> dict[str, float]:
+        return self.bus.true_positions()
+
+    def snapshot(self) -> InstrumentState:
         """The state to `restore` a resumed run from (between targets)."""
-        return InstrumentState(self.clock.now, self.bus.snapshot())
+        return InstrumentState(self.clock.now(), self.bus.snapshot())
 
-    def restore(self, state: InstrumentState) -> None:
+    def restore(self, state: Any) -> None:
         """Continue from ``state``: the clock (which must not be past it) and the motors."""
-        if self.clock.now > state.time_s:
+        if not isinstance(state, InstrumentState):
+            raise TypeError(f"expected an InstrumentState, got {type(state).__name__}")
+        if self.clock.now() > state.time_s:
             raise ValueError(f"the clock is already past {state.time_s} s")
-        self.clock.advance(state.time_s - self.clock.now)
+        self.clock.advance_to(state.time_s)
         self.bus.restore(state.motors)
 
-    def measure_target(
-        self, index: int, angles: Sequence[float], exposure_s: float, averages: int
-    ) -> tuple[FloatArray, Reading, float]:
-        """Move to ``angles`` (rig.axes order), settle, measure with sample ``index``'s
-        stream: (read-back angles, reading, virtual time when the motors settled)."""
-        self.bus.sample_index = index
-        self.detector.sample_index = index
-        self.bus.move_to(dict(zip(self.rig.axes, angles, strict=True)))
-        self.bus.wait_settled(MOVE_TIMEOUT_S)
-        settled = self.clock.now
-        read_back = np.array(list(self.bus.positions().values()))
-        return read_back, self.detector.measure(exposure_s, averages), settled
-
-    def measure_reference(self, k: int, angles: Sequence[float], exposure_s: float) -> Reading:
-        """Measure the reference standard at ``angles`` (calibration reading k)."""
-        self.detector.target = "reference"
-        try:
-            return self.measure_target(CALIBRATION_INDEX + k, angles, exposure_s, 1)[1]
-        finally:
-            self.detector.target = "sample"
-
+    # -- a whole plan ------------------------------------------------------------------
     def run(
         self, plan: Plan, *, start: int = 0, stop: int | None = None, prepare: bool = True
     ) -> SimRun:
@@ -114,36 +133,38 @@ class SimulatedInstrument(Resource):
         computes the optics at the poses the plan will reach, vectorized
         (`SimDetector.prepare`); the readings are the same either way."""
         stop = len(plan) if stop is None else stop
-        rows = range(start, stop)
         if prepare:
             _, expected, _ = planned_poses(plan, self.scene, self.streams)
             self.detector.prepare(expected[start:stop])
-        read_back, true, readings, settled, ends = [], [], [], [], []
-        for i in rows:
-            rb, reading, t = self.measure_target(
-                i, plan.angles[i].tolist(), float(plan.exposure_s[i]), int(plan.averages[i])
-            )
-            read_back.append(rb)
-            true.append(list(self.bus.true_positions().values()))
-            readings.append(reading)
-            settled.append(t)
-            ends.append(self.clock.now)
-        true_a = np.array(true, dtype=np.float64).reshape(-1, len(self.rig.axes))
-        wi, wo = self.rig.forward(true_a)
+        axes, settle = self.rig.axes, self.rig.spec.settle_s
+        rows = []
+        for i in range(start, stop):
+            m = measure_target(
+                self._devices, i, dict(zip(axes, plan.angles[i].tolist(), strict=True)),
+                float(plan.exposure_s[i]), int(plan.averages[i]), settle_s=settle,
+            )  # fmt: skip
+            assert m.true is not None
+            rows.append((m, self.clock.now()))
+        n = len(axes)
+        true = np.array([[m.true[a] for a in axes] for m, _ in rows if m.true], dtype=np.float64)
+        true = true.reshape(-1, n)
+        wi, wo = self.rig.forward(true)
         return SimRun(
             index=np.arange(start, stop, dtype=np.int64),
             commanded=plan.angles[start:stop],
-            read_back=np.array(read_back, dtype=np.float64).reshape(-1, len(self.rig.axes)),
-            true=true_a,
+            read_back=np.array(
+                [[m.read_back[a] for a in axes] for m, _ in rows], dtype=np.float64
+            ).reshape(-1, n),
+            true=true,
             wi=wi,
             wo=wo,
             exposure_s=plan.exposure_s[start:stop],
             averages=plan.averages[start:stop],
-            settled_s=np.array(settled, dtype=np.float64),
-            end_s=np.array(ends, dtype=np.float64),
-            value=np.array([r.value for r in readings], dtype=np.float64),
-            std=np.array([r.std for r in readings], dtype=np.float64),
-            saturated=np.array([r.saturated for r in readings], dtype=np.bool_),
+            settled_s=np.array([m.settled_s for m, _ in rows], dtype=np.float64),
+            end_s=np.array([end for _, end in rows], dtype=np.float64),
+            value=np.array([m.reading.value for m, _ in rows], dtype=np.float64),
+            std=np.array([m.reading.std for m, _ in rows], dtype=np.float64),
+            saturated=np.array([m.reading.saturated for m, _ in rows], dtype=np.bool_),
         )
 
 
@@ -181,14 +202,13 @@ def rehearsal(
     light = SimLightSource()
     with emulator:
         bus = DynamixelBus(emulator.path, axes, baud=rig.spec.bus.baud)
-        with bus:
-            detector = SimDetector(
-                scene,
-                rig,
-                bus.positions,
-                now=clock,
-                wait=lambda s: time.sleep(s / speedup),
-                streams=Streams(scene.seed if seed is None else seed),
-                light=light,
-            )
+        detector = SimDetector(
+            scene,
+            rig,
+            bus.positions,
+            clock=clock,
+            streams=Streams(scene.seed if seed is None else seed),
+            light=light,
+        )
+        with bus, detector, light:
             yield Rehearsal(emulator, bus, detector, light, clock)

@@ -1,9 +1,11 @@
 """`SimMotorBus`: the rig's axes as virtual motors on a virtual clock.
 
-Implements `drivers.base.MotorBus`. Nothing sleeps: `wait_settled` advances the clock to
-the end of the slowest axis's trapezoidal profile (the rig file's velocity and
-acceleration; `gonio.rig.travel`) plus the rig's settle time, so a simulated run reports
-the hours the real rig would take in the seconds it computes.
+Implements `drivers.base.MotorBus` (every rule of the contract). Nothing sleeps:
+`wait_settled` advances the clock to the end of the slowest axis's trapezoidal profile
+(the rig file's velocity and acceleration; `gonio.rig.travel`), so a simulated run
+reports the hours the real rig would take in the seconds it computes. The rig's settle
+dwell is the caller's to wait, as on hardware. Faults are injected from the scene's
+``faults:`` rules (`sim.faults`) for the sample named by `begin_sample`.
 
 Positions: each axis moves from where it is to its goal; a new goal starts a new
 profile from the present position (at rest: blending is not modelled). With the
@@ -24,10 +26,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.base import DriverError, Health, LimitError, MotionTimeout, Resource
+from drivers.base import (
+    CommError,
+    DeviceClosed,
+    DriverError,
+    Health,
+    LimitError,
+    MotionTimeout,
+    MotorFault,
+    Resource,
+    TorqueOff,
+)
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.clock import ManualClock
+from sim.faults import MOTOR_KINDS, FaultInjector, FaultRule
 from sim.physics import streams as streams_module
 from sim.scene import PositionErrorSpec
 
@@ -109,57 +122,68 @@ class SimMotorBus(Resource):
         *,
         position_error: PositionErrorSpec | None = None,
         streams: streams_module.Streams | None = None,
-        settle_s: float | None = None,
+        faults: FaultInjector | None = None,
     ) -> None:
         self.rig = rig
         self.clock = clock
-        self.settle_s = rig.spec.settle_s if settle_s is None else float(settle_s)
+        streams = streams or streams_module.Streams(0)
+        self._faults = faults or FaultInjector((), streams)
         self._names = rig.axes
+        self._motor_ids = {a.name: a.motor_id for a in rig.bus_axes()}
         self._index = {n: i for i, n in enumerate(self._names)}
         self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
         self._v, self._a = rig.velocity, rig.acceleration
         self._travel = rig.travel.scalar()  # one move's time with Python floats: no numpy overhead
         self._model = (
-            PositionModel(rig, position_error, streams or streams_module.Streams(0))
-            if position_error is not None
-            else None
+            PositionModel(rig, position_error, streams) if position_error is not None else None
         )
         home = np.asarray(rig.home, dtype=np.float64)
         self._start = home.copy()  # where the present profile started
         self._goal = home.copy()  # where the motors are going (encoder ticks if quantized)
-        self._t0 = self._end = clock.now
-        self._settled_at = self._end
+        self._t0 = self._end = clock.now()
         self._direction = np.zeros(len(home))  # sign of each axis's last move
         self._repeat = np.zeros(len(home))  # each axis's repeatability error
         self._error = np.zeros(len(home))  # joint − encoder
         self._moves: dict[int, int] = {}  # moves made so far per sample index
         self._open = False
         self._torque = True
-        #: The sample index whose stream draws the next move's repeatability errors (set
-        #: by the instrument before each target's move; a second move for the same
-        #: sample continues that stream).
-        self.sample_index = 0
+        self._sample = 0  # the sample the next move belongs to (streams, faults)
+        self._pending: FaultRule | None = None  # a fault that strikes during this move
+        self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
     def axes(self) -> tuple[str, ...]:
         return self._names
 
+    @property
+    def is_open(self) -> bool:
+        return self._open
+
+    def limits(self) -> dict[str, tuple[float, float]]:
+        return {n: (float(self._lo[i]), float(self._hi[i])) for n, i in self._index.items()}
+
     def open(self) -> None:
         self._open = True
 
     def close(self) -> None:
         if self._open:
-            self.stop()
+            self._hold()
         self._open = False
 
     def _check_open(self) -> None:
         if not self._open:
-            raise DriverError("the simulated bus is not open (use it as a context manager)")
+            raise DeviceClosed("the simulated bus is not open (use it as a context manager)")
+
+    def begin_sample(self, index: int) -> None:
+        """The next moves belong to sample ``index``: its random stream draws their
+        repeatability errors (a second move continues it) and its fault rules apply."""
+        self._sample = int(index)
 
     def move_to(self, targets: Mapping[str, float]) -> None:
         """Start moving the named axes (rad); `LimitError` before anything moves if a
-        target is outside its axis's limits or not finite."""
+        target is outside its axis's limits or not finite, `TorqueOff` with torque off,
+        `MotorFault` while an axis's fault is latched (until `reboot`)."""
         self._check_open()
         goal = self._present_encoder()
         for name, angle in targets.items():
@@ -174,7 +198,9 @@ class SimMotorBus(Resource):
                 )
             goal[i] = value
         if not self._torque:
-            raise DriverError("torque is off: call torque(True) before moving")
+            raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
+        if self._latched:
+            raise self._fault_error(*next(iter(self._latched.items())))
         self._start_move(goal)
 
     def _start_move(self, goal: FloatArray) -> None:
@@ -184,40 +210,74 @@ class SimMotorBus(Resource):
         step = np.sign(goal - here)
         moved = step != 0
         self._direction = np.where(moved, step, self._direction)
-        self._start, self._goal, self._t0 = here, goal, self.clock.now
+        self._start, self._goal, self._t0 = here, goal, self.clock.now()
         self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
-        self._settled_at = self._end + self.settle_s
+        k = self._moves.get(self._sample, 0)
+        self._moves[self._sample] = k + 1
+        self._pending = self._faults.fired(self._sample, k, MOTOR_KINDS) if self._faults else None
         if self._model is not None:
-            k = self._moves.get(self.sample_index, 0)
-            self._moves[self.sample_index] = k + 1
             axes = len(goal)
-            draw = self._model.repeatability_draw(
-                np.array([self.sample_index]), axes, start=k * axes
-            )[0]
+            draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
             self._repeat = np.where(moved, draw, self._repeat)
             self._error = self._model.backlash_error(self._direction) + self._repeat
 
     def _present_encoder(self) -> FloatArray:
-        now = self.clock.now
+        now = self.clock.now()
         if now >= self._end:  # at rest (the common case: read after settling)
             return self._goal.copy()
         return profile_position(self._start, self._goal, self._v, self._a, now - self._t0)
 
     def wait_settled(self, timeout_s: float) -> None:
-        """Advance the clock to the end of the motion plus the settle time (at once if
-        that has passed); if that is more than ``timeout_s`` away, hold the axes where
-        they are after ``timeout_s`` and raise `MotionTimeout`."""
+        """Advance the clock to the end of the motion (at once if that has passed); if
+        that is more than ``timeout_s`` away, hold the axes where they are after
+        ``timeout_s`` and raise `MotionTimeout`. An injected fault strikes half-way
+        through the move: every axis is held, then the fault is raised."""
         self._check_open()
-        remaining = self._settled_at - self.clock.now
+        if self._pending is not None:
+            self._strike(self._pending, timeout_s)
+        remaining = self._end - self.clock.now()
         if remaining > timeout_s:
             self.clock.advance(timeout_s)
-            self.stop()
+            self._hold()
             raise MotionTimeout(
-                f"axes did not settle within {timeout_s:g} s (the move and the settle "
-                f"time need {remaining:.3f} s more); holding them"
+                f"axes did not settle within {timeout_s:g} s (the move needs "
+                f"{remaining:.3f} s more); holding them"
             )
         if remaining > 0:
-            self.clock.advance_to(self._settled_at)
+            self.clock.advance_to(self._end)
+
+    def _strike(self, rule: FaultRule, timeout_s: float) -> None:
+        """Raise the injected fault ``rule`` of the present move, holding every axis."""
+        self._pending = None
+        now = self.clock.now()
+        if rule.kind == "motion_timeout":
+            self.clock.advance(timeout_s)
+            self._hold()
+            raise MotionTimeout(
+                f"axes did not settle within {timeout_s:g} s (an axis is blocked: injected "
+                f"at sample {self._sample}); holding them"
+            )
+        if self._end > now:
+            self.clock.advance_to(now + 0.5 * (self._end - now))
+        self._hold()
+        if rule.kind == "comm_error":
+            raise CommError(
+                f"no status from the bus during the move into sample {self._sample} "
+                "(injected); every axis told to hold",
+                port="simulated",
+            )
+        axis = rule.axis or self._names[0]
+        self._latched[axis] = rule.flags
+        raise self._fault_error(axis, rule.flags)
+
+    def _fault_error(self, axis: str, flags: tuple[str, ...]) -> MotorFault:
+        motor_id = self._motor_ids[axis]
+        return MotorFault(
+            f"motor {motor_id} (axis {axis!r}) reports a hardware error: {', '.join(flags)}",
+            motor_id=motor_id,
+            axis=axis,
+            flags=flags,
+        )
 
     def positions(self) -> dict[str, float]:
         """The encoder's reading of each axis (rad)."""
@@ -242,24 +302,45 @@ class SimMotorBus(Resource):
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
-        self._start, self._goal, self._t0 = here, here.copy(), self.clock.now
-        self._end = self._settled_at = self._t0
+        self._start, self._goal, self._t0 = here, here.copy(), self.clock.now()
+        self._end = self._t0
         self._direction = np.array(state.direction, dtype=np.float64)
         self._repeat = np.array(state.repeatability, dtype=np.float64)
         backlash = self._model.backlash_error(self._direction) if self._model else 0.0
         self._error = backlash + self._repeat
 
     def stop(self) -> None:
+        """Hold every axis where it is now (also a faulted axis's neighbours)."""
+        self._check_open()
+        self._hold()
+
+    def _hold(self) -> None:
         here = self._present_encoder()
-        self._start, self._goal, self._t0 = here, here, self.clock.now
-        self._end = self._settled_at = self._t0
+        self._start, self._goal, self._t0 = here, here, self.clock.now()
+        self._end = self._t0
+        self._pending = None
 
     def torque(self, on: bool) -> None:
         self._check_open()
         if not on:
-            self.stop()
+            self._hold()
         self._torque = bool(on)
 
     def health(self) -> dict[str, Health]:
         self._check_open()
-        return {n: Health(temperature_c=35.0, voltage_v=12.0) for n in self._names}
+        return {
+            n: Health(temperature_c=35.0, voltage_v=12.0, error_flags=self._latched.get(n, ()))
+            for n in self._names
+        }
+
+    def reboot(self, axes: tuple[str, ...] | None = None) -> tuple[str, ...]:
+        """Clear the latched faults (of ``axes``, or every faulted axis), holding; the
+        axes rebooted."""
+        self._check_open()
+        names = tuple(self._latched) if axes is None else tuple(axes)
+        for name in names:
+            if name not in self._index:
+                raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(self._names)}")
+            self._latched.pop(name, None)
+        self._hold()
+        return names

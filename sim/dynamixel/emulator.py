@@ -28,7 +28,7 @@ from types import FrameType, TracebackType
 from typing import Self
 
 from drivers.dynamixel.control_table import BAUD_RATES
-from sim.clock import Clock, ManualClock, ScaledClock
+from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.dynamixel.faults import Fault, FaultBook
 from sim.dynamixel.instructions import FastChain, Reply, Response, handle
 from sim.dynamixel.instructions import instruction_name as _name
@@ -81,7 +81,7 @@ class DxlEmulator:
         ids: Iterable[int] = (1,),
         model: int = 1020,
         baud: int = 57_600,
-        clock: Clock | None = None,
+        clock: TimeSource | None = None,
         wire_time: bool = True,
         return_delay: bool = True,
         *,
@@ -94,7 +94,7 @@ class DxlEmulator:
         if baud not in BAUD_RATES.values():
             raise ValueError(f"{baud} baud is not an X-series rate: {sorted(BAUD_RATES.values())}")
         self.baud = baud
-        self.clock: Clock = clock if clock is not None else time.monotonic
+        self.clock: TimeSource = clock if clock is not None else time.monotonic
         self.wire_time = wire_time
         self.return_delay = return_delay
         self._lock = threading.RLock()

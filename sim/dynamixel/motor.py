@@ -28,7 +28,7 @@ from drivers.dynamixel.control_table import (
     TABLE_SIZE,
     TICKS_PER_REV,
 )
-from sim.clock import Clock
+from sim.clock import TimeSource
 from sim.dynamixel.motion import (
     INF,
     TICKS_PER_S2_PER_ACCELERATION_UNIT,
@@ -97,7 +97,7 @@ class EmulatedMotor:
         firmware: int = 46,
         baud: int = 57_600,
         position: int = 2048,
-        clock: Clock = time.monotonic,
+        clock: TimeSource = time.monotonic,
         lock: threading.RLock | None = None,
     ) -> None:
         self._clock = clock

@@ -229,17 +229,25 @@ def summarize(counts: ArrayLike, saturated: ArrayLike) -> Summary:
     return Summary(value, std, np.full(n, a, dtype=np.int64), np.asarray(s.any(axis=1)))
 
 
-def readings(counts: ArrayLike, saturated: ArrayLike) -> list[Reading]:
-    """One `drivers.base.Reading` per sample (with the raw counts)."""
+def readings(
+    counts: ArrayLike, saturated: ArrayLike, started_s: ArrayLike, ended_s: ArrayLike
+) -> list[Reading]:
+    """One `drivers.base.Reading` per sample (with the raw counts), stamped with the
+    times (s) its first exposure started and its last ended (N,)."""
     c = np.asarray(counts, dtype=np.float64)
     summary = summarize(c, saturated)
+    n = len(c)
+    started = np.broadcast_to(np.asarray(started_s, dtype=np.float64), (n,))
+    ended = np.broadcast_to(np.asarray(ended_s, dtype=np.float64), (n,))
     return [
-        Reading(value=v, std=sd, n=k, saturated=sat, raw=tuple(raw))
-        for v, sd, k, sat, raw in zip(
+        Reading(value=v, std=sd, n=k, saturated=sat, started_s=t0, ended_s=t1, raw=tuple(raw))
+        for v, sd, k, sat, t0, t1, raw in zip(
             summary.value.tolist(),
             summary.std.tolist(),
             summary.n.tolist(),
             summary.saturated.tolist(),
+            started.tolist(),
+            ended.tolist(),
             c.tolist(),
             strict=True,
         )

@@ -98,6 +98,8 @@ APERTURE: Final = 48
 FOOTPRINT: Final = 49
 #: Stray light.
 STRAY_LIGHT: Final = 64
+#: Injected faults (`sim.faults`): one channel per fault rule, from here on.
+FAULT: Final = 128
 
 #: Every named channel, by name (a test checks that no two share a number).
 CHANNELS: Final[dict[str, int]] = {
@@ -109,6 +111,7 @@ CHANNELS: Final[dict[str, int]] = {
     "APERTURE": APERTURE,
     "FOOTPRINT": FOOTPRINT,
     "STRAY_LIGHT": STRAY_LIGHT,
+    "FAULT": FAULT,
 }
 
 _CHANNEL_BITS: Final = 16

@@ -17,7 +17,7 @@ from pathlib import Path
 import dynamixel_sdk as sdk
 import pytest
 
-from drivers.base import CommError, DriverError, LimitError, MotionTimeout, MotorBus, MotorFault
+from drivers.base import CommError, DriverError, LimitError, MotionTimeout, MotorFault
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK
@@ -178,14 +178,6 @@ def test_baud_mismatch_is_a_timeout_not_a_hang(emulator: Emulator, latency_timer
 
 
 # -- the bus ---------------------------------------------------------------------------
-
-
-def test_bus_satisfies_the_motor_bus_protocol(
-    bus_on: Callable[..., tuple[DxlEmulator, DynamixelBus]],
-) -> None:
-    _, bus = bus_on()
-    assert isinstance(bus, MotorBus)
-    assert bus.axes == ("axis1", "axis2", "axis3")
 
 
 def test_open_configures_and_holds_without_a_jump(
@@ -369,13 +361,16 @@ def test_transient_noise_is_retried_transparently(
 def test_silent_bus_is_a_comm_error_after_bounded_retries(
     bus_on: Callable[..., tuple[DxlEmulator, DynamixelBus]],
 ) -> None:
+    """The failed poll is tried 1 + retries times; then the bus tries to hold the axes,
+    as the contract asks, which fails too and says so in a note."""
     emu, bus = bus_on(retries=2)
     with bus:
         emu.inject(Fault.SILENT)
-        started = time.monotonic()
-        with pytest.raises(CommError, match=r"after 3 attempts.*no answer from motor 1"):
+        with pytest.raises(CommError, match=r"after 3 attempts.*no answer from motor 1") as info:
             bus.positions()
-        assert time.monotonic() - started < 2.0
+        assert "and holding the axes: could not hold axis1, axis2, axis3" in "".join(
+            getattr(info.value, "__notes__", [])
+        )
         emu.clear_faults()
 
 

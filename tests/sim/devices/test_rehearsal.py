@@ -4,21 +4,19 @@ path, no hardware."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from gonio.acquire.measure import measure_target
+from gonio.rig.model import Rig
 from sim.devices.instrument import SimulatedInstrument, rehearsal
 from sim.scene import load_scene
-from tests.gonio.rig.helpers import RIGS
+from tests.conftest import CONFIGS
 
-SCENES = Path(__file__).resolve().parents[3] / "configs" / "scenes"
+SCENES = CONFIGS / "scenes"
 
 
-@pytest.mark.parametrize("rig_name", list(RIGS))
-def test_rehearsal_measures_like_the_simulation(rig_name: str) -> None:
-    rig = RIGS[rig_name]
+def test_rehearsal_measures_like_the_simulation(rig: Rig) -> None:
     scene = load_scene(SCENES / "matte.yaml").with_effects([])
     ticks = np.array([a.resolution_rad for a in rig.bus_axes()])
     rng = np.random.default_rng(4)
@@ -32,6 +30,7 @@ def test_rehearsal_measures_like_the_simulation(rig_name: str) -> None:
             assert np.all(np.abs(read_back - target) <= 2.5 * ticks)
             reading = r.detector.measure(0.01)
             # The simulation at the read-back pose gives the same reading.
-            _, expected, _ = sim.measure_target(0, read_back.tolist(), 0.01, 1)
+            pose = dict(zip(rig.axes, read_back.tolist(), strict=True))
+            expected = measure_target(sim.devices(), 0, pose, 0.01, 1, settle_s=0.0).reading
             assert reading.value == pytest.approx(expected.value, rel=1e-12)
         assert r.emulator.stats.instructions["SYNC_WRITE"] >= 3

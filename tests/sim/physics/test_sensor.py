@@ -392,11 +392,28 @@ def test_summarize_matches_reading_fields() -> None:
     one = summarize(counts[:, :1], saturated[:, :1])
     np.testing.assert_array_equal(one.value, [1.0, 4.0])
     np.testing.assert_array_equal(one.std, [0.0, 0.0])
-    assert readings(counts, saturated) == [
-        Reading(value=3.0, std=math.sqrt(7.0), n=3, saturated=True, raw=(1.0, 2.0, 6.0)),
-        Reading(value=4.0, std=0.0, n=3, saturated=False, raw=(4.0, 4.0, 4.0)),
+    assert readings(counts, saturated, [1.0, 2.0], [1.5, 2.5]) == [
+        Reading(
+            value=3.0,
+            std=math.sqrt(7.0),
+            n=3,
+            saturated=True,
+            started_s=1.0,
+            ended_s=1.5,
+            raw=(1.0, 2.0, 6.0),
+        ),
+        Reading(
+            value=4.0,
+            std=0.0,
+            n=3,
+            saturated=False,
+            started_s=2.0,
+            ended_s=2.5,
+            raw=(4.0, 4.0, 4.0),
+        ),
     ]
-    r = readings(counts[:1, :1], saturated[:1, :1])[0]
+    r = readings(counts[:1, :1], saturated[:1, :1], 0.0, 0.1)[0]
+    assert r.middle_s == 0.05
     assert type(r.value) is float
     assert type(r.n) is int
     assert type(r.saturated) is bool

@@ -1,0 +1,70 @@
+"""One target, measured through the `drivers.base` contract: check the pose against the
+axis limits (never command outside them), move, wait until the motion stopped, wait the
+rig's settle dwell, read the positions back, measure.
+
+The settle dwell is waited here, on the devices' clock, exactly once per target: the
+planner's predicted time (`gonio.planner.plan`) counts it the same way (travel + settle
++ exposure × averages). A simulated backend is told which sample comes next (its random
+streams and injected faults) through `drivers.base.Simulated`, when it offers it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from drivers.base import LimitError, Reading
+from gonio.acquire.devices import Devices
+
+#: How long one move may take before `wait_settled` gives up (s).
+MOVE_TIMEOUT_S = 600.0
+
+
+@dataclass(frozen=True)
+class Measured:
+    """What one target gave: the read-back joint angles (rad), the true ones when the
+    backend is simulated (else None), the time the exposures could start (s, after the
+    settle dwell) and the reading."""
+
+    read_back: dict[str, float]
+    true: dict[str, float] | None
+    settled_s: float
+    reading: Reading
+
+
+def check_pose(devices: Devices, pose: Mapping[str, float]) -> None:
+    """`LimitError` unless every angle of ``pose`` is finite and inside its axis's range."""
+    limits = devices.bus.limits()
+    for axis, angle in pose.items():
+        lo, hi = limits[axis]
+        if not (math.isfinite(angle) and lo <= angle <= hi):
+            raise LimitError(
+                f"axis {axis!r}: target {angle!r} rad is outside its limits "
+                f"[{lo:.6f}, {hi:.6f}] rad; nothing was sent"
+            )
+
+
+def measure_target(
+    devices: Devices,
+    index: int,
+    pose: Mapping[str, float],
+    exposure_s: float,
+    averages: int,
+    *,
+    settle_s: float,
+    timeout_s: float = MOVE_TIMEOUT_S,
+) -> Measured:
+    """Move to ``pose`` (rad per axis), settle, measure sample ``index``."""
+    check_pose(devices, pose)
+    simulation = devices.simulation
+    if simulation is not None:
+        simulation.begin_sample(index)
+    bus = devices.bus
+    bus.move_to(pose)
+    bus.wait_settled(timeout_s)
+    devices.clock.sleep(settle_s)
+    settled = devices.clock.now()
+    read_back = bus.positions()
+    true = simulation.true_positions() if simulation is not None else None
+    return Measured(read_back, true, settled, devices.detector.measure(exposure_s, averages))

@@ -1,0 +1,106 @@
+"""Injected faults: the ``faults:`` section of a scene, and the injector the simulated
+devices consult, so every fault path of an engine can be exercised in milliseconds.
+
+A rule names a fault ``kind`` and when it fires — at chosen sample indices (``at``), or
+at random with a probability per sample (``rate``, drawn from the run's counter-based
+streams, so a resumed run sees exactly the faults an uninterrupted one does):
+
+- ``motor_fault``: a motor reports a hardware error half-way through the move into the
+  sample: that axis stops where it is and keeps reporting ``flags`` (its latched
+  Hardware Error Status) until the bus is rebooted; `MotorFault` is raised by
+  ``wait_settled`` after every axis was told to hold;
+- ``comm_error``: a status poll fails half-way through the move: every axis is held
+  and ``wait_settled`` raises `CommError`;
+- ``motion_timeout``: an axis is blocked: after the caller's timeout every axis is held
+  and ``wait_settled`` raises `MotionTimeout`;
+- ``detector_error``: ``measure`` raises `DetectorError` (nothing is exposed);
+- ``saturated``: ``measure`` returns a reading at the sensor's full scale, flagged
+  saturated.
+
+A rule fires on the first attempt at a sample only (the first move into it, or its first
+measurement): a retried sample succeeds, as after a transient fault on hardware.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from gonio.config import Strict, field_error
+from sim.physics.streams import FAULT, Streams
+
+FaultKind = Literal["motor_fault", "comm_error", "motion_timeout", "detector_error", "saturated"]
+#: The kinds the motor bus raises; the others belong to the detector.
+MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout"})
+#: Hardware Error Status flags a motor_fault may name (`drivers.dynamixel.control_table`).
+MOTOR_FLAGS = frozenset(
+    {"input_voltage", "overheating", "motor_encoder", "electrical_shock", "overload"}
+)
+
+
+class FaultRule(Strict):
+    """One injected fault (see the module docstring)."""
+
+    kind: FaultKind
+    at: tuple[int, ...] | None = None  # sample indices
+    rate: float | None = Field(None, ge=0, le=1)  # probability per sample
+    axis: str | None = None  # motor_fault: the axis that faults (default: the first)
+    flags: tuple[str, ...] = ("overload",)  # motor_fault: its Hardware Error Status
+
+    @field_validator("at", mode="before")
+    @classmethod
+    def _one_index(cls, v: Any) -> Any:
+        return (v,) if isinstance(v, int) and not isinstance(v, bool) else v
+
+    @model_validator(mode="after")
+    def _when(self) -> FaultRule:
+        if (self.at is None) == (self.rate is None):
+            raise field_error("at", "expected exactly one of at (sample indices) or rate")
+        if self.at is not None and any(i < 0 for i in self.at):
+            raise field_error("at", f"expected sample indices ≥ 0, got {list(self.at)}")
+        bad = [f for f in self.flags if f not in MOTOR_FLAGS]
+        if bad or not self.flags:
+            raise field_error(
+                "flags", f"expected some of {', '.join(sorted(MOTOR_FLAGS))}, got {bad or '[]'}"
+            )
+        if self.kind != "motor_fault" and self.axis is not None:
+            raise field_error("axis", f"only a motor_fault names an axis, not a {self.kind}")
+        return self
+
+
+class FaultInjector:
+    """Which rule fires at which attempt of which sample (pure function of the rules,
+    the run's streams, the sample index and the attempt number)."""
+
+    def __init__(self, rules: tuple[FaultRule, ...], streams: Streams) -> None:
+        self.rules = rules
+        self.streams = streams
+        self._at = [frozenset(r.at) if r.at is not None else None for r in rules]
+
+    def __bool__(self) -> bool:
+        return bool(self.rules)
+
+    def fired(self, index: int, attempt: int, kinds: frozenset[str]) -> FaultRule | None:
+        """The first rule of ``kinds`` that fires at ``attempt`` (0 = first) of sample
+        ``index``, or None."""
+        if attempt != 0:
+            return None
+        for k, (rule, at) in enumerate(zip(self.rules, self._at, strict=True)):
+            if rule.kind not in kinds:
+                continue
+            if at is not None:
+                if index in at:
+                    return rule
+            elif rule.rate and self._draw(index, k) < rule.rate:
+                return rule
+        return None
+
+    def _draw(self, index: int, rule: int) -> float:
+        u = self.streams.uniform(np.array([index]), FAULT + rule, 1)
+        return float(u[0, 0])
+
+
+def no_faults(streams: Streams) -> FaultInjector:
+    return FaultInjector((), streams)
