@@ -1,0 +1,163 @@
+"""`SerialLightSwitch`: a light source (lamp, shutter, relay) switched by line commands.
+
+The host sends ``on`` or ``off`` (one line each); the device answers a line matching
+``ack``, or a line matching ``error_reply`` (refused), and the switch is done only once
+acknowledged: ``is_on`` is the state last acknowledged (False until the first switch,
+since nothing is assumed about a device just opened). After switching on the driver
+waits ``warmup_s`` on its clock, for a lamp that needs time to stabilize (waits for an
+answer are in real time: they are the port's). A missing or
+refused acknowledgement is sent again up to ``retries`` more times, then raises
+`LightError`; on a closed switch `on` and `off` raise `DeviceClosed`. ``close`` leaves
+the light as it is and releases the port (idempotent).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import re
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import serial
+
+from drivers.base import Clock, DeviceClosed, LightError, Resource, SystemClock
+
+_POLL_S = 0.02  # the serial read timeout: how late a deadline may be noticed
+
+
+@dataclass(frozen=True)
+class SerialLightConfig:
+    """How to talk to one serial light switch (regular expressions match anywhere in a
+    received line unless anchored; times in seconds)."""
+
+    port: str
+    baud: int = 9600
+    on: str = "ON"
+    off: str = "OFF"
+    ack: str = r"^OK\b"
+    error_reply: str | None = r"^ERR"
+    line_ending: str = "\n"
+    timeout_s: float = 1.0
+    retries: int = 1
+    warmup_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("ack", "error_reply"):
+            pattern = getattr(self, name)
+            if pattern is None:
+                continue
+            try:
+                re.compile(pattern)
+            except re.error as exc:
+                raise ValueError(f"{name}: not a regular expression ({exc}): {pattern!r}") from None
+        if not (self.on.strip() and self.off.strip()):
+            raise ValueError("on and off must be non-empty commands")
+        if self.line_ending not in ("\n", "\r\n", "\r"):
+            raise ValueError(f"line_ending must be \\n, \\r\\n or \\r, got {self.line_ending!r}")
+        if not (0 < self.timeout_s < math.inf) or not (0 <= self.warmup_s < math.inf):
+            raise ValueError("timeout_s must be > 0 and warmup_s ≥ 0, both finite")
+        if self.retries < 0 or self.baud <= 0:
+            raise ValueError("retries must be ≥ 0 and baud > 0")
+
+
+class SerialLightSwitch(Resource):
+    """A `drivers.base.LightSource` on a serial line (see the module docstring)."""
+
+    def __init__(self, config: SerialLightConfig, *, clock: Clock | None = None) -> None:
+        self.config = config
+        self._clock: Clock = clock or SystemClock()
+        self._ack = re.compile(config.ack)
+        self._refused = re.compile(config.error_reply) if config.error_reply else None
+        self._serial: Any = None
+        self._rx = bytearray()
+        self._on = False
+
+    @property
+    def port(self) -> str:
+        return self.config.port
+
+    @property
+    def is_open(self) -> bool:
+        return self._serial is not None
+
+    @property
+    def is_on(self) -> bool:
+        return self._on
+
+    def open(self) -> None:
+        if self._serial is not None:
+            return
+        try:
+            self._serial = serial.serial_for_url(
+                self.config.port,
+                baudrate=self.config.baud,
+                timeout=_POLL_S,
+                write_timeout=self.config.timeout_s,
+                exclusive=True,
+            )
+        except (OSError, ValueError, serial.SerialException) as exc:
+            raise LightError(f"light switch {self.port}: cannot open the port: {exc}") from exc
+        self._rx.clear()
+
+    def close(self) -> None:
+        port, self._serial = self._serial, None
+        if port is None:
+            return
+        with contextlib.suppress(Exception):
+            port.reset_output_buffer()
+        with contextlib.suppress(Exception):
+            port.close()
+
+    def on(self) -> None:
+        self._switch(True)
+        self._clock.sleep(self.config.warmup_s)
+
+    def off(self) -> None:
+        self._switch(False)
+
+    def _switch(self, on: bool) -> None:
+        if self._serial is None:
+            raise DeviceClosed(f"light switch {self.port} is not open")
+        command = self.config.on if on else self.config.off
+        problem = "no answer"
+        for _ in range(self.config.retries + 1):
+            with contextlib.suppress(Exception):
+                self._serial.reset_input_buffer()
+            self._rx.clear()
+            try:
+                self._serial.write((command + self.config.line_ending).encode("ascii"))
+                self._serial.flush()
+                answer = self._answer()
+            except (OSError, serial.SerialException) as exc:
+                self.close()
+                raise LightError(f"light switch {self.port}: the port failed: {exc}") from exc
+            if answer is not None and self._ack.search(answer):
+                self._on = on
+                return
+            problem = "no answer" if answer is None else f"the answer {answer[:80]!r}"
+        raise LightError(
+            f"light switch {self.port}: {command!r} was not acknowledged after "
+            f"{self.config.retries + 1} attempt(s) ({problem}); the light's state is unknown"
+        )
+
+    def _answer(self) -> str | None:
+        """The first line that acknowledges or refuses, or None at the deadline."""
+        deadline = time.monotonic() + self.config.timeout_s  # I/O waits in real time
+        while time.monotonic() < deadline:
+            chunk = self._serial.read(256)
+            self._rx += chunk
+            while (end := _line_end(self._rx)) >= 0:
+                text = self._rx[:end].decode("ascii", "replace").strip()
+                del self._rx[: end + 1]
+                if not text:
+                    continue
+                if self._ack.search(text) or (self._refused and self._refused.search(text)):
+                    return text
+        return None
+
+
+def _line_end(buffer: bytearray) -> int:
+    ends = [i for i in (buffer.find(b"\n"), buffer.find(b"\r")) if i >= 0]
+    return min(ends) if ends else -1

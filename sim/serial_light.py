@@ -1,0 +1,98 @@
+"""A simulated serial light switch (lamp relay or shutter) on a pseudo-terminal, the
+peer of `drivers.light.SerialLightSwitch`.
+
+Protocol (lines end in CR LF on the way out; any line ending is accepted in):
+
+- ``ON`` / ``OFF`` → ``OK`` once switched (after ``reply_delay_s``);
+- ``STATE?`` → ``ON`` or ``OFF``;
+- anything else → ``ERR unknown command: …``.
+
+Faults for tests: `silent` (ignore everything), `refuse` (answer the next switches with
+``ERR lamp failure``), `clear`. ``is_on`` can drive a simulated detector's signal, so a
+rehearsal's dark reading really is dark.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+
+from drivers.light import SerialLightConfig
+from sim.serial_photometer.protocol import _line
+from sim.serial_photometer.server import _Event, _PtyServer
+
+
+class SerialLamp(_PtyServer):
+    """A lamp behind a serial relay, off at power-up."""
+
+    def __init__(self, *, reply_delay_s: float = 0.0) -> None:
+        if reply_delay_s < 0:
+            raise ValueError("reply_delay_s must be ≥ 0")
+        self._reply_delay_s = reply_delay_s
+        self._reset_on_open = False
+        self._on = False
+        self._silent = False
+        self._refuse = 0
+        self._commands: list[str] = []
+        self._lock = threading.Lock()
+        self._events: list[_Event] = []
+        self._seq = itertools.count()
+        self._inbuf = bytearray()
+        self._skipping = False
+        self._outbuf = bytearray()
+        self._master: int | None = None
+        self._slave: int | None = None
+        self._wake: tuple[int, int] | None = None
+        self._thread: threading.Thread | None = None
+        self._stopping = threading.Event()
+        self._path: str | None = None
+        self._error: BaseException | None = None
+
+    def config(self, **overrides: object) -> SerialLightConfig:
+        """The driver configuration that speaks this protocol."""
+        fields: dict[str, object] = {"port": self.path, "timeout_s": 0.5, **overrides}
+        return SerialLightConfig(**fields)  # type: ignore[arg-type]
+
+    @property
+    def is_on(self) -> bool:
+        with self._lock:
+            return self._on
+
+    @property
+    def commands(self) -> list[str]:
+        with self._lock:
+            return list(self._commands)
+
+    def silent(self) -> None:
+        with self._lock:
+            self._silent = True
+
+    def refuse(self, count: int = 1) -> None:
+        with self._lock:
+            self._refuse += count
+
+    def clear(self) -> None:
+        with self._lock:
+            self._silent, self._refuse = False, 0
+
+    def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
+        self._events.clear()
+
+    def _handle(self, line: str, now: float) -> None:
+        with self._lock:
+            self._commands.append(line)
+            if self._silent:
+                return
+            word = line.strip().upper()
+            if word in ("ON", "OFF"):
+                if self._refuse:
+                    self._refuse -= 1
+                    answer = "ERR lamp failure"
+                else:
+                    self._on = word == "ON"
+                    answer = "OK"
+            elif word == "STATE?":
+                answer = "ON" if self._on else "OFF"
+            else:
+                answer = f"ERR unknown command: {line}"
+            self._schedule_locked(now + self._reply_delay_s, _line(answer))
