@@ -1,29 +1,21 @@
-"""`gonio motors scan | status | reboot` as real subprocesses against the emulator."""
+"""`gonio motors scan | status | reboot` against the emulator, in-process (`gonio_cli`)."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
 from sim.dynamixel.emulator import DxlEmulator
 from sim.dynamixel.faults import Fault
+from tests.conftest import CONFIGS, CliResult
 
-GONIO = Path(sys.executable).with_name("gonio")
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 Emulator = Callable[..., DxlEmulator]
+Gonio = Callable[..., CliResult]
 
 
-def gonio(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [str(GONIO), *args], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL
-    )
-
-
-def test_scan_finds_the_motors_at_their_rate(emulator: Emulator) -> None:
+def test_scan_finds_the_motors_at_their_rate(emulator: Emulator, run_gonio: Gonio) -> None:
     emu = emulator(ids=(1, 3, 4), baud=1_000_000)
-    r = gonio("motors", "scan", "--port", emu.path)
+    r = run_gonio("motors", "scan", "--port", emu.path)
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert f"{emu.path} at 57600 baud: 0 motor(s)" in lines
@@ -31,18 +23,20 @@ def test_scan_finds_the_motors_at_their_rate(emulator: Emulator) -> None:
     assert any(line.split()[:3] == ["3", "XM430-W350", "1020"] for line in lines)
 
 
-def test_scan_of_an_empty_bus_says_what_to_check(emulator: Emulator) -> None:
+def test_scan_of_an_empty_bus_says_what_to_check(emulator: Emulator, run_gonio: Gonio) -> None:
     emu = emulator(ids=(1,), baud=115_200)
-    r = gonio("motors", "scan", "--port", emu.path, "--baud", "57600")
+    r = run_gonio("motors", "scan", "--port", emu.path, "--baud", "57600")
     assert r.returncode == 1
     assert "no motor answered: check power" in r.stdout
 
 
-def test_status_shows_positions_temperatures_voltages_and_errors(emulator: Emulator) -> None:
+def test_status_shows_positions_temperatures_voltages_and_errors(
+    emulator: Emulator, run_gonio: Gonio
+) -> None:
     emu = emulator(ids=(1, 2))
     emu.motors[2].set("present_position", -1024)
     emu.inject(Fault.OVERHEATING, motor_id=2)
-    r = gonio("motors", "status", "--port", emu.path, "--ids", "1-2,5")
+    r = run_gonio("motors", "status", "--port", emu.path, "--ids", "1-2,5")
     assert r.returncode == 1  # motor 5 is missing
     rows = {line.split()[0]: line for line in r.stdout.splitlines()[1:]}
     assert rows["1"].split()[2:4] == ["2048", "180.00"]
@@ -53,16 +47,16 @@ def test_status_shows_positions_temperatures_voltages_and_errors(emulator: Emula
     assert rows["5"].endswith("no answer")
 
 
-def test_reboot_clears_a_hardware_error(emulator: Emulator) -> None:
+def test_reboot_clears_a_hardware_error(emulator: Emulator, run_gonio: Gonio) -> None:
     emu = emulator(ids=(1,))
     emu.inject(Fault.OVERLOAD, motor_id=1)
-    r = gonio("motors", "reboot", "--port", emu.path, "--ids", "1")
+    r = run_gonio("motors", "reboot", "--port", emu.path, "--ids", "1")
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "motor 1 rebooted"
     assert emu.motors[1].hardware_error == 0
 
 
-def test_errors_are_one_line_without_traceback(emulator: Emulator) -> None:
+def test_errors_are_one_line_without_traceback(emulator: Emulator, run_gonio: Gonio) -> None:
     emu = emulator(ids=(1,))
     cases = [
         (("motors", "scan", "--port", "/dev/does-not-exist"), "does not exist"),
@@ -74,14 +68,14 @@ def test_errors_are_one_line_without_traceback(emulator: Emulator) -> None:
         (("motors", "reboot", "--port", emu.path, "--ids", "9"), "motor 9"),
     ]
     for args, message in cases:
-        r = gonio(*args)
+        r = run_gonio(*args)
         assert r.returncode == 2, (args, r.stdout, r.stderr)
         assert "Traceback" not in r.stderr
         assert message in r.stderr
 
 
 def test_status_with_a_rig_file_names_axes_and_joint_angles(
-    emulator: Emulator, tmp_path: Path
+    emulator: Emulator, tmp_path: Path, run_gonio: Gonio
 ) -> None:
     """--rig supplies the IDs (and the rate); each row gains its axis and joint angle:
     light_elevation has its zero at −180°, so tick 2048 (180° of motor) is joint 0°."""
@@ -93,7 +87,7 @@ def test_status_with_a_rig_file_names_axes_and_joint_angles(
     rig["bus"] = {"port": emu.path, "baud": 57_600}
     path = tmp_path / "rig.yaml"
     path.write_text(yaml.safe_dump(rig), encoding="utf-8")
-    r = gonio("motors", "status", "--rig", str(path))
+    r = run_gonio("motors", "status", "--rig", str(path))
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert lines[0].split()[-3:] == ["axis", "joint", "(deg)"]
@@ -102,16 +96,16 @@ def test_status_with_a_rig_file_names_axes_and_joint_angles(
     assert rows["1"].split()[-2:] == ["light_elevation", "0.00"]
     assert rows["3"].split()[-4:] == ["detector_elevation", "90.00", "OUTSIDE", "LIMITS"]
     # Flags override the rig: only motor 2.
-    r = gonio("motors", "status", "--rig", str(path), "--ids", "2")
+    r = run_gonio("motors", "status", "--rig", str(path), "--ids", "2")
     assert [line.split()[0] for line in r.stdout.splitlines()[1:]] == ["2"]
 
 
-def test_status_needs_a_port_and_ids_or_a_rig() -> None:
-    r = gonio("motors", "status", "--port", "/dev/ttyUSB9")
+def test_status_needs_a_port_and_ids_or_a_rig(run_gonio: Gonio) -> None:
+    r = run_gonio("motors", "status", "--port", "/dev/ttyUSB9")
     assert r.returncode == 2
     assert r.stderr.strip() == (
         "gonio: error: motors status: give --port and --ids, or --rig RIG.yaml"
     )
-    r = gonio("motors", "status", "--rig", "/nowhere/rig.yaml")
+    r = run_gonio("motors", "status", "--rig", "/nowhere/rig.yaml")
     assert r.returncode == 2
     assert "/nowhere/rig.yaml: cannot read the file" in r.stderr

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import csv
-import subprocess
-import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -12,20 +11,14 @@ import numpy as np
 from gonio.planner import build, load_plan
 from sim.scene import load_scene
 from sim.session import simulate_plan
+from tests.conftest import CONFIGS, CliResult
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
-GONIO = Path(sys.executable).with_name("gonio")
-
-
-def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [str(GONIO), *args], capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL
-    )
+Gonio = Callable[..., CliResult]
 
 
-def test_simulate_writes_the_run_and_recovers_the_brdf(tmp_path: Path) -> None:
+def test_simulate_writes_the_run_and_recovers_the_brdf(run_gonio: Gonio, tmp_path: Path) -> None:
     out = tmp_path / "run.csv"
-    r = run(
+    r = run_gonio(
         "simulate", str(CONFIGS / "plans" / "quick.yaml"),
         "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-o", str(out),
     )  # fmt: skip
@@ -42,10 +35,10 @@ def test_simulate_writes_the_run_and_recovers_the_brdf(tmp_path: Path) -> None:
     assert np.all(np.diff(settled) > 0)
 
 
-def test_bad_scene_is_one_line(tmp_path: Path) -> None:
+def test_bad_scene_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
     scene = tmp_path / "scene.yaml"
     scene.write_text("name: x\nmaterial: {name: velvet}\n", encoding="utf-8")
-    r = run("simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene))
+    r = run_gonio("simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene))
     assert r.returncode == 2
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
     assert f"{scene}:2: material.name: unknown BRDF model 'velvet'" in r.stderr
