@@ -2,13 +2,14 @@
 
 The plan is measured target by target through the driver protocols (`SimMotorBus`,
 `SimDetector`: what the acquisition engine will drive); the reference standard is read
-at the 0°/45° geometry before and after (its exposure halved until it does not
-saturate), with a dark frame; the readings are carried back to BRDF values through the
-calibration, the source's drift divided out by interpolating the two reference readings
-in time, with directions recomputed from the read-back motor angles. The summary says
-how long the real rig would take, how long the simulation took, and how far the
-recovered BRDF is from the scene's model at the pairs measured: what a plan and a set
-of effects cost in accuracy, before any hardware moves.
+at the rig's calibration geometry (``reference``, 0°/45° in the shipped rigs) before
+and after (its exposure halved until it does not saturate), with a dark frame; the
+readings are carried back to BRDF values through the calibration, the source's drift
+divided out by interpolating the two reference readings in time, with directions
+recomputed from the read-back motor angles. The summary says how long the real rig would
+take, how long the simulation took, and how far the recovered BRDF is from the scene's
+model at the pairs measured: what a plan and a set of effects cost in accuracy, before
+any hardware moves.
 """
 
 from __future__ import annotations
@@ -19,7 +20,6 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 
@@ -33,9 +33,6 @@ from sim.devices.instrument import SimulatedInstrument
 from sim.physics.optics import SceneOptics
 from sim.record import SimRun
 from sim.scene import Scene, load_scene
-
-#: The calibration geometry: light at the normal, detector 45° away (the classic 0°/45°).
-REFERENCE_GEOMETRY_DEG = (0.0, 45.0)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -74,14 +71,20 @@ class Result:
 
 
 def reference_pose(rig: Rig) -> FloatArray:
-    """Joint angles of the 0°/45° calibration geometry on ``rig``."""
-    ti, to = (math.radians(a) for a in REFERENCE_GEOMETRY_DEG)
-    wi = np.array([[math.sin(ti), 0.0, math.cos(ti)]])
-    wo = np.array([[-math.sin(to), 0.0, math.cos(to)]])
+    """Joint angles of the rig's calibration geometry (``reference``)."""
+    wi, wo = rig.reference_directions()
     solution = rig.solve(wi, wo)
     if solution.reasons[0] not in (Reason.OK, Reason.BLIND_SPOT, Reason.FOOTPRINT):
-        raise GonioError(f"rig {rig.spec.name!r} cannot reach the 0°/45° reference geometry")
+        raise GonioError(
+            f"rig {rig.spec.name!r} cannot reach its reference geometry "
+            f"({_geometry(rig)}; {Reason(solution.reasons[0]).label.replace('_', ' ')})"
+        )
     return np.asarray(solution.angles[0], dtype=np.float64)
+
+
+def _geometry(rig: Rig) -> str:
+    ref = rig.spec.reference
+    return f"{ref.theta_i_deg:g}°/{ref.theta_o_deg:g}°"
 
 
 def _reference(
@@ -104,7 +107,7 @@ def _reference(
 def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
     """Measure ``plan`` in ``scene`` and recover the BRDF (see the module docstring)."""
     rig = plan.rig
-    shortest, longest = scene.detector.exposure_range_s
+    shortest, longest = rig.spec.detector.exposure_range_s
     exposure = float(np.clip(np.median(plan.exposure_s), shortest, longest))
     started = time.perf_counter()
     with SimulatedInstrument(scene, rig, seed=seed) as inst:
@@ -120,10 +123,10 @@ def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
     wall = time.perf_counter() - started
     dark_rate = dark / exposure
     wi_ref, wo_ref = rig.forward(np.asarray(pose))
-    kind: Literal["collimated", "point"] = scene.source.kind
     calibration = radiometry.ReferenceCalibration.from_counts(
-        scene.reference.albedo, first, exposure, wi_ref, wo_ref, kind, dark_counts=dark
-    )
+        rig.spec.reference.albedo, first, exposure, wi_ref, wo_ref, rig.source_kind,
+        dark_counts=dark,
+    )  # fmt: skip
     wi, wo = rig.forward(run.read_back)  # directions come from the read-back angles
     recovered = calibration.brdf_from_counts(
         run.value, run.exposure_s, wi, wo, dark_counts=dark_rate * run.exposure_s
@@ -133,7 +136,7 @@ def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
     middle = (run.settled_s + run.end_s) / 2  # of each target's exposures
     when = (middle - t_first) / (t_last - t_first)
     recovered = recovered / (1.0 + change * when)
-    truth = SceneOptics(scene).models["sample"](run.wi, run.wo)
+    truth = SceneOptics(scene, rig).models["sample"](run.wi, run.wo)
     return Result(
         plan, scene, run, wall, first, exposure, change, dark_rate, recovered, truth, wi, wo
     )
@@ -141,6 +144,7 @@ def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
 
 def render(result: Result) -> str:
     run, plan, scene = result.run, result.plan, result.scene
+    reference = plan.rig.spec.reference
     effects = ", ".join(scene.effects.names()) or "none"
     ok = ~run.saturated & (result.truth > 0)
     error = np.abs(result.brdf[ok] / result.truth[ok] - 1.0)
@@ -154,7 +158,7 @@ def render(result: Result) -> str:
         f"(1/{run.instrument_time_s / max(result.wall_s, 1e-9):,.0f} of the instrument time)",
         f"  {'saturated readings':<24}{int(run.saturated.sum()):>10}",
         f"  {'reference standard':<24}{result.reference_counts:>10.1f}   counts "
-        f"(albedo {scene.reference.albedo:g}, 0°/45°, {result.reference_exposure_s:g} s; "
+        f"(albedo {reference.albedo:g}, {_geometry(plan.rig)}, {result.reference_exposure_s:g} s; "
         f"dark {result.dark_rate:.1f} counts/s; {100 * result.reference_change:+.3f} % "
         "by the end, divided out)",
     ]
@@ -165,34 +169,16 @@ def render(result: Result) -> str:
             f"95th percentile {100 * q95:.3f} %, max {100 * error.max():.3f} % "
             f"(vs the model at the pairs measured, {error.size} unsaturated targets)"
         )
-    lines += _point_source_note(result) + _size_note(result)
+    lines += _point_source_note(result)
     return "\n".join(lines)
-
-
-def _size_note(result: Result) -> list[str]:
-    """The rig file's sizes decide what the plan refuses; the scene's, what is measured."""
-    scene, c = result.scene, result.plan.rig.spec.constraints
-    pairs = [
-        ("sample diameter", scene.sample.diameter_mm, c.sample_diameter_mm),
-        ("field of view", scene.detector.fov_diameter_mm, c.detector_fov_mm),
-    ]
-    if scene.source.kind == "collimated":
-        pairs.append(("beam diameter", scene.source.beam_diameter_mm, c.beam_diameter_mm))
-    differ = [f"{name} {a:g} mm (rig {b:g} mm)" for name, a, b in pairs if a != b]
-    if not differ:
-        return []
-    return [
-        f"  note: the scene's {', '.join(differ)} differ from the rig file's, which the "
-        "plan's footprint refusals used"
-    ]
 
 
 def _point_source_note(result: Result) -> list[str]:
     """A point source's ideal chain assumes the detector's spot lies on the sample."""
-    scene = result.scene
-    if scene.source.kind != "point" or scene.effects.footprint is not None:
+    rig = result.plan.rig
+    if rig.source_kind != "point" or result.scene.effects.footprint is not None:
         return []
-    fov, sample = scene.detector.fov_diameter_mm, scene.sample.diameter_mm
+    fov, sample = rig.spec.constraints.detector_fov_mm, rig.spec.constraints.sample_diameter_mm
     beyond = int(np.count_nonzero(fov > sample * result.run.wo[:, 2]))
     if not beyond:
         return []
@@ -231,7 +217,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.output is not None:
         check_output(args.output, "-o")
     spec, rig = load_plan(args.plan, args.rig)
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, rig)
     if args.no_effects:
         scene = scene.with_effects([])
     plan = build(spec, rig, where=str(args.plan))

@@ -76,15 +76,15 @@ class SimDetector:
     ) -> None:
         self.scene = scene
         self.rig = rig
-        self.chain = SceneOptics(scene)
+        self.chain = SceneOptics(scene, rig)
         self.sensor, self.sensor_effects = sensor_of(scene)
         self._pose = pose
         self._now = now
         self._wait = wait
         self.streams = streams
         self.light = light or SimLightSource()
-        self.exposure_range = scene.detector.exposure_range_s
-        self.readout_s = scene.detector.readout_s
+        self.exposure_range = rig.spec.detector.exposure_range_s
+        self.readout_s = rig.spec.detector.readout_s
         #: What is on the stage: the material or the reference standard.
         self.target: Target = "sample"
         #: The sample index whose random streams the next measurement uses (set by the
