@@ -135,19 +135,43 @@ def check_output(path: Path, option: str) -> None:
         raise ConfigError(f"{option} {path}: the folder {parent} is not writable")
 
 
-def load(path: str | Path, model: type[M]) -> M:
-    """Read ``path`` and validate it as ``model``; `ConfigError` on any mistake."""
+def untagged(data: Any, loc: Sequence[int | str]) -> tuple[int | str, ...]:
+    """``loc`` without the tags pydantic inserts for a union told apart by ``kind``
+    (``source.point.distance_mm`` → ``source.distance_mm``): a key absent from the
+    mapping the data has there, equal to that mapping's ``kind`` (or to the data, for a
+    bare kind such as ``interface: serial``)."""
+    out: list[int | str] = []
+    for key in loc:
+        tag = data.get("kind") if isinstance(data, dict) else data
+        if isinstance(key, str) and tag == key and not (isinstance(data, dict) and key in data):
+            continue
+        out.append(key)
+        if isinstance(data, dict):
+            data = data.get(key)
+        elif isinstance(data, list) and isinstance(key, int) and 0 <= key < len(data):
+            data = data[key]
+        else:
+            data = None
+    return tuple(out)
+
+
+def load(path: str | Path, model: type[M], context: dict[str, Any] | None = None) -> M:
+    """Read ``path`` and validate it as ``model`` (its validators see ``context`` and
+    the ``path``); `ConfigError` on any mistake."""
     path = Path(path)
     data, node = read_yaml(path)
     if not isinstance(data, dict):
         kind = "empty" if data is None else type(data).__name__
         raise ConfigError(f"{path}: expected a mapping of fields at the top level, got {kind}")
     try:
-        return model.model_validate(data, context={"path": path})
+        return model.model_validate(data, context={**(context or {}), "path": path})
     except ValidationError as exc:
         first = exc.errors(include_url=False)[0]
-        line = line_of(node, located(first)[0])
+        loc, message = located(first)
+        loc = untagged(data, loc)
+        line = line_of(node, loc)
         where = f"{path}:{line}" if line is not None else str(path)
         more = exc.error_count() - 1
         extra = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-        raise ConfigError(f"{where}: {describe(first)}{extra}") from None
+        field = ".".join(str(p) for p in loc) or "(top level)"
+        raise ConfigError(f"{where}: {field}: {message}{extra}") from None

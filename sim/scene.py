@@ -1,30 +1,36 @@
-"""The scene file (YAML): what the simulated instrument measures and which effects it
-models.
+"""The scene file (YAML): what a simulation adds to the rig it runs on.
 
-A scene names a material (any `gonio.brdf` model with its parameters), a light source
-(a distant collimated beam or a proximal point source), a detector (aperture, field of
-view, responsivity, sensor), the sample's size, a Lambertian reference target, and the
-effects to model. With no effects a reading is the exact analytic value carried
-through the radiometric chain (`gonio.radiometry`); each listed effect is computed, and
-only those. Angles in the file are degrees (``_deg``), lengths millimetres (``_mm``).
+The rig file describes the instrument, real or simulated: its geometry and optical
+sizes, the light's kind, the detector's aperture, exposure range and readout, the
+reference standard. A scene adds only what the simulated world needs: the material
+(any `gonio.brdf` model with its parameters), the source's power (irradiance for a
+collimated light, intensity for a point source, as the rig's ``light.kind`` says), the
+simulated sensor's noise model, the effects to model and the seed. A scene that repeats
+a fact of the rig is refused with one line saying where it belongs (`RIG_FIELDS`).
+
+With no effects a reading is the exact analytic value carried through the radiometric
+chain (`gonio.radiometry`); each listed effect is computed, and only those. Angles in
+the file are degrees (``_deg``), lengths millimetres (``_mm``).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
 from pydantic import (
     Field,
     SerializerFunctionWrapHandler,
+    ValidationInfo,
     field_validator,
     model_serializer,
     model_validator,
 )
 
 from gonio import brdf
-from gonio.config import Strict, field_error, load
+from gonio.config import ConfigError, Strict, field_error, load
 from gonio.errors import GonioError
+from gonio.rig.model import Rig
 from sim.faults import FaultRule
 
 #: Rec. 709 luminance weights: how a grey detector sees an RGB material.
@@ -58,48 +64,86 @@ class MaterialSpec(Strict):
             raise field_error("name", str(exc)) from None
 
 
-class CollimatedSpec(Strict):
-    kind: Literal["collimated"]
-    irradiance_w_m2: float = Field(gt=0)  # perpendicular to the beam
-    beam_diameter_mm: float = Field(gt=0)
+class SourceSpec(Strict):
+    """The source's power, of the kind the rig's light is (``light.kind``): the
+    irradiance of a collimated beam (W/m², perpendicular to the beam) or the intensity
+    of a point source (W/sr)."""
 
+    irradiance_w_m2: float | None = Field(None, gt=0)
+    intensity_w_sr: float | None = Field(None, gt=0)
 
-class PointSpec(Strict):
-    kind: Literal["point"]
-    intensity_w_sr: float = Field(gt=0)
-    distance_mm: float = Field(gt=0)
+    @model_validator(mode="after")
+    def _one_power(self) -> SourceSpec:
+        if (self.irradiance_w_m2 is None) == (self.intensity_w_sr is None):
+            raise ValueError(
+                "expected one power: irradiance_w_m2 (a collimated light) or intensity_w_sr "
+                "(a point source)"
+            )
+        return self
+
+    @property
+    def kind(self) -> Literal["collimated", "point"]:
+        """The kind of light this power is for."""
+        return "collimated" if self.irradiance_w_m2 is not None else "point"
+
+    @property
+    def power(self) -> float:
+        """The irradiance (W/m²) or the intensity (W/sr)."""
+        value = self.irradiance_w_m2 if self.irradiance_w_m2 is not None else self.intensity_w_sr
+        assert value is not None  # one of the two, by validation
+        return value
 
 
 class DetectorSpec(Strict):
-    aperture_sr: float = Field(gt=0, lt=6.2832)
-    fov_diameter_mm: float = Field(gt=0)
+    """The simulated sensor behind the rig's detector optics: how light becomes counts
+    (`sim.physics.sensor`), and which colour band an RGB material is seen in."""
+
     responsivity_a_w: float = Field(gt=0)
     dark_current_e_s: float = Field(0.0, ge=0)
     read_noise_e: float = Field(0.0, ge=0)
     full_well_e: float = Field(gt=0)
     adc_bits: int = Field(16, ge=1, le=32)
-    exposure_range_s: tuple[float, float] = (1e-4, 60.0)
-    readout_s: float = Field(0.0, ge=0)  # dead time after each exposure
     band: Literal["luminance", "r", "g", "b"] = "luminance"  # for RGB materials
 
-    @model_validator(mode="after")
-    def _range(self) -> DetectorSpec:
-        lo, hi = self.exposure_range_s
-        if not 0 < lo <= hi:
-            raise field_error(
-                "exposure_range_s", f"expected [min, max] with 0 < min ≤ max, got [{lo}, {hi}]"
-            )
-        return self
+
+#: Scene fields that are facts of the instrument: where the rig file holds each.
+RIG_FIELDS = {
+    ("source", "kind"): "light.kind",
+    ("source", "beam_diameter_mm"): "constraints.beam_diameter_mm",
+    ("source", "distance_mm"): "light.distance_mm",
+    ("detector", "aperture_sr"): "detector.aperture_sr",
+    ("detector", "fov_diameter_mm"): "constraints.detector_fov_mm",
+    ("detector", "exposure_range_s"): "detector.exposure_range_s",
+    ("detector", "readout_s"): "detector.readout_s",
+    ("detector", "max_averages"): "detector.max_averages",
+    ("detector", "interface"): "detector.interface",
+    ("sample",): "constraints.sample_diameter_mm",
+    ("reference",): "reference",
+}
 
 
-class SampleSpec(Strict):
-    diameter_mm: float = Field(gt=0)
+def _rig_field_given(data: Any) -> tuple[str, str] | None:
+    """(scene field, rig field) of the first instrument fact a scene's data repeats."""
+    if not isinstance(data, dict):
+        return None
+    for path, rig_field in RIG_FIELDS.items():
+        section = data.get(path[0]) if len(path) > 1 else data
+        if isinstance(section, dict) and path[-1] in section:
+            return ".".join(path), rig_field
+    return None
 
 
-class ReferenceSpec(Strict):
-    """The Lambertian standard measured for calibration (e.g. a 99 % diffuse target)."""
-
-    albedo: float = Field(0.99, gt=0, le=1)
+def source_mismatch(source: SourceSpec, kind: str, rig: str) -> tuple[str, str] | None:
+    """(field, what was expected) when a scene's source power is not of the light
+    ``kind`` of the ``rig`` (its file or name); None when it is."""
+    if source.kind == kind:
+        return None
+    given, wanted = (
+        ("irradiance_w_m2", "intensity_w_sr (W/sr)")
+        if kind == "point"
+        else ("intensity_w_sr", "irradiance_w_m2 (W/m², perpendicular to the beam)")
+    )
+    return f"source.{given}", f"the light of {rig} is {kind} (light.kind); expected {wanted}"
 
 
 # -- effects ---------------------------------------------------------------------------
@@ -182,15 +226,29 @@ class EffectsSpec(Strict):
 
 
 class Scene(Strict):
+    """What a simulation adds to a rig (see the module docstring)."""
+
     name: str
     material: MaterialSpec
-    source: Annotated[CollimatedSpec | PointSpec, Field(discriminator="kind")]
+    source: SourceSpec
     detector: DetectorSpec
-    sample: SampleSpec
-    reference: ReferenceSpec = Field(default_factory=ReferenceSpec)
     effects: EffectsSpec = Field(default_factory=EffectsSpec)
     faults: tuple[FaultRule, ...] = ()  # injected faults (`sim.faults`)
     seed: int = Field(0, ge=0)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_rig_facts(cls, data: Any) -> Any:
+        """A fact of the instrument given in the scene: one line saying where it goes."""
+        repeated = _rig_field_given(data)
+        if repeated is not None:
+            field, rig_field = repeated
+            raise field_error(
+                field,
+                f"belongs in the rig file ({rig_field}), not the scene; a scene holds only "
+                "what a simulation adds",
+            )
+        return data
 
     @field_validator("effects", mode="before")
     @classmethod
@@ -209,12 +267,35 @@ class Scene(Strict):
         )
         return self.model_copy(update={"faults": faults})
 
+    @model_validator(mode="after")
+    def _source_of_the_rig(self, info: ValidationInfo) -> Scene:
+        """Read with a rig (`load_scene`): the source's power is of the rig's kind."""
+        context = info.context or {}
+        kind = context.get("source_kind")
+        mismatch = None if kind is None else source_mismatch(self.source, kind, context["rig"])
+        if mismatch is not None:
+            raise field_error(*mismatch)
+        return self
+
+    def check_rig(self, rig: Rig) -> None:
+        """`ConfigError` (one line) unless this scene can be simulated on ``rig``."""
+        mismatch = source_mismatch(self.source, rig.source_kind, _rig_label(rig))
+        if mismatch is not None:
+            field, expected = mismatch
+            raise ConfigError(f"scene {self.name!r}: {field}: {expected}")
+
     def with_effects(self, effects: EffectsSpec | dict[str, Any] | list[str]) -> Scene:
         """The same scene with another set of effects."""
         spec = effects if isinstance(effects, EffectsSpec) else EffectsSpec.model_validate(effects)
         return self.model_copy(update={"effects": spec})
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (`gonio.config.ConfigError` on any mistake)."""
-    return load(path, Scene)
+def load_scene(path: str | Path, rig: Rig | None = None) -> Scene:
+    """Read and validate a scene file (`gonio.config.ConfigError` on any mistake), for
+    ``rig`` when given (its source power must then be of the rig's light kind)."""
+    context = None if rig is None else {"source_kind": rig.source_kind, "rig": _rig_label(rig)}
+    return load(path, Scene, context)
+
+
+def _rig_label(rig: Rig) -> str:
+    return f"the rig file {rig.source}" if rig.source else f"rig {rig.spec.name!r}"

@@ -2,7 +2,8 @@
 by target, the reference again, and the BRDF recovered through the calibration.
 
 Everything goes through the `drivers.base` contract (`gonio.acquire`), as the engine
-drives hardware: the reference standard read at 0°/45° before and after (its exposure
+drives hardware: the reference standard read at the rig's calibration geometry before
+and after (its exposure
 halved until it does not saturate) with a dark reading (light off), the readings
 carried back to BRDF values with directions from the read-back motor angles, the
 source's drift divided out (`gonio.acquire.calibration`).
@@ -12,7 +13,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
@@ -73,12 +73,9 @@ def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
         run = inst.run(plan)
         last, _ = read_reference(devices, rig, 2, pose, exposure)
     wall = time.perf_counter() - started
-    kind: Literal["collimated", "point"] = scene.source.kind
-    calibration = Calibration.from_readings(
-        rig, pose, scene.reference.albedo, kind, exposure, first, dark, last
-    )
+    calibration = Calibration.from_readings(rig, pose, exposure, first, dark, last)
     wi, wo = rig.forward(run.read_back)  # directions come from the read-back angles
     middle = (run.settled_s + run.end_s) / 2  # of each target's exposures
     recovered = calibration.brdf(run.value, run.exposure_s, wi, wo, middle)
-    truth = SceneOptics(scene).models["sample"](run.wi, run.wo)
+    truth = SceneOptics(scene, rig).models["sample"](run.wi, run.wo)
     return Result(plan, scene, run, wall, calibration, recovered, truth, wi, wo)

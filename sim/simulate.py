@@ -65,7 +65,7 @@ def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
     # Virtual time: move, settle, then `averages` exposures (+ readout) per target, added
     # up in the order the instrument's clock adds them (so the times agree bit for bit).
     travel = rig.travel_time(previous, goal)
-    readout = scene.detector.readout_s
+    readout = rig.spec.detector.readout_s
     period = plan.exposure_s + readout
     busy = period * plan.averages
     settle = np.full(n, rig.spec.settle_s)
@@ -73,7 +73,7 @@ def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
     settled, end = clock[:, 1], clock[:, 2]
 
     wi, wo = rig.forward(true)
-    chain = SceneOptics(scene)
+    chain = SceneOptics(scene, rig)
     geometric = chain.geometric_power(wi, wo)
     sensor_spec, sensor_effects = sensor_of(scene)
     value = np.empty(n)

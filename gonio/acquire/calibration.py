@@ -1,7 +1,8 @@
 """Calibration with the reference standard, through the `drivers.base` contract.
 
-The reference standard (a Lambertian target of known albedo) is read at the classic
-0°/45° geometry (light at the normal, detector 45° away) with the plan's typical
+The reference standard (a Lambertian target of known albedo, the rig file's
+``reference`` section) is read at the rig's calibration geometry (0°/45° in the shipped
+rigs: light at the normal, detector 45° away) with the plan's typical
 exposure, halved until the reading does not saturate; a dark reading is taken with the
 light off at the same exposure. Readings of the sample become BRDF values through
 `gonio.radiometry.ReferenceCalibration` (dark subtracted, the geometry of each pair
@@ -17,9 +18,7 @@ so they never share random numbers with the plan's samples.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
@@ -31,20 +30,26 @@ from gonio.errors import GonioError
 from gonio.rig.model import Reason, Rig
 from gonio.types import FloatArray
 
-#: The calibration geometry: light at the normal, detector 45° away (the classic 0°/45°).
-REFERENCE_GEOMETRY_DEG = (0.0, 45.0)
 #: Sample indices of calibration readings start here, far above any plan's indices.
 CALIBRATION_INDEX = 1 << 40
 
 
+def geometry_label(rig: Rig) -> str:
+    """The rig's calibration geometry, e.g. ``0°/45°`` (θi/θo)."""
+    ref = rig.spec.reference
+    return f"{ref.theta_i_deg:g}°/{ref.theta_o_deg:g}°"
+
+
 def reference_pose(rig: Rig) -> FloatArray:
-    """Joint angles (rad, rig.axes order) of the 0°/45° calibration geometry on ``rig``."""
-    ti, to = (math.radians(a) for a in REFERENCE_GEOMETRY_DEG)
-    wi = np.array([[math.sin(ti), 0.0, math.cos(ti)]])
-    wo = np.array([[-math.sin(to), 0.0, math.cos(to)]])
+    """Joint angles (rad, rig.axes order) of the rig's calibration geometry (its
+    ``reference`` section; 0°/45° in the shipped rigs)."""
+    wi, wo = rig.reference_directions()
     solution = rig.solve(wi, wo)
     if solution.reasons[0] not in (Reason.OK, Reason.BLIND_SPOT, Reason.FOOTPRINT):
-        raise GonioError(f"rig {rig.spec.name!r} cannot reach the 0°/45° reference geometry")
+        raise GonioError(
+            f"rig {rig.spec.name!r} cannot reach its reference geometry "
+            f"({geometry_label(rig)}; {Reason(solution.reasons[0]).label.replace('_', ' ')})"
+        )
     return np.asarray(solution.angles[0], dtype=np.float64)
 
 
@@ -111,16 +116,17 @@ class Calibration:
         cls,
         rig: Rig,
         pose: FloatArray,
-        albedo: float,
-        kind: Literal["collimated", "point"],
         exposure_s: float,
         first: Reading,
         dark: Reading,
         last: Reading,
     ) -> Calibration:
+        """The calibration from the reference readings taken at ``pose`` (the rig's
+        reference standard and source kind)."""
+        albedo = rig.spec.reference.albedo
         wi, wo = rig.forward(np.asarray(pose))
         reference = radiometry.ReferenceCalibration.from_counts(
-            albedo, first.value, exposure_s, wi, wo, kind, dark_counts=dark.value
+            albedo, first.value, exposure_s, wi, wo, rig.source_kind, dark_counts=dark.value
         )
         return cls(albedo, exposure_s, first, dark, last, reference)
 

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gonio.acquire.calibration import geometry_label
 from gonio.config import check_output
 from gonio.planner.plan import build, hms, load_plan
 from sim.scene import load_scene
@@ -40,6 +41,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def render(result: Result) -> str:
     run, plan, scene = result.run, result.plan, result.scene
+    reference = plan.rig.spec.reference
     effects = ", ".join(scene.effects.names()) or "none"
     ok = ~run.saturated & (result.truth > 0)
     error = np.abs(result.brdf[ok] / result.truth[ok] - 1.0)
@@ -53,7 +55,8 @@ def render(result: Result) -> str:
         f"(1/{run.instrument_time_s / max(result.wall_s, 1e-9):,.0f} of the instrument time)",
         f"  {'saturated readings':<24}{int(run.saturated.sum()):>10}",
         f"  {'reference standard':<24}{result.reference_counts:>10.1f}   counts "
-        f"(albedo {scene.reference.albedo:g}, 0°/45°, {result.reference_exposure_s:g} s; "
+        f"(albedo {reference.albedo:g}, {geometry_label(plan.rig)}, "
+        f"{result.reference_exposure_s:g} s; "
         f"dark {result.dark_rate:.1f} counts/s; {100 * result.reference_change:+.3f} % "
         "by the end, divided out)",
     ]
@@ -64,34 +67,16 @@ def render(result: Result) -> str:
             f"95th percentile {100 * q95:.3f} %, max {100 * error.max():.3f} % "
             f"(vs the model at the pairs measured, {error.size} unsaturated targets)"
         )
-    lines += _point_source_note(result) + _size_note(result)
+    lines += _point_source_note(result)
     return "\n".join(lines)
-
-
-def _size_note(result: Result) -> list[str]:
-    """The rig file's sizes decide what the plan refuses; the scene's, what is measured."""
-    scene, c = result.scene, result.plan.rig.spec.constraints
-    pairs = [
-        ("sample diameter", scene.sample.diameter_mm, c.sample_diameter_mm),
-        ("field of view", scene.detector.fov_diameter_mm, c.detector_fov_mm),
-    ]
-    if scene.source.kind == "collimated":
-        pairs.append(("beam diameter", scene.source.beam_diameter_mm, c.beam_diameter_mm))
-    differ = [f"{name} {a:g} mm (rig {b:g} mm)" for name, a, b in pairs if a != b]
-    if not differ:
-        return []
-    return [
-        f"  note: the scene's {', '.join(differ)} differ from the rig file's, which the "
-        "plan's footprint refusals used"
-    ]
 
 
 def _point_source_note(result: Result) -> list[str]:
     """A point source's ideal chain assumes the detector's spot lies on the sample."""
-    scene = result.scene
-    if scene.source.kind != "point" or scene.effects.footprint is not None:
+    rig = result.plan.rig
+    if rig.source_kind != "point" or result.scene.effects.footprint is not None:
         return []
-    fov, sample = scene.detector.fov_diameter_mm, scene.sample.diameter_mm
+    fov, sample = rig.spec.constraints.detector_fov_mm, rig.spec.constraints.sample_diameter_mm
     beyond = int(np.count_nonzero(fov > sample * result.run.wo[:, 2]))
     if not beyond:
         return []
@@ -130,7 +115,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.output is not None:
         check_output(args.output, "-o")
     spec, rig = load_plan(args.plan, args.rig)
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene, rig)
     if args.no_effects:
         scene = scene.with_effects([])
     plan = build(spec, rig, where=str(args.plan))

@@ -1,4 +1,6 @@
-"""`Rig`: a validated rig file turned into kinematics, constraints and motor axes.
+"""`Rig`: a validated rig file turned into kinematics, constraints and motor axes, with
+what the instrument is (``rig.spec.light``, ``.detector``, ``.reference``; the
+serial detector's driver configuration from `Rig.serial_detector_config`).
 
 Joint angles are radians, in the order of the rig file's ``axes``. Directions are
 sample-frame unit vectors (z = normal). `solve` gives, for each pair, the joint angles
@@ -13,12 +15,15 @@ import math
 from dataclasses import dataclass
 from enum import IntEnum
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
 from drivers.dynamixel.axis import AxisConfig
+from drivers.serial_detector import SerialDetectorConfig
 from gonio.config import ConfigError, load
 from gonio.rig import constraints, inverse
+from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
 from gonio.rig.travel import TravelModel
@@ -32,7 +37,7 @@ class Reason(IntEnum):
     OK = 0
     THETA_MAX = 1  # beyond the usable polar angle of the light or the detector
     BLIND_SPOT = 2  # source and detector closer than the minimum separation
-    FOOTPRINT = 3  # the lit area leaves the sample or the detector's view
+    FOOTPRINT = 3  # the lit area leaves the sample or the detector's view (collimated)
     AXIS_LIMIT = 4  # no inverse-kinematics solution inside the axes' limits
     COLLISION = 5  # every solution inside the limits hits a keep-out box
 
@@ -252,15 +257,19 @@ class Rig:
         reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
         theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
         c = self.spec.constraints
+        # A point source floods the sample: no lit ellipse to keep on it (the spot the
+        # detector sees leaving the sample is the footprint effect's to model).
+        footprint = (
+            np.zeros(len(wi), dtype=np.bool_)
+            if c.beam_diameter_mm is None
+            else ~constraints.footprint_ok(
+                wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
+            )
+        )
         checks = [
             (Reason.THETA_MAX, theta_max),
             (Reason.BLIND_SPOT, constraints.separation(wi, wo) < self.min_separation),
-            (
-                Reason.FOOTPRINT,
-                ~constraints.footprint_ok(
-                    wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
-                ),
-            ),
+            (Reason.FOOTPRINT, footprint),
             (Reason.AXIS_LIMIT, ~limits_ok.any(axis=1)),
             (Reason.COLLISION, ~usable.any(axis=1)),
         ]
@@ -279,6 +288,34 @@ class Rig:
         """(mask, reasons) for pairs (N, 3): True where the rig can measure the pair."""
         solution = self.solve(wi, wo, isotropic=isotropic)
         return solution.ok, solution.reasons
+
+    # -- the instrument ------------------------------------------------------------------
+    @property
+    def source_kind(self) -> Literal["collimated", "point"]:
+        """The light's kind (``light.kind``)."""
+        return self.spec.light.kind
+
+    def reference_directions(self) -> tuple[FloatArray, FloatArray]:
+        """(ωi, ωo), each (3,), of the reference standard's calibration geometry: the
+        light at ``reference.theta_i_deg`` toward +x, the detector at ``theta_o_deg``
+        toward −x (the sample's x-z plane)."""
+        ref = self.spec.reference
+        ti, to = math.radians(ref.theta_i_deg), math.radians(ref.theta_o_deg)
+        wi = np.array([math.sin(ti), 0.0, math.cos(ti)])
+        wo = np.array([-math.sin(to), 0.0, math.cos(to)])
+        return wi, wo
+
+    def serial_detector_config(self) -> SerialDetectorConfig:
+        """The detector's ``interface`` as the driver's `SerialDetectorConfig`;
+        `ConfigError` unless the interface is ``serial``."""
+        interface = self.spec.detector.interface
+        if not isinstance(interface, SerialInterfaceSpec):
+            where = str(self.source) if self.source else "rig"
+            raise ConfigError(
+                f"{where}: detector.interface: is {interface.kind!r}; expected 'serial' for "
+                "a serial detector"
+            )
+        return interface.config()  # checked when the rig was read
 
     # -- motors ------------------------------------------------------------------------
     def bus_axes(self) -> list[AxisConfig]:

@@ -1,4 +1,6 @@
-"""The rig file (YAML), validated: axes, kinematic chains, physical constraints.
+"""The rig file (YAML), validated: axes, kinematic chains, physical constraints, and
+what the instrument is — the light's kind and switch, the detector's limits and
+interface, the reference standard (`gonio.rig.instrument`) — real or simulated.
 
 Angles in the file are degrees (fields say ``_deg``), lengths millimetres (``_mm``),
 times seconds. Everything is converted to radians once, in `gonio.rig.model`.
@@ -11,6 +13,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 
 from gonio.config import Strict, field_error
+from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
 
 Vector = tuple[float, float, float]
 
@@ -69,9 +72,19 @@ class ConstraintSpec(Strict):
     theta_max_deg: float = Field(80.0, gt=0, le=90)
     min_separation_deg: float = Field(8.0, ge=0, lt=180)
     collisions: tuple[CollisionSpec, ...] = ()
-    beam_diameter_mm: float = Field(gt=0)
+    #: The collimated beam's diameter (none for a point source, which floods the sample).
+    beam_diameter_mm: float | None = Field(None, gt=0)
     sample_diameter_mm: float = Field(gt=0)
+    #: The diameter of the spot the detector sees, perpendicular to ωo.
     detector_fov_mm: float = Field(gt=0)
+
+
+class LightChainSpec(KinematicChainSpec, LightSpec):
+    """The light: its chain, its kind and its switch."""
+
+
+class DetectorChainSpec(KinematicChainSpec, DetectorSpec):
+    """The detector: its chain, its limits and its interface."""
 
 
 class BusSpec(Strict):
@@ -86,10 +99,11 @@ class RigSpec(Strict):
     name: str
     type: Literal["arch", "in_plane"]
     axes: dict[str, AxisSpec] = Field(min_length=1)
-    light: KinematicChainSpec
-    detector: KinematicChainSpec
+    light: LightChainSpec
+    detector: DetectorChainSpec
     sample: KinematicChainSpec
     constraints: ConstraintSpec
+    reference: ReferenceSpec = ReferenceSpec()
     settle_s: float = Field(0.2, ge=0)
     bus: BusSpec = BusSpec()
 
@@ -111,6 +125,18 @@ class RigSpec(Strict):
                         f"{where}.{name}",
                         f"collision {box.name!r}: expected [low, high], got [{lo}, {hi}]",
                     )
+        beam = self.constraints.beam_diameter_mm
+        if self.light.kind == "collimated" and beam is None:
+            raise field_error(
+                "constraints.beam_diameter_mm",
+                "Field required for a collimated light (light.kind: collimated)",
+            )
+        if self.light.kind == "point" and beam is not None:
+            raise field_error(
+                "constraints.beam_diameter_mm",
+                "a point source floods the sample and has no beam diameter; expected it "
+                "only with light.kind: collimated",
+            )
         seen: dict[int, str] = {}
         for name, axis in self.axes.items():
             if axis.motor_id in seen:

@@ -94,15 +94,15 @@ class SimDetector(Resource):
     ) -> None:
         self.scene = scene
         self.rig = rig
-        self.chain = SceneOptics(scene)
+        self.chain = SceneOptics(scene, rig)
         self.sensor, self.sensor_effects = sensor_of(scene)
         self._pose = pose
         self._clock = clock
         self.streams = streams
         self._faults = faults or FaultInjector((), streams)
         self.light = light or SimLightSource()
-        self.exposure_range = scene.detector.exposure_range_s
-        self.readout_s = scene.detector.readout_s
+        self.exposure_range = rig.spec.detector.exposure_range_s
+        self.readout_s = rig.spec.detector.readout_s
         self._target: Target = "sample"  # what is on the stage
         self._sample = 0  # whose random streams the next measurement uses
         self._open = False

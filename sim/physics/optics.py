@@ -1,6 +1,11 @@
 """The simulated measurement's forward chain: geometry and time → radiant power at the
 detector → expected photo-electrons, with the scene's optical effects.
 
+The instrument's facts come from the rig (the light's kind and distance, the beam, sample
+and field-of-view sizes, the detector's aperture, the reference standard's albedo);
+what the simulation adds from the scene (the material, the source's power, the
+sensor's responsivity and band, the effects).
+
 The ideal chain is `gonio.radiometry`'s: Φ = K(source, ωi) · f(ωi, ωo) · c(ωo) · Ω.
 Effects, each computed only when the scene lists it:
 
@@ -26,8 +31,9 @@ from typing import Literal
 import numpy as np
 
 from gonio import brdf, radiometry
+from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
-from sim.scene import LUMINANCE, CollimatedSpec, Scene
+from sim.scene import LUMINANCE, Scene
 
 Target = Literal["sample", "reference"]
 
@@ -40,21 +46,31 @@ def band_eval(model: brdf.BRDF, band: str) -> BrdfEval:
     return lambda wi, wo: np.asarray(model.eval(wi, wo) @ weights, dtype=np.float64)
 
 
-class SceneOptics:
-    """The scene's chain, vectorized over pairs (N, 3) and exposures (N, A)."""
+def source_of(scene: Scene, rig: Rig) -> radiometry.Source:
+    """The rig's light with the scene's power (`ConfigError` if they do not match)."""
+    scene.check_rig(rig)
+    light, beam = rig.spec.light, rig.spec.constraints.beam_diameter_mm
+    if light.kind == "point":
+        assert light.distance_mm is not None  # required by the rig file
+        return radiometry.PointSource(scene.source.power, light.distance_mm)
+    assert beam is not None  # required by the rig file
+    return radiometry.CollimatedSource(scene.source.power, beam)
 
-    def __init__(self, scene: Scene) -> None:
+
+class SceneOptics:
+    """The chain of ``scene`` on ``rig``, vectorized over pairs (N, 3) and exposures
+    (N, A)."""
+
+    def __init__(self, scene: Scene, rig: Rig) -> None:
         self.scene = scene
-        s, d = scene.source, scene.detector
-        self.source: radiometry.Source = (
-            radiometry.CollimatedSource(s.irradiance_w_m2, s.beam_diameter_mm)
-            if isinstance(s, CollimatedSpec)
-            else radiometry.PointSource(s.intensity_w_sr, s.distance_mm)
-        )
-        self.optics = radiometry.DetectorOptics(d.aperture_sr, d.fov_diameter_mm)
+        self.source = source_of(scene, rig)
+        c, band = rig.spec.constraints, scene.detector.band
+        self.optics = radiometry.DetectorOptics(rig.spec.detector.aperture_sr, c.detector_fov_mm)
+        self.sample_diameter_mm = c.sample_diameter_mm
+        albedo = rig.spec.reference.albedo
         self.models: dict[Target, BrdfEval] = {
-            "sample": band_eval(scene.material.model(), d.band),
-            "reference": band_eval(brdf.create("lambert", albedo=scene.reference.albedo), d.band),
+            "sample": band_eval(scene.material.model(), band),
+            "reference": band_eval(brdf.create("lambert", albedo=albedo), band),
         }
         self.effects = scene.effects
 
@@ -75,7 +91,7 @@ class SceneOptics:
                 wo,
                 footprint=e.footprint is not None,
                 aperture_integration=aperture is not None,
-                sample_diameter_mm=self.scene.sample.diameter_mm,
+                sample_diameter_mm=self.sample_diameter_mm,
                 aperture_order=aperture.order if aperture is not None else 6,
             ),
             dtype=np.float64,

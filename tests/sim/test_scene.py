@@ -1,5 +1,7 @@
 """Scene files: the shipped scenes load; each mistake is one line naming the file, the
-line, the field and what was expected."""
+line, the field and what was expected; a fact of the instrument given in a scene is
+refused with where it belongs in the rig file; a source power of the other kind than
+the rig's light is refused."""
 
 from __future__ import annotations
 
@@ -10,7 +12,10 @@ import pytest
 import yaml
 
 from gonio.config import ConfigError
-from sim.scene import EffectsSpec, Scene, load_scene
+from gonio.rig.model import Rig
+from sim.physics.optics import SceneOptics
+from sim.scene import RIG_FIELDS, EffectsSpec, Scene, load_scene
+from tests.gonio.rig.helpers import ARCH_POINT, RIGS
 
 SCENES = Path(__file__).resolve().parents[2] / "configs" / "scenes"
 SHIPPED = sorted(p.stem for p in SCENES.glob("*.yaml"))
@@ -72,28 +77,28 @@ CASES = [
         "less than 1",
     ),
     (
-        "unknown-source-kind",
-        {"source": {"kind": "laser", "irradiance_w_m2": 1, "beam_diameter_mm": 2}},
+        "no-source-power",
+        {"source": {}},
         "source",
-        "'collimated', 'point'",
+        "expected one power: irradiance_w_m2 (a collimated light) or intensity_w_sr",
     ),
     (
-        "negative-aperture",
-        {"detector": {**MATTE["detector"], "aperture_sr": -1}},
-        "detector.aperture_sr",
+        "two-source-powers",
+        {"source": {"irradiance_w_m2": 1, "intensity_w_sr": 0.01}},
+        "source",
+        "expected one power",
+    ),
+    (
+        "negative-power",
+        {"source": {"intensity_w_sr": -1}},
+        "source.intensity_w_sr",
         "greater than 0",
     ),
     (
-        "exposure-range-inverted",
-        {"detector": {**MATTE["detector"], "exposure_range_s": [1, 0.1]}},
-        "detector.exposure_range_s",
-        "expected [min, max] with 0 < min ≤ max",
-    ),
-    (
-        "albedo-above-one",
-        {"reference": {"albedo": 1.2}},
-        "reference.albedo",
-        "less than or equal to 1",
+        "negative-responsivity",
+        {"detector": {**MATTE["detector"], "responsivity_a_w": -1}},
+        "detector.responsivity_a_w",
+        "greater than 0",
     ),
 ]
 
@@ -112,6 +117,84 @@ def test_bad_scene_is_one_line(
     assert message.startswith(f"{path}:"), message
     assert f": {field}: " in message, message
     assert words in message
+
+
+#: A value for each fact of the instrument a scene might repeat.
+RIG_VALUES: dict[tuple[str, ...], Any] = {
+    ("source", "kind"): "collimated",
+    ("source", "beam_diameter_mm"): 6,
+    ("source", "distance_mm"): 300,
+    ("detector", "aperture_sr"): 1e-5,
+    ("detector", "fov_diameter_mm"): 25,
+    ("detector", "exposure_range_s"): [1e-4, 60],
+    ("detector", "readout_s"): 0.0,
+    ("detector", "max_averages"): 8,
+    ("detector", "interface"): "simulated",
+    ("sample",): {"diameter_mm": 30},
+    ("reference",): {"albedo": 0.99},
+}
+
+
+def test_every_rig_fact_has_a_case() -> None:
+    assert set(RIG_VALUES) == set(RIG_FIELDS)
+
+
+def line_of_key(path: Path, key: str) -> int:
+    """1-based line where the value of ``key`` starts: the key's, or the next one for a
+    block mapping or sequence (where `gonio.config` points)."""
+    lines = path.read_text().splitlines()
+    at = next(i for i, line in enumerate(lines) if line.lstrip().startswith(f"{key}:"))
+    return at + 1 + lines[at].rstrip().endswith(":")
+
+
+@pytest.mark.parametrize("where", list(RIG_VALUES), ids=".".join)
+def test_a_fact_of_the_rig_in_a_scene_is_one_line(tmp_path: Path, where: tuple[str, ...]) -> None:
+    data = {**MATTE, "detector": dict(MATTE["detector"]), "source": dict(MATTE["source"])}
+    if len(where) == 1:
+        data[where[0]] = RIG_VALUES[where]
+    else:
+        data[where[0]][where[1]] = RIG_VALUES[where]
+    path = write(tmp_path, data)
+    with pytest.raises(ConfigError) as info:
+        load_scene(path)
+    message = str(info.value)
+    field = ".".join(where)
+    assert message == (
+        f"{path}:{line_of_key(path, where[-1])}: {field}: belongs in the rig file "
+        f"({RIG_FIELDS[where]}), not the scene; a scene holds only what a simulation adds"
+    )
+
+
+@pytest.mark.parametrize(
+    ("source", "rig", "field", "words"),
+    [
+        ({"irradiance_w_m2": 1.0}, ARCH_POINT, "source.irradiance_w_m2", "is point"),
+        ({"intensity_w_sr": 0.01}, RIGS["arch"], "source.intensity_w_sr", "is collimated"),
+    ],
+    ids=["irradiance-for-a-point-source", "intensity-for-a-collimated-beam"],
+)
+def test_a_source_power_of_the_other_kind_is_one_line(
+    tmp_path: Path, source: dict[str, float], rig: Rig, field: str, words: str
+) -> None:
+    path = write(tmp_path, {**MATTE, "source": source})
+    load_scene(path)  # alone, a scene does not know the rig's light
+    with pytest.raises(ConfigError) as info:
+        load_scene(path, rig)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(f"{path}:{line_of_key(path, field.split('.')[-1])}: {field}: ")
+    assert f"the light of the rig file {rig.source} {words} (light.kind); expected" in message
+    # Built in code, the scene is refused when it meets the rig.
+    scene = Scene.model_validate({**MATTE, "source": source})
+    with pytest.raises(ConfigError, match=f"^scene 'matte': {field}: the light of the rig file"):
+        SceneOptics(scene, rig)
+
+
+def test_shipped_scenes_fit_their_rigs() -> None:
+    for name in SHIPPED:
+        rig = ARCH_POINT if name == "seed000_specular" else RIGS["arch"]
+        scene = load_scene(SCENES / f"{name}.yaml", rig)
+        assert scene.source.kind == rig.source_kind
 
 
 def test_missing_scene_file(tmp_path: Path) -> None:

@@ -20,6 +20,7 @@ from sim.physics.optics import SceneOptics
 from sim.scene import Scene, load_scene
 from sim.simulate import simulate
 from tests.conftest import CONFIGS
+from tests.gonio.rig.helpers import ARCH_POINT, RIGS, with_point_source
 
 SCENES = CONFIGS / "scenes"
 
@@ -51,14 +52,15 @@ def varied(plan: Plan) -> Plan:
         ("matte", "arch", True),
         ("glossy_metal", "in_plane", True),
         ("brushed_metal", "in_plane", False),
-        ("seed000_specular", "arch", False),
+        ("seed000_specular", "arch_point", False),
     ],
 )
 def test_vectorized_equals_target_by_target(
     rigs: dict[str, Rig], scene_name: str, rig_name: str, isotropic: bool
 ) -> None:
-    scene = load_scene(SCENES / f"{scene_name}.yaml")
-    plan = varied(small_plan(rigs[rig_name], isotropic=isotropic, n=60))
+    rig = {**RIGS, "arch_point": ARCH_POINT}[rig_name]
+    scene = load_scene(SCENES / f"{scene_name}.yaml", rig)
+    plan = varied(small_plan(rig, isotropic=isotropic, n=60))
     fast = simulate(plan, scene)
     with SimulatedInstrument(scene, plan.rig) as inst:
         slow = inst.run(plan)
@@ -127,13 +129,13 @@ def test_no_effects_counts_to_brdf_recovers_the_model(
     the model's value at the measured pair to 1e-12 relative, over the reachable domain
     of every shipped rig, for both source types."""
     base = load_scene(SCENES / "glossy_metal.yaml").with_effects([])
-    source = (
-        {"kind": "collimated", "irradiance_w_m2": 1.0, "beam_diameter_mm": 6}
+    rig, source = (
+        (RIGS[rig_name], {"irradiance_w_m2": 1.0})
         if kind == "collimated"
-        else {"kind": "point", "intensity_w_sr": 0.01, "distance_mm": 300}
+        else (with_point_source(RIGS[rig_name]), {"intensity_w_sr": 0.01})
     )
     scene = Scene.model_validate({**base.model_dump(), "source": source})
-    rig = rigs[rig_name]
+    assert rig.source_kind == kind
     plan = small_plan(rig, isotropic=isotropic, n=300, seed=5)
     run = simulate(plan, scene)
     with SimulatedInstrument(scene, rig) as inst:
@@ -141,10 +143,10 @@ def test_no_effects_counts_to_brdf_recovers_the_model(
         ref, _ = read_reference(inst.devices(), rig, 0, reference_pose, 0.01)
         wi_ref, wo_ref = rig.forward(reference_pose)
     calibration = radiometry.ReferenceCalibration.from_counts(
-        scene.reference.albedo, ref.value, 0.01, wi_ref, wo_ref, kind
+        rig.spec.reference.albedo, ref.value, 0.01, wi_ref, wo_ref, rig.source_kind
     )
     measured = calibration.brdf_from_counts(run.value, run.exposure_s, run.wi, run.wo)
-    expected = SceneOptics(scene).models["sample"](run.wi, run.wo)
+    expected = SceneOptics(scene, rig).models["sample"](run.wi, run.wo)
     assert np.all(expected > 0)
     np.testing.assert_allclose(measured, expected, rtol=1e-12)
     assert scene.material.model().is_rgb  # the detector's band reduced RGB to one value

@@ -1,4 +1,5 @@
-"""`gonio simulate`: a plan measured on the simulated rig, end to end, as a user runs it."""
+"""`gonio simulate`: a plan measured on the simulated rig, end to end, as a user runs it
+(in-process through `gonio.cli.main`), and what its summary says."""
 
 from __future__ import annotations
 
@@ -7,11 +8,16 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from gonio.acquire.calibration import reference_pose
+from gonio.cli.simulate import render
+from gonio.errors import GonioError
 from gonio.planner import build, load_plan
 from sim.scene import load_scene
 from sim.session import simulate_plan
 from tests.conftest import CONFIGS, CliResult
+from tests.gonio.rig.helpers import ARCH_POINT, RIGS, rig_with
 
 Gonio = Callable[..., CliResult]
 
@@ -44,17 +50,53 @@ def test_bad_scene_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
     assert f"{scene}:2: material.name: unknown BRDF model 'velvet'" in r.stderr
 
 
-def test_notes_when_the_scene_and_the_rig_disagree() -> None:
-    from gonio.cli.simulate import render
-    from sim.scene import Scene
-
-    spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
-    plan = build(spec, rig)
-    base = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml")
-    result = simulate_plan(plan, base)
-    text = render(result)
+def test_point_source_note_uses_the_rigs_sizes() -> None:
+    spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
+    plan = build(spec, ARCH_POINT)
+    scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", ARCH_POINT)
+    text = render(simulate_plan(plan, scene))
+    # 25 mm seen on a 30 mm sample: the view leaves the sample beyond acos(25/30).
     assert "see past the sample's edge (θo > 33.6°)" in text
-    assert "differ from the rig file's" not in text
-    bigger = Scene.model_validate({**base.model_dump(), "sample": {"diameter_mm": 40}})
-    text = render(simulate_plan(plan, bigger))
-    assert "the scene's sample diameter 40 mm (rig 30 mm) differ from the rig file's" in text
+    wider = rig_with(ARCH_POINT, constraints={"sample_diameter_mm": 60})
+    assert "see past the sample's edge (θo > 65.4°)" in render(
+        simulate_plan(build(spec, wider), scene)
+    )
+
+
+def test_the_reference_standard_is_the_rigs() -> None:
+    """Albedo and calibration geometry come from the rig file's reference section."""
+    rig = rig_with(RIGS["arch"], reference={"albedo": 0.9, "theta_i_deg": 10, "theta_o_deg": 40})
+    spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
+    plan = build(spec, rig)
+    scene = load_scene(CONFIGS / "scenes" / "glossy_metal.yaml").with_effects([])
+    result = simulate_plan(plan, scene)
+    assert "(albedo 0.9, 10°/40°, " in render(result)
+    np.testing.assert_allclose(result.brdf, result.truth, rtol=1e-12)
+    wi, wo = rig.forward(reference_pose(rig))
+    np.testing.assert_allclose(np.degrees(np.arccos([wi[2], wo[2]])), [10.0, 40.0], atol=1e-9)
+
+
+def test_an_unreachable_reference_geometry_is_one_line() -> None:
+    rig = rig_with(RIGS["arch"], reference={"theta_o_deg": 85})  # beyond θ max = 80°
+    with pytest.raises(GonioError) as info:
+        reference_pose(rig)
+    assert str(info.value) == (
+        "rig 'arch-4axis' cannot reach its reference geometry (0°/85°; theta max)"
+    )
+
+
+def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None:
+    """The quick plan's rig has a collimated light; the seed-000 scene gives a point
+    source's intensity: refused at the scene's line, before anything is simulated."""
+    scene = CONFIGS / "scenes" / "seed000_specular.yaml"
+    r = run_gonio("simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene))
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+    assert f"{scene}:6: source.intensity_w_sr: the light of the rig file " in r.stderr
+    assert "is collimated (light.kind); expected irradiance_w_m2" in r.stderr
+    r = run_gonio(
+        "simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene),
+        "--rig", str(CONFIGS / "rigs" / "arch_point.yaml"),
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: none)" in r.stdout

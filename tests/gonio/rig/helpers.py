@@ -3,16 +3,40 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from gonio.rig.model import Rig
+from gonio.rig.schema import RigSpec
 from gonio.types import FloatArray
 
 RIG_DIR = Path(__file__).resolve().parents[3] / "configs" / "rigs"
 RIG_FILES = {"arch": RIG_DIR / "arch.yaml", "in_plane": RIG_DIR / "in_plane.yaml"}
-#: The shipped rigs, loaded once (module-level so hypothesis tests can use them).
+#: The shipped rigs of each kinematic type, loaded once (module-level so hypothesis
+#: tests can use them); their lights are collimated.
 RIGS = {name: Rig.from_yaml(path) for name, path in RIG_FILES.items()}
+#: The arch rig with a point source (for the point-source scene).
+ARCH_POINT = Rig.from_yaml(RIG_DIR / "arch_point.yaml")
+
+
+def rig_with(rig: Rig, **sections: Any) -> Rig:
+    """``rig`` with some fields of its sections replaced, e.g.
+    ``rig_with(rig, detector={"readout_s": 0.004})`` (validated as a rig file is)."""
+    data = rig.spec.model_dump()
+    for key, value in sections.items():
+        data[key] = {**data[key], **value} if isinstance(value, dict) else value
+    return Rig(RigSpec.model_validate(data))
+
+
+def with_point_source(rig: Rig, distance_mm: float = 300.0) -> Rig:
+    """``rig`` with a point source ``distance_mm`` from the sample instead of its beam."""
+    return rig_with(
+        rig,
+        light={"kind": "point", "distance_mm": distance_mm},
+        constraints={"beam_diameter_mm": None},
+    )
+
 
 #: Round-trip tolerance (rad) required by the issue.
 TOL = 1e-10

@@ -55,6 +55,298 @@ def edit(rig: str, change: Callable[[dict[str, Any]], object]) -> dict[str, Any]
     return data
 
 
+def serial(**fields: object) -> Callable[[dict[str, Any]], object]:
+    """A change: the detector's interface serial on a port, with ``fields``."""
+    return lambda d: d["detector"].update(interface={"kind": "serial", "port": "/dev/x", **fields})
+
+
+def switch(fields: dict[Any, object]) -> Callable[[dict[str, Any]], object]:
+    """A change: a serial light switch, with ``fields``."""
+    base = {"kind": "serial", "port": "/dev/y", "on_command": "L1", "off_command": "L0"}
+    return lambda d: d["light"].update(switch={**base, **fields})
+
+
+def point(d: dict[str, Any]) -> None:
+    d["light"].update(kind="point", distance_mm=300)
+    d["constraints"].pop("beam_diameter_mm")
+
+
+def _chain(*changes: Callable[[dict[str, Any]], object]) -> Callable[[dict[str, Any]], object]:
+    return lambda d: [change(d) for change in changes]
+
+
+#: The light, detector and reference sections (id, rig, change, field, line keys, words).
+INSTRUMENT_CASES: list[
+    tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, ...], str]
+] = [
+    (
+        "unknown-light-kind",
+        "arch",
+        lambda d: d["light"].update(kind="laser"),
+        "light.kind",
+        ("light", "kind"),
+        "Input should be 'collimated' or 'point' (got 'laser')",
+    ),
+    (
+        "point-source-without-a-distance",
+        "arch",
+        _chain(point, lambda d: d["light"].pop("distance_mm")),
+        "light.distance_mm",
+        ("light",),
+        "Field required for a point source (kind: point)",
+    ),
+    (
+        "collimated-light-with-a-distance",
+        "in_plane",
+        lambda d: d["light"].update(distance_mm=300),
+        "light.distance_mm",
+        ("light", "distance_mm"),
+        "a collimated beam has no distance; expected it with kind: point",
+    ),
+    (
+        "point-source-with-a-beam",
+        "arch",
+        _chain(point, lambda d: d["constraints"].update(beam_diameter_mm=6)),
+        "constraints.beam_diameter_mm",
+        ("constraints", "beam_diameter_mm"),
+        "a point source floods the sample and has no beam diameter",
+    ),
+    (
+        "unknown-switch",
+        "arch",
+        lambda d: d["light"].update(switch="relay"),
+        "light.switch",
+        ("light", "switch"),
+        "Input tag 'relay' found using 'kind' does not match any of the expected tags: "
+        "'none', 'serial'",
+    ),
+    (
+        "serial-switch-without-a-port",
+        "arch",
+        lambda d: d["light"].update(switch={"kind": "serial", "on_command": "L1"}),
+        "light.switch.port",
+        ("light", "switch"),
+        "Field required",
+    ),
+    (
+        "switch-with-yaml-boolean-keys",
+        "arch",
+        switch({True: "L1", False: "L0"}),  # what `on: L1` and `off: L0` read as
+        "light.switch",
+        ("light", "switch"),
+        "YAML reads the keys on: and off: as true and false; expected on_command:",
+    ),
+    (
+        "switch-command-of-two-lines",
+        "arch",
+        switch({"on_command": "L1\nL2"}),
+        "light.switch.on_command",
+        ("light", "switch", "on_command"),
+        "expected one line of ASCII text, got 'L1\\nL2'",
+    ),
+    (
+        "switch-ack-not-a-regex",
+        "in_plane",
+        switch({"ack": "(OK"}),
+        "light.switch.ack",
+        ("light", "switch", "ack"),
+        "'(OK' is not a valid regular expression: missing ), unterminated subpattern",
+    ),
+    (
+        "switch-query-without-replies",
+        "arch",
+        switch({"query_command": "L?", "off_reply": "^OFF"}),
+        "light.switch.on_reply",
+        ("light", "switch"),
+        "expected a regex for the answer to query_command",
+    ),
+    (
+        "switch-reply-without-a-query",
+        "arch",
+        switch({"on_reply": "^ON"}),
+        "light.switch.query_command",
+        ("light", "switch"),
+        "expected the command that on_reply answers",
+    ),
+    (
+        "detector-without-an-aperture",
+        "arch",
+        lambda d: d["detector"].pop("aperture_sr"),
+        "detector.aperture_sr",
+        ("detector",),
+        "Field required",
+    ),
+    (
+        "aperture-beyond-a-hemisphere",
+        "in_plane",
+        lambda d: d["detector"].update(aperture_sr=7),
+        "detector.aperture_sr",
+        ("detector", "aperture_sr"),
+        "less than or equal to 6.28",
+    ),
+    (
+        "exposure-range-inverted",
+        "arch",
+        lambda d: d["detector"].update(exposure_range_s=[1, 0.1]),
+        "detector.exposure_range_s",
+        ("detector", "exposure_range_s"),
+        "expected [min, max] with 0 < min ≤ max, got [1.0, 0.1]",
+    ),
+    (
+        "negative-readout",
+        "arch",
+        lambda d: d["detector"].update(readout_s=-0.1),
+        "detector.readout_s",
+        ("detector", "readout_s"),
+        "greater than or equal to 0",
+    ),
+    (
+        "zero-max-averages",
+        "arch",
+        lambda d: d["detector"].update(max_averages=0),
+        "detector.max_averages",
+        ("detector", "max_averages"),
+        "greater than or equal to 1",
+    ),
+    (
+        "unknown-interface",
+        "arch",
+        lambda d: d["detector"].update(interface="usb"),
+        "detector.interface",
+        ("detector", "interface"),
+        "Input tag 'usb' found using 'kind' does not match any of the expected tags: "
+        "'simulated', 'serial'",
+    ),
+    (
+        "serial-detector-without-a-port",
+        "arch",
+        lambda d: d["detector"].update(interface="serial"),
+        "detector.interface.port",
+        ("detector", "interface"),
+        "Field required",
+    ),
+    (
+        "serial-query-with-an-unknown-field",
+        "arch",
+        serial(query="MEAS {gain}"),
+        "detector.interface.query",
+        ("detector", "interface", "query"),
+        "'MEAS {gain}' uses ['gain']; allowed fields: {averages}, {exposure_ms}",
+    ),
+    (
+        "serial-query-not-a-template",
+        "arch",
+        serial(query="MEAS {exposure_ms"),
+        "detector.interface.query",
+        ("detector", "interface", "query"),
+        "'MEAS {exposure_ms' is not a valid template: ",
+    ),
+    (
+        "serial-set-exposure-with-averages",
+        "in_plane",
+        serial(set_exposure="EXP {averages}"),
+        "detector.interface.set_exposure",
+        ("detector", "interface", "set_exposure"),
+        "'EXP {averages}' uses ['averages']; allowed fields: {exposure_ms}",
+    ),
+    (
+        "serial-init-command-with-a-field",
+        "arch",
+        serial(init=["MODE {x}"]),
+        "detector.interface.init.0",
+        ("detector", "interface", "init"),
+        "'MODE {x}' uses ['x']; allowed fields: none",
+    ),
+    (
+        "serial-response-without-a-value",
+        "arch",
+        serial(response=r"VAL (\d+)"),
+        "detector.interface.response",
+        ("detector", "interface", "response"),
+        "needs a named group (?P<value>...)",
+    ),
+    (
+        "serial-response-not-a-regex",
+        "arch",
+        serial(response="(?P<value>[0-9"),
+        "detector.interface.response",
+        ("detector", "interface", "response"),
+        "is not a valid regular expression: unterminated character set",
+    ),
+    (
+        "serial-banner-not-a-regex",
+        "arch",
+        serial(reset_banner="READY)"),
+        "detector.interface.reset_banner",
+        ("detector", "interface", "reset_banner"),
+        "'READY)' is not a valid regular expression: unbalanced parenthesis",
+    ),
+    (
+        "serial-saturated-status-without-a-group",
+        "arch",
+        serial(saturated_status="^SAT$"),
+        "detector.interface.saturated_status",
+        ("detector", "interface", "saturated_status"),
+        "needs a named group (?P<status>...) in response",
+    ),
+    (
+        "serial-device-averaging-without-the-field",
+        "arch",
+        serial(device_averaging=True),
+        "detector.interface.device_averaging",
+        ("detector", "interface", "device_averaging"),
+        "needs an {averages} field in query",
+    ),
+    (
+        "serial-unknown-line-ending",
+        "arch",
+        serial(line_ending="\t"),
+        "detector.interface.line_ending",
+        ("detector", "interface", "line_ending"),
+        "Input should be 'lf', 'crlf' or 'cr' (got '\\t')",
+    ),
+    (
+        "serial-zero-timeout",
+        "arch",
+        serial(timeout_s=0),
+        "detector.interface.timeout_s",
+        ("detector", "interface", "timeout_s"),
+        "greater than 0",
+    ),
+    (
+        "serial-short-max-line",
+        "arch",
+        serial(max_line_bytes=8),
+        "detector.interface.max_line_bytes",
+        ("detector", "interface", "max_line_bytes"),
+        "greater than or equal to 16",
+    ),
+    (
+        "serial-unknown-field",
+        "arch",
+        serial(parity="E"),
+        "detector.interface.parity",
+        ("detector", "interface", "parity"),
+        "Extra inputs are not permitted",
+    ),
+    (
+        "reference-albedo-above-one",
+        "arch",
+        lambda d: d["reference"].update(albedo=1.2),
+        "reference.albedo",
+        ("reference", "albedo"),
+        "less than or equal to 1",
+    ),
+    (
+        "reference-at-grazing",
+        "in_plane",
+        lambda d: d["reference"].update(theta_o_deg=90),
+        "reference.theta_o_deg",
+        ("reference", "theta_o_deg"),
+        "less than 90",
+    ),
+]
+
 # (id, rig, change, field path, line keys or None, expected words)
 CASES: list[tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, ...], str]] = [
     (
@@ -100,10 +392,18 @@ CASES: list[tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, 
     (
         "missing-field",
         "arch",
+        lambda d: d["constraints"].pop("sample_diameter_mm"),
+        "constraints.sample_diameter_mm",
+        ("constraints",),
+        "Field required",
+    ),
+    (
+        "collimated-light-without-a-beam",
+        "arch",
         lambda d: d["constraints"].pop("beam_diameter_mm"),
         "constraints.beam_diameter_mm",
         ("constraints",),
-        "Field required",
+        "Field required for a collimated light (light.kind: collimated)",
     ),
     (
         "missing-chain",
@@ -177,6 +477,7 @@ CASES: list[tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, 
         ("axes", "detector_azimuth", "motor_id"),
         "motor ID 1 is already used by light_elevation",
     ),
+    *INSTRUMENT_CASES,
     (
         "collision-names-an-unknown-axis",
         "in_plane",

@@ -14,7 +14,8 @@ from gonio import radiometry
 from gonio.rig.model import Rig
 from sim.devices.instrument import SimulatedInstrument
 from sim.scene import Scene, load_scene
-from tests.conftest import CONFIGS, RIG_FILES
+from tests.conftest import CONFIGS
+from tests.gonio.rig.helpers import RIGS, rig_with
 
 SCENES = CONFIGS / "scenes"
 MATTE = load_scene(SCENES / "matte.yaml")
@@ -41,7 +42,7 @@ def read(inst: SimulatedInstrument, pose: list[float], exposure: float, averages
     return inst.detector.measure(exposure, averages)
 
 
-ARCH = Rig.from_yaml(RIG_FILES["arch"])
+ARCH = RIGS["arch"]
 
 
 def test_exact_value_without_effects() -> None:
@@ -70,9 +71,17 @@ def test_exposure_and_averages_are_checked() -> None:
                 inst.detector.measure(0.01, averages)  # type: ignore[arg-type]
 
 
+def test_the_exposure_range_is_the_rigs() -> None:
+    rig = rig_with(ARCH, detector={"exposure_range_s": [0.01, 1.0]})
+    with SimulatedInstrument(MATTE, rig) as inst:
+        with pytest.raises(DetectorError, match=r"range \[0.01, 1\] s"):
+            inst.detector.measure(0.005)
+        assert inst.detector.measure(1.0).n == 1
+
+
 def test_measuring_takes_virtual_time() -> None:
-    scene = scene_with(detector={"readout_s": 0.004})
-    with SimulatedInstrument(scene, ARCH) as inst:
+    rig = rig_with(ARCH, detector={"readout_s": 0.004})
+    with SimulatedInstrument(MATTE, rig) as inst:
         t = inst.clock.now()
         r = inst.detector.measure(0.1, 5)
         assert inst.clock.now() - t == pytest.approx(5 * 0.104)
@@ -136,9 +145,10 @@ def test_aperture_integration_lowers_a_sharp_peak_and_converges() -> None:
     pose = in_plane_pose(ARCH, 30.0, 30.0)  # the mirror configuration: the peak
     values = {}
     for aperture in (1e-3, 1e-4, 1e-5, 1e-6):
+        rig = rig_with(ARCH, detector={"aperture_sr": aperture})
         for effects in ([], ["aperture_integration"]):
-            scene = scene_with(material=ggx, detector={"aperture_sr": aperture}, effects=effects)
-            with SimulatedInstrument(scene, ARCH) as inst:
+            scene = scene_with(material=ggx, effects=effects)
+            with SimulatedInstrument(scene, rig) as inst:
                 values[aperture, bool(effects)] = read(inst, pose, 1e-4).value
     ratio = {a: values[a, True] / values[a, False] for a in (1e-3, 1e-4, 1e-5, 1e-6)}
     assert ratio[1e-3] < 0.9
@@ -160,13 +170,14 @@ def test_aperture_integration_lowers_a_sharp_peak_and_converges() -> None:
 def test_footprint_kicks_in_at_the_predicted_grazing_angle(
     fov_mm: float, predicted_deg: float
 ) -> None:
-    clean = scene_with(detector={"fov_diameter_mm": fov_mm}, effects=[])
-    spill = scene_with(detector={"fov_diameter_mm": fov_mm}, effects=["footprint"])
+    clean = scene_with(effects=[])
+    spill = scene_with(effects=["footprint"])
+    rig = rig_with(ARCH, constraints={"detector_fov_mm": fov_mm})
     ratios = {}
     angles = (60.0, predicted_deg - 0.01, predicted_deg + 0.01, 82.0, 84.0)
     for theta in angles:
-        pose = in_plane_pose(ARCH, theta, 10.0)
-        with SimulatedInstrument(clean, ARCH) as a, SimulatedInstrument(spill, ARCH) as b:
+        pose = in_plane_pose(rig, theta, 10.0)
+        with SimulatedInstrument(clean, rig) as a, SimulatedInstrument(spill, rig) as b:
             ratios[theta] = read(b, pose, 0.05).value / read(a, pose, 0.05).value
     assert ratios[60.0] == pytest.approx(1.0, rel=1e-14)
     assert ratios[angles[1]] == pytest.approx(1.0, rel=1e-14)

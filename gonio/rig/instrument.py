@@ -1,0 +1,270 @@
+"""The rig file's instrument sections: what the light, the detector and the reference
+standard are, beside where their chains put them (`gonio.rig.schema`).
+
+- ``light``: the source's kind (``collimated``, its beam diameter in
+  ``constraints.beam_diameter_mm``; or ``point``, at ``distance_mm`` from the sample
+  centre) and its ``switch``: ``none`` (the light cannot be switched: a dark reading is
+  taken another way, e.g. with the beam blocked) or ``serial`` (commands on a serial
+  port, `SerialSwitchSpec`).
+- ``detector``: its collecting solid angle, exposure range, readout dead time, averaging
+  limit and ``interface``: ``simulated`` or ``serial`` (every field of
+  `drivers.serial_detector.SerialDetectorConfig`, `SerialInterfaceSpec`).
+- ``reference``: the Lambertian standard read for calibration, and where.
+
+A value here is never repeated in a scene file (`sim.scene` refuses it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
+from gonio.config import Strict, field_error
+
+#: Line endings by name (a YAML file may also give the characters, e.g. ``"\r\n"``).
+LINE_ENDINGS = {"lf": "\n", "crlf": "\r\n", "cr": "\r"}
+
+
+def _line_ending_name(v: Any) -> Any:
+    """``"\\r\\n"`` → ``"crlf"`` (the names are what the models store)."""
+    return next((name for name, chars in LINE_ENDINGS.items() if v == chars), v)
+
+
+def _tagged(v: Any) -> Any:
+    """A bare kind (``switch: none``, ``interface: simulated``) means that kind with its
+    defaults."""
+    return {"kind": v} if isinstance(v, str) else v
+
+
+def _check_pattern(field: str, pattern: str | None) -> None:
+    if pattern is None:
+        return
+    try:
+        re.compile(pattern)
+    except re.error as exc:
+        raise field_error(field, f"{pattern!r} is not a valid regular expression: {exc}") from None
+
+
+def _check_command(field: str, command: str | None) -> None:
+    if command is None:
+        return
+    if not command.strip():
+        raise field_error(field, "expected a command, got an empty string")
+    if "\r" in command or "\n" in command or not command.isascii():
+        raise field_error(field, f"expected one line of ASCII text, got {command!r}")
+
+
+# -- the light ---------------------------------------------------------------------------
+
+
+class NoSwitchSpec(Strict):
+    """The light cannot be switched by the program: the dark reading is taken another
+    way (a shutter or a cap; the simulator models it as the source giving no light)."""
+
+    kind: Literal["none"]
+
+
+class SerialSwitchSpec(Strict):
+    """A light switched by one-line commands on a serial port (a relay board, a lamp
+    controller). ``ack``: a regex a line answering ``on_command``/``off_command`` must
+    match (no answer is read without it). ``query_command``: asks the state; the
+    answer matches ``on_reply`` when on, ``off_reply`` when off. ``warmup_s``: how long
+    the source needs after switching on before readings are stable."""
+
+    kind: Literal["serial"]
+    port: str = Field(min_length=1)
+    baud: int = Field(9600, gt=0)
+    line_ending: Literal["lf", "crlf", "cr"] = "lf"
+    on_command: str
+    off_command: str
+    ack: str | None = None
+    query_command: str | None = None
+    on_reply: str | None = None
+    off_reply: str | None = None
+    timeout_s: float = Field(1.0, gt=0)
+    warmup_s: float = Field(0.0, ge=0)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _yaml_booleans(cls, data: Any) -> Any:
+        if isinstance(data, dict) and any(isinstance(k, bool) for k in data):
+            raise ValueError(
+                "YAML reads the keys on: and off: as true and false; expected on_command: "
+                "and off_command:"
+            )
+        return data
+
+    @field_validator("line_ending", mode="before")
+    @classmethod
+    def _ending(cls, v: Any) -> Any:
+        return _line_ending_name(v)
+
+    @model_validator(mode="after")
+    def _usable(self) -> SerialSwitchSpec:
+        for name in ("on_command", "off_command", "query_command"):
+            _check_command(name, getattr(self, name))
+        for name in ("ack", "on_reply", "off_reply"):
+            _check_pattern(name, getattr(self, name))
+        if self.query_command is not None:
+            for name in ("on_reply", "off_reply"):
+                if getattr(self, name) is None:
+                    raise field_error(name, "expected a regex for the answer to query_command")
+        elif self.on_reply is not None or self.off_reply is not None:
+            raise field_error("query_command", "expected the command that on_reply answers")
+        return self
+
+    @property
+    def line_ending_chars(self) -> str:
+        return LINE_ENDINGS[self.line_ending]
+
+
+SwitchSpec = Annotated[NoSwitchSpec | SerialSwitchSpec, Field(discriminator="kind")]
+
+
+class LightSpec(Strict):
+    """What the light is, beside its chain: a distant ``collimated`` beam (its diameter
+    is ``constraints.beam_diameter_mm``) or a ``point`` source ``distance_mm`` from the
+    sample centre along ωi; and its switch."""
+
+    kind: Literal["collimated", "point"] = "collimated"
+    distance_mm: float | None = Field(None, gt=0)
+    switch: SwitchSpec = NoSwitchSpec(kind="none")
+
+    @field_validator("switch", mode="before")
+    @classmethod
+    def _bare_kind(cls, v: Any) -> Any:
+        return _tagged(v)
+
+    @model_validator(mode="after")
+    def _distance(self) -> LightSpec:
+        if self.kind == "point" and self.distance_mm is None:
+            raise field_error("distance_mm", "Field required for a point source (kind: point)")
+        if self.kind == "collimated" and self.distance_mm is not None:
+            raise field_error(
+                "distance_mm", "a collimated beam has no distance; expected it with kind: point"
+            )
+        return self
+
+
+# -- the detector ------------------------------------------------------------------------
+
+
+class SimulatedInterfaceSpec(Strict):
+    """The simulated detector (`sim.devices.detector.SimDetector`); the scene file
+    gives its sensor."""
+
+    kind: Literal["simulated"]
+
+
+_DRIVER_FIELDS = tuple(f.name for f in dataclasses.fields(SerialDetectorConfig))
+
+
+def _driver_default(name: str) -> Any:
+    field = next(f for f in dataclasses.fields(SerialDetectorConfig) if f.name == name)
+    return field.default
+
+
+class SerialInterfaceSpec(Strict):
+    """A line-based serial detector: every field of `SerialDetectorConfig`, with its
+    defaults (docs/serial_detector.md), ``line_ending`` by name (``lf``, ``crlf``,
+    ``cr``). Templates and regular expressions are checked by the driver's own rules
+    when the rig is read, each mistake reported at its field."""
+
+    kind: Literal["serial"]
+    port: str = Field(min_length=1)
+    baud: int = Field(_driver_default("baud"), gt=0)
+    query: str = _driver_default("query")
+    set_exposure: str | None = _driver_default("set_exposure")
+    response: str = _driver_default("response")
+    line_ending: Literal["lf", "crlf", "cr"] = _line_ending_name(_driver_default("line_ending"))
+    timeout_s: float = Field(_driver_default("timeout_s"), gt=0)
+    retries: int = Field(_driver_default("retries"), ge=0)
+    full_scale: float | None = Field(_driver_default("full_scale"), gt=0)
+    reset_banner: str | None = _driver_default("reset_banner")
+    init: tuple[str, ...] = _driver_default("init")
+    settle_s: float = Field(_driver_default("settle_s"), ge=0)
+    command_ack: str | None = _driver_default("command_ack")
+    error_reply: str | None = _driver_default("error_reply")
+    saturated_status: str | None = _driver_default("saturated_status")
+    device_averaging: bool = _driver_default("device_averaging")
+    max_line_bytes: int = Field(_driver_default("max_line_bytes"), ge=16)
+
+    @field_validator("line_ending", mode="before")
+    @classmethod
+    def _ending(cls, v: Any) -> Any:
+        return _line_ending_name(v)
+
+    @model_validator(mode="after")
+    def _driver_accepts(self) -> SerialInterfaceSpec:
+        self.config()
+        return self
+
+    def config(self) -> SerialDetectorConfig:
+        """The driver's configuration; a `field_error` at the field the driver refuses."""
+        values = {name: getattr(self, name) for name in _DRIVER_FIELDS}
+        values["line_ending"] = LINE_ENDINGS[self.line_ending]
+        try:
+            return SerialDetectorConfig(**values)
+        except SerialDetectorValueError as exc:
+            message = str(exc).partition("invalid configuration: ")[2] or str(exc)
+            raise field_error(*self._field_of(message)) from None
+
+    def _field_of(self, message: str) -> tuple[str, str]:
+        """(field, message without the field's name) of a driver's message, which
+        starts with the field's name (an init command's: with "init command")."""
+        if message.startswith("init command "):
+            i = next((i for i, c in enumerate(self.init) if repr(c) in message), None)
+            rest = message.removeprefix("init command ")
+            return ("init" if i is None else f"init.{i}"), rest
+        named = [n for n in _DRIVER_FIELDS if message.startswith(f"{n} ")]
+        if not named:
+            return "kind", message
+        field = max(named, key=len)
+        return field, message.removeprefix(f"{field} ")
+
+
+InterfaceSpec = Annotated[SimulatedInterfaceSpec | SerialInterfaceSpec, Field(discriminator="kind")]
+
+
+class DetectorSpec(Strict):
+    """What the detector is, beside its chain: the solid angle it collects (seen from
+    the sample), the exposures it accepts, its dead time after each exposure, the most
+    averages one reading may ask for (none: no limit) and how it is reached."""
+
+    aperture_sr: float = Field(gt=0, le=2 * math.pi)
+    exposure_range_s: tuple[float, float] = (1e-4, 60.0)
+    readout_s: float = Field(0.0, ge=0)
+    max_averages: int | None = Field(None, ge=1)
+    interface: InterfaceSpec = SimulatedInterfaceSpec(kind="simulated")
+
+    @field_validator("interface", mode="before")
+    @classmethod
+    def _bare_kind(cls, v: Any) -> Any:
+        return _tagged(v)
+
+    @model_validator(mode="after")
+    def _range(self) -> DetectorSpec:
+        lo, hi = self.exposure_range_s
+        if not 0 < lo <= hi:
+            raise field_error(
+                "exposure_range_s", f"expected [min, max] with 0 < min ≤ max, got [{lo}, {hi}]"
+            )
+        return self
+
+
+# -- the reference standard ----------------------------------------------------------------
+
+
+class ReferenceSpec(Strict):
+    """The Lambertian standard read for calibration (e.g. a 99 % diffuse target), with
+    the light at ``theta_i_deg`` and the detector at ``theta_o_deg`` on the far side of
+    the normal, both in the sample's x-z plane (the classic 0°/45°)."""
+
+    albedo: float = Field(0.99, gt=0, le=1)
+    theta_i_deg: float = Field(0.0, ge=0, lt=90)
+    theta_o_deg: float = Field(45.0, ge=0, lt=90)
