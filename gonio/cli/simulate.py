@@ -26,7 +26,7 @@ import numpy as np
 from gonio import radiometry
 from gonio.config import check_output
 from gonio.errors import GonioError
-from gonio.planner.plan import Plan, build, hms, load_plan
+from gonio.planner.plan import Plan, hms, load_plan_source
 from gonio.rig.model import Reason, Rig
 from gonio.types import FloatArray
 from sim.devices.instrument import SimulatedInstrument
@@ -230,11 +230,11 @@ def write_csv(result: Result, path: Path) -> None:
 def cmd_simulate(args: argparse.Namespace) -> int:
     if args.output is not None:
         check_output(args.output, "-o")
-    spec, rig = load_plan(args.plan, args.rig)
+    source = load_plan_source(args.plan, args.rig)
     scene = load_scene(args.scene)
     if args.no_effects:
         scene = scene.with_effects([])
-    plan = build(spec, rig, where=str(args.plan))
+    plan = source.build()
     result = simulate_plan(plan, scene, args.seed)
     print(render(result))
     if args.output is not None:

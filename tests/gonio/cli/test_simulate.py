@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import subprocess
 import sys
 from pathlib import Path
@@ -67,8 +68,7 @@ def test_saturating_reference_exposure_is_shortened() -> None:
     """At a 0.3 s plan exposure the reference standard would clip: the calibration
     halves the exposure until it does not, and the recovered BRDF stays right."""
     spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
-    plan = build(spec, rig)
-    plan.exposure_s = np.full(len(plan), 0.3)
+    plan = dataclasses.replace(build(spec, rig), exposure_s=np.full(500, 0.3))
     scene = load_scene(CONFIGS / "scenes" / "matte.yaml")
     result = simulate_plan(plan, scene)
     assert result.reference_exposure_s == 0.15
