@@ -9,8 +9,11 @@ generation order (with the same choice of inverse-kinematics solutions), after t
 constructive order (on the solutions nearest home), of the final plan (2-opt/Or-opt,
 solutions re-chosen along the order, improved again), the minimum spanning tree over
 the poses measured, the ratios the issue sets targets for (ordered ≤ 1.3 × MST,
-generation order ≥ 2 × ordered) and the wall time of ordering (construction,
-improvement and the choice of solutions; time budget 30 s) and of the lower bound.
+generation order ≥ 2 × ordered), the improving moves the ordering applied (the default
+budget is 10 per target + 100: "(budget)" if it bound, "(time cap)" if the wall-clock
+safety cap did, which makes the order machine-dependent) and the wall time of ordering
+(construction, improvement and the choice of solutions; safety cap 30 s) and of the
+lower bound (`build(..., bounds=True)`).
 Run: .venv/bin/python benchmarks/planner.py [--sizes 5000,50000]
 """
 
@@ -41,9 +44,9 @@ def main() -> None:
     print()
     print(
         "| rig | plan | targets | generation order | constructed | ordered | MST bound "
-        "| ordered / MST | generation / ordered | ordering (s) | bound (s) |"
+        "| ordered / MST | generation / ordered | moves | ordering (s) | bound (s) |"
     )
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for rig_name, rig_path in RIGS.items():
         rig = Rig.from_yaml(rig_path)
         for isotropic in (False, True):
@@ -56,9 +59,11 @@ def main() -> None:
                         "time_budget_s": args.budget,
                     }
                 )
-                plan = build(spec, rig)
+                plan = build(spec, rig, bounds=True)
                 o, s = plan.ordering, plan.summary
                 assert o is not None
+                assert s.naive_travel_s is not None and s.lower_bound_travel_s is not None
+                flag = {"converged": "", "move budget": " (budget)", "time cap": " (time cap)"}
                 kind = "isotropic" if isotropic else "anisotropic"
                 print(
                     f"| {rig_name} | {kind} | {len(plan)} | {hms(s.naive_travel_s)} "
@@ -67,7 +72,8 @@ def main() -> None:
                     f"{'' if s.lower_bound_exact else ' (weak)'} "
                     f"| {s.travel_s / s.lower_bound_travel_s:.3f} "
                     f"| {s.naive_travel_s / s.travel_s:.1f} "
-                    f"| {s.ordering_s:.1f}{'' if s.converged else ' (budget)'} "
+                    f"| {s.moves:,}{flag[s.stopped]} "
+                    f"| {s.ordering_s:.1f} "
                     f"| {s.bound_wall_s:.1f} |",
                     flush=True,
                 )

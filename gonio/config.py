@@ -34,13 +34,21 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
-def read_yaml(path: Path) -> tuple[Any, yaml.Node | None]:
-    """(data, node tree) of a YAML file; ConfigError if it cannot be read or parsed."""
+def read_bytes(path: Path) -> bytes:
+    """The file's bytes, as UTF-8 text checked; ConfigError if it cannot be read."""
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
+        raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
         raise ConfigError(f"{path}: cannot read the file: {reason}") from None
+    return raw
+
+
+def read_yaml(path: Path, raw: bytes | None = None) -> tuple[Any, yaml.Node | None]:
+    """(data, node tree) of a YAML file (or of its bytes ``raw``, already read);
+    ConfigError if it cannot be read or parsed."""
+    text = (read_bytes(path) if raw is None else raw).decode("utf-8")
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         data = yaml.safe_load(text)
@@ -155,11 +163,25 @@ def untagged(data: Any, loc: Sequence[int | str]) -> tuple[int | str, ...]:
     return tuple(out)
 
 
-def load(path: str | Path, model: type[M], context: dict[str, Any] | None = None) -> M:
-    """Read ``path`` and validate it as ``model`` (its validators see ``context`` and
-    the ``path``); `ConfigError` on any mistake."""
+def spec_text(spec: BaseModel) -> bytes:
+    """A validated model as YAML text that reads back as the same model: the text of a
+    configuration made in code (every field given, floats written exactly)."""
+    data = spec.model_dump(mode="json")
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True).encode("utf-8")
+
+
+def load(
+    path: str | Path,
+    model: type[M],
+    context: dict[str, Any] | None = None,
+    *,
+    raw: bytes | None = None,
+) -> M:
+    """Read ``path`` (or its bytes ``raw``, already read, so that what is validated is
+    exactly what was hashed) and validate it as ``model`` (its validators see
+    ``context`` and the ``path``); `ConfigError` on any mistake."""
     path = Path(path)
-    data, node = read_yaml(path)
+    data, node = read_yaml(path, raw)
     if not isinstance(data, dict):
         kind = "empty" if data is None else type(data).__name__
         raise ConfigError(f"{path}: expected a mapping of fields at the top level, got {kind}")

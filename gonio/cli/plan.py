@@ -1,4 +1,4 @@
-"""`gonio plan PLAN.yaml [--rig RIG.yaml] [-o plan.csv] [--plot coverage.png]`."""
+"""`gonio plan PLAN.yaml [--rig RIG.yaml] [-o plan.csv] [--plot coverage.png] [--bounds]`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from gonio.config import check_output
-from gonio.planner.plan import build, load_plan, render_summary
+from gonio.planner.plan import load_plan_source, render_summary
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -18,8 +18,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     plan.add_argument("plan", type=Path, help="the plan file (YAML)")
     plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
-    plan.add_argument("-o", "--output", type=Path, help="write the ordered targets as CSV")
+    plan.add_argument(
+        "-o", "--output", type=Path,
+        help="store the plan: a '# gonio-plan v1' header, then the ordered targets as CSV",
+    )  # fmt: skip
     plan.add_argument("--plot", type=Path, help="draw the plan's coverage (needs matplotlib)")
+    plan.add_argument(
+        "--bounds", action="store_true",
+        help="also compute the duration in generation order and the MST lower bound",
+    )  # fmt: skip
     plan.set_defaults(func=cmd_plan)
 
 
@@ -31,11 +38,10 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
         check_output(args.plot, "--plot")
         require_matplotlib()
-    spec, rig = load_plan(args.plan, args.rig)
-    plan = build(spec, rig, where=str(args.plan))
+    plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
     print(render_summary(plan))
     if args.output is not None:
-        plan.write_csv(args.output)
+        plan.write(args.output)
         print(f"wrote {len(plan)} targets to {args.output}")
     if args.plot is not None:
         from gonio.plots.coverage import plot_coverage

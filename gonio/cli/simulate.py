@@ -17,7 +17,7 @@ import numpy as np
 
 from gonio.acquire.calibration import geometry_label
 from gonio.config import check_output
-from gonio.planner.plan import build, hms, load_plan
+from gonio.planner.plan import hms, load_plan_source
 from sim.scene import load_scene
 from sim.session import Result, simulate_plan
 
@@ -114,11 +114,11 @@ def write_csv(result: Result, path: Path) -> None:
 def cmd_simulate(args: argparse.Namespace) -> int:
     if args.output is not None:
         check_output(args.output, "-o")
-    spec, rig = load_plan(args.plan, args.rig)
-    scene = load_scene(args.scene, rig)
+    source = load_plan_source(args.plan, args.rig)
+    scene = load_scene(args.scene, source.rig)
     if args.no_effects:
         scene = scene.with_effects([])
-    plan = build(spec, rig, where=str(args.plan))
+    plan = source.build()
     result = simulate_plan(plan, scene, args.seed)
     print(render(result))
     if args.output is not None:

@@ -5,7 +5,10 @@ joint space). The path starts at the given pose and ends anywhere.
 
 - Construction: the given order (a serpentine over a grid) or nearest neighbour.
 - Improvement: 2-opt and Or-opt (segments of 1 to 3 targets, either orientation) over
-  neighbour lists with don't-look bits, until no move improves or the time budget ends.
+  neighbour lists with don't-look bits, until no move improves or a budget of improving
+  moves is spent (`default_moves`: a count, so the result is the same on any machine);
+  a wall-clock cap stays as a safety net, and when it binds the result says so, since
+  the order then depends on the machine's speed.
 - Lower bound: the exact minimum spanning tree of the travel-time graph over the start
   and the targets (any path through them is a spanning tree), found with Kruskal on the
   graph of moves up to a threshold time, raised until that graph is connected.
@@ -31,6 +34,9 @@ from gonio.rig.travel import TravelModel
 from gonio.types import FloatArray
 
 Method = Literal["given", "nearest", "auto"]
+#: Why the local search stopped: no improving move left, the move budget spent, or the
+#: wall-clock cap reached (only the last depends on the machine).
+Stop = Literal["converged", "move budget", "time cap"]
 
 #: Neighbours per node the local search considers.
 NEIGHBOURS = 10
@@ -40,6 +46,16 @@ EPSILON = 1e-9
 MAX_PAIRS = 10_000_000
 #: Added to every edge so that csgraph keeps zero-time moves (it drops explicit zeros).
 TINY = 1e-300
+#: The default budget of improving moves: this many per target, plus `MOVES_EXTRA`. The
+#: shipped plans converge after at most 1.5 moves per target, a random given order of
+#: uniform poses after at most 3, so the budget binds only on something unusual.
+MOVES_PER_TARGET = 10
+MOVES_EXTRA = 100
+
+
+def default_moves(n: int) -> int:
+    """The budget of improving moves for ``n`` targets when none is given."""
+    return MOVES_PER_TARGET * n + MOVES_EXTRA
 
 
 @dataclass(frozen=True)
@@ -53,7 +69,9 @@ class Ordering:
     lower_bound_s: float  # the minimum spanning tree over the start and the targets
     lower_bound_exact: bool  # False if memory forced a weaker bound
     moves: int  # improving moves applied
-    converged: bool  # no improving move left (False: the time budget ran out)
+    converged: bool  # no improving move left
+    stopped: Stop = "converged"  # why the improvement ended
+    max_moves: int = 0  # the budget of improving moves it had
     order_wall_s: float = 0.0  # wall time spent constructing and improving
     bound_wall_s: float = 0.0  # wall time spent on the lower bound
 
@@ -83,8 +101,9 @@ def _typical_move(model: TravelModel, points: FloatArray) -> float:
 
 
 def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarray:
-    """(N, k') indices of each point's nearest others by travel time, nearest first
-    (candidates from a k-d tree in a proxy metric, ranked by the exact time)."""
+    """(N, k') indices of each point's nearest others by travel time, nearest first,
+    equal times in index order (candidates from a k-d tree in a proxy metric, ranked by
+    the exact time)."""
     n = len(points)
     k = min(k, n - 1)
     if k <= 0:
@@ -95,7 +114,11 @@ def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarra
     idx = np.asarray(idx, dtype=np.int64)
     t = model.time(points[:, None, :], points[idx])
     t[idx == np.arange(n)[:, None]] = np.inf  # not itself
-    rank = np.argsort(t, axis=1, kind="stable")[:, :k]
+    # Nearest first, equal times in index order (whatever order the tree returned them).
+    by_index = np.argsort(idx, axis=1, kind="stable")
+    rank = np.take_along_axis(
+        by_index, np.argsort(np.take_along_axis(t, by_index, axis=1), axis=1, kind="stable"), 1
+    )[:, :k]
     return np.asarray(np.take_along_axis(idx, rank, axis=1), dtype=np.int64)
 
 
@@ -250,9 +273,18 @@ class _Path:
         self.pos[block] = np.arange(lo, hi + 1)
 
 
-def _improve(path: _Path, neighbours: np.ndarray, deadline: float) -> tuple[int, bool]:
-    """2-opt and Or-opt moves from each node whose don't-look bit is clear.
-    Returns (moves applied, converged)."""
+def _improve(
+    path: _Path, neighbours: np.ndarray, max_moves: int, deadline: float
+) -> tuple[int, Stop]:
+    """2-opt and Or-opt moves from each node whose don't-look bit is clear, until none
+    improves, ``max_moves`` have been applied or ``deadline`` (`time.perf_counter`) has
+    passed. Returns (moves applied, why it stopped).
+
+    Everything but the deadline is deterministic: the queue starts in target order,
+    neighbours are visited nearest first (`neighbour_lists`), the first improving move
+    found is applied. Each node visit costs a bounded number of cost evaluations and a
+    move wakes at most 7 nodes, so ``max_moves`` bounds the work as well.
+    """
     cost, pos, nodes = path.cost, path.pos, path.nodes
     S, E = path.S, path.E
     nbr = neighbours.tolist()
@@ -353,13 +385,15 @@ def _improve(path: _Path, neighbours: np.ndarray, deadline: float) -> tuple[int,
         return False
 
     while queue:
+        if moves >= max_moves:
+            return moves, "move budget"
         if time.perf_counter() > deadline:
-            return moves, False
+            return moves, "time cap"
         a = queue.popleft()
         queued[a] = False
         if two_opt(a) or or_opt(a):
             moves += 1
-    return moves, True
+    return moves, "converged"
 
 
 def order_targets(
@@ -368,25 +402,29 @@ def order_targets(
     start: FloatArray,
     *,
     method: Method = "auto",
-    time_budget_s: float = 20.0,
+    max_moves: int | None = None,
+    time_budget_s: float = 120.0,
     lower_bound: bool = True,
 ) -> Ordering:
     """Order ``targets`` (N, A) joint angles (rad) for the shortest travel from ``start``.
 
     ``method``: "given" improves the order given (e.g. a serpentine), "nearest" starts
     from nearest neighbour, "auto" starts from whichever of the two is shorter. The
-    improvement stops at ``time_budget_s`` seconds of wall time from the call (the
-    construction, O(n log n), always runs to the end). The search is deterministic.
+    improvement stops when no move improves, after ``max_moves`` improving moves
+    (default `default_moves`), or, as a safety cap, ``time_budget_s`` seconds of wall
+    time from the call (the construction, O(n log n), always runs to the end). Unless
+    the cap binds (``stopped == "time cap"``) the result depends only on the inputs.
     With ``lower_bound`` the MST bound over the start and the targets is computed too.
     """
     targets = np.asarray(targets, dtype=np.float64)
     start = np.asarray(start, dtype=np.float64)
     n = len(targets)
+    budget = default_moves(n) if max_moves is None else max_moves
     started = time.perf_counter()
     deadline = started + time_budget_s
     given_s = path_time(model, start, targets)
     if n == 0:
-        return Ordering(np.zeros(0, np.int64), 0.0, 0.0, 0.0, 0.0, True, 0, True)
+        return Ordering(np.zeros(0, np.int64), 0.0, 0.0, 0.0, 0.0, True, 0, True, max_moves=budget)
     order = np.arange(n)
     if method in ("nearest", "auto"):
         greedy = nearest_neighbour(model, targets, start)
@@ -396,12 +434,13 @@ def order_targets(
     everything = np.vstack([targets, start[None, :]])  # node n is the start
     neighbours = neighbour_lists(model, everything, NEIGHBOURS)
     path = _Path(model, targets, start, order)
-    moves, converged = _improve(path, neighbours, deadline)
+    moves, stopped = _improve(path, neighbours, budget, deadline)
     order = path.nodes[1:-1].copy()
     travel_s = path_time(model, start, targets[order])
     ordered = time.perf_counter()
     bound, exact = mst_lower_bound(model, everything) if lower_bound else (0.0, False)
     return Ordering(
-        order, travel_s, constructed_s, given_s, bound, exact, moves, converged,
+        order, travel_s, constructed_s, given_s, bound, exact, moves, stopped == "converged",
+        stopped=stopped, max_moves=budget,
         order_wall_s=ordered - started, bound_wall_s=time.perf_counter() - ordered,
     )  # fmt: skip

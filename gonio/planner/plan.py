@@ -4,23 +4,38 @@ Points are placed uniformly in the parametrization's coordinate box (or its isot
 reduction), kept where the coordinates are `valid` and the rig can reach the pair, mapped
 to joint angles, ordered for the motors, and timed with each axis's trapezoidal profile
 plus settle and exposure. Nothing here moves a motor.
+
+A `Plan` is frozen (its arrays read-only) and is the same for a given plan file, rig
+and seed on any machine unless the ordering's wall-clock safety cap binds (the summary
+says so). It writes itself to a file and reads back bit for bit (`Plan.write`,
+`gonio.planner.stored.read_plan`); `content_hash` names the texts it was built from.
 """
 
 from __future__ import annotations
 
-import csv
+import hashlib
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
 from gonio import params
-from gonio.config import ConfigError, line_of, load, read_yaml
+from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml, spec_text
 from gonio.planner import poses, sampling
 from gonio.planner.exposure import exposures
-from gonio.planner.ordering import Method, Ordering, mst_lower_bound, order_targets
+from gonio.planner.ordering import (
+    Method,
+    Ordering,
+    Stop,
+    default_moves,
+    mst_lower_bound,
+    order_targets,
+)
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray
@@ -31,94 +46,202 @@ BATCH = 4096
 MAX_DRAWN = 4_000_000
 
 
-@dataclass
+#: Framing of `content_hash` (the version names the framing, not gonio's).
+_HASH_MAGIC = b"gonio content v1\n"
+
+
+def content_hash(plan_text: bytes, rig_text: bytes, scene_text: bytes | None = None) -> str:
+    """SHA-256 (hex) of a plan file's, a rig file's and optionally a scene file's bytes,
+    for the run journal: what a run measured, named by what it was made from.
+
+    Framing: the bytes ``gonio content v1\\n``, then for each of plan, rig, scene the
+    part's name, a space, its length in bytes in decimal (``-`` for no scene), a newline
+    and the bytes themselves. The lengths make the split unambiguous: ("ab", "c") and
+    ("a", "bc") hash differently, and no scene differs from an empty one.
+    """
+    h = hashlib.sha256(_HASH_MAGIC)
+    for name, text in (("plan", plan_text), ("rig", rig_text), ("scene", scene_text)):
+        h.update(f"{name} {'-' if text is None else len(text)}\n".encode("ascii"))
+        if text is not None:
+            h.update(text)
+    return h.hexdigest()
+
+
+def sha256(text: bytes) -> str:
+    """SHA-256 (hex) of one file's bytes."""
+    return hashlib.sha256(text).hexdigest()
+
+
+@dataclass(frozen=True)
 class Summary:
+    """Counts and times of a plan. Times in seconds; the generation-order and MST
+    figures are None unless the plan was built with ``bounds=True``."""
+
     requested: int  # points placed in the coordinate box
     invalid: int  # outside the parametrization's domain
-    refused: dict[str, int]  # unreachable, by reason
+    refused: Mapping[str, int]  # unreachable, by reason (read-only)
     kept: int
     travel_s: float  # ordered, moves only
-    naive_travel_s: float  # in generation order
-    lower_bound_travel_s: float  # the MST of the travel-time graph
     dwell_s: float  # settle + exposure × averages, summed
     ordering_s: float  # time spent ordering (wall clock)
-    lower_bound_exact: bool = True  # False: memory forced a weaker bound than the MST
+    moves: int = 0  # improving moves the ordering applied (both passes)
+    max_moves: int = 0  # the budget of improving moves
+    stopped: Stop = "converged"  # why the ordering stopped
+    time_cap_s: float = 0.0  # the ordering's wall-clock safety cap
     grid_shape: tuple[int, ...] | None = None
     target: int | None = None  # the kept targets asked for, if the plan gave a number
-    bound_wall_s: float = 0.0  # time spent on the lower bound (wall clock)
-    converged: bool = True  # the local search ended with no improving move left
+    naive_travel_s: float | None = None  # in generation order (bounds only)
+    lower_bound_travel_s: float | None = None  # the MST of the travel-time graph (bounds only)
+    lower_bound_exact: bool | None = None  # False: memory forced a weaker bound than the MST
+    bound_wall_s: float | None = None  # time spent on the lower bound (wall clock)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))
+
+    @property
+    def converged(self) -> bool:
+        """The local search ended with no improving move left."""
+        return self.stopped == "converged"
 
     @property
     def total_s(self) -> float:
         return self.travel_s + self.dwell_s
 
     @property
-    def naive_total_s(self) -> float:
-        return self.naive_travel_s + self.dwell_s
+    def naive_total_s(self) -> float | None:
+        return None if self.naive_travel_s is None else self.naive_travel_s + self.dwell_s
 
     @property
-    def lower_bound_s(self) -> float:
+    def lower_bound_s(self) -> float | None:
+        if self.lower_bound_travel_s is None:
+            return None
         return self.lower_bound_travel_s + self.dwell_s
 
 
-@dataclass
+#: The array fields of a `Plan` and their dtypes.
+ARRAYS: dict[str, type[np.generic]] = {
+    "coords": np.float64,
+    "generated": np.int64,
+    "wi": np.float64,
+    "wo": np.float64,
+    "angles": np.float64,
+    "exposure_s": np.float64,
+    "averages": np.int64,
+    "travel_s": np.float64,
+    "arrival_s": np.float64,
+}
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Equal dtype, shape and every byte (so −0.0 ≠ 0.0: identical, not just equal)."""
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@dataclass(frozen=True, eq=False)
 class Plan:
-    """Targets in measuring order. Angles in radians, times in seconds."""
+    """Targets in measuring order. Angles in radians, times in seconds.
+
+    Frozen: every array is a private read-only copy (change a plan with
+    `dataclasses.replace`, which makes a new one). ``==`` is "the same stored plan":
+    spec, plan and rig texts, coordinate names and summary equal, every array identical
+    bit for bit; ``ordering`` (diagnostics of the first pass, not stored) is left out.
+    """
 
     spec: PlanSpec
     rig: Rig
     coordinate_names: tuple[str, ...]
     coords: FloatArray  # (N, d) the planned coordinates
-    generated: np.ndarray  # (N,) each target's position among the points placed
+    generated: np.ndarray  # (N,) int64, each target's position among the points placed
     wi: FloatArray  # (N, 3) the pair measured (sample frame)
     wo: FloatArray
     angles: FloatArray  # (N, A) in rig.axes order
     exposure_s: FloatArray
-    averages: np.ndarray
+    averages: np.ndarray  # (N,) int64
     travel_s: FloatArray  # move into each target
     arrival_s: FloatArray  # predicted time of arrival at each target
     summary: Summary
+    plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
     ordering: Ordering | None = None  # the first ordering (on the solutions nearest home)
+
+    def __post_init__(self) -> None:
+        n = len(self.coords)
+        for name, dtype in ARRAYS.items():
+            value = np.array(getattr(self, name), dtype=dtype)  # a copy nobody else holds
+            if value.shape[:1] != (n,):
+                raise ValueError(f"Plan.{name}: expected {n} rows, got shape {value.shape}")
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
 
     def __len__(self) -> int:
         return len(self.coords)
 
-    def write_csv(self, path: str | Path) -> None:
-        """One row per target in measuring order: index, its position among the points
-        placed (generation order), coordinates, ωi, ωo, joint angles (rad), exposure,
-        averages, predicted arrival (s from the start). Floats are written exactly."""
-        header = [
-            "index",
-            "generated",
-            *self.coordinate_names,
-            "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z",
-            *(f"{a}_rad" for a in self.rig.axes),
-            "exposure_s", "averages", "arrival_s",
-        ]  # fmt: skip
-        with Path(path).open("w", newline="", encoding="utf-8") as f:
-            out = csv.writer(f)
-            out.writerow(header)
-            for i in range(len(self)):
-                row = [*self.coords[i], *self.wi[i], *self.wo[i], *self.angles[i]]
-                out.writerow(
-                    [i, int(self.generated[i]), *(repr(float(v)) for v in row),
-                     repr(float(self.exposure_s[i])), int(self.averages[i]),
-                     repr(float(self.arrival_s[i]))]
-                )  # fmt: skip
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Plan):
+            return NotImplemented
+        return (
+            self.spec == other.spec
+            and self.plan_text == other.plan_text
+            and self.rig.text == other.rig.text
+            and self.coordinate_names == other.coordinate_names
+            and self.summary == other.summary
+            and all(same_bits(getattr(self, n), getattr(other, n)) for n in ARRAYS)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def content_hash(self, scene_text: bytes | None = None) -> str:
+        """`content_hash` of the texts this plan was built from (and a scene's)."""
+        return content_hash(self.plan_text, self.rig.text, scene_text)
+
+    def write(self, path: str | Path) -> None:
+        """Store the plan (`gonio.planner.stored`: a ``# gonio-plan v1`` header, then one
+        CSV row per target); `read_plan` reads it back bit for bit."""
+        from gonio.planner.stored import write_plan
+
+        write_plan(self, path)
+
+    write_csv = write  # the name of `write` before plans were stored with a header
 
 
-def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[PlanSpec, Rig]:
-    """The plan file and its rig (``rig_path`` overrides the plan's ``rig`` field)."""
+@dataclass(frozen=True)
+class PlanSource:
+    """A plan file as read: its path and bytes, the validated spec and the rig (which
+    keeps its own bytes, `Rig.text`)."""
+
+    path: Path
+    text: bytes
+    spec: PlanSpec
+    rig: Rig
+
+    def content_hash(self, scene_text: bytes | None = None) -> str:
+        return content_hash(self.text, self.rig.text, scene_text)
+
+    def build(self, *, bounds: bool = False) -> Plan:
+        """`build` with this file's text (so the plan carries its hash)."""
+        return build(self.spec, self.rig, where=str(self.path), bounds=bounds, text=self.text)
+
+
+def load_plan_source(path: str | Path, rig_path: str | Path | None = None) -> PlanSource:
+    """The plan file, its bytes and its rig (``rig_path`` overrides the ``rig`` field).
+    Each file is read once: what is validated is exactly what is hashed."""
     path = Path(path)
-    spec = load(path, PlanSpec)
+    text = read_bytes(path)
+    spec = load(path, PlanSpec, raw=text)
     if rig_path is None:
         if spec.rig is None:
             raise ConfigError(f"{path}: rig: no rig file named; give one here or with --rig")
         rig_path = path.parent / spec.rig
         if Path(rig_path).is_dir():
-            line = line_of(read_yaml(path)[1], ("rig",))
+            line = line_of(read_yaml(path, text)[1], ("rig",))
             raise ConfigError(f"{path}:{line}: rig: {rig_path} is a folder; expected a rig file")
-    return spec, Rig.from_yaml(rig_path)
+    return PlanSource(path, text, spec, Rig.from_yaml(rig_path))
+
+
+def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[PlanSpec, Rig]:
+    """The plan file and its rig (``rig_path`` overrides the plan's ``rig`` field); see
+    `load_plan_source` to keep the plan file's bytes as well."""
+    source = load_plan_source(path, rig_path)
+    return source.spec, source.rig
 
 
 def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, ...] | None]:
@@ -195,8 +318,20 @@ def _kept(spec: PlanSpec, rig: Rig, coords: FloatArray) -> np.ndarray:
     return ok
 
 
-def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
-    """The ordered, timed plan (`ConfigError` if the rig can reach none of it)."""
+def build(
+    spec: PlanSpec,
+    rig: Rig,
+    *,
+    where: str = "plan",
+    bounds: bool = False,
+    text: bytes | None = None,
+) -> Plan:
+    """The ordered, timed plan (`ConfigError` if the rig can reach none of it).
+
+    ``bounds``: also compute the figures the benchmarks compare against, the
+    generation-order duration (a second choice of solutions) and the MST lower bound
+    (otherwise None in the summary). ``text``: the plan file's bytes, for the content
+    hash (`load_plan_source` gives them; default: the spec as YAML, `spec_text`)."""
     names = spec.coordinates()
     coords, shape = _place(spec, rig, where)
     valid, wi, wo = _directions(spec, coords)
@@ -225,11 +360,12 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         method = "auto"
     # Order on each target's solution nearest home, then let every target take the
     # solution that suits its neighbours (`poses.choose`), improve the order on those
-    # poses with what is left of the budget, and choose again.
+    # poses with what is left of the move budget (and of the time cap), and choose again.
+    budget = default_moves(sel.size) if spec.max_moves is None else spec.max_moves
     started = time.perf_counter()
     result = order_targets(
-        rig.travel, targets, rig.home, method=method, time_budget_s=spec.time_budget_s,
-        lower_bound=False,
+        rig.travel, targets, rig.home, method=method, max_moves=budget,
+        time_budget_s=spec.time_budget_s, lower_bound=False,
     )  # fmt: skip
     chosen = sel[given[result.order]]
     angles, _ = poses.choose(
@@ -237,20 +373,28 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
     )
     left = max(spec.time_budget_s - (time.perf_counter() - started), 0.0)
     again = order_targets(
-        rig.travel, angles, rig.home, method="given", time_budget_s=left, lower_bound=False
-    )
+        rig.travel, angles, rig.home, method="given", max_moves=budget - result.moves,
+        time_budget_s=left, lower_bound=False,
+    )  # fmt: skip
     chosen = chosen[again.order]
     angles, travel = poses.choose(
         solution.candidates[chosen], solution.usable[chosen], rig.home, rig.travel_time
     )
     ordering_s = time.perf_counter() - started
-    # The bound: the MST over the poses measured (any order of these poses is at least
-    # this long). Generation order gets the same choice of solutions, for a fair ratio.
-    bound, exact = mst_lower_bound(rig.travel, np.vstack([angles, rig.home[None, :]]))
-    bound_wall_s = time.perf_counter() - started - ordering_s
-    _, naive = poses.choose(
-        solution.candidates[sel], solution.usable[sel], rig.home, rig.travel_time
-    )
+    stops = {result.stopped, again.stopped}
+    stopped: Stop = next(s for s in ("time cap", "move budget", "converged") if s in stops)
+    figures: dict[str, Any] = {}
+    if bounds:
+        # The bound: the MST over the poses measured (any order of these poses is at
+        # least this long). Generation order gets the same choice of solutions.
+        bound, exact = mst_lower_bound(rig.travel, np.vstack([angles, rig.home[None, :]]))
+        figures["bound_wall_s"] = time.perf_counter() - started - ordering_s
+        _, naive = poses.choose(
+            solution.candidates[sel], solution.usable[sel], rig.home, rig.travel_time
+        )
+        figures.update(
+            naive_travel_s=float(naive.sum()), lower_bound_travel_s=bound, lower_bound_exact=exact
+        )
     order = np.searchsorted(sel, chosen)  # positions in generation order
     mwi, mwo = rig.forward(angles)  # the pair the chosen pose measures
     exposure, averages = exposures(spec.exposure, mwi, mwo)
@@ -262,15 +406,15 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         refused=refused,
         kept=int(kept_idx.size),
         travel_s=float(travel.sum()),
-        naive_travel_s=float(naive.sum()),
-        lower_bound_travel_s=bound,
         dwell_s=float(dwell.sum()),
         ordering_s=ordering_s,
-        lower_bound_exact=exact,
+        moves=result.moves + again.moves,
+        max_moves=budget,
+        stopped=stopped,
+        time_cap_s=spec.time_budget_s,
         grid_shape=shape,
         target=spec.sampling.target,
-        bound_wall_s=bound_wall_s,
-        converged=result.converged and again.converged,
+        **figures,
     )
     return Plan(
         spec=spec,
@@ -286,6 +430,7 @@ def build(spec: PlanSpec, rig: Rig, *, where: str = "plan") -> Plan:
         travel_s=travel,
         arrival_s=arrival,
         summary=summary,
+        plan_text=spec_text(spec) if text is None else text,
         ordering=result,
     )
 
@@ -320,10 +465,33 @@ def render_summary(plan: Plan) -> str:
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
         f"settle + exposure {hms(s.dwell_s)})",
-        f"  {'in generation order':<26}{hms(s.naive_total_s):>9}   "
-        f"({s.naive_total_s / s.total_s:.2f}× the ordered plan)",
-        f"  {'lower bound (MST)':<26}{hms(s.lower_bound_s):>9}   "
-        f"(ordered moves = {s.travel_s / max(s.lower_bound_travel_s, 1e-12):.2f}× the MST)",
+    ]
+    if s.naive_total_s is not None:
+        lines.append(
+            f"  {'in generation order':<26}{hms(s.naive_total_s):>9}   "
+            f"({s.naive_total_s / s.total_s:.2f}× the ordered plan)"
+        )
+    if s.lower_bound_s is not None and s.lower_bound_travel_s is not None:
+        lines.append(
+            f"  {'lower bound (MST)':<26}{hms(s.lower_bound_s):>9}   "
+            f"(ordered moves = {s.travel_s / max(s.lower_bound_travel_s, 1e-12):.2f}× the MST"
+            + ("" if s.lower_bound_exact else "; memory forced a weaker bound")
+            + ")"
+        )
+    lines += [
+        f"  {'ordering':<26}{ordering_line(s)}",
         f"  {'ordering took':<26}{s.ordering_s:>8.1f}s",
     ]
     return "\n".join(lines)
+
+
+def ordering_line(s: Summary) -> str:
+    """How the ordering ended, for the summary table."""
+    if s.stopped == "converged":
+        return f"converged after {s.moves:,} moves (budget {s.max_moves:,})"
+    if s.stopped == "move budget":
+        return f"stopped at the move budget ({s.max_moves:,} moves): not converged"
+    return (
+        f"stopped at the time cap ({s.time_cap_s:g} s, after {s.moves:,} of {s.max_moves:,} "
+        "moves): not converged, and this order depends on the machine's speed"
+    )

@@ -92,7 +92,13 @@ class PlanSpec(Strict):
     isotropic: bool = True
     sampling: SamplingSpec
     exposure: ExposureSpec = Field(default_factory=ExposureSpec)
-    time_budget_s: float = Field(20.0, gt=0)  # for improving the order
+    # Improving moves the ordering may apply (both passes together); None: 10 per kept
+    # target + 100 (`gonio.planner.ordering.default_moves`). A count, not a time, so the
+    # same plan file orders the same on any machine.
+    max_moves: int | None = Field(None, ge=0)
+    # A safety cap on the wall time of improving the order; when it binds the summary
+    # says so (the order then depends on the machine).
+    time_budget_s: float = Field(120.0, gt=0)
 
     @model_validator(mode="after")
     def _known_names(self) -> PlanSpec:

@@ -21,7 +21,7 @@ import numpy as np
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.serial_detector import SerialDetectorConfig
-from gonio.config import ConfigError, load
+from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
@@ -85,9 +85,14 @@ class Solution:
 class Rig:
     """A rig: forward and inverse kinematics, constraints, and its motor axes."""
 
-    def __init__(self, spec: RigSpec, source: Path | None = None) -> None:
+    def __init__(
+        self, spec: RigSpec, source: Path | None = None, text: bytes | None = None
+    ) -> None:
         self.spec = spec
         self.source = source
+        #: The rig file's bytes as read (what a plan's content hash covers); for a rig
+        #: made from a spec in code, the spec as YAML (which reads back as the same spec).
+        self.text = text if text is not None else spec_text(spec)
         self._check_chains()
         self.axes: tuple[str, ...] = tuple(spec.axes)
         a = list(spec.axes.values())
@@ -122,8 +127,11 @@ class Rig:
         self._check_something_reachable()
 
     @classmethod
-    def from_yaml(cls, path: str | Path) -> Rig:
-        return cls(load(path, RigSpec), Path(path))
+    def from_yaml(cls, path: str | Path, raw: bytes | None = None) -> Rig:
+        """The rig of the file at ``path`` (or of its bytes ``raw``, already read)."""
+        path = Path(path)
+        raw = read_bytes(path) if raw is None else raw
+        return cls(load(path, RigSpec, raw=raw), path, raw)
 
     def _check_chains(self) -> None:
         where = str(self.source) if self.source else "rig"

@@ -4,6 +4,8 @@ readings carried back through the calibration give the model's BRDF to 1e-12."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -41,9 +43,11 @@ def small_plan(rig: Rig, *, isotropic: bool = True, n: int = 120, seed: int = 0)
 def varied(plan: Plan) -> Plan:
     """The plan with exposures and averages that differ from target to target."""
     n = len(plan)
-    plan.exposure_s = np.where(np.arange(n) % 3 == 0, 0.002, 0.01)
-    plan.averages = (np.arange(n) % 4 + 1).astype(np.int64)
-    return plan
+    return dataclasses.replace(
+        plan,
+        exposure_s=np.where(np.arange(n) % 3 == 0, 0.002, 0.01),
+        averages=(np.arange(n) % 4 + 1).astype(np.int64),
+    )
 
 
 @pytest.mark.parametrize(

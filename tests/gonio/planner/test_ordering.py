@@ -209,3 +209,69 @@ def test_start_pose_counts_in_the_bound() -> None:
     target = np.array([[1.0, 0.0, 0.0, 0.0]])
     result = order_targets(model, target, np.zeros(4))
     assert result.lower_bound_s == pytest.approx(float(model.time(np.zeros(4), target[0])))
+
+
+# --- a budget of moves, not of time: the same order on any machine ------------------
+
+
+def test_the_same_inputs_give_the_same_order() -> None:
+    model = MODELS["in_plane"]
+    targets = poses(np.random.default_rng(4), 1500, model)
+    a = order_targets(model, targets, np.zeros(4), lower_bound=False)
+    b = order_targets(model, targets, np.zeros(4), lower_bound=False)
+    assert a.converged and a.stopped == "converged"
+    assert np.array_equal(a.order, b.order)
+    assert a.moves == b.moves and a.travel_s == b.travel_s
+    assert a.max_moves == ordering.default_moves(1500)
+
+
+@pytest.mark.parametrize("max_moves", [0, 1, 37, 400])
+def test_the_move_budget_binds_before_any_time_cap(max_moves: int) -> None:
+    """With the move budget binding, a huge time cap and an ordinary one give the same
+    order: the result does not depend on how fast the machine is."""
+    model = MODELS["arch"]
+    targets = poses(np.random.default_rng(9), 1200, model)
+    runs = [
+        order_targets(
+            model,
+            targets,
+            np.zeros(4),
+            method="given",
+            max_moves=max_moves,
+            time_budget_s=cap,
+            lower_bound=False,
+        )
+        for cap in (1e9, 20.0)
+    ]
+    for r in runs:
+        assert r.moves == max_moves
+        assert not r.converged and r.stopped == "move budget"
+    assert np.array_equal(runs[0].order, runs[1].order)
+    assert runs[0].travel_s == runs[1].travel_s
+    # Each move improves: more moves, a shorter path.
+    if max_moves:
+        assert runs[0].travel_s < runs[0].given_s
+
+
+def test_the_time_cap_is_reported_as_such() -> None:
+    model = MODELS["arch"]
+    targets = poses(np.random.default_rng(2), 2000, model)
+    result = order_targets(model, targets, np.zeros(4), method="given", time_budget_s=1e-9)
+    assert result.stopped == "time cap" and not result.converged
+
+
+def test_neighbour_ties_are_taken_in_index_order() -> None:
+    """Equal move times rank by index, whatever order the k-d tree returns them in."""
+    model = MODELS["arch"]
+    ring = np.array(
+        [[1.0, 0, 0, 0], [-1.0, 0, 0, 0], [0, 0, 0, 0], [0, 1.0, 0, 0], [0, -1.0, 0, 0]]
+    )
+    for perm in ([0, 1, 2, 3, 4], [4, 3, 2, 1, 0], [1, 3, 2, 0, 4]):
+        points = ring[perm]
+        centre = perm.index(2)
+        nbrs = ordering.neighbour_lists(model, points, 4)[centre].tolist()
+        t = model.time(points[centre], points[nbrs])
+        assert np.all(np.diff(t) >= 0)
+        for i in range(len(nbrs) - 1):
+            if t[i] == t[i + 1]:
+                assert nbrs[i] < nbrs[i + 1]

@@ -1,10 +1,11 @@
 """`gonio.planner.build`: counts that add up, targets that are valid, reachable and
-measured as planned, arrival times that follow from the moves and the dwell, a CSV
-that round-trips, exposures that follow the expected signal."""
+measured as planned, arrival times that follow from the moves and the dwell, the
+benchmark figures only when asked, exposures that follow the expected signal."""
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +14,7 @@ import pytest
 
 from gonio import brdf, params
 from gonio.config import ConfigError
-from gonio.planner import build, load_plan, sampling
+from gonio.planner import build, load_plan, ordering, sampling
 from gonio.planner import plan as plan_module
 from gonio.planner.plan import Plan, hms, render_summary
 from gonio.planner.schema import PlanSpec
@@ -31,11 +32,12 @@ def spec(**fields: Any) -> PlanSpec:
 
 @pytest.fixture(scope="module")
 def plans() -> dict[str, Plan]:
-    """One small plan per (rig, isotropic), built once."""
+    """One small plan per (rig, isotropic), built once, with the benchmark figures."""
     out = {}
     for rig in RIGS:
         for iso in (True, False):
-            out[f"{rig}-{'iso' if iso else 'aniso'}"] = build(spec(isotropic=iso), RIGS[rig])
+            key = f"{rig}-{'iso' if iso else 'aniso'}"
+            out[key] = build(spec(isotropic=iso), RIGS[rig], bounds=True)
     return out
 
 
@@ -93,8 +95,28 @@ def test_arrival_times_follow_moves_and_dwell(plans: dict[str, Plan], key: str) 
     assert plan.arrival_s[0] == pytest.approx(plan.travel_s[0])
     s = plan.summary
     assert s.total_s == pytest.approx(plan.arrival_s[-1] + dwell[-1])
+    assert s.naive_travel_s is not None and s.lower_bound_travel_s is not None
     assert s.travel_s <= s.naive_travel_s
     assert s.lower_bound_travel_s <= s.travel_s * (1 + 1e-9)
+    assert s.lower_bound_exact
+
+
+def test_bounds_only_when_asked(plans: dict[str, Plan]) -> None:
+    """Without ``bounds`` the benchmark figures are not computed (None, and absent from
+    the summary table); the plan itself is the same, bit for bit."""
+    with_bounds = plans["arch-iso"]
+    plain = build(spec(), RIGS["arch"])
+    s = plain.summary
+    assert s.naive_travel_s is None and s.naive_total_s is None
+    assert s.lower_bound_travel_s is None and s.lower_bound_s is None
+    assert s.lower_bound_exact is None and s.bound_wall_s is None
+    for name in ("coords", "angles", "travel_s", "arrival_s", "exposure_s", "generated"):
+        assert np.array_equal(getattr(plain, name), getattr(with_bounds, name)), name
+    assert s.travel_s == with_bounds.summary.travel_s
+    text = render_summary(plain)
+    assert "in generation order" not in text and "lower bound (MST)" not in text
+    shown = render_summary(with_bounds)
+    assert "in generation order" in shown and "lower bound (MST)" in shown
 
 
 def test_same_seed_same_plan() -> None:
@@ -104,6 +126,70 @@ def test_same_seed_same_plan() -> None:
     assert np.array_equal(a.angles, b.angles)
     c = build(spec(sampling={"strategy": "sobol", "target": 300, "seed": 9}), RIGS["arch"])
     assert not np.array_equal(a.coords, c.coords)
+
+
+def same_plan_but_wall_times(a: Plan, b: Plan) -> bool:
+    """Equal as stored plans once the wall-clock figures are set aside."""
+    wall = {"ordering_s": 0.0, "bound_wall_s": None}
+    return dataclasses.replace(a, summary=dataclasses.replace(a.summary, **wall)) == (
+        dataclasses.replace(b, summary=dataclasses.replace(b.summary, **wall))
+    )
+
+
+@pytest.mark.parametrize("rig", list(RIGS))
+def test_the_same_spec_orders_the_same(rig: str) -> None:
+    """Built twice, bit for bit the same plan: the same order, poses, moves."""
+    a = build(spec(isotropic=False), RIGS[rig])
+    b = build(spec(isotropic=False), RIGS[rig])
+    assert np.array_equal(a.generated, b.generated)
+    assert a.summary.moves == b.summary.moves > 0
+    assert a.summary.converged
+    assert same_plan_but_wall_times(a, b)
+
+
+@pytest.mark.parametrize("moves", [0, 25])
+def test_a_binding_move_budget_is_machine_independent_and_reported(moves: int) -> None:
+    """A move budget that binds stops both passes at the same place whatever the time
+    cap: a huge cap and the default give the same plan; the summary says it did not
+    converge and why."""
+    plans = [
+        build(spec(isotropic=False, max_moves=moves, time_budget_s=cap), RIGS["in_plane"])
+        for cap in (1e9, 120.0)
+    ]
+    for plan in plans:
+        s = plan.summary
+        assert not s.converged and s.stopped == "move budget"
+        assert s.moves == s.max_moves == moves
+        assert (
+            f"ordering                  stopped at the move budget ({moves} moves): not converged"
+            in (render_summary(plan))
+        )
+    huge, normal = plans
+    assert np.array_equal(huge.generated, normal.generated)
+    assert np.array_equal(huge.angles.view(np.int64), normal.angles.view(np.int64))
+    free = build(spec(isotropic=False), RIGS["in_plane"])
+    assert free.summary.converged and free.summary.moves > moves
+    assert free.summary.travel_s < huge.summary.travel_s
+
+
+def test_the_time_cap_is_reported_with_its_consequence() -> None:
+    plan = build(spec(time_budget_s=1e-9), RIGS["arch"])
+    s = plan.summary
+    assert s.stopped == "time cap" and not s.converged
+    line = next(x for x in render_summary(plan).splitlines() if x.startswith("  ordering  "))
+    assert line.startswith("  ordering                  stopped at the time cap (1e-09 s, after ")
+    assert line.endswith("moves): not converged, and this order depends on the machine's speed")
+
+
+def test_the_default_budget_converges_and_says_so() -> None:
+    plan = build(spec(), RIGS["arch"])
+    s = plan.summary
+    assert s.converged and s.stopped == "converged"
+    assert s.max_moves == ordering.default_moves(300) == 3100
+    assert 0 < s.moves < s.max_moves
+    assert f"ordering                  converged after {s.moves} moves (budget 3,100)" in (
+        render_summary(plan)
+    )
 
 
 @pytest.mark.parametrize("strategy", ["sobol", "halton", "random"])
@@ -178,12 +264,13 @@ def test_plans_too_large_are_refused_before_any_work(sampling: dict[str, Any], f
         build(spec(sampling=sampling), RIGS["arch"], where="here")
 
 
-def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
+def test_csv_part_reads_with_any_csv_reader(plans: dict[str, Plan], tmp_path: Path) -> None:
+    """Past the ``#`` header the stored plan is plain CSV, floats written exactly."""
     plan = plans["arch-aniso"]
     path = tmp_path / "plan.csv"
-    plan.write_csv(path)
+    plan.write(path)
     with path.open(encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert len(rows) == len(plan)
     assert list(rows[0])[:6] == ["index", "generated", "hbar", "phi_h", "k", "phi_k"]
     for name in ("wi_x", "wo_z", "light_elevation_rad", "sample_rotation_rad", "arrival_s"):
@@ -194,6 +281,7 @@ def test_csv_round_trips(plans: dict[str, Plan], tmp_path: Path) -> None:
     assert np.array_equal(coords, plan.coords)
     assert [int(r["index"]) for r in rows] == list(range(len(plan)))
     assert [float(r["arrival_s"]) for r in rows] == plan.arrival_s.tolist()
+    assert [float(r["travel_s"]) for r in rows] == plan.travel_s.tolist()
     assert sorted(int(r["generated"]) for r in rows) == sorted(plan.generated.tolist())
 
 
@@ -228,9 +316,12 @@ def test_constant_exposure_without_adapt(plans: dict[str, Plan]) -> None:
 @pytest.mark.parametrize("name", ["quick", "isotropic_hybrid", "anisotropic"])
 def test_shipped_plans_build(name: str) -> None:
     s, rig = load_plan(PLANS / f"{name}.yaml")
-    plan = build(s, rig)
+    plan = build(s, rig, bounds=True)
     assert len(plan) > 0
+    assert plan.summary.lower_bound_travel_s is not None
     assert plan.summary.travel_s <= 1.3 * plan.summary.lower_bound_travel_s
+    # The default move budget leaves the shipped plans converged, as the time budget did.
+    assert plan.summary.converged and plan.summary.moves < plan.summary.max_moves
     text = render_summary(plan)
     for line in ("requested", "outside the domain", "refused: blind spot", "kept"):
         assert line in text
