@@ -50,7 +50,14 @@ class SerialLamp(_PtyServer):
 
     def config(self, **overrides: object) -> SerialLightConfig:
         """The driver configuration that speaks this protocol."""
-        fields: dict[str, object] = {"port": self.path, "timeout_s": 0.5, **overrides}
+        fields: dict[str, object] = {
+            "port": self.path,
+            "timeout_s": 0.5,
+            "query": "STATE?",
+            "on_reply": "^ON$",
+            "off_reply": "^OFF$",
+            **overrides,
+        }
         return SerialLightConfig(**fields)  # type: ignore[arg-type]
 
     @property

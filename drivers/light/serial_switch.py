@@ -2,8 +2,10 @@
 
 The host sends ``on`` or ``off`` (one line each); the device answers a line matching
 ``ack``, or a line matching ``error_reply`` (refused), and the switch is done only once
-acknowledged: ``is_on`` is the state last acknowledged (False until the first switch,
-since nothing is assumed about a device just opened). After switching on the driver
+acknowledged (with ``ack`` None nothing is read: the switch is done once sent). ``is_on``
+is the state last acknowledged; on open it is asked with ``query`` when the device has
+one (the answer matches ``on_reply`` or ``off_reply``), else it is False until the
+first switch, since nothing is assumed about a device just opened. After switching on the driver
 waits ``warmup_s`` on its clock, for a lamp that needs time to stabilize (waits for an
 answer are in real time: they are the port's). A missing or
 refused acknowledgement is sent again up to ``retries`` more times, then raises
@@ -36,15 +38,18 @@ class SerialLightConfig:
     baud: int = 9600
     on: str = "ON"
     off: str = "OFF"
-    ack: str = r"^OK\b"
+    ack: str | None = r"^OK\b"
     error_reply: str | None = r"^ERR"
+    query: str | None = None
+    on_reply: str | None = None
+    off_reply: str | None = None
     line_ending: str = "\n"
     timeout_s: float = 1.0
     retries: int = 1
     warmup_s: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("ack", "error_reply"):
+        for name in ("ack", "error_reply", "on_reply", "off_reply"):
             pattern = getattr(self, name)
             if pattern is None:
                 continue
@@ -54,6 +59,10 @@ class SerialLightConfig:
                 raise ValueError(f"{name}: not a regular expression ({exc}): {pattern!r}") from None
         if not (self.on.strip() and self.off.strip()):
             raise ValueError("on and off must be non-empty commands")
+        if (self.query is None) != (self.on_reply is None) or (self.query is None) != (
+            self.off_reply is None
+        ):
+            raise ValueError("query, on_reply and off_reply go together (all or none)")
         if self.line_ending not in ("\n", "\r\n", "\r"):
             raise ValueError(f"line_ending must be \\n, \\r\\n or \\r, got {self.line_ending!r}")
         if not (0 < self.timeout_s < math.inf) or not (0 <= self.warmup_s < math.inf):
@@ -68,8 +77,10 @@ class SerialLightSwitch(Resource):
     def __init__(self, config: SerialLightConfig, *, clock: Clock | None = None) -> None:
         self.config = config
         self._clock: Clock = clock or SystemClock()
-        self._ack = re.compile(config.ack)
-        self._refused = re.compile(config.error_reply) if config.error_reply else None
+        self._ack = _compiled(config.ack)
+        self._refused = _compiled(config.error_reply)
+        self._on_reply = _compiled(config.on_reply)
+        self._off_reply = _compiled(config.off_reply)
         self._serial: Any = None
         self._rx = bytearray()
         self._on = False
@@ -100,6 +111,27 @@ class SerialLightSwitch(Resource):
         except (OSError, ValueError, serial.SerialException) as exc:
             raise LightError(f"light switch {self.port}: cannot open the port: {exc}") from exc
         self._rx.clear()
+        self._on = False
+        if self.config.query is not None:
+            try:
+                self._on = self._ask_state()
+            except BaseException:
+                self.close()
+                raise
+
+    def _ask_state(self) -> bool:
+        assert self.config.query is not None
+        assert self._on_reply is not None and self._off_reply is not None
+        answer = self._exchange(self.config.query, (self._on_reply, self._off_reply))
+        if answer is not None and self._on_reply.search(answer):
+            return True
+        if answer is not None and self._off_reply.search(answer):
+            return False
+        problem = "no answer" if answer is None else f"the answer {answer[:80]!r}"
+        raise LightError(
+            f"light switch {self.port}: {self.config.query!r} did not say whether the light "
+            f"is on ({problem})"
+        )
 
     def close(self) -> None:
         port, self._serial = self._serial, None
@@ -121,18 +153,13 @@ class SerialLightSwitch(Resource):
         if self._serial is None:
             raise DeviceClosed(f"light switch {self.port} is not open")
         command = self.config.on if on else self.config.off
+        if self._ack is None:  # a device that never answers: sent is switched
+            self._exchange(command, ())
+            self._on = on
+            return
         problem = "no answer"
         for _ in range(self.config.retries + 1):
-            with contextlib.suppress(Exception):
-                self._serial.reset_input_buffer()
-            self._rx.clear()
-            try:
-                self._serial.write((command + self.config.line_ending).encode("ascii"))
-                self._serial.flush()
-                answer = self._answer()
-            except (OSError, serial.SerialException) as exc:
-                self.close()
-                raise LightError(f"light switch {self.port}: the port failed: {exc}") from exc
+            answer = self._exchange(command, (self._ack,))
             if answer is not None and self._ack.search(answer):
                 self._on = on
                 return
@@ -142,20 +169,39 @@ class SerialLightSwitch(Resource):
             f"{self.config.retries + 1} attempt(s) ({problem}); the light's state is unknown"
         )
 
-    def _answer(self) -> str | None:
-        """The first line that acknowledges or refuses, or None at the deadline."""
+    def _exchange(self, command: str, expected: tuple[re.Pattern[str], ...]) -> str | None:
+        """Send ``command``; the first line matching one of ``expected`` or the refusal
+        pattern, or None at the deadline (nothing is read when ``expected`` is empty)."""
+        if self._serial is None:
+            raise DeviceClosed(f"light switch {self.port} is not open")
+        try:
+            with contextlib.suppress(Exception):
+                self._serial.reset_input_buffer()
+            self._rx.clear()
+            self._serial.write((command + self.config.line_ending).encode("ascii"))
+            self._serial.flush()
+            if not expected:
+                return None
+            patterns = (*expected, self._refused) if self._refused else expected
+            return self._answer(patterns)
+        except (OSError, serial.SerialException) as exc:
+            self.close()
+            raise LightError(f"light switch {self.port}: the port failed: {exc}") from exc
+
+    def _answer(self, patterns: tuple[re.Pattern[str], ...]) -> str | None:
         deadline = time.monotonic() + self.config.timeout_s  # I/O waits in real time
         while time.monotonic() < deadline:
-            chunk = self._serial.read(256)
-            self._rx += chunk
+            self._rx += self._serial.read(256)
             while (end := _line_end(self._rx)) >= 0:
                 text = self._rx[:end].decode("ascii", "replace").strip()
                 del self._rx[: end + 1]
-                if not text:
-                    continue
-                if self._ack.search(text) or (self._refused and self._refused.search(text)):
+                if text and any(p.search(text) for p in patterns):
                     return text
         return None
+
+
+def _compiled(pattern: str | None) -> re.Pattern[str] | None:
+    return None if pattern is None else re.compile(pattern)
 
 
 def _line_end(buffer: bytearray) -> int:

@@ -23,6 +23,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from drivers.light import SerialLightConfig
 from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
 from gonio.config import Strict, field_error
 
@@ -121,6 +122,23 @@ class SerialSwitchSpec(Strict):
     @property
     def line_ending_chars(self) -> str:
         return LINE_ENDINGS[self.line_ending]
+
+    def config(self) -> SerialLightConfig:
+        """The driver's configuration (`drivers.light.SerialLightConfig`)."""
+        return SerialLightConfig(
+            port=self.port,
+            baud=self.baud,
+            on=self.on_command,
+            off=self.off_command,
+            ack=self.ack,
+            error_reply=None,
+            query=self.query_command,
+            on_reply=self.on_reply,
+            off_reply=self.off_reply,
+            line_ending=self.line_ending_chars,
+            timeout_s=self.timeout_s,
+            warmup_s=self.warmup_s,
+        )
 
 
 SwitchSpec = Annotated[NoSwitchSpec | SerialSwitchSpec, Field(discriminator="kind")]

@@ -26,7 +26,7 @@ from gonio.acquire.measure import measure_target
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan
 from gonio.rig.model import Rig
-from sim.clock import ManualClock, ScaledClock
+from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.devices.detector import SimDetector, SimLightSource
 from sim.devices.motors import MotorState, SimMotorBus
 from sim.dynamixel.emulator import DxlEmulator
@@ -180,13 +180,9 @@ class Rehearsal:
     clock: ScaledClock
 
 
-@contextmanager
-def rehearsal(
-    scene: Scene, rig: Rig, *, speedup: float = 50.0, seed: int | None = None
-) -> Iterator[Rehearsal]:
-    """An emulated bus of the rig's motors (at home), the real `DynamixelBus` on it,
-    and a `SimDetector` on a clock running ``speedup`` times faster than real time."""
-    clock = ScaledClock(speedup)
+def emulated_bus(rig: Rig, clock: TimeSource) -> DxlEmulator:
+    """A (not yet started) byte-level emulator of the rig's motors, at home, in their
+    operating modes, at the rig's bus rate (no wire time: as fast as the host reads)."""
     axes = rig.bus_axes()
     emulator = DxlEmulator(
         ids=[a.motor_id for a in axes],
@@ -199,6 +195,18 @@ def rehearsal(
         motor = emulator.motors[axis.motor_id]
         motor.set("operating_mode", axis.operating_mode)
         motor.set("present_position", axis.to_ticks(float(home)))
+    return emulator
+
+
+@contextmanager
+def rehearsal(
+    scene: Scene, rig: Rig, *, speedup: float = 50.0, seed: int | None = None
+) -> Iterator[Rehearsal]:
+    """An emulated bus of the rig's motors (at home), the real `DynamixelBus` on it,
+    and a `SimDetector` on a clock running ``speedup`` times faster than real time."""
+    clock = ScaledClock(speedup)
+    axes = rig.bus_axes()
+    emulator = emulated_bus(rig, clock)
     light = SimLightSource()
     with emulator:
         bus = DynamixelBus(emulator.path, axes, baud=rig.spec.bus.baud)
