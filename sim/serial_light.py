@@ -14,12 +14,9 @@ rehearsal's dark reading really is dark.
 
 from __future__ import annotations
 
-import itertools
-import threading
-
 from drivers.light import SerialLightConfig
 from sim.serial_photometer.protocol import _line
-from sim.serial_photometer.server import _Event, _PtyServer
+from sim.serial_photometer.server import _PtyServer
 
 
 class SerialLamp(_PtyServer):
@@ -34,19 +31,7 @@ class SerialLamp(_PtyServer):
         self._silent = False
         self._refuse = 0
         self._commands: list[str] = []
-        self._lock = threading.Lock()
-        self._events: list[_Event] = []
-        self._seq = itertools.count()
-        self._inbuf = bytearray()
-        self._skipping = False
-        self._outbuf = bytearray()
-        self._master: int | None = None
-        self._slave: int | None = None
-        self._wake: tuple[int, int] | None = None
-        self._thread: threading.Thread | None = None
-        self._stopping = threading.Event()
-        self._path: str | None = None
-        self._error: BaseException | None = None
+        self._init_pty_state()
 
     def config(self, **overrides: object) -> SerialLightConfig:
         """The driver configuration that speaks this protocol."""

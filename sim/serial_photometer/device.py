@@ -3,7 +3,6 @@ answers each command (see the package docstring for the protocol)."""
 
 from __future__ import annotations
 
-import itertools
 import math
 import random
 import statistics
@@ -24,7 +23,7 @@ from sim.serial_photometer.protocol import (
     _line,
     default_config,
 )
-from sim.serial_photometer.server import _Event, _PtyServer
+from sim.serial_photometer.server import _PtyServer
 
 Signal = float | Callable[[float], float]
 
@@ -92,21 +91,9 @@ class SerialPhotometer(_PtyServer):
         self._exposure_ms = default_exposure_ms
         self._gain = 1
         self._busy_until = 0.0
-        self._events: list[_Event] = []
-        self._seq = itertools.count()
         self._commands: list[str] = []
         self._resets = 0
-
-        self._inbuf = bytearray()
-        self._skipping = False  # inside a command line that was too long
-        self._outbuf = bytearray()
-        self._master: int | None = None
-        self._slave: int | None = None
-        self._wake: tuple[int, int] | None = None
-        self._thread: threading.Thread | None = None
-        self._stopping = threading.Event()
-        self._path: str | None = None
-        self._error: BaseException | None = None
+        self._init_pty_state()
 
     # -- configuration -------------------------------------------------------------
 

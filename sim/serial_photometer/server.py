@@ -62,6 +62,22 @@ class _PtyServer:
 
         def _reset_locked(self, now: float, *, banner_now: bool = False) -> None: ...
 
+    def _init_pty_state(self) -> None:
+        """The transport's state, before `start` (called by the device's ``__init__``)."""
+        self._lock = threading.Lock()
+        self._events = []
+        self._seq = itertools.count()
+        self._inbuf = bytearray()
+        self._skipping = False  # inside a command line that was too long
+        self._outbuf = bytearray()
+        self._master = None
+        self._slave = None
+        self._wake = None
+        self._thread = None
+        self._stopping = threading.Event()
+        self._path = None
+        self._error = None
+
     # -- life cycle ---------------------------------------------------------------
 
     @property
