@@ -124,3 +124,24 @@ def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
     """Pin the SDK's LATENCY_TIMER for the test (and restore it after)."""
     monkeypatch.setattr(port_handler, "LATENCY_TIMER", TEST_LATENCY_TIMER)
     return TEST_LATENCY_TIMER
+
+
+#: Tests that talk to a pseudo-terminal (the emulated bus, the photometer, the lamp): the
+#: SDK busy-waits for replies in the test's thread while the device serves from another,
+#: so they run in their own serial pass (`make test`), away from CPU-bound workers.
+PTY_TESTS = (
+    "tests/drivers/",
+    "tests/sim/dynamixel/",
+    "tests/sim/test_serial_photometer.py",
+    "tests/sim/devices/test_rehearsal.py",
+    "tests/gonio/cli/test_motors.py",
+    "tests/gonio/acquire/test_hardware.py",
+)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    root = Path(config.rootpath)
+    for item in items:
+        where = item.path.relative_to(root).as_posix()
+        if where.startswith(PTY_TESTS) or "emulator" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.pty)
