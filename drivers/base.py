@@ -60,8 +60,8 @@ Simulation only (`Simulated`)
     What only a simulation has — which sample's random streams the next move and
     reading use, whether the stage shows the sample or the reference standard, the
     true joint angles, snapshots for resume — sits behind the optional `Simulated`
-    protocol. The engine uses it only when a backend offers it (``isinstance(x,
-    Simulated)``), never by poking attributes.
+    protocol. The engine uses it only when a backend offers it (the run's
+    ``gonio.acquire.Devices.simulation``), never by poking attributes.
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Any, Literal, Protocol, Self, runtime_checkable
+from typing import Any, Literal, Protocol, Self
 
 # -- errors ---------------------------------------------------------------------------
 
@@ -182,7 +182,6 @@ class Reading:
 # -- time -------------------------------------------------------------------------------
 
 
-@runtime_checkable
 class Clock(Protocol):
     """Seconds on a monotonic clock, and a way to let time pass on it."""
 
@@ -325,7 +324,6 @@ class LightSource(Device, Protocol):
 StageTarget = Literal["sample", "reference"]
 
 
-@runtime_checkable
 class Simulated(Protocol):
     """What only a simulated backend offers (optional; see the module docstring)."""
 
