@@ -203,7 +203,8 @@ def seed_cone_widths(theta_i: ArrayLike, cone_half_angle: float) -> LobeWidths:
 
 
 def seed_closed_form_aspect(theta_i: ArrayLike, cone_half_angle: float) -> FloatArray:
-    """2a / δ with sin(δ/2) = sin a cos θ: seed 001's L_min / L_max semi-axes."""
+    """2a / δ with sin(δ/2) = sin a cos θ: the L_min / L_max semi-axes
+    of the lobe-anisotropy derivation (seed 001)."""
     theta = np.asarray(theta_i, dtype=np.float64)
     a = cone_half_angle
     return np.asarray(a / np.arcsin(np.sin(a) * np.cos(theta)), dtype=np.float64)
@@ -224,7 +225,7 @@ def _fmt(x: float) -> str:
 
 
 def aspect_table() -> str:
-    """The seed-001 table of docs/brdf.md, as markdown."""
+    """The lobe-anisotropy table (seed 001) of docs/brdf.md, as markdown."""
     theta = np.radians(ANGLES_DEG)
     lines = [
         "| D | α | θi | f·cosθo, Schlick | f·cosθo, F = 1 | f, Schlick | seed cone "

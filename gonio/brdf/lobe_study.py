@@ -287,7 +287,7 @@ def minimax_xi(n_range: tuple[float, float] = FIG3_N) -> tuple[float, float]:
 
 
 def render_summary() -> str:
-    """Compact fixed-width table of the seed-003 check (for ``make demo``)."""
+    """Compact fixed-width table of the check of Romanyuk et al. (seed 003) (for ``make demo``)."""
     seed, ours, ln53 = SEED_EQ12, equation_12(), equation_12(K_LN_5_3)
     lines = [
         "Seed 003 lobes vs F_B = cos^n ψ (K = 0.511; δ relative, epicentre zone)",

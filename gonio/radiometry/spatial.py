@@ -1,4 +1,5 @@
-"""Spatial integration for a proximal point source (seed 004's proximal point law).
+"""Spatial integration for a proximal point source (the proximal point law of
+the lecture notes on reflectance models, seed 004).
 
 The source sits at s = r·wi from the sample centre. A surface point x (sample plane,
 z = 0) receives E(x) = I · cos θ(x) / |s − x|² = I · r cos θi / |s − x|³ from the
