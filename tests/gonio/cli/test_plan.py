@@ -17,8 +17,8 @@ import pytest
 from gonio.cli import main
 from gonio.config import ConfigError
 from gonio.planner import load_plan_source, read_plan
+from tests.conftest import CONFIGS
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 GONIO = Path(sys.executable).with_name("gonio")
 
 

@@ -15,8 +15,8 @@ import pytest
 import yaml
 
 from gonio.cli import main
+from tests.conftest import CONFIGS
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())
 ARCH = str(CONFIGS / "rigs" / "arch.yaml")
 GONIO = Path(sys.executable).with_name("gonio")
