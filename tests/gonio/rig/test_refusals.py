@@ -88,7 +88,7 @@ def grazing_limits(rig: Rig) -> tuple[float, float]:
     )
 
 
-def test_grazing_limits_of_the_shipped_rigs(rigs: dict[str, Rig], rig: Rig) -> None:
+def test_grazing_limits_of_the_shipped_rigs(rig: Rig) -> None:
     fov, sample = grazing_limits(rig)
     assert fov == pytest.approx(76.1135, abs=1e-4)  # acos(6 / 25)
     assert sample == pytest.approx(78.4630, abs=1e-4)  # acos(6 / 30)
