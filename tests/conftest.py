@@ -1,5 +1,6 @@
 """Suite-wide settings (hypothesis profiles, derandomized under CI) and the fixtures
-shared across packages: the shipped rigs, a virtual clock and emulated Dynamixel buses."""
+shared across packages: the shipped rigs, a virtual clock, emulated Dynamixel buses and
+the in-process `gonio` command (helper functions shared across packages: tests/support)."""
 
 from __future__ import annotations
 
@@ -21,6 +22,10 @@ from sim.dynamixel.emulator import DxlEmulator
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 #: The shipped rigs by short name (the files in configs/rigs).
 RIG_FILES = {"arch": CONFIGS / "rigs" / "arch.yaml", "in_plane": CONFIGS / "rigs" / "in_plane.yaml"}
+#: Their short names, for parametrize lists at collection time (load them with `rigs`).
+RIG_NAMES = list(RIG_FILES)
+#: The arch rig with a point source instead of its beam (the point-source scene's rig).
+ARCH_POINT_FILE = CONFIGS / "rigs" / "arch_point.yaml"
 
 settings.register_profile(
     "dev", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow]
@@ -86,10 +91,16 @@ def rigs() -> dict[str, Rig]:
     return {name: Rig.from_yaml(path) for name, path in RIG_FILES.items()}
 
 
-@pytest.fixture(params=list(RIG_FILES))
+@pytest.fixture(params=RIG_NAMES)
 def rig(request: pytest.FixtureRequest, rigs: dict[str, Rig]) -> Rig:
     """Each shipped rig in turn."""
     return rigs[request.param]
+
+
+@pytest.fixture(scope="session")
+def arch_point() -> Rig:
+    """The arch rig with a point source (configs/rigs/arch_point.yaml), loaded once."""
+    return Rig.from_yaml(ARCH_POINT_FILE)
 
 
 @pytest.fixture

@@ -27,7 +27,7 @@ from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
 from sim.dynamixel.faults import Fault
 from sim.dynamixel.protocol import Instruction, Packet, PacketReader
-from tests.drivers.test_dynamixel import axes
+from tests.support.dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]
 TORQUE = item("torque_enable").address

@@ -15,7 +15,6 @@ from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from sim.physics.optics import SceneOptics
 from sim.scene import RIG_FIELDS, EffectsSpec, Scene, load_scene
-from tests.gonio.rig.helpers import ARCH_POINT, RIGS
 
 SCENES = Path(__file__).resolve().parents[2] / "configs" / "scenes"
 SHIPPED = sorted(p.stem for p in SCENES.glob("*.yaml"))
@@ -166,16 +165,23 @@ def test_a_fact_of_the_rig_in_a_scene_is_one_line(tmp_path: Path, where: tuple[s
 
 
 @pytest.mark.parametrize(
-    ("source", "rig", "field", "words"),
+    ("source", "rig_name", "field", "words"),
     [
-        ({"irradiance_w_m2": 1.0}, ARCH_POINT, "source.irradiance_w_m2", "is point"),
-        ({"intensity_w_sr": 0.01}, RIGS["arch"], "source.intensity_w_sr", "is collimated"),
+        ({"irradiance_w_m2": 1.0}, "arch_point", "source.irradiance_w_m2", "is point"),
+        ({"intensity_w_sr": 0.01}, "arch", "source.intensity_w_sr", "is collimated"),
     ],
     ids=["irradiance-for-a-point-source", "intensity-for-a-collimated-beam"],
 )
 def test_a_source_power_of_the_other_kind_is_one_line(
-    tmp_path: Path, source: dict[str, float], rig: Rig, field: str, words: str
+    arch_point: Rig,
+    rigs: dict[str, Rig],
+    tmp_path: Path,
+    source: dict[str, float],
+    rig_name: str,
+    field: str,
+    words: str,
 ) -> None:
+    rig = {**rigs, "arch_point": arch_point}[rig_name]
     path = write(tmp_path, {**MATTE, "source": source})
     load_scene(path)  # alone, a scene does not know the rig's light
     with pytest.raises(ConfigError) as info:
@@ -190,9 +196,9 @@ def test_a_source_power_of_the_other_kind_is_one_line(
         SceneOptics(scene, rig)
 
 
-def test_shipped_scenes_fit_their_rigs() -> None:
+def test_shipped_scenes_fit_their_rigs(arch_point: Rig, rigs: dict[str, Rig]) -> None:
     for name in SHIPPED:
-        rig = ARCH_POINT if name == "seed000_specular" else RIGS["arch"]
+        rig = arch_point if name == "seed000_specular" else rigs["arch"]
         scene = load_scene(SCENES / f"{name}.yaml", rig)
         assert scene.source.kind == rig.source_kind
 

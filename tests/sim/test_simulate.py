@@ -22,7 +22,7 @@ from sim.physics.optics import SceneOptics
 from sim.scene import Scene, load_scene
 from sim.simulate import simulate
 from tests.conftest import CONFIGS
-from tests.gonio.rig.helpers import ARCH_POINT, RIGS, with_point_source
+from tests.support.rigs import with_point_source
 
 SCENES = CONFIGS / "scenes"
 
@@ -60,9 +60,13 @@ def varied(plan: Plan) -> Plan:
     ],
 )
 def test_vectorized_equals_target_by_target(
-    rigs: dict[str, Rig], scene_name: str, rig_name: str, isotropic: bool
+    rigs: dict[str, Rig],
+    arch_point: Rig,
+    scene_name: str,
+    rig_name: str,
+    isotropic: bool,
 ) -> None:
-    rig = {**RIGS, "arch_point": ARCH_POINT}[rig_name]
+    rig = {**rigs, "arch_point": arch_point}[rig_name]
     scene = load_scene(SCENES / f"{scene_name}.yaml", rig)
     plan = varied(small_plan(rig, isotropic=isotropic, n=60))
     fast = simulate(plan, scene)
@@ -134,9 +138,9 @@ def test_no_effects_counts_to_brdf_recovers_the_model(
     of every shipped rig, for both source types."""
     base = load_scene(SCENES / "glossy_metal.yaml").with_effects([])
     rig, source = (
-        (RIGS[rig_name], {"irradiance_w_m2": 1.0})
+        (rigs[rig_name], {"irradiance_w_m2": 1.0})
         if kind == "collimated"
-        else (with_point_source(RIGS[rig_name]), {"intensity_w_sr": 0.01})
+        else (with_point_source(rigs[rig_name]), {"intensity_w_sr": 0.01})
     )
     scene = Scene.model_validate({**base.model_dump(), "source": source})
     assert rig.source_kind == kind

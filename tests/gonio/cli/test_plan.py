@@ -1,46 +1,36 @@
-"""`gonio plan` as a user runs it: the summary table (with whether the ordering
-converged, and the benchmark figures only with --bounds), the stored plan that reads
-back, the coverage PNG, and a clear line when matplotlib is missing (checked before any
-planning work)."""
+"""`gonio plan` as a user runs it (in-process, through `gonio.cli.main`): the summary
+table (with whether the ordering converged, and the benchmark figures only with
+--bounds), the stored plan that reads back, the coverage PNG, and a clear line when
+matplotlib is missing (checked before any planning work)."""
 
 from __future__ import annotations
 
 import dataclasses
-import os
-import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gonio.cli import main
+import gonio.cli.plan as plan_command
 from gonio.config import ConfigError
 from gonio.planner import load_plan_source, read_plan
+from tests.conftest import CONFIGS, CliResult
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
-GONIO = Path(sys.executable).with_name("gonio")
-
-
-def run(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [str(GONIO), *args], capture_output=True, text=True, timeout=300,
-        stdin=subprocess.DEVNULL, env=env,
-    )  # fmt: skip
+Gonio = Callable[..., CliResult]
+QUICK = str(CONFIGS / "plans" / "quick.yaml")
 
 
-def gonio_plan(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    """`gonio plan ARGS` in this process: (exit code, stdout, stderr)."""
-    code = main(["plan", *args])
-    out, err = capsys.readouterr()
-    return code, out, err
+def gonio_plan(run_gonio: Gonio, *args: str) -> tuple[int, str, str]:
+    """`gonio plan ARGS`: (exit code, stdout, stderr)."""
+    r = run_gonio("plan", *args)
+    return r.returncode, r.stdout, r.stderr
 
 
-def test_quick_plan_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_quick_plan_end_to_end(tmp_path: Path, run_gonio: Gonio) -> None:
     out_csv, out_png = tmp_path / "plan.csv", tmp_path / "coverage.png"
-    code, out, err = gonio_plan(
-        capsys, str(CONFIGS / "plans" / "quick.yaml"), "-o", str(out_csv), "--plot", str(out_png)
-    )
+    code, out, err = gonio_plan(run_gonio, QUICK, "-o", str(out_csv), "--plot", str(out_png))
     assert code == 0, err
     lines = out.splitlines()
     assert lines[0] == "plan 'quick': isotropic hybrid, sobol, rig 'arch-4axis'"
@@ -71,8 +61,8 @@ def test_quick_plan_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert image[..., :3].std() > 0.05  # not blank
 
 
-def test_convergence_is_printed(capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = gonio_plan(capsys, str(CONFIGS / "plans" / "quick.yaml"))
+def test_convergence_is_printed(run_gonio: Gonio) -> None:
+    code, out, _ = gonio_plan(run_gonio, QUICK)
     assert code == 0
     line = next(x for x in out.splitlines() if x.startswith("  ordering  "))
     words = line.split()
@@ -81,16 +71,14 @@ def test_convergence_is_printed(capsys: pytest.CaptureFixture[str]) -> None:
     assert "ordering took" in out
 
 
-def test_a_binding_move_budget_is_printed(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_a_binding_move_budget_is_printed(tmp_path: Path, run_gonio: Gonio) -> None:
     text = (CONFIGS / "plans" / "quick.yaml").read_text(encoding="utf-8")
     plan = tmp_path / "tight.yaml"
     plan.write_text(
         text.replace("../rigs/arch.yaml", str(CONFIGS / "rigs" / "arch.yaml")) + "max_moves: 7\n",
         encoding="utf-8",
     )
-    code, out, _ = gonio_plan(capsys, str(plan), "-o", str(tmp_path / "p.csv"))
+    code, out, _ = gonio_plan(run_gonio, str(plan), "-o", str(tmp_path / "p.csv"))
     assert code == 0
     assert (
         "  ordering                  stopped at the move budget (7 moves): not converged\n" in out
@@ -99,10 +87,9 @@ def test_a_binding_move_budget_is_printed(
     assert s.stopped == "move budget" and not s.converged and s.moves == 7
 
 
-def test_bounds_only_with_the_option(capsys: pytest.CaptureFixture[str]) -> None:
-    quick = str(CONFIGS / "plans" / "quick.yaml")
-    _, plain, _ = gonio_plan(capsys, quick)
-    code, bounds, _ = gonio_plan(capsys, quick, "--bounds")
+def test_bounds_only_with_the_option(run_gonio: Gonio) -> None:
+    _, plain, _ = gonio_plan(run_gonio, QUICK)
+    code, bounds, _ = gonio_plan(run_gonio, QUICK, "--bounds")
     assert code == 0
     for label in ("in generation order", "lower bound (MST)"):
         assert label not in plain
@@ -118,11 +105,9 @@ def test_bounds_only_with_the_option(capsys: pytest.CaptureFixture[str]) -> None
     assert without_took == [x for x in plain.splitlines() if "ordering took" not in x]
 
 
-def test_anisotropic_plan_with_the_other_rig(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def test_anisotropic_plan_with_the_other_rig(tmp_path: Path, run_gonio: Gonio) -> None:
     code, out, err = gonio_plan(
-        capsys, str(CONFIGS / "plans" / "quick.yaml"),
+        run_gonio, QUICK,
         "--rig", str(CONFIGS / "rigs" / "in_plane.yaml"), "--plot", str(tmp_path / "c.png"),
         "-o", str(tmp_path / "p.csv"),
     )  # fmt: skip
@@ -135,18 +120,19 @@ def test_anisotropic_plan_with_the_other_rig(
         read_plan(tmp_path / "p.csv", rig=CONFIGS / "rigs" / "arch.yaml")
 
 
-def test_missing_matplotlib_is_one_line_before_any_work(tmp_path: Path) -> None:
-    """A matplotlib that cannot be imported (shadowed on PYTHONPATH) gives one line
-    saying how to install the plot extra, and no plan is written."""
-    shadow = tmp_path / "shadow" / "matplotlib"
-    shadow.mkdir(parents=True)
-    (shadow / "__init__.py").write_text("raise ImportError('no matplotlib here')\n")
-    env = {**os.environ, "PYTHONPATH": str(shadow.parent)}
+def test_missing_matplotlib_is_one_line_before_any_work(
+    tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A matplotlib that cannot be imported gives one line saying how to install the
+    plot extra, before the plan is even read: nothing is planned, no plan is written."""
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # `import matplotlib` fails
+
+    def no_planning(*args: object) -> None:
+        raise AssertionError("planning started before matplotlib was checked")
+
+    monkeypatch.setattr(plan_command, "load_plan_source", no_planning)
     out_csv = tmp_path / "plan.csv"
-    r = run(
-        "plan", str(CONFIGS / "plans" / "quick.yaml"), "-o", str(out_csv),
-        "--plot", str(tmp_path / "c.png"), env=env,
-    )  # fmt: skip
+    r = run_gonio("plan", QUICK, "-o", str(out_csv), "--plot", str(tmp_path / "c.png"))
     assert r.returncode == 2
     assert r.stdout == ""
     assert r.stderr == (
@@ -156,9 +142,17 @@ def test_missing_matplotlib_is_one_line_before_any_work(tmp_path: Path) -> None:
     assert not out_csv.exists()
 
 
-@pytest.mark.parametrize("args", [["plan"], ["plan", "a.yaml", "--frobnicate"]])
-def test_usage_errors(args: list[str]) -> None:
-    r = run(*args)
+@pytest.mark.parametrize(
+    ("args", "usage", "words"),
+    [
+        (["plan"], "gonio plan", "the following arguments are required: plan"),
+        (["plan", "a.yaml", "--frobnicate"], "gonio", "unrecognized arguments: --frobnicate"),
+    ],
+    ids=["no-plan-file", "unknown-option"],
+)
+def test_usage_errors(run_gonio: Gonio, args: list[str], usage: str, words: str) -> None:
+    r = run_gonio(*args)
     assert r.returncode == 2
-    assert "usage: gonio" in r.stderr
-    assert "Traceback" not in r.stderr
+    assert r.stdout == ""
+    assert r.stderr.startswith(f"usage: {usage} ")
+    assert r.stderr.endswith(f"\n{usage}: error: {words}\n")

@@ -14,10 +14,11 @@ from gonio.acquire.calibration import reference_pose
 from gonio.cli.simulate import render
 from gonio.errors import GonioError
 from gonio.planner import build, load_plan
+from gonio.rig.model import Rig
 from sim.scene import load_scene
 from sim.session import simulate_plan
 from tests.conftest import CONFIGS, CliResult
-from tests.gonio.rig.helpers import ARCH_POINT, RIGS, rig_with
+from tests.support.rigs import rig_with
 
 Gonio = Callable[..., CliResult]
 
@@ -50,22 +51,22 @@ def test_bad_scene_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
     assert f"{scene}:2: material.name: unknown BRDF model 'velvet'" in r.stderr
 
 
-def test_point_source_note_uses_the_rigs_sizes() -> None:
+def test_point_source_note_uses_the_rigs_sizes(arch_point: Rig) -> None:
     spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
-    plan = build(spec, ARCH_POINT)
-    scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", ARCH_POINT)
+    plan = build(spec, arch_point)
+    scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", arch_point)
     text = render(simulate_plan(plan, scene))
     # 25 mm seen on a 30 mm sample: the view leaves the sample beyond acos(25/30).
     assert "see past the sample's edge (θo > 33.6°)" in text
-    wider = rig_with(ARCH_POINT, constraints={"sample_diameter_mm": 60})
+    wider = rig_with(arch_point, constraints={"sample_diameter_mm": 60})
     assert "see past the sample's edge (θo > 65.4°)" in render(
         simulate_plan(build(spec, wider), scene)
     )
 
 
-def test_the_reference_standard_is_the_rigs() -> None:
+def test_the_reference_standard_is_the_rigs(rigs: dict[str, Rig]) -> None:
     """Albedo and calibration geometry come from the rig file's reference section."""
-    rig = rig_with(RIGS["arch"], reference={"albedo": 0.9, "theta_i_deg": 10, "theta_o_deg": 40})
+    rig = rig_with(rigs["arch"], reference={"albedo": 0.9, "theta_i_deg": 10, "theta_o_deg": 40})
     spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
     plan = build(spec, rig)
     scene = load_scene(CONFIGS / "scenes" / "glossy_metal.yaml").with_effects([])
@@ -76,8 +77,8 @@ def test_the_reference_standard_is_the_rigs() -> None:
     np.testing.assert_allclose(np.degrees(np.arccos([wi[2], wo[2]])), [10.0, 40.0], atol=1e-9)
 
 
-def test_an_unreachable_reference_geometry_is_one_line() -> None:
-    rig = rig_with(RIGS["arch"], reference={"theta_o_deg": 85})  # beyond θ max = 80°
+def test_an_unreachable_reference_geometry_is_one_line(rigs: dict[str, Rig]) -> None:
+    rig = rig_with(rigs["arch"], reference={"theta_o_deg": 85})  # beyond θ max = 80°
     with pytest.raises(GonioError) as info:
         reference_pose(rig)
     assert str(info.value) == (

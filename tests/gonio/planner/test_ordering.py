@@ -16,10 +16,8 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 
 from gonio.planner import ordering
 from gonio.planner.ordering import mst_lower_bound, order_targets, path_time
+from gonio.rig.model import Rig
 from gonio.rig.travel import TravelModel
-from tests.gonio.rig.helpers import RIGS
-
-MODELS = {name: rig.travel for name, rig in RIGS.items()}
 
 
 def dense_mst(model: TravelModel, points: np.ndarray) -> float:
@@ -35,10 +33,9 @@ def poses(rng: np.random.Generator, n: int, model: TravelModel, spread: float = 
     return rng.uniform(-spread, spread, (n, len(model.velocity)))
 
 
-@pytest.mark.parametrize("name", list(MODELS))
 @pytest.mark.parametrize("n", [2, 3, 17, 300])
-def test_mst_bound_is_the_exact_mst(name: str, n: int) -> None:
-    model = MODELS[name]
+def test_mst_bound_is_the_exact_mst(rig: Rig, n: int) -> None:
+    model = rig.travel
     points = poses(np.random.default_rng(n), n, model)
     bound, exact = mst_lower_bound(model, points)
     assert exact
@@ -52,11 +49,11 @@ def test_mst_bound_is_the_exact_mst(name: str, n: int) -> None:
     frozen=st.booleans(),
 )
 def test_mst_bound_with_repeats_and_a_frozen_axis(
-    seed: int, n: int, duplicates: int, frozen: bool
+    rigs: dict[str, Rig], seed: int, n: int, duplicates: int, frozen: bool
 ) -> None:
     """Repeated poses (zero-time moves) and an axis that never moves (the rotation stage
     of an isotropic plan) change nothing: the staged Kruskal equals the dense MST."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     rng = np.random.default_rng(seed)
     points = poses(rng, n, model, spread=rng.uniform(0.01, 3.0))
     points = np.vstack([points, points[rng.integers(0, n, duplicates)]])
@@ -67,8 +64,10 @@ def test_mst_bound_with_repeats_and_a_frozen_axis(
     assert bound == pytest.approx(dense_mst(model, points), rel=1e-12, abs=1e-12)
 
 
-def test_mst_bound_stays_a_bound_when_memory_runs_out(monkeypatch: pytest.MonkeyPatch) -> None:
-    model = MODELS["in_plane"]
+def test_mst_bound_stays_a_bound_when_memory_runs_out(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    model = rigs["in_plane"].travel
     points = poses(np.random.default_rng(5), 400, model)
     exact_bound, _ = mst_lower_bound(model, points)
     monkeypatch.setattr(ordering, "MAX_PAIRS", 50)
@@ -78,10 +77,12 @@ def test_mst_bound_stays_a_bound_when_memory_runs_out(monkeypatch: pytest.Monkey
 
 
 @pytest.mark.parametrize("limit", [0, 10, 300])
-def test_weak_bound_never_exceeds_the_mst(monkeypatch: pytest.MonkeyPatch, limit: int) -> None:
+def test_weak_bound_never_exceeds_the_mst(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch, limit: int
+) -> None:
     """Points on a line plus tight clusters (the typical move is tiny, most moves are
     long): however little memory the stages get, the bound stays below the MST."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     rng = np.random.default_rng(8)
     line = np.linspace(0.0, 3.0, 201)[:, None] * np.array([1.0, 0.0, 0.0, 0.0])
     centres = rng.uniform(-2, 2, (20, 4))
@@ -95,10 +96,9 @@ def test_weak_bound_never_exceeds_the_mst(monkeypatch: pytest.MonkeyPatch, limit
     assert 0.0 <= weak <= exact
 
 
-@pytest.mark.parametrize("name", list(MODELS))
 @pytest.mark.parametrize("method", ["given", "nearest", "auto"])
-def test_order_is_a_permutation_timed_as_reported(name: str, method: str) -> None:
-    model = MODELS[name]
+def test_order_is_a_permutation_timed_as_reported(rig: Rig, method: str) -> None:
+    model = rig.travel
     rng = np.random.default_rng(1)
     targets = poses(rng, 700, model)
     start = np.zeros(4)
@@ -121,10 +121,10 @@ def brute_force_best(model: TravelModel, start: np.ndarray, targets: np.ndarray)
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_small_instances_near_the_optimum(seed: int) -> None:
+def test_small_instances_near_the_optimum(rigs: dict[str, Rig], seed: int) -> None:
     """Seven targets: the search ends within 10 % of the brute-force optimum (2-opt and
     Or-opt optima are not always global) and never below it."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     rng = np.random.default_rng(seed)
     targets = poses(rng, 7, model)
     start = np.zeros(4)
@@ -133,9 +133,9 @@ def test_small_instances_near_the_optimum(seed: int) -> None:
     assert best - 1e-9 <= result.travel_s <= 1.1 * best
 
 
-def test_no_improving_two_opt_move_is_left() -> None:
+def test_no_improving_two_opt_move_is_left(rigs: dict[str, Rig]) -> None:
     """With neighbour lists covering every target, the final path is 2-opt optimal."""
-    model = MODELS["in_plane"]
+    model = rigs["in_plane"].travel
     rng = np.random.default_rng(3)
     targets = poses(rng, ordering.NEIGHBOURS, model)
     start = np.zeros(4)
@@ -154,9 +154,9 @@ def test_no_improving_two_opt_move_is_left() -> None:
             assert after >= before - 1e-9
 
 
-def test_sorted_line_is_kept() -> None:
+def test_sorted_line_is_kept(rigs: dict[str, Rig]) -> None:
     """Targets on a line, given in order from the start: already optimal, unchanged."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     targets = np.linspace(0.1, 2.0, 50)[:, None] * np.array([1.0, 0.5, -0.3, 0.0])
     result = order_targets(model, targets, np.zeros(4), method="given")
     assert result.order.tolist() == list(range(50))
@@ -164,8 +164,8 @@ def test_sorted_line_is_kept() -> None:
     assert result.travel_s == pytest.approx(result.lower_bound_s)
 
 
-def test_shuffled_line_is_recovered() -> None:
-    model = MODELS["arch"]
+def test_shuffled_line_is_recovered(rigs: dict[str, Rig]) -> None:
+    model = rigs["arch"].travel
     targets = np.linspace(0.1, 2.0, 200)[:, None] * np.array([1.0, 0.5, -0.3, 0.0])
     shuffled = np.random.default_rng(0).permutation(200)
     result = order_targets(model, targets[shuffled], np.zeros(4), method="auto")
@@ -173,17 +173,16 @@ def test_shuffled_line_is_recovered() -> None:
     assert result.given_s > 5 * result.travel_s
 
 
-@pytest.mark.parametrize("name", list(MODELS))
-def test_uniform_targets_near_the_bound_and_far_below_generation_order(name: str) -> None:
-    model = MODELS[name]
+def test_uniform_targets_near_the_bound_and_far_below_generation_order(rig: Rig) -> None:
+    model = rig.travel
     targets = poses(np.random.default_rng(11), 3000, model, spread=1.4)
     result = order_targets(model, targets, np.zeros(4), time_budget_s=60.0)
     assert result.travel_s <= 1.3 * result.lower_bound_s
     assert result.given_s >= 2.0 * result.travel_s
 
 
-def test_exhausted_budget_still_returns_a_valid_order() -> None:
-    model = MODELS["arch"]
+def test_exhausted_budget_still_returns_a_valid_order(rigs: dict[str, Rig]) -> None:
+    model = rigs["arch"].travel
     targets = poses(np.random.default_rng(2), 2000, model)
     result = order_targets(model, targets, np.zeros(4), method="given", time_budget_s=0.0)
     assert not result.converged
@@ -192,8 +191,8 @@ def test_exhausted_budget_still_returns_a_valid_order() -> None:
 
 
 @pytest.mark.parametrize("n", [0, 1])
-def test_trivial_sizes(n: int) -> None:
-    model = MODELS["arch"]
+def test_trivial_sizes(rigs: dict[str, Rig], n: int) -> None:
+    model = rigs["arch"].travel
     targets = np.full((n, 4), 0.5)
     result = order_targets(model, targets, np.zeros(4))
     assert result.order.tolist() == list(range(n))
@@ -203,9 +202,9 @@ def test_trivial_sizes(n: int) -> None:
     assert math.isfinite(result.travel_s)
 
 
-def test_start_pose_counts_in_the_bound() -> None:
+def test_start_pose_counts_in_the_bound(rigs: dict[str, Rig]) -> None:
     """The bound spans the start: one target far from the start costs its move."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     target = np.array([[1.0, 0.0, 0.0, 0.0]])
     result = order_targets(model, target, np.zeros(4))
     assert result.lower_bound_s == pytest.approx(float(model.time(np.zeros(4), target[0])))
@@ -214,8 +213,8 @@ def test_start_pose_counts_in_the_bound() -> None:
 # --- a budget of moves, not of time: the same order on any machine ------------------
 
 
-def test_the_same_inputs_give_the_same_order() -> None:
-    model = MODELS["in_plane"]
+def test_the_same_inputs_give_the_same_order(rigs: dict[str, Rig]) -> None:
+    model = rigs["in_plane"].travel
     targets = poses(np.random.default_rng(4), 1500, model)
     a = order_targets(model, targets, np.zeros(4), lower_bound=False)
     b = order_targets(model, targets, np.zeros(4), lower_bound=False)
@@ -226,10 +225,10 @@ def test_the_same_inputs_give_the_same_order() -> None:
 
 
 @pytest.mark.parametrize("max_moves", [0, 1, 37, 400])
-def test_the_move_budget_binds_before_any_time_cap(max_moves: int) -> None:
+def test_the_move_budget_binds_before_any_time_cap(rigs: dict[str, Rig], max_moves: int) -> None:
     """With the move budget binding, a huge time cap and an ordinary one give the same
     order: the result does not depend on how fast the machine is."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     targets = poses(np.random.default_rng(9), 1200, model)
     runs = [
         order_targets(
@@ -253,16 +252,16 @@ def test_the_move_budget_binds_before_any_time_cap(max_moves: int) -> None:
         assert runs[0].travel_s < runs[0].given_s
 
 
-def test_the_time_cap_is_reported_as_such() -> None:
-    model = MODELS["arch"]
+def test_the_time_cap_is_reported_as_such(rigs: dict[str, Rig]) -> None:
+    model = rigs["arch"].travel
     targets = poses(np.random.default_rng(2), 2000, model)
     result = order_targets(model, targets, np.zeros(4), method="given", time_budget_s=1e-9)
     assert result.stopped == "time cap" and not result.converged
 
 
-def test_neighbour_ties_are_taken_in_index_order() -> None:
+def test_neighbour_ties_are_taken_in_index_order(rigs: dict[str, Rig]) -> None:
     """Equal move times rank by index, whatever order the k-d tree returns them in."""
-    model = MODELS["arch"]
+    model = rigs["arch"].travel
     ring = np.array(
         [[1.0, 0, 0, 0], [-1.0, 0, 0, 0], [0, 0, 0, 0], [0, 1.0, 0, 0], [0, -1.0, 0, 0]]
     )

@@ -18,8 +18,7 @@ from gonio.planner import build, load_plan, ordering, sampling
 from gonio.planner import plan as plan_module
 from gonio.planner.plan import Plan, hms, render_summary
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Reason
-from tests.gonio.rig.helpers import RIGS
+from gonio.rig.model import Reason, Rig
 
 PLANS = Path(__file__).resolve().parents[3] / "configs" / "plans"
 
@@ -31,13 +30,13 @@ def spec(**fields: Any) -> PlanSpec:
 
 
 @pytest.fixture(scope="module")
-def plans() -> dict[str, Plan]:
+def plans(rigs: dict[str, Rig]) -> dict[str, Plan]:
     """One small plan per (rig, isotropic), built once, with the benchmark figures."""
     out = {}
-    for rig in RIGS:
+    for rig in rigs:
         for iso in (True, False):
             key = f"{rig}-{'iso' if iso else 'aniso'}"
-            out[key] = build(spec(isotropic=iso), RIGS[rig], bounds=True)
+            out[key] = build(spec(isotropic=iso), rigs[rig], bounds=True)
     return out
 
 
@@ -101,11 +100,11 @@ def test_arrival_times_follow_moves_and_dwell(plans: dict[str, Plan], key: str) 
     assert s.lower_bound_exact
 
 
-def test_bounds_only_when_asked(plans: dict[str, Plan]) -> None:
+def test_bounds_only_when_asked(rigs: dict[str, Rig], plans: dict[str, Plan]) -> None:
     """Without ``bounds`` the benchmark figures are not computed (None, and absent from
     the summary table); the plan itself is the same, bit for bit."""
     with_bounds = plans["arch-iso"]
-    plain = build(spec(), RIGS["arch"])
+    plain = build(spec(), rigs["arch"])
     s = plain.summary
     assert s.naive_travel_s is None and s.naive_total_s is None
     assert s.lower_bound_travel_s is None and s.lower_bound_s is None
@@ -119,12 +118,12 @@ def test_bounds_only_when_asked(plans: dict[str, Plan]) -> None:
     assert "in generation order" in shown and "lower bound (MST)" in shown
 
 
-def test_same_seed_same_plan() -> None:
-    a = build(spec(), RIGS["arch"])
-    b = build(spec(), RIGS["arch"])
+def test_same_seed_same_plan(rigs: dict[str, Rig]) -> None:
+    a = build(spec(), rigs["arch"])
+    b = build(spec(), rigs["arch"])
     assert np.array_equal(a.coords, b.coords)
     assert np.array_equal(a.angles, b.angles)
-    c = build(spec(sampling={"strategy": "sobol", "target": 300, "seed": 9}), RIGS["arch"])
+    c = build(spec(sampling={"strategy": "sobol", "target": 300, "seed": 9}), rigs["arch"])
     assert not np.array_equal(a.coords, c.coords)
 
 
@@ -136,11 +135,10 @@ def same_plan_but_wall_times(a: Plan, b: Plan) -> bool:
     )
 
 
-@pytest.mark.parametrize("rig", list(RIGS))
-def test_the_same_spec_orders_the_same(rig: str) -> None:
+def test_the_same_spec_orders_the_same(rig: Rig) -> None:
     """Built twice, bit for bit the same plan: the same order, poses, moves."""
-    a = build(spec(isotropic=False), RIGS[rig])
-    b = build(spec(isotropic=False), RIGS[rig])
+    a = build(spec(isotropic=False), rig)
+    b = build(spec(isotropic=False), rig)
     assert np.array_equal(a.generated, b.generated)
     assert a.summary.moves == b.summary.moves > 0
     assert a.summary.converged
@@ -148,12 +146,14 @@ def test_the_same_spec_orders_the_same(rig: str) -> None:
 
 
 @pytest.mark.parametrize("moves", [0, 25])
-def test_a_binding_move_budget_is_machine_independent_and_reported(moves: int) -> None:
+def test_a_binding_move_budget_is_machine_independent_and_reported(
+    rigs: dict[str, Rig], moves: int
+) -> None:
     """A move budget that binds stops both passes at the same place whatever the time
     cap: a huge cap and the default give the same plan; the summary says it did not
     converge and why."""
     plans = [
-        build(spec(isotropic=False, max_moves=moves, time_budget_s=cap), RIGS["in_plane"])
+        build(spec(isotropic=False, max_moves=moves, time_budget_s=cap), rigs["in_plane"])
         for cap in (1e9, 120.0)
     ]
     for plan in plans:
@@ -167,13 +167,13 @@ def test_a_binding_move_budget_is_machine_independent_and_reported(moves: int) -
     huge, normal = plans
     assert np.array_equal(huge.generated, normal.generated)
     assert np.array_equal(huge.angles.view(np.int64), normal.angles.view(np.int64))
-    free = build(spec(isotropic=False), RIGS["in_plane"])
+    free = build(spec(isotropic=False), rigs["in_plane"])
     assert free.summary.converged and free.summary.moves > moves
     assert free.summary.travel_s < huge.summary.travel_s
 
 
-def test_the_time_cap_is_reported_with_its_consequence() -> None:
-    plan = build(spec(time_budget_s=1e-9), RIGS["arch"])
+def test_the_time_cap_is_reported_with_its_consequence(rigs: dict[str, Rig]) -> None:
+    plan = build(spec(time_budget_s=1e-9), rigs["arch"])
     s = plan.summary
     assert s.stopped == "time cap" and not s.converged
     line = next(x for x in render_summary(plan).splitlines() if x.startswith("  ordering  "))
@@ -181,8 +181,8 @@ def test_the_time_cap_is_reported_with_its_consequence() -> None:
     assert line.endswith("moves): not converged, and this order depends on the machine's speed")
 
 
-def test_the_default_budget_converges_and_says_so() -> None:
-    plan = build(spec(), RIGS["arch"])
+def test_the_default_budget_converges_and_says_so(rigs: dict[str, Rig]) -> None:
+    plan = build(spec(), rigs["arch"])
     s = plan.summary
     assert s.converged and s.stopped == "converged"
     assert s.max_moves == ordering.default_moves(300) == 3100
@@ -193,11 +193,13 @@ def test_the_default_budget_converges_and_says_so() -> None:
 
 
 @pytest.mark.parametrize("strategy", ["sobol", "halton", "random"])
-def test_sequence_strategies_keep_the_first_points_that_fit(strategy: str) -> None:
+def test_sequence_strategies_keep_the_first_points_that_fit(
+    rigs: dict[str, Rig], strategy: str
+) -> None:
     """The kept targets are exactly the first `target` usable points of the sequence in
     generation order: uniform in the coordinates, nothing chosen by hand."""
     s = spec(sampling={"strategy": strategy, "target": 200, "seed": 3})
-    plan = build(s, RIGS["in_plane"])
+    plan = build(s, rigs["in_plane"])
 
     stream = sampling.Sequence(strategy, 3, 3)
     batches = -(-plan.summary.requested // plan_module.BATCH)
@@ -207,14 +209,14 @@ def test_sequence_strategies_keep_the_first_points_that_fit(strategy: str) -> No
         params.get("hybrid").iso_bounds,
         np.ones(3),
     )
-    kept = plan_module._kept(s, RIGS["in_plane"], drawn)
+    kept = plan_module._kept(s, rigs["in_plane"], drawn)
     assert kept.sum() == 200 and kept[-1]
     assert sorted(map(tuple, plan.coords)) == sorted(map(tuple, drawn[kept]))
 
 
-def test_grid_counts_place_every_cell() -> None:
+def test_grid_counts_place_every_cell(rigs: dict[str, Rig]) -> None:
     s = spec(sampling={"strategy": "grid", "counts": {"hbar": 6, "k": 5, "phi_k_minus_phi_h": 4}})
-    plan = build(s, RIGS["arch"])
+    plan = build(s, rigs["arch"])
     assert plan.summary.requested == 120
     assert plan.summary.grid_shape == (6, 5, 4)
     # Cell centres: hbar at (i + 1/2)/6.
@@ -222,26 +224,28 @@ def test_grid_counts_place_every_cell() -> None:
     assert np.allclose(hbar * 6 - 0.5, np.round(hbar * 6 - 0.5))
 
 
-def test_grid_target_reaches_the_target() -> None:
-    plan = build(spec(sampling={"strategy": "stratified", "target": 400, "seed": 1}), RIGS["arch"])
+def test_grid_target_reaches_the_target(rigs: dict[str, Rig]) -> None:
+    plan = build(spec(sampling={"strategy": "stratified", "target": 400, "seed": 1}), rigs["arch"])
     assert plan.summary.kept >= 400 * 0.8
     shape = plan.summary.grid_shape
     assert shape is not None and len(set(shape)) == 1
 
 
-def test_warp_densifies_near_the_specular_peak() -> None:
-    flat = build(spec(sampling={"strategy": "sobol", "target": 600}), RIGS["arch"])
+def test_warp_densifies_near_the_specular_peak(rigs: dict[str, Rig]) -> None:
+    flat = build(spec(sampling={"strategy": "sobol", "target": 600}), rigs["arch"])
     warped = build(
         spec(sampling={"strategy": "sobol", "target": 600, "warps": {"hbar": {"power": 2}}}),
-        RIGS["arch"],
+        rigs["arch"],
     )
     assert np.mean(warped.coords[:, 0] < 0.2) > 1.8 * np.mean(flat.coords[:, 0] < 0.2)
 
 
-def test_unreachable_target_count_is_a_config_error(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_unreachable_target_count_is_a_config_error(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setattr(plan_module, "MAX_DRAWN", 8192)
     with pytest.raises(ConfigError, match=r"^here: sampling.target: only \d+ of 8000"):
-        build(spec(sampling={"strategy": "random", "target": 8000}), RIGS["arch"], where="here")
+        build(spec(sampling={"strategy": "random", "target": 8000}), rigs["arch"], where="here")
 
 
 @pytest.mark.parametrize(
@@ -259,9 +263,11 @@ def test_unreachable_target_count_is_a_config_error(monkeypatch: pytest.MonkeyPa
     ],
     ids=["sequence", "grid-from-target", "grid-counts"],
 )
-def test_plans_too_large_are_refused_before_any_work(sampling: dict[str, Any], field: str) -> None:
+def test_plans_too_large_are_refused_before_any_work(
+    rigs: dict[str, Rig], sampling: dict[str, Any], field: str
+) -> None:
     with pytest.raises(ConfigError, match=f"^here: {field}"):
-        build(spec(sampling=sampling), RIGS["arch"], where="here")
+        build(spec(sampling=sampling), rigs["arch"], where="here")
 
 
 def test_csv_part_reads_with_any_csv_reader(plans: dict[str, Plan], tmp_path: Path) -> None:
@@ -285,14 +291,14 @@ def test_csv_part_reads_with_any_csv_reader(plans: dict[str, Plan], tmp_path: Pa
     assert sorted(int(r["generated"]) for r in rows) == sorted(plan.generated.tolist())
 
 
-def test_adaptive_exposure_follows_the_expected_signal() -> None:
+def test_adaptive_exposure_follows_the_expected_signal(rigs: dict[str, Rig]) -> None:
     adapt = {
         "material": {"name": "cook_torrance", "alpha": 0.2, "fresnel": "schlick", "f0": 0.04},
         "min_s": 0.02,
         "max_s": 0.5,
         "max_averages": 4,
     }
-    plan = build(spec(exposure={"seconds": 0.1, "averages": 1, "adapt": adapt}), RIGS["arch"])
+    plan = build(spec(exposure={"seconds": 0.1, "averages": 1, "adapt": adapt}), rigs["arch"])
 
     model = brdf.create("cook_torrance", alpha=0.2, fresnel="schlick", f0=0.04)
     signal = model.eval(plan.wi, plan.wo) * plan.wi[:, 2]

@@ -1,5 +1,6 @@
 """Bad plan files: one line naming the file, the line, the field path and what is
-expected; exit code 2 from `gonio plan`; no traceback; nothing constructed by YAML."""
+expected; exit code 2 from `gonio plan`; no traceback; nothing constructed by YAML.
+In-process through `gonio.cli.main`, but for one real process (its exit code and stderr)."""
 
 from __future__ import annotations
 
@@ -14,12 +15,12 @@ from typing import Any
 import pytest
 import yaml
 
-from gonio.cli import main
+from tests.conftest import CONFIGS, CliResult
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())
 ARCH = str(CONFIGS / "rigs" / "arch.yaml")
 GONIO = Path(sys.executable).with_name("gonio")
+Gonio = Callable[..., CliResult]
 
 
 def write(tmp_path: Path, data: Any, name: str = "bad-plan.yaml") -> Path:
@@ -48,10 +49,10 @@ def line_of_key(path: Path, *keys: str) -> int:
     return at + 1 + lines[at].rstrip().endswith(":")
 
 
-def run_plan(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(["plan", *args])
-    out, err = capsys.readouterr()
-    return code, out, err
+def run_plan(run_gonio: Gonio, *args: str) -> tuple[int, str, str]:
+    """`gonio plan ARGS` in-process: (exit code, stdout, stderr)."""
+    r = run_gonio("plan", *args)
+    return r.returncode, r.stdout, r.stderr
 
 
 def grid(counts: dict[str, int]) -> Callable[[dict[str, Any]], object]:
@@ -210,14 +211,14 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
 )
 def test_invalid_field(
     tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
+    run_gonio: Gonio,
     change: Callable[[dict[str, Any]], object],
     field: str,
     keys: tuple[str, ...],
     expected: str,
 ) -> None:
     path = write(tmp_path, edit(change))
-    code, out, err = run_plan(capsys, str(path))
+    code, out, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert out == ""
     line = line_of_key(path, *keys) if keys else 1
@@ -226,66 +227,64 @@ def test_invalid_field(
     assert err.count("\n") == 1
 
 
-def test_not_yaml(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_not_yaml(tmp_path: Path, run_gonio: Gonio) -> None:
     path = write(tmp_path, "name: x\nsampling: {strategy: sobol, target: 3\n")
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert re.match(rf"gonio: error: {re.escape(str(path))}:\d+: not valid YAML: ", err), err
 
 
-def test_yaml_cannot_construct_objects(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_yaml_cannot_construct_objects(tmp_path: Path, run_gonio: Gonio) -> None:
     marker = tmp_path / "constructed"
     path = write(tmp_path, f"name: !!python/object/apply:os.system ['touch {marker}']\n")
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert "not valid YAML" in err
     assert not marker.exists()
 
 
 @pytest.mark.parametrize(("text", "kind"), [("- a\n- b\n", "list"), ("", "empty"), ("3\n", "int")])
-def test_not_a_mapping(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, kind: str
-) -> None:
+def test_not_a_mapping(tmp_path: Path, run_gonio: Gonio, text: str, kind: str) -> None:
     path = write(tmp_path, text)
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert (
         err == f"gonio: error: {path}: expected a mapping of fields at the top level, got {kind}\n"
     )
 
 
-def test_missing_plan_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, _, err = run_plan(capsys, str(tmp_path / "nowhere.yaml"))
+def test_missing_plan_file(tmp_path: Path, run_gonio: Gonio) -> None:
+    code, _, err = run_plan(run_gonio, str(tmp_path / "nowhere.yaml"))
     assert code == 2
     assert err.startswith(f"gonio: error: {tmp_path / 'nowhere.yaml'}: cannot read the file")
 
 
-def test_missing_rig_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_missing_rig_file(tmp_path: Path, run_gonio: Gonio) -> None:
     path = write(tmp_path, edit(lambda d: d.update(rig="no-such-rig.yaml")))
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert err.startswith(f"gonio: error: {tmp_path / 'no-such-rig.yaml'}: cannot read the file")
 
 
-def test_no_rig_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_no_rig_named(tmp_path: Path, run_gonio: Gonio) -> None:
     data = edit(lambda d: d.pop("rig"))
     path = tmp_path / "plan.yaml"
     path.write_text(yaml.safe_dump(data), encoding="utf-8")
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert err == f"gonio: error: {path}: rig: no rig file named; give one here or with --rig\n"
     # --rig supplies it.
-    code, out, _ = run_plan(capsys, str(path), "--rig", ARCH)
+    code, out, _ = run_plan(run_gonio, str(path), "--rig", ARCH)
     assert code == 0 and "kept" in out
 
 
-def test_rig_that_reaches_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_rig_that_reaches_nothing(tmp_path: Path, run_gonio: Gonio) -> None:
     rig = yaml.safe_load(Path(ARCH).read_text())
     rig["constraints"]["beam_diameter_mm"] = 40  # wider than the 30 mm sample
     rig_path = tmp_path / "rig.yaml"
     rig_path.write_text(yaml.safe_dump(rig), encoding="utf-8")
     plan = write(tmp_path, edit(lambda d: None))
-    code, _, err = run_plan(capsys, str(plan), "--rig", str(rig_path))
+    code, _, err = run_plan(run_gonio, str(plan), "--rig", str(rig_path))
     assert code == 2
     assert err.startswith(f"gonio: error: {rig_path}: constraints: leave no direction pair")
     assert "footprint" in err and err.count("\n") == 1
@@ -304,9 +303,9 @@ def test_real_process_exit_code_and_no_traceback(tmp_path: Path) -> None:
     assert f"{path}:" in r.stderr and "parametrization: unknown parametrization" in r.stderr
 
 
-def test_duplicate_key_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_duplicate_key_is_refused(tmp_path: Path, run_gonio: Gonio) -> None:
     path = write(tmp_path, f"name: a\nrig: {ARCH}\nname: b\nsampling: {{strategy: sobol}}\n")
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert err == (
         f"gonio: error: {path}:3: name: this key is given twice in the same mapping; "
@@ -326,19 +325,19 @@ def test_duplicate_key_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[
 )  # fmt: skip
 def test_infinities_and_nans_are_refused(
     tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
+    run_gonio: Gonio,
     change: Callable[[dict[str, Any]], object],
     field: str,
 ) -> None:
     path = write(tmp_path, edit(change))
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     assert f": {field}: Input should be a finite number" in err
 
 
-def test_rig_that_is_a_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_rig_that_is_a_folder(tmp_path: Path, run_gonio: Gonio) -> None:
     path = write(tmp_path, edit(lambda d: d.update(rig=str(tmp_path))))
-    code, _, err = run_plan(capsys, str(path))
+    code, _, err = run_plan(run_gonio, str(path))
     assert code == 2
     line = line_of_key(path, "rig")
     assert err == f"gonio: error: {path}:{line}: rig: {tmp_path} is a folder; expected a rig file\n"
@@ -353,9 +352,9 @@ def test_rig_that_is_a_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     ids=["output-is-a-folder", "plot-folder-missing"],
 )
 def test_output_paths_are_checked_before_planning(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], message: str
+    tmp_path: Path, run_gonio: Gonio, args: list[str], message: str
 ) -> None:
     plan = CONFIGS / "plans" / "quick.yaml"
-    code, out, err = run_plan(capsys, str(plan), *(a.format(tmp=tmp_path) for a in args))
+    code, out, err = run_plan(run_gonio, str(plan), *(a.format(tmp=tmp_path) for a in args))
     assert code == 2 and out == ""
     assert err.startswith("gonio: error: " + message.format(tmp=tmp_path))

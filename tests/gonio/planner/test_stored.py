@@ -22,9 +22,8 @@ from gonio.planner.schema import PlanSpec
 from gonio.planner.stored import MAGIC, columns
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
-from tests.gonio.rig.helpers import RIGS
+from tests.conftest import CONFIGS
 
-CONFIGS = Path(__file__).resolve().parents[3] / "configs"
 PLANS = CONFIGS / "plans"
 
 
@@ -75,9 +74,9 @@ def assert_identical(a: Plan, b: Plan) -> None:
     ("rig", "s", "bounds"), [v[1:] for v in VARIANTS], ids=[v[0] for v in VARIANTS]
 )
 def test_write_then_read_is_the_same_plan_bit_for_bit(
-    tmp_path: Path, rig: str, s: PlanSpec, bounds: bool
+    rigs: dict[str, Rig], tmp_path: Path, rig: str, s: PlanSpec, bounds: bool
 ) -> None:
-    plan = build(s, RIGS[rig], bounds=bounds)
+    plan = build(s, rigs[rig], bounds=bounds)
     path = tmp_path / "plan.csv"
     plan.write(path)
     again = read_plan(path)  # the rig rebuilt from the text the file carries
@@ -91,10 +90,10 @@ def test_write_then_read_is_the_same_plan_bit_for_bit(
     assert (tmp_path / "again.csv").read_bytes() == path.read_bytes()
 
 
-def test_awkward_floats_survive(tmp_path: Path) -> None:
+def test_awkward_floats_survive(rigs: dict[str, Rig], tmp_path: Path) -> None:
     """Signed zeros, subnormals, the extremes of float64 and values with no short
     decimal form come back as the same bits."""
-    plan = build(spec(), RIGS["arch"])
+    plan = build(spec(), rigs["arch"])
     n = len(plan)
     awkward = np.array([-0.0, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, 0.1 + 0.2])
     values = np.resize(awkward, n) * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
@@ -106,8 +105,8 @@ def test_awkward_floats_survive(tmp_path: Path) -> None:
     assert np.signbit(back.arrival_s[0]) and back.arrival_s[0] == 0.0
 
 
-def test_a_plan_is_frozen_and_owns_its_arrays(tmp_path: Path) -> None:
-    plan = build(spec(), RIGS["arch"])
+def test_a_plan_is_frozen_and_owns_its_arrays(rigs: dict[str, Rig], tmp_path: Path) -> None:
+    plan = build(spec(), rigs["arch"])
     for name in ARRAYS:
         array = getattr(plan, name)
         assert not array.flags.writeable, name
@@ -131,8 +130,8 @@ def test_a_plan_is_frozen_and_owns_its_arrays(tmp_path: Path) -> None:
         back.summary.moves = 0  # type: ignore[misc]
 
 
-def test_plans_differing_in_one_bit_are_not_equal() -> None:
-    plan = build(spec(), RIGS["arch"])
+def test_plans_differing_in_one_bit_are_not_equal(rigs: dict[str, Rig]) -> None:
+    plan = build(spec(), rigs["arch"])
     arrival = np.array(plan.arrival_s)
     arrival[5] = np.nextafter(arrival[5], np.inf)
     assert dataclasses.replace(plan, arrival_s=arrival) != plan
@@ -184,7 +183,7 @@ def test_content_hash_framing() -> None:
     assert len(expected) == 64
 
 
-def test_load_plan_source_keeps_the_files_bytes() -> None:
+def test_load_plan_source_keeps_the_files_bytes(rigs: dict[str, Rig]) -> None:
     source = load_plan_source(PLANS / "quick.yaml")
     assert source.text == (PLANS / "quick.yaml").read_bytes()
     assert source.rig.text == (CONFIGS / "rigs" / "arch.yaml").read_bytes()
@@ -193,10 +192,10 @@ def test_load_plan_source_keeps_the_files_bytes() -> None:
     spec_, rig = load_plan(PLANS / "quick.yaml")  # the old signature still works
     assert spec_ == source.spec and rig.text == source.rig.text
     # A spec made in code has its YAML as text, which reads back as the same spec.
-    made = build(spec(), RIGS["arch"])
+    made = build(spec(), rigs["arch"])
     assert made.plan_text.startswith(b"name: stored\n")
     assert PlanSpec.model_validate(yaml.safe_load(made.plan_text)) == made.spec
-    in_code = Rig(RIGS["in_plane"].spec)
+    in_code = Rig(rigs["in_plane"].spec)
     assert RigSpec.model_validate(yaml.safe_load(in_code.text)) == in_code.spec
 
 
@@ -322,10 +321,12 @@ def test_bad_files_are_one_line_errors(
     assert re.search(message, text), text
 
 
-def test_another_rig_is_refused_by_hash(tmp_path: Path, stored: tuple[Plan, bytes]) -> None:
+def test_another_rig_is_refused_by_hash(
+    rigs: dict[str, Rig], tmp_path: Path, stored: tuple[Plan, bytes]
+) -> None:
     path = tmp_path / "quick.csv"
     path.write_bytes(stored[1])
-    for other in (RIGS["in_plane"], CONFIGS / "rigs" / "in_plane.yaml"):
+    for other in (rigs["in_plane"], CONFIGS / "rigs" / "in_plane.yaml"):
         with pytest.raises(ConfigError, match=r":4: rig: the plan was built for rig 'arch-4axis'"):
             read_plan(path, rig=other)
     # The same rig with one comment changed is another file: refused too.

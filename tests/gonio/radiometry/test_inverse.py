@@ -5,7 +5,6 @@ both shipped rigs, for both source types and several models (grey and RGB)."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,28 +27,27 @@ from gonio.radiometry import (
 from gonio.rig.model import Rig
 from tests.gonio.radiometry.helpers import GRAZING, MODELS, NORMAL, direction, hemisphere
 
-RIG_DIR = Path(__file__).resolve().parents[3] / "configs" / "rigs"
-RIGS = [Rig.from_yaml(RIG_DIR / "arch.yaml"), Rig.from_yaml(RIG_DIR / "in_plane.yaml")]
 
-
-def _reachable_pairs(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    wi, wo = hemisphere(rng, n), hemisphere(rng, n)
-    keep = np.ones(n, dtype=bool)
-    for rig in RIGS:
+@pytest.fixture(scope="module")
+def pairs(rigs: dict[str, Rig]) -> tuple[np.ndarray, np.ndarray]:
+    """3000 uniform pairs, those reachable on both shipped rigs kept."""
+    rng = np.random.default_rng(2024)
+    wi, wo = hemisphere(rng, 3000), hemisphere(rng, 3000)
+    keep = np.ones(len(wi), dtype=bool)
+    for rig in rigs.values():
         keep &= rig.reachable(wi, wo)[0]
     return wi[keep], wo[keep]
 
 
-WI, WO = _reachable_pairs(3000, seed=2024)
 REF_WI, REF_WO = direction(math.radians(8.0), 0.0), direction(math.radians(45.0), math.pi)
 REFERENCE = brdf.create("lambert", albedo=0.99)
 
 
-def test_the_pair_set_is_large_and_reachable_on_both_rigs():
-    assert len(WI) > 1500  # about 60 % of uniform pairs survive both rigs
-    for rig in RIGS:
-        assert rig.reachable(WI, WO)[0].all()
+def test_the_pair_set_is_large_and_reachable_on_both_rigs(rigs, pairs):
+    wi, wo = pairs
+    assert len(wi) > 1500  # about 60 % of uniform pairs survive both rigs
+    for rig in rigs.values():
+        assert rig.reachable(wi, wo)[0].all()
         assert rig.reachable(REF_WI[None], REF_WO[None])[0].all()
 
 
@@ -75,18 +73,19 @@ instruments = st.tuples(
 @pytest.mark.parametrize("kind", ["collimated", "point"])
 @settings(max_examples=15)
 @given(instrument=instruments)
-def test_counts_to_brdf_recovers_the_model(model_name, kind, instrument):
+def test_counts_to_brdf_recovers_the_model(pairs, model_name, kind, instrument):
+    wi, wo = pairs
     level, beam, distance, aperture, fov, exposure, responsivity, gain = instrument
     source = CollimatedSource(level, beam) if kind == "collimated" else PointSource(level, distance)
     optics = DetectorOptics(aperture, fov)
     model = MODELS[model_name]
-    f = model.eval(WI, WO)
+    f = model.eval(wi, wo)
     assert np.all(f > 0.0)
-    counts = _counts(source, optics, f, WI, WO, exposure, responsivity, gain)
+    counts = _counts(source, optics, f, wi, wo, exposure, responsivity, gain)
 
     # absolute inverse: counts → electrons → power → f
     power = power_from_electrons(counts * gain, exposure, responsivity)
-    np.testing.assert_allclose(brdf_from_power(power, source, optics, WI, WO), f, rtol=1e-12)
+    np.testing.assert_allclose(brdf_from_power(power, source, optics, wi, wo), f, rtol=1e-12)
 
     # reference calibration: a 99 % Lambertian read through the same chain, another exposure
     ref_exposure = 0.37 * exposure
@@ -103,7 +102,7 @@ def test_counts_to_brdf_recovers_the_model(model_name, kind, instrument):
     calibration = ReferenceCalibration.from_counts(
         0.99, ref_counts, ref_exposure, REF_WI, REF_WO, source_kind(source)
     )
-    recovered = calibration.brdf_from_counts(counts, exposure, WI, WO)
+    recovered = calibration.brdf_from_counts(counts, exposure, wi, wo)
     assert recovered.shape == f.shape
     np.testing.assert_allclose(recovered, f, rtol=1e-12)
 

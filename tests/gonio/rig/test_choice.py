@@ -9,7 +9,9 @@ import pytest
 
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
-from tests.gonio.rig.helpers import RIGS, column, direction
+from tests.conftest import RIG_NAMES
+from tests.gonio.rig.helpers import column
+from tests.support.rigs import direction
 
 #: (rig, wi, wo, number of usable candidates): pairs with several usable solutions. The
 #: arch with the light within 5° of the normal has four (light ±θi, detector ±θo); the
@@ -28,9 +30,9 @@ def solve_one(rig: Rig, wi: FloatArray, wo: FloatArray, previous: FloatArray | N
 
 @pytest.mark.parametrize(("name", "wi", "wo", "count"), SEVERAL)
 def test_previous_pose_decides_between_solutions(
-    name: str, wi: FloatArray, wo: FloatArray, count: int
+    rigs: dict[str, Rig], name: str, wi: FloatArray, wo: FloatArray, count: int
 ) -> None:
-    rig = RIGS[name]
+    rig = rigs[name]
     solution = rig.solve(wi[None], wo[None])
     candidates = solution.candidates[0]
     assert solution.usable[0].sum() == count
@@ -45,20 +47,22 @@ def test_previous_pose_decides_between_solutions(
 
 
 @pytest.mark.parametrize(("name", "wi", "wo", "count"), SEVERAL)
-def test_default_start_is_home(name: str, wi: FloatArray, wo: FloatArray, count: int) -> None:
-    rig = RIGS[name]
+def test_default_start_is_home(
+    rigs: dict[str, Rig], name: str, wi: FloatArray, wo: FloatArray, count: int
+) -> None:
+    rig = rigs[name]
     solution = rig.solve(wi[None], wo[None])
     times = rig.travel.time(rig.home, solution.candidates[0])
     assert np.array_equal(solution.angles[0], solution.candidates[0, np.argmin(times)])
     assert np.array_equal(solve_one(rig, wi, wo, rig.home), solution.angles[0])
 
 
-@pytest.mark.parametrize("name", list(RIGS))
-def test_pick_is_the_fastest_usable_move(name: str) -> None:
+@pytest.mark.parametrize("name", RIG_NAMES)
+def test_pick_is_the_fastest_usable_move(rigs: dict[str, Rig], name: str) -> None:
     """Random starting poses: the pick is the argmin of the travel time over the usable
     candidates (a brute-force check); the nearest candidate in joint distance is
     sometimes another one, so the time model, not the distance, is what decides."""
-    rig = RIGS[name]
+    rig = rigs[name]
     rng = np.random.default_rng(5)
     differs = 0
     for name_, wi, wo, _ in SEVERAL:
@@ -77,11 +81,11 @@ def test_pick_is_the_fastest_usable_move(name: str) -> None:
     assert differs > 0
 
 
-def test_unusable_solution_is_never_picked() -> None:
+def test_unusable_solution_is_never_picked(rigs: dict[str, Rig]) -> None:
     """Arch, detector opposite the light: only one of the four solutions is usable (the
     others need the azimuth in the ±179° gap or the light at −30°); even starting on an
     unusable one, the usable one is taken."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     wi, wo = direction(30.0, 0.0), direction(40.0, 180.0)
     solution = rig.solve(wi[None], wo[None])
     usable = np.flatnonzero(solution.usable[0])
@@ -92,9 +96,9 @@ def test_unusable_solution_is_never_picked() -> None:
     assert only[column(rig, "detector_elevation")] < 0.0
 
 
-def test_batch_shares_one_previous_pose() -> None:
+def test_batch_shares_one_previous_pose(rigs: dict[str, Rig]) -> None:
     """``previous`` (A,) applies to every pair of a batch: each row picks as alone."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     wi = np.stack([p[1] for p in SEVERAL[:1]] * 3)
     wo = np.stack([p[2] for p in SEVERAL[:1]] * 3)
     first = rig.solve(wi[:1], wo[:1])
@@ -103,10 +107,10 @@ def test_batch_shares_one_previous_pose() -> None:
         assert all(np.array_equal(row, start) for row in batch.angles)
 
 
-def test_an_extended_stage_uses_its_whole_range() -> None:
+def test_an_extended_stage_uses_its_whole_range(rigs: dict[str, Rig]) -> None:
     """The sample rotation (±200°) standing at 190°: a pair that needs ψ = 190° ≡ −170°
     is measured without moving it, not after a 360° turn."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     previous = np.radians([20.0, 30.0, 40.0, 190.0])
     wi, wo = rig.forward(previous)
     angles = rig.solve(wi[None], wo[None], previous=previous).angles[0]

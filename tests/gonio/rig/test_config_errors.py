@@ -17,7 +17,8 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.rig.model import Reason, Rig
-from tests.gonio.rig.helpers import RIG_FILES, direction, uniform_directions
+from tests.conftest import RIG_FILES
+from tests.support.rigs import direction, uniform_directions
 
 BASE = {name: yaml.safe_load(path.read_text()) for name, path in RIG_FILES.items()}
 

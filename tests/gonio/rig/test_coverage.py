@@ -27,10 +27,11 @@ import pytest
 
 from gonio.rig.model import Reason, Rig
 from gonio.types import FloatArray
-from tests.gonio.rig.helpers import RIGS, TOL, column, uniform_directions, wrap
+from tests.conftest import RIG_NAMES
+from tests.gonio.rig.helpers import TOL, column, wrap
+from tests.support.rigs import uniform_directions
 
 N = 100_000
-RIG_NAMES = list(RIGS)
 
 
 def lit_inside_view(wi: FloatArray, wo: FloatArray, beam: float, fov: float) -> FloatArray:
@@ -98,8 +99,8 @@ def sample(seed: int, n: int = N) -> tuple[FloatArray, FloatArray]:
 
 
 @pytest.mark.parametrize("name", RIG_NAMES)
-def test_reaches_the_claimed_domain(name: str) -> None:
-    rig = RIGS[name]
+def test_reaches_the_claimed_domain(rigs: dict[str, Rig], name: str) -> None:
+    rig = rigs[name]
     wi, wo = sample(11)
     _, reasons = rig.reachable(wi, wo)
     expected = expected_reasons(rig, wi, wo)
@@ -119,11 +120,11 @@ def test_reaches_the_claimed_domain(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", RIG_NAMES)
-def test_geometry_alone_decides_up_to_the_hardware(name: str) -> None:
+def test_geometry_alone_decides_up_to_the_hardware(rigs: dict[str, Rig], name: str) -> None:
     """Hardware refusals only where the description above puts them: every pair that
     passes the geometric checks and lies outside the keep-out and tilt regions is
     reached, and the arch is never short of axis range."""
-    rig = RIGS[name]
+    rig = rigs[name]
     wi, wo = sample(12)
     ok, reasons = rig.reachable(wi, wo)
     expected = expected_reasons(rig, wi, wo)
@@ -133,12 +134,12 @@ def test_geometry_alone_decides_up_to_the_hardware(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", RIG_NAMES)
-def test_isotropic_mode(name: str) -> None:
+def test_isotropic_mode(rigs: dict[str, Rig], name: str) -> None:
     """isotropic=True keeps the sample rotation home and measures the pair turned about
     the normal: same θi, θo and azimuth difference (signed) as asked, FK of the angles
     is the measured pair, and the domain is the same as without the option (on these
     rigs the rotation stage never limits)."""
-    rig = RIGS[name]
+    rig = rigs[name]
     wi, wo = sample(13, 30_000)
     anisotropic = rig.solve(wi, wo)
     solution = rig.solve(wi, wo, isotropic=True)

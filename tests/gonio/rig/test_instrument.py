@@ -18,7 +18,8 @@ from gonio.config import ConfigError
 from gonio.rig.instrument import NoSwitchSpec, SerialInterfaceSpec, SerialSwitchSpec
 from gonio.rig.model import Reason, Rig
 from sim.serial_photometer import RESPONSE, SerialPhotometer, default_config
-from tests.gonio.rig.helpers import ARCH_POINT, RIG_DIR, RIG_FILES, RIGS, direction
+from tests.conftest import ARCH_POINT_FILE, RIG_FILES
+from tests.support.rigs import direction
 
 ARCH_DATA = yaml.safe_load(RIG_FILES["arch"].read_text())
 
@@ -100,17 +101,17 @@ def test_the_defaults_are_the_drivers() -> None:
     assert spec.config() == SerialDetectorConfig(port="/dev/ttyACM0")
 
 
-def test_a_simulated_detector_has_no_serial_config() -> None:
+def test_a_simulated_detector_has_no_serial_config(rigs: dict[str, Rig]) -> None:
     with pytest.raises(ConfigError) as info:
-        RIGS["arch"].serial_detector_config()
+        rigs["arch"].serial_detector_config()
     assert str(info.value) == (
         f"{RIG_FILES['arch']}: detector.interface: is 'simulated'; expected 'serial' for a "
         "serial detector"
     )
 
 
-def test_the_shipped_rigs_instrument_sections() -> None:
-    for rig in (*RIGS.values(), ARCH_POINT):
+def test_the_shipped_rigs_instrument_sections(arch_point: Rig, rigs: dict[str, Rig]) -> None:
+    for rig in (*rigs.values(), arch_point):
         d = rig.spec.detector
         assert (d.aperture_sr, d.exposure_range_s, d.readout_s, d.max_averages) == (
             1e-5, (1e-4, 60.0), 0.0, 64,
@@ -118,15 +119,15 @@ def test_the_shipped_rigs_instrument_sections() -> None:
         assert d.interface.kind == "simulated"
         assert rig.spec.light.switch == NoSwitchSpec(kind="none")
         assert (rig.spec.reference.albedo, rig.spec.constraints.detector_fov_mm) == (0.99, 25)
-    assert [r.source_kind for r in RIGS.values()] == ["collimated", "collimated"]
-    assert ARCH_POINT.source_kind == "point"
-    assert ARCH_POINT.spec.light.distance_mm == 300
-    assert ARCH_POINT.spec.constraints.beam_diameter_mm is None
+    assert [r.source_kind for r in rigs.values()] == ["collimated", "collimated"]
+    assert arch_point.source_kind == "point"
+    assert arch_point.spec.light.distance_mm == 300
+    assert arch_point.spec.constraints.beam_diameter_mm is None
 
 
 def test_the_point_rig_is_the_arch_rig_with_a_lamp() -> None:
     """arch_point.yaml repeats arch.yaml but for its name, its light and its beam."""
-    point = yaml.safe_load((RIG_DIR / "arch_point.yaml").read_text())
+    point = yaml.safe_load(ARCH_POINT_FILE.read_text())
     arch = dict(ARCH_DATA)
     for data in (point, arch):
         data.pop("name")
@@ -137,12 +138,12 @@ def test_the_point_rig_is_the_arch_rig_with_a_lamp() -> None:
     assert point == arch
 
 
-def test_a_point_source_refuses_no_footprint() -> None:
+def test_a_point_source_refuses_no_footprint(arch_point: Rig, rigs: dict[str, Rig]) -> None:
     """A grazing light: the collimated beam's ellipse leaves the sample; a point source
     floods the sample anyway (the view leaving it is the footprint effect's)."""
     wi, wo = direction(79.0, 0.0)[None], direction(10.0, 180.0)[None]
-    assert RIGS["arch"].solve(wi, wo).reasons[0] == Reason.FOOTPRINT
-    assert ARCH_POINT.solve(wi, wo).reasons[0] == Reason.OK
+    assert rigs["arch"].solve(wi, wo).reasons[0] == Reason.FOOTPRINT
+    assert arch_point.solve(wi, wo).reasons[0] == Reason.OK
 
 
 def test_a_serial_light_switch() -> None:

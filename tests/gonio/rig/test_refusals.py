@@ -20,9 +20,10 @@ import yaml
 from gonio.rig import constraints
 from gonio.rig.model import Reason, Rig
 from gonio.types import FloatArray
-from tests.gonio.rig.helpers import RIG_FILES, RIGS, column, direction, in_tilted_plane
+from tests.conftest import RIG_FILES
+from tests.gonio.rig.helpers import column, in_tilted_plane
+from tests.support.rigs import direction
 
-RIG_NAMES = list(RIGS)
 #: A small step (degrees) across a boundary: far above rounding, far below any feature.
 STEP = 1e-6
 
@@ -48,18 +49,14 @@ def test_reason_order_is_the_documented_priority() -> None:
 
 
 # -- THETA_MAX ---------------------------------------------------------------------------
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_theta_max_of_the_detector(name: str) -> None:
-    rig = RIGS[name]
+def test_theta_max_of_the_detector(rig: Rig) -> None:
     limit = rig.spec.constraints.theta_max_deg
     wi = direction(30.0, 0.0)
     assert reason(rig, wi, direction(limit - STEP, 180.0)) == Reason.OK
     assert reason(rig, wi, direction(limit + STEP, 180.0)) == Reason.THETA_MAX
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_theta_max_of_the_light(name: str) -> None:
-    rig = RIGS[name]
+def test_theta_max_of_the_light(rig: Rig) -> None:
     limit = rig.spec.constraints.theta_max_deg
     assert reason(rig, direction(limit + STEP, 0.0), direction(30.0, 180.0)) == Reason.THETA_MAX
     # Just inside, the light is refused anyway, for its footprint (see below).
@@ -67,9 +64,7 @@ def test_theta_max_of_the_light(name: str) -> None:
 
 
 # -- BLIND_SPOT --------------------------------------------------------------------------
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_blind_spot(name: str) -> None:
-    rig = RIGS[name]
+def test_blind_spot(rig: Rig) -> None:
     gap = rig.spec.constraints.min_separation_deg
     assert gap == 8.0
     wi = direction(30.0, 0.0)
@@ -93,35 +88,30 @@ def grazing_limits(rig: Rig) -> tuple[float, float]:
     )
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_grazing_limits_of_the_shipped_rigs(name: str) -> None:
-    fov, sample = grazing_limits(RIGS[name])
+def test_grazing_limits_of_the_shipped_rigs(rig: Rig) -> None:
+    fov, sample = grazing_limits(rig)
     assert fov == pytest.approx(76.1135, abs=1e-4)  # acos(6 / 25)
     assert sample == pytest.approx(78.4630, abs=1e-4)  # acos(6 / 30)
-    assert fov < sample < RIGS[name].spec.constraints.theta_max_deg
+    assert fov < sample < rig.spec.constraints.theta_max_deg
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
 @pytest.mark.parametrize(
     "wo",
     [direction(0.0, 0.0), direction(60.0, 90.0)],
     ids=["detector-at-normal", "detector-across"],
 )
-def test_footprint_leaves_the_detector_view(name: str, wo: FloatArray) -> None:
+def test_footprint_leaves_the_detector_view(rig: Rig, wo: FloatArray) -> None:
     """The detector sees a circle of diameter F (at the normal), or an ellipse whose
     short axis F lies along the light's azimuth (detector 90° around): the lit ellipse,
     D / cos θi long, leaves it at cos θi = D / F."""
-    rig = RIGS[name]
     fov, _ = grazing_limits(rig)
     assert reason(rig, direction(fov - STEP, 0.0), wo) == Reason.OK
     assert reason(rig, direction(fov + STEP, 0.0), wo) == Reason.FOOTPRINT
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_footprint_leaves_the_sample(name: str) -> None:
+def test_footprint_leaves_the_sample(rig: Rig) -> None:
     """With the detector's ellipse long along the light's azimuth (θo = 60°, mirror side:
     F / cos θo = 50 mm), the sample's diameter S binds first: at cos θi = D / S."""
-    rig = RIGS[name]
     fov, sample = grazing_limits(rig)
     wo = direction(60.0, 180.0)
     assert reason(rig, direction(0.5 * (fov + sample), 0.0), wo) == Reason.OK
@@ -129,10 +119,8 @@ def test_footprint_leaves_the_sample(name: str) -> None:
     assert reason(rig, direction(sample + STEP, 0.0), wo) == Reason.FOOTPRINT
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_a_grazing_detector_alone_keeps_the_footprint(name: str) -> None:
+def test_a_grazing_detector_alone_keeps_the_footprint(rig: Rig) -> None:
     """The detector's ellipse only grows toward grazing: never a footprint refusal."""
-    rig = RIGS[name]
     limit = rig.spec.constraints.theta_max_deg
     for phi in (0.0, 45.0, 90.0, 180.0):
         assert reason(rig, direction(10.0, 0.0), direction(limit - STEP, phi)) == Reason.OK
@@ -154,17 +142,19 @@ def test_a_grazing_detector_alone_keeps_the_footprint(name: str) -> None:
         ((70.0, 0.0), (75.0, 180.0), Reason.OK),  # opposite side
     ],
 )
-def test_arch_collision(wi: tuple[float, float], wo: tuple[float, float], expected: Reason) -> None:
+def test_arch_collision(
+    rigs: dict[str, Rig], wi: tuple[float, float], wo: tuple[float, float], expected: Reason
+) -> None:
     """The arch's keep-out boxes: light ≥ 55° and detector ≥ 55° within 25° of azimuth of
     each other (the second and third boxes are the same place with the arch turned by π
     and the elevation negative)."""
-    assert reason(RIGS["arch"], direction(*wi), direction(*wo)) == expected
+    assert reason(rigs["arch"], direction(*wi), direction(*wo)) == expected
 
 
-def test_in_plane_collision() -> None:
+def test_in_plane_collision(rigs: dict[str, Rig]) -> None:
     """Sample tilted by 45° (box: 40…60°) and the detector arm low at 75° (box: 70…95°)
     on the same side; the mirror image (x → −x) puts the arm on the other side."""
-    rig = RIGS["in_plane"]
+    rig = rigs["in_plane"]
     wi, wo = in_tilted_plane(-45.0, -20.0), in_tilted_plane(-45.0, 75.0)
     assert reason(rig, wi, wo) == Reason.COLLISION
     solution = rig.solve(wi[None], wo[None])
@@ -179,9 +169,9 @@ def test_in_plane_collision() -> None:
 
 
 # -- AXIS_LIMIT --------------------------------------------------------------------------
-def test_in_plane_axis_limit_of_the_sample_tilt() -> None:
+def test_in_plane_axis_limit_of_the_sample_tilt(rigs: dict[str, Rig]) -> None:
     """A pair whose plane is tilted more than the tilt stage's 59° from the vertical."""
-    rig = RIGS["in_plane"]
+    rig = rigs["in_plane"]
     limit = rig.spec.axes["sample_tilt"].max_deg
     for sign in (1.0, -1.0):
         inside = sign * (limit - STEP)
@@ -197,10 +187,10 @@ def test_in_plane_axis_limit_of_the_sample_tilt() -> None:
     )
 
 
-def test_arch_reaches_across_the_azimuth_gap() -> None:
+def test_arch_reaches_across_the_azimuth_gap(rigs: dict[str, Rig]) -> None:
     """Detector opposite the light: the +θo solution needs azimuth π, in the arch's gap
     (±179°); the −θo solution (azimuth 0) is used instead."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     wi, wo = direction(30.0, 0.0), direction(40.0, 180.0)
     assert reason(rig, wi, wo) == Reason.OK
     solution = rig.solve(wi[None], wo[None])
@@ -280,9 +270,14 @@ def failing(rig: Rig, wi: FloatArray, wo: FloatArray) -> set[Reason]:
     ],
 )
 def test_first_failing_check_wins(
-    name: str, wi: FloatArray, wo: FloatArray, fails: set[Reason], wins: Reason
+    rigs: dict[str, Rig],
+    name: str,
+    wi: FloatArray,
+    wo: FloatArray,
+    fails: set[Reason],
+    wins: Reason,
 ) -> None:
-    rig = RIGS[name]
+    rig = rigs[name]
     assert failing(rig, wi, wo) == fails
     assert reason(rig, wi, wo) == wins
 

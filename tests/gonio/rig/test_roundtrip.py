@@ -23,17 +23,10 @@ from hypothesis import strategies as st
 
 from gonio.rig.model import Reason, Rig
 from gonio.types import BoolArray, FloatArray
-from tests.gonio.rig.helpers import (
-    RIGS,
-    TOL,
-    angle_between,
-    column,
-    direction,
-    uniform_directions,
-    wrap,
-)
+from tests.conftest import RIG_NAMES
+from tests.gonio.rig.helpers import TOL, column, wrap
+from tests.support.rigs import angle_between, direction, uniform_directions
 
-RIG_NAMES = list(RIGS)
 BATCH = 20_000
 #: Distance (rad) from a singular pose beyond which joint angles must round-trip.
 SINGULAR_MARGIN = 1e-3
@@ -81,9 +74,7 @@ def in_keep_out(rig: Rig, angles: FloatArray) -> BoolArray:
 
 
 # -- seeded batches ----------------------------------------------------------------------
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_fk_of_ik_batch(name: str) -> None:
-    rig = RIGS[name]
+def test_fk_of_ik_batch(rig: Rig) -> None:
     rng = np.random.default_rng(20_240_601)
     wi = uniform_directions(rng, BATCH, rig.theta_max)
     wo = uniform_directions(rng, BATCH, rig.theta_max)
@@ -97,9 +88,7 @@ def test_fk_of_ik_batch(name: str) -> None:
     assert fk_error(rig, solution.candidates, wi[:, None], wo[:, None]).max() <= TOL
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_ik_of_fk_batch(name: str) -> None:
-    rig = RIGS[name]
+def test_ik_of_fk_batch(rig: Rig) -> None:
     rng = np.random.default_rng(7)
     pose = rng.uniform(rig.limits[:, 0], rig.limits[:, 1], (BATCH, len(rig.axes)))
     wi, wo = rig.forward(pose)
@@ -110,10 +99,10 @@ def test_ik_of_fk_batch(name: str) -> None:
     assert joint_error(rig, candidates[regular], pose[regular]).max() <= TOL
 
 
-def test_ik_of_fk_is_ill_posed_at_a_singular_pose() -> None:
+def test_ik_of_fk_is_ill_posed_at_a_singular_pose(rigs: dict[str, Rig]) -> None:
     """The reason for SINGULAR_MARGIN: with the arch's light at the zenith, a pose and the
     same pose with the sample and the arch turned together give the same pair."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     pose = np.radians([0.0, 30.0, 40.0, 50.0])
     turned = pose + np.radians([0.0, 20.0, 0.0, 20.0])
     for a, b in zip(rig.forward(pose), rig.forward(turned), strict=True):
@@ -161,8 +150,10 @@ def pairs(draw: st.DrawFn) -> tuple[FloatArray, FloatArray]:
 
 @settings(max_examples=300, deadline=None)
 @given(name=st.sampled_from(RIG_NAMES), pair=pairs())
-def test_fk_of_ik_any_pair(name: str, pair: tuple[FloatArray, FloatArray]) -> None:
-    rig = RIGS[name]
+def test_fk_of_ik_any_pair(
+    rigs: dict[str, Rig], name: str, pair: tuple[FloatArray, FloatArray]
+) -> None:
+    rig = rigs[name]
     wi, wo = pair[0][None], pair[1][None]
     solution = rig.solve(wi, wo)
     assert fk_error(rig, solution.candidates, wi[:, None], wo[:, None]).max() <= TOL
@@ -178,8 +169,8 @@ def poses(draw: st.DrawFn, rig: Rig) -> FloatArray:
 
 @settings(max_examples=150, deadline=None)
 @given(data=st.data(), name=st.sampled_from(RIG_NAMES))
-def test_ik_of_fk_any_pose(data: st.DataObject, name: str) -> None:
-    rig = RIGS[name]
+def test_ik_of_fk_any_pose(rigs: dict[str, Rig], data: st.DataObject, name: str) -> None:
+    rig = rigs[name]
     pose = data.draw(poses(rig))[None]
     wi, wo = rig.forward(pose)
     candidates, _ = rig.candidates(wi, wo)
@@ -188,12 +179,10 @@ def test_ik_of_fk_any_pose(data: st.DataObject, name: str) -> None:
         assert joint_error(rig, candidates, pose)[0] <= TOL
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
 @pytest.mark.parametrize("apart", [1e-15, 1e-13, 1e-12, 1e-11, 1e-9, 1e-7, 1e-5, 1e-3])
-def test_candidates_exact_near_retro_reflection(name: str, apart: float) -> None:
+def test_candidates_exact_near_retro_reflection(rig: Rig, apart: float) -> None:
     """Regression: the in-plane solver took the plane's normal from ωi × ωo, which keeps
     only ε/|ωi × ωo| relative precision (FK 4e-5 rad off at 1e-12 rad apart)."""
-    rig = RIGS[name]
     rng = np.random.default_rng(3)
     wi = uniform_directions(rng, 200, np.radians(85.0))
     wo = np.array(
@@ -203,9 +192,9 @@ def test_candidates_exact_near_retro_reflection(name: str, apart: float) -> None
     assert fk_error(rig, candidates, wi[:, None], wo[:, None]).max() <= TOL
 
 
-def test_reachable_pairs_are_solved_exactly_named() -> None:
+def test_reachable_pairs_are_solved_exactly_named(rigs: dict[str, Rig]) -> None:
     """A named reachable pair per rig, refused for nothing, round-trips."""
-    for rig in RIGS.values():
+    for rig in rigs.values():
         wi, wo = direction(30.0, 20.0)[None], direction(50.0, 200.0)[None]
         solution = rig.solve(wi, wo)
         assert solution.reasons[0] == Reason.OK

@@ -10,18 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from gonio.rig.model import Rig
 from gonio.rig.travel import TravelModel
-from tests.gonio.rig.helpers import RIGS
-
-RIG_NAMES = list(RIGS)
-#: (v rad/s, a rad/s²) of every axis of the shipped rigs.
-AXES = sorted(
-    {
-        (float(v), float(a))
-        for r in RIGS.values()
-        for v, a in zip(r.velocity, r.acceleration, strict=True)
-    }
-)
+from tests.conftest import RIG_NAMES
 
 
 def trapezoid(d: float, v: float, a: float) -> float:
@@ -37,19 +28,31 @@ def single(v: float, a: float) -> TravelModel:
     return TravelModel(np.array([v]), np.array([a]))
 
 
-@pytest.mark.parametrize(("v", "a"), AXES)
+def axis_dynamics(rig: Rig) -> list[tuple[float, float]]:
+    """(v rad/s, a rad/s²) of the rig's axes, each distinct pair once."""
+    return sorted(
+        {(float(v), float(a)) for v, a in zip(rig.velocity, rig.acceleration, strict=True)}
+    )
+
+
 @pytest.mark.parametrize(
     "fraction", [0.0, 1e-9, 0.01, 0.5, 1 - 1e-9, 1.0, 1 + 1e-9, 1.5, 10.0, 100.0]
 )
-def test_time_is_the_trapezoid(v: float, a: float, fraction: float) -> None:
-    """At, below and above the knee d = v² / a where cruising starts."""
-    d = fraction * v * v / a
-    assert single(v, a).time([0.0], [d]) == pytest.approx(trapezoid(d, v, a), rel=1e-14, abs=0)
-    assert single(v, a).time([d], [0.0]) == single(v, a).time([0.0], [d])
+def test_time_is_the_trapezoid(rig: Rig, fraction: float) -> None:
+    """At, below and above the knee d = v² / a where cruising starts, on every axis."""
+    for v, a in axis_dynamics(rig):
+        d = fraction * v * v / a
+        expected = pytest.approx(trapezoid(d, v, a), rel=1e-14, abs=0)
+        assert single(v, a).time([0.0], [d]) == expected, (v, a)
+        assert single(v, a).time([d], [0.0]) == single(v, a).time([0.0], [d])
 
 
-@pytest.mark.parametrize(("v", "a"), AXES)
-def test_time_is_continuous_and_smooth_at_the_knee(v: float, a: float) -> None:
+def test_time_is_continuous_and_smooth_at_the_knee(rig: Rig) -> None:
+    for v, a in axis_dynamics(rig):
+        continuous_and_smooth_at_the_knee(v, a)
+
+
+def continuous_and_smooth_at_the_knee(v: float, a: float) -> None:
     model = single(v, a)
     knee = v * v / a
     assert model.time([0.0], [knee]) == pytest.approx(2.0 * v / a, rel=1e-15)
@@ -66,10 +69,8 @@ def test_time_is_continuous_and_smooth_at_the_knee(v: float, a: float) -> None:
     assert right == pytest.approx(1.0 / v, rel=1e-5)
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
 @pytest.mark.parametrize("fraction", [1e-6, 0.3, 1 - 1e-9, 1.0, 1 + 1e-9, 2.0, 20.0])
-def test_reach_inverts_time_on_each_axis(name: str, fraction: float) -> None:
-    rig = RIGS[name]
+def test_reach_inverts_time_on_each_axis(rig: Rig, fraction: float) -> None:
     model = rig.travel
     knees = model.velocity**2 / model.acceleration
     for j, knee in enumerate(knees):
@@ -82,8 +83,8 @@ def test_reach_inverts_time_on_each_axis(name: str, fraction: float) -> None:
         assert np.all(model.reach(t) >= q * (1 - 1e-12))  # the other axes reach farther
 
 
-def test_time_is_the_slowest_axis_and_broadcasts() -> None:
-    model = RIGS["in_plane"].travel
+def test_time_is_the_slowest_axis_and_broadcasts(rigs: dict[str, Rig]) -> None:
+    model = rigs["in_plane"].travel
     rng = np.random.default_rng(0)
     p = rng.uniform(-3, 3, (5, 7, 4))
     q = rng.uniform(-3, 3, (7, 4))
@@ -109,9 +110,8 @@ def test_rejects_nonpositive_dynamics() -> None:
         TravelModel(np.array([1.0, 1.0]), np.array([1.0]))
 
 
-@pytest.mark.parametrize("name", RIG_NAMES)
-def test_scalar_equals_time(name: str) -> None:
-    model = RIGS[name].travel
+def test_scalar_equals_time(rig: Rig) -> None:
+    model = rig.travel
     scalar = model.scalar()
     rng = np.random.default_rng(1)
     p = rng.uniform(-4, 4, (2000, 4))
@@ -128,8 +128,10 @@ poses = st.lists(st.floats(-4.0, 4.0), min_size=4, max_size=4)
 
 @settings(max_examples=300, deadline=None)
 @given(name=st.sampled_from(RIG_NAMES), p=poses, q=poses, r=poses)
-def test_triangle_inequality(name: str, p: list[float], q: list[float], r: list[float]) -> None:
-    model = RIGS[name].travel
+def test_triangle_inequality(
+    rigs: dict[str, Rig], name: str, p: list[float], q: list[float], r: list[float]
+) -> None:
+    model = rigs[name].travel
     pq, qr, pr = model.time(p, q), model.time(q, r), model.time(p, r)
     assert pr <= pq + qr + 1e-12
     assert model.time(q, p) == pq  # symmetric
@@ -139,9 +141,11 @@ def test_triangle_inequality(name: str, p: list[float], q: list[float], r: list[
 
 @settings(max_examples=200, deadline=None)
 @given(name=st.sampled_from(RIG_NAMES), p=poses, q=poses, t=st.floats(0.0, 10.0))
-def test_reach_bounds_every_axis(name: str, p: list[float], q: list[float], t: float) -> None:
+def test_reach_bounds_every_axis(
+    rigs: dict[str, Rig], name: str, p: list[float], q: list[float], t: float
+) -> None:
     """time(p, q) ≤ t exactly when every |q_j − p_j| ≤ reach(t)_j (up to rounding)."""
-    model = RIGS[name].travel
+    model = rigs[name].travel
     move = np.abs(np.subtract(q, p))
     reach = model.reach(t)
     time = float(model.time(p, q))

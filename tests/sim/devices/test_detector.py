@@ -15,7 +15,7 @@ from gonio.rig.model import Rig
 from sim.devices.instrument import SimulatedInstrument
 from sim.scene import Scene, load_scene
 from tests.conftest import CONFIGS
-from tests.gonio.rig.helpers import RIGS, rig_with
+from tests.support.rigs import rig_with
 
 SCENES = CONFIGS / "scenes"
 MATTE = load_scene(SCENES / "matte.yaml")
@@ -42,15 +42,17 @@ def read(inst: SimulatedInstrument, pose: list[float], exposure: float, averages
     return inst.detector.measure(exposure, averages)
 
 
-ARCH = RIGS["arch"]
+@pytest.fixture(scope="module")
+def arch(rigs: dict[str, Rig]) -> Rig:
+    return rigs["arch"]
 
 
-def test_exact_value_without_effects() -> None:
+def test_exact_value_without_effects(arch: Rig) -> None:
     scene = scene_with(effects=[])
-    with SimulatedInstrument(scene, ARCH) as inst:
-        pose = in_plane_pose(ARCH, 30.0, 20.0)
+    with SimulatedInstrument(scene, arch) as inst:
+        pose = in_plane_pose(arch, 30.0, 20.0)
         r = read(inst, pose, 0.05, averages=3)
-        wi, wo = ARCH.forward(np.array(pose))
+        wi, wo = arch.forward(np.array(pose))
     f = scene.material.model().eval(wi, wo)
     source = radiometry.CollimatedSource(1.0, 6.0)
     optics = radiometry.DetectorOptics(1e-5, 25.0)
@@ -61,8 +63,8 @@ def test_exact_value_without_effects() -> None:
     assert r.raw == (r.value,) * 3
 
 
-def test_exposure_and_averages_are_checked() -> None:
-    with SimulatedInstrument(MATTE, ARCH) as inst:
+def test_exposure_and_averages_are_checked(arch: Rig) -> None:
+    with SimulatedInstrument(MATTE, arch) as inst:
         for bad in (0.0, 1e-6, 120.0, math.nan):
             with pytest.raises(DetectorError, match="outside the detector's range"):
                 inst.detector.measure(bad)
@@ -71,16 +73,16 @@ def test_exposure_and_averages_are_checked() -> None:
                 inst.detector.measure(0.01, averages)  # type: ignore[arg-type]
 
 
-def test_the_exposure_range_is_the_rigs() -> None:
-    rig = rig_with(ARCH, detector={"exposure_range_s": [0.01, 1.0]})
+def test_the_exposure_range_is_the_rigs(arch: Rig) -> None:
+    rig = rig_with(arch, detector={"exposure_range_s": [0.01, 1.0]})
     with SimulatedInstrument(MATTE, rig) as inst:
         with pytest.raises(DetectorError, match=r"range \[0.01, 1\] s"):
             inst.detector.measure(0.005)
         assert inst.detector.measure(1.0).n == 1
 
 
-def test_measuring_takes_virtual_time() -> None:
-    rig = rig_with(ARCH, detector={"readout_s": 0.004})
+def test_measuring_takes_virtual_time(arch: Rig) -> None:
+    rig = rig_with(arch, detector={"readout_s": 0.004})
     with SimulatedInstrument(MATTE, rig) as inst:
         t = inst.clock.now()
         r = inst.detector.measure(0.1, 5)
@@ -88,10 +90,10 @@ def test_measuring_takes_virtual_time() -> None:
         assert (r.started_s, r.ended_s) == (t, inst.clock.now())
 
 
-def test_dark_frames_with_the_light_off() -> None:
+def test_dark_frames_with_the_light_off(arch: Rig) -> None:
     scene = scene_with(effects=["dark_current"])
     gain = scene.detector.full_well_e / (2**scene.detector.adc_bits - 1)
-    with SimulatedInstrument(scene, ARCH) as inst:
+    with SimulatedInstrument(scene, arch) as inst:
         inst.light.off()
         for t in (0.01, 0.1, 1.0):
             r = inst.detector.measure(t)
@@ -100,29 +102,29 @@ def test_dark_frames_with_the_light_off() -> None:
         assert inst.detector.measure(0.1).value > 1.5 * scene.detector.dark_current_e_s * 0.1 / gain
 
 
-def test_stray_light_adds_a_constant_floor() -> None:
+def test_stray_light_adds_a_constant_floor(arch: Rig) -> None:
     floor = 1e-13  # W
     clean = scene_with(effects=[])
     stray = scene_with(effects={"stray_light": {"power_w": floor}})
     gain = clean.detector.full_well_e / (2**clean.detector.adc_bits - 1)
     expected = radiometry.electrons(floor, 0.05, clean.detector.responsivity_a_w) / gain
     for theta_o in (5.0, 40.0, 70.0):
-        pose = in_plane_pose(ARCH, 20.0, theta_o)
-        with SimulatedInstrument(clean, ARCH) as a, SimulatedInstrument(stray, ARCH) as b:
+        pose = in_plane_pose(arch, 20.0, theta_o)
+        with SimulatedInstrument(clean, arch) as a, SimulatedInstrument(stray, arch) as b:
             diff = read(b, pose, 0.05).value - read(a, pose, 0.05).value
         assert diff == pytest.approx(float(expected), rel=1e-9)
-    with SimulatedInstrument(stray, ARCH) as b:
+    with SimulatedInstrument(stray, arch) as b:
         b.light.off()
         assert b.detector.measure(0.05).value == 0.0  # stray light comes from the source
 
 
-def test_drift_correlates_with_time_and_the_reference_removes_it() -> None:
+def test_drift_correlates_with_time_and_the_reference_removes_it(arch: Rig) -> None:
     scene = scene_with(
         effects={"source_drift": {"rate_per_hour": 0.05, "amplitude": 0.01, "period_s": 1800}}
     )
-    pose = in_plane_pose(ARCH, 25.0, 35.0)
+    pose = in_plane_pose(arch, 25.0, 35.0)
     samples, ratios, times = [], [], []
-    with SimulatedInstrument(scene, ARCH) as inst:
+    with SimulatedInstrument(scene, arch) as inst:
         for _ in range(40):
             inst.clock.advance(300.0)  # a target every five minutes for over three hours
             s = read(inst, pose, 0.05).value
@@ -140,12 +142,12 @@ def test_drift_correlates_with_time_and_the_reference_removes_it() -> None:
     assert np.ptp(ratios_a) / ratios_a.mean() < 1e-5
 
 
-def test_aperture_integration_lowers_a_sharp_peak_and_converges() -> None:
+def test_aperture_integration_lowers_a_sharp_peak_and_converges(arch: Rig) -> None:
     ggx = {"name": "cook_torrance", "alpha": 0.02, "fresnel": "schlick", "f0": 0.9}
-    pose = in_plane_pose(ARCH, 30.0, 30.0)  # the mirror configuration: the peak
+    pose = in_plane_pose(arch, 30.0, 30.0)  # the mirror configuration: the peak
     values = {}
     for aperture in (1e-3, 1e-4, 1e-5, 1e-6):
-        rig = rig_with(ARCH, detector={"aperture_sr": aperture})
+        rig = rig_with(arch, detector={"aperture_sr": aperture})
         for effects in ([], ["aperture_integration"]):
             scene = scene_with(material=ggx, effects=effects)
             with SimulatedInstrument(scene, rig) as inst:
@@ -168,11 +170,11 @@ def test_aperture_integration_lowers_a_sharp_peak_and_converges() -> None:
     ids=["sample-limit", "field-of-view-limit"],
 )
 def test_footprint_kicks_in_at_the_predicted_grazing_angle(
-    fov_mm: float, predicted_deg: float
+    arch: Rig, fov_mm: float, predicted_deg: float
 ) -> None:
     clean = scene_with(effects=[])
     spill = scene_with(effects=["footprint"])
-    rig = rig_with(ARCH, constraints={"detector_fov_mm": fov_mm})
+    rig = rig_with(arch, constraints={"detector_fov_mm": fov_mm})
     ratios = {}
     angles = (60.0, predicted_deg - 0.01, predicted_deg + 0.01, 82.0, 84.0)
     for theta in angles:
@@ -185,23 +187,23 @@ def test_footprint_kicks_in_at_the_predicted_grazing_angle(
     assert ratios[angles[2]] > ratios[82.0] > ratios[84.0]
 
 
-def test_saturation_flags_the_glossy_peak() -> None:
+def test_saturation_flags_the_glossy_peak(arch: Rig) -> None:
     glossy = load_scene(SCENES / "glossy_metal.yaml")
-    pose = in_plane_pose(ARCH, 30.0, 30.0)
-    with SimulatedInstrument(glossy, ARCH) as inst:
+    pose = in_plane_pose(arch, 30.0, 30.0)
+    with SimulatedInstrument(glossy, arch) as inst:
         long = read(inst, pose, 1.0)
         short = read(inst, pose, 1e-4)
     assert long.saturated and long.value == 2**16 - 1
     assert not short.saturated
 
 
-def test_rgb_material_seen_through_the_detector_band() -> None:
+def test_rgb_material_seen_through_the_detector_band(arch: Rig) -> None:
     glossy = load_scene(SCENES / "glossy_metal.yaml")
-    pose = in_plane_pose(ARCH, 30.0, 45.0)
+    pose = in_plane_pose(arch, 30.0, 45.0)
     values = {}
     for band in ("luminance", "r", "g", "b"):
         scene = scene_with(glossy, detector={"band": band}, effects=[])
-        with SimulatedInstrument(scene, ARCH) as inst:
+        with SimulatedInstrument(scene, arch) as inst:
             values[band] = read(inst, pose, 0.01).value
     assert values["r"] > values["g"] > values["b"]  # gold
     weights = (0.2126, 0.7152, 0.0722)

@@ -15,7 +15,7 @@ from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus, profile_position
 from sim.physics.streams import Streams
 from sim.scene import PositionErrorSpec
-from tests.gonio.rig.helpers import RIGS, angle_between
+from tests.support.rigs import angle_between
 
 
 def bus(
@@ -31,10 +31,8 @@ def pose(rig: Rig, values: list[float]) -> dict[str, float]:
 TARGET = [0.6, -1.0, 0.8, 1.5]
 
 
-@pytest.mark.parametrize("name", list(RIGS))
-def test_a_move_takes_the_planned_travel_time(name: str) -> None:
+def test_a_move_takes_the_planned_travel_time(rig: Rig) -> None:
     """`wait_settled` ends when the motion ends; the settle dwell is the caller's."""
-    rig = RIGS[name]
     clock = ManualClock()
     with bus(rig, clock) as b:
         b.move_to(pose(rig, TARGET))
@@ -46,8 +44,8 @@ def test_a_move_takes_the_planned_travel_time(name: str) -> None:
         assert set(b.health()) == set(rig.axes)
 
 
-def test_positions_follow_the_trapezoid_mid_move() -> None:
-    rig = RIGS["arch"]
+def test_positions_follow_the_trapezoid_mid_move(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
     clock = ManualClock()
     with bus(rig, clock) as b:
         b.move_to(pose(rig, TARGET))
@@ -79,8 +77,8 @@ def test_profile_is_continuous_and_ends_on_the_goal(d: float, v: float, a: float
     assert profile_position(start, goal, vv, aa, t_end + 1.0)[0] == d
 
 
-def test_limits_are_refused_before_anything_moves() -> None:
-    rig = RIGS["arch"]
+def test_limits_are_refused_before_anything_moves(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
     clock = ManualClock()
     with bus(rig, clock) as b:
         before = b.positions()
@@ -94,8 +92,8 @@ def test_limits_are_refused_before_anything_moves() -> None:
             b.move_to({"elbow": 0.1})
 
 
-def test_timeout_holds_where_the_axes_are() -> None:
-    rig = RIGS["in_plane"]
+def test_timeout_holds_where_the_axes_are(rigs: dict[str, Rig]) -> None:
+    rig = rigs["in_plane"]
     clock = ManualClock()
     with bus(rig, clock) as b:
         b.move_to(pose(rig, [1.5, -1.5, 1.0, 3.0]))
@@ -108,8 +106,8 @@ def test_timeout_holds_where_the_axes_are() -> None:
         assert 0 < held["light_arm"] < 1.5
 
 
-def test_stop_torque_and_closed_bus() -> None:
-    rig = RIGS["arch"]
+def test_stop_torque_and_closed_bus(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
     clock = ManualClock()
     b = bus(rig, clock)
     with pytest.raises(DriverError, match="not open"):
@@ -135,12 +133,10 @@ def test_stop_torque_and_closed_bus() -> None:
         assert b.positions() == end
 
 
-@pytest.mark.parametrize("name", list(RIGS))
-def test_tick_quantization_bounds_the_direction_error(name: str) -> None:
+def test_tick_quantization_bounds_the_direction_error(rig: Rig) -> None:
     """The encoder reads the tick the motor went to; the joint is there too, so the
     measured pair differs from the commanded one by at most the half-ticks of the
     axes in each chain."""
-    rig = RIGS[name]
     rng = np.random.default_rng(0)
     lo, hi = rig.limits[:, 0], rig.limits[:, 1]
     ticks = np.array([a.resolution_rad for a in rig.bus_axes()])
@@ -167,8 +163,8 @@ def test_tick_quantization_bounds_the_direction_error(name: str) -> None:
     assert 0 < worst_o <= bound_o * (1 + 1e-9)
 
 
-def test_backlash_depends_on_the_approach_direction() -> None:
-    rig = RIGS["arch"]
+def test_backlash_depends_on_the_approach_direction(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
     spec = PositionErrorSpec(ticks=False, backlash_deg=0.2)
     with bus(rig, spec=spec) as b:
         b.move_to(pose(rig, [0.5, 0.2, 0.3, 0.1]))  # from home: every axis moves up
@@ -184,8 +180,8 @@ def test_backlash_depends_on_the_approach_direction() -> None:
     np.testing.assert_allclose(from_below - [0.5, 0.2, 0.3, 0.1], -math.radians(0.1), rtol=1e-9)
 
 
-def test_repeatability_statistics_and_per_sample_reproducibility() -> None:
-    rig = RIGS["in_plane"]
+def test_repeatability_statistics_and_per_sample_reproducibility(rigs: dict[str, Rig]) -> None:
+    rig = rigs["in_plane"]
     sigma = math.radians(0.05)
     spec = PositionErrorSpec(ticks=False, repeatability_deg=0.05)
     errors = []
@@ -210,10 +206,10 @@ def test_repeatability_statistics_and_per_sample_reproducibility() -> None:
     np.testing.assert_array_equal(alone, e[1234])
 
 
-def test_an_axis_that_stays_put_keeps_its_error() -> None:
+def test_an_axis_that_stays_put_keeps_its_error(rigs: dict[str, Rig]) -> None:
     """Only the axes that move draw a new repeatability error (and may change backlash
     side); commanding the pose the motors are at changes nothing."""
-    rig = RIGS["arch"]
+    rig = rigs["arch"]
     spec = PositionErrorSpec(ticks=False, backlash_deg=0.1, repeatability_deg=0.05)
     with bus(rig, spec=spec, seed=3) as b:
         b.begin_sample(0)
@@ -233,8 +229,8 @@ def test_an_axis_that_stays_put_keeps_its_error() -> None:
     np.testing.assert_array_equal(third, second)
 
 
-def test_waiting_again_after_the_motion_ended_takes_no_time() -> None:
-    rig = RIGS["arch"]
+def test_waiting_again_after_the_motion_ended_takes_no_time(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
     clock = ManualClock()
     with SimMotorBus(rig, clock) as b:
         b.move_to({"light_elevation": 1.0})

@@ -9,26 +9,29 @@ from pathlib import Path
 import numpy as np
 
 from gonio import radiometry
+from gonio.rig.model import Rig
 from sim.physics.optics import SceneOptics
 from sim.scene import Scene, load_scene
-from tests.gonio.rig.helpers import ARCH_POINT, RIGS, direction, rig_with
+from tests.support.rigs import direction, rig_with
 
 SCENES = Path(__file__).resolve().parents[3] / "configs" / "scenes"
 MATTE = load_scene(SCENES / "matte.yaml")
 
 
-def test_the_source_is_the_rigs_light_with_the_scenes_power() -> None:
-    optics = SceneOptics(MATTE, RIGS["arch"])
+def test_the_source_is_the_rigs_light_with_the_scenes_power(
+    arch_point: Rig, rigs: dict[str, Rig]
+) -> None:
+    optics = SceneOptics(MATTE, rigs["arch"])
     assert optics.source == radiometry.CollimatedSource(1.0, 6.0)
     assert optics.optics == radiometry.DetectorOptics(1e-5, 25.0)
     assert optics.sample_diameter_mm == 30.0
-    point = SceneOptics(load_scene(SCENES / "seed000_specular.yaml"), ARCH_POINT)
+    point = SceneOptics(load_scene(SCENES / "seed000_specular.yaml"), arch_point)
     assert point.source == radiometry.PointSource(0.01, 300.0)
 
 
-def test_sizes_aperture_and_reference_follow_the_rig() -> None:
+def test_sizes_aperture_and_reference_follow_the_rig(rigs: dict[str, Rig]) -> None:
     rig = rig_with(
-        RIGS["arch"],
+        rigs["arch"],
         detector={"aperture_sr": 2e-4},
         constraints={"beam_diameter_mm": 4, "detector_fov_mm": 20, "sample_diameter_mm": 50},
         reference={"albedo": 0.5},
@@ -40,18 +43,18 @@ def test_sizes_aperture_and_reference_follow_the_rig() -> None:
     wi, wo = direction(0.0, 0.0)[None], direction(45.0, 180.0)[None]
     np.testing.assert_allclose(optics.models["reference"](wi, wo), 0.5 / math.pi, rtol=1e-15)
     # The power scales with the aperture the rig gives (no effects: Φ = f · G).
-    base = SceneOptics(MATTE.with_effects([]), RIGS["arch"]).geometric_power(wi, wo)
+    base = SceneOptics(MATTE.with_effects([]), rigs["arch"]).geometric_power(wi, wo)
     wider = SceneOptics(
-        MATTE.with_effects([]), rig_with(RIGS["arch"], detector={"aperture_sr": 2e-4})
+        MATTE.with_effects([]), rig_with(rigs["arch"], detector={"aperture_sr": 2e-4})
     ).geometric_power(wi, wo)
     np.testing.assert_allclose(wider / base, 20.0, rtol=1e-12)
 
 
-def test_the_band_and_responsivity_are_the_scenes() -> None:
+def test_the_band_and_responsivity_are_the_scenes(rigs: dict[str, Rig]) -> None:
     data = MATTE.model_dump()
     data["detector"] = {**data["detector"], "responsivity_a_w": 0.25}
-    half = SceneOptics(Scene.model_validate(data), RIGS["arch"])
-    full = SceneOptics(MATTE, RIGS["arch"])
+    half = SceneOptics(Scene.model_validate(data), rigs["arch"])
+    full = SceneOptics(MATTE, rigs["arch"])
     power, exposure = np.array([1e-9]), np.array([0.1])
     np.testing.assert_allclose(
         half.electrons(power[:, None], exposure), 0.5 * full.electrons(power[:, None], exposure)

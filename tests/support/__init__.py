@@ -1,0 +1,1 @@
+"""Helpers shared by the tests of several packages (fixtures live in tests/conftest.py)."""
