@@ -1,4 +1,7 @@
-"""Seed 001: the specular lobe's cross-section flattens as the incidence angle grows.
+"""The specular lobe's cross-section flattens as the incidence angle grows (seed 001).
+
+Seed 001 is a derivation (in Chinese and English) of why a microfacet lobe becomes
+anisotropic as the view angle grows; this module measures its claim on full models.
 
 Geometry. wi = (sin θ, 0, cos θ), mirror direction m = (−sin θ, 0, cos θ). Two
 great circles cross at m, perpendicular to it: the in-plane one, wo(s) = cos s m +
@@ -203,7 +206,7 @@ def seed_cone_widths(theta_i: ArrayLike, cone_half_angle: float) -> LobeWidths:
 
 
 def seed_closed_form_aspect(theta_i: ArrayLike, cone_half_angle: float) -> FloatArray:
-    """2a / δ with sin(δ/2) = sin a cos θ: seed 001's L_min / L_max semi-axes."""
+    """2a/δ, sin(δ/2) = sin a cos θ: L_min / L_max of the lobe-anisotropy derivation (seed 001)."""
     theta = np.asarray(theta_i, dtype=np.float64)
     a = cone_half_angle
     return np.asarray(a / np.arcsin(np.sin(a) * np.cos(theta)), dtype=np.float64)
@@ -224,7 +227,7 @@ def _fmt(x: float) -> str:
 
 
 def aspect_table() -> str:
-    """The seed-001 table of docs/brdf.md, as markdown."""
+    """The lobe-anisotropy table (seed 001) of docs/brdf.md, as markdown."""
     theta = np.radians(ANGLES_DEG)
     lines = [
         "| D | α | θi | f·cosθo, Schlick | f·cosθo, F = 1 | f, Schlick | seed cone "

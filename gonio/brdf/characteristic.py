@@ -1,4 +1,4 @@
-"""Seed 000's three test functions, each isolating one typical BRDF effect.
+"""The test functions of Barla, Belcour & Pacanowski 2015 (seed 000), one BRDF effect each.
 
 With h = (wi + wo)/2 (not normalized) and h̄ its projection on the tangent plane:
 
@@ -29,7 +29,7 @@ class _TestFunction(BRDF):
 
 
 class FresnelTestFunction(_TestFunction):
-    """F = 1 − cos θd (white in seed 000's figure 2)."""
+    """F = 1 − cos θd (white in figure 2 of Barla, Belcour & Pacanowski 2015, seed 000)."""
 
     name = "fresnel_test_function"
 
@@ -38,7 +38,10 @@ class FresnelTestFunction(_TestFunction):
 
 
 class SpecularTestFunction(_TestFunction):
-    """S = 1 − ‖h̄‖, h = (wi + wo)/2 (red in seed 000's figure 2)."""
+    """S = 1 − ‖h̄‖, h = (wi + wo)/2.
+
+    Red in figure 2 of Barla, Belcour & Pacanowski 2015 (seed 000).
+    """
 
     name = "specular_test_function"
 
@@ -48,9 +51,9 @@ class SpecularTestFunction(_TestFunction):
 
 
 class GrazingTestFunction(_TestFunction):
-    """G = 1 − (wi · n)(wo · n) (blue in seed 000's figure 2).
+    """G = 1 − (wi · n)(wo · n) (blue in figure 2 of Barla, Belcour & Pacanowski 2015, seed 000).
 
-    G = 1 where either direction is grazing (seed 000 calls this its "0-isoline":
+    G = 1 where either direction is grazing (the paper calls this its "0-isoline":
     it is the product (wi · n)(wo · n) that is 0 there) and 0 only at wi = wo = n.
     """
 

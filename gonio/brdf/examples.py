@@ -86,7 +86,7 @@ def albedo_table() -> str:
     return "\n".join(lines)
 
 
-#: Shininess values of the seed-003 family survey.
+#: Shininess values of the survey of Romanyuk et al.'s cosine-quadratic family (seed 003).
 FAMILY_N = (0.5, 1.0, 2.0, 4.0, 16.0, 64.0, 256.0, 1000.0)
 FAMILY = ("blinn_phong", "cosine_quadratic", "cosine_quadratic_modified", "schlick_lobe")
 

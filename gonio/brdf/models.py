@@ -1,10 +1,10 @@
-"""Lambert and the cosine-lobe models: Phong, Blinn-Phong and seed 003's family.
+"""Lambert, Phong, Blinn-Phong and Romanyuk et al.'s modified cosine-quadratic lobes (seed 003).
 
     lambert             f = ρ / π
     phong               f = ks (n + 2)/(2π) cos^n ψ + kd/π,     cos ψ = r · wo
     blinn_phong         f = ks C(n) cos^n θh + kd/π
     cosine_quadratic    f = ks C(n) (ξ n (cos θh − 1) + 1)² + kd/π,   ξ = 1/2
-    cosine_quadratic_modified   the same with ξ from seed 003's eq. 12 (≈ 0.4629)
+    cosine_quadratic_modified   the same with ξ from Romanyuk et al.'s eq. 12 (≈ 0.4629)
     schlick_lobe        f = ks C(n) cos θh / (n − n cos θh + cos θh) + kd/π
 
 with r = 2 (wi · n) n − wi the mirror direction of wi and θh the angle between
@@ -18,7 +18,7 @@ Blinn-Phong's
 
 does the same for cos^n θh (the closed form of the albedo at normal incidence;
 the maximum over θi, measured). The popular (n + 8)/(8π) is too large for every
-n > 0 (albedo up to 1.075 at n = 8). The seed-003 lobes approximate cos^n θh and
+n > 0 (albedo up to 1.075 at n = 8). Romanyuk et al.'s lobes approximate cos^n θh and
 share C(n); their albedo is not held to 1 (the cosine-quadratic lobes cut at
 their zero, ξ n (cos θh − 1) + 1 = 0). With ks + kd ≤ 1, phong and blinn_phong
 conserve energy. Every model here is reciprocal (cos ψ is symmetric in wi, wo)
@@ -127,7 +127,10 @@ class BlinnPhong(_CosineLobe):
 
 
 class CosineQuadratic(BlinnPhong):
-    """Seed 003's F_2: cos^n θh of `BlinnPhong` replaced by (n (cos θh − 1)/2 + 1)², cut at 0."""
+    """Romanyuk et al.'s F_2 (seed 003): `BlinnPhong` with (n (cos θh − 1)/2 + 1)² for cos^n θh.
+
+    The lobe is cut at 0 beyond its zero crossing.
+    """
 
     name = "cosine_quadratic"
     physically_based = False
@@ -137,9 +140,9 @@ class CosineQuadratic(BlinnPhong):
 
 
 class CosineQuadraticModified(BlinnPhong):
-    """Seed 003's F_VOL: (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
+    """Romanyuk et al.'s F_VOL (seed 003): (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
 
-    ``xi``: "eq12" (default, ξ ≈ 0.4629 solving seed 003's eq. 12), "29/64", or a
+    ``xi``: "eq12" (default, ξ ≈ 0.4629 solving the paper's eq. 12), "29/64", or a
     number in (0, 1].
     """
 
@@ -164,7 +167,7 @@ class CosineQuadraticModified(BlinnPhong):
 
 
 class SchlickLobe(BlinnPhong):
-    """Seed 003's F_S (its eq. 4): cos θh / (n − n cos θh + cos θh) in place of cos^n θh."""
+    """Romanyuk et al.'s F_S (seed 003, eq. 4): cos θh / (n − n cos θh + cos θh) for cos^n θh."""
 
     name = "schlick_lobe"
     physically_based = False

@@ -3,8 +3,8 @@
 The shipped quick plan is planned on the arch rig and measured on the simulated rig
 (the matte scene, with sensor noise) through the driver protocols, calibrated with the
 reference standard and compared with the truth; then the four parametrizations on
-named direction pairs (coordinates and round-trip error) and seed 003's lobe
-comparison.
+named direction pairs (coordinates and round-trip error) and the lobe comparison of
+Romanyuk et al.'s modified cosine-quadratic model (seed 003).
 """
 
 from __future__ import annotations
@@ -68,7 +68,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="the main job on the simulated rig, then the parametrization and lobe tables",
         description="The main job on the simulated rig (the quick plan measured on the "
         "matte scene), then the four parametrizations' coordinates and round-trip errors "
-        "for named direction pairs, and the seed-003 lobe comparison.",
+        "for named direction pairs, and the lobe comparison of Romanyuk et al.'s modified "
+        "cosine-quadratic model (seed 003).",
     )
     demo.set_defaults(func=_cmd_demo)
 

@@ -1,10 +1,11 @@
-"""Hybrid coordinates (‖h̄‖, φh, ‖k‖, φk) (seed 000 eqs 5-6 and appendix, after Stark 2005).
+"""Hybrid coordinates (‖h̄‖, φh, ‖k‖, φk) (after Stark 2005).
 
 h = (ωi + ωo)/2 and k = (ωi − ωo)/2, unnormalized (‖h‖² + ‖k‖² = 1, h·k = 0); h̄, k̄
 are their projections on the tangent plane, φh, φk the azimuths of h̄ and k̄ (φk is
 well defined: in the closed upper hemisphere k̄ = 0 only when k = 0). The inverse
 rebuilds h = (h̄, hz) with hz = sqrt(1 − ‖k‖² − ‖h̄‖²) and k = ‖k‖ (sin θk k̂̄, cos θk)
-from h·k = 0, then ωi = h + k, ωo = h − k (seed 000 eqs 5-6).
+from h·k = 0, then ωi = h + k, ωo = h − k (eqs 5-6 and appendix of Barla, Belcour &
+Pacanowski 2015, seed 000).
 
 θk, done right. The appendix's θk = tan⁻¹(−hz / (‖h̄‖ cos(φh − φk))) needs its
 quadrant: sin θk ≥ 0 because φk is k̄'s own azimuth, so

@@ -1,8 +1,9 @@
-"""Orthographic coordinates (‖h̄‖, φh, ‖k̄‖, φk) (Neumann 1999, Löw 2012; seed 000 eqs 3-4).
+"""Orthographic coordinates (‖h̄‖, φh, ‖k̄‖, φk) (Neumann 1999, Löw 2012).
 
 h = (ωi + ωo)/2 and k = (ωi − ωo)/2, unnormalized; a bar is the projection on the
 tangent plane; φh, φk are the azimuths of h̄ and k̄. The inverse is
-ω̄i = h̄ + k̄, ω̄o = h̄ − k̄ and ωz = sqrt(1 − ‖ω̄‖²) (seed 000 eqs 3-4).
+ω̄i = h̄ + k̄, ω̄o = h̄ − k̄ and ωz = sqrt(1 − ‖ω̄‖²) (eqs 3-4 of Barla, Belcour & Pacanowski
+2015, seed 000).
 
 Precision: a direction at elevation δ above the horizon has ‖ω̄‖² = 1 − δ², so its
 z is recovered from a difference that float64 knows to about ε: the round trip error

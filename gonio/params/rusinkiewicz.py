@@ -1,9 +1,10 @@
-"""Rusinkiewicz's halfway/difference coordinates (θh, φh, θd, φd) (seed 000, eqs 1-2).
+"""Rusinkiewicz's halfway/difference coordinates (θh, φh, θd, φd).
 
+As in Barla, Belcour & Pacanowski 2015 (seed 000), eqs 1-2:
 ĥ = (ωi + ωo)/‖ωi + ωo‖ has polar angles (θh, φh); d̂ = rot_y(−θh) rot_z(−φh) ωi is
 ωi in the frame where ĥ is the pole, with polar angles (θd, φd). The inverse is
 ωi = rot_z(φh) rot_y(θh) d̂ and ωo = rot_z(φh) rot_y(θh) (−d̂x, −d̂y, d̂z), i.e. the
-mirror of ωi about ĥ (seed 000 eq. 2).
+mirror of ωi about ĥ (Barla et al. 2015, eq. 2).
 
 How the forward map keeps precision: with h = ωi + ωo and k = ωi − ωo (both exact for
 nearly equal or nearly opposite directions, by Sterbenz's lemma), θh = atan2(‖h̄‖, hz),

@@ -1,4 +1,4 @@
-"""The coverage of a plan, drawn the way seed 000's figures show the hybrid domain.
+"""Plan coverage, drawn as Barla, Belcour & Pacanowski 2015 (seed 000) draw the hybrid domain.
 
 Top row: slices of the plane of the first two isotropic coordinates (‖h̄‖, ‖k‖ for
 hybrid) at a few values of the third (φk − φh, reciprocity-folded), shaded by what
