@@ -1,6 +1,7 @@
-"""Seed 003's lobes: accuracy against F_B = cos^n ψ next to numpy evaluation speed.
+"""Romanyuk et al.'s modified cosine-quadratic lobes (seed 003): accuracy next to speed.
 
-Run: ``.venv/bin/python benchmarks/lobes.py`` (about 10 s). Prints the machine, the
+Accuracy against F_B = cos^n ψ, next to numpy evaluation speed. Run:
+``.venv/bin/python benchmarks/lobes.py`` (about 10 s). Prints the machine, the
 recomputed equation 12, the epicentre relative errors over n, the candidate readings
 of the "4.5-fold" claim, the absolute errors over the hemisphere, the zero-crossing
 and inflexion checks, and ns per value for each lobe (10^6 values, best of repeats).

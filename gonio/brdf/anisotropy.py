@@ -1,4 +1,7 @@
-"""Seed 001: the specular lobe's cross-section flattens as the incidence angle grows.
+"""The specular lobe's cross-section flattens as the incidence angle grows (seed 001).
+
+Seed 001 is a derivation (in Chinese and English) of why a microfacet lobe becomes
+anisotropic as the view angle grows; this module measures its claim on full models.
 
 Geometry. wi = (sin θ, 0, cos θ), mirror direction m = (−sin θ, 0, cos θ). Two
 great circles cross at m, perpendicular to it: the in-plane one, wo(s) = cos s m +

@@ -1,4 +1,4 @@
-"""Seed 000's three test functions, each isolating one typical BRDF effect.
+"""The test functions of Barla, Belcour & Pacanowski 2015 (seed 000), one BRDF effect each.
 
 With h = (wi + wo)/2 (not normalized) and h̄ its projection on the tangent plane:
 

@@ -1,7 +1,7 @@
-"""Seed 003 (Romanyuk et al.) recomputed with the project's own lobes.
+"""Romanyuk et al.'s modified cosine-quadratic model (seed 003) recomputed with gonio's own lobes.
 
 Conventions: c = cos ψ, n the shininess; the "epicentre zone" is ψ ≤ lim(n) =
-acos(exp(−K/n)) with the seed's printed K = 0.511. The relative error of a lobe F
+acos(exp(−K/n)) with the paper's printed K = 0.511. The relative error of a lobe F
 against F_B = cos^n ψ is δ = |F − F_B| / F_B, the absolute error Δ = |F − F_B| (F_B
 peaks at 1, so Δ is a fraction of the peak). All angles in radians.
 
@@ -27,7 +27,7 @@ from scipy import integrate, optimize
 from gonio.brdf import lobes
 from gonio.types import ArrayLike, FloatArray
 
-K_PRINTED = 0.511  # the seed's lim(n) = acos(exp(−0.511/n))
+K_PRINTED = 0.511  # the paper's lim(n) = acos(exp(−0.511/n))
 K_LN_5_3 = math.log(5.0 / 3.0)  # 0.51083: F_B = 3/5 at the limit; reproduces eq 12's digits
 EQ11_N = (16.0, 256.0)
 FIG3_N = (16.0, 1000.0)
@@ -96,7 +96,7 @@ class Lobe:
 
 
 def study_lobes() -> tuple[Lobe, ...]:
-    """F_VOL with the seed's ξ = 0.463, with the recomputed eq-12 root and 29/64; F_2; F_S."""
+    """F_VOL with the paper's ξ = 0.463, with the recomputed eq-12 root and 29/64; F_2; F_S."""
     return (
         Lobe("F_VOL(0.463)", SEED_XI),
         Lobe("F_VOL(eq12)", equation_12().xi()),
@@ -251,7 +251,7 @@ def zero_crossing_psi(n: ArrayLike, xi: float) -> FloatArray:
 
 
 def eq14_psi(n: ArrayLike) -> FloatArray:
-    """Seed eq 14 as printed: acos((29 n − 64) / (29 n))."""
+    """Eq 14 of Romanyuk et al. (seed 003) as printed: acos((29 n − 64) / (29 n))."""
     nn = np.asarray(n, dtype=np.float64)
     return np.asarray(np.arccos((29.0 * nn - 64.0) / (29.0 * nn)), dtype=np.float64)
 

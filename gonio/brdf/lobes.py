@@ -25,7 +25,7 @@ def xi_equation_12() -> float:
     """ξ solving Romanyuk et al.'s equation 12, 1.098 = −0.71068 ξ + 0.12026 ξ² + 1.40119.
 
     Of the two roots (≈ 0.4629 and ≈ 5.447) the one in (0, 1) is the lobe's; the
-    seed rounds it to 0.463.
+    paper rounds it to 0.463.
     """
     a, b, c = 0.12026, -0.71068, 1.40119 - 1.098
     return float((-b - np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a))
@@ -47,8 +47,8 @@ def cosine_quadratic(
     """(ξ n (cos ψ − 1) + 1)², Romanyuk et al. eq. 3 (ξ = 1/2 is F_2, ξ ≈ 0.463 is F_VOL).
 
     The parabola reaches 0 at cos ψ = 1 − 1/(ξ n) and rises again beyond it; with
-    ``cut`` (the default) it is zeroed from that point on, as the seed prescribes
-    for F_VOL. ``cut=False`` gives the raw polynomial for the seed's comparisons.
+    ``cut`` (the default) it is zeroed from that point on, as the paper prescribes
+    for F_VOL. ``cut=False`` gives the raw polynomial for the paper's comparisons.
     """
     c = np.asarray(cos_psi, dtype=np.float64)
     xn = np.asarray(xi, dtype=np.float64) * np.asarray(n, dtype=np.float64)

@@ -128,7 +128,10 @@ class BlinnPhong(_CosineLobe):
 
 
 class CosineQuadratic(BlinnPhong):
-    """Seed 003's F_2: cos^n θh of `BlinnPhong` replaced by (n (cos θh − 1)/2 + 1)², cut at 0."""
+    """Romanyuk et al.'s F_2 (seed 003): `BlinnPhong` with (n (cos θh − 1)/2 + 1)² for cos^n θh.
+
+    The lobe is cut at 0 beyond its zero crossing.
+    """
 
     name = "cosine_quadratic"
     physically_based = False
@@ -138,7 +141,7 @@ class CosineQuadratic(BlinnPhong):
 
 
 class CosineQuadraticModified(BlinnPhong):
-    """Seed 003's F_VOL: (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
+    """Romanyuk et al.'s F_VOL (seed 003): (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
 
     ``xi``: "eq12" (default, ξ ≈ 0.4629 solving Romanyuk et al.'s eq. 12), "29/64", or a
     number in (0, 1].
@@ -165,7 +168,7 @@ class CosineQuadraticModified(BlinnPhong):
 
 
 class SchlickLobe(BlinnPhong):
-    """Seed 003's F_S (its eq. 4): cos θh / (n − n cos θh + cos θh) in place of cos^n θh."""
+    """Romanyuk et al.'s F_S (seed 003, eq. 4): cos θh / (n − n cos θh + cos θh) for cos^n θh."""
 
     name = "schlick_lobe"
     physically_based = False

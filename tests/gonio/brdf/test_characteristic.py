@@ -1,4 +1,7 @@
-"""Seed 000's test functions F, S, G and the identities its appendix derives for them."""
+"""The test functions F, S, G of Barla, Belcour & Pacanowski 2015 (seed 000).
+
+Also the identities the paper's appendix derives for them.
+"""
 
 from __future__ import annotations
 

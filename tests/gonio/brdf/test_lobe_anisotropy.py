@@ -1,6 +1,7 @@
-"""Seed 001: the lobe's cross-section flattens with the incidence angle.
+"""The lobe's cross-section flattens with the incidence angle (seed 001).
 
-The seed reflects a cone of microfacet normals (half-angle a about n) about the
+Seed 001, the derivation of why a microfacet lobe becomes anisotropic as the view angle
+grows, reflects a cone of microfacet normals (half-angle a about n) about the
 view direction and finds the reflected cone's cross-section flattening as
 ≈ 1/cos θ. Measured here on full Cook-Torrance models (GGX, Beckmann; α = 0.1,
 0.3; Schlick f0 = 0.04 and F = 1) with f·cos θo (whose level sets, for F = G2 = 1,
@@ -121,9 +122,10 @@ def test_departure_the_brdf_itself_peaks_at_the_horizon(measured):
 def test_seed_algebra_semi_axes():
     """Reflect the cone of normals about v and measure the reflected curve directly.
 
-    Seed 001: l·l_o = 2L + 1 with L ∈ [L_min, L_max], L_min = −sin²α (in-plane, any θ:
-    the long semi-axis is always 2α) and L_max = −sin²α cos²θ (the closest approach δ,
-    sin(δ/2) = sin α cos θ, reached at φ = 90°).
+    The lobe-anisotropy derivation (seed 001): l·l_o = 2L + 1 with L ∈ [L_min, L_max],
+    L_min = −sin²α (in-plane, any θ: the long semi-axis is always 2α) and
+    L_max = −sin²α cos²θ (the closest approach δ, sin(δ/2) = sin α cos θ, reached at
+    φ = 90°).
     """
     a = 0.2
     phi = np.linspace(0.0, 2 * np.pi, 200001)

@@ -1,4 +1,6 @@
-"""gonio.brdf.lobe_study: seed 003's equation 12 and error figures, recomputed.
+"""gonio.brdf.lobe_study: Romanyuk et al.'s equation 12 and error figures, recomputed.
+
+The paper is Romanyuk et al.'s modified cosine-quadratic reflectance model (seed 003).
 
 Tolerances: the integrals and the epicentre maxima are exact up to rounding and
 quad's 1e-13 tolerance, so they are checked against independent computations at

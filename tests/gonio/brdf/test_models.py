@@ -1,4 +1,7 @@
-"""Closed-form values of Lambert, Phong, Blinn-Phong and seed 003's lobe family."""
+"""Closed-form values of Lambert, Phong, Blinn-Phong and Romanyuk et al.'s lobe family.
+
+The family is the lobes of Romanyuk et al.'s modified cosine-quadratic model (seed 003).
+"""
 
 from __future__ import annotations
 
@@ -83,7 +86,7 @@ def test_modified_cosine_quadratic_is_zero_beyond_its_zero_crossing(xi, value):
     n = 100.0
     model = brdf.create("cosine_quadratic_modified", n=n, xi=xi)
     assert model.params["xi"] == xi
-    cut = np.arccos(1.0 - 1.0 / (value * n))  # θh of the zero (seed 003 eq. 14 for 29/64)
+    cut = np.arccos(1.0 - 1.0 / (value * n))  # θh of the zero (Romanyuk et al.'s eq. 14 at 29/64)
     wi = _dir(0.2)
     before, after = _dir(2 * cut * 0.99 - 0.2), _dir(2 * cut * 1.01 - 0.2)
     assert model.eval(wi, before) > 0.0
@@ -99,10 +102,10 @@ def test_seed003_equation_14_is_the_29_64_zero_crossing():
 
 
 def test_epicentre_accuracy_of_the_family():
-    """Max relative error vs cos^n θh where cos θh ≥ exp(−0.511/n) (seed 003's epicentre).
+    """Max relative error vs cos^n θh where cos θh ≥ exp(−0.511/n) (Romanyuk et al.'s epicentre).
 
     Measured: ξ = 0.4629 (eq. 12) 1.9 % at n = 16 growing to 2.8 % at n = 1000 (the
-    seed reports 1.9 % over n ∈ [16, 1000]); ξ = 29/64 stays below 1.6 %; F_2 7.6 %,
+    paper reports 1.9 % over n ∈ [16, 1000]); ξ = 29/64 stays below 1.6 %; F_2 7.6 %,
     Schlick 10.3 %.
     """
 

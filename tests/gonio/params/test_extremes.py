@@ -111,8 +111,9 @@ class TestConventionsWhereAnAzimuthIsUndefined:
 
 
 def _appendix_inverse(c: np.ndarray, quadrant: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Seed 000's appendix, transcribed literally (θk by arctan, or by atan2 with the
-    quadrant right), hz = sqrt(1 − ‖k‖² − ‖h̄‖²) clipped at 0."""
+    """The appendix of Barla, Belcour & Pacanowski 2015 (seed 000), transcribed
+    literally (θk by arctan, or by atan2 with the quadrant right),
+    hz = sqrt(1 − ‖k‖² − ‖h̄‖²) clipped at 0."""
     hb, ph, k, pk = (c[:, j] for j in range(4))
     hz = np.sqrt(np.maximum(1 - k * k - hb * hb, 0.0))
     a = hb * np.cos(ph - pk)

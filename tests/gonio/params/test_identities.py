@@ -1,4 +1,6 @@
-"""Seed 000's identities (section 3 and appendix), checked numerically.
+"""The identities of Barla, Belcour & Pacanowski 2015 (seed 000), checked numerically.
+
+They are in the paper's section 3 and appendix.
 
 Where an identity does not hold in general the test shows where it fails and checks
 the relation that does hold (derived in docs/parametrizations.md).
@@ -120,7 +122,7 @@ def test_phi_k_is_phi_h_plus_phi_d_only_in_special_cases() -> None:
 
 
 def test_orthographic_and_hybrid_agree_when_k_is_tangent() -> None:
-    """At φk − φh = 90° k lies in the tangent plane: ‖k‖ = ‖k̄‖ (seed 000, section 3)."""
+    """At φk − φh = 90° k lies in the tangent plane: ‖k‖ = ‖k̄‖ (Barla et al. 2015, section 3)."""
     c3 = np.array([[0.3, 0.5, np.pi / 2], [0.6, 0.2, np.pi / 2], [0.0, 0.9, np.pi / 2]])
     a, b = params.get("hybrid").inverse_iso(c3)
     np.testing.assert_allclose(params.get("orthographic").forward_iso(a, b), c3, atol=1e-15)

@@ -1,4 +1,7 @@
-"""The ideal chain: formulas with units, seed 004's laws, electrons, shapes and errors."""
+"""The ideal chain: formulas with units, the laws of the lecture notes, electrons, shapes, errors.
+
+The lecture notes are those on lighting and reflectance models (seed 004).
+"""
 
 from __future__ import annotations
 
@@ -46,7 +49,7 @@ LAMP = PointSource(INTENSITY, R_MM)
 OPTICS = DetectorOptics(2e-3, 25.0)
 
 
-# -- seed 004: irradiance laws --------------------------------------------------------------
+# -- the lecture notes (seed 004): irradiance laws ----------------------------------------
 
 
 @given(positives, thetas, phis)
@@ -80,9 +83,10 @@ def test_irradiance_is_zero_at_exact_grazing_and_maximal_at_normal():
 
 @given(st.floats(0.0, np.pi / 2 - 1e-6), st.floats(0.05, 0.95))
 def test_lambertian_radiance_is_independent_of_the_view(theta_i, albedo):
-    """Seed 004: L = f · E, the same toward every wo for a Lambertian sample; and the
-    radiance recovered from the detector's power (Φ / (Ω · projected seen area)) is the
-    same toward every wo, and divided by E gives back the BRDF."""
+    """The lecture notes (seed 004): L = f · E, the same toward every wo for a
+    Lambertian sample; and the radiance recovered from the detector's power
+    (Φ / (Ω · projected seen area)) is the same toward every wo, and divided by E gives
+    back the BRDF."""
     model = brdf.create("lambert", albedo=albedo)
     wi = direction(theta_i, 0.3)
     wo = hemisphere(np.random.default_rng(1), 200)
@@ -104,8 +108,8 @@ def test_lambertian_radiance_is_independent_of_the_view(theta_i, albedo):
 
 @given(sources, optics, thetas, phis, thetas, phis)
 def test_brdf_is_radiance_over_irradiance(source, opt, ti, pi, to, po):
-    """Seed 004's definition, through the chain: radiance from the power (for any model)
-    divided by the irradiance at the centre is f."""
+    """The lecture notes' definition (seed 004), through the chain: radiance from the
+    power (for any model) divided by the irradiance at the centre is f."""
     model = brdf.create("cook_torrance", alpha=0.2, kd=0.1)
     wi, wo = direction(ti, pi), direction(to, po)
     f = model.eval(wi, wo)
@@ -239,7 +243,7 @@ def test_other_invalid_inputs_raise_one_line():
         assert "\n" not in str(err.value)
 
 
-# -- where seed 004 is loose or wrong (recorded in docs/radiometry.md) ------------------------
+# -- where the lecture notes (seed 004) are loose or wrong (see docs/radiometry.md) -------
 
 
 def _disc_emitter_irradiance(h, a, *, emitter_cosine, n=64):
@@ -254,9 +258,9 @@ def _disc_emitter_irradiance(h, a, *, emitter_cosine, n=64):
 
 
 def test_seed_extended_source_formula_misses_the_emitters_cosine():
-    """Seed 004 sums ⌊N_p·L⌋/|x − x_p|² R dx over the source: without the emitter's own
-    foreshortening cos θs it overestimates (17 % for a disc at a distance equal to its
-    radius); with it, the textbook πL a²/(h² + a²) comes out."""
+    """The lecture notes (seed 004) sum ⌊N_p·L⌋/|x − x_p|² R dx over the source: without
+    the emitter's own foreshortening cos θs it overestimates (17 % for a disc at a
+    distance equal to its radius); with it, the textbook πL a²/(h² + a²) comes out."""
     h = a = 10.0
     with_cos = _disc_emitter_irradiance(h, a, emitter_cosine=True)
     assert with_cos == pytest.approx(math.pi * a * a / (h * h + a * a), rel=1e-12)
@@ -266,9 +270,10 @@ def test_seed_extended_source_formula_misses_the_emitters_cosine():
 
 
 def test_seed_lambertian_r_is_albedo_over_pi_and_a_brdf_is_not_a_proportion():
-    """Seed 004 writes R = r(λ) ⌊N·L⌋ I with r "the reflectance": as a BRDF, r = ρ/π (the
-    reflected fraction of the power is ρ = ∫ (ρ/π) cos θo dωo), and a BRDF value is a
-    density in sr⁻¹ that may exceed 1 (a sharp GGX peak) while conserving energy."""
+    """The lecture notes (seed 004) write R = r(λ) ⌊N·L⌋ I with r "the reflectance": as
+    a BRDF, r = ρ/π (the reflected fraction of the power is ρ = ∫ (ρ/π) cos θo dωo), and
+    a BRDF value is a density in sr⁻¹ that may exceed 1 (a sharp GGX peak) while
+    conserving energy."""
     lam = brdf.create("lambert", albedo=0.7)
     assert lam.eval(NORMAL, NORMAL) == pytest.approx(0.7 / math.pi)
     assert directional_albedo(lam, [0.0, 1.0]) == pytest.approx(0.7, rel=1e-12)
