@@ -18,7 +18,7 @@ import pytest
 from dynamixel_sdk import port_handler
 
 import drivers.dynamixel.bus as bus_module
-from drivers.base import CommError, DriverError, MotionTimeout, MotorBus, MotorFault
+from drivers.base import CommError, DriverError, MotionTimeout, MotorFault
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK, item
@@ -330,12 +330,6 @@ def test_a_second_link_does_not_shrink_the_first_ones_timeouts(
         waited = time.monotonic() - started
     assert first.latency_timer_ms == sdk_latency_timer(16, 57_600)
     assert waited >= 2 * first.latency_timer_ms / 1000
-
-
-def test_wait_settled_documents_the_error_it_raises() -> None:
-    doc = MotorBus.wait_settled.__doc__ or ""
-    assert "MotionTimeout" in doc
-    assert "`CommError` on timeout" not in doc
 
 
 # -- 7. every alert end to end, and reboot ---------------------------------------------------
