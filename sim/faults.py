@@ -100,7 +100,3 @@ class FaultInjector:
     def _draw(self, index: int, rule: int) -> float:
         u = self.streams.uniform(np.array([index]), FAULT + rule, 1)
         return float(u[0, 0])
-
-
-def no_faults(streams: Streams) -> FaultInjector:
-    return FaultInjector((), streams)

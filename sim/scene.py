@@ -283,6 +283,12 @@ class Scene(Strict):
         if mismatch is not None:
             field, expected = mismatch
             raise ConfigError(f"scene {self.name!r}: {field}: {expected}")
+        for k, rule in enumerate(self.faults):
+            if rule.axis is not None and rule.axis not in rig.axes:
+                raise ConfigError(
+                    f"scene {self.name!r}: faults.{k}.axis: {rule.axis!r} is not an axis of "
+                    f"rig {rig.spec.name!r} ({', '.join(rig.axes)})"
+                )
 
     def with_effects(self, effects: EffectsSpec | dict[str, Any] | list[str]) -> Scene:
         """The same scene with another set of effects."""

@@ -150,8 +150,6 @@ class SerialLightSwitch(Resource):
         self._switch(False)
 
     def _switch(self, on: bool) -> None:
-        if self._serial is None:
-            raise DeviceClosed(f"light switch {self.port} is not open")
         command = self.config.on if on else self.config.off
         if self._ack is None:  # a device that never answers: sent is switched
             self._exchange(command, ())

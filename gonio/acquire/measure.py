@@ -1,6 +1,6 @@
-"""One target, measured through the `drivers.base` contract: check the pose against the
-axis limits (never command outside them), move, wait until the motion stopped, wait the
-rig's settle dwell, read the positions back, measure.
+"""One target, measured through the `drivers.base` contract: move (a pose outside the
+axis limits is refused by the bus before anything is sent: the contract), wait until the
+motion stopped, wait the rig's settle dwell, read the positions back, measure.
 
 The settle dwell is waited here, on the devices' clock, exactly once per target: the
 planner's predicted time (`gonio.planner.plan`) counts it the same way (travel + settle
@@ -10,11 +10,10 @@ streams and injected faults) through `drivers.base.Simulated`, when it offers it
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from drivers.base import LimitError, Reading
+from drivers.base import Reading
 from gonio.acquire.devices import Devices
 
 #: How long one move may take before `wait_settled` gives up (s).
@@ -33,18 +32,6 @@ class Measured:
     reading: Reading
 
 
-def check_pose(devices: Devices, pose: Mapping[str, float]) -> None:
-    """`LimitError` unless every angle of ``pose`` is finite and inside its axis's range."""
-    limits = devices.bus.limits()
-    for axis, angle in pose.items():
-        lo, hi = limits[axis]
-        if not (math.isfinite(angle) and lo <= angle <= hi):
-            raise LimitError(
-                f"axis {axis!r}: target {angle!r} rad is outside its limits "
-                f"[{lo:.6f}, {hi:.6f}] rad; nothing was sent"
-            )
-
-
 def measure_target(
     devices: Devices,
     index: int,
@@ -56,7 +43,6 @@ def measure_target(
     timeout_s: float = MOVE_TIMEOUT_S,
 ) -> Measured:
     """Move to ``pose`` (rad per axis), settle, measure sample ``index``."""
-    check_pose(devices, pose)
     simulation = devices.simulation
     if simulation is not None:
         simulation.begin_sample(index)

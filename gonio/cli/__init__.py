@@ -18,7 +18,8 @@ from drivers.base import DriverError
 from gonio import __version__
 from gonio.errors import GonioError
 
-#: name → (module with ``add_parser``, the one-line help shown by ``gonio --help``).
+#: name → (module with ``add_parser(sub, help_)``, the command's one-line help: the only
+#: copy, shown by ``gonio --help`` and passed to the module when it builds its parser).
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": (
         "gonio.cli.demo",
@@ -54,7 +55,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name, (module, help_) in COMMANDS.items():
         if command in (name, "*"):
-            importlib.import_module(module).add_parser(sub)
+            importlib.import_module(module).add_parser(sub, help_)
         else:
             sub.add_parser(name, help=help_, add_help=False)
     return parser

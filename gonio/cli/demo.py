@@ -62,10 +62,10 @@ def render() -> str:
     return "\n\n".join([simulated_job(), parametrization_table(), lobe_study.render_summary()])
 
 
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     demo = sub.add_parser(
         "demo",
-        help="the main job on the simulated rig, then the parametrization and lobe tables",
+        help=help_,
         description="The main job on the simulated rig (the quick plan measured on the "
         "matte scene), then the four parametrizations' coordinates and round-trip errors "
         "for named direction pairs, and the lobe comparison of Romanyuk et al. (seed 003).",

@@ -47,8 +47,8 @@ def baud_rate(text: str) -> int:
     return value
 
 
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    motors = sub.add_parser("motors", help="scan, inspect and reboot Dynamixel motors")
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    motors = sub.add_parser("motors", help=help_)
     cmds = motors.add_subparsers(dest="motors_command", metavar="ACTION", required=True)
 
     scan = cmds.add_parser("scan", help="list the motors answering on a port")

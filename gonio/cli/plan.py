@@ -9,10 +9,10 @@ from gonio.config import check_output
 from gonio.planner.plan import load_plan_source, render_summary
 
 
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     plan = sub.add_parser(
         "plan",
-        help="turn a plan file into ordered motor targets, with counts and durations",
+        help=help_,
         description="Place targets uniformly in the plan's parametrization, keep what the "
         "rig can reach, order them for the motors and predict the duration. Nothing moves.",
     )

@@ -22,10 +22,10 @@ from sim.scene import load_scene
 from sim.session import Result, simulate_plan
 
 
-def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     p = sub.add_parser(
         "simulate",
-        help="measure a plan on the simulated rig and compare with the scene's truth",
+        help=help_,
         description="Plan, then measure every target through the simulated motors and "
         "detector, calibrate with the reference standard, and report instrument time, "
         "wall time and the error of the recovered BRDF.",

@@ -20,11 +20,11 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource
+from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource, StageTarget
 from gonio.rig.model import Rig
 from sim.faults import FaultInjector
 from sim.physics import sensor
-from sim.physics.optics import SceneOptics, Target
+from sim.physics.optics import SceneOptics
 from sim.physics.streams import Streams
 from sim.scene import Scene
 
@@ -101,9 +101,8 @@ class SimDetector(Resource):
         self.streams = streams
         self._faults = faults or FaultInjector((), streams)
         self.light = light or SimLightSource()
-        self.exposure_range = rig.spec.detector.exposure_range_s
         self.readout_s = rig.spec.detector.readout_s
-        self._target: Target = "sample"  # what is on the stage
+        self._target: StageTarget = "sample"  # what is on the stage
         self._sample = 0  # whose random streams the next measurement uses
         self._open = False
         self._draws: dict[int, int] = {}  # draws used so far per sample index
@@ -118,7 +117,7 @@ class SimDetector(Resource):
 
     @property
     def exposure_range_s(self) -> tuple[float, float]:
-        return self.exposure_range
+        return self.rig.spec.detector.exposure_range_s
 
     def open(self) -> None:
         self._open = True
@@ -131,7 +130,7 @@ class SimDetector(Resource):
         """The next measurements use sample ``index``'s random streams and faults."""
         self._sample = int(index)
 
-    def show(self, target: Target) -> None:
+    def show(self, target: StageTarget) -> None:
         """Put the sample or the reference standard on the stage."""
         if target not in ("sample", "reference"):
             raise ValueError(f"expected 'sample' or 'reference', got {target!r}")
@@ -166,7 +165,7 @@ class SimDetector(Resource):
         """Expose ``averages`` times for ``exposure_s`` s each; the mean in counts."""
         if not self._open:
             raise DeviceClosed("the simulated detector is not open (use it as a context manager)")
-        lo, hi = self.exposure_range
+        lo, hi = self.exposure_range_s
         if not lo <= exposure_s <= hi:
             raise DetectorError(
                 f"exposure {exposure_s!r} s is outside the detector's range [{lo:g}, {hi:g}] s"

@@ -23,7 +23,6 @@ from drivers.base import Resource, StageTarget
 from drivers.dynamixel.bus import DynamixelBus
 from gonio.acquire.devices import Devices
 from gonio.acquire.measure import measure_target
-from gonio.errors import GonioError
 from gonio.planner.plan import Plan
 from gonio.rig.model import Rig
 from sim.clock import ManualClock, ScaledClock, TimeSource
@@ -63,12 +62,6 @@ class SimulatedInstrument(Resource):
         self.seed = scene.seed if seed is None else int(seed)
         self.clock = clock or ManualClock()
         self.streams = Streams(self.seed)
-        for k, rule in enumerate(scene.faults if faults else ()):
-            if rule.axis is not None and rule.axis not in rig.axes:
-                raise GonioError(
-                    f"scene {scene.name!r}: faults.{k}.axis: {rule.axis!r} is not an axis of "
-                    f"rig {rig.spec.name!r} ({', '.join(rig.axes)})"
-                )
         injector = FaultInjector(scene.faults if faults else (), self.streams)
         self.bus = SimMotorBus(
             rig,
@@ -137,34 +130,33 @@ class SimulatedInstrument(Resource):
             _, expected, _ = planned_poses(plan, self.scene, self.streams)
             self.detector.prepare(expected[start:stop])
         axes, settle = self.rig.axes, self.rig.spec.settle_s
-        rows = []
-        for i in range(start, stop):
-            m = measure_target(
+        rows = [
+            measure_target(
                 self._devices, i, dict(zip(axes, plan.angles[i].tolist(), strict=True)),
                 float(plan.exposure_s[i]), int(plan.averages[i]), settle_s=settle,
-            )  # fmt: skip
-            assert m.true is not None
-            rows.append((m, self.clock.now()))
+            )
+            for i in range(start, stop)
+        ]  # fmt: skip
         n = len(axes)
-        true = np.array([[m.true[a] for a in axes] for m, _ in rows if m.true], dtype=np.float64)
-        true = true.reshape(-1, n)
+        true = np.array([[m.true[a] for a in axes] for m in rows if m.true], dtype=np.float64)
+        true = true.reshape(-1, n)  # every row has its true pose: this backend is simulated
         wi, wo = self.rig.forward(true)
         return SimRun(
             index=np.arange(start, stop, dtype=np.int64),
             commanded=plan.angles[start:stop],
             read_back=np.array(
-                [[m.read_back[a] for a in axes] for m, _ in rows], dtype=np.float64
+                [[m.read_back[a] for a in axes] for m in rows], dtype=np.float64
             ).reshape(-1, n),
             true=true,
             wi=wi,
             wo=wo,
             exposure_s=plan.exposure_s[start:stop],
             averages=plan.averages[start:stop],
-            settled_s=np.array([m.settled_s for m, _ in rows], dtype=np.float64),
-            end_s=np.array([end for _, end in rows], dtype=np.float64),
-            value=np.array([m.reading.value for m, _ in rows], dtype=np.float64),
-            std=np.array([m.reading.std for m, _ in rows], dtype=np.float64),
-            saturated=np.array([m.reading.saturated for m, _ in rows], dtype=np.bool_),
+            settled_s=np.array([m.settled_s for m in rows], dtype=np.float64),
+            end_s=np.array([m.reading.ended_s for m in rows], dtype=np.float64),
+            value=np.array([m.reading.value for m in rows], dtype=np.float64),
+            std=np.array([m.reading.std for m in rows], dtype=np.float64),
+            saturated=np.array([m.reading.saturated for m in rows], dtype=np.bool_),
         )
 
 

@@ -26,16 +26,14 @@ The sensor (`sim.physics.sensor`) turns the expected electrons into counts.
 from __future__ import annotations
 
 import math
-from typing import Literal
 
 import numpy as np
 
+from drivers.base import StageTarget
 from gonio import brdf, radiometry
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 from sim.scene import LUMINANCE, Scene
-
-Target = Literal["sample", "reference"]
 
 
 def band_eval(model: brdf.BRDF, band: str) -> BrdfEval:
@@ -68,14 +66,14 @@ class SceneOptics:
         self.optics = radiometry.DetectorOptics(rig.spec.detector.aperture_sr, c.detector_fov_mm)
         self.sample_diameter_mm = c.sample_diameter_mm
         albedo = rig.spec.reference.albedo
-        self.models: dict[Target, BrdfEval] = {
+        self.models: dict[StageTarget, BrdfEval] = {
             "sample": band_eval(scene.material.model(), band),
             "reference": band_eval(brdf.create("lambert", albedo=albedo), band),
         }
         self.effects = scene.effects
 
     def geometric_power(
-        self, wi: FloatArray, wo: FloatArray, target: Target = "sample"
+        self, wi: FloatArray, wo: FloatArray, target: StageTarget = "sample"
     ) -> FloatArray:
         """Radiant power (W, shape (N,)) from the source at its nominal strength, before
         drift and stray light (`gonio.radiometry.detector_power` with the scene's
