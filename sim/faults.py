@@ -15,7 +15,10 @@ streams, so a resumed run sees exactly the faults an uninterrupted one does):
   and ``wait_settled`` raises `MotionTimeout`;
 - ``detector_error``: ``measure`` raises `DetectorError` (nothing is exposed);
 - ``saturated``: ``measure`` returns a reading at the sensor's full scale, flagged
-  saturated.
+  saturated;
+- ``overheat``: from the move into the sample on, ``axis`` reports ``temperature_c``
+  in its health for ``for_s`` seconds of the run's clock, then cools back (a health
+  check sees it; nothing else changes).
 
 A rule fires on the first attempt at a sample only (the first move into it, or its first
 measurement): a retried sample succeeds, as after a transient fault on hardware.
@@ -31,9 +34,11 @@ from pydantic import Field, field_validator, model_validator
 from gonio.config import Strict, field_error
 from sim.physics.streams import FAULT, Streams
 
-FaultKind = Literal["motor_fault", "comm_error", "motion_timeout", "detector_error", "saturated"]
-#: The kinds the motor bus raises; the others belong to the detector.
-MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout"})
+FaultKind = Literal[
+    "motor_fault", "comm_error", "motion_timeout", "detector_error", "saturated", "overheat"
+]
+#: The kinds the motor bus raises or shows; the others belong to the detector.
+MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout", "overheat"})
 #: Hardware Error Status flags a motor_fault may name (`drivers.dynamixel.control_table`).
 MOTOR_FLAGS = frozenset(
     {"input_voltage", "overheating", "motor_encoder", "electrical_shock", "overload"}
@@ -48,6 +53,8 @@ class FaultRule(Strict):
     rate: float | None = Field(None, ge=0, le=1)  # probability per sample
     axis: str | None = None  # motor_fault: the axis that faults (default: the first)
     flags: tuple[str, ...] = ("overload",)  # motor_fault: its Hardware Error Status
+    temperature_c: float = Field(80.0, gt=-50, lt=200)  # overheat: the temperature shown
+    for_s: float = Field(60.0, gt=0)  # overheat: how long (s of the run's clock)
 
     @field_validator("at", mode="before")
     @classmethod
@@ -65,8 +72,10 @@ class FaultRule(Strict):
             raise field_error(
                 "flags", f"expected some of {', '.join(sorted(MOTOR_FLAGS))}, got {bad or '[]'}"
             )
-        if self.kind != "motor_fault" and self.axis is not None:
-            raise field_error("axis", f"only a motor_fault names an axis, not a {self.kind}")
+        if self.kind not in ("motor_fault", "overheat") and self.axis is not None:
+            raise field_error(
+                "axis", f"only a motor_fault or an overheat names an axis, not a {self.kind}"
+            )
         return self
 
 

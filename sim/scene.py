@@ -296,11 +296,12 @@ class Scene(Strict):
         return self.model_copy(update={"effects": spec})
 
 
-def load_scene(path: str | Path, rig: Rig | None = None) -> Scene:
+def load_scene(path: str | Path, rig: Rig | None = None, *, raw: bytes | None = None) -> Scene:
     """Read and validate a scene file (`gonio.config.ConfigError` on any mistake), for
-    ``rig`` when given (its source power must then be of the rig's light kind)."""
+    ``rig`` when given (its source power must then be of the rig's light kind);
+    ``raw``: the file's bytes, already read (what is validated is what was hashed)."""
     context = None if rig is None else {"source_kind": rig.source_kind, "rig": _rig_label(rig)}
-    return load(path, Scene, context)
+    return load(path, Scene, context, raw=raw)
 
 
 def _rig_label(rig: Rig) -> str:

@@ -33,6 +33,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.simulate",
         "measure a plan on the simulated rig and compare with the scene's truth",
     ),
+    "acquire": (
+        "gonio.cli.acquire",
+        "measure a plan on the rig (simulated or hardware), journaling every sample",
+    ),
+    "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "motors": ("gonio.cli.motors", "look at a Dynamixel bus: scan, status, reboot"),
 }
 

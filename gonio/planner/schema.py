@@ -85,6 +85,59 @@ class ExposureSpec(Strict):
     adapt: AdaptSpec | None = None
 
 
+class CalibrationSpec(Strict):
+    """When the reference standard is read: always at the start and at the end of a
+    run, and again after ``every_samples`` targets or ``every_minutes`` of run time
+    (whichever comes first; none: never in between). ``dark``: a dark reading (light
+    off) with each reference reading. ``averages``: exposures per calibration reading
+    (at least 2: their spread is what the uncertainty of every sample is scaled by)."""
+
+    every_samples: int | None = Field(None, ge=1)
+    every_minutes: float | None = Field(None, gt=0)
+    dark: bool = True
+    averages: int = Field(16, ge=2, le=1000)
+
+
+class OnFaultSpec(Strict):
+    """What a target does when a transient fault strikes (`CommError`, `DetectorError`):
+    try again up to ``retries`` times, then ``skip`` it (the reason journaled) or
+    ``abort`` the run (resumable). A motor fault or a motion timeout always stops every
+    axis and ends the run resumable."""
+
+    retries: int = Field(2, ge=0, le=100)
+    then: Literal["skip", "abort"] = "skip"
+
+
+class SaturationSpec(Strict):
+    """A saturated reading is measured again at half the exposure (never below the
+    detector's shortest), up to ``attempts`` more times, when ``remeasure``; a reading
+    still saturated is kept and flagged."""
+
+    remeasure: bool = True
+    attempts: int = Field(6, ge=1, le=60)
+
+
+class HealthSpec(Strict):
+    """Motor health (temperature, voltage: limits in the rig file's ``health``) checked
+    every ``every_samples`` targets or ``every_minutes``; beyond a limit the run pauses
+    with the axes holding, checks again every ``poll_s`` and resumes once the condition
+    clears, or ends resumable after ``pause_timeout_minutes``."""
+
+    every_samples: int | None = Field(100, ge=1)
+    every_minutes: float | None = Field(5.0, gt=0)
+    poll_s: float = Field(10.0, gt=0)
+    pause_timeout_minutes: float = Field(30.0, gt=0)
+
+
+class AcquisitionSpec(Strict):
+    """How `gonio acquire` runs the plan (docs/acquire.md)."""
+
+    calibration: CalibrationSpec = Field(default_factory=CalibrationSpec)
+    on_fault: OnFaultSpec = Field(default_factory=OnFaultSpec)
+    saturation: SaturationSpec = Field(default_factory=SaturationSpec)
+    health: HealthSpec = Field(default_factory=HealthSpec)
+
+
 class PlanSpec(Strict):
     name: str
     rig: str | None = None  # a rig file, relative to the plan file
@@ -99,6 +152,7 @@ class PlanSpec(Strict):
     # A safety cap on the wall time of improving the order; when it binds the summary
     # says so (the order then depends on the machine).
     time_budget_s: float = Field(120.0, gt=0)
+    acquisition: AcquisitionSpec = Field(default_factory=AcquisitionSpec)
 
     @model_validator(mode="after")
     def _known_names(self) -> PlanSpec:

@@ -72,9 +72,8 @@ def _json(value: Any) -> str:
     return json.dumps(value, ensure_ascii=False, allow_nan=False)
 
 
-def write_plan(plan: Plan, path: str | Path) -> None:
-    """Write ``plan`` to ``path`` in the stored format (module docstring)."""
-    path = Path(path)
+def plan_bytes(plan: Plan) -> bytes:
+    """``plan`` in the stored format (module docstring), as the file's bytes."""
     names = columns(plan.coordinate_names, plan.rig.axes)
     body = io.StringIO()
     out = csv.writer(body, lineterminator="\n")
@@ -106,7 +105,13 @@ def write_plan(plan: Plan, path: str | Path) -> None:
         "content": plan.content_hash(),
         "file_sha256": sha256(before + targets),
     }
-    data = before + f"# hashes: {_json(hashes)}\n".encode() + targets
+    return before + f"# hashes: {_json(hashes)}\n".encode() + targets
+
+
+def write_plan(plan: Plan, path: str | Path) -> None:
+    """Write ``plan`` to ``path`` in the stored format (module docstring)."""
+    path = Path(path)
+    data = plan_bytes(plan)
     partial = path.with_name(f".{path.name}.partial")
     try:
         partial.write_bytes(data)
@@ -276,6 +281,13 @@ def read_plan(path: str | Path, rig: Rig | str | Path | None = None) -> Plan:
         raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read the plan: {exc.strerror or exc}") from None
+    return parse_plan(raw, path, rig)
+
+
+def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None) -> Plan:
+    """The plan stored in ``raw`` (the bytes of a stored plan; ``path`` names them in
+    messages): `read_plan` without reading a file."""
+    path = Path(path)
     try:
         header, line, offset, hashed = _header(path, raw)
         body = raw[offset:].decode("utf-8")

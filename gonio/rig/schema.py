@@ -88,8 +88,33 @@ class DetectorChainSpec(KinematicChainSpec, DetectorSpec):
 
 
 class BusSpec(Strict):
+    """The motors: ``simulated`` (virtual motors: the simulated backend) or
+    ``dynamixel`` (X-series servos on ``port`` at ``baud``: the hardware backend;
+    ``gonio acquire --rehearse`` puts the byte-level emulator in their place)."""
+
+    kind: Literal["simulated", "dynamixel"] = "simulated"
     port: str = "/dev/ttyUSB0"
     baud: int = 57_600
+
+
+class HealthLimitsSpec(Strict):
+    """The motors' safe operating range, checked during a run (`gonio acquire` pauses
+    beyond it): the highest internal temperature (°C) and the input voltage range (V).
+    The defaults are inside the X-series limits (72 °C shutdown, 9.5–16 V at 12 V)."""
+
+    max_temperature_c: float = Field(65.0, gt=0, le=100)
+    min_voltage_v: float = Field(10.0, gt=0)
+    max_voltage_v: float = Field(14.8, gt=0)
+
+    @model_validator(mode="after")
+    def _range(self) -> HealthLimitsSpec:
+        if not self.min_voltage_v < self.max_voltage_v:
+            raise field_error(
+                "min_voltage_v",
+                f"expected less than max_voltage_v ({self.max_voltage_v}), "
+                f"got {self.min_voltage_v}",
+            )
+        return self
 
 
 class RigSpec(Strict):
@@ -106,6 +131,7 @@ class RigSpec(Strict):
     reference: ReferenceSpec = ReferenceSpec()
     settle_s: float = Field(0.2, ge=0)
     bus: BusSpec = BusSpec()
+    health: HealthLimitsSpec = HealthLimitsSpec()
 
     @model_validator(mode="after")
     def _known_axes(self) -> RigSpec:

@@ -130,6 +130,14 @@ class SimDetector(Resource):
         """The next measurements use sample ``index``'s random streams and faults."""
         self._sample = int(index)
 
+    def draws_of(self, sample: int) -> int:
+        """Exposures read so far for ``sample``."""
+        return self._draws.get(sample, 0)
+
+    def set_draws(self, sample: int, draws: int) -> None:
+        """Continue ``sample`` after ``draws`` exposures (a resumed run)."""
+        self._draws[sample] = draws
+
     def show(self, target: StageTarget) -> None:
         """Put the sample or the reference standard on the stage."""
         if target not in ("sample", "reference"):

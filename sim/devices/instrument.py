@@ -36,14 +36,6 @@ from sim.scene import Scene
 from sim.simulate import planned_poses
 
 
-@dataclass(frozen=True)
-class InstrumentState:
-    """Where a simulated run stands between targets: virtual time and the motors."""
-
-    time_s: float
-    motors: MotorState
-
-
 class SimulatedInstrument(Resource):
     """`SimMotorBus` + `SimDetector` + `SimLightSource` on one `ManualClock`; the
     scene's ``faults`` are injected (``faults=False`` ignores them)."""
@@ -103,18 +95,42 @@ class SimulatedInstrument(Resource):
     def true_positions(self) -> dict[str, float]:
         return self.bus.true_positions()
 
-    def snapshot(self) -> InstrumentState:
-        """The state to `restore` a resumed run from (between targets)."""
-        return InstrumentState(self.clock.now(), self.bus.snapshot())
+    def snapshot(self) -> dict[str, Any]:
+        """The state a resumed run restores (between targets, at rest), as JSON values:
+        the virtual time, the motors (`MotorState`) and how many moves and readings the
+        present sample has used (so a retried or resumed sample continues its streams
+        and its injected faults do not fire twice)."""
+        motors = self.bus.snapshot()
+        sample = self.bus.present_sample
+        return {
+            "time_s": self.clock.now(),
+            "encoder": list(motors.encoder),
+            "direction": list(motors.direction),
+            "repeatability": list(motors.repeatability),
+            "sample": sample,
+            "moves": self.bus.moves_of(sample),
+            "draws": self.detector.draws_of(sample),
+        }
 
     def restore(self, state: Any) -> None:
-        """Continue from ``state``: the clock (which must not be past it) and the motors."""
-        if not isinstance(state, InstrumentState):
-            raise TypeError(f"expected an InstrumentState, got {type(state).__name__}")
-        if self.clock.now() > state.time_s:
-            raise ValueError(f"the clock is already past {state.time_s} s")
-        self.clock.advance_to(state.time_s)
-        self.bus.restore(state.motors)
+        """Continue from a `snapshot`: the clock (which must not be past it), the
+        motors and the present sample's counters."""
+        try:
+            time_s = float(state["time_s"])
+            motors = MotorState(
+                tuple(map(float, state["encoder"])),
+                tuple(map(float, state["direction"])),
+                tuple(map(float, state["repeatability"])),
+            )
+            sample, moves, draws = int(state["sample"]), int(state["moves"]), int(state["draws"])
+        except (TypeError, KeyError, ValueError) as exc:
+            raise ValueError(f"not a snapshot of a simulated instrument: {exc}") from None
+        if self.clock.now() > time_s:
+            raise ValueError(f"the clock is already past {time_s} s")
+        self.clock.advance_to(time_s)
+        self.bus.restore(motors)
+        self.bus.set_moves(sample, moves)
+        self.detector.set_draws(sample, draws)
 
     # -- a whole plan ------------------------------------------------------------------
     def run(

@@ -150,6 +150,7 @@ class SimMotorBus(Resource):
         self._sample = 0  # the sample the next move belongs to (streams, faults)
         self._pending: FaultRule | None = None  # a fault that strikes during this move
         self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
+        self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -215,6 +216,9 @@ class SimMotorBus(Resource):
         k = self._moves.get(self._sample, 0)
         self._moves[self._sample] = k + 1
         self._pending = self._faults.fired(self._sample, k, MOTOR_KINDS) if self._faults else None
+        if self._pending is not None and self._pending.kind == "overheat":
+            rule, self._pending = self._pending, None
+            self._hot = (rule.axis or self._names[0], rule.temperature_c, self._t0 + rule.for_s)
         if self._model is not None:
             axes = len(goal)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -299,6 +303,19 @@ class SimMotorBus(Resource):
             tuple(self._repeat.tolist()),
         )
 
+    @property
+    def present_sample(self) -> int:
+        """The sample the moves belong to (`begin_sample`)."""
+        return self._sample
+
+    def moves_of(self, sample: int) -> int:
+        """Moves made so far for ``sample``."""
+        return self._moves.get(sample, 0)
+
+    def set_moves(self, sample: int, moves: int) -> None:
+        """Continue ``sample`` after ``moves`` moves (a resumed run)."""
+        self._moves[sample] = moves
+
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
@@ -328,8 +345,13 @@ class SimMotorBus(Resource):
 
     def health(self) -> dict[str, Health]:
         self._check_open()
+        hot = self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
         return {
-            n: Health(temperature_c=35.0, voltage_v=12.0, error_flags=self._latched.get(n, ()))
+            n: Health(
+                temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
+                voltage_v=12.0,
+                error_flags=self._latched.get(n, ()),
+            )
             for n in self._names
         }
 

@@ -1,0 +1,162 @@
+"""The backends a run can drive, built from the rig file (composition code: the only
+place in `gonio.acquire` that imports the simulator, lazily).
+
+- ``simulated``: the rig's ``bus.kind`` is ``simulated``: virtual motors, detector and
+  light on a virtual clock (`sim.devices.instrument.SimulatedInstrument`); the scene
+  supplies material, noise and faults. Its journal commits without fsync and a resumed
+  run restores the virtual instrument exactly where the journal left it.
+- ``hardware``: ``bus.kind: dynamixel``: the real `DynamixelBus`, the rig's serial
+  detector (or, with ``detector.interface: simulated``, the simulated detector reading
+  the real bus's positions) and light switch, on the system clock; every sample is
+  committed durably; the reference standard is put in view by the operator.
+- ``rehearsal`` (``--rehearse``): the hardware path without hardware: the byte-level
+  Dynamixel emulator on a pseudo-terminal in place of the motors (`sim.rehearsal`).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from contextlib import AbstractContextManager, ExitStack
+from dataclasses import dataclass, field
+from typing import IO, Any, Literal
+
+from drivers.base import StageTarget, SystemClock
+from gonio.acquire.devices import Devices
+from gonio.acquire.engine import RunTime, Stage, wall_offset
+from gonio.errors import GonioError
+from gonio.rig.model import Rig
+
+BackendKind = Literal["simulated", "hardware", "rehearsal"]
+
+
+@dataclass
+class Backend:
+    """The devices of a run and how the engine treats them."""
+
+    kind: BackendKind
+    devices: Devices
+    stage: Stage
+    time: RunTime
+    durable: bool  # commit every sample with fsync
+    calibrate_on_resume: bool
+    stack: ExitStack = field(default_factory=ExitStack)  # what must outlive the run
+
+    def close(self) -> None:
+        self.stack.close()
+
+
+class OperatorStage:
+    """The operator swaps the sample and the reference standard when asked (a prompt on
+    the terminal); without a terminal the run cannot read its reference."""
+
+    def __init__(self, ask: Callable[[str], str] | None = None, out: IO[str] | None = None):
+        self._ask = ask
+        self._out = out or sys.stderr
+        self._showing: StageTarget = "sample"
+
+    def show(self, target: StageTarget) -> None:
+        if target == self._showing:
+            return
+        what = "the reference standard" if target == "reference" else "the sample"
+        if self._ask is None:
+            if not sys.stdin.isatty():
+                raise GonioError(
+                    f"the run needs {what} put on the stage and no one can be asked (no "
+                    "terminal): run gonio acquire from a terminal"
+                )
+            self._ask = input
+        print(f"put {what} on the stage, then press Enter", file=self._out, flush=True)
+        self._ask("")
+        self._showing = target
+
+
+def kind_of(rig: Rig, rehearse: bool) -> BackendKind:
+    if rehearse:
+        return "rehearsal"
+    return "simulated" if rig.spec.bus.kind == "simulated" else "hardware"
+
+
+def needs_scene(rig: Rig, kind: BackendKind) -> bool:
+    """A scene is needed wherever the detector is simulated."""
+    return kind == "simulated" or rig.spec.detector.interface.kind == "simulated"
+
+
+def simulated(rig: Rig, scene: Any, seed: int | None) -> Backend:
+    from sim.devices.instrument import SimulatedInstrument
+
+    if rig.spec.detector.interface.kind != "simulated":
+        raise GonioError(
+            f"{rig.source}: detector.interface: a simulated rig (bus.kind: simulated) needs "
+            "a simulated detector; use --rehearse to try a serial detector without hardware"
+        )
+    instrument = SimulatedInstrument(scene, rig, seed=seed)
+    return Backend(
+        "simulated", instrument.devices(), instrument, RunTime(instrument.clock.now),
+        durable=False, calibrate_on_resume=False,
+    )  # fmt: skip
+
+
+def hardware(
+    rig: Rig, scene: Any, seed: int | None, run_started_unix: float, stage: Stage | None = None
+) -> Backend:
+    from gonio.acquire.hardware import hardware_devices
+
+    clock = SystemClock()
+    if rig.spec.detector.interface.kind == "simulated":
+        devices = _with_simulated_detector(rig, scene, seed, clock)
+    else:
+        devices = hardware_devices(rig, clock=clock)
+    time = RunTime(clock.now, wall_offset(clock.now(), run_started_unix))
+    stage = stage or OperatorStage()
+    return Backend("hardware", devices, stage, time, durable=True, calibrate_on_resume=True)
+
+
+def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any) -> Devices:
+    from drivers.dynamixel.bus import DynamixelBus
+    from sim.devices.detector import SimDetector, SimLightSource
+    from sim.physics.streams import Streams
+
+    bus = DynamixelBus(rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud)
+    light = SimLightSource()
+    detector = SimDetector(
+        scene, rig, bus.positions, clock=clock,
+        streams=Streams(scene.seed if seed is None else seed), light=light,
+    )  # fmt: skip
+    return Devices(bus, detector, clock, light, None)
+
+
+def rehearsal(
+    rig: Rig, scene: Any, seed: int | None, run_started_unix: float, speedup: float
+) -> Backend:
+    from sim.rehearsal import rehearsal_devices
+
+    stack = ExitStack()
+    devices, clock = stack.enter_context(rehearsal_devices(rig, scene, seed, speedup))
+    time = RunTime(clock.now, wall_offset(clock.now(), run_started_unix))
+    stage = devices.simulation
+    assert stage is not None
+    return Backend(
+        "rehearsal", devices, stage, time, durable=True, calibrate_on_resume=True, stack=stack
+    )
+
+
+def build(
+    kind: BackendKind,
+    rig: Rig,
+    scene: Any,
+    seed: int | None,
+    run_started_unix: float,
+    *,
+    speedup: float = 50.0,
+) -> Backend:
+    if kind == "simulated":
+        return simulated(rig, scene, seed)
+    if kind == "rehearsal":
+        return rehearsal(rig, scene, seed, run_started_unix, speedup)
+    return hardware(rig, scene, seed, run_started_unix)
+
+
+def opened(backend: Backend) -> AbstractContextManager[Devices]:
+    """The backend's devices as a context manager (dry runs: open, look, close)."""
+    return backend.devices

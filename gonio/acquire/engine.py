@@ -1,0 +1,540 @@
+"""The acquisition engine: one loop for every backend, written against the
+`drivers.base` contract only (docs/acquire.md).
+
+For each target of the stored, ordered plan still to measure: check its pose against
+the bus's limits (a pose outside them is skipped, never commanded) → move → wait until
+settled → the rig's settle dwell → read the positions back → measure → if saturated,
+measure again at half the exposure (plan option) → journal the raw sample. Between
+targets, when due: a health check (pause while a motor is too hot or its supply out of
+range) and a calibration (the reference standard, and a dark reading). The reference is
+read at the start and at the end of every run.
+
+Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
+is retried, then the target skipped (journaled) or the run aborted; a `MotorFault` or
+`MotionTimeout` stops every axis, is journaled with the motor's flags, and ends the run
+resumable. A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at
+once (`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
+resumable: `gonio acquire --resume` measures exactly the targets still missing.
+
+Times: each journaled time is *run time* (`RunTime`): the simulated backend's virtual
+clock (restored when a run resumes, so a resumed simulation is the uninterrupted one),
+or on hardware the seconds since the run's first start by the wall clock.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from typing import Any, Literal, Protocol
+
+import numpy as np
+
+from drivers.base import (
+    CommError,
+    DetectorError,
+    DriverError,
+    LimitError,
+    MotionTimeout,
+    MotorFault,
+    Reading,
+    StageTarget,
+)
+from gonio.acquire.devices import Devices
+from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target
+from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.schedule import Every
+from gonio.acquire.signals import RunInterrupted, StopRequests
+from gonio.errors import GonioError
+from gonio.planner.plan import Plan
+from gonio.planner.schema import AcquisitionSpec
+from gonio.store.journal import Journal, JournalError, dumps
+from gonio.store.read import Run
+
+#: Sample indices of calibration readings start here, far above any plan's indices
+#: (reading ``k`` of the reference uses CALIBRATION_INDEX + 2k, its dark + 2k + 1).
+CALIBRATION_INDEX = 1 << 40
+
+Outcome = Literal["completed", "interrupted", "fault", "aborted", "paused", "journal"]
+
+
+def utc_now() -> str:
+    return datetime.now(UTC).isoformat(timespec="microseconds")
+
+
+@dataclass(frozen=True)
+class RunTime:
+    """Run time (s) from the devices' clock: ``clock() + offset``."""
+
+    clock: Callable[[], float]
+    offset: float = 0.0
+
+    def now(self) -> float:
+        return self.clock() + self.offset
+
+
+class Stage(Protocol):
+    """Puts the sample or the reference standard in view (a simulated stage, or an
+    operator asked to swap them)."""
+
+    def show(self, target: StageTarget) -> None: ...
+
+
+@dataclass
+class Report:
+    """How a session of a run ended."""
+
+    outcome: Outcome
+    measured: int  # targets measured in this session
+    skipped: int  # targets skipped in this session
+    message: str = ""
+    t_start_s: float = 0.0
+    t_end_s: float = 0.0
+    calibrations: int = 0
+
+
+class _Stop(Exception):
+    """Ends the session with ``outcome`` (raised inside the loop)."""
+
+    def __init__(self, outcome: Outcome, message: str) -> None:
+        super().__init__(message)
+        self.outcome = outcome
+
+
+@dataclass
+class Engine:
+    """Runs ``plan`` on ``devices`` into ``journal`` (see the module docstring).
+
+    ``history``: the run as journaled so far (None for a new run). ``stage``: how the
+    reference standard gets in view. ``calibrate_on_resume``: read the reference when a
+    run resumes (hardware: conditions may have changed; a restored simulation: no).
+    """
+
+    plan: Plan
+    devices: Devices
+    journal: Journal
+    stage: Stage
+    time: RunTime
+    history: Run | None = None
+    calibrate_on_resume: bool = True
+    retry_skipped: bool = False
+    progress: Progress = field(default_factory=Quiet)
+    stops: StopRequests = field(default_factory=StopRequests)
+    move_timeout_s: float = MOVE_TIMEOUT_S
+
+    def __post_init__(self) -> None:
+        spec: AcquisitionSpec = self.plan.spec.acquisition
+        self.spec = spec
+        self.rig = self.plan.rig
+        self.axes = self.rig.axes
+        cal, health = spec.calibration, spec.health
+        self.calibration_due = Every(cal.every_samples, cal.every_minutes)
+        self.health_due = Every(health.every_samples, health.every_minutes)
+        self.count = 0  # targets measured in the run so far (all sessions)
+        self.calibrations = 0  # calibrations journaled so far (all sessions)
+        self.reference_exposure_s: float | None = None
+        self._busy_until = 0.0
+        self._current: int | None = None  # the target in flight
+        self._temperatures: str | None = None  # read by the last health check (JSON)
+        self._session = Report("completed", 0, 0)
+        self.stops.remaining_s = lambda: self._busy_until - self.time.now()
+        self._history_state()
+
+    # -- resuming ------------------------------------------------------------------------
+    def _history_state(self) -> None:
+        h = self.history
+        if h is None:
+            return
+        self.count = len(h)
+        calibrations = h.of_kind("calibration")
+        self.calibrations = len(calibrations)
+        if calibrations:
+            last = calibrations[-1]
+            self.calibration_due.done(int(last.data["count"]), last.t_s)
+            self.reference_exposure_s = float(last.data["reference"]["exposure_s"])
+        checks = h.of_kind("health")
+        if checks:
+            self.health_due.done(int(checks[-1].data["count"]), checks[-1].t_s)
+
+    def _latest_snapshot(self) -> Any:
+        """The simulated backend's state when the journal's last entry was written."""
+        h = self.history
+        if h is None:
+            return None
+        best: tuple[float, int, Any] | None = None
+        states = h.samples["sim_state"]
+        if len(states) and states[-1] is not None:
+            k = int(np.argmax(h.samples["ended_s"]))
+            best = (float(h.samples["ended_s"][k]), 0, states[k])
+        for e in h.events:
+            if "sim_state" in e.data and (best is None or (e.t_s, 1) >= best[:2]):
+                best = (e.t_s, 1, e.data["sim_state"])
+        return None if best is None else best[2]
+
+    def todo(self) -> np.ndarray:
+        """The plan indices this session measures, in the plan's order."""
+        if self.history is None:
+            return np.arange(len(self.plan))
+        return self.history.missing(include_skipped=self.retry_skipped)
+
+    # -- the run -------------------------------------------------------------------------
+    def run(self) -> Report:
+        """Open the devices, measure what is left, close them; the session's `Report`.
+        A signal that ends the session early raises `RunInterrupted` after the pause
+        was journaled and the devices closed."""
+        todo = self.todo()
+        report = self._session = Report("completed", 0, 0, t_start_s=self.time.now())
+        interrupted: RunInterrupted | None = None
+        with self.stops, self.devices:
+            try:
+                self._start(resuming=self.history is not None)
+                self.progress.start(self.plan, todo)
+                for done, i in enumerate(todo.tolist()):
+                    self._between_targets()
+                    self._target(i)
+                    self.progress.advance(done + 1)
+                    if self.stops.requested:
+                        raise RunInterrupted(self.stops.signum or 2, abandoned=False)
+                self._calibrate("end")
+            except RunInterrupted as exc:
+                interrupted = exc
+                report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
+                self._hold_all()
+                self._event("pause", {"reason": "signal", "signal": exc.args[0], **self._sim()})
+            except (MotorFault, MotionTimeout) as exc:
+                report.outcome, report.message = "fault", str(exc)
+                self._hold_all()
+                self._event("fault", self._fault_data(exc), target=self._current)
+            except _Stop as exc:
+                report.outcome, report.message = exc.outcome, str(exc)
+                self._hold_all()
+            except JournalError as exc:
+                report.outcome, report.message = "journal", str(exc)
+                self._hold_all()
+            except GonioError as exc:
+                report.outcome, report.message = "aborted", str(exc)
+                self._hold_all()
+            finally:
+                self.progress.close()
+        report.t_end_s = self.time.now()
+        report.calibrations = self.calibrations
+        self._end_session(report.outcome)
+        if interrupted is not None:
+            raise interrupted
+        return report
+
+    def _start(self, *, resuming: bool) -> None:
+        if resuming and not self.calibrate_on_resume:
+            simulation = self.devices.simulation
+            state = self._latest_snapshot()
+            if simulation is not None and state is not None:
+                simulation.restore(state)
+        self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
+        self._check_health(force=True)
+        if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
+            self._calibrate("start" if self.calibrations == 0 else "resume")
+
+    def _between_targets(self) -> None:
+        t = self.time.now()
+        if self.health_due.due(self.count, t):
+            self._check_health()
+        if self.calibration_due.due(self.count, self.time.now()):
+            self._calibrate("scheduled")
+
+    def _end_session(self, outcome: Outcome) -> None:
+        # A full disk: the session's end is all that is not recorded.
+        with contextlib.suppress(JournalError):
+            self.journal.end_session(utc_now(), outcome)
+
+    def _hold_all(self) -> None:
+        """Tell every axis to hold (the contract already did after a motion fault; again
+        here so no path out of the loop leaves an axis moving)."""
+        with contextlib.suppress(DriverError):
+            self.devices.bus.stop()
+
+    # -- journal helpers -----------------------------------------------------------------
+    def _event(self, kind: str, data: Mapping[str, Any], target: int | None = None) -> None:
+        self.journal.event(kind, self.time.now(), utc_now(), data, target)
+
+    def _sim(self) -> dict[str, Any]:
+        """``{"sim_state": …}`` on a simulated backend (at rest), else nothing."""
+        simulation = self.devices.simulation
+        state = None if simulation is None else simulation.snapshot()
+        return {} if state is None else {"sim_state": state}
+
+    @staticmethod
+    def _fault_data(exc: DriverError) -> dict[str, Any]:
+        data: dict[str, Any] = {"error": type(exc).__name__, "message": str(exc)}
+        if isinstance(exc, MotorFault):
+            data.update(motor_id=exc.motor_id, axis=exc.axis, flags=list(exc.flags))
+        if isinstance(exc, CommError):
+            data.update(port=exc.port, motor_id=exc.motor_id)
+        return data
+
+    # -- one target ----------------------------------------------------------------------
+    def _within_limits(self, pose: np.ndarray) -> str | None:
+        """Why ``pose`` must not be commanded (outside an axis's limits), or None."""
+        limits = self.devices.bus.limits()
+        for name, angle in zip(self.axes, pose.tolist(), strict=True):
+            lo, hi = limits[name]
+            if not (math.isfinite(angle) and lo <= angle <= hi):
+                return f"axis {name!r}: {angle!r} rad is outside its limits [{lo:.6f}, {hi:.6f}]"
+        return None
+
+    def _target(self, i: int) -> None:
+        self._current = i
+        plan = self.plan
+        pose = plan.angles[i]
+        refused = self._within_limits(pose)
+        if refused is not None:
+            self._skip(i, refused)
+            return
+        exposure, averages = float(plan.exposure_s[i]), int(plan.averages[i])
+        on_fault = self.spec.on_fault
+        goal = dict(zip(self.axes, pose.tolist(), strict=True))
+        for attempt in range(on_fault.retries + 1):
+            self._busy_until = self.time.now() + float(plan.travel_s[i]) + exposure * averages
+            try:
+                measured = measure_target(
+                    self.devices, i, goal, exposure, averages,
+                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                )  # fmt: skip
+                break
+            except LimitError as exc:
+                self._skip(i, str(exc))
+                return
+            except (CommError, DetectorError) as exc:
+                last = attempt == on_fault.retries
+                data = {**self._fault_data(exc), "attempt": attempt + 1, **self._sim()}
+                if not last:
+                    self._event("retry", data, target=i)
+                    continue
+                if on_fault.then == "skip":
+                    self._skip(i, f"{type(exc).__name__} after {attempt + 1} attempts: {exc}")
+                    return
+                self._event("fault", data, target=i)
+                raise _Stop("aborted", f"target {i}: {exc}") from None
+        reading, exposure, remeasured = self._unsaturated(i, measured.reading, exposure, averages)
+        self._journal_sample(i, attempt + 1, measured, reading, exposure, remeasured)
+
+    def _skip(self, i: int, reason: str) -> None:
+        self._event("skip", {"reason": reason, **self._sim()}, target=i)
+        self._session.skipped += 1
+
+    def _unsaturated(
+        self, i: int, reading: Reading, exposure: float, averages: int
+    ) -> tuple[Reading, float, int]:
+        """Measure again at half the exposure while saturated (plan option)."""
+        spec = self.spec.saturation
+        shortest = self.devices.detector.exposure_range_s[0]
+        remeasured = 0
+        while (
+            reading.saturated
+            and spec.remeasure
+            and remeasured < spec.attempts
+            and exposure > shortest
+        ):
+            exposure = max(exposure / 2.0, shortest)
+            reading = self.devices.detector.measure(exposure, averages)
+            remeasured += 1
+        return reading, exposure, remeasured
+
+    def _journal_sample(
+        self,
+        i: int,
+        attempts: int,
+        measured: Measured,
+        reading: Reading,
+        exposure: float,
+        remeasured: int,
+    ) -> None:
+        plan = self.plan
+        back = [measured.read_back[a] for a in self.axes]
+        wi, wo = self.rig.forward(np.array(back, dtype=np.float64))
+        offset = self.time.offset
+        commanded = [f"{a}_commanded_rad" for a in self.axes]
+        coords = [f"coord_{c}" for c in plan.coordinate_names]
+        row: dict[str, Any] = {
+            "target": i,
+            "attempts": attempts,
+            **dict(zip(commanded, plan.angles[i].tolist(), strict=True)),
+            **{f"{a}_read_back_rad": v for a, v in zip(self.axes, back, strict=True)},
+            "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
+            "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
+            **dict(zip(coords, plan.coords[i].tolist(), strict=True)),
+            "exposure_s": exposure,
+            "averages": int(plan.averages[i]),
+            "n": reading.n,
+            "counts": reading.value,
+            "counts_std": reading.std,
+            "saturated": int(reading.saturated),
+            "remeasured": remeasured,
+            "settled_s": measured.settled_s + offset,
+            "started_s": reading.started_s + offset,
+            "ended_s": reading.ended_s + offset,
+            "utc": utc_now(),
+            "temperatures_c": self._temperatures,
+            "sim_state": None,
+        }  # fmt: skip
+        state = self._sim()
+        if state:
+            row["sim_state"] = dumps(state["sim_state"])
+        self._temperatures = None
+        self.journal.sample(row)
+        self.count += 1
+        self._session.measured += 1
+
+    # -- health --------------------------------------------------------------------------
+    def _check_health(self, *, force: bool = False) -> None:
+        """Read every motor's health; pause while beyond the rig's limits."""
+        limits = self.rig.spec.health
+        spec = self.spec.health
+        started = self.time.now()
+        paused = False
+        while True:
+            health = self.devices.bus.health()
+            temperatures = {a: h.temperature_c for a, h in health.items()}
+            problems = [
+                f"{a} at {h.temperature_c:g} °C (limit {limits.max_temperature_c:g})"
+                for a, h in health.items()
+                if h.temperature_c > limits.max_temperature_c
+            ] + [
+                f"{a} supply {h.voltage_v:g} V (limits {limits.min_voltage_v:g}–"
+                f"{limits.max_voltage_v:g})"
+                for a, h in health.items()
+                if not limits.min_voltage_v <= h.voltage_v <= limits.max_voltage_v
+            ]
+            flagged = {a: list(h.error_flags) for a, h in health.items() if h.error_flags}
+            data = {
+                "count": self.count,
+                "temperatures_c": temperatures,
+                "voltages_v": {a: h.voltage_v for a, h in health.items()},
+                "problems": problems,
+                "flags": flagged,
+            }
+            self._event("health", data)
+            self.health_due.done(self.count, self.time.now())
+            self._temperatures = _json_temperatures(temperatures)
+            if flagged:
+                axis, flags = next(iter(flagged.items()))
+                raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
+            if not problems:
+                if paused:
+                    self._event(
+                        "resume", {"reason": "health", "paused_s": self.time.now() - started}
+                    )
+                return
+            if not paused:
+                paused = True
+                self._hold_all()
+                self._event("pause", {"reason": "health", "problems": problems})
+            if self.time.now() - started >= 60.0 * spec.pause_timeout_minutes:
+                raise _Stop(
+                    "paused",
+                    f"paused {spec.pause_timeout_minutes:g} min for {problems[0]}; "
+                    "it did not clear",
+                )
+            if self.stops.requested:
+                raise RunInterrupted(self.stops.signum or 2, abandoned=False)
+            self.devices.clock.sleep(spec.poll_s)
+
+    # -- calibration ---------------------------------------------------------------------
+    def _calibrate(self, why: str) -> None:
+        """Read the reference standard (and a dark reading) and journal them as one
+        ``calibration`` event."""
+        from gonio.acquire.calibration import reference_pose
+
+        pose = reference_pose(self.rig)
+        goal = dict(zip(self.axes, pose.tolist(), strict=True))
+        spec = self.spec.calibration
+        k = self.calibrations
+        detector = self.devices.detector
+        shortest, longest = detector.exposure_range_s
+        exposure = self.reference_exposure_s
+        if exposure is None:
+            exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
+        averages = spec.averages
+        self.stage.show("reference")
+        try:
+            reference = self._reference_reading(CALIBRATION_INDEX + 2 * k, goal, exposure, averages)
+            while reference.reading.saturated and exposure > shortest:
+                exposure = max(exposure / 2.0, shortest)
+                reference = self._reference_reading(
+                    CALIBRATION_INDEX + 2 * k, goal, exposure, averages
+                )
+            if reference.reading.saturated:
+                raise GonioError(
+                    f"the reference standard saturates the detector even at {shortest:g} s: "
+                    "lower the source's power or the detector's aperture"
+                )
+            dark = None
+            if spec.dark:
+                dark = self._dark_reading(CALIBRATION_INDEX + 2 * k + 1, goal, exposure, averages)
+        finally:
+            self.stage.show("sample")
+        self.reference_exposure_s = exposure
+        wi, wo = self.rig.forward(np.array(list(reference.read_back.values())))
+        data: dict[str, Any] = {
+            "why": why,
+            "k": k,
+            "count": self.count,
+            "albedo": self.rig.spec.reference.albedo,
+            "source_kind": self.rig.source_kind,
+            "wi": wi.tolist(),
+            "wo": wo.tolist(),
+            "pose_rad": [reference.read_back[a] for a in self.axes],
+            "reference": self._reading_data(reference.reading, exposure),
+            "dark": None if dark is None else self._reading_data(dark, exposure),
+            **self._sim(),
+        }
+        self._event("calibration", data)
+        self.calibrations += 1
+        self.calibration_due.done(self.count, self.time.now())
+
+    def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
+        offset = self.time.offset
+        return {
+            "value": reading.value,
+            "std": reading.std,
+            "n": reading.n,
+            "saturated": reading.saturated,
+            "exposure_s": exposure,
+            "started_s": reading.started_s + offset,
+            "ended_s": reading.ended_s + offset,
+        }
+
+    def _reference_reading(
+        self, index: int, goal: dict[str, float], exposure: float, averages: int
+    ) -> Measured:
+        return measure_target(
+            self.devices, index, goal, exposure, averages,
+            settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+        )  # fmt: skip
+
+    def _dark_reading(
+        self, index: int, goal: dict[str, float], exposure: float, averages: int
+    ) -> Reading:
+        light = self.devices.light
+        if light is None:
+            raise GonioError(
+                "the rig's light cannot be switched: a dark reading needs it off; set "
+                "acquisition.calibration.dark: false in the plan (darks then count as 0)"
+            )
+        light.off()
+        try:
+            return self._reference_reading(index, goal, exposure, averages).reading
+        finally:
+            light.on()
+
+
+def _json_temperatures(temperatures: Mapping[str, float]) -> str:
+    return dumps(dict(temperatures))
+
+
+def wall_offset(clock_now: float, run_started_unix: float) -> float:
+    """The `RunTime` offset of a hardware session: run time = seconds since the run's
+    first start (wall clock), from a monotonic clock reading ``clock_now``."""
+    return (time.time() - run_started_unix) - clock_now

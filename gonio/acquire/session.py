@@ -1,0 +1,356 @@
+"""Starting, resuming and checking a run: files → backend → journal → engine.
+
+`start` plans (or reads a stored plan), creates and locks the run file before anything
+moves, and runs the engine. `resume` reopens a run file, checks that the plan, rig and
+scene files it was made from are unchanged (by hash; ``force`` accepts a change and
+journals it), and measures exactly the targets still missing from the stored plan,
+which it never re-plans. `dry_run` checks everything a run needs without moving.
+"""
+
+from __future__ import annotations
+
+import getpass
+import os
+import platform
+import shutil
+import socket
+import tempfile
+import time
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drivers.base import DriverError
+from gonio import __version__
+from gonio.acquire import backends
+from gonio.acquire.backends import BackendKind
+from gonio.acquire.engine import Engine, Report, utc_now
+from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.signals import StopRequests
+from gonio.config import ConfigError, read_bytes
+from gonio.errors import GonioError
+from gonio.planner.plan import Plan, sha256
+from gonio.planner.stored import plan_bytes
+from gonio.rig.model import Rig
+from gonio.store.journal import Journal, remove_run_file
+from gonio.store.read import Run, read_run
+
+#: Journal bytes per sample, measured on the shipped plans (with a simulated
+#: snapshot), for the disk-space check of a dry run; doubled there for the WAL.
+BYTES_PER_SAMPLE = 700
+
+
+@dataclass(frozen=True)
+class Files:
+    """The files a run is made from: paths (None: made in code) and bytes."""
+
+    plan_path: Path | None
+    plan_text: bytes
+    rig_path: Path | None
+    rig_text: bytes
+    scene_path: Path | None = None
+    scene_text: bytes | None = None
+
+    def hashes(self) -> dict[str, str | None]:
+        from gonio.planner.plan import content_hash
+
+        return {
+            "plan_sha256": sha256(self.plan_text),
+            "rig_sha256": sha256(self.rig_text),
+            "scene_sha256": None if self.scene_text is None else sha256(self.scene_text),
+            "content": content_hash(self.plan_text, self.rig_text, self.scene_text),
+        }
+
+
+def load_scene_file(path: Path, rig: Rig) -> tuple[Any, bytes]:
+    """(scene, its bytes)."""
+    from sim.scene import load_scene
+
+    raw = read_bytes(path)
+    return load_scene(path, rig, raw=raw), raw
+
+
+def _versions() -> dict[str, str]:
+    out = {"gonio": __version__, "python": platform.python_version()}
+    for name in ("numpy", "scipy", "pydantic", "dynamixel-sdk", "pyserial"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+def _meta(
+    plan: Plan, files: Files, kind: BackendKind, seed: int | None, started: float, **extra: Any
+) -> dict[str, Any]:
+    return {
+        "plan_name": plan.spec.name,
+        "rig_name": plan.rig.spec.name,
+        "backend": kind,
+        "seed": seed,
+        "created_utc": utc_now(),
+        "started_unix": started,
+        "host": socket.gethostname(),
+        "user": getpass.getuser(),
+        "versions": _versions(),
+        "axes": list(plan.rig.axes),
+        "coordinate_names": list(plan.coordinate_names),
+        "plan_path": None if files.plan_path is None else str(files.plan_path.resolve()),
+        "rig_path": None if files.rig_path is None else str(files.rig_path.resolve()),
+        "scene_path": None if files.scene_path is None else str(files.scene_path.resolve()),
+        "plan_text": files.plan_text.decode("utf-8"),
+        "rig_text": files.rig_text.decode("utf-8"),
+        "scene_text": None if files.scene_text is None else files.scene_text.decode("utf-8"),
+        "hashes": files.hashes(),
+        **extra,
+    }
+
+
+def _session_info(kind: BackendKind, argv: list[str]) -> dict[str, Any]:
+    return {"backend": kind, "pid": os.getpid(), "host": socket.gethostname(), "argv": argv}
+
+
+def check_output(path: Path | None, overwrite: bool) -> None:
+    """`ConfigError` unless a run file can be created at ``path`` (checked by creating
+    and removing a file beside it, not only by permission bits)."""
+    if path is None:
+        return
+    if path.is_dir():
+        raise ConfigError(f"-o {path}: is a folder; expected a run file name")
+    if (path.exists() or path.is_symlink()) and not overwrite:
+        raise ConfigError(
+            f"-o {path}: a run file already exists; give another name, continue it with "
+            "--resume, or replace it with --overwrite"
+        )
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise ConfigError(f"-o {path}: the folder {folder} does not exist")
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=f".{path.name}.", suffix=".probe"):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"-o {path}: cannot write in {folder}: {exc.strerror or exc}") from None
+
+
+@dataclass
+class Outcome:
+    report: Report
+    path: Path | None
+    run: Run  # the journal as it stands after the session
+
+
+def _run_engine(
+    journal: Journal,
+    plan: Plan,
+    backend: backends.Backend,
+    history: Run | None,
+    *,
+    progress: Progress,
+    retry_skipped: bool = False,
+    argv: list[str],
+) -> Outcome:
+    journal.start_session(utc_now(), _session_info(backend.kind, argv))
+    engine = Engine(
+        plan=plan,
+        devices=backend.devices,
+        journal=journal,
+        stage=backend.stage,
+        time=backend.time,
+        history=history,
+        calibrate_on_resume=backend.calibrate_on_resume,
+        retry_skipped=retry_skipped,
+        progress=progress,
+        stops=StopRequests(),
+    )
+    report = engine.run()
+    return Outcome(report, journal.path, read_run(journal.conn, journal.path or Path(":memory:")))
+
+
+def start(
+    plan: Plan,
+    files: Files,
+    *,
+    scene: Any = None,
+    output: Path | None,
+    overwrite: bool = False,
+    seed: int | None = None,
+    rehearse: bool = False,
+    speedup: float = 50.0,
+    progress: Progress | None = None,
+    argv: list[str] | None = None,
+    max_page_count: int | None = None,
+) -> Outcome:
+    """Acquire ``plan`` into a new run file ``output`` (None: in memory)."""
+    rig = plan.rig
+    kind = backends.kind_of(rig, rehearse)
+    if backends.needs_scene(rig, kind) and scene is None:
+        raise ConfigError(f"{files.rig_path or 'rig'}: the detector is simulated: give --scene")
+    if seed is None and scene is not None:
+        seed = int(scene.seed)
+    check_output(output, overwrite)
+    started = time.time()
+    backend = backends.build(kind, rig, scene, seed, started, speedup=speedup)
+    meta = _meta(plan, files, kind, seed, started, speedup=speedup if rehearse else None)
+    try:
+        with Journal.create(
+            output, meta, plan_bytes(plan), durable=backend.durable, overwrite=overwrite,
+            max_page_count=max_page_count,
+        ) as journal:  # fmt: skip
+            try:
+                return _run_engine(
+                    journal, plan, backend, None, progress=progress or Quiet(), argv=argv or []
+                )
+            except DriverError:
+                # The devices could not be opened (port missing, busy, no permission):
+                # nothing moved and nothing was measured, so no run file is left behind.
+                if output is not None and not _anything_measured(journal):
+                    journal.close()
+                    remove_run_file(output)
+                raise
+    finally:
+        backend.close()
+
+
+def _anything_measured(journal: Journal) -> bool:
+    samples = journal.conn.execute("SELECT COUNT(*) FROM samples").fetchone()[0]
+    events = journal.conn.execute(
+        "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
+    ).fetchone()[0]
+    return bool(samples or events)
+
+
+def changed_files(run: Run, files: Files) -> list[str]:
+    """Which of the run's files differ from those given now (by hash)."""
+    stored = run.meta["hashes"]
+    now = files.hashes()
+    return [
+        name
+        for name, key in (("plan", "plan_sha256"), ("rig", "rig_sha256"), ("scene", "scene_sha256"))
+        if stored.get(key) != now[key] and not (name == "scene" and now[key] is None)
+    ]
+
+
+def current_files(run: Run, plan: Path | None, rig: Path | None, scene: Path | None) -> Files:
+    """The files a run was made from as they are on disk now (paths from the journal
+    unless given); a file that is gone keeps its stored text."""
+
+    def now(given: Path | None, key: str) -> tuple[Path | None, bytes | None]:
+        path = given or (Path(run.meta[f"{key}_path"]) if run.meta.get(f"{key}_path") else None)
+        stored = run.meta.get(f"{key}_text")
+        if path is not None and path.is_file():
+            return path, read_bytes(path)
+        if given is not None:
+            raise ConfigError(f"--{key} {given}: no such file")
+        return path, None if stored is None else str(stored).encode("utf-8")
+
+    plan_path, plan_text = now(plan, "plan")
+    rig_path, rig_text = now(rig, "rig")
+    scene_path, scene_text = now(scene, "scene")
+    assert plan_text is not None and rig_text is not None
+    return Files(plan_path, plan_text, rig_path, rig_text, scene_path, scene_text)
+
+
+def resume(
+    path: Path,
+    *,
+    plan_path: Path | None = None,
+    rig_path: Path | None = None,
+    scene_path: Path | None = None,
+    force: bool = False,
+    retry_skipped: bool = False,
+    progress: Progress | None = None,
+    argv: list[str] | None = None,
+    max_page_count: int | None = None,
+    speedup: float | None = None,
+) -> Outcome:
+    """Measure what is missing from the run file at ``path`` (module docstring)."""
+    journal = Journal.reopen(path, durable=False, max_page_count=max_page_count)
+    try:
+        run = read_run(journal.conn, path)
+        files = current_files(run, plan_path, rig_path, scene_path)
+        changed = changed_files(run, files)
+        if changed and not force:
+            name = changed[0]
+            where = files.plan_path if name == "plan" else files.rig_path
+            where = files.scene_path if name == "scene" else where
+            raise ConfigError(
+                f"{where}: the {name} file changed since the run started (sha256 differs "
+                f"from the journal's); restore it, or resume with --force to accept the change"
+            )
+        kind: BackendKind = run.meta["backend"]
+        rig = run.plan.rig
+        if changed:  # forced: the devices follow the rig file as it is now
+            rig = Rig.from_yaml(files.rig_path or Path("rig"), files.rig_text)
+        scene = None
+        if backends.needs_scene(rig, kind):
+            if files.scene_text is None:
+                raise ConfigError(f"{path}: the run's scene is not stored; give --scene")
+            from sim.scene import load_scene
+
+            scene = load_scene(files.scene_path or Path("scene"), rig, raw=files.scene_text)
+        seed = run.meta.get("seed")
+        started = float(run.meta["started_unix"])
+        speed = speedup or float(run.meta.get("speedup") or 50.0)
+        backend = backends.build(kind, rig, scene, seed, started, speedup=speed)
+        journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
+        if changed:
+            journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
+            journal.end_session(utc_now(), "forced")
+        try:
+            return _run_engine(
+                journal, run.plan, backend, run, progress=progress or Quiet(),
+                retry_skipped=retry_skipped, argv=argv or [],
+            )  # fmt: skip
+        finally:
+            backend.close()
+    finally:
+        journal.close()
+
+
+def dry_run(plan: Plan, files: Files, *, scene: Any, output: Path | None, overwrite: bool,
+            rehearse: bool = False) -> list[str]:  # fmt: skip
+    """Check what a run needs without moving anything; the lines to print (raises a
+    `GonioError` at the first problem)."""
+    rig = plan.rig
+    kind = backends.kind_of(rig, rehearse)
+    lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]
+    if backends.needs_scene(rig, kind) and scene is None:
+        raise ConfigError(f"{files.rig_path or 'rig'}: the detector is simulated: give --scene")
+    lo, hi = rig.limits[:, 0], rig.limits[:, 1]
+    outside = ~np.all((plan.angles >= lo) & (plan.angles <= hi), axis=1)
+    if outside.any():
+        raise GonioError(
+            f"{int(outside.sum())} targets lie outside the axis limits (first: target "
+            f"{int(np.flatnonzero(outside)[0])}); re-plan with this rig"
+        )
+    lines.append(f"targets: {len(plan)} within the axis limits")
+    check_output(output, overwrite)
+    if output is not None:
+        folder = output.parent if str(output.parent) else Path(".")
+        need = 2 * BYTES_PER_SAMPLE * len(plan) + (1 << 20)
+        free = shutil.disk_usage(folder).free
+        if free < need:
+            raise GonioError(
+                f"-o {output}: {free / 1e6:.1f} MB free in {folder}; the run needs about "
+                f"{need / 1e6:.1f} MB"
+            )
+        lines.append(
+            f"output: {output} writable, {free / 1e9:.1f} GB free (needs {need / 1e6:.1f} MB)"
+        )
+    backend = backends.build(kind, rig, scene, None if scene is None else scene.seed, time.time())
+    try:
+        with backend.devices as devices:
+            positions = devices.bus.positions()
+            health = devices.bus.health()
+            reading = devices.detector.measure(devices.detector.exposure_range_s[0], 1)
+        lines.append(
+            f"motors: {len(positions)} axes answer, "
+            f"{max(h.temperature_c for h in health.values()):g} °C at most"
+        )
+        lines.append(f"detector: answers ({reading.value:g} counts at its shortest exposure)")
+    finally:
+        backend.close()
+    return lines

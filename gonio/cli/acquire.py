@@ -1,0 +1,131 @@
+"""`gonio acquire PLAN.yaml -o RUN.sqlite`: measure a plan on the rig its file names
+(simulated or hardware; `--rehearse`: the hardware path on emulators), journaling every
+sample; `gonio acquire --resume RUN.sqlite` measures what is missing.
+
+Exit codes: 0 the run completed; 2 refused before anything moved (a bad file or
+option, an output that exists or cannot be written, a port missing or busy); 3 the run
+ended early on a fault, a pause that did not clear or a full disk (resumable); 130
+stopped by Ctrl-C or SIGTERM (resumable).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+from gonio.acquire import progress as progress_module
+from gonio.acquire.signals import RunInterrupted
+from gonio.config import ConfigError
+
+#: Exit code of a run that ended early but can be resumed.
+EXIT_RESUMABLE = 3
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "acquire",
+        help=help_,
+        description="Measure a plan target by target on the rig its file names (simulated "
+        "or Dynamixel hardware), journaling every raw sample in a SQLite run file; resume "
+        "an interrupted run with --resume RUN. Exit codes: 0 completed, 2 refused before "
+        "anything moved, 3 ended early (resumable), 130 interrupted (resumable).",
+    )
+    p.add_argument("plan", type=Path, nargs="?", help="the plan file (YAML)")
+    p.add_argument("-o", "--output", type=Path, help="the run file to write (SQLite)")
+    p.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
+    p.add_argument("--scene", type=Path, help="the scene file (where the detector is simulated)")
+    p.add_argument("--seed", type=int, help="the run's seed (default: the scene's)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing run file")
+    p.add_argument("--resume", type=Path, metavar="RUN", help="continue the run in RUN")
+    p.add_argument(
+        "--force", action="store_true", help="with --resume: accept changed plan/rig/scene files"
+    )
+    p.add_argument(
+        "--retry-skipped", action="store_true", help="with --resume: measure skipped targets too"
+    )
+    p.add_argument(
+        "--dry-run", action="store_true", help="check everything a run needs; move nothing"
+    )
+    p.add_argument(
+        "--rehearse",
+        action="store_true",
+        help="run the hardware path on the Dynamixel emulator (no hardware needed)",
+    )
+    p.add_argument(
+        "--speedup", type=float, default=50.0, help="--rehearse: time runs this much faster"
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    p.set_defaults(func=cmd_acquire)
+
+
+def _resume_command(path: Path | None) -> str:
+    return f"gonio acquire --resume {shlex.quote(str(path))}"
+
+
+def cmd_acquire(args: argparse.Namespace) -> int:
+    from gonio.acquire import session, summary
+    from gonio.planner.plan import load_plan_source, render_summary
+
+    progress = progress_module.for_stream(args.quiet)
+    argv = ["gonio", *sys.argv[1:]]
+    if args.resume is not None:
+        if args.plan is not None or args.output is not None:
+            raise ConfigError("--resume RUN continues RUN: give no plan file and no -o")
+        path: Path | None = args.resume
+        try:
+            outcome = session.resume(
+                args.resume, rig_path=args.rig, scene_path=args.scene, force=args.force,
+                retry_skipped=args.retry_skipped, progress=progress, argv=argv,
+            )  # fmt: skip
+        except RunInterrupted:
+            return _interrupted(path)
+    else:
+        if args.plan is None:
+            raise ConfigError("expected a plan file (or --resume RUN)")
+        if args.output is None and not args.dry_run:
+            raise ConfigError("-o RUN: expected the run file to write (e.g. runs/my-run.sqlite)")
+        source = load_plan_source(args.plan, args.rig)
+        scene = None
+        scene_text = None
+        if args.scene is not None:
+            scene, scene_text = session.load_scene_file(args.scene, source.rig)
+        files = session.Files(
+            source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
+        )
+        if args.output is not None:
+            session.check_output(args.output, args.overwrite)
+        plan = source.build()
+        print(render_summary(plan), flush=True)
+        if args.dry_run:
+            for line in session.dry_run(
+                plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
+                rehearse=args.rehearse,
+            ):  # fmt: skip
+                print(f"  ok: {line}")
+            print("dry run: nothing moved, nothing written")
+            return 0
+        path = args.output
+        try:
+            outcome = session.start(
+                plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
+                seed=args.seed, rehearse=args.rehearse, speedup=args.speedup,
+                progress=progress, argv=argv,
+            )  # fmt: skip
+        except RunInterrupted:
+            return _interrupted(path)
+    print(summary.render(outcome.run))
+    report = outcome.report
+    if report.outcome == "completed":
+        print(f"wrote {len(outcome.run)} samples to {path}")
+        return 0
+    print(f"gonio: the run ended early: {report.message}", file=sys.stderr)
+    print(f"resume with: {_resume_command(path)}", file=sys.stderr)
+    return EXIT_RESUMABLE
+
+
+def _interrupted(path: Path | None) -> int:
+    print("gonio: interrupted; the axes hold and every measured sample is saved", file=sys.stderr)
+    print(f"resume with: {_resume_command(path)}", file=sys.stderr)
+    return 130

@@ -1,0 +1,32 @@
+"""`gonio info RUN.sqlite`: what a run file holds — plan, backend, progress, instrument
+time, faults, skips, pauses, calibration drift (``--json`` for scripts)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "info",
+        help=help_,
+        description="Print what a run file holds: plan, backend, progress, instrument time, "
+        "faults, skips, pauses and calibration drift. The file may still be being written.",
+    )
+    p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    p.set_defaults(func=cmd_info)
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from gonio.acquire import summary
+    from gonio.store import open_run
+
+    run = open_run(args.run)
+    if args.json:
+        print(json.dumps(summary.figures(run), indent=2, ensure_ascii=False))
+    else:
+        print(summary.render(run))
+    return 0

@@ -1,0 +1,300 @@
+"""The run journal, written: one SQLite file per run (WAL mode), committed sample by
+sample, that a crash never corrupts and a resumed run appends to.
+
+The layout (schema version `SCHEMA_VERSION`) is documented in docs/journal.md:
+
+- ``meta`` (key → JSON text, or bytes for ``plan_file``): the plan, rig and scene
+  texts and their hashes, the stored plan itself (`gonio.planner.stored`), the axes and
+  coordinate names, the backend, the seed, the package versions, the host;
+- ``sessions``: one row per process that wrote to the run (start, end, how it ended);
+- ``samples``: one row per measured target (``target`` = its index in the plan);
+- ``events``: calibrations, darks, faults, retries, skips, pauses, resumes, health
+  readings, the simulated backend's state snapshots.
+
+Durability: ``durable=True`` (hardware) commits with ``PRAGMA synchronous=FULL``, so
+every committed sample is on the disk (WAL fsync'ed) before the next move and survives
+a power loss; ``durable=False`` (the simulated backend) commits each sample too, with
+``synchronous=NORMAL``: a crash of the process loses nothing committed, a power loss
+may lose the last commits (the run resumes from what is there). The writer holds an
+exclusive `fcntl.flock` on the file for its whole life, so a second writer is refused
+at once; readers (`gonio.store.open_run`) never take it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import json
+import os
+import sqlite3
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from gonio.errors import GonioError
+
+#: The layout version this gonio writes (and the newest it reads).
+SCHEMA_VERSION = 1
+#: ``PRAGMA application_id`` of a gonio run journal ("goni").
+APPLICATION_ID = 0x676F6E69
+
+
+class JournalError(GonioError):
+    """The journal cannot be created, opened or written; the message is one line."""
+
+
+def sample_columns(axes: Sequence[str], coordinate_names: Sequence[str]) -> list[str]:
+    """The ``samples`` table's columns for a rig's axes and a plan's coordinates."""
+    return [
+        "target", "session", "attempts",
+        *(f"{a}_commanded_rad" for a in axes),
+        *(f"{a}_read_back_rad" for a in axes),
+        "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z",
+        *(f"coord_{c}" for c in coordinate_names),
+        "exposure_s", "averages", "n", "counts", "counts_std", "saturated", "remeasured",
+        "settled_s", "started_s", "ended_s", "utc",
+        "temperatures_c", "sim_state",
+    ]  # fmt: skip
+
+
+#: Columns that hold integers or text (the rest are REAL).
+_INTEGER = frozenset({"target", "session", "attempts", "averages", "n", "saturated", "remeasured"})
+_TEXT = frozenset({"utc", "temperatures_c", "sim_state"})
+_NULLABLE = frozenset({"temperatures_c", "sim_state"})
+
+
+def _column_sql(name: str) -> str:
+    kind = "INTEGER" if name in _INTEGER else "TEXT" if name in _TEXT else "REAL"
+    null = "" if name in _NULLABLE else " NOT NULL"
+    key = " PRIMARY KEY" if name == "target" else ""
+    return f'"{name}" {kind}{null}{key}'
+
+
+_EVENTS_SQL = """CREATE TABLE events (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    session INTEGER NOT NULL,
+    kind TEXT NOT NULL,
+    target INTEGER,
+    t_s REAL NOT NULL,
+    utc TEXT NOT NULL,
+    data TEXT NOT NULL
+)"""
+_SESSIONS_SQL = """CREATE TABLE sessions (
+    id INTEGER PRIMARY KEY,
+    started_utc TEXT NOT NULL,
+    info TEXT NOT NULL,
+    ended_utc TEXT,
+    outcome TEXT
+)"""
+
+
+def dumps(value: Any) -> str:
+    """JSON text of a journal value (no NaN: a journal never stores one)."""
+    return json.dumps(value, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+
+
+def _lock(path: Path) -> int:
+    """An open descriptor of ``path`` holding an exclusive flock (`JournalError` if
+    another process holds it)."""
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
+    except OSError as exc:
+        raise JournalError(f"{path}: cannot open the run file: {exc.strerror or exc}") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise JournalError(
+            f"{path}: another gonio acquire is writing this run (the file is locked); "
+            "wait for it to end or stop it first"
+        ) from None
+    return fd
+
+
+def remove_run_file(path: Path) -> None:
+    """Delete a run file and its WAL and shared-memory files."""
+    for suffix in ("", "-wal", "-shm", "-journal"):
+        Path(f"{path}{suffix}").unlink(missing_ok=True)
+
+
+class Journal:
+    """A run journal open for writing (see the module docstring). Use `create` for a new
+    run or `reopen` to resume one; `close` (or ``with``) releases the file."""
+
+    def __init__(self, conn: sqlite3.Connection, path: Path | None, lock_fd: int | None):
+        self.conn = conn
+        self.path = path
+        self._lock_fd = lock_fd
+        self.session = 0
+        axes = json.loads(self._meta_text("axes"))
+        coords = json.loads(self._meta_text("coordinate_names"))
+        self.columns = sample_columns(axes, coords)
+        names = ", ".join(f'"{c}"' for c in self.columns)
+        marks = ", ".join("?" for _ in self.columns)
+        self._insert = f"INSERT INTO samples ({names}) VALUES ({marks})"
+
+    # -- opening ---------------------------------------------------------------------------
+    @staticmethod
+    def _connect(target: str, durable: bool, max_page_count: int | None) -> sqlite3.Connection:
+        conn = sqlite3.connect(target, isolation_level=None, check_same_thread=False)
+        conn.execute("PRAGMA journal_mode=WAL")
+        conn.execute(f"PRAGMA synchronous={'FULL' if durable else 'NORMAL'}")
+        conn.execute("PRAGMA foreign_keys=ON")
+        if max_page_count is not None:  # tests: a disk that fills up
+            conn.execute(f"PRAGMA max_page_count={int(max_page_count)}")
+        return conn
+
+    @classmethod
+    def create(
+        cls,
+        path: Path | None,
+        meta: Mapping[str, Any],
+        plan_file: bytes,
+        *,
+        durable: bool,
+        overwrite: bool = False,
+        max_page_count: int | None = None,
+    ) -> Journal:
+        """A new run file at ``path`` (None: in memory) with ``meta`` (JSON values; it
+        must name ``axes`` and ``coordinate_names``) and the stored plan's bytes.
+
+        An existing file is refused unless ``overwrite`` (and even then while another
+        process writes it). The file is created and locked before anything is written
+        to it, so nothing moves before the output is known to be usable."""
+        if path is None:
+            conn = cls._connect(":memory:", durable, max_page_count)
+            lock = None
+        else:
+            if path.is_dir():
+                raise JournalError(f"{path}: is a folder; expected a run file name")
+            if path.exists() or path.is_symlink():
+                if not overwrite:
+                    raise JournalError(
+                        f"{path}: a run file already exists; give another name, continue it "
+                        "with --resume, or replace it with --overwrite"
+                    )
+                os.close(_lock(path))  # refuse to replace a run another process writes
+                remove_run_file(path)
+            try:
+                fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o644)
+            except OSError as exc:
+                raise JournalError(
+                    f"{path}: cannot create the run file: {exc.strerror or exc}"
+                ) from None
+            os.close(fd)
+            lock = _lock(path)
+            try:
+                conn = cls._connect(str(path), durable, max_page_count)
+            except sqlite3.Error as exc:
+                os.close(lock)
+                raise JournalError(f"{path}: cannot open the run file: {exc}") from None
+        try:
+            cls._write_schema(conn, meta, plan_file)
+        except sqlite3.Error as exc:
+            conn.close()
+            if lock is not None:
+                os.close(lock)
+            raise JournalError(f"{path}: cannot write the run file: {exc}") from None
+        return cls(conn, path, lock)
+
+    @staticmethod
+    def _write_schema(conn: sqlite3.Connection, meta: Mapping[str, Any], plan: bytes) -> None:
+        columns = sample_columns(meta["axes"], meta["coordinate_names"])
+        conn.execute("BEGIN IMMEDIATE")
+        conn.execute(f"PRAGMA application_id={APPLICATION_ID}")
+        conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+        conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value NOT NULL)")
+        conn.execute(_SESSIONS_SQL)
+        conn.execute(f"CREATE TABLE samples ({', '.join(map(_column_sql, columns))})")
+        conn.execute(_EVENTS_SQL)
+        conn.execute("CREATE INDEX events_kind ON events (kind)")
+        rows: list[tuple[str, str | bytes]] = [(k, dumps(v)) for k, v in meta.items()]
+        rows += [("schema_version", dumps(SCHEMA_VERSION)), ("plan_file", plan)]
+        conn.executemany("INSERT INTO meta VALUES (?, ?)", rows)
+        conn.execute("COMMIT")
+
+    @classmethod
+    def reopen(cls, path: Path, *, durable: bool, max_page_count: int | None = None) -> Journal:
+        """An existing run file, to append to (`JournalError` if it is missing, not a
+        gonio run, of a newer layout, or being written by another process)."""
+        from gonio.store.read import check_version
+
+        if not path.is_file():
+            raise JournalError(f"{path}: no such run file")
+        lock = _lock(path)
+        try:
+            conn = cls._connect(str(path), durable, max_page_count)
+            check_version(conn, path)
+            return cls(conn, path, lock)
+        except (sqlite3.Error, GonioError) as exc:
+            os.close(lock)
+            if isinstance(exc, GonioError):
+                raise
+            raise JournalError(f"{path}: not a usable run file: {exc}") from None
+
+    # -- writing ---------------------------------------------------------------------------
+    def _meta_text(self, key: str) -> str:
+        row = self.conn.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
+        if row is None:
+            raise JournalError(f"{self.path}: meta.{key}: missing")
+        return str(row[0])
+
+    def _write(self, sql: str, args: Sequence[Any]) -> None:
+        try:
+            self.conn.execute(sql, args)
+        except sqlite3.Error as exc:
+            raise JournalError(
+                f"{self.path or 'journal'}: cannot write the journal ({exc}); every sample "
+                "committed so far is kept and the run can be resumed"
+            ) from None
+
+    def start_session(self, utc: str, info: Mapping[str, Any]) -> int:
+        """Record a new writing session; returns its number (1, 2, …)."""
+        row = self.conn.execute("SELECT COALESCE(MAX(id), 0) FROM sessions").fetchone()
+        self.session = int(row[0]) + 1
+        self._write(
+            "INSERT INTO sessions (id, started_utc, info) VALUES (?, ?, ?)",
+            (self.session, utc, dumps(dict(info))),
+        )
+        return self.session
+
+    def end_session(self, utc: str, outcome: str) -> None:
+        self._write(
+            "UPDATE sessions SET ended_utc = ?, outcome = ? WHERE id = ?",
+            (utc, outcome, self.session),
+        )
+
+    def sample(self, row: Mapping[str, Any]) -> None:
+        """Commit one measured target (every column of `sample_columns` but ``session``)."""
+        values = [self.session if c == "session" else row[c] for c in self.columns]
+        self._write(self._insert, values)
+
+    def event(
+        self,
+        kind: str,
+        t_s: float,
+        utc: str,
+        data: Mapping[str, Any] | None = None,
+        target: int | None = None,
+    ) -> None:
+        """Commit one event (``data``: JSON values)."""
+        self._write(
+            "INSERT INTO events (session, kind, target, t_s, utc, data) VALUES (?, ?, ?, ?, ?, ?)",
+            (self.session, kind, target, float(t_s), utc, dumps(dict(data or {}))),
+        )
+
+    # -- closing ---------------------------------------------------------------------------
+    def close(self) -> None:
+        """Close the database and release the lock (idempotent)."""
+        if self.conn is not None:
+            with contextlib.suppress(sqlite3.Error):
+                self.conn.close()
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
+    def __enter__(self) -> Journal:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,198 @@
+"""Reading a run journal: `open_run(path)` gives the metadata, the stored plan, the
+samples as numpy columns and the events, as one consistent snapshot, also of a run
+that is still being written (the file is opened read-only, in one read transaction).
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from gonio.planner.plan import Plan
+from gonio.planner.stored import parse_plan
+from gonio.store.journal import APPLICATION_ID, SCHEMA_VERSION, JournalError
+from gonio.types import FloatArray
+
+
+@dataclass(frozen=True)
+class Event:
+    """One journaled event: its kind, the target it concerns (or None), the run time
+    ``t_s`` (s), the UTC wall time and its data (JSON values)."""
+
+    id: int
+    session: int
+    kind: str
+    target: int | None
+    t_s: float
+    utc: str
+    data: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class Session:
+    id: int
+    started_utc: str
+    info: Mapping[str, Any]
+    ended_utc: str | None
+    outcome: str | None
+
+
+@dataclass(frozen=True)
+class Run:
+    """A run as stored. ``samples`` maps each column of the samples table to a numpy
+    array (one entry per measured target, by target index); angles rad, times s,
+    readings in the detector's counts."""
+
+    path: Path
+    meta: Mapping[str, Any]
+    plan: Plan
+    samples: Mapping[str, np.ndarray]
+    events: tuple[Event, ...]
+    sessions: tuple[Session, ...]
+    _by_kind: dict[str, tuple[Event, ...]] = field(default_factory=dict, repr=False)
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        return tuple(self.meta["axes"])
+
+    @property
+    def target(self) -> np.ndarray:
+        """The plan index of each sample (int64)."""
+        return self.samples["target"]
+
+    def __len__(self) -> int:
+        return len(self.samples["target"])
+
+    def angles(self, which: str = "read_back") -> FloatArray:
+        """(N, A) joint angles (rad) per sample, ``read_back`` or ``commanded``."""
+        cols = [self.samples[f"{a}_{which}_rad"] for a in self.axes]
+        return np.stack(cols, axis=1) if cols else np.empty((0, 0))
+
+    def directions(self) -> tuple[FloatArray, FloatArray]:
+        """(ωi, ωo), each (N, 3), from the read-back angles (forward kinematics)."""
+        s = self.samples
+        wi = np.stack([s["wi_x"], s["wi_y"], s["wi_z"]], axis=1)
+        wo = np.stack([s["wo_x"], s["wo_y"], s["wo_z"]], axis=1)
+        return wi, wo
+
+    def of_kind(self, *kinds: str) -> tuple[Event, ...]:
+        """The events of these kinds, in order."""
+        return tuple(e for e in self.events if e.kind in kinds)
+
+    @property
+    def skipped(self) -> np.ndarray:
+        """Targets skipped (and not measured since), sorted."""
+        skipped = {e.target for e in self.of_kind("skip") if e.target is not None}
+        return np.array(sorted(skipped - set(self.target.tolist())), dtype=np.int64)
+
+    def missing(self, *, include_skipped: bool = False) -> np.ndarray:
+        """Targets of the plan not measured yet (nor skipped, unless asked), in the
+        plan's order."""
+        done = np.zeros(len(self.plan), dtype=np.bool_)
+        done[self.target] = True
+        if not include_skipped:
+            done[self.skipped] = True
+        return np.flatnonzero(~done)
+
+    @property
+    def complete(self) -> bool:
+        """The last session ended the run (every target measured or skipped)."""
+        return bool(self.sessions) and self.sessions[-1].outcome == "completed"
+
+
+def check_version(conn: sqlite3.Connection, path: Path) -> None:
+    """`JournalError` unless ``conn`` is a gonio run journal this gonio can read."""
+    app = conn.execute("PRAGMA application_id").fetchone()[0]
+    if app != APPLICATION_ID:
+        raise JournalError(f"{path}: not a gonio run file (application_id {app:#x})")
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
+    if version > SCHEMA_VERSION:
+        raise JournalError(
+            f"{path}: run file schema version {version}; this gonio reads versions up to "
+            f"{SCHEMA_VERSION} (update gonio to read it)"
+        )
+
+
+def read_run(conn: sqlite3.Connection, path: Path) -> Run:
+    """The run in an open connection (one read transaction: a consistent snapshot)."""
+    check_version(conn, path)
+    conn.execute("BEGIN")
+    try:
+        meta_rows = conn.execute("SELECT key, value FROM meta").fetchall()
+        cursor = conn.execute("SELECT * FROM samples ORDER BY target")
+        names = [d[0] for d in cursor.description]
+        rows = cursor.fetchall()
+        events = conn.execute(
+            "SELECT id, session, kind, target, t_s, utc, data FROM events ORDER BY id"
+        ).fetchall()
+        sessions = conn.execute(
+            "SELECT id, started_utc, info, ended_utc, outcome FROM sessions ORDER BY id"
+        ).fetchall()
+    finally:
+        conn.execute("COMMIT")
+    meta: dict[str, Any] = {}
+    plan_file = b""
+    for key, value in meta_rows:
+        if key == "plan_file":
+            plan_file = bytes(value)
+        else:
+            meta[key] = json.loads(value)
+    plan = parse_plan(plan_file, f"{path}#plan_file")
+    return Run(
+        path=path,
+        meta=MappingProxyType(meta),
+        plan=plan,
+        samples=MappingProxyType(_columns(names, rows)),
+        events=tuple(
+            Event(i, s, k, t, ts, u, MappingProxyType(json.loads(d)))
+            for i, s, k, t, ts, u, d in events
+        ),
+        sessions=tuple(
+            Session(i, st, MappingProxyType(json.loads(info)), en, out)
+            for i, st, info, en, out in sessions
+        ),
+    )
+
+
+_INTEGER = ("target", "session", "attempts", "averages", "n", "remeasured")
+
+
+def _columns(names: list[str], rows: list[tuple[Any, ...]]) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for j, name in enumerate(names):
+        cells = [r[j] for r in rows]
+        if name in _INTEGER:
+            out[name] = np.array(cells, dtype=np.int64)
+        elif name == "saturated":
+            out[name] = np.array(cells, dtype=np.bool_)
+        elif name in ("utc", "temperatures_c", "sim_state"):
+            out[name] = np.array(cells, dtype=object)
+        else:
+            out[name] = np.array(cells, dtype=np.float64)
+    return out
+
+
+def open_run(path: str | Path) -> Run:
+    """The run stored at ``path`` (read-only; a run still being written is read as it
+    stands). `JournalError` (one line) if it is missing, not a gonio run file, or of a
+    newer layout than this gonio reads."""
+    path = Path(path)
+    if not path.is_file():
+        raise JournalError(f"{path}: no such run file")
+    try:
+        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, isolation_level=None)
+    except sqlite3.Error as exc:
+        raise JournalError(f"{path}: cannot open the run file: {exc}") from None
+    try:
+        return read_run(conn, path)
+    except sqlite3.DatabaseError as exc:
+        raise JournalError(f"{path}: not a readable run file: {exc}") from None
+    finally:
+        conn.close()
