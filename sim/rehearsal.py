@@ -40,6 +40,9 @@ class RehearsalSide:
     def true_positions(self) -> dict[str, float]:
         return self.bus.positions()
 
+    def expect(self, goals: Any, index: Any) -> None:
+        pass
+
     def snapshot(self) -> Any:
         return None
 

@@ -55,6 +55,9 @@ class OperatorStage:
         self._out = out or sys.stderr
         self._showing: StageTarget = "sample"
 
+    def can_ask(self) -> bool:
+        return self._ask is not None or sys.stdin.isatty()
+
     def show(self, target: StageTarget) -> None:
         if target == self._showing:
             return

@@ -191,6 +191,8 @@ class Engine:
         with self.stops, self.devices:
             try:
                 self._start(resuming=self.history is not None)
+                if self.devices.simulation is not None:
+                    self.devices.simulation.expect(self.plan.angles[todo], todo)
                 self.progress.start(self.plan, todo)
                 for done, i in enumerate(todo.tolist()):
                     self._between_targets()

@@ -33,7 +33,7 @@ from gonio.acquire.signals import StopRequests
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan, sha256
-from gonio.planner.stored import plan_bytes
+from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, remove_run_file
 from gonio.store.read import Run, read_run
@@ -193,10 +193,17 @@ def start(
     check_output(output, overwrite)
     started = time.time()
     backend = backends.build(kind, rig, scene, seed, started, speedup=speedup)
-    meta = _meta(plan, files, kind, seed, started, speedup=speedup if rehearse else None)
     try:
+        preflight(plan, backend, files.plan_path)
+    except GonioError:
+        backend.close()
+        raise
+    meta = _meta(plan, files, kind, seed, started, speedup=speedup if rehearse else None)
+    stored = plan_bytes(plan)
+    try:
+        parse_plan(stored, "plan")  # a plan the journal could not give back is refused now
         with Journal.create(
-            output, meta, plan_bytes(plan), durable=backend.durable, overwrite=overwrite,
+            output, meta, stored, durable=backend.durable, overwrite=overwrite,
             max_page_count=max_page_count,
         ) as journal:  # fmt: skip
             try:
@@ -220,6 +227,23 @@ def _anything_measured(journal: Journal) -> bool:
         "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
     ).fetchone()[0]
     return bool(samples or events)
+
+
+def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> None:
+    """Refuse, before anything is created or moved, a run the backend cannot finish."""
+    spec = plan.spec.acquisition.calibration
+    if spec.dark and backend.devices.light is None:
+        raise ConfigError(
+            f"{plan_path or 'plan'}: acquisition.calibration.dark: the rig's light cannot be "
+            "switched (light.switch: none), so no dark reading can be taken; give the rig a "
+            "switch, or set dark: false (the dark signal is then taken as 0 counts)"
+        )
+    stage = backend.stage
+    if isinstance(stage, backends.OperatorStage) and not stage.can_ask():
+        raise GonioError(
+            "the reference standard is put on the stage by the operator and no one can be "
+            "asked (no terminal): run gonio acquire from a terminal"
+        )
 
 
 def changed_files(run: Run, files: Files) -> list[str]:
@@ -295,6 +319,11 @@ def resume(
         started = float(run.meta["started_unix"])
         speed = speedup or float(run.meta.get("speedup") or 50.0)
         backend = backends.build(kind, rig, scene, seed, started, speedup=speed)
+        try:
+            preflight(run.plan, backend, files.plan_path)
+        except GonioError:
+            backend.close()
+            raise
         journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
         if changed:
             journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
