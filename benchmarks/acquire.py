@@ -30,7 +30,7 @@ from gonio.planner import load_plan_source
 from gonio.planner.plan import Plan
 from gonio.store.journal import Journal, sample_columns
 from sim.devices.instrument import SimulatedInstrument
-from sim.scene import Scene, load_scene
+from sim.scene import Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANS = {
@@ -77,7 +77,7 @@ def commit_cost(folder: Path, durable: bool, n: int = 300) -> float:
     meta = {"axes": axes, "coordinate_names": coords}
     path = folder / f"commit-{durable}.sqlite"
     path.unlink(missing_ok=True)
-    row = {c: 0.5 for c in sample_columns(axes, coords)}
+    row = dict.fromkeys(sample_columns(axes, coords), 0.5)
     row.update(utc="2026-01-01T00:00:00", temperatures_c=None, sim_state=None)
     with Journal.create(path, meta, b"", durable=durable, overwrite=True) as journal:
         journal.start_session("t", {})
