@@ -85,10 +85,11 @@ def needs_scene(rig: Rig, kind: BackendKind) -> bool:
     return kind == "simulated" or rig.spec.detector.interface.kind == "simulated"
 
 
-def simulated(rig: Rig, scene: Any, seed: int | None) -> Backend:
+def simulated(rig: Rig, scene: Any, seed: int | None, *, any_detector: bool = False) -> Backend:
+    """``any_detector``: simulate the rig's detector whatever its interface says."""
     from sim.devices.instrument import SimulatedInstrument
 
-    if rig.spec.detector.interface.kind != "simulated":
+    if rig.spec.detector.interface.kind != "simulated" and not any_detector:
         raise GonioError(
             f"{rig.source}: detector.interface: a simulated rig (bus.kind: simulated) needs "
             "a simulated detector; use --rehearse to try a serial detector without hardware"
@@ -152,9 +153,10 @@ def build(
     run_started_unix: float,
     *,
     speedup: float = 50.0,
+    any_detector: bool = False,
 ) -> Backend:
     if kind == "simulated":
-        return simulated(rig, scene, seed)
+        return simulated(rig, scene, seed, any_detector=any_detector)
     if kind == "rehearsal":
         return rehearsal(rig, scene, seed, run_started_unix, speedup)
     return hardware(rig, scene, seed, run_started_unix)

@@ -182,23 +182,30 @@ def start(
     progress: Progress | None = None,
     argv: list[str] | None = None,
     max_page_count: int | None = None,
+    force_simulated: bool = False,
 ) -> Outcome:
-    """Acquire ``plan`` into a new run file ``output`` (None: in memory)."""
+    """Acquire ``plan`` into a new run file ``output`` (None: in memory);
+    ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
     rig = plan.rig
-    kind = backends.kind_of(rig, rehearse)
+    kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
     if backends.needs_scene(rig, kind) and scene is None:
         raise ConfigError(f"{files.rig_path or 'rig'}: the detector is simulated: give --scene")
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite)
     started = time.time()
-    backend = backends.build(kind, rig, scene, seed, started, speedup=speedup)
+    backend = backends.build(
+        kind, rig, scene, seed, started, speedup=speedup, any_detector=force_simulated
+    )
     try:
         preflight(plan, backend, files.plan_path)
     except GonioError:
         backend.close()
         raise
-    meta = _meta(plan, files, kind, seed, started, speedup=speedup if rehearse else None)
+    meta = _meta(
+        plan, files, kind, seed, started, speedup=speedup if rehearse else None,
+        any_detector=force_simulated,
+    )  # fmt: skip
     stored = plan_bytes(plan)
     try:
         parse_plan(stored, "plan")  # a plan the journal could not give back is refused now
@@ -318,7 +325,10 @@ def resume(
         seed = run.meta.get("seed")
         started = float(run.meta["started_unix"])
         speed = speedup or float(run.meta.get("speedup") or 50.0)
-        backend = backends.build(kind, rig, scene, seed, started, speedup=speed)
+        backend = backends.build(
+            kind, rig, scene, seed, started, speedup=speed,
+            any_detector=bool(run.meta.get("any_detector")),
+        )  # fmt: skip
         try:
             preflight(run.plan, backend, files.plan_path)
         except GonioError:

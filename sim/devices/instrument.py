@@ -108,12 +108,14 @@ class SimulatedInstrument(Resource):
         present sample has used (so a retried or resumed sample continues its streams
         and its injected faults do not fire twice)."""
         motors = self.bus.snapshot()
+        true = self.bus.true_positions()
         sample = self.bus.present_sample
         return {
             "time_s": self.clock.now(),
             "encoder": list(motors.encoder),
             "direction": list(motors.direction),
             "repeatability": list(motors.repeatability),
+            "true_rad": [true[a] for a in self.rig.axes],  # what the optics saw
             "sample": sample,
             "moves": self.bus.moves_of(sample),
             "draws": self.detector.draws_of(sample),

@@ -1,5 +1,6 @@
-"""`sim.session.simulate_plan`: a whole simulated session through the device contract —
-reference, dark, plan, reference — and the BRDF recovered through the calibration."""
+"""`sim.session.simulate_plan`: the acquisition engine on the simulated backend —
+reference, dark, the plan, reference — and the BRDF recovered through the journaled
+calibration."""
 
 from __future__ import annotations
 
@@ -37,13 +38,14 @@ def test_saturating_reference_exposure_is_shortened() -> None:
     scene = load_scene(CONFIGS / "scenes" / "matte.yaml")
     result = simulate_plan(plan, scene)
     assert result.reference_exposure_s == 0.15
-    assert not result.calibration.first.saturated and not result.calibration.last.saturated
-    ok = ~result.run.saturated
+    for calibration in result.run.of_kind("calibration"):
+        assert not calibration.data["reference"]["saturated"]
+    ok = ~result.saturated
     assert ok.sum() > 50
     assert np.median(np.abs(result.brdf[ok] / result.truth[ok] - 1)) < 0.01
 
 
-def test_drift_is_divided_out_with_the_two_reference_readings() -> None:
+def test_drift_is_divided_out_with_the_reference_readings() -> None:
     spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
     plan = build(spec, rig)
     scene = load_scene(CONFIGS / "scenes" / "matte.yaml").with_effects(
@@ -54,6 +56,8 @@ def test_drift_is_divided_out_with_the_two_reference_readings() -> None:
     # time, so interpolating the reference removes it to rounding.
     assert 0.05 < result.reference_change < 0.07
     np.testing.assert_allclose(result.brdf, result.truth, rtol=1e-9)
-    cal = result.calibration
-    assert cal.first.ended_s <= cal.dark.started_s < cal.dark.ended_s <= result.run.settled_s[0]
-    assert cal.last.started_s >= result.run.end_s[-1]
+    first, last = result.run.of_kind("calibration")
+    s = result.run.samples
+    assert first.data["reference"]["ended_s"] <= first.data["dark"]["started_s"]
+    assert first.data["dark"]["ended_s"] <= s["settled_s"][0]
+    assert last.data["reference"]["started_s"] >= s["ended_s"][-1]
