@@ -112,7 +112,8 @@ def hardware(
     else:
         devices = hardware_devices(rig, clock=clock)
     time = RunTime(clock.now, wall_offset(clock.now(), run_started_unix))
-    stage = stage or OperatorStage()
+    # A simulated detector sees a simulated reference standard; a real one needs hands.
+    stage = stage or devices.simulation or OperatorStage()
     return Backend("hardware", devices, stage, time, durable=True, calibrate_on_resume=True)
 
 
@@ -120,6 +121,7 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
     from drivers.dynamixel.bus import DynamixelBus
     from sim.devices.detector import SimDetector, SimLightSource
     from sim.physics.streams import Streams
+    from sim.rehearsal import RehearsalSide
 
     bus = DynamixelBus(rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud)
     light = SimLightSource()
@@ -127,7 +129,7 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
         scene, rig, bus.positions, clock=clock,
         streams=Streams(scene.seed if seed is None else seed), light=light,
     )  # fmt: skip
-    return Devices(bus, detector, clock, light, None)
+    return Devices(bus, detector, clock, light, RehearsalSide(bus, detector))
 
 
 def rehearsal(
