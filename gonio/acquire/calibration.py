@@ -2,9 +2,13 @@
 
 The reference standard (a Lambertian target of known albedo, the rig file's
 ``reference`` section) is read at the rig's calibration geometry (0°/45° in the shipped
-rigs: light at the normal, detector 45° away) with the plan's typical
-exposure, halved until the reading does not saturate; a dark reading is taken with the
-light off at the same exposure. Readings of the sample become BRDF values through
+rigs: light at the normal, detector 45° away) with the plan's typical exposure, halved
+until the reading does not saturate. The geometry is the rig file's or none: where the
+standard would not fill what the ideal chain assumes (a collimated beam's lit spot on
+the standard and in the detector's view; for a point source, the view on the standard),
+`reference_geometry` refuses the rig rather than move the standard to a geometry its
+albedo is not given for. A dark reading is taken with the light off at the same
+exposure. Readings of the sample become BRDF values through
 `gonio.radiometry.ReferenceCalibration` (dark subtracted, the geometry of each pair
 accounted for, directions from the read-back angles), and a drifting source is divided
 out by interpolating the reference's dark-subtracted signal linearly in time between
@@ -18,6 +22,7 @@ so they never share random numbers with the plan's samples.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +31,7 @@ from drivers.base import Reading
 from gonio import radiometry
 from gonio.acquire.devices import Devices
 from gonio.acquire.measure import measure_target
+from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError
 from gonio.rig.model import Reason, Rig
 from gonio.types import FloatArray
@@ -34,16 +40,76 @@ from gonio.types import FloatArray
 CALIBRATION_INDEX = 1 << 40
 
 
+def reference_geometry(rig: Rig) -> tuple[FloatArray, FloatArray]:
+    """(ωi, ωo), each (3,), at which the reference standard is read: the rig file's
+    ``reference`` geometry, where the reading is the ideal chain's (the standard,
+    ``Rig.reference_diameter_mm`` across, holds a collimated beam's whole lit spot inside
+    the detector's view, or the whole view of a point-source rig's detector); else
+    `ConfigError` naming the rig file's line and field. Never another geometry: the
+    standard's albedo is given for this one."""
+    wi, wo = rig.reference_directions()
+    problem = _clipped(rig, wi, wo)
+    if problem is not None:
+        field, message = problem
+        where = str(rig.source) if rig.source else f"rig {rig.spec.name!r}"
+        if rig.source is not None:
+            where += f":{line_of(read_yaml(rig.source, rig.text)[1], field.split('.'))}"
+        raise ConfigError(f"{where}: {field}: {message}")
+    return wi, wo
+
+
+def _clipped(rig: Rig, wi: FloatArray, wo: FloatArray) -> tuple[str, str] | None:
+    """(field, why) when the reference reading at (wi, wo) would be clipped, else None."""
+    ref, c = rig.spec.reference, rig.spec.constraints
+    size, fov = rig.reference_diameter_mm, c.detector_fov_mm
+    seen = fov / float(wo[2])  # the view's length on the standard, along the x-z plane
+    if rig.source_kind == "point":
+        if radiometry.seen_fits_sample(fov, size, wo):
+            return None
+        widest = f"θo ≤ {_floor_deg(fov / size)}°" if fov <= size else "no θo"
+        return "reference.theta_o_deg", (
+            f"the detector's {fov:g} mm field of view spans {seen:.1f} mm of the {size:g} mm "
+            f"reference standard at θo = {ref.theta_o_deg:g}°, past its edge (a point "
+            f"source's calibration assumes the view lies on the standard); expected "
+            f"{widest}, or a standard at least {seen:.1f} mm across (reference.diameter_mm)"
+        )
+    beam = c.beam_diameter_mm
+    assert beam is not None  # required by the rig file for a collimated light
+    eta = float(radiometry.footprint_fraction(beam, fov, size, wi, wo))
+    if eta == 1.0:
+        return None
+    lit = beam / float(wi[2])  # the lit spot's length, along the x-z plane
+    low = f"the reference would read {100 * (1 - eta):.1f} % low"
+    if lit > size:
+        return "reference.theta_i_deg", (
+            f"the {beam:g} mm beam lights {lit:.1f} mm of the {size:g} mm reference standard "
+            f"at θi = {ref.theta_i_deg:g}°, past its edge ({low}); expected "
+            f"θi ≤ {_floor_deg(beam / size)}°, or a standard at least {lit:.1f} mm across "
+            "(reference.diameter_mm)"
+        )
+    return "reference.theta_o_deg", (
+        f"the detector's {fov:g} mm field of view ({seen:.1f} mm along the standard at "
+        f"θo = {ref.theta_o_deg:g}°) misses part of the {lit:.1f} mm lit spot ({low}); "
+        "expected a geometry whose view takes in the whole spot"
+    )
+
+
+def _floor_deg(cosine: float) -> str:
+    """arccos(cosine) in degrees rounded down to 0.1° (so the quoted limit is valid)."""
+    return f"{math.floor(math.degrees(math.acos(cosine)) * 10) / 10:g}"
+
+
 def geometry_label(rig: Rig) -> str:
-    """The rig's calibration geometry, e.g. ``0°/45°`` (θi/θo)."""
+    """The rig's calibration geometry, e.g. ``0°/45°`` (θi/θo; `reference_geometry`)."""
+    reference_geometry(rig)
     ref = rig.spec.reference
     return f"{ref.theta_i_deg:g}°/{ref.theta_o_deg:g}°"
 
 
 def reference_pose(rig: Rig) -> FloatArray:
-    """Joint angles (rad, rig.axes order) of the rig's calibration geometry (its
-    ``reference`` section; 0°/45° in the shipped rigs)."""
-    wi, wo = rig.reference_directions()
+    """Joint angles (rad, rig.axes order) of the rig's calibration geometry
+    (`reference_geometry`; 0°/45° in the shipped rigs)."""
+    wi, wo = reference_geometry(rig)
     solution = rig.solve(wi, wo)
     if solution.reasons[0] not in (Reason.OK, Reason.BLIND_SPOT, Reason.FOOTPRINT):
         raise GonioError(
