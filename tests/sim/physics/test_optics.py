@@ -26,7 +26,7 @@ def test_the_source_is_the_rigs_light_with_the_scenes_power(
     assert optics.optics == radiometry.DetectorOptics(1e-5, 25.0)
     assert optics.diameters_mm == {"sample": 30.0, "reference": 50.8}
     point = SceneOptics(load_scene(SCENES / "seed000_specular.yaml"), arch_point)
-    assert point.source == radiometry.PointSource(0.01, 300.0)
+    assert point.source == radiometry.PointSource(0.002, 300.0)
 
 
 def test_sizes_aperture_and_reference_follow_the_rig(rigs: dict[str, Rig]) -> None:
