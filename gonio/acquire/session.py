@@ -27,6 +27,7 @@ from drivers.base import DriverError
 from gonio import __version__
 from gonio.acquire import backends
 from gonio.acquire.backends import BackendKind
+from gonio.acquire.calibration import geometry_label, reference_pose
 from gonio.acquire.engine import Engine, Report, utc_now
 from gonio.acquire.progress import Progress, Quiet
 from gonio.acquire.signals import StopRequests
@@ -238,6 +239,7 @@ def _anything_measured(journal: Journal) -> bool:
 
 def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> None:
     """Refuse, before anything is created or moved, a run the backend cannot finish."""
+    reference_pose(plan.rig)  # a reference reading the calibration could not trust
     spec = plan.spec.acquisition.calibration
     if spec.dark and backend.devices.light is None:
         raise ConfigError(
@@ -366,6 +368,11 @@ def dry_run(plan: Plan, files: Files, *, scene: Any, output: Path | None, overwr
             f"{int(np.flatnonzero(outside)[0])}); re-plan with this rig"
         )
     lines.append(f"targets: {len(plan)} within the axis limits")
+    reference_pose(rig)
+    lines.append(
+        f"reference standard: read at {geometry_label(rig)} on "
+        f"{rig.reference_diameter_mm:g} mm, unclipped"
+    )
     check_output(output, overwrite)
     if output is not None:
         folder = output.parent if str(output.parent) else Path(".")

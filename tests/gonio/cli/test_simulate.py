@@ -114,4 +114,4 @@ def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None
         "--rig", str(CONFIGS / "rigs" / "arch_point.yaml"),
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
-    assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: none)" in r.stdout
+    assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: saturation)" in r.stdout
