@@ -24,6 +24,7 @@ or on hardware the seconds since the run's first start by the wall clock.
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -136,6 +137,7 @@ class Engine:
         self.count = 0  # targets measured in the run so far (all sessions)
         self.calibrations = 0  # calibrations journaled so far (all sessions)
         self.reference_exposure_s: float | None = None
+        self._calibrated_at: int | None = None  # `count` at the last calibration
         self._busy_until = 0.0
         self._current: int | None = None  # the target in flight
         self._temperatures: str | None = None  # read by the last health check (JSON)
@@ -154,6 +156,7 @@ class Engine:
         if calibrations:
             last = calibrations[-1]
             self.calibration_due.done(int(last.data["count"]), last.t_s)
+            self._calibrated_at = int(last.data["count"])
             self.reference_exposure_s = float(last.data["reference"]["exposure_s"])
         checks = h.of_kind("health")
         if checks:
@@ -168,7 +171,7 @@ class Engine:
         states = h.samples["sim_state"]
         if len(states) and states[-1] is not None:
             k = int(np.argmax(h.samples["ended_s"]))
-            best = (float(h.samples["ended_s"][k]), 0, states[k])
+            best = (float(h.samples["ended_s"][k]), 0, json.loads(states[k]))  # stored as text
         for e in h.events:
             if "sim_state" in e.data and (best is None or (e.t_s, 1) >= best[:2]):
                 best = (e.t_s, 1, e.data["sim_state"])
@@ -198,7 +201,8 @@ class Engine:
                     self.progress.advance(done + 1)
                     if self.stops.requested:
                         raise RunInterrupted(self.stops.signum or 2, abandoned=False)
-                self._calibrate("end")
+                if todo.size or self._calibrated_at != self.count:
+                    self._calibrate("end")  # not again when a run that ended is resumed
             except RunInterrupted as exc:
                 interrupted = exc
                 report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
@@ -207,7 +211,7 @@ class Engine:
             except (MotorFault, MotionTimeout) as exc:
                 report.outcome, report.message = "fault", str(exc)
                 self._hold_all()
-                self._event("fault", self._fault_data(exc), target=self._current)
+                self._event("fault", {**self._fault_data(exc), **self._sim()}, target=self._current)
             except _Stop as exc:
                 report.outcome, report.message = exc.outcome, str(exc)
                 self._hold_all()
@@ -415,7 +419,7 @@ class Engine:
                 "problems": problems,
                 "flags": flagged,
             }
-            self._event("health", data)
+            self._event("health", {**data, **self._sim()})
             self.health_due.done(self.count, self.time.now())
             self._temperatures = _json_temperatures(temperatures)
             if flagged:
@@ -423,14 +427,13 @@ class Engine:
                 raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
             if not problems:
                 if paused:
-                    self._event(
-                        "resume", {"reason": "health", "paused_s": self.time.now() - started}
-                    )
+                    paused_s = self.time.now() - started
+                    self._event("resume", {"reason": "health", "paused_s": paused_s, **self._sim()})
                 return
             if not paused:
                 paused = True
                 self._hold_all()
-                self._event("pause", {"reason": "health", "problems": problems})
+                self._event("pause", {"reason": "health", "problems": problems, **self._sim()})
             if self.time.now() - started >= 60.0 * spec.pause_timeout_minutes:
                 raise _Stop(
                     "paused",
@@ -492,6 +495,7 @@ class Engine:
         }
         self._event("calibration", data)
         self.calibrations += 1
+        self._calibrated_at = self.count
         self.calibration_due.done(self.count, self.time.now())
 
     def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
