@@ -207,7 +207,11 @@ class Engine:
                 interrupted = exc
                 report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
                 self._hold_all()
-                self._event("pause", {"reason": "signal", "signal": exc.args[0], **self._sim()})
+                # A step abandoned half-way is redone from the state last journaled (a
+                # snapshot taken now would resume the simulation mid-step).
+                state = {} if exc.abandoned else self._sim()
+                data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
+                self._event("pause", {**data, **state})
             except (MotorFault, MotionTimeout) as exc:
                 report.outcome, report.message = "fault", str(exc)
                 self._hold_all()
