@@ -193,16 +193,10 @@ class Engine:
         interrupted: RunInterrupted | None = None
         with self.stops, self.devices:
             try:
-                self._start(resuming=self.history is not None)
-                self.progress.start(self.plan, todo)
-                for done, i in enumerate(todo.tolist()):
-                    self._between_targets()
-                    self._target(i)
-                    self.progress.advance(done + 1)
-                    if self.stops.requested:
-                        raise RunInterrupted(self.stops.signum or 2, abandoned=False)
-                if todo.size or self._calibrated_at != self.count:
-                    self._calibrate("end")  # not again when a run that ended is resumed
+                try:
+                    self._measure(todo)
+                finally:
+                    self.stops.disarm()  # a signal now must not cut the ending short
             except RunInterrupted as exc:
                 interrupted = exc
                 report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
@@ -233,6 +227,18 @@ class Engine:
         if interrupted is not None:
             raise interrupted
         return report
+
+    def _measure(self, todo: np.ndarray) -> None:
+        self._start(resuming=self.history is not None)
+        self.progress.start(self.plan, todo)
+        for done, i in enumerate(todo.tolist()):
+            self._between_targets()
+            self._target(i)
+            self.progress.advance(done + 1)
+            if self.stops.requested:
+                raise RunInterrupted(self.stops.signum or 2, abandoned=False)
+        if todo.size or self._calibrated_at != self.count:
+            self._calibrate("end")  # not again when a run that ended is resumed
 
     def _start(self, *, resuming: bool) -> None:
         if resuming and not self.calibrate_on_resume:

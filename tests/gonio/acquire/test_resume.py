@@ -70,7 +70,9 @@ def stop_and_resume(path: Path, files: RunFiles, stops: list[StopRequests], seed
         except RunInterrupted:
             run = open_run(path)
             assert run.sessions[-1].outcome == "interrupted"
-            assert run.events[-1].kind == "pause" and "sim_state" in run.events[-1].data
+            pause = run.events[-1]
+            assert pause.kind == "pause" and pause.data["abandoned"] == progress.twice
+            assert ("sim_state" in pause.data) != progress.twice  # abandoned: redone
             first = False
             continue
         assert outcome.report.outcome == "completed"
