@@ -19,6 +19,9 @@ from gonio.store.read import Run, open_run
 from tests.conftest import CliResult
 from tests.support.acquire import ARCH, RunFiles, assert_same_samples, plan_yaml
 
+#: Each resume parses the run's stored rig: once per test is enough.
+pytestmark = pytest.mark.usefixtures("rigs_parsed_once")
+
 
 class StopAfter:
     """A progress that asks the run to stop (as a first Ctrl-C would, through
