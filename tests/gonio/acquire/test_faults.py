@@ -14,9 +14,10 @@ from typing import Any
 import pytest
 
 from gonio.acquire import backends, session
-from gonio.store.read import Run
+from gonio.store.read import Run, open_run
+from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus
-from tests.support.acquire import RunFiles
+from tests.support.acquire import RunFiles, assert_same_samples
 
 
 class Watched:
@@ -179,10 +180,19 @@ def test_a_pause_that_does_not_clear_ends_the_run_paused(
     run = outcome.run
     assert len(run) == 20 and run.sessions[-1].outcome == "paused"
     watched.assert_closed()
-    done = resumed_to_completion(path, run)
-    assert min(e.t_s for e in done.events if e.session == 2) >= max(
-        e.t_s for e in run.events
-    )  # the resumed run's clock goes on from the pause, not back to the last sample
+    # The simulated motor stays hot for 60 s of the run's clock, which runs only while
+    # the run does: each resume pauses again (15 s at most) until it has cooled.
+    for _ in range(4):
+        again = session.resume(path)
+        if again.report.outcome == "completed":
+            break
+        assert again.report.outcome == "paused"
+    done = again.run
+    assert done.complete and len(done) == 30
+    times = [e.t_s for e in done.events]
+    assert times == sorted(times)  # each session goes on from the pause, never back
+    (resumed,) = [e for e in done.of_kind("resume") if e.data.get("reason") == "health"]
+    assert resumed.t_s >= 60.0  # cooled 60 s after the move into target 12
     watched.assert_closed()
 
 
@@ -197,3 +207,40 @@ def test_gonio_acquire_ends_a_faulted_run_with_exit_3(
     assert ended.startswith("gonio: the run ended early: ")
     assert resume == f"resume with: gonio acquire --resume {path}"
     assert run_gonio("acquire", "--resume", str(path), "-q").returncode == 0
+
+
+class Crash(BaseException):
+    """A crash at a chosen moment, in-process: nothing in the engine catches it, so the
+    journal is left as a kill would leave it (the session never ended)."""
+
+
+def test_a_crash_during_a_pause_resumes_as_if_uninterrupted(
+    tmp_path: Path,
+    run_files: Callable[..., RunFiles],
+    uninterrupted: Callable[[RunFiles], Run],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The overheated motor is part of the simulated state: a run that crashed half-way
+    through the pause still waits for it to cool when it resumes."""
+    files = overheat_files(run_files, 5.0)
+    expected = uninterrupted(files)
+    polls = 0
+    sleep = ManualClock.sleep
+
+    def crash_at_the_second_poll(clock: ManualClock, seconds: float) -> None:
+        nonlocal polls
+        polls += seconds == 10.0  # the pause's poll_s (settling is 0.2 s)
+        if polls == 2:
+            raise Crash
+        sleep(clock, seconds)
+
+    monkeypatch.setattr(ManualClock, "sleep", crash_at_the_second_poll)
+    path = tmp_path / "run.sqlite"
+    with pytest.raises(Crash):
+        files.start(path)
+    monkeypatch.setattr(ManualClock, "sleep", sleep)
+    crashed = open_run(path)
+    assert crashed.sessions[-1].outcome is None and crashed.of_kind("pause")
+    outcome = session.resume(path)
+    assert outcome.report.outcome == "completed"
+    assert_same_samples(outcome.run, expected)
