@@ -141,6 +141,7 @@ class Engine:
         self._busy_until = 0.0
         self._current: int | None = None  # the target in flight
         self._temperatures: str | None = None  # read by the last health check (JSON)
+        self._unhealthy = False  # the last health check found a problem
         self._session = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
         self._history_state()
@@ -160,7 +161,11 @@ class Engine:
             self.reference_exposure_s = float(last.data["reference"]["exposure_s"])
         checks = h.of_kind("health")
         if checks:
-            self.health_due.done(int(checks[-1].data["count"]), checks[-1].t_s)
+            last_check = checks[-1].data
+            self.health_due.done(int(last_check["count"]), checks[-1].t_s)
+            self._unhealthy = bool(last_check["problems"] or last_check["flags"])
+            if int(last_check["count"]) == self.count:  # the next sample's temperatures
+                self._temperatures = _json_temperatures(last_check["temperatures_c"])
 
     def _latest_snapshot(self) -> Any:
         """The simulated backend's state when the journal's last entry was written."""
@@ -241,13 +246,18 @@ class Engine:
             self._calibrate("end")  # not again when a run that ended is resumed
 
     def _start(self, *, resuming: bool) -> None:
+        restored = False
         if resuming and not self.calibrate_on_resume:
             simulation = self.devices.simulation
             state = self._latest_snapshot()
             if simulation is not None and state is not None:
                 simulation.restore(state)
+                restored = True
         self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
-        self._check_health(force=True)
+        # A restored simulation keeps the uninterrupted run's schedule of health checks,
+        # unless it stopped in a pause (then it goes on checking).
+        if not restored or self._unhealthy:
+            self._check_health(force=True)
         if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
             self._calibrate("start" if self.calibrations == 0 else "resume")
 
