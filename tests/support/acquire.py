@@ -91,10 +91,9 @@ class RunFiles:
 
 def sample_values(run: Run) -> dict[str, np.ndarray]:
     """Every column of a run's samples that a resume must not change: all but the
-    session, the wall-clock time, the attempts (a retried sample resumed after its failed
-    attempt counts only the attempts of its session) and the motor temperatures (each
-    session starts with a health check, so later checks fall elsewhere)."""
-    skip = {"session", "utc", "attempts", "temperatures_c"}
+    session, the wall-clock time and the attempts (a retried sample resumed after its
+    failed attempt counts only the attempts of its session)."""
+    skip = {"session", "utc", "attempts"}
     return {k: v for k, v in run.samples.items() if k not in skip}
 
 

@@ -34,12 +34,14 @@ from tests.support.acquire import (
 #: Seeds of the kill schedules, and the kills each makes at least (≥ 100 in all).
 KILL_SEEDS = (0, 1, 2, 3)
 KILLS_PER_SEED = 26
-#: Transient faults on the way, so kills also land after a retry (a mid-sample
-#: snapshot), a skip and a saturated reading measured again.
+#: Faults on the way, so kills also land after a retry (a mid-sample snapshot), a
+#: saturated reading measured again, and in a health pause (a motor hot from the move
+#: into target 12 until 30 s later; health is checked every 10 targets).
 FAULTS = [
     {"kind": "comm_error", "at": [7, 33]},
     {"kind": "detector_error", "at": [21]},
     {"kind": "saturated", "at": [40, 41]},
+    {"kind": "overheat", "at": [12], "axis": "light_elevation", "for_s": 30},
 ]
 
 
@@ -59,6 +61,7 @@ def test_kill_9_at_random_moments(
     files = run_files(faults=FAULTS, acquisition={"on_fault": {"retries": 1, "then": "skip"}})
     expected = uninterrupted(files)
     assert len(expected.skipped) == 0 and expected.samples["remeasured"].any()
+    assert expected.of_kind("pause")
     path = tmp_path / "run.sqlite"
     rng = random.Random(seed)
     kills = runs = 0
