@@ -196,39 +196,44 @@ class Engine:
         todo = self.todo()
         report = self._session = Report("completed", 0, 0, t_start_s=self.time.now())
         interrupted: RunInterrupted | None = None
-        with self.stops, self.devices:
-            try:
+        # The session ends in the journal while the signal handlers are still ours: a
+        # late second Ctrl-C must not skip it.
+        with self.stops:
+            with self.devices:
                 try:
-                    self._measure(todo)
+                    try:
+                        self._measure(todo)
+                    finally:
+                        self.stops.disarm()  # a signal now must not cut the ending short
+                except RunInterrupted as exc:
+                    interrupted = exc
+                    report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
+                    self._hold_all()
+                    # A step abandoned half-way is redone from the state last journaled (a
+                    # snapshot taken now would resume the simulation mid-step).
+                    state = {} if exc.abandoned else self._sim()
+                    data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
+                    self._event("pause", {**data, **state})
+                except (MotorFault, MotionTimeout) as exc:
+                    report.outcome, report.message = "fault", str(exc)
+                    self._hold_all()
+                    self._event(
+                        "fault", {**self._fault_data(exc), **self._sim()}, target=self._current
+                    )
+                except _Stop as exc:
+                    report.outcome, report.message = exc.outcome, str(exc)
+                    self._hold_all()
+                except JournalError as exc:
+                    report.outcome, report.message = "journal", str(exc)
+                    self._hold_all()
+                except GonioError as exc:
+                    report.outcome, report.message = "aborted", str(exc)
+                    self._hold_all()
                 finally:
-                    self.stops.disarm()  # a signal now must not cut the ending short
-            except RunInterrupted as exc:
-                interrupted = exc
-                report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
-                self._hold_all()
-                # A step abandoned half-way is redone from the state last journaled (a
-                # snapshot taken now would resume the simulation mid-step).
-                state = {} if exc.abandoned else self._sim()
-                data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
-                self._event("pause", {**data, **state})
-            except (MotorFault, MotionTimeout) as exc:
-                report.outcome, report.message = "fault", str(exc)
-                self._hold_all()
-                self._event("fault", {**self._fault_data(exc), **self._sim()}, target=self._current)
-            except _Stop as exc:
-                report.outcome, report.message = exc.outcome, str(exc)
-                self._hold_all()
-            except JournalError as exc:
-                report.outcome, report.message = "journal", str(exc)
-                self._hold_all()
-            except GonioError as exc:
-                report.outcome, report.message = "aborted", str(exc)
-                self._hold_all()
-            finally:
-                self.progress.close()
-        report.t_end_s = self.time.now()
-        report.calibrations = self.calibrations
-        self._end_session(report.outcome)
+                    self.progress.close()
+            report.t_end_s = self.time.now()
+            report.calibrations = self.calibrations
+            self._end_session(report.outcome)
         if interrupted is not None:
             raise interrupted
         return report
