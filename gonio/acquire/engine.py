@@ -24,6 +24,7 @@ or on hardware the seconds since the run's first start by the wall clock.
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -136,10 +137,12 @@ class Engine:
         self.count = 0  # targets measured in the run so far (all sessions)
         self.calibrations = 0  # calibrations journaled so far (all sessions)
         self.reference_exposure_s: float | None = None
+        self._calibrated_at: int | None = None  # `count` at the last calibration
         self._busy_until = 0.0
         self._current: int | None = None  # the target in flight
         self._limits: dict[str, tuple[float, float]] | None = None
         self._temperatures: str | None = None  # read by the last health check (JSON)
+        self._unhealthy = False  # the last health check found a problem
         self._session = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
         self._history_state()
@@ -155,10 +158,15 @@ class Engine:
         if calibrations:
             last = calibrations[-1]
             self.calibration_due.done(int(last.data["count"]), last.t_s)
+            self._calibrated_at = int(last.data["count"])
             self.reference_exposure_s = float(last.data["reference"]["exposure_s"])
         checks = h.of_kind("health")
         if checks:
-            self.health_due.done(int(checks[-1].data["count"]), checks[-1].t_s)
+            last_check = checks[-1].data
+            self.health_due.done(int(last_check["count"]), checks[-1].t_s)
+            self._unhealthy = bool(last_check["problems"] or last_check["flags"])
+            if int(last_check["count"]) == self.count:  # the next sample's temperatures
+                self._temperatures = _json_temperatures(last_check["temperatures_c"])
 
     def _latest_snapshot(self) -> Any:
         """The simulated backend's state when the journal's last entry was written."""
@@ -169,7 +177,7 @@ class Engine:
         states = h.samples["sim_state"]
         if len(states) and states[-1] is not None:
             k = int(np.argmax(h.samples["ended_s"]))
-            best = (float(h.samples["ended_s"][k]), 0, states[k])
+            best = (float(h.samples["ended_s"][k]), 0, json.loads(states[k]))  # stored as text
         for e in h.events:
             if "sim_state" in e.data and (best is None or (e.t_s, 1) >= best[:2]):
                 best = (e.t_s, 1, e.data["sim_state"])
@@ -189,54 +197,75 @@ class Engine:
         todo = self.todo()
         report = self._session = Report("completed", 0, 0, t_start_s=self.time.now())
         interrupted: RunInterrupted | None = None
-        with self.stops, self.devices:
-            try:
-                self._start(resuming=self.history is not None)
-                if self.devices.simulation is not None:
-                    self.devices.simulation.expect(self.plan.angles[todo], todo)
-                self.progress.start(self.plan, todo)
-                for done, i in enumerate(todo.tolist()):
-                    self._between_targets()
-                    self._target(i)
-                    self.progress.advance(done + 1)
-                    if self.stops.requested:
-                        raise RunInterrupted(self.stops.signum or 2, abandoned=False)
-                self._calibrate("end")
-            except RunInterrupted as exc:
-                interrupted = exc
-                report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
-                self._hold_all()
-                self._event("pause", {"reason": "signal", "signal": exc.args[0], **self._sim()})
-            except (MotorFault, MotionTimeout) as exc:
-                report.outcome, report.message = "fault", str(exc)
-                self._hold_all()
-                self._event("fault", self._fault_data(exc), target=self._current)
-            except _Stop as exc:
-                report.outcome, report.message = exc.outcome, str(exc)
-                self._hold_all()
-            except JournalError as exc:
-                report.outcome, report.message = "journal", str(exc)
-                self._hold_all()
-            except GonioError as exc:
-                report.outcome, report.message = "aborted", str(exc)
-                self._hold_all()
-            finally:
-                self.progress.close()
-        report.t_end_s = self.time.now()
-        report.calibrations = self.calibrations
-        self._end_session(report.outcome)
+        # The session ends in the journal while the signal handlers are still ours: a
+        # late second Ctrl-C must not skip it.
+        with self.stops:
+            with self.devices:
+                try:
+                    try:
+                        self._measure(todo)
+                    finally:
+                        self.stops.disarm()  # a signal now must not cut the ending short
+                except RunInterrupted as exc:
+                    interrupted = exc
+                    report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
+                    self._hold_all()
+                    # A step abandoned half-way is redone from the state last journaled (a
+                    # snapshot taken now would resume the simulation mid-step).
+                    state = {} if exc.abandoned else self._sim()
+                    data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
+                    self._event("pause", {**data, **state})
+                except (MotorFault, MotionTimeout) as exc:
+                    report.outcome, report.message = "fault", str(exc)
+                    self._hold_all()
+                    self._event(
+                        "fault", {**self._fault_data(exc), **self._sim()}, target=self._current
+                    )
+                except _Stop as exc:
+                    report.outcome, report.message = exc.outcome, str(exc)
+                    self._hold_all()
+                except JournalError as exc:
+                    report.outcome, report.message = "journal", str(exc)
+                    self._hold_all()
+                except GonioError as exc:
+                    report.outcome, report.message = "aborted", str(exc)
+                    self._hold_all()
+                finally:
+                    self.progress.close()
+            report.t_end_s = self.time.now()
+            report.calibrations = self.calibrations
+            self._end_session(report.outcome)
         if interrupted is not None:
             raise interrupted
         return report
 
+    def _measure(self, todo: np.ndarray) -> None:
+        self._start(resuming=self.history is not None)
+        if self.devices.simulation is not None:
+            self.devices.simulation.expect(self.plan.angles[todo], todo)
+        self.progress.start(self.plan, todo)
+        for done, i in enumerate(todo.tolist()):
+            self._between_targets()
+            self._target(i)
+            self.progress.advance(done + 1)
+            if self.stops.requested:
+                raise RunInterrupted(self.stops.signum or 2, abandoned=False)
+        if todo.size or self._calibrated_at != self.count:
+            self._calibrate("end")  # not again when a run that ended is resumed
+
     def _start(self, *, resuming: bool) -> None:
+        restored = False
         if resuming and not self.calibrate_on_resume:
             simulation = self.devices.simulation
             state = self._latest_snapshot()
             if simulation is not None and state is not None:
                 simulation.restore(state)
+                restored = True
         self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
-        self._check_health(force=True)
+        # A restored simulation keeps the uninterrupted run's schedule of health checks,
+        # unless it stopped in a pause (then it goes on checking).
+        if not restored or self._unhealthy:
+            self._check_health(force=True)
         if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
             self._calibrate("start" if self.calibrations == 0 else "resume")
 
@@ -420,7 +449,7 @@ class Engine:
                 "problems": problems,
                 "flags": flagged,
             }
-            self._event("health", data)
+            self._event("health", {**data, **self._sim()})
             self.health_due.done(self.count, self.time.now())
             self._temperatures = _json_temperatures(temperatures)
             if flagged:
@@ -428,14 +457,13 @@ class Engine:
                 raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
             if not problems:
                 if paused:
-                    self._event(
-                        "resume", {"reason": "health", "paused_s": self.time.now() - started}
-                    )
+                    paused_s = self.time.now() - started
+                    self._event("resume", {"reason": "health", "paused_s": paused_s, **self._sim()})
                 return
             if not paused:
                 paused = True
                 self._hold_all()
-                self._event("pause", {"reason": "health", "problems": problems})
+                self._event("pause", {"reason": "health", "problems": problems, **self._sim()})
             if self.time.now() - started >= 60.0 * spec.pause_timeout_minutes:
                 raise _Stop(
                     "paused",
@@ -497,6 +525,7 @@ class Engine:
         }
         self._event("calibration", data)
         self.calibrations += 1
+        self._calibrated_at = self.count
         self.calibration_due.done(self.count, self.time.now())
 
     def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:

@@ -34,6 +34,7 @@ class StopRequests:
         self.remaining_s = remaining_s
         self.grace_s = grace_s
         self.signum: int | None = None
+        self.armed = True
         self._previous: dict[int, object] = {}
 
     @property
@@ -41,12 +42,21 @@ class StopRequests:
         return self.signum is not None
 
     def request(self, signum: int = signal.SIGINT) -> None:
-        """What a first signal does (also callable directly, e.g. by a test)."""
+        """What a first signal does (also callable directly, e.g. by a test). Once
+        `disarm`ed, a signal is only recorded (the run is already stopping)."""
+        if not self.armed:
+            self.signum = self.signum or signum
+            return
         if self.signum is not None:
             raise RunInterrupted(signum, abandoned=True)
         self.signum = signum
         if self.remaining_s() > self.grace_s:
             raise RunInterrupted(signum, abandoned=True)
+
+    def disarm(self) -> None:
+        """From now on signals raise nothing: the run is ending (holding the axes,
+        journaling how it ended), which a second Ctrl-C must not cut short."""
+        self.armed = False
 
     def _handler(self, signum: int, frame: FrameType | None) -> None:
         self.request(signum)

@@ -162,41 +162,57 @@ class Journal:
 
         An existing file is refused unless ``overwrite`` (and even then while another
         process writes it). The file is created and locked before anything is written
-        to it, so nothing moves before the output is known to be usable."""
+        to it, so nothing moves before the output is known to be usable.
+
+        The run file appears complete or not at all: its schema and metadata are written
+        to a hidden file beside it (``.NAME.creating-PID``), which is then linked to
+        ``path`` (refused if ``path`` appeared meanwhile). A crash before that leaves only
+        the hidden file; never a ``path`` that is neither a run nor free."""
         if path is None:
             conn = cls._connect(":memory:", durable, max_page_count)
-            lock = None
-        else:
-            if path.is_dir():
-                raise JournalError(f"{path}: is a folder; expected a run file name")
-            if path.exists() or path.is_symlink():
-                if not overwrite:
-                    raise JournalError(
-                        f"{path}: a run file already exists; give another name, continue it "
-                        "with --resume, or replace it with --overwrite"
-                    )
-                os.close(_lock(path))  # refuse to replace a run another process writes
-                remove_run_file(path)
             try:
-                fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o644)
-            except OSError as exc:
-                raise JournalError(
-                    f"{path}: cannot create the run file: {exc.strerror or exc}"
-                ) from None
-            os.close(fd)
-            lock = _lock(path)
-            try:
-                conn = cls._connect(str(path), durable, max_page_count)
+                cls._write_schema(conn, meta, plan_file)
             except sqlite3.Error as exc:
-                os.close(lock)
-                raise JournalError(f"{path}: cannot open the run file: {exc}") from None
+                conn.close()
+                raise JournalError(f"journal: cannot write the run file: {exc}") from None
+            return cls(conn, None, None)
+        if path.is_dir():
+            raise JournalError(f"{path}: is a folder; expected a run file name")
+        if path.exists() or path.is_symlink():
+            if not overwrite:
+                raise JournalError(
+                    f"{path}: a run file already exists; give another name, continue it "
+                    "with --resume, or replace it with --overwrite"
+                )
+            os.close(_lock(path))  # refuse to replace a run another process writes
+            remove_run_file(path)
+        creating = path.with_name(f".{path.name}.creating-{os.getpid()}")
+        remove_run_file(creating)
         try:
-            cls._write_schema(conn, meta, plan_file)
+            fd = os.open(creating, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            raise JournalError(
+                f"{path}: cannot create the run file: {exc.strerror or exc}"
+            ) from None
+        os.close(fd)
+        try:
+            conn = cls._connect(str(creating), False, None)
+            try:
+                cls._write_schema(conn, meta, plan_file)
+            finally:
+                conn.close()  # the last connection: the WAL is checkpointed into the file
+            os.link(creating, path)
+        except (sqlite3.Error, OSError) as exc:
+            why = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+            raise JournalError(f"{path}: cannot write the run file: {why}") from None
+        finally:
+            remove_run_file(creating)
+        lock = _lock(path)
+        try:
+            conn = cls._connect(str(path), durable, max_page_count)
         except sqlite3.Error as exc:
-            conn.close()
-            if lock is not None:
-                os.close(lock)
-            raise JournalError(f"{path}: cannot write the run file: {exc}") from None
+            os.close(lock)
+            raise JournalError(f"{path}: cannot open the run file: {exc}") from None
         return cls(conn, path, lock)
 
     @staticmethod

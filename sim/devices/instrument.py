@@ -104,9 +104,9 @@ class SimulatedInstrument(Resource):
 
     def snapshot(self) -> dict[str, Any]:
         """The state a resumed run restores (between targets, at rest), as JSON values:
-        the virtual time, the motors (`MotorState`) and how many moves and readings the
+        the virtual time, the motors (`MotorState`), how many moves and readings the
         present sample has used (so a retried or resumed sample continues its streams
-        and its injected faults do not fire twice)."""
+        and its injected faults do not fire twice) and an injected overheat in force."""
         motors = self.bus.snapshot()
         true = self.bus.true_positions()
         sample = self.bus.present_sample
@@ -119,11 +119,12 @@ class SimulatedInstrument(Resource):
             "sample": sample,
             "moves": self.bus.moves_of(sample),
             "draws": self.detector.draws_of(sample),
+            "overheat": self.bus.overheat,
         }
 
     def restore(self, state: Any) -> None:
         """Continue from a `snapshot`: the clock (which must not be past it), the
-        motors and the present sample's counters."""
+        motors, the present sample's counters and an overheat in force."""
         try:
             time_s = float(state["time_s"])
             motors = MotorState(
@@ -132,6 +133,8 @@ class SimulatedInstrument(Resource):
                 tuple(map(float, state["repeatability"])),
             )
             sample, moves, draws = int(state["sample"]), int(state["moves"]), int(state["draws"])
+            hot = state.get("overheat")
+            overheat = None if hot is None else (str(hot[0]), float(hot[1]), float(hot[2]))
         except (TypeError, KeyError, ValueError) as exc:
             raise ValueError(f"not a snapshot of a simulated instrument: {exc}") from None
         if self.clock.now() > time_s:
@@ -140,6 +143,7 @@ class SimulatedInstrument(Resource):
         self.bus.restore(motors)
         self.bus.set_moves(sample, moves)
         self.detector.set_draws(sample, draws)
+        self.bus.set_overheat(overheat)
 
     # -- a whole plan ------------------------------------------------------------------
     def run(

@@ -316,6 +316,15 @@ class SimMotorBus(Resource):
         """Continue ``sample`` after ``moves`` moves (a resumed run)."""
         self._moves[sample] = moves
 
+    @property
+    def overheat(self) -> tuple[str, float, float] | None:
+        """An injected overheat in force: (axis, °C, until when on the clock), or None."""
+        return self._hot
+
+    def set_overheat(self, hot: tuple[str, float, float] | None) -> None:
+        """Continue an overheat (a resumed run)."""
+        self._hot = hot
+
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)

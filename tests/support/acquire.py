@@ -1,15 +1,225 @@
-"""Small plans and runs for the acquisition tests: a plan file with its rig, built
-once, and a run acquired on the simulated backend into a real SQLite file."""
+"""Runs of `gonio acquire` for the acquisition and journal tests: small plan and scene
+files written into a folder (a plan file with its rig, built once), a run acquired on
+the simulated backend into a real SQLite file, an acquiring child process (`os.fork`)
+that reports every target it finishes through a pipe and can be killed at any moment,
+and what a run file holds, for bit-for-bit comparisons."""
 
 from __future__ import annotations
 
+import os
+import select
+import signal
+import sqlite3
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
 
 from gonio.acquire import session
 from gonio.planner.plan import Plan, PlanSource, load_plan_source
+from gonio.store.read import Run
 from sim.scene import Scene
-from tests.conftest import CONFIGS
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+ARCH = CONFIGS / "rigs" / "arch.yaml"
+#: Noise, backlash, repeatability, ticks and a drifting source: every random stream and
+#: the motors' state matter, so a resume that restored anything wrong shows.
+BRUSHED = CONFIGS / "scenes" / "brushed_metal.yaml"
+
+
+def plan_yaml(
+    targets: int = 60, *, rig: Path = ARCH, acquisition: dict[str, Any] | None = None
+) -> str:
+    """A small Sobol plan on ``rig``: calibrations every 15 targets, health every 10."""
+    spec: dict[str, Any] = {
+        "name": "crash",
+        "rig": str(rig),
+        "parametrization": "hybrid",
+        "isotropic": True,
+        "sampling": {"strategy": "sobol", "target": targets, "seed": 1},
+        "exposure": {"seconds": 0.05, "averages": 2},
+        "time_budget_s": 5,
+        "acquisition": {
+            "calibration": {"every_samples": 15, "averages": 4},
+            "health": {"every_samples": 10},
+            **(acquisition or {}),
+        },
+    }
+    return yaml.safe_dump(spec, sort_keys=False)
+
+
+def scene_yaml(faults: list[dict[str, Any]] | None = None, base: Path = BRUSHED) -> str:
+    spec = yaml.safe_load(base.read_text())
+    if faults is not None:
+        spec["faults"] = faults
+    return yaml.safe_dump(spec, sort_keys=False)
+
+
+_PLANS: dict[tuple[str, str], Plan] = {}
+
+
+@dataclass(frozen=True)
+class RunFiles:
+    """A plan file and a scene file (written by the `run_files` fixture)."""
+
+    plan: Path
+    scene: Path
+
+    def files(self) -> tuple[Plan, session.Files, Any]:
+        """(the plan, planned once per plan text and rig, the files, the scene)."""
+        source = load_plan_source(self.plan)
+        key = (source.text.decode(), source.rig.text.decode())
+        if key not in _PLANS:
+            _PLANS[key] = source.build()
+        scene, text = session.load_scene_file(self.scene, source.rig)
+        files = session.Files(
+            source.path, source.text, source.rig.source, source.rig.text, self.scene, text
+        )
+        return _PLANS[key], files, scene
+
+    def start(self, output: Path | None, **kwargs: Any) -> session.Outcome:
+        plan, files, scene = self.files()
+        return session.start(plan, files, scene=scene, output=output, **kwargs)
+
+    def cli(self, output: Path) -> list[str]:
+        """``gonio`` arguments that start this run into ``output``."""
+        return ["acquire", str(self.plan), "--scene", str(self.scene), "-o", str(output), "-q"]
+
+
+def sample_values(run: Run) -> dict[str, np.ndarray]:
+    """Every column of a run's samples that a resume must not change: all but the
+    session, the wall-clock time and the attempts (a retried sample resumed after its
+    failed attempt counts only the attempts of its session)."""
+    skip = {"session", "utc", "attempts"}
+    return {k: v for k, v in run.samples.items() if k not in skip}
+
+
+def calibration_values(run: Run) -> list[tuple[Any, ...]]:
+    """Each calibration's readings, counts and run times."""
+    return [
+        (e.data["k"], e.data["count"], e.t_s, dict(e.data["reference"]), dict(e.data["dark"]))
+        for e in run.of_kind("calibration")
+    ]
+
+
+def assert_same_samples(run: Run, expected: Run) -> None:
+    got, want = sample_values(run), sample_values(expected)
+    assert got.keys() == want.keys()
+    for name, value in want.items():
+        if value.dtype == object:
+            assert got[name].tolist() == value.tolist(), name
+        else:
+            np.testing.assert_array_equal(got[name], value, err_msg=name, strict=True)
+    assert calibration_values(run) == calibration_values(expected)
+
+
+def integrity(path: Path) -> str:
+    """``PRAGMA integrity_check`` of a run file ('ok' when sound)."""
+    conn = sqlite3.connect(path)
+    try:
+        return str(conn.execute("PRAGMA integrity_check").fetchone()[0])
+    finally:
+        conn.close()
+
+
+class PipeProgress:
+    """A `gonio.acquire.progress.Progress` that writes ``t INDEX`` to a pipe for every
+    target finished (called after its sample or skip was committed)."""
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+        self.todo: list[int] = []
+
+    def start(self, plan: Plan, todo: np.ndarray) -> None:
+        self.todo = todo.tolist()
+
+    def advance(self, done: int) -> None:
+        os.write(self.fd, b"t %d\n" % self.todo[done - 1])
+
+    def close(self) -> None:
+        pass
+
+
+@dataclass
+class ChildResult:
+    """What a forked acquiring child did: the targets it reported finished, whether it
+    was killed, and its last line (``done OUTCOME`` or ``error …``) if it got there."""
+
+    reported: list[int] = field(default_factory=list)
+    killed: bool = False
+    last: str | None = None
+
+
+def acquire_in_child(
+    work: Callable[[PipeProgress], object],
+    *,
+    kill_after: int | None = None,
+    delay_s: float = 0.0,
+    kill_signal: int = signal.SIGKILL,
+    timeout_s: float = 60.0,
+) -> ChildResult:
+    """Fork a child that runs ``work(progress)`` (a `session.Outcome` is reported as its
+    outcome, anything else as it is); the parent sends ``kill_signal`` once the child
+    reported ``kill_after`` targets (None: never; 0: from the fork) and ``delay_s`` more
+    seconds passed, and returns what the child reported."""
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: never returns into the test
+        code = 0
+        try:
+            os.close(r)
+            value = work(PipeProgress(w))
+            if isinstance(value, session.Outcome):
+                value = value.report.outcome
+            os.write(w, f"done {value}\n".encode())
+        except BaseException as exc:
+            os.write(w, f"error {type(exc).__name__}: {exc}\n".encode())
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+    os.close(w)
+    result = ChildResult()
+    buf = b""
+    deadline = time.monotonic() + delay_s if kill_after == 0 else None
+    give_up = time.monotonic() + timeout_s
+    try:
+        while True:
+            if deadline is None and kill_after and buf.count(b"t ") >= kill_after:
+                deadline = time.monotonic() + delay_s
+            now = time.monotonic()
+            if deadline is not None and now >= deadline:
+                os.kill(pid, kill_signal)
+                result.killed = kill_signal == signal.SIGKILL
+                break
+            wait = min(give_up, deadline or give_up) - now
+            assert wait > 0, "the acquiring child hung"
+            ready, _, _ = select.select([r], [], [], wait)
+            if ready:
+                chunk = os.read(r, 65536)
+                if not chunk:
+                    break
+                buf += chunk
+        while chunk := os.read(r, 65536):
+            buf += chunk
+    finally:
+        os.close(r)
+        _, status = os.waitpid(pid, 0)
+    if result.killed:
+        result.killed = os.WIFSIGNALED(status) and os.WTERMSIG(status) == signal.SIGKILL
+    for line in buf.decode().splitlines():
+        if line.startswith("t "):
+            result.reported.append(int(line.split()[1]))
+        else:
+            result.last = line
+    return result
+
 
 QUICK = CONFIGS / "plans" / "quick.yaml"
 MATTE = CONFIGS / "scenes" / "matte.yaml"
