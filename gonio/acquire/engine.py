@@ -233,6 +233,8 @@ class Engine:
             if simulation is not None and state is not None:
                 simulation.restore(state)
         self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
+        if self.devices.light is not None:  # a switchable lamp may be off at power-up
+            self.devices.light.on()
         self._check_health(force=True)
         if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
             self._calibrate("start" if self.calibrations == 0 else "resume")
