@@ -78,8 +78,9 @@ def kind_of(rig: Rig, rehearse: bool) -> BackendKind:
 
 
 def needs_scene(rig: Rig, kind: BackendKind) -> bool:
-    """A scene is needed wherever the detector is simulated."""
-    return kind == "simulated" or rig.spec.detector.interface.kind == "simulated"
+    """A scene is needed wherever the detector is simulated (in a rehearsal, a serial
+    detector's simulated peer measures the scene too)."""
+    return kind != "hardware" or rig.spec.detector.interface.kind == "simulated"
 
 
 def simulated(rig: Rig, scene: Any, seed: int | None) -> Backend:
