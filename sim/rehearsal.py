@@ -22,6 +22,7 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
 from typing import Any
 
 from drivers.base import Detector, LightSource, StageTarget
@@ -55,14 +56,24 @@ def emulated_pose(emulator: DxlEmulator, axes: list[AxisConfig]) -> Pose:
     return pose
 
 
+@dataclass(frozen=True)
+class Peers:
+    """The simulated devices at the far end of the ports (for tests and benchmarks)."""
+
+    emulator: DxlEmulator
+    photometer: SerialPhotometer | None  # a serial detector's
+    lamp: SerialLamp | None  # a serial light switch's
+
+
 class RehearsalSide:
     """The `drivers.base.Simulated` side of a rehearsal: which sample's random streams
     the detector's physics uses and what is on the stage; the true joint angles are the
     emulated motors'. A rehearsal resumes as hardware does, with no snapshot."""
 
-    def __init__(self, physics: SimDetector, pose: Pose) -> None:
+    def __init__(self, physics: SimDetector, pose: Pose, peers: Peers) -> None:
         self.physics = physics
         self.pose = pose
+        self.peers = peers
 
     def begin_sample(self, index: int) -> None:
         self.physics.begin_sample(index)
@@ -123,18 +134,21 @@ def _photometer(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPho
 
 @contextmanager
 def rehearsal_devices(
-    rig: Rig, scene: Scene, seed: int | None, speedup: float
+    rig: Rig, scene: Scene, seed: int | None, speedup: float, *, wire_time: bool = False
 ) -> Iterator[tuple[Devices, ScaledClock]]:
-    """The peers running (stopped on exit) and the unopened `Devices` driving them."""
+    """The peers running (stopped on exit) and the unopened `Devices` driving them (their
+    ``simulation`` is a `RehearsalSide`). ``wire_time``: the emulated bus answers when a
+    real one would (`sim.devices.instrument.emulated_bus`)."""
     clock = ScaledClock(speedup)
     streams = Streams(scene.seed if seed is None else seed)
     axes = rig.bus_axes()
     with ExitStack() as stack:
-        emulator = stack.enter_context(emulated_bus(rig, clock))
+        emulator = stack.enter_context(emulated_bus(rig, clock, wire_time=wire_time))
         bus = dynamixel_bus(rig, port=emulator.path)
         switch = rig.spec.light.switch
         light: LightSource
         state: LightState
+        lamp = photometer = None
         if isinstance(switch, SerialSwitchSpec):
             lamp = stack.enter_context(_lamp(rig, switch))
             driver = light_switch(rig, clock, port=lamp.path)
@@ -153,4 +167,5 @@ def rehearsal_devices(
             detector: Detector = serial_detector(rig, clock, port=photometer.path)
         else:
             detector = physics
-        yield Devices(bus, detector, clock, light, RehearsalSide(physics, truth)), clock
+        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp))
+        yield Devices(bus, detector, clock, light, side), clock
