@@ -73,3 +73,16 @@ def test_a_rehearsed_run_journals_what_the_emulated_instrument_did(
     assert np.all(calibrated.sigma > 0) and np.all(calibrated.sigma < 0.02 * truth)
     assert np.max(np.abs(z)) < 4.5, z
     assert np.mean(z**2) < 2.5, z  # χ²/n near 1: the uncertainty is the noise
+
+
+def test_a_rehearsal_without_a_scene_is_one_line(
+    run_gonio: Callable[..., CliResult], tmp_path: Path
+) -> None:
+    out = tmp_path / "rehearsal.sqlite"
+    result = run_gonio("acquire", str(PLAN), "--rehearse", "-o", str(out), "-q")
+    assert result.returncode == 2
+    rig = PLAN.parent / "../rigs/arch_serial.yaml"
+    assert result.stderr == (
+        f"gonio: error: {rig}: --rehearse simulates what the detector sees: give --scene\n"
+    )
+    assert not out.exists()
