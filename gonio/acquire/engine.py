@@ -208,6 +208,10 @@ class Engine:
                 report.outcome, report.message = "fault", str(exc)
                 self._hold_all()
                 self._event("fault", self._fault_data(exc), target=self._current)
+            except DriverError as exc:  # outside a target's retries: a calibration, the light
+                report.outcome, report.message = "fault", str(exc)
+                self._hold_all()
+                self._event("fault", self._fault_data(exc))
             except _Stop as exc:
                 report.outcome, report.message = exc.outcome, str(exc)
                 self._hold_all()

@@ -15,9 +15,15 @@ import numpy as np
 import pytest
 
 from gonio.acquire.calibrated import calibrate
+from gonio.acquire.engine import Engine, RunTime
+from gonio.planner.plan import Plan, load_plan_source
+from gonio.planner.stored import plan_bytes
 from gonio.rig.model import Rig
 from gonio.store import open_run
+from gonio.store.journal import Journal
+from gonio.store.read import read_run
 from sim.physics.optics import band_eval
+from sim.rehearsal import RehearsalSide, rehearsal_devices
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
@@ -86,3 +92,49 @@ def test_a_rehearsal_without_a_scene_is_one_line(
         f"gonio: error: {rig}: --rehearse simulates what the detector sees: give --scene\n"
     )
     assert not out.exists()
+
+
+class _RefuseAtTheEnd:
+    """Progress that makes the lamp relay refuse every switch once the last target is
+    measured (the end calibration's dark reading then cannot switch the light off)."""
+
+    def __init__(self, side: RehearsalSide) -> None:
+        self.side = side
+
+    def start(self, plan: Plan, todo: np.ndarray) -> None:
+        self.last = len(todo)
+
+    def advance(self, done: int) -> None:
+        if done == self.last:
+            assert self.side.peers.lamp is not None
+            self.side.peers.lamp.refuse(100)
+
+    def close(self) -> None:
+        pass
+
+
+def test_a_light_that_fails_in_a_calibration_ends_the_run_resumable(tmp_path: Path) -> None:
+    """A `LightError` (any driver fault) outside a target's retry loop is journaled as a
+    fault and ends the session resumable, with the axes held, as a motor fault does."""
+    source = load_plan_source(PLAN)
+    plan = source.build()
+    with rehearsal_devices(source.rig, load_scene(SCENE), None, 1000.0) as (devices, clock):
+        side = devices.simulation
+        assert isinstance(side, RehearsalSide)
+        meta = {"axes": list(source.rig.axes), "coordinate_names": list(plan.coordinate_names)}
+        path = tmp_path / "run.sqlite"
+        with Journal.create(path, meta, plan_bytes(plan), durable=False) as journal:
+            journal.start_session("now", {})
+            engine = Engine(
+                plan, devices, journal, side, RunTime(clock.now), progress=_RefuseAtTheEnd(side)
+            )
+            report = engine.run()
+            run = read_run(journal.conn, path)
+    assert report.outcome == "fault"
+    assert report.message.startswith("light switch") and "'OFF' was not acknowledged" in (
+        report.message
+    )
+    assert len(run) == len(plan) and not run.complete  # every sample kept; resumable
+    (fault,) = run.of_kind("fault")
+    assert fault.data["error"] == "LightError"
+    assert run.sessions[-1].outcome == "fault"
