@@ -20,8 +20,12 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(PIP) install -e '.[test]'
 	touch $@ $(VENV)/.installed
 
+# The main job on the simulated rig, then what its run file holds (re-running replaces it).
 demo: $(VENV)/.installed
-	$(BIN)/gonio demo
+	@mkdir -p runs
+	$(BIN)/gonio acquire configs/plans/quickstart.yaml --scene configs/scenes/glossy_metal.yaml \
+		-o runs/quickstart.sqlite --overwrite
+	$(BIN)/gonio info runs/quickstart.sqlite
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .

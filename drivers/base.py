@@ -340,8 +340,14 @@ class Simulated(Protocol):
         """Where the joints really are (rad), errors included."""
         ...
 
+    def expect(self, goals: Any, index: Any) -> None:
+        """A hint: the next samples ``index`` (N,) will be measured at joint ``goals``
+        (N, A, rad), in order; a simulation may precompute them (readings unchanged)."""
+        ...
+
     def snapshot(self) -> Any:
-        """The state a resumed run restores (between targets, at rest)."""
+        """The state a resumed run restores (between targets, at rest), as JSON values
+        (None when the backend cannot be restored)."""
         ...
 
     def restore(self, state: Any) -> None:

@@ -66,11 +66,12 @@ class Peers:
 
 
 class RehearsalSide:
-    """The `drivers.base.Simulated` side of a rehearsal: which sample's random streams
-    the detector's physics uses and what is on the stage; the true joint angles are the
-    emulated motors'. A rehearsal resumes as hardware does, with no snapshot."""
+    """The `drivers.base.Simulated` side of a rehearsal (or of real motors with a
+    simulated detector: no peers): which sample's random streams the detector's physics
+    uses and what is on the stage; the true joint angles are ``pose()``'s (the emulated
+    motors'). A rehearsal resumes as hardware does, with no snapshot."""
 
-    def __init__(self, physics: SimDetector, pose: Pose, peers: Peers) -> None:
+    def __init__(self, physics: SimDetector, pose: Pose, peers: Peers | None = None) -> None:
         self.physics = physics
         self.pose = pose
         self.peers = peers
@@ -83,6 +84,9 @@ class RehearsalSide:
 
     def true_positions(self) -> dict[str, float]:
         return self.pose()
+
+    def expect(self, goals: Any, index: Any) -> None:
+        pass
 
     def snapshot(self) -> Any:
         return None

@@ -1,81 +1,119 @@
-"""A whole simulated session: the reference standard and a dark reading, the plan target
-by target, the reference again, and the BRDF recovered through the calibration.
+"""A whole simulated session: the acquisition engine on the simulated backend (the
+same loop, journal and calibration as `gonio acquire`), and what it recovers.
 
-Everything goes through the `drivers.base` contract (`gonio.acquire`), as the engine
-drives hardware: the reference standard read at the rig's calibration geometry before
-and after (its exposure
-halved until it does not saturate) with a dark reading (light off), the readings
-carried back to BRDF values with directions from the read-back motor angles, the
-source's drift divided out (`gonio.acquire.calibration`).
+`simulate_plan` runs `gonio.acquire.session.start` with the simulated backend into a
+run journal (in memory unless ``output`` names a file), then derives the BRDF from the
+raw counts through the journaled calibration readings (`gonio.acquire.calibrated`) and
+evaluates the scene's model at the pairs the optics really saw (the true joint angles
+the simulated backend journals), the truth to compare with.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from gonio.acquire.calibration import Calibration, read_dark, read_reference, reference_pose
+from gonio.acquire import session
+from gonio.acquire.calibrated import Calibrated, calibrate
+from gonio.acquire.engine import Report
+from gonio.acquire.progress import Progress
+from gonio.acquire.summary import measured_pairs, truth_of
+from gonio.config import spec_text
 from gonio.planner.plan import Plan
+from gonio.store.read import Run
 from gonio.types import FloatArray
-from sim.devices.instrument import SimulatedInstrument
-from sim.physics.optics import SceneOptics
-from sim.record import SimRun
 from sim.scene import Scene
 
 
 @dataclass(frozen=True)
 class Result:
-    """A simulated run with its calibration and the BRDF it recovers."""
+    """A simulated run (its journal), the BRDF it recovers and the truth."""
 
     plan: Plan
     scene: Scene
-    run: SimRun
+    run: Run
+    report: Report
     wall_s: float
-    calibration: Calibration
-    brdf: FloatArray  # recovered at the read-back pairs
-    truth: FloatArray  # the scene's model at the pairs actually measured
+    calibrated: Calibrated
+    truth: FloatArray  # the scene's model at the pairs the optics saw
     wi: FloatArray  # from the read-back angles
     wo: FloatArray
+    true_wi: FloatArray  # from the true joint angles
+    true_wo: FloatArray
+
+    @property
+    def brdf(self) -> FloatArray:
+        """Recovered at the read-back pairs (sr⁻¹)."""
+        return self.calibrated.brdf
+
+    @property
+    def sigma(self) -> FloatArray:
+        return self.calibrated.sigma
+
+    @property
+    def saturated(self) -> np.ndarray:
+        return np.asarray(self.run.samples["saturated"])
 
     @property
     def reference_counts(self) -> float:
         """The first reading of the reference standard (counts)."""
-        return self.calibration.first.value
+        return float(self.run.of_kind("calibration")[0].data["reference"]["value"])
 
     @property
     def reference_exposure_s(self) -> float:
-        return self.calibration.exposure_s
+        return float(self.run.of_kind("calibration")[0].data["reference"]["exposure_s"])
 
     @property
     def reference_change(self) -> float:
         """Last / first dark-subtracted reference signal − 1 (the drift seen)."""
-        return self.calibration.change
+        rate = self.calibrated.series.rate
+        return float(rate[-1] / rate[0] - 1.0)
 
     @property
     def dark_rate(self) -> float:
-        """Counts per second with the light off."""
-        return self.calibration.dark_rate
+        """Counts per second with the light off (the first dark reading)."""
+        return float(self.calibrated.series.dark_rate[0])
 
 
-def simulate_plan(plan: Plan, scene: Scene, seed: int | None = None) -> Result:
-    """Measure ``plan`` in ``scene`` and recover the BRDF (see the module docstring)."""
-    rig = plan.rig
+def simulate_plan(
+    plan: Plan,
+    scene: Scene,
+    seed: int | None = None,
+    *,
+    files: session.Files | None = None,
+    output: Path | None = None,
+    overwrite: bool = False,
+    progress: Progress | None = None,
+) -> Result:
+    """Measure ``plan`` in ``scene`` on the simulated backend and recover the BRDF.
+    ``files``: the texts the run is made from (default: the plan's and rig's, and the
+    scene as validated); ``output``: keep the run journal there."""
+    if files is None:
+        files = session.Files(
+            None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene)
+        )
     started = time.perf_counter()
-    with SimulatedInstrument(scene, rig, seed=seed) as inst:
-        devices = inst.devices()
-        shortest, longest = devices.detector.exposure_range_s
-        exposure = float(np.clip(np.median(plan.exposure_s), shortest, longest))
-        pose = reference_pose(rig)
-        first, exposure = read_reference(devices, rig, 0, pose, exposure)
-        dark = read_dark(devices, rig, 1, pose, exposure)
-        run = inst.run(plan)
-        last, _ = read_reference(devices, rig, 2, pose, exposure)
+    outcome = session.start(
+        plan, files, scene=scene, output=output, overwrite=overwrite, seed=seed,
+        progress=progress, force_simulated=True,
+    )  # fmt: skip
     wall = time.perf_counter() - started
-    calibration = Calibration.from_readings(rig, pose, exposure, first, dark, last)
-    wi, wo = rig.forward(run.read_back)  # directions come from the read-back angles
-    middle = (run.settled_s + run.end_s) / 2  # of each target's exposures
-    recovered = calibration.brdf(run.value, run.exposure_s, wi, wo, middle)
-    truth = SceneOptics(scene, rig).models["sample"](run.wi, run.wo)
-    return Result(plan, scene, run, wall, calibration, recovered, truth, wi, wo)
+    run = outcome.run
+    wi, wo = run.directions()
+    true_wi, true_wo = measured_pairs(run)
+    return Result(
+        plan=plan,
+        scene=scene,
+        run=run,
+        report=outcome.report,
+        wall_s=wall,
+        calibrated=calibrate(run),
+        truth=truth_of(run, at_true_pairs=True),
+        wi=wi,
+        wo=wo,
+        true_wi=true_wi,
+        true_wo=true_wo,
+    )

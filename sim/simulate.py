@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from gonio.planner.plan import Plan
+from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.devices.detector import sensor_of
 from sim.devices.motors import PositionModel
@@ -32,12 +33,16 @@ def _carry(values: FloatArray, where: np.ndarray) -> FloatArray:
 
 
 def planned_poses(
-    plan: Plan, scene: Scene, streams: Streams
+    rig: Rig,
+    angles: FloatArray,
+    scene: Scene,
+    streams: Streams,
+    index: np.ndarray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """(goals the motors go to, true joint angles there, the previous goals), each
-    (N, A), for the plan measured in order from the rig's home pose."""
-    rig = plan.rig
-    goal = np.asarray(plan.angles, dtype=np.float64)
+    (N, A), for joint ``angles`` (N, A) measured in order from the rig's home pose as
+    samples ``index`` (default 0 … N − 1: their random streams)."""
+    goal = np.asarray(angles, dtype=np.float64)
     error = np.zeros_like(goal)
     spec = scene.effects.position_error
     if spec is not None:
@@ -48,7 +53,8 @@ def planned_poses(
         # Each axis keeps the direction and the repeatability draw of its last move.
         step = np.sign(goal - previous)
         moved = step != 0
-        index = np.arange(len(goal), dtype=np.int64)
+        if index is None:
+            index = np.arange(len(goal), dtype=np.int64)
         draws = model.repeatability_draw(index, goal.shape[1])
         error = model.backlash_error(_carry(step, moved)) + _carry(draws, moved)
     return goal, goal + error, previous
@@ -60,7 +66,7 @@ def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
     streams = Streams(scene.seed if seed is None else int(seed))
     n = len(plan)
     index = np.arange(n, dtype=np.int64)
-    goal, true, previous = planned_poses(plan, scene, streams)
+    goal, true, previous = planned_poses(rig, plan.angles, scene, streams)
 
     # Virtual time: move, settle, then `averages` exposures (+ readout) per target, added
     # up in the order the instrument's clock adds them (so the times agree bit for bit).

@@ -55,6 +55,9 @@ class OperatorStage:
         self._out = out or sys.stderr
         self._showing: StageTarget = "sample"
 
+    def can_ask(self) -> bool:
+        return self._ask is not None or sys.stdin.isatty()
+
     def show(self, target: StageTarget) -> None:
         if target == self._showing:
             return
@@ -83,10 +86,11 @@ def needs_scene(rig: Rig, kind: BackendKind) -> bool:
     return kind != "hardware" or rig.spec.detector.interface.kind == "simulated"
 
 
-def simulated(rig: Rig, scene: Any, seed: int | None) -> Backend:
+def simulated(rig: Rig, scene: Any, seed: int | None, *, any_detector: bool = False) -> Backend:
+    """``any_detector``: simulate the rig's detector whatever its interface says."""
     from sim.devices.instrument import SimulatedInstrument
 
-    if rig.spec.detector.interface.kind != "simulated":
+    if rig.spec.detector.interface.kind != "simulated" and not any_detector:
         raise GonioError(
             f"{rig.source}: detector.interface: a simulated rig (bus.kind: simulated) needs "
             "a simulated detector; use --rehearse to try a serial detector without hardware"
@@ -109,7 +113,8 @@ def hardware(
     else:
         devices = hardware_devices(rig, clock=clock)
     time = RunTime(clock.now, wall_offset(clock.now(), run_started_unix))
-    stage = stage or OperatorStage()
+    # A simulated detector sees a simulated reference standard; a real one needs hands.
+    stage = stage or devices.simulation or OperatorStage()
     return Backend("hardware", devices, stage, time, durable=True, calibrate_on_resume=True)
 
 
@@ -117,6 +122,7 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
     from drivers.dynamixel.bus import DynamixelBus
     from sim.devices.detector import SimDetector, SimLightSource
     from sim.physics.streams import Streams
+    from sim.rehearsal import RehearsalSide
 
     bus = DynamixelBus(rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud)
     light = SimLightSource()
@@ -124,7 +130,7 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
         scene, rig, bus.positions, clock=clock,
         streams=Streams(scene.seed if seed is None else seed), light=light,
     )  # fmt: skip
-    return Devices(bus, detector, clock, light, None)
+    return Devices(bus, detector, clock, light, RehearsalSide(detector, bus.positions))
 
 
 def rehearsal(
@@ -150,9 +156,10 @@ def build(
     run_started_unix: float,
     *,
     speedup: float = 50.0,
+    any_detector: bool = False,
 ) -> Backend:
     if kind == "simulated":
-        return simulated(rig, scene, seed)
+        return simulated(rig, scene, seed, any_detector=any_detector)
     if kind == "rehearsal":
         return rehearsal(rig, scene, seed, run_started_unix, speedup)
     return hardware(rig, scene, seed, run_started_unix)

@@ -138,6 +138,7 @@ class Engine:
         self.reference_exposure_s: float | None = None
         self._busy_until = 0.0
         self._current: int | None = None  # the target in flight
+        self._limits: dict[str, tuple[float, float]] | None = None
         self._temperatures: str | None = None  # read by the last health check (JSON)
         self._session = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
@@ -191,6 +192,8 @@ class Engine:
         with self.stops, self.devices:
             try:
                 self._start(resuming=self.history is not None)
+                if self.devices.simulation is not None:
+                    self.devices.simulation.expect(self.plan.angles[todo], todo)
                 self.progress.start(self.plan, todo)
                 for done, i in enumerate(todo.tolist()):
                     self._between_targets()
@@ -283,7 +286,9 @@ class Engine:
     # -- one target ----------------------------------------------------------------------
     def _within_limits(self, pose: np.ndarray) -> str | None:
         """Why ``pose`` must not be commanded (outside an axis's limits), or None."""
-        limits = self.devices.bus.limits()
+        if self._limits is None:  # configured once: the same for the whole run
+            self._limits = self.devices.bus.limits()
+        limits = self._limits
         for name, angle in zip(self.axes, pose.tolist(), strict=True):
             lo, hi = limits[name]
             if not (math.isfinite(angle) and lo <= angle <= hi):

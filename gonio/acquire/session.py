@@ -27,13 +27,14 @@ from drivers.base import DriverError
 from gonio import __version__
 from gonio.acquire import backends
 from gonio.acquire.backends import BackendKind
+from gonio.acquire.calibration import geometry_label, reference_pose
 from gonio.acquire.engine import Engine, Report, utc_now
 from gonio.acquire.progress import Progress, Quiet
 from gonio.acquire.signals import StopRequests
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan, sha256
-from gonio.planner.stored import plan_bytes
+from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, remove_run_file
 from gonio.store.read import Run, read_run
@@ -189,21 +190,35 @@ def start(
     progress: Progress | None = None,
     argv: list[str] | None = None,
     max_page_count: int | None = None,
+    force_simulated: bool = False,
 ) -> Outcome:
-    """Acquire ``plan`` into a new run file ``output`` (None: in memory)."""
+    """Acquire ``plan`` into a new run file ``output`` (None: in memory);
+    ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
     rig = plan.rig
-    kind = backends.kind_of(rig, rehearse)
+    kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
     if backends.needs_scene(rig, kind) and scene is None:
         raise _no_scene(files, kind)
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite)
     started = time.time()
-    backend = backends.build(kind, rig, scene, seed, started, speedup=speedup)
-    meta = _meta(plan, files, kind, seed, started, speedup=speedup if rehearse else None)
+    backend = backends.build(
+        kind, rig, scene, seed, started, speedup=speedup, any_detector=force_simulated
+    )
     try:
+        preflight(plan, backend, files.plan_path)
+    except GonioError:
+        backend.close()
+        raise
+    meta = _meta(
+        plan, files, kind, seed, started, speedup=speedup if rehearse else None,
+        any_detector=force_simulated,
+    )  # fmt: skip
+    stored = plan_bytes(plan)
+    try:
+        parse_plan(stored, "plan")  # a plan the journal could not give back is refused now
         with Journal.create(
-            output, meta, plan_bytes(plan), durable=backend.durable, overwrite=overwrite,
+            output, meta, stored, durable=backend.durable, overwrite=overwrite,
             max_page_count=max_page_count,
         ) as journal:  # fmt: skip
             try:
@@ -227,6 +242,24 @@ def _anything_measured(journal: Journal) -> bool:
         "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
     ).fetchone()[0]
     return bool(samples or events)
+
+
+def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> None:
+    """Refuse, before anything is created or moved, a run the backend cannot finish."""
+    reference_pose(plan.rig)  # a reference reading the calibration could not trust
+    spec = plan.spec.acquisition.calibration
+    if spec.dark and backend.devices.light is None:
+        raise ConfigError(
+            f"{plan_path or 'plan'}: acquisition.calibration.dark: the rig's light cannot be "
+            "switched (light.switch: none), so no dark reading can be taken; give the rig a "
+            "switch, or set dark: false (the dark signal is then taken as 0 counts)"
+        )
+    stage = backend.stage
+    if isinstance(stage, backends.OperatorStage) and not stage.can_ask():
+        raise GonioError(
+            "the reference standard is put on the stage by the operator and no one can be "
+            "asked (no terminal): run gonio acquire from a terminal"
+        )
 
 
 def changed_files(run: Run, files: Files) -> list[str]:
@@ -301,7 +334,15 @@ def resume(
         seed = run.meta.get("seed")
         started = float(run.meta["started_unix"])
         speed = speedup or float(run.meta.get("speedup") or 50.0)
-        backend = backends.build(kind, rig, scene, seed, started, speedup=speed)
+        backend = backends.build(
+            kind, rig, scene, seed, started, speedup=speed,
+            any_detector=bool(run.meta.get("any_detector")),
+        )  # fmt: skip
+        try:
+            preflight(run.plan, backend, files.plan_path)
+        except GonioError:
+            backend.close()
+            raise
         journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
         if changed:
             journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
@@ -334,6 +375,11 @@ def dry_run(plan: Plan, files: Files, *, scene: Any, output: Path | None, overwr
             f"{int(np.flatnonzero(outside)[0])}); re-plan with this rig"
         )
     lines.append(f"targets: {len(plan)} within the axis limits")
+    reference_pose(rig)
+    lines.append(
+        f"reference standard: read at {geometry_label(rig)} on "
+        f"{rig.reference_diameter_mm:g} mm, unclipped"
+    )
     check_output(output, overwrite)
     if output is not None:
         folder = output.parent if str(output.parent) else Path(".")

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 from collections import Counter
 from typing import Any
 
@@ -49,6 +50,10 @@ def figures(run: Run) -> dict[str, Any]:
     }
     if calibrations:
         first, last = calibrations[0].data, calibrations[-1].data
+        out["reference_albedo"] = float(first["albedo"])
+        out["reference_geometry_deg"] = [
+            float(np.degrees(np.arccos(np.clip(first[w][2], -1.0, 1.0)))) for w in ("wi", "wo")
+        ]
         out["reference_counts"] = float(first["reference"]["value"])
         out["reference_exposure_s"] = float(first["reference"]["exposure_s"])
         dark = first["dark"]
@@ -89,7 +94,8 @@ def error_figures(
     }
 
 
-def render(run: Run, errors: dict[str, float | int] | None = None) -> str:
+def render(run: Run, errors: dict[str, float | int] | None = None, *, title: bool = True) -> str:
+    """The table (``title``: with a first line naming the run file, plan and rig)."""
     f = figures(run)
     lines = [
         f"run {str(run.path)!r}: plan {f['plan']!r} on rig {f['rig']!r}, "
@@ -116,12 +122,16 @@ def render(run: Run, errors: dict[str, float | int] | None = None) -> str:
         )
     if f["calibrations"]:
         dark = f["dark_counts_per_s"]
+        ti, to = f["reference_geometry_deg"]
         lines.append(
-            f"  {'calibrations':<24}{f['calibrations']:>10}   reference "
-            f"{f['reference_counts']:.1f} counts at {f['reference_exposure_s']:g} s; "
+            f"  {'calibrations':<24}{f['calibrations']:>10}   reference standard (albedo "
+            f"{f['reference_albedo']:g}, {ti:.0f}°/{to:.0f}°) {f['reference_counts']:.1f} "
+            f"counts at {f['reference_exposure_s']:g} s; "
             f"dark {'not read' if dark is None else f'{dark:.1f} counts/s'}; "
             f"drift {100 * f['drift']:+.3f} % by the last, divided out"
         )
+    if not title:
+        lines.pop(0)
     if errors is not None and errors.get("n"):
         lines.append(
             f"  {'recovered BRDF error':<24}{100 * errors['median']:>9.3f}%   median; "
@@ -131,9 +141,20 @@ def render(run: Run, errors: dict[str, float | int] | None = None) -> str:
     return "\n".join(lines)
 
 
-def truth_of(run: Run) -> FloatArray:
-    """The simulated scene's model at the pairs measured (true joint angles unknown to
-    the journal: the read-back pairs; `GonioError` unless the run stored a scene)."""
+def measured_pairs(run: Run) -> tuple[FloatArray, FloatArray]:
+    """(ωi, ωo) the optics really saw: from the simulated backend's true joint angles
+    (its journaled state) when every sample has them, else from the read-back angles."""
+    states = run.samples["sim_state"]
+    if len(states) and all(s is not None for s in states):
+        true = np.array([json.loads(s)["true_rad"] for s in states], dtype=np.float64)
+        return run.plan.rig.forward(true)
+    return run.directions()
+
+
+def truth_of(run: Run, *, at_true_pairs: bool = False) -> FloatArray:
+    """The simulated scene's model at the samples' read-back pairs, or at the pairs the
+    optics really saw (``at_true_pairs``: they differ by the motors' position errors);
+    `GonioError` unless the run stored a scene."""
     text = run.meta.get("scene_text")
     if text is None:
         raise GonioError(f"{run.path}: the run has no scene: no truth to compare with")
@@ -143,5 +164,5 @@ def truth_of(run: Run) -> FloatArray:
     from sim.scene import load_scene
 
     scene = load_scene(Path(f"{run.path}#scene_text"), run.plan.rig, raw=str(text).encode())
-    wi, wo = run.directions()
+    wi, wo = measured_pairs(run) if at_true_pairs else run.directions()
     return np.asarray(SceneOptics(scene, run.plan.rig).models["sample"](wi, wo), dtype=np.float64)

@@ -23,7 +23,7 @@ from gonio.errors import GonioError
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": (
         "gonio.cli.demo",
-        "the main job on the simulated rig, then the parametrization and lobe tables",
+        "the parametrization and lobe tables (the main job is make demo: gonio acquire)",
     ),
     "plan": (
         "gonio.cli.plan",

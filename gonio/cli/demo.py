@@ -1,24 +1,16 @@
-"""`gonio demo`: the main job on the simulated rig, then the core tables.
-
-The shipped quick plan is planned on the arch rig and measured on the simulated rig
-(the matte scene, with sensor noise) through the driver protocols, calibrated with the
-reference standard and compared with the truth; then the four parametrizations on
-named direction pairs (coordinates and round-trip error) and the lobe
-comparison of Romanyuk et al.'s modified cosine-quadratic model (seed 003).
-"""
+"""`gonio demo`: the core tables — the four parametrizations on named direction pairs
+(coordinates and round-trip error) and the lobe comparison of Romanyuk et al.'s
+modified cosine-quadratic model (seed 003). The main job on the simulated rig is
+`make demo` (`gonio acquire configs/plans/quickstart.yaml …`, then `gonio info`)."""
 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
 
 from gonio import params
 from gonio.params.cases import NAMED_PAIRS, roundtrip_error
-
-#: The shipped configuration files (the demo runs from a source checkout).
-CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 #: Coordinates printed in degrees (the rest are unitless norms).
 _ANGLE = {"theta_i", "phi_i", "theta_o", "phi_o", "theta_h", "phi_h", "theta_d", "phi_d", "phi_k"}
@@ -43,32 +35,19 @@ def parametrization_table() -> str:
     return "\n".join(lines)
 
 
-def simulated_job() -> str:
-    """Plan the quick plan and measure it on the simulated rig (matte scene)."""
-    from gonio.cli import simulate as simulate_cli
-    from gonio.planner.plan import build, load_plan, render_summary
-    from sim.scene import load_scene
-    from sim.session import simulate_plan
-
-    spec, rig = load_plan(CONFIGS / "plans" / "quick.yaml")
-    plan = build(spec, rig)
-    result = simulate_plan(plan, load_scene(CONFIGS / "scenes" / "matte.yaml"))
-    return "\n\n".join([render_summary(plan), simulate_cli.render(result)])
-
-
 def render() -> str:
     from gonio.brdf import lobe_study
 
-    return "\n\n".join([simulated_job(), parametrization_table(), lobe_study.render_summary()])
+    return "\n\n".join([parametrization_table(), lobe_study.render_summary()])
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     demo = sub.add_parser(
         "demo",
         help=help_,
-        description="The main job on the simulated rig (the quick plan measured on the "
-        "matte scene), then the four parametrizations' coordinates and round-trip errors "
-        "for named direction pairs, and the lobe comparison of Romanyuk et al. (seed 003).",
+        description="The four parametrizations' coordinates and round-trip errors for named "
+        "direction pairs, and the lobe comparison of Romanyuk et al. (seed 003). The main "
+        "job on the simulated rig is make demo (gonio acquire, then gonio info).",
     )
     demo.set_defaults(func=_cmd_demo)
 

@@ -397,7 +397,7 @@ def build(
         )
     order = np.searchsorted(sel, chosen)  # positions in generation order
     mwi, mwo = rig.forward(angles)  # the pair the chosen pose measures
-    exposure, averages = exposures(spec.exposure, mwi, mwo)
+    exposure, averages = exposures(spec.exposure, mwi, mwo, rig.source_kind)
     dwell = rig.spec.settle_s + exposure * averages
     arrival = np.cumsum(travel) + np.concatenate([[0.0], np.cumsum(dwell)[:-1]])
     summary = Summary(

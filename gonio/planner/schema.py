@@ -51,9 +51,10 @@ class SamplingSpec(Strict):
 
 
 class AdaptSpec(Strict):
-    """Exposure and averaging scaled by 1/expected signal: s = f(ωi, ωo) cos θi of the
-    expected material; exposure = base × s_ref / s clipped to [min_s, max_s], with s_ref
-    the median over the plan's targets."""
+    """Exposure and averaging scaled by 1/expected signal: s = f(ωi, ωo) · g of the
+    expected material (g = cos θo for a collimated light, cos θi for a point source:
+    `gonio.planner.exposure`); exposure = base × s_ref / s clipped to [min_s, max_s],
+    with s_ref the median over the plan's targets."""
 
     material: dict[str, float | str | list[float]] = Field(min_length=1)
     min_s: float = Field(gt=0)

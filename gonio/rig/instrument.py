@@ -281,8 +281,13 @@ class DetectorSpec(Strict):
 class ReferenceSpec(Strict):
     """The Lambertian standard read for calibration (e.g. a 99 % diffuse target), with
     the light at ``theta_i_deg`` and the detector at ``theta_o_deg`` on the far side of
-    the normal, both in the sample's x-z plane (the classic 0°/45°)."""
+    the normal, both in the sample's x-z plane (the classic 0°/45°). ``diameter_mm``:
+    the standard's diameter; none (the default) means it is the sample's size
+    (``constraints.sample_diameter_mm``: the standard sits in the sample holder).
+    `gonio.acquire.calibration.reference_geometry` refuses a geometry at which the
+    standard would not fill what the calibration assumes."""
 
     albedo: float = Field(0.99, gt=0, le=1)
     theta_i_deg: float = Field(0.0, ge=0, lt=90)
     theta_o_deg: float = Field(45.0, ge=0, lt=90)
+    diameter_mm: float | None = Field(None, gt=0)

@@ -303,6 +303,13 @@ class Rig:
         """The light's kind (``light.kind``)."""
         return self.spec.light.kind
 
+    @property
+    def reference_diameter_mm(self) -> float:
+        """The reference standard's diameter (mm): ``reference.diameter_mm``, or the
+        sample's (``constraints.sample_diameter_mm``) when the rig file gives none."""
+        given = self.spec.reference.diameter_mm
+        return self.spec.constraints.sample_diameter_mm if given is None else given
+
     def reference_directions(self) -> tuple[FloatArray, FloatArray]:
         """(ωi, ωo), each (3,), of the reference standard's calibration geometry: the
         light at ``reference.theta_i_deg`` toward +x, the detector at ``theta_o_deg``

@@ -95,18 +95,27 @@ class SimulatedInstrument(Resource):
     def true_positions(self) -> dict[str, float]:
         return self.bus.true_positions()
 
+    def expect(self, goals: np.ndarray, index: np.ndarray) -> None:
+        """Compute the optics, vectorized, at the poses the motors will really reach
+        moving from home to ``goals`` (N, A) in order as samples ``index``
+        (`SimDetector.prepare`: a cache; readings are the same without it)."""
+        _, expected, _ = planned_poses(self.rig, goals, self.scene, self.streams, index)
+        self.detector.prepare(expected)
+
     def snapshot(self) -> dict[str, Any]:
         """The state a resumed run restores (between targets, at rest), as JSON values:
         the virtual time, the motors (`MotorState`) and how many moves and readings the
         present sample has used (so a retried or resumed sample continues its streams
         and its injected faults do not fire twice)."""
         motors = self.bus.snapshot()
+        true = self.bus.true_positions()
         sample = self.bus.present_sample
         return {
             "time_s": self.clock.now(),
             "encoder": list(motors.encoder),
             "direction": list(motors.direction),
             "repeatability": list(motors.repeatability),
+            "true_rad": [true[a] for a in self.rig.axes],  # what the optics saw
             "sample": sample,
             "moves": self.bus.moves_of(sample),
             "draws": self.detector.draws_of(sample),
@@ -143,7 +152,7 @@ class SimulatedInstrument(Resource):
         (`SimDetector.prepare`); the readings are the same either way."""
         stop = len(plan) if stop is None else stop
         if prepare:
-            _, expected, _ = planned_poses(plan, self.scene, self.streams)
+            _, expected, _ = planned_poses(self.rig, plan.angles, self.scene, self.streams)
             self.detector.prepare(expected[start:stop])
         axes, settle = self.rig.axes, self.rig.spec.settle_s
         rows = [

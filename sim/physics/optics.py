@@ -2,7 +2,8 @@
 detector → expected photo-electrons, with the scene's optical effects.
 
 The instrument's facts come from the rig (the light's kind and distance, the beam, sample
-and field-of-view sizes, the detector's aperture, the reference standard's albedo);
+and field-of-view sizes, the detector's aperture, the reference standard's albedo and
+diameter);
 what the simulation adds from the scene (the material, the source's power, the
 sensor's responsivity and band, the effects).
 
@@ -64,7 +65,10 @@ class SceneOptics:
         self.source = source_of(scene, rig)
         c, band = rig.spec.constraints, scene.detector.band
         self.optics = radiometry.DetectorOptics(rig.spec.detector.aperture_sr, c.detector_fov_mm)
-        self.sample_diameter_mm = c.sample_diameter_mm
+        self.diameters_mm: dict[StageTarget, float] = {
+            "sample": c.sample_diameter_mm,
+            "reference": rig.reference_diameter_mm,
+        }
         albedo = rig.spec.reference.albedo
         self.models: dict[StageTarget, BrdfEval] = {
             "sample": band_eval(scene.material.model(), band),
@@ -89,7 +93,7 @@ class SceneOptics:
                 wo,
                 footprint=e.footprint is not None,
                 aperture_integration=aperture is not None,
-                sample_diameter_mm=self.sample_diameter_mm,
+                sample_diameter_mm=self.diameters_mm[target],
                 aperture_order=aperture.order if aperture is not None else 6,
             ),
             dtype=np.float64,

@@ -34,7 +34,7 @@ def test_shipped_scenes_load() -> None:
     )  # fmt: skip
     assert scenes["glossy_metal"].material.model().is_rgb
     assert not scenes["brushed_metal"].material.model().isotropic
-    assert scenes["seed000_specular"].effects.names() == ()
+    assert scenes["seed000_specular"].effects.names() == ("saturation",)
     assert scenes["seed000_specular"].source.kind == "point"
     assert scenes["brushed_metal"].effects.position_error is not None
     assert scenes["brushed_metal"].effects.position_error.backlash_deg == 0.1

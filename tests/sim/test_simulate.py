@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from gonio import radiometry
-from gonio.acquire.calibration import read_reference
+from gonio.acquire.engine import CALIBRATION_INDEX
 from gonio.acquire.measure import measure_target
 from gonio.planner import build
-from gonio.planner.plan import Plan
+from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
@@ -148,7 +148,11 @@ def test_no_effects_counts_to_brdf_recovers_the_model(
     run = simulate(plan, scene)
     with SimulatedInstrument(scene, rig) as inst:
         reference_pose = plan.angles[0]
-        ref, _ = read_reference(inst.devices(), rig, 0, reference_pose, 0.01)
+        inst.show("reference")
+        pose = dict(zip(rig.axes, reference_pose.tolist(), strict=True))
+        ref = measure_target(
+            inst.devices(), CALIBRATION_INDEX, pose, 0.01, 1, settle_s=rig.spec.settle_s
+        ).reading
         wi_ref, wo_ref = rig.forward(reference_pose)
     calibration = radiometry.ReferenceCalibration.from_counts(
         rig.spec.reference.albedo, ref.value, 0.01, wi_ref, wo_ref, rig.source_kind
@@ -177,7 +181,11 @@ def test_repeated_measurements_continue_the_sample_streams(rigs: dict[str, Rig])
         with SimulatedInstrument(scene, rig) as inst:
             first = target(inst, 5)
             again = inst.detector.measure(0.01, 2)  # sample 5 again, two exposures
-            ref, _ = read_reference(inst.devices(), rig, 0, rig.home, 0.01)
+            inst.show("reference")
+            ref = measure_target(
+                inst.devices(), CALIBRATION_INDEX, home, 0.01, 1, settle_s=rig.spec.settle_s
+            ).reading
+            inst.show("sample")
             six = target(inst, 6)
             return [first, *again.raw, ref.value, six]
 
@@ -188,3 +196,40 @@ def test_repeated_measurements_continue_the_sample_streams(rigs: dict[str, Rig])
     # on the calibration reading taken in between.
     with SimulatedInstrument(scene, rig) as inst:
         assert target(inst, 6) == a[-1]
+
+
+@pytest.fixture(scope="module")
+def shipped_plans(arch_point: Rig) -> dict[tuple[str, str], Plan]:
+    """Each shipped plan on its own rig and on the point-source rig, ordered with no move
+    budget (which poses and exposures a plan holds does not depend on their order)."""
+    plans = {}
+    for path in sorted((CONFIGS / "plans").glob("*.yaml")):
+        source = load_plan_source(path)
+        spec = source.spec.model_copy(update={"max_moves": 0})
+        plans[path.stem, "collimated"] = build(spec, source.rig)
+        plans[path.stem, "point"] = build(spec, arch_point)
+    return plans
+
+
+@pytest.mark.parametrize("scene_name", sorted(p.stem for p in SCENES.glob("*.yaml")))
+def test_no_shipped_plan_saturates_a_shipped_scene(
+    shipped_plans: dict[tuple[str, str], Plan], scene_name: str
+) -> None:
+    """Every shipped scene models saturation and none of the shipped plans (quick,
+    quickstart, isotropic_hybrid, anisotropic, rehearsal) puts a reading at the top of
+    its ADC (issue 12: the quick plan put 67 and 74 glossy and brushed-metal readings
+    there, up to 48× full well, and 194 point-source readings above full well with
+    saturation unmodelled)."""
+    scene = load_scene(SCENES / f"{scene_name}.yaml")
+    assert scene.effects.saturation is not None
+    assert {name for name, _ in shipped_plans} == {
+        "quick",
+        "quickstart",
+        "isotropic_hybrid",
+        "anisotropic",
+        "rehearsal",
+    }
+    for (name, kind), plan in shipped_plans.items():
+        if kind == scene.source.kind:
+            run = simulate(plan, scene)
+            assert not run.saturated.any(), (name, int(run.saturated.sum()))

@@ -81,6 +81,7 @@ def _acquire(plan: Plan) -> tuple[Report, list[int], dict[int, str], dict[int, l
                     "SELECT target, data FROM events WHERE kind = 'skip'"
                 )
             }
+        assert side.peers is not None
         goals = side.peers.emulator.goals_written()
     return report, measured, skips, goals
 

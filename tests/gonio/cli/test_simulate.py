@@ -3,18 +3,20 @@
 
 from __future__ import annotations
 
-import csv
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from gonio.acquire.calibrated import calibrate
 from gonio.acquire.calibration import reference_pose
-from gonio.cli.simulate import render
+from gonio.acquire.summary import truth_of
+from gonio.cli.simulate import render_result as render
 from gonio.errors import GonioError
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.store import open_run
 from sim.scene import load_scene
 from sim.session import simulate_plan
 from tests.conftest import CONFIGS, CliResult
@@ -24,22 +26,32 @@ Gonio = Callable[..., CliResult]
 
 
 def test_simulate_writes_the_run_and_recovers_the_brdf(run_gonio: Gonio, tmp_path: Path) -> None:
-    out = tmp_path / "run.csv"
+    out = tmp_path / "run.sqlite"
     r = run_gonio(
         "simulate", str(CONFIGS / "plans" / "quick.yaml"),
         "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-o", str(out),
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "scene 'matte' (effects: shot_noise, read_noise, dark_current" in r.stdout
-    with out.open(encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
-    assert len(rows) == 500
-    brdf = np.array([float(row["brdf"]) for row in rows])
-    truth = np.array([float(row["brdf_truth"]) for row in rows])
-    error = np.abs(brdf / truth - 1)
+    assert f"wrote 500 samples to {out}" in r.stdout
+    run = open_run(out)
+    assert len(run) == 500 and run.meta["backend"] == "simulated"
+    error = np.abs(calibrate(run).brdf / truth_of(run) - 1)
     assert np.median(error) < 0.005  # shot and read noise at ~30 % of full well
-    settled = np.array([float(row["settled_s"]) for row in rows])
-    assert np.all(np.diff(settled) > 0)
+    assert np.all(np.diff(run.samples["settled_s"]) > 0)
+
+
+def test_without_output_nothing_is_written_and_it_says_so(
+    run_gonio: Gonio, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    r = run_gonio(
+        "simulate", str(CONFIGS / "plans" / "quick.yaml"),
+        "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-q",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "nothing written: give -o RUN.sqlite to keep the run file" in r.stdout
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_bad_scene_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
@@ -71,7 +83,8 @@ def test_the_reference_standard_is_the_rigs(rigs: dict[str, Rig]) -> None:
     plan = build(spec, rig)
     scene = load_scene(CONFIGS / "scenes" / "glossy_metal.yaml").with_effects([])
     result = simulate_plan(plan, scene)
-    assert "(albedo 0.9, 10°/40°, " in render(result)
+    first = result.run.of_kind("calibration")[0].data
+    assert first["albedo"] == 0.9
     np.testing.assert_allclose(result.brdf, result.truth, rtol=1e-12)
     wi, wo = rig.forward(reference_pose(rig))
     np.testing.assert_allclose(np.degrees(np.arccos([wi[2], wo[2]])), [10.0, 40.0], atol=1e-9)
@@ -101,4 +114,4 @@ def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None
         "--rig", str(CONFIGS / "rigs" / "arch_point.yaml"),
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
-    assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: none)" in r.stdout
+    assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: saturation)" in r.stdout

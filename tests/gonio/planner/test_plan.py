@@ -19,6 +19,7 @@ from gonio.planner import plan as plan_module
 from gonio.planner.plan import Plan, hms, render_summary
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig
+from tests.support.rigs import with_point_source
 
 PLANS = Path(__file__).resolve().parents[3] / "configs" / "plans"
 
@@ -301,7 +302,8 @@ def test_adaptive_exposure_follows_the_expected_signal(rigs: dict[str, Rig]) -> 
     plan = build(spec(exposure={"seconds": 0.1, "averages": 1, "adapt": adapt}), rigs["arch"])
 
     model = brdf.create("cook_torrance", alpha=0.2, fresnel="schlick", f0=0.04)
-    signal = model.eval(plan.wi, plan.wo) * plan.wi[:, 2]
+    # A collimated beam's whole power lands on the sample: the signal goes as f cos θo.
+    signal = model.eval(plan.wi, plan.wo) * plan.wo[:, 2]
     assert plan.exposure_s.min() >= 0.02 and plan.exposure_s.max() <= 0.5
     assert plan.averages.min() >= 1 and plan.averages.max() <= 4
     # Inside the clip range the exposure is exactly base × median / signal.
@@ -312,6 +314,15 @@ def test_adaptive_exposure_follows_the_expected_signal(rigs: dict[str, Rig]) -> 
     # Dark targets at the maximum exposure average more; bright ones do not.
     assert plan.averages[plan.exposure_s == 0.5].max() > 1
     assert np.all(plan.averages[plan.exposure_s < 0.5] == 1)
+    # A point source's irradiance goes as cos θi, the view's area cancels cos θo.
+    point = build(
+        spec(exposure={"seconds": 0.1, "averages": 1, "adapt": adapt}),
+        with_point_source(rigs["arch"]),
+    )
+    signal = model.eval(point.wi, point.wo) * point.wi[:, 2]
+    inside = (point.exposure_s > 0.02) & (point.exposure_s < 0.5)
+    ref = float(np.median(signal[signal > 0]))
+    np.testing.assert_allclose(point.exposure_s[inside], 0.1 * ref / signal[inside], rtol=1e-9)
 
 
 def test_constant_exposure_without_adapt(plans: dict[str, Plan]) -> None:

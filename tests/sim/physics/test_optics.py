@@ -24,9 +24,9 @@ def test_the_source_is_the_rigs_light_with_the_scenes_power(
     optics = SceneOptics(MATTE, rigs["arch"])
     assert optics.source == radiometry.CollimatedSource(1.0, 6.0)
     assert optics.optics == radiometry.DetectorOptics(1e-5, 25.0)
-    assert optics.sample_diameter_mm == 30.0
+    assert optics.diameters_mm == {"sample": 30.0, "reference": 50.8}
     point = SceneOptics(load_scene(SCENES / "seed000_specular.yaml"), arch_point)
-    assert point.source == radiometry.PointSource(0.01, 300.0)
+    assert point.source == radiometry.PointSource(0.002, 300.0)
 
 
 def test_sizes_aperture_and_reference_follow_the_rig(rigs: dict[str, Rig]) -> None:
@@ -34,12 +34,14 @@ def test_sizes_aperture_and_reference_follow_the_rig(rigs: dict[str, Rig]) -> No
         rigs["arch"],
         detector={"aperture_sr": 2e-4},
         constraints={"beam_diameter_mm": 4, "detector_fov_mm": 20, "sample_diameter_mm": 50},
-        reference={"albedo": 0.5},
+        reference={"albedo": 0.5, "diameter_mm": None},
     )
     optics = SceneOptics(MATTE, rig)
     assert optics.source == radiometry.CollimatedSource(1.0, 4.0)
     assert optics.optics == radiometry.DetectorOptics(2e-4, 20.0)
-    assert optics.sample_diameter_mm == 50.0
+    assert optics.diameters_mm == {"sample": 50.0, "reference": 50.0}  # in the sample holder
+    sized = SceneOptics(MATTE, rig_with(rig, reference={"diameter_mm": 60}))
+    assert sized.diameters_mm == {"sample": 50.0, "reference": 60.0}
     wi, wo = direction(0.0, 0.0)[None], direction(45.0, 180.0)[None]
     np.testing.assert_allclose(optics.models["reference"](wi, wo), 0.5 / math.pi, rtol=1e-15)
     # The power scales with the aperture the rig gives (no effects: Φ = f · G).
