@@ -45,6 +45,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/extremes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/rehearsal.py
 	$(BIN)/python benchmarks/planner.py
 	$(BIN)/python benchmarks/simulator.py
 

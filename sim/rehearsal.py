@@ -1,44 +1,89 @@
 """The rehearsal backend of `gonio acquire --rehearse`: the hardware path without
-hardware. The byte-level Dynamixel emulator runs the rig's motors on a pseudo-terminal
-and the real `DynamixelBus` drives it through the unmodified SDK; the detector measures
-the scene at the positions the bus reads back; time runs ``speedup`` times faster than
-real time (motion profiles, settle dwells and exposures alike)."""
+hardware. Each device the rig file wires to a port runs as a simulated peer on its own
+pseudo-terminal, driven by the real driver built from the rig file exactly as
+`gonio.acquire.hardware` builds it (only the port is the pty's):
+
+- the motors: the byte-level Dynamixel emulator, driven by `DynamixelBus` through the
+  unmodified SDK;
+- a ``serial`` detector: the simulated photometer (`sim.serial_photometer`) driven by
+  `SerialDetector`, its counts those of the scene through `SimDetector`'s radiometric
+  chain and sensor at the pose the emulated motors are at; a ``simulated`` detector:
+  `SimDetector` reading the bus's positions;
+- a ``serial`` light switch: the simulated lamp relay (`sim.serial_light`) driven by
+  `SerialLightSwitch`, whose state the detector sees; else a `SimLightSource`.
+
+Time runs ``speedup`` times faster than real time (motion profiles, settle dwells and
+exposures alike); waits for serial answers are real time, as they are the ports'. The
+scene's injected faults are not applied (inject faults into the peers instead).
+"""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
+import re
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import StageTarget
-from drivers.dynamixel.bus import DynamixelBus
+from drivers.base import Detector, LightSource, StageTarget
+from drivers.dynamixel.axis import AxisConfig
 from gonio.acquire.devices import Devices
+from gonio.acquire.hardware import dynamixel_bus, light_switch, serial_detector
+from gonio.config import ConfigError
+from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.model import Rig
 from sim.clock import ScaledClock
-from sim.devices.detector import SimDetector, SimLightSource
+from sim.devices.detector import LightState, SimDetector, SimLightSource
 from sim.devices.instrument import emulated_bus
+from sim.dynamixel.emulator import DxlEmulator
 from sim.physics.streams import Streams
 from sim.scene import Scene
+from sim.serial_light import SerialLamp
+from sim.serial_photometer import SerialPhotometer
+from sim.serial_photometer.protocol import mismatch
+
+Pose = Callable[[], dict[str, float]]
+
+
+def emulated_pose(emulator: DxlEmulator, axes: list[AxisConfig]) -> Pose:
+    """The axis angles (rad) the emulated motors are at, from their Present Position
+    registers, with no bus traffic."""
+
+    def pose() -> dict[str, float]:
+        motors = emulator.motors
+        return {a.name: a.to_rad(motors[a.motor_id].get("present_position")) for a in axes}
+
+    return pose
+
+
+@dataclass(frozen=True)
+class Peers:
+    """The simulated devices at the far end of the ports (for tests and benchmarks)."""
+
+    emulator: DxlEmulator
+    photometer: SerialPhotometer | None  # a serial detector's
+    lamp: SerialLamp | None  # a serial light switch's
 
 
 class RehearsalSide:
-    """The `drivers.base.Simulated` side of a rehearsal: which sample's streams the
-    detector uses and what is on the stage (the motors are the emulator's: their true
-    angles are their read-back ones; a rehearsal is resumed like hardware, with no
-    snapshot)."""
+    """The `drivers.base.Simulated` side of a rehearsal (or of real motors with a
+    simulated detector: no peers): which sample's random streams the detector's physics
+    uses and what is on the stage; the true joint angles are ``pose()``'s (the emulated
+    motors'). A rehearsal resumes as hardware does, with no snapshot."""
 
-    def __init__(self, bus: DynamixelBus, detector: SimDetector) -> None:
-        self.bus = bus
-        self.detector = detector
+    def __init__(self, physics: SimDetector, pose: Pose, peers: Peers | None = None) -> None:
+        self.physics = physics
+        self.pose = pose
+        self.peers = peers
 
     def begin_sample(self, index: int) -> None:
-        self.detector.begin_sample(index)
+        self.physics.begin_sample(index)
 
     def show(self, target: StageTarget) -> None:
-        self.detector.show(target)
+        self.physics.show(target)
 
     def true_positions(self) -> dict[str, float]:
-        return self.bus.positions()
+        return self.pose()
 
     def expect(self, goals: Any, index: Any) -> None:
         pass
@@ -50,19 +95,81 @@ class RehearsalSide:
         raise NotImplementedError("a rehearsal resumes as hardware does, without a snapshot")
 
 
+def _where(rig: Rig) -> str:
+    return str(rig.source) if rig.source else "rig"
+
+
+def _lamp(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
+    """The simulated relay answering the rig's switch commands (`ConfigError` if the
+    rig expects answers it does not give)."""
+    answers = (("ack", "OK"), ("on_reply", "ON"), ("off_reply", "OFF"))
+    for field, answer in answers:
+        pattern = getattr(switch, field)
+        if pattern is not None and re.search(pattern, answer) is None:
+            raise ConfigError(
+                f"{_where(rig)}: light.switch.{field}: --rehearse: {pattern!r} does not "
+                f"match the simulated lamp relay's answer {answer!r}"
+            )
+    query = switch.query_command or "STATE?"
+    return SerialLamp(commands=(switch.on_command, switch.off_command, query))
+
+
+def _photometer(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPhotometer:
+    """The simulated photometer the rig's serial interface can talk to, reading each
+    exposure's counts from ``physics`` (`ConfigError` if the rig's protocol is not the
+    photometer's: docs/serial_detector.md)."""
+    config = rig.serial_detector_config()
+    problem = mismatch(config)
+    if problem is not None:
+        field, reason = problem
+        raise ConfigError(f"{_where(rig)}: detector.interface.{field}: --rehearse: {reason}")
+
+    def signal(exposure_s: float) -> float:
+        counts, _ = physics.expose(exposure_s, 1, clock.now())
+        return float(counts[0, 0])
+
+    return SerialPhotometer(
+        signal,
+        full_scale=physics.sensor.max_count if physics.sensor_effects.saturation else None,
+        reset_on_open=config.reset_banner is not None and config.settle_s > 0,
+        speedup=clock.speedup,
+    )
+
+
 @contextmanager
 def rehearsal_devices(
-    rig: Rig, scene: Scene, seed: int | None, speedup: float
+    rig: Rig, scene: Scene, seed: int | None, speedup: float, *, wire_time: bool = False
 ) -> Iterator[tuple[Devices, ScaledClock]]:
-    """The emulator running (stopped on exit) and the unopened `Devices` on it."""
+    """The peers running (stopped on exit) and the unopened `Devices` driving them (their
+    ``simulation`` is a `RehearsalSide`). ``wire_time``: the emulated bus answers when a
+    real one would (`sim.devices.instrument.emulated_bus`)."""
     clock = ScaledClock(speedup)
-    emulator = emulated_bus(rig, clock)
-    with emulator:
-        bus = DynamixelBus(emulator.path, rig.bus_axes(), baud=rig.spec.bus.baud)
-        light = SimLightSource()
-        detector = SimDetector(
-            scene, rig, bus.positions, clock=clock,
-            streams=Streams(scene.seed if seed is None else seed), light=light,
+    streams = Streams(scene.seed if seed is None else seed)
+    axes = rig.bus_axes()
+    with ExitStack() as stack:
+        emulator = stack.enter_context(emulated_bus(rig, clock, wire_time=wire_time))
+        bus = dynamixel_bus(rig, port=emulator.path)
+        switch = rig.spec.light.switch
+        light: LightSource
+        state: LightState
+        lamp = photometer = None
+        if isinstance(switch, SerialSwitchSpec):
+            lamp = stack.enter_context(_lamp(rig, switch))
+            driver = light_switch(rig, clock, port=lamp.path)
+            assert driver is not None  # the switch is serial
+            light, state = driver, lamp
+        else:
+            light = state = SimLightSource()
+        truth = emulated_pose(emulator, axes)
+        serial = rig.spec.detector.interface.kind == "serial"
+        physics = SimDetector(
+            scene, rig, truth if serial else bus.positions, clock=clock, streams=streams,
+            light=state,
         )  # fmt: skip
-        side = RehearsalSide(bus, detector)
+        if serial:
+            photometer = stack.enter_context(_photometer(rig, physics, clock))
+            detector: Detector = serial_detector(rig, clock, port=photometer.path)
+        else:
+            detector = physics
+        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp))
         yield Devices(bus, detector, clock, light, side), clock

@@ -7,6 +7,9 @@ Protocol (lines end in CR LF on the way out; any line ending is accepted in):
 - ``STATE?`` → ``ON`` or ``OFF``;
 - anything else → ``ERR unknown command: …``.
 
+The three commands can be renamed (``commands``: a rig's ``light.switch`` section, as a
+rehearsal wires it); the answers stay ``OK``, ``ON``, ``OFF`` and ``ERR …``.
+
 Faults for tests: `silent` (ignore everything), `refuse` (answer the next switches with
 ``ERR lamp failure``), `clear`. ``is_on`` can drive a simulated detector's signal, so a
 rehearsal's dark reading really is dark.
@@ -22,9 +25,17 @@ from sim.serial_photometer.server import _PtyServer
 class SerialLamp(_PtyServer):
     """A lamp behind a serial relay, off at power-up."""
 
-    def __init__(self, *, reply_delay_s: float = 0.0) -> None:
+    def __init__(
+        self,
+        *,
+        reply_delay_s: float = 0.0,
+        commands: tuple[str, str, str] = ("ON", "OFF", "STATE?"),
+    ) -> None:
         if reply_delay_s < 0:
             raise ValueError("reply_delay_s must be ≥ 0")
+        self._words = tuple(c.strip().upper() for c in commands)  # on, off, query
+        if len(self._words) != 3 or len(set(self._words)) != 3 or not all(self._words):
+            raise ValueError(f"expected three distinct commands (on, off, query), got {commands}")
         self._reply_delay_s = reply_delay_s
         self._reset_on_open = False
         self._on = False
@@ -76,14 +87,15 @@ class SerialLamp(_PtyServer):
             if self._silent:
                 return
             word = line.strip().upper()
-            if word in ("ON", "OFF"):
+            on, off, query = self._words
+            if word in (on, off):
                 if self._refuse:
                     self._refuse -= 1
                     answer = "ERR lamp failure"
                 else:
-                    self._on = word == "ON"
+                    self._on = word == on
                     answer = "OK"
-            elif word == "STATE?":
+            elif word == query:
                 answer = "ON" if self._on else "OFF"
             else:
                 answer = f"ERR unknown command: {line}"

@@ -81,8 +81,9 @@ def kind_of(rig: Rig, rehearse: bool) -> BackendKind:
 
 
 def needs_scene(rig: Rig, kind: BackendKind) -> bool:
-    """A scene is needed wherever the detector is simulated."""
-    return kind == "simulated" or rig.spec.detector.interface.kind == "simulated"
+    """A scene is needed wherever the detector is simulated (in a rehearsal, a serial
+    detector's simulated peer measures the scene too)."""
+    return kind != "hardware" or rig.spec.detector.interface.kind == "simulated"
 
 
 def simulated(rig: Rig, scene: Any, seed: int | None, *, any_detector: bool = False) -> Backend:
@@ -129,7 +130,7 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
         scene, rig, bus.positions, clock=clock,
         streams=Streams(scene.seed if seed is None else seed), light=light,
     )  # fmt: skip
-    return Devices(bus, detector, clock, light, RehearsalSide(bus, detector))
+    return Devices(bus, detector, clock, light, RehearsalSide(detector, bus.positions))
 
 
 def rehearsal(

@@ -221,6 +221,10 @@ class Engine:
                     self._event(
                         "fault", {**self._fault_data(exc), **self._sim()}, target=self._current
                     )
+                except DriverError as exc:  # outside a target's retries: a calibration, the light
+                    report.outcome, report.message = "fault", str(exc)
+                    self._hold_all()
+                    self._event("fault", {**self._fault_data(exc), **self._sim()})
                 except _Stop as exc:
                     report.outcome, report.message = exc.outcome, str(exc)
                     self._hold_all()
@@ -262,6 +266,8 @@ class Engine:
                 simulation.restore(state)
                 restored = True
         self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
+        if self.devices.light is not None:  # a switchable lamp may be off at power-up
+            self.devices.light.on()
         # A restored simulation keeps the uninterrupted run's schedule of health checks,
         # unless it stopped in a pause (then it goes on checking).
         if not restored or self._unhealthy:

@@ -114,6 +114,13 @@ def _session_info(kind: BackendKind, argv: list[str]) -> dict[str, Any]:
     return {"backend": kind, "pid": os.getpid(), "host": socket.gethostname(), "argv": argv}
 
 
+def _no_scene(files: Files, kind: BackendKind) -> ConfigError:
+    why = "the detector is simulated"
+    if kind == "rehearsal":
+        why = "--rehearse simulates what the detector sees"
+    return ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
+
+
 def check_output(path: Path | None, overwrite: bool) -> None:
     """`ConfigError` unless a run file can be created at ``path`` (checked by creating
     and removing a file beside it, not only by permission bits)."""
@@ -190,7 +197,7 @@ def start(
     rig = plan.rig
     kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
     if backends.needs_scene(rig, kind) and scene is None:
-        raise ConfigError(f"{files.rig_path or 'rig'}: the detector is simulated: give --scene")
+        raise _no_scene(files, kind)
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite)
@@ -359,7 +366,7 @@ def dry_run(plan: Plan, files: Files, *, scene: Any, output: Path | None, overwr
     kind = backends.kind_of(rig, rehearse)
     lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]
     if backends.needs_scene(rig, kind) and scene is None:
-        raise ConfigError(f"{files.rig_path or 'rig'}: the detector is simulated: give --scene")
+        raise _no_scene(files, kind)
     lo, hi = rig.limits[:, 0], rig.limits[:, 1]
     outside = ~np.all((plan.angles >= lo) & (plan.angles <= hi), axis=1)
     if outside.any():

@@ -17,6 +17,7 @@ the first measurement of their samples.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from typing import Protocol
 
 import numpy as np
 
@@ -29,6 +30,14 @@ from sim.physics.streams import Streams
 from sim.scene import Scene
 
 DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
+
+
+class LightState(Protocol):
+    """Whether the light reaches the sample: a `SimLightSource`, or a rehearsal's
+    simulated lamp relay (`sim.serial_light.SerialLamp`)."""
+
+    @property
+    def is_on(self) -> bool: ...
 
 
 class SimLightSource(Resource):
@@ -89,7 +98,7 @@ class SimDetector(Resource):
         *,
         clock: Clock,
         streams: Streams,
-        light: SimLightSource | None = None,
+        light: LightState | None = None,
         faults: FaultInjector | None = None,
     ) -> None:
         self.scene = scene
@@ -100,7 +109,7 @@ class SimDetector(Resource):
         self._clock = clock
         self.streams = streams
         self._faults = faults or FaultInjector((), streams)
-        self.light = light or SimLightSource()
+        self.light: LightState = light or SimLightSource()
         self.readout_s = rig.spec.detector.readout_s
         self._target: StageTarget = "sample"  # what is on the stage
         self._sample = 0  # whose random streams the next measurement uses
@@ -186,23 +195,34 @@ class SimDetector(Resource):
         if fault is not None and fault.kind == "detector_error":
             self._draws[self._sample] = start + averages
             raise DetectorError(f"the detector did not answer (injected at sample {self._sample})")
+        started = self._clock.now()
+        counts, saturated = self.expose(exposure_s, averages, started)
+        if fault is not None:  # saturated: the sensor's top code, flagged
+            counts = np.full_like(counts, float(self.sensor.max_count))
+            saturated = np.ones_like(saturated)
+        self._clock.sleep((exposure_s + self.readout_s) * averages)
+        return sensor.readings(counts, saturated, started, self._clock.now())[0]
+
+    def expose(
+        self, exposure_s: float, averages: int, started_s: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The physics of one reading, with no checks and no waiting: counts and
+        saturated flags, each (1, averages), of ``averages`` exposures of ``exposure_s``
+        s (> 0) each, the first starting at ``started_s`` (s on the clock), at the pose
+        ``pose()`` gives now, continuing the present sample's random streams. A
+        rehearsal's serial photometer reads its signal here."""
         geometric = self._geometric_power()
         period = exposure_s + self.readout_s
-        started = self._clock.now()
         t_mid = np.asarray(
-            started + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
+            started_s + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
             dtype=np.float64,
         )
         power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
         signal = self.chain.electrons(power, np.array([exposure_s]))
         index = np.array([self._sample], dtype=np.int64)
+        start = self._draws.get(self._sample, 0)
         self._draws[self._sample] = start + averages
-        counts, saturated = sensor.read_out(
+        return sensor.read_out(
             signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams,
             index, start=start,
         )  # fmt: skip
-        if fault is not None:  # saturated: the sensor's top code, flagged
-            counts = np.full_like(counts, float(self.sensor.max_count))
-            saturated = np.ones_like(saturated)
-        self._clock.sleep(period * averages)
-        return sensor.readings(counts, saturated, started, self._clock.now())[0]

@@ -201,16 +201,17 @@ class Rehearsal:
     clock: ScaledClock
 
 
-def emulated_bus(rig: Rig, clock: TimeSource) -> DxlEmulator:
+def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:
     """A (not yet started) byte-level emulator of the rig's motors, at home, in their
-    operating modes, at the rig's bus rate (no wire time: as fast as the host reads)."""
+    operating modes, at the rig's bus rate; as fast as the host reads, or with
+    ``wire_time`` as a real bus (bytes on the wire and the motors' return delays)."""
     axes = rig.bus_axes()
     emulator = DxlEmulator(
         ids=[a.motor_id for a in axes],
         baud=rig.spec.bus.baud,
         clock=clock,
-        wire_time=False,
-        return_delay=False,
+        wire_time=wire_time,
+        return_delay=wire_time,
     )
     for axis, home in zip(axes, rig.home, strict=True):
         motor = emulator.motors[axis.motor_id]

@@ -190,6 +190,17 @@ class DxlEmulator:
         with self._lock:
             return list(self._transcript or [])
 
+    def goals_written(self) -> dict[int, list[int]]:
+        """Every Goal Position value (ticks) the host has written to each motor, by ID,
+        oldest first (`EmulatedMotor.goals_written`)."""
+        with self._lock:
+            return {m.id: m.goals_written for m in self._motors}
+
+    def clear_goals(self) -> None:
+        with self._lock:
+            for motor in self._motors:
+                motor.clear_goals()
+
     def host_baud(self) -> int | None:
         """The rate the host has set on the tty (bits/s)."""
         return tty_rate(self._slave) if self._slave >= 0 else None

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 
 from drivers.dynamixel.control_table import (
@@ -51,6 +52,11 @@ DRIVE_MODE_TORQUE_ON_BY_GOAL = 0x08
 VELOCITY = OPERATING_MODES["velocity"]
 #: Position mode ignores a Homing Offset outside ±1,024 (e-manual).
 _POSITION_MODE_HOMING_LIMIT = 1024
+
+#: Goal Position values a motor remembers (`EmulatedMotor.goals_written`); older ones
+#: are dropped.
+GOAL_LOG_SIZE = 100_000
+_GOAL = BY_NAME["goal_position"]
 
 #: Present Input Voltage (0.1 V) and Present Temperature (°C) of a healthy motor.
 NOMINAL_VOLTAGE = 120
@@ -109,6 +115,7 @@ class EmulatedMotor:
         self._traj: Trajectory = at_rest(position)
         self._kind = ProfileType.STEP
         self._registered: tuple[int, bytes] | None = None
+        self._goals: deque[int] = deque(maxlen=GOAL_LOG_SIZE)
         self._put("model_number", model)
         self._put("firmware_version", firmware)
         self._put("id", motor_id)
@@ -186,8 +193,12 @@ class EmulatedMotor:
             return bytes(self._mem[address : address + length])
 
     def write(self, address: int, data: bytes, *, via_secondary: bool = False) -> StatusError:
-        """Apply a WRITE of ``data`` at ``address`` under the control-table rules."""
+        """Apply a WRITE of ``data`` at ``address`` under the control-table rules (a
+        Goal Position in it is logged first, whether the rules accept it or not)."""
         with self._lock:
+            start = _GOAL.address - address
+            if start >= 0 and start + _GOAL.size <= len(data):
+                self._goals.append(_GOAL.decode(bytes(data[start : start + _GOAL.size])))
             error = self.check_write(address, data, via_secondary=via_secondary)
             if error:
                 return error
@@ -200,6 +211,18 @@ class EmulatedMotor:
             return check_write(
                 self._mem, address, data, shutdown=self.in_shutdown, via_secondary=via_secondary
             )
+
+    @property
+    def goals_written(self) -> list[int]:
+        """Every Goal Position value (ticks) the host has written, oldest first (WRITE,
+        SYNC_WRITE, BULK_WRITE, ACTION; refused ones too; the last `GOAL_LOG_SIZE`)."""
+        with self._lock:
+            return list(self._goals)
+
+    def clear_goals(self) -> None:
+        """Forget the Goal Position values written so far."""
+        with self._lock:
+            self._goals.clear()
 
     def get(self, name: str) -> int:
         """A register's value by control-table name (derived registers are up to date)."""

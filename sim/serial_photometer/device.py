@@ -48,7 +48,9 @@ class SerialPhotometer(_PtyServer):
     above ``full_scale`` are clipped to it with the status ``SAT`` (``None``: no
     clipping). ``reply_delay_s`` is added to every answer. With ``reset_on_open`` the
     device reboots when a host opens the port (as an Arduino does when DTR rises) and
-    prints its banner ``boot_s`` later. ``echo`` echoes every command line.
+    prints its banner ``boot_s`` later. ``echo`` echoes every command line. With
+    ``speedup`` an exposure of t s takes t / ``speedup`` real seconds (a rehearsal's
+    scaled time; the counts are still those of t s).
 
     The pty and the serving thread come from :class:`~sim.serial_photometer.server._PtyServer`.
     """
@@ -66,11 +68,14 @@ class SerialPhotometer(_PtyServer):
         boot_s: float = 0.0,
         echo: bool = False,
         seed: int = 0,
+        speedup: float = 1.0,
     ) -> None:
         if not callable(signal) and not math.isfinite(signal):
             raise ValueError(f"signal must be finite or a callable, got {signal!r}")
         if noise_std < 0 or reply_delay_s < 0 or boot_s < 0:
             raise ValueError("noise_std, reply_delay_s and boot_s must be ≥ 0")
+        if not (math.isfinite(speedup) and speedup > 0):
+            raise ValueError(f"speedup must be finite and > 0, got {speedup!r}")
         if full_scale is not None and not full_scale > 0:
             raise ValueError(f"full_scale must be > 0 or None, got {full_scale!r}")
         if reset_on_open and not hasattr(termios, "TIOCPKT"):  # pragma: no cover
@@ -84,6 +89,7 @@ class SerialPhotometer(_PtyServer):
         self._reset_on_open = reset_on_open
         self._boot_s = boot_s
         self._echo = echo
+        self._speedup = float(speedup)
         self._rng = random.Random(seed)
 
         self._lock = threading.Lock()
@@ -226,7 +232,7 @@ class SerialPhotometer(_PtyServer):
             return
         exposure_ms = int(args[0]) if args else self._exposure_ms
         count = int(args[1]) if len(args) == 2 else 1
-        duration = exposure_ms / 1000 * count
+        duration = exposure_ms / 1000 * count / self._speedup
         faults = self._faults
         if faults.reset_next:
             faults.reset_next = False

@@ -3,6 +3,7 @@ its fixed lines, the driver configuration that speaks it, and line helpers."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from drivers.serial_detector import SerialDetectorConfig
@@ -39,6 +40,33 @@ def default_config(port: str, **overrides: Any) -> SerialDetectorConfig:
     }
     fields.update(overrides)
     return SerialDetectorConfig(**fields)
+
+
+#: The first word of every command the device knows.
+COMMANDS = ("MEAS", "EXP", "GAIN", "ID?")
+
+
+def mismatch(config: SerialDetectorConfig) -> tuple[str, str] | None:
+    """Why a driver configured with ``config`` cannot talk to this device, as (field,
+    reason), or None when it can: each command it would send (rendered for 50 ms and 4
+    averages) must be one of `COMMANDS`, and the device's answers must match
+    ``response`` and ``command_ack``."""
+    values = {"exposure_s": 0.05, "exposure_ms": 50, "exposure_us": 50_000, "averages": 4}
+    commands = {"query": config.query.format(**values)}
+    if config.set_exposure is not None:
+        commands["set_exposure"] = config.set_exposure.format(**values)
+    commands.update({f"init.{i}": command for i, command in enumerate(config.init)})
+    for field, command in commands.items():
+        word = (command.split() or [""])[0].upper()
+        if word not in COMMANDS:
+            known = ", ".join(COMMANDS)
+            return field, f"{command!r} is not a command of the simulated photometer ({known})"
+    answer = "VAL 1234.0 OK" + (" 5.0" if config.device_averaging else "")
+    if re.fullmatch(config.response, answer) is None:
+        return "response", f"does not match the simulated photometer's answer {answer!r}"
+    if config.command_ack is not None and re.search(config.command_ack, "OK") is None:
+        return "command_ack", "does not match the simulated photometer's acknowledgement 'OK'"
+    return None
 
 
 def _line(text: str) -> bytes:

@@ -21,6 +21,7 @@ from sim.serial_photometer import RESPONSE, SerialPhotometer, default_config
 from tests.conftest import ARCH_POINT_FILE, RIG_FILES
 from tests.support.rigs import direction
 
+ARCH_SERIAL_FILE = RIG_FILES["arch"].parent / "arch_serial.yaml"
 ARCH_DATA = yaml.safe_load(RIG_FILES["arch"].read_text())
 
 #: The simulated photometer's protocol as a user writes it in a rig file.
@@ -136,6 +137,26 @@ def test_the_point_rig_is_the_arch_rig_with_a_lamp() -> None:
             k: v for k, v in data["constraints"].items() if k != "beam_diameter_mm"
         }
     assert point == arch
+
+
+def test_the_serial_rig_is_the_arch_rig_wired_to_hardware() -> None:
+    """arch_serial.yaml repeats arch.yaml but for its name, its bus, its lamp relay, its
+    photometer (the simulated photometer's protocol) and its shortest exposure (whole
+    milliseconds)."""
+    serial = Rig.from_yaml(ARCH_SERIAL_FILE)
+    spec = serial.spec
+    assert spec.bus.kind == "dynamixel" and isinstance(spec.light.switch, SerialSwitchSpec)
+    assert serial.serial_detector_config() == default_config("/dev/ttyACM0", timeout_s=0.5)
+    assert spec.detector.exposure_range_s == (1e-3, 60.0)
+    data = yaml.safe_load(ARCH_SERIAL_FILE.read_text())
+    arch = dict(ARCH_DATA)
+    for d in (data, arch):
+        d.pop("name"), d.pop("bus")
+        d["light"] = {k: v for k, v in d["light"].items() if k != "switch"}
+        d["detector"] = {
+            k: v for k, v in d["detector"].items() if k not in ("interface", "exposure_range_s")
+        }
+    assert data == arch
 
 
 def test_a_point_source_refuses_no_footprint(arch_point: Rig, rigs: dict[str, Rig]) -> None:

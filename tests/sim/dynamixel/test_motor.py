@@ -148,6 +148,23 @@ def test_extended_position_mode_allows_256_turns_each_way(motor: EmulatedMotor) 
     assert write(motor, "goal_position", -1_048_576) == StatusError.DATA_LIMIT
 
 
+def test_every_goal_position_written_is_logged_refused_or_not(motor: EmulatedMotor) -> None:
+    assert write(motor, "max_position_limit", 3000) == StatusError.NONE
+    assert write(motor, "goal_position", 2500) == StatusError.NONE
+    assert write(motor, "goal_position", 3001) == StatusError.DATA_LIMIT  # logged all the same
+    assert motor.write(108, u32(10) + u32(100) + u32(1500)) == StatusError.NONE  # spanning it
+    assert motor.write(116, u32(1700)[:2]) == StatusError.DATA_LENGTH  # half of it: no goal
+    assert motor.write(112, u32(100)) == StatusError.NONE  # beside it
+    assert motor.reg_write(116, u32(1200)) == StatusError.NONE  # registered, not yet written
+    assert motor.goals_written == [2500, 3001, 1500]
+    assert motor.action() == StatusError.NONE
+    assert motor.goals_written == [2500, 3001, 1500, 1200]
+    motor.set("goal_position", 7)  # the backdoor is not the host
+    torque_on(motor)  # nor is torque on holding the present position
+    motor.clear_goals()
+    assert motor.goals_written == []
+
+
 def test_goal_velocity_current_and_pwm_limits(motor: EmulatedMotor) -> None:
     assert write(motor, "goal_velocity", 200) == StatusError.NONE
     assert write(motor, "goal_velocity", -201) == StatusError.DATA_LIMIT
