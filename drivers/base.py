@@ -162,7 +162,8 @@ class Reading:
     deviation of the ``n`` raw samples averaged (0 for one sample), ``saturated`` whether
     any sample hit the full scale, ``started_s`` / ``ended_s`` the clock's time (s) when
     the first exposure began and the last one ended (readout included), ``raw`` the
-    individual samples.
+    individual samples, ``exposure_s`` the exposure actually integrated (s) when the
+    device's step made it differ from the one asked (e.g. whole milliseconds), else None.
     """
 
     value: float
@@ -172,6 +173,7 @@ class Reading:
     started_s: float
     ended_s: float
     raw: tuple[float, ...] = field(default_factory=tuple)
+    exposure_s: float | None = None
 
     @property
     def middle_s(self) -> float:

@@ -218,6 +218,15 @@ class SerialDetector(_LineIO, Resource):
                 )
         return exposure, n
 
+    def _integrated(self, exposure_s: float) -> float | None:
+        """The exposure the device integrates when the templates round it (s), or None
+        when it is the one asked."""
+        for name, scale in (("exposure_ms", 1e3), ("exposure_us", 1e6)):
+            if name in self._fields and "exposure_s" not in self._fields:
+                integrated = round(exposure_s * scale) / scale
+                return None if integrated == exposure_s else integrated
+        return None
+
     def _values(self, exposure_s: float, averages: int) -> dict[str, float | int]:
         return {
             "exposure_s": exposure_s,
@@ -244,6 +253,7 @@ class SerialDetector(_LineIO, Resource):
             started_s=started,
             ended_s=self._clock.now(),
             raw=tuple(samples),
+            exposure_s=self._integrated(exposure_s),
         )
 
     def _device_averaged(self, exposure_s: float, averages: int, started: float) -> Reading:
@@ -271,6 +281,7 @@ class SerialDetector(_LineIO, Resource):
             started_s=started,
             ended_s=self._clock.now(),
             raw=(value,),
+            exposure_s=self._integrated(exposure_s),
         )
 
     def _is_saturated(self, value: float, match: re.Match[str]) -> bool:

@@ -16,7 +16,9 @@ own spread std²/n when it averaged n ≥ 2 exposures, else the calibration's no
 var(C) = a + b·max(C − d·e, 0) per exposure, with a the dark reading's variance and b
 the reference's excess variance per count (counting statistics: shot noise grows with
 the signal, read and dark noise do not); the reference and dark rates carry the
-variance of their means. These add in quadrature through the formula above.
+variance of their means. These add in quadrature through the formula above. A detector
+that averages on its own and reports no spread gives no noise estimate: its readings
+count as exact there (docs/acquire.md).
 """
 
 from __future__ import annotations
@@ -70,14 +72,14 @@ class CalibrationSeries:
             if d is None:
                 dark_counts, dark_std, dn = 0.0, 0.0, 1
             else:
-                dark_counts, dark_std, dn = float(d["value"]), float(d["std"]), max(int(d["n"]), 1)
+                dark_counts, dark_std, dn = float(d["value"]), _std(d), max(int(d["n"]), 1)
             dark.append(dark_counts / exposure)
             dark_var.append(dark_std**2 / dn / exposure**2)
             signal = float(r["value"]) - dark_counts
             ref.append(signal / exposure)
-            ref_var.append((float(r["std"]) ** 2 / n + dark_std**2 / dn) / exposure**2)
+            ref_var.append((_std(r) ** 2 / n + dark_std**2 / dn) / exposure**2)
             a_s.append(dark_std**2)
-            b_s.append(max(float(r["std"]) ** 2 - dark_std**2, 0.0) / max(signal, 1e-300))
+            b_s.append(max(_std(r) ** 2 - dark_std**2, 0.0) / max(signal, 1e-300))
         first = events[0].data
         rate = np.array(ref)
         if np.any(rate <= 0):
@@ -127,11 +129,18 @@ class CalibrationSeries:
         scale = self.albedo / math.pi * g_ref / np.where(g > 0, g, 1.0)
         f = scale * s / big_s
         modelled = self.noise_a + self.noise_b * np.maximum(counts - d * exposure_s, 0.0)
-        var_counts = np.where(n >= 2, std**2 / np.maximum(n, 1), modelled / np.maximum(n, 1))
+        own = (n >= 2) & np.isfinite(std)
+        var_counts = np.where(own, std**2 / np.maximum(n, 1), modelled / np.maximum(n, 1))
         var_s = var_counts / exposure_s**2 + self._var_at(self.dark_rate_var, t)
         var_big = self._var_at(self.rate_var, t)
         sigma = scale * np.sqrt(var_s / big_s**2 + s**2 * var_big / big_s**4)
         return np.asarray(f, dtype=np.float64), np.asarray(sigma, dtype=np.float64)
+
+
+def _std(reading: dict[str, object]) -> float:
+    """A journaled reading's spread (counts); 0 where the device gave none."""
+    std = reading.get("std")
+    return 0.0 if std is None else float(std)  # type: ignore[arg-type]
 
 
 def calibrate(run: Run) -> Calibrated:

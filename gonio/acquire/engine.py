@@ -405,11 +405,11 @@ class Engine:
             "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
             "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
             **dict(zip(coords, plan.coords[i].tolist(), strict=True)),
-            "exposure_s": exposure,
+            "exposure_s": exposure if reading.exposure_s is None else reading.exposure_s,
             "averages": int(plan.averages[i]),
             "n": reading.n,
             "counts": reading.value,
-            "counts_std": reading.std,
+            "counts_std": reading.std if math.isfinite(reading.std) else None,
             "saturated": int(reading.saturated),
             "remeasured": remeasured,
             "settled_s": measured.settled_s + offset,
@@ -538,10 +538,10 @@ class Engine:
         offset = self.time.offset
         return {
             "value": reading.value,
-            "std": reading.std,
+            "std": reading.std if math.isfinite(reading.std) else None,
             "n": reading.n,
             "saturated": reading.saturated,
-            "exposure_s": exposure,
+            "exposure_s": exposure if reading.exposure_s is None else reading.exposure_s,
             "started_s": reading.started_s + offset,
             "ended_s": reading.ended_s + offset,
         }

@@ -60,7 +60,8 @@ def sample_columns(axes: Sequence[str], coordinate_names: Sequence[str]) -> list
 #: Columns that hold integers or text (the rest are REAL).
 _INTEGER = frozenset({"target", "session", "attempts", "averages", "n", "saturated", "remeasured"})
 _TEXT = frozenset({"utc", "temperatures_c", "sim_state"})
-_NULLABLE = frozenset({"temperatures_c", "sim_state"})
+#: counts_std is NULL when the device averaged and gave no spread.
+_NULLABLE = frozenset({"temperatures_c", "sim_state", "counts_std"})
 
 
 def _column_sql(name: str) -> str:

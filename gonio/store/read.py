@@ -174,8 +174,8 @@ def _columns(names: list[str], rows: list[tuple[Any, ...]]) -> dict[str, np.ndar
             out[name] = np.array(cells, dtype=np.bool_)
         elif name in ("utc", "temperatures_c", "sim_state"):
             out[name] = np.array(cells, dtype=object)
-        else:
-            out[name] = np.array(cells, dtype=np.float64)
+        else:  # NULL (a spread the device did not give) reads as NaN
+            out[name] = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
     return out
 
 

@@ -165,6 +165,16 @@ def test_exposure_command_sent_only_when_it_changes(
     assert device.exposure_ms == 10
 
 
+def test_a_reading_says_the_exposure_the_device_integrated(
+    device: SerialPhotometer, detector: SerialDetector
+) -> None:
+    """Templates in whole milliseconds round what is asked: the reading says so (the
+    engine journals it), and says nothing when the device integrated what was asked."""
+    assert detector.measure(0.0201).exposure_s == 0.02
+    assert detector.measure(0.0015625).exposure_s == 0.002
+    assert detector.measure(0.01).exposure_s is None
+
+
 def test_exposure_in_the_query_template(device: SerialPhotometer) -> None:
     cfg = config_for(device, query="MEAS {exposure_ms:d}", set_exposure=None)
     with SerialDetector(cfg) as det:
