@@ -100,7 +100,7 @@ def render(run: Run, errors: dict[str, float | int] | None = None, *, title: boo
     lines = [
         f"run {str(run.path)!r}: plan {f['plan']!r} on rig {f['rig']!r}, "
         f"{f['backend']} backend, seed {f['seed']}",
-        f"  {'outcome':<24}{f['outcome']!s:>10}   ({f['sessions']} session"
+        f"  {'outcome':<24}{f['outcome'] or 'not ended':>10}   ({f['sessions']} session"
         f"{'s' if f['sessions'] != 1 else ''})",
         f"  {'targets measured':<24}{f['measured']:>10}   of {f['targets']} "
         f"({f['skipped']} skipped, {f['missing']} missing)",
@@ -166,3 +166,30 @@ def truth_of(run: Run, *, at_true_pairs: bool = False) -> FloatArray:
     scene = load_scene(Path(f"{run.path}#scene_text"), run.plan.rig, raw=str(text).encode())
     wi, wo = measured_pairs(run) if at_true_pairs else run.directions()
     return np.asarray(SceneOptics(scene, run.plan.rig).models["sample"](wi, wo), dtype=np.float64)
+
+
+def render_details(run: Run) -> str:
+    """What `gonio info` adds to the table: the sessions, the BRDF the counts give
+    through the calibration, the file."""
+    lines = ["  sessions"]
+    for session in run.sessions:
+        info = session.info
+        lines.append(
+            f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
+            f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
+        )
+    if len(run) and run.of_kind("calibration"):
+        cal = calibrate(run)
+        ok = np.isfinite(cal.brdf) & (cal.brdf > 0)
+        rel = cal.sigma[ok] / cal.brdf[ok]
+        lines.append(
+            f"  {'derived BRDF':<24}{int(ok.sum()):>10}   values, {cal.brdf[ok].min():.4g} to "
+            f"{cal.brdf[ok].max():.4g} sr⁻¹, median uncertainty {100 * np.median(rel):.3f} % (1σ)"
+        )
+    if run.path.is_file():
+        size = run.path.stat().st_size
+        lines.append(
+            f"  {'run file':<24}{size / 1024:>9.0f}K   schema v{run.meta['schema_version']}, "
+            f"{len(run.events)} events"
+        )
+    return "\n".join(lines)

@@ -29,4 +29,5 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(json.dumps(summary.figures(run), indent=2, ensure_ascii=False))
     else:
         print(summary.render(run))
+        print(summary.render_details(run))
     return 0
