@@ -1,6 +1,7 @@
 """The simulated instrument: virtual motors, detector and light sharing one virtual
-clock, one run seed and the scene's injected faults; and a rehearsal mode that drives
-the real `DynamixelBus` against the byte-level emulator with the simulated detector.
+clock, one run seed and the scene's injected faults; and the byte-level emulator of a
+rig's motors (`emulated_bus`), which the rehearsal backend (`sim.rehearsal`) drives
+with the real `DynamixelBus`.
 
 `SimulatedInstrument` is the simulated backend as the engine sees it: `devices()` gives
 the `gonio.acquire.Devices` (the `drivers.base` contract), and the instrument itself is
@@ -12,20 +13,16 @@ by target through `gonio.acquire.measure`, the same step the engine takes;
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from drivers.base import Resource, StageTarget
-from drivers.dynamixel.bus import DynamixelBus
 from gonio.acquire.devices import Devices
 from gonio.acquire.measure import measure_target
 from gonio.planner.plan import Plan
 from gonio.rig.model import Rig
-from sim.clock import ManualClock, ScaledClock, TimeSource
+from sim.clock import ManualClock, TimeSource
 from sim.devices.detector import SimDetector, SimLightSource
 from sim.devices.motors import MotorState, SimMotorBus
 from sim.dynamixel.emulator import DxlEmulator
@@ -189,18 +186,6 @@ class SimulatedInstrument(Resource):
         )
 
 
-@dataclass
-class Rehearsal:
-    """The real driver path without hardware: `DynamixelBus` on the emulator's pty, the
-    simulated detector reading the bus's read-back positions."""
-
-    emulator: DxlEmulator
-    bus: DynamixelBus
-    detector: SimDetector
-    light: SimLightSource
-    clock: ScaledClock
-
-
 def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:
     """A (not yet started) byte-level emulator of the rig's motors, at home, in their
     operating modes, at the rig's bus rate; as fast as the host reads, or with
@@ -218,27 +203,3 @@ def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> Dxl
         motor.set("operating_mode", axis.operating_mode)
         motor.set("present_position", axis.to_ticks(float(home)))
     return emulator
-
-
-@contextmanager
-def rehearsal(
-    scene: Scene, rig: Rig, *, speedup: float = 50.0, seed: int | None = None
-) -> Iterator[Rehearsal]:
-    """An emulated bus of the rig's motors (at home), the real `DynamixelBus` on it,
-    and a `SimDetector` on a clock running ``speedup`` times faster than real time."""
-    clock = ScaledClock(speedup)
-    axes = rig.bus_axes()
-    emulator = emulated_bus(rig, clock)
-    light = SimLightSource()
-    with emulator:
-        bus = DynamixelBus(emulator.path, axes, baud=rig.spec.bus.baud)
-        detector = SimDetector(
-            scene,
-            rig,
-            bus.positions,
-            clock=clock,
-            streams=Streams(scene.seed if seed is None else seed),
-            light=light,
-        )
-        with bus, detector, light:
-            yield Rehearsal(emulator, bus, detector, light, clock)

@@ -9,7 +9,8 @@ import pytest
 
 from gonio.acquire.measure import measure_target
 from gonio.rig.model import Rig
-from sim.devices.instrument import SimulatedInstrument, rehearsal
+from sim.devices.instrument import SimulatedInstrument
+from sim.rehearsal import RehearsalSide, rehearsal_devices
 from sim.scene import load_scene
 from tests.conftest import CONFIGS
 
@@ -21,16 +22,23 @@ def test_rehearsal_measures_like_the_simulation(rig: Rig) -> None:
     ticks = np.array([a.resolution_rad for a in rig.bus_axes()])
     rng = np.random.default_rng(4)
     targets = [rng.uniform(0.6 * rig.limits[:, 0], 0.6 * rig.limits[:, 1]) for _ in range(3)]
-    with rehearsal(scene, rig, speedup=40.0) as r, SimulatedInstrument(scene, rig) as sim:
-        assert r.bus.axes == rig.axes
+    with (
+        rehearsal_devices(rig, scene, None, 40.0) as (devices, _),
+        devices,
+        SimulatedInstrument(scene, rig) as sim,
+    ):
+        bus, detector = devices.bus, devices.detector
+        side = devices.simulation
+        assert isinstance(side, RehearsalSide) and side.peers is not None
+        assert bus.axes == rig.axes
         for target in targets:
-            r.bus.move_to(dict(zip(rig.axes, target.tolist(), strict=True)))
-            r.bus.wait_settled(10.0)
-            read_back = np.array(list(r.bus.positions().values()))
+            bus.move_to(dict(zip(rig.axes, target.tolist(), strict=True)))
+            bus.wait_settled(10.0)
+            read_back = np.array(list(bus.positions().values()))
             assert np.all(np.abs(read_back - target) <= 2.5 * ticks)
-            reading = r.detector.measure(0.01)
+            reading = detector.measure(0.01)
             # The simulation at the read-back pose gives the same reading.
             pose = dict(zip(rig.axes, read_back.tolist(), strict=True))
             expected = measure_target(sim.devices(), 0, pose, 0.01, 1, settle_s=0.0).reading
             assert reading.value == pytest.approx(expected.value, rel=1e-12)
-        assert r.emulator.stats.instructions["SYNC_WRITE"] >= 3
+        assert side.peers.emulator.stats.instructions["SYNC_WRITE"] >= 3
