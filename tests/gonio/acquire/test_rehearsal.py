@@ -138,3 +138,26 @@ def test_a_light_that_fails_in_a_calibration_ends_the_run_resumable(tmp_path: Pa
     (fault,) = run.of_kind("fault")
     assert fault.data["error"] == "LightError"
     assert run.sessions[-1].outcome == "fault"
+
+
+def test_the_exposure_journaled_is_the_one_the_device_integrated(tmp_path: Path) -> None:
+    """The rig's photometer takes whole milliseconds: a plan asking 1.5 ms gets 2 ms.
+    The journal says 2 ms (the reading's `exposure_s`), so the calibrated BRDF is right;
+    with the exposure asked it would come out a third too high."""
+    from gonio.acquire import session
+
+    source = load_plan_source(PLAN)
+    plan = source.build()
+    import dataclasses
+
+    plan = dataclasses.replace(plan, exposure_s=np.full(len(plan), 0.0015))
+    scene, text = session.load_scene_file(SCENE, source.rig)
+    files = session.Files(source.path, source.text, source.rig.source, source.rig.text, SCENE, text)
+    out = tmp_path / "run.sqlite"
+    session.start(plan, files, scene=scene, output=out, rehearse=True, speedup=1000.0)
+    run = open_run(out)
+    assert np.all(run.samples["exposure_s"] == 0.002)
+    wi, wo = run.directions()
+    truth = band_eval(scene.material.model(), scene.detector.band)(wi, wo)
+    calibrated = calibrate(run)
+    assert np.median(np.abs(calibrated.brdf / truth - 1)) < 0.05
