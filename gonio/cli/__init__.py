@@ -44,7 +44,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "measure a plan on the rig (simulated or hardware), journaling every sample",
     ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
-    "motors": ("gonio.cli.motors", "look at a Dynamixel bus: scan, status, reboot"),
+    "motors": (
+        "gonio.cli.motors",
+        "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
+    ),
 }
 
 

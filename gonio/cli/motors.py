@@ -1,5 +1,5 @@
 """`gonio motors scan | status | reboot`: look at a Dynamixel bus, with or without a
-rig file.
+rig file; `move | home | torque | set-id` bring a new rig up (`gonio.cli.bringup`).
 
 Every command opens the port, does its job through `drivers.dynamixel.link`, and
 releases the port; driver errors become one line (see `gonio.cli`). Given ``--rig``,
@@ -55,7 +55,12 @@ def baud_rate(text: str) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    motors = sub.add_parser("motors", help=help_)
+    motors = sub.add_parser(
+        "motors",
+        help=help_,
+        description="Look at a Dynamixel bus (scan, status, reboot) and bring a rig up "
+        "(move, home, torque, set-id), on the safety rules of a run.",
+    )
     cmds = motors.add_subparsers(dest="motors_command", metavar="ACTION", required=True)
 
     scan = cmds.add_parser("scan", help="list the motors answering on a port")
@@ -80,6 +85,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     reboot.add_argument("--ids", type=motor_ids, required=True)
     reboot.add_argument("--baud", type=baud_rate, default=57_600)
     reboot.set_defaults(func=cmd_reboot)
+
+    from gonio.cli import bringup
+
+    bringup.add_parsers(cmds, baud_rate)
 
 
 def cmd_scan(args: argparse.Namespace) -> int:
