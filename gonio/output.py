@@ -48,7 +48,7 @@ class PendingOutput:
     def _open(self) -> None:
         path = self.path
         if path.is_dir():
-            raise ConfigError(f"{self.option} {path}: is a folder; expected a file name")
+            raise ConfigError(f"{self.option} {path}: is a directory; expected a file name")
         target = Path(os.path.realpath(path)) if path.is_symlink() else path
         try:
             info = target.stat()

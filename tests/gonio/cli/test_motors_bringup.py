@@ -58,6 +58,12 @@ def _assert_read_back(line: str, axis: str, motor: int, deg: float) -> None:
     assert abs(read - deg) <= SETTLED_DEG, line
 
 
+def _served(emu: DxlEmulator, baud: int = 57_600) -> None:
+    """Every byte sent so far has been served: a ping's reply comes after them."""
+    with DynamixelLink(emu.path, baud, latency_ms=0) as link:
+        link.ping(1)
+
+
 def _ticks(rig: Rig, axis: str, deg: float) -> int:
     config = next(a for a in rig.bus_axes() if a.name == axis)
     return config.to_ticks(math.radians(deg))
@@ -68,6 +74,7 @@ def test_a_move_beyond_the_limits_sends_no_byte(
 ) -> None:
     _, path, emu = bench
     assert run_gonio("motors", "torque", "on", "--rig", str(path)).returncode == 0
+    _served(emu)  # the release's SYNC_WRITE (no reply) is in before the count starts
     emu.reset_stats()
     emu.clear_goals()
     for deg in ("86", "-5.5", "1e308"):
@@ -105,11 +112,12 @@ def test_move_settles_and_prints_the_read_back_then_home_moves_every_axis(
         assert r.returncode == 0, r.stderr
         motor = next(a.motor_id for a in rig.bus_axes() if a.name == axis)
         _assert_read_back(r.stdout, axis, motor, deg)
+        _served(emu)
         assert _ticks(rig, axis, deg) in emu.goals_written()[motor]
-        _released(emu)
     emu.clear_goals()
     r = run_gonio("motors", "home", "--rig", str(path))
     assert r.returncode == 0, r.stderr
+    _served(emu)
     lines = r.stdout.splitlines()
     assert len(lines) == 4
     for axis, config, line in zip(rig.axes, rig.bus_axes(), lines, strict=True):
@@ -131,12 +139,13 @@ def test_torque_off_then_a_move_is_refused(
         f"axis {a.name} (motor {a.motor_id}): torque off" for a in rig.bus_axes()
     ]
     assert all(m.get("torque_enable") == 0 for m in emu.motors.values())
-    _released(emu)
+    _served(emu)
     emu.clear_goals()
     r = run_gonio("motors", "move", "--rig", str(path), "--axis", "light_elevation", "--deg", "10")
     assert r.returncode == 2
     assert r.stderr.startswith("gonio: error: torque is off on light_elevation (motor 1), ")
     assert "nothing was moved" in r.stderr and len(r.stderr.splitlines()) == 1
+    _served(emu)
     assert all(goals == [] for goals in emu.goals_written().values())
     assert all(m.get("torque_enable") == 0 for m in emu.motors.values())
     _released(emu)
