@@ -15,7 +15,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "plan",
         help=help_,
         description="Place targets uniformly in the plan's parametrization, keep what the "
-        "rig can reach, order them for the motors and predict the duration. Nothing moves.",
+        "rig can reach, order them for the motors and predict the duration. Nothing moves; "
+        "nothing is written without -o (each output is created before planning and "
+        "replaced whole).",
     )
     plan.add_argument("plan", type=Path, help="the plan file (YAML)")
     plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")

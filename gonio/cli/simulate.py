@@ -30,7 +30,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Plan, then measure every target with the acquisition engine on the "
         "simulated backend (virtual motors and detector, the scene's material, noise and "
         "faults), calibrate with the reference standard, and report instrument time, wall "
-        "time and the error of the recovered BRDF. -o keeps the run file (as gonio acquire "
+        "time and the error of the recovered BRDF, with a warning for saturated readings "
+        "and for spots that overrun the sample. -o keeps the run file (as gonio acquire "
         "writes it).",
     )
     p.add_argument("plan", type=Path, help="the plan file (YAML)")
