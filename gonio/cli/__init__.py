@@ -5,14 +5,20 @@ Subcommand modules are imported only when their command runs, so ``gonio --help`
 not pay for scipy or the simulator. Errors a user can cause (``GonioError``, and
 ``DriverError`` from the hardware layer) become one line on stderr and exit code 2;
 anything else is a bug and keeps its traceback. Ctrl-C exits with code 130 and one line.
+A usage error is one line too, with where to read the usage (`UsageParser`). A reader
+that closes the pipe early (``gonio plan … | head -1``) ends the command quietly with
+exit code 141, as Unix tools killed by SIGPIPE do.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import os
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from drivers.base import DriverError
 from gonio import __version__
@@ -38,8 +44,31 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "measure a plan on the rig (simulated or hardware), journaling every sample",
     ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
-    "motors": ("gonio.cli.motors", "look at a Dynamixel bus: scan, status, reboot"),
+    "motors": (
+        "gonio.cli.motors",
+        "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
+    ),
 }
+
+
+#: Exit code of a command whose reader closed the pipe (128 + SIGPIPE, as Unix tools).
+EXIT_BROKEN_PIPE = 141
+
+
+class UsageParser(argparse.ArgumentParser):
+    """An `argparse.ArgumentParser` whose usage errors are one line with exit code 2:
+    ``gonio: error: plan: the following arguments are required: plan (see gonio plan
+    --help)``, instead of argparse's usage block wrapped over several lines. Subcommand
+    parsers are made of the same class (argparse builds them with the parent's type)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, usage_error(self.prog, message) + "\n")
+
+
+def usage_error(prog: str, message: str) -> str:
+    """The one line of a usage error of the command ``prog`` (e.g. ``gonio plan``)."""
+    where = prog.removeprefix("gonio").strip()
+    return f"gonio: error: {where + ': ' if where else ''}{message} (see {prog} --help)"
 
 
 def _command_of(argv: Sequence[str]) -> str | None:
@@ -52,7 +81,7 @@ def _command_of(argv: Sequence[str]) -> str | None:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; only ``command``'s module is imported (all of them if ``"*"``)."""
-    parser = argparse.ArgumentParser(
+    parser = UsageParser(
         prog="gonio",
         description="A virtual gonioreflectometer with a hardware driver layer.",
     )
@@ -66,10 +95,29 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def _prog(args: argparse.Namespace) -> str:
+    """``gonio`` and the (sub)command words of ``args`` (for a usage error's hint)."""
+    words = [getattr(args, key, None) for key in ("command", "motors_command")]
+    return " ".join(["gonio", *(w for w in words if w)])
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        code = _run(argv)
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+    except BrokenPipeError:
+        return _broken_pipe()
+    return code
+
+
+def _run(argv: list[str]) -> int:
     parser = build_parser(_command_of(argv))
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        parser.exit(
+            2, usage_error(_prog(args), f"unrecognized arguments: {' '.join(extra)}") + "\n"
+        )
     if not hasattr(args, "func"):
         parser.print_help()
         return 0
@@ -81,6 +129,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (GonioError, DriverError) as exc:
         print(f"gonio: error: {exc}", file=sys.stderr)
         return 2
+
+
+def _broken_pipe() -> int:
+    """The reader closed stdout: say nothing, and point stdout at /dev/null so that
+    Python's own flush at exit does not print "Exception ignored … BrokenPipeError"."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return EXIT_BROKEN_PIPE
 
 
 if __name__ == "__main__":  # pragma: no cover

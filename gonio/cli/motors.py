@@ -1,5 +1,5 @@
 """`gonio motors scan | status | reboot`: look at a Dynamixel bus, with or without a
-rig file.
+rig file; `move | home | torque | set-id` bring a new rig up (`gonio.cli.bringup`).
 
 Every command opens the port, does its job through `drivers.dynamixel.link`, and
 releases the port; driver errors become one line (see `gonio.cli`). Given ``--rig``,
@@ -24,19 +24,26 @@ DEFAULT_SCAN_BAUDS = (57_600, 1_000_000)
 
 
 def motor_ids(text: str) -> list[int]:
-    """Parse "1,2,5-7" into [1, 2, 5, 6, 7] (IDs 0…252)."""
+    """Parse "1,2,5-7" into [1, 2, 5, 6, 7] (IDs 0…252); a range with an end missing
+    ("1-") or going down ("4-1") is refused, not read as something else."""
     ids: list[int] = []
-    try:
-        for part in text.split(","):
-            lo, _, hi = part.strip().partition("-")
-            first, last = int(lo), int(hi or lo)
-            ids.extend(range(first, last + 1))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected IDs like 1,2,5-7, got {text!r}") from None
-    bad = [i for i in ids if not 0 <= i <= 252]
-    if not ids or bad:
-        raise argparse.ArgumentTypeError(f"motor IDs must be in 0…252, got {text!r}")
+    for part in text.split(","):
+        lo, dash, hi = (w.strip() for w in part.strip().partition("-"))
+        if not _number(lo) or (dash and not _number(hi)):
+            raise argparse.ArgumentTypeError(f"expected IDs like 1,2,5-7, got {text!r}")
+        first, last = int(lo), int(hi if dash else lo)
+        if last < first:
+            raise argparse.ArgumentTypeError(
+                f"the range {part.strip()!r} goes down; write {last}-{first}"
+            )
+        if last > 252:  # before making the range: "1-99999999999" must not fill memory
+            raise argparse.ArgumentTypeError(f"motor IDs must be in 0…252, got {text!r}")
+        ids.extend(range(first, last + 1))
     return ids
+
+
+def _number(word: str) -> bool:
+    return word.isascii() and word.isdigit()
 
 
 def baud_rate(text: str) -> int:
@@ -48,7 +55,12 @@ def baud_rate(text: str) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    motors = sub.add_parser("motors", help=help_)
+    motors = sub.add_parser(
+        "motors",
+        help=help_,
+        description="Look at a Dynamixel bus (scan, status, reboot) and bring a rig up "
+        "(move, home, torque, set-id), on the safety rules of a run.",
+    )
     cmds = motors.add_subparsers(dest="motors_command", metavar="ACTION", required=True)
 
     scan = cmds.add_parser("scan", help="list the motors answering on a port")
@@ -73,6 +85,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     reboot.add_argument("--ids", type=motor_ids, required=True)
     reboot.add_argument("--baud", type=baud_rate, default=57_600)
     reboot.set_defaults(func=cmd_reboot)
+
+    from gonio.cli import bringup
+
+    bringup.add_parsers(cmds, baud_rate)
 
 
 def cmd_scan(args: argparse.Namespace) -> int:

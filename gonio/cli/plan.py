@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 from pathlib import Path
 
-from gonio.config import check_output
+from gonio.output import reserve_output
 from gonio.planner.plan import load_plan_source, render_summary
 
 
@@ -14,7 +15,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "plan",
         help=help_,
         description="Place targets uniformly in the plan's parametrization, keep what the "
-        "rig can reach, order them for the motors and predict the duration. Nothing moves.",
+        "rig can reach, order them for the motors and predict the duration. Nothing moves; "
+        "nothing is written without -o (each output is created before planning and "
+        "replaced whole).",
     )
     plan.add_argument("plan", type=Path, help="the plan file (YAML)")
     plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
@@ -31,21 +34,35 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    if args.output is not None:
-        check_output(args.output, "-o")
     if args.plot is not None:
-        from gonio.plots import require_matplotlib
+        from gonio.plots import check_figure_format
 
-        check_output(args.plot, "--plot")
-        require_matplotlib()
-    plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
-    print(render_summary(plan))
-    if args.output is not None:
-        plan.write(args.output)
-        print(f"wrote {len(plan)} targets to {args.output}")
-    if args.plot is not None:
-        from gonio.plots.coverage import plot_coverage
+        check_figure_format(args.plot, "--plot")
+    with contextlib.ExitStack() as outputs:
+        # Every output is created (as a temporary file beside it) before any work, and
+        # renamed into place when whole: a refused or interrupted write leaves nothing.
+        stored = None
+        if args.output is not None:
+            stored = outputs.enter_context(reserve_output(args.output, "-o"))
+        figure = None
+        if args.plot is not None:
+            figure = outputs.enter_context(reserve_output(args.plot, "--plot"))
+        plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
+        print(render_summary(plan))
+        if stored is not None:
+            from gonio.planner.stored import plan_bytes
 
-        plot_coverage(plan, args.plot)
-        print(f"drew the coverage in {args.plot}")
+            stored.write_bytes(plan_bytes(plan))
+            print(f"wrote {len(plan)} targets to {args.output}")
+        if figure is not None:
+            from gonio.plots.coverage import plot_coverage
+
+            kind = args.plot.suffix.lower().removeprefix(".") or "png"
+            figure.write_with(lambda path: plot_coverage(plan, path, format=kind))
+            print(f"drew the coverage in {args.plot}")
+        if stored is None:
+            print(
+                "nothing written: give -o PLAN.csv to store the plan "
+                "(gonio.planner.read_plan reads it back)"
+            )
     return 0

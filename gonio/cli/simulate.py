@@ -30,7 +30,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Plan, then measure every target with the acquisition engine on the "
         "simulated backend (virtual motors and detector, the scene's material, noise and "
         "faults), calibrate with the reference standard, and report instrument time, wall "
-        "time and the error of the recovered BRDF. -o keeps the run file (as gonio acquire "
+        "time and the error of the recovered BRDF, with a warning for saturated readings "
+        "and for spots that overrun the sample. -o keeps the run file (as gonio acquire "
         "writes it).",
     )
     p.add_argument("plan", type=Path, help="the plan file (YAML)")
@@ -57,7 +58,7 @@ def render_result(result: Result) -> str:
     )
     lines = [f"scene {scene.name!r} (effects: {effects}), seed {result.run.meta['seed']}"]
     lines += instrument
-    lines += _saturation_note(result) + _point_source_note(result)
+    lines += _saturation_note(result) + _point_source_note(result) + _footprint_note(result)
     return "\n".join(lines)
 
 
@@ -91,6 +92,38 @@ def _point_source_note(result: Result) -> list[str]:
         f"  note: {beyond} targets see past the sample's edge (θo > {limit:.1f}°); the "
         "ideal point-source chain counts that area as lit sample: list the footprint "
         "effect to model it"
+    ]
+
+
+def _footprint_note(result: Result) -> list[str]:
+    """Targets whose spot overruns the sample at the angles reached (the true ones: the
+    planner refused overruns at the commanded angles, a position error can still cross
+    the edge): a collimated beam's lit ellipse off the sample or out of the detector's
+    view, or, with the footprint effect, a point-source detector's view past the
+    sample's edge (without the effect `_point_source_note` says it)."""
+    rig, n = result.plan.rig, len(result.true_wi)
+    c = rig.spec.constraints
+    if not n:
+        return []
+    if c.beam_diameter_mm is not None:
+        from gonio.rig.constraints import footprint_ok
+
+        over = ~footprint_ok(
+            result.true_wi, result.true_wo, c.beam_diameter_mm, c.sample_diameter_mm,
+            c.detector_fov_mm,
+        )  # fmt: skip
+        what = "the beam's footprint leaves the sample or the detector's view"
+    elif rig.source_kind == "point" and result.scene.effects.footprint is not None:
+        over = c.detector_fov_mm > c.sample_diameter_mm * result.true_wo[:, 2]
+        what = "the detector's field of view reaches past the sample's edge"
+    else:
+        return []
+    count = int(np.count_nonzero(over))
+    if not count:
+        return []
+    return [
+        f"  warning: at {count} of {n} targets ({100 * count / n:.1f} %) {what} at the "
+        "angles reached: their readings miss light that the BRDF assumes"
     ]
 
 

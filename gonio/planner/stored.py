@@ -15,8 +15,9 @@ A header of ``# KEY: JSON`` lines, then the targets as CSV (docs/planner.md)::
 Floats are written with ``repr`` (the shortest text that reads back as the same
 double), in the CSV and in the JSON. ``content`` is `content_hash` of the two texts;
 ``file_sha256`` covers every byte of the file but the hashes line itself, so an edited
-or truncated file is refused. The file is written to a temporary name and renamed, so a crash never
-leaves half a plan under the real name.
+or truncated file is refused. The file is written to a temporary name beside it, flushed
+to the disk and renamed (`gonio.output`), so a crash never leaves half a plan under the
+real name.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ import dataclasses
 import io
 import json
 import math
-import os
 from pathlib import Path
 from typing import Any
 
@@ -109,16 +109,12 @@ def plan_bytes(plan: Plan) -> bytes:
 
 
 def write_plan(plan: Plan, path: str | Path) -> None:
-    """Write ``plan`` to ``path`` in the stored format (module docstring)."""
-    path = Path(path)
-    data = plan_bytes(plan)
-    partial = path.with_name(f".{path.name}.partial")
-    try:
-        partial.write_bytes(data)
-        os.replace(partial, path)
-    except OSError as exc:
-        partial.unlink(missing_ok=True)
-        raise ConfigError(f"{path}: cannot write the plan: {exc.strerror or exc}") from None
+    """Write ``plan`` to ``path`` in the stored format (module docstring), atomically: a
+    temporary file beside it, flushed to the disk, then renamed (`gonio.output`)."""
+    from gonio.output import reserve_output
+
+    with reserve_output(path, "plan file") as out:
+        out.write_bytes(plan_bytes(plan))
 
 
 def _refuse_constant(name: str) -> float:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from types import ModuleType
 
 from gonio.errors import GonioError
@@ -24,3 +25,18 @@ def require_matplotlib() -> ModuleType:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def check_figure_format(path: Path, option: str) -> None:
+    """`PlotUnavailable` unless matplotlib is installed, and `GonioError` unless it can
+    write the format ``path``'s suffix names (no suffix: PNG); both before any work."""
+    require_matplotlib()
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = path.suffix.lower().removeprefix(".")
+    if suffix and suffix not in formats:
+        raise GonioError(
+            f"{option} {path}: matplotlib cannot write '.{suffix}' figures; "
+            f"name a file ending in one of {', '.join('.' + f for f in sorted(formats))}"
+        )

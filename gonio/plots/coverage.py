@@ -59,9 +59,9 @@ def slice_values(bounds: FloatArray) -> FloatArray:
     return np.asarray(lo + (hi - lo) / SLICES * (np.arange(SLICES) + 0.5), dtype=np.float64)
 
 
-def plot_coverage(plan: Plan, path: str | Path) -> None:
-    """Write the coverage figure of ``plan`` to ``path`` (PNG, or any format matplotlib
-    knows from the suffix)."""
+def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) -> None:
+    """Write the coverage figure of ``plan`` to ``path`` (``format``, default: the one
+    matplotlib knows from the suffix, PNG without one)."""
     plt = require_matplotlib()
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
@@ -118,7 +118,7 @@ def plot_coverage(plan: Plan, path: str | Path) -> None:
         f"{'isotropic' if plan.spec.isotropic else 'anisotropic'} "
         f"{plan.spec.parametrization}, rig {plan.rig.spec.name!r}"
     )
-    fig.savefig(path, dpi=100)
+    fig.savefig(path, dpi=100, format=format)
     plt.close(fig)
 
 

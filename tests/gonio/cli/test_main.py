@@ -83,3 +83,78 @@ def test_demo_prints_the_tables(run_gonio: Gonio) -> None:
     errors = [float(line.split()[-1]) for line in tables.splitlines() if line.startswith("  ")][:36]
     assert len(errors) == 36
     assert max(errors) < 1e-7
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["plan", "configs/plans/quick.yaml"], ["--help"]],
+    ids=["plan", "help"],
+)
+def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:
+    """`gonio plan … | head -1` with the reader gone before the first line: no
+    BrokenPipeError traceback and no "Exception ignored" at exit, exit code 141 (or 0)."""
+    root = Path(__file__).resolve().parents[3]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gonio", *args], cwd=root, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before anything was written
+    with proc.stderr:
+        err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) in (0, 141), err
+    assert err == ""
+
+
+def test_a_closed_pipe_in_a_real_shell_pipeline() -> None:
+    """The same through ``| head -1``: the first line arrives, the rest is dropped."""
+    root = Path(__file__).resolve().parents[3]
+    r = subprocess.run(
+        ["sh", "-c", f"'{sys.executable}' -m gonio demo | head -1; exit $(( 0 ))"],
+        cwd=root, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert r.stdout.startswith("Parametrizations on named direction pairs")
+    assert len(r.stdout.splitlines()) == 1
+    assert r.stderr == ""
+
+
+def test_a_closed_pipe_in_process_returns_141(
+    monkeypatch: pytest.MonkeyPatch, run_gonio: Gonio
+) -> None:
+    """Output printed by any subcommand: the error surfaces in `main`, which ends quietly."""
+    from gonio.cli import demo
+
+    def closed(*args: object, **kwargs: object) -> None:
+        raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(demo, "print", closed, raising=False)
+    r = run_gonio("demo")
+    assert r.returncode == 141
+    assert r.stderr == ""
+
+
+@pytest.mark.parametrize(
+    ("args", "line"),
+    [
+        (["plan"], "plan: the following arguments are required: plan (see gonio plan --help)"),
+        (
+            ["plan", "a.yaml", "--frobnicate"],
+            "plan: unrecognized arguments: --frobnicate (see gonio plan --help)",
+        ),
+        (["motors"], "motors: the following arguments are required: ACTION"),
+        (
+            ["motors", "status", "--ids", "x"],
+            "motors status: argument --ids: expected IDs like 1,2,5-7, got 'x' "
+            "(see gonio motors status --help)",
+        ),
+        (["frobnicate"], "argument COMMAND: invalid choice: 'frobnicate'"),
+        (["simulate", "p.yaml", "--seed", "two"], "simulate: argument --seed: invalid int value"),
+    ],
+    ids=["missing", "unknown-option", "missing-action", "bad-type", "bad-command", "bad-int"],
+)
+def test_usage_errors_are_one_line(run_gonio: Gonio, args: list[str], line: str) -> None:
+    r = run_gonio(*args)
+    assert r.returncode == 2
+    assert r.stdout == ""
+    assert len(r.stderr.splitlines()) == 1, r.stderr
+    assert r.stderr.startswith(f"gonio: error: {line}")

@@ -115,3 +115,39 @@ def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: saturation)" in r.stdout
+
+
+def test_a_footprint_or_view_that_overruns_the_sample_is_warned(
+    rigs: dict[str, Rig], arch_point: Rig
+) -> None:
+    """A collimated beam's lit ellipse off the sample at the angles reached (here: the
+    true angles moved toward grazing, as a position error near the edge would), and a
+    point source's view past the sample's edge with the footprint effect on (without it
+    the point-source note says so): a warning with the count and the share."""
+    import dataclasses
+
+    spec, _ = load_plan(CONFIGS / "plans" / "quickstart.yaml")
+    scene = load_scene(CONFIGS / "scenes" / "matte.yaml").with_effects([])
+    result = simulate_plan(build(spec, rigs["arch"]), scene)
+    assert "warning: at" not in render(result)  # the planner refused every overrun
+    grazing = result.true_wi.copy()
+    grazing[:10] = [np.sin(1.5), 0.0, np.cos(1.5)]  # 86°: 6 mm / cos θi > 30 mm
+    text = render(dataclasses.replace(result, true_wi=grazing))
+    assert (
+        "  warning: at 10 of 300 targets (3.3 %) the beam's footprint leaves the sample or "
+        "the detector's view at the angles reached: their readings miss light that the "
+        "BRDF assumes"
+    ) in text.splitlines()
+
+    point_scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", arch_point)
+    point = simulate_plan(build(spec, arch_point), point_scene.with_effects([]))
+    seen_past = int(np.count_nonzero(30.0 * point.true_wo[:, 2] < 25.0))
+    assert seen_past > 0
+    assert "warning: at" not in render(point)  # the point-source note speaks instead
+    with_effect = dataclasses.replace(point, scene=point_scene.with_effects(["footprint"]))
+    lines = render(with_effect).splitlines()
+    assert (
+        f"  warning: at {seen_past} of 300 targets ({100 * seen_past / 300:.1f} %) the "
+        "detector's field of view reaches past the sample's edge at the angles reached: "
+        "their readings miss light that the BRDF assumes"
+    ) in lines
