@@ -151,7 +151,7 @@ class Plan:
     Frozen: every array is a private read-only copy (change a plan with
     `dataclasses.replace`, which makes a new one). ``==`` is "the same stored plan":
     spec, plan and rig texts, coordinate names and summary equal, every array identical
-    bit for bit; ``ordering`` (diagnostics of the first pass, not stored) is left out.
+    bit for bit; ``ordering`` (the search's diagnostics, not stored) is left out.
     """
 
     spec: PlanSpec
@@ -168,7 +168,7 @@ class Plan:
     arrival_s: FloatArray  # predicted time of arrival at each target
     summary: Summary
     plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
-    ordering: Ordering | None = None  # the first ordering (on the solutions nearest home)
+    ordering: Ordering | None = None  # the search's figures (constructed length, …)
 
     def __post_init__(self) -> None:
         n = len(self.coords)

@@ -143,6 +143,7 @@ def descend(
     costs a bounded number of cost evaluations, so ``max_moves`` bounds the work too.
     """
     cost, pos, nodes = path.cost, path.pos, path.nodes
+    at, node = pos.item, nodes.item  # Python ints, faster than int(array[i])
     S, E, n = path.S, path.E, path.n
     nbr = neighbours
     queue = deque(range(n) if queue_from is None else (u for u in queue_from if u < n))
@@ -158,9 +159,9 @@ def descend(
                 queue.append(u)
 
     def two_opt(a: int) -> float:
-        i = int(pos[a])
+        i = at(a)
         # Successor side: drop (a, a+), (c, c+); add (a, c), (a+, c+).
-        b = int(nodes[i + 1])
+        b = node(i + 1)
         d_ab = cost(a, b)
         for c, t_ac in nbr[a]:
             g1 = d_ab - t_ac
@@ -168,8 +169,8 @@ def descend(
                 break
             if c == b:  # (c is never E: E is in no neighbour list)
                 continue
-            j = int(pos[c])
-            d = int(nodes[j + 1])
+            j = at(c)
+            d = node(j + 1)
             if d == a:
                 continue
             gain = g1 + cost(c, d) - cost(b, d)
@@ -179,16 +180,16 @@ def descend(
                 wake(a, b, c, d)
                 return gain
         # Predecessor side: drop (a-, a), (c-, c); add (a, c), (a-, c-).
-        b = int(nodes[i - 1])
+        b = node(i - 1)
         d_ab = cost(b, a)
         for c, t_ac in nbr[a]:
             g1 = d_ab - t_ac
             if g1 <= EPSILON:
                 break
-            j = int(pos[c])
+            j = at(c)
             if c == b or j == 0:
                 continue
-            d = int(nodes[j - 1])
+            d = node(j - 1)
             if d == a:
                 continue
             gain = g1 + cost(d, c) - cost(b, d)
@@ -200,14 +201,14 @@ def descend(
         return 0.0
 
     def or_opt(a: int) -> float:
-        i0 = int(pos[a])
+        i0 = at(a)
         for length in (1, 2, 3):
             for i in (i0, i0 - length + 1):  # segments starting or ending at a
                 if i < 1 or i + length > n + 1 or (length == 1 and i != i0):
                     continue
                 segment = nodes[i : i + length].tolist()
                 first, last = segment[0], segment[-1]
-                p, q = int(nodes[i - 1]), int(nodes[i + length])
+                p, q = node(i - 1), node(i + length)
                 removed = cost(p, first) + cost(last, q) - cost(p, q)
                 if removed <= EPSILON:
                     continue
@@ -216,17 +217,17 @@ def descend(
                         g1 = removed - t_ec
                         if g1 <= EPSILON:
                             break
-                        j = int(pos[c])
+                        j = at(c)
                         if i <= j < i + length:
                             continue
                         # Insert between c and its successor, then its predecessor.
-                        for x, y, at in (
-                            (c, int(nodes[j + 1]) if j <= n else -1, j),
-                            (int(nodes[j - 1]) if j >= 1 else -1, c, j - 1),
+                        for x, y, after in (
+                            (c, node(j + 1) if j <= n else -1, j),
+                            (node(j - 1) if j >= 1 else -1, c, j - 1),
                         ):
                             if x < 0 or y < 0:  # S first and E last: never between
                                 continue
-                            if i <= pos[x] < i + length or i <= pos[y] < i + length:
+                            if i <= at(x) < i + length or i <= at(y) < i + length:
                                 continue
                             # `end` sits next to c; the other end goes to the other side.
                             head, tail = (end, first if end == last else last)
@@ -237,7 +238,7 @@ def descend(
                                 added = cost(x, tail) + cost(head, y) - cost(x, y)
                                 flip = tail != first
                             if removed - added > EPSILON:
-                                path.move_segment(i, length, at, flip)
+                                path.move_segment(i, length, after, flip)
                                 wake(p, q, x, y, *segment)
                                 return removed - added
         return 0.0
@@ -275,6 +276,7 @@ def iterate(
     if n < 3:
         return 0, 0, 0.0, "converged"
     cost, nodes = path.cost, path.nodes
+    node = nodes.item
     span = min(KICK_SPAN, max(1, (n - 1) // 2))
     draws = rng.integers(0, 2**62, size=(kicks, 3))
     kept, gained = 0, 0.0
@@ -285,8 +287,8 @@ def iterate(
         lb, lc = 1 + r1 % span, 1 + r2 % span
         i = 1 + r0 % (n - lb - lc + 1)  # B = i..i+lb-1, C = then lc nodes; E stays last
         j, m = i + lb, i + lb + lc
-        a, b0, b1 = int(nodes[i - 1]), int(nodes[i]), int(nodes[j - 1])
-        c0, c1, d = int(nodes[j]), int(nodes[m - 1]), int(nodes[m])
+        a, b0, b1 = node(i - 1), node(i), node(j - 1)
+        c0, c1, d = node(j), node(m - 1), node(m)
         delta = cost(a, c0) + cost(c1, b0) + cost(b1, d) - cost(a, b0) - cost(b1, c0) - cost(c1, d)
         path.journal = []
         path._write(i, np.concatenate([nodes[j:m], nodes[i:j]]))
