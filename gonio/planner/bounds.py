@@ -190,12 +190,12 @@ def held_karp_bound(
     flat, owner = relaxed.flat()
     if relaxed.n == 0:
         return Bounds(0.0, 0.0, True, 0)
-    nbr = relaxed.neighbour_lists(neighbours, typical_move(relaxed.model, flat))
+    nbr, times = relaxed.neighbour_lists(neighbours, typical_move(relaxed.model, flat))
     u = np.repeat(np.arange(len(nbr)), nbr.shape[1])
-    v = nbr.reshape(-1)
+    v, t = nbr.reshape(-1), times.reshape(-1)
     keep = v >= 0
-    u, v = np.minimum(u[keep], v[keep]), np.maximum(u[keep], v[keep])
-    return _held_karp(relaxed.model, flat, owner, (u, v, relaxed.times(u, v)), upper, steps)
+    u, v, t = np.minimum(u[keep], v[keep]), np.maximum(u[keep], v[keep]), t[keep]
+    return _held_karp(relaxed.model, flat, owner, (u, v, t), upper, steps)
 
 
 def _held_karp(

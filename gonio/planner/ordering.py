@@ -62,12 +62,14 @@ NEIGHBOURS = 10
 MOVES_PER_TARGET = 10
 MOVES_EXTRA = 100
 #: The default budget of kicks of the iterated local search: this many per target, at
-#: most `MAX_KICKS` (a kick and its repair take about 0.3–1 ms, so 5 000 targets take
-#: about 10 s and 50 000 about a minute on a 2.1 GHz core).
-KICKS_PER_TARGET = 3
-MAX_KICKS = 60_000
-#: Rounds of "improve on the chosen poses, choose again" after the relaxed order.
-ROUNDS = 3
+#: most `MAX_KICKS` (a kick and its repair take about 0.5–1 ms: README, the trade).
+KICKS_PER_TARGET = 2
+MAX_KICKS = 20_000
+#: Rounds of "improve on the chosen poses, choose again" after the relaxed order; the
+#: first `KICK_ROUNDS` share the kicks the relaxed phase leaves (`RELAXED_SHARE`).
+ROUNDS = 4
+KICK_ROUNDS = 2
+RELAXED_SHARE = 1 / 3
 
 mst_lower_bound = mst_bound  # the name before the bounds had their own module
 
@@ -184,11 +186,8 @@ def _fixed_neighbours(model: TravelModel, points: FloatArray) -> search.Neighbou
 
 
 def _relaxed_neighbours(relaxed: Relaxed) -> search.Neighbours:
-    nbr = relaxed.neighbour_lists(NEIGHBOURS, typical_move(relaxed.model, relaxed.flat()[0]))
-    u = np.repeat(np.arange(len(nbr)), nbr.shape[1])
-    v = nbr.reshape(-1)
-    t = np.where(v >= 0, relaxed.times(u, np.maximum(v, 0)), np.inf)
-    return _lists(nbr, t.reshape(nbr.shape))
+    scale = typical_move(relaxed.model, relaxed.flat()[0])
+    return _lists(*relaxed.neighbour_lists(NEIGHBOURS, scale))
 
 
 @dataclass(frozen=True)
@@ -350,7 +349,8 @@ def order_jointly(
     if choice:
         neighbours = _relaxed_neighbours(relaxed)
         path = Path(n, order, relaxed.scalar())
-        effort = _improve(path, neighbours, budget, kick_budget // 2, rng, deadline)
+        share = int(kick_budget * RELAXED_SHARE)
+        effort = _improve(path, neighbours, budget, share, rng, deadline)
         order = path.order()
     relaxed_s = float(relaxed.times(np.concatenate([[n], order[:-1]]), order).sum())
     angles, travel = choose(candidates[order], usable[order], start, model.time)
@@ -361,12 +361,14 @@ def order_jointly(
         everything = np.vstack([angles, start[None, :]])
         neighbours = _fixed_neighbours(model, everything)
         path = Path(n, np.arange(n), _fixed_cost(model, angles, start))
-        left = kick_budget - effort.kicks if rounds == 1 else 0
+        left = 0
+        if rounds <= KICK_ROUNDS:  # the rest of the kicks, shared
+            left = (kick_budget - effort.kicks) // (KICK_ROUNDS - rounds + 1)
         effort += _improve(path, neighbours, budget - effort.moves, left, rng, deadline)
         again = path.order()
         order = order[again]
         angles, travel = choose(candidates[order], usable[order], start, model.time)
-        if not float(travel.sum()) < before - EPSILON:
+        if rounds >= KICK_ROUNDS and not float(travel.sum()) < before - EPSILON:
             break
     travel_s = float(travel.sum())
     ordering = Ordering(

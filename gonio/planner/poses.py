@@ -98,18 +98,19 @@ class Relaxed:
         node, slot = np.nonzero(self.usable)
         return self.poses[node, slot], node
 
-    def neighbour_lists(self, k: int, scale: float) -> np.ndarray:
-        """(N + 1, k') each node's nearest others in relaxed time, nearest first, equal
-        times in index order. Candidates: the 2k + 1 nearest poses of each of a node's
-        poses in a k-d tree (Chebyshev in coordinates scaled by each axis's reach in
-        ``scale`` seconds), ranked by the exact relaxed time."""
+    def neighbour_lists(self, k: int, scale: float) -> tuple[np.ndarray, FloatArray]:
+        """(indices (N + 1, k), relaxed times (N + 1, k)): each node's nearest others in
+        relaxed time, nearest first, equal times in index order (−1 and inf pad a short
+        row). Candidates: the k + 1 + K nearest poses of each of a node's poses in a k-d
+        tree (Chebyshev in coordinates scaled by each axis's reach in ``scale`` seconds),
+        ranked by the exact relaxed time."""
         m = len(self.poses)
         k = min(k, m - 1)
         if k <= 0:
-            return np.zeros((m, 0), dtype=np.int64)
+            return np.zeros((m, 0), dtype=np.int64), np.zeros((m, 0))
         flat, owner = self.flat()
         scaled = flat / np.maximum(self.model.reach(scale), 1e-300)
-        q = min(2 * k + 1 + int(self.usable.sum(axis=1).max()), len(flat))
+        q = min(k + 1 + int(self.usable.sum(axis=1).max()), len(flat))
         _, idx = cKDTree(scaled).query(scaled, k=q, p=np.inf)
         u = np.repeat(owner, q)
         v = owner[np.asarray(idx, dtype=np.int64).reshape(-1)]
@@ -118,13 +119,15 @@ class Relaxed:
         u, v = pair // m, pair % m
         t = self.times(u, v)
         by = np.lexsort((v, t, u))  # by node, then time, then index
-        u, v = u[by], v[by]
+        u, v, t = u[by], v[by], t[by]
         first = np.searchsorted(u, np.arange(m))
         rank = np.arange(len(u)) - first[u]
         out = np.full((m, k), -1, dtype=np.int64)
+        times = np.full((m, k), np.inf)
         take = rank < k
         out[u[take], rank[take]] = v[take]
-        return out
+        times[u[take], rank[take]] = t[take]
+        return out, times
 
 
 def choose(
@@ -133,22 +136,44 @@ def choose(
     """(angles (N, A), travel time (N,) into each target) along the given order.
 
     ``candidates`` (N, K, A) with ``usable`` (N, K) (every target has at least one).
-    The loop runs over targets (each step is a K × K numpy operation): the choice at a
-    target depends on the one before it. Only usable candidates are ever returned.
+    Only usable candidates are ever returned. The moves between consecutive targets'
+    candidates are computed at once (N, K′, K′) over the K′ usable slots packed first;
+    the recursion (each choice depends on the one before) runs over Python floats.
     """
-    n, k, _ = candidates.shape
-    cost = np.where(usable[0], travel(start, candidates[0]), np.inf)
-    back = np.zeros((n, k), dtype=np.int64)
-    for i in range(1, n):
-        step = travel(candidates[i - 1][:, None, :], candidates[i][None, :, :])  # (K, K)
-        total = cost[:, None] + step
-        back[i] = np.argmin(total, axis=0)
-        cost = np.where(usable[i], total[back[i], np.arange(k)], np.inf)
-    pick = np.empty(n, dtype=np.int64)
-    pick[-1] = int(np.argmin(cost))
-    for i in range(n - 1, 0, -1):
-        pick[i - 1] = back[i, pick[i]]
-    angles = candidates[np.arange(n), pick]
+    n = len(candidates)
+    if n == 0:
+        return np.zeros((0, candidates.shape[2])), np.zeros(0)
+    k = max(int(usable.sum(axis=1).max()), 1)
+    slots = np.argsort(~usable, axis=1, kind="stable")[:, :k]  # usable ones first
+    packed = np.take_along_axis(candidates, slots[:, :, None], axis=1)
+    ok = np.take_along_axis(usable, slots, axis=1)
+    first = np.where(ok[0], travel(start, packed[0]), np.inf).tolist()
+    steps = np.where(
+        ok[:-1, :, None] & ok[1:, None, :],
+        travel(packed[:-1, :, None, :], packed[1:, None, :, :]),
+        np.inf,
+    ).tolist()  # (N − 1, K′, K′): from slot a of target i to slot b of target i + 1
+    cost = first
+    back: list[list[int]] = []
+    span = range(k)
+    for step in steps:
+        best_from = []
+        new = []
+        for b in span:
+            best, arg = math.inf, 0
+            for a in span:
+                t = cost[a] + step[a][b]
+                if t < best:
+                    best, arg = t, a
+            new.append(best)
+            best_from.append(arg)
+        back.append(best_from)
+        cost = new
+    pick = [min(span, key=lambda b: cost[b])]
+    for best_from in reversed(back):
+        pick.append(best_from[pick[-1]])
+    chosen = np.asarray(pick[::-1], dtype=np.int64)
+    angles = packed[np.arange(n), chosen]
     previous = np.vstack([start[None, :], angles[:-1]])
     return np.asarray(angles, dtype=np.float64), np.asarray(
         travel(previous, angles), dtype=np.float64

@@ -69,10 +69,11 @@ def test_relaxed_neighbours_are_nearest_first(rig: Rig) -> None:
     model = rig.travel
     cand, usable = random_candidates(np.random.default_rng(1), 300, 4, tempting=False)
     relaxed = Relaxed.of(model, cand, usable, np.zeros(4))
-    nbr = relaxed.neighbour_lists(6, 0.5)
+    nbr, times = relaxed.neighbour_lists(6, 0.5)
     assert nbr.shape == (301, 6) and np.all(nbr >= 0)
     assert np.all(nbr != np.arange(301)[:, None])
     t = relaxed.times(np.repeat(np.arange(301), 6), nbr.reshape(-1)).reshape(301, 6)
+    np.testing.assert_array_equal(times, t)
     assert np.all(np.diff(t, axis=1) >= 0)
 
 
