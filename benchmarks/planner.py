@@ -106,7 +106,7 @@ def trade() -> None:
     for rig_name in ("arch", "in_plane"):
         rig = Rig.from_yaml(RIGS[rig_name])
         bound = None
-        for per_target in (0.0, 0.5, 1.0, 3.0, 6.0):
+        for per_target in (0.0, 0.5, 1.5, 4.0):
             n = spec.sampling.target or 0
             kicks = int(per_target * n)
             plan = build(spec.model_copy(update={"kicks": kicks}), rig, bounds=bound is None)

@@ -74,50 +74,57 @@ def staged_mst(
     at both ends.
 
     Kruskal in stages of growing threshold T: after a stage every edge ≤ T has been
-    considered, so the forest is part of the MST. An edge ≤ T is a move ≤ T − 2 min π,
-    which the k-d tree's box query in `_scaled` coordinates returns exactly. The next
-    stage (T × 1.5) needs only edges between components, each with an end outside the
-    largest one: only those poses are queried. If the first stage's pairs would not fit
-    in memory it starts at a quarter of T, and so on; if a later one's would not, the
-    forest so far is returned with w + (components − 1)·T′ (T′ the last threshold fully
-    considered: every missing edge costs more), still a lower bound (exact = False).
+    considered, so the forest is part of the MST. Penalties are shifted to a least of 0
+    (a spanning tree has m − 1 edges: the shift is added back exactly), so an edge ≤ T
+    from node u is a move ≤ T − π_u, which a k-d tree's box query in `_scaled`
+    coordinates (radius: the largest ratio of reaches over the axes) finds, and the
+    exact time then filters. The next stage (T × 1.5) needs only edges between
+    components, each with an end outside the largest one: only those poses are queried.
+    If the first stage's pairs would not fit in memory it starts at a quarter of T, and
+    so on; if a later one's would not, the forest so far is returned with
+    w + (components − 1)·T′ (T′ the last threshold fully considered: every missing edge
+    costs more), still a lower bound (exact = False).
     """
     n_poses = len(poses)
     owner = np.arange(n_poses) if owner is None else np.asarray(owner, dtype=np.int64)
     m = int(owner.max()) + 1 if n_poses else 0
-    pi = np.zeros(m) if penalty is None else np.asarray(penalty, dtype=np.float64)
     if m <= 1:
         return Tree(0.0, True, np.zeros((0, 2), dtype=np.int64))
-    low = 2.0 * float(pi.min())
+    pi = np.zeros(m) if penalty is None else np.asarray(penalty, dtype=np.float64)
+    least = float(pi.min())
+    pi = pi - least
+    restore = 2.0 * least * (m - 1)
     typical = typical_move(model, poses)
-    threshold = typical + max(low, 0.0)
+    threshold = typical
     labels = np.arange(m)  # component of each node
     components, weight = m, 0.0
-    edges: list[np.ndarray] = []
+    edges: list[np.ndarray] = [np.zeros((0, 2), dtype=np.int64)]
     first = True
     while True:
-        reach = max(threshold - low, 0.0)
-        scaled = _scaled(model, poses, reach)
+        reach = np.maximum(model.reach(threshold), 1e-300)
+        scaled = poses / reach
         tree = cKDTree(scaled)
-        radius = 1.0 + 1e-12
         if first:
-            if tree.count_neighbors(tree, radius, p=np.inf) > 2 * MAX_PAIRS + n_poses:
-                threshold = low + (threshold - low) / 4.0
-                if threshold - low < 1e-12 * typical:  # millions of coincident poses
-                    return Tree(0.0, False, np.zeros((0, 2), dtype=np.int64))
-                continue
-            pairs = tree.query_pairs(radius, p=np.inf, output_type="ndarray")
-            u, v = pairs[:, 0], pairs[:, 1]
+            active = np.arange(n_poses)
         else:
             largest = np.argmax(np.bincount(labels))
             active = np.flatnonzero(labels[owner] != largest)
-            lengths = tree.query_ball_point(scaled[active], radius, p=np.inf, return_length=True)
-            if lengths.sum() > MAX_PAIRS:
-                previous = low + (threshold - low) / 1.5
-                return Tree(weight + (components - 1) * previous, False, np.concatenate(edges))
-            found = tree.query_ball_point(scaled[active], radius, p=np.inf)
-            u = np.repeat(active, lengths)
-            v = np.fromiter((j for row in found for j in row), np.int64, int(lengths.sum()))
+        left = threshold - pi[owner[active]]
+        active, left = active[left >= 0.0], left[left >= 0.0]
+        radius = np.max(model.reach(left[:, None]) / reach, axis=1) * (1.0 + 1e-12)
+        lengths = tree.query_ball_point(scaled[active], radius, p=np.inf, return_length=True)
+        if first and lengths.sum() > 2 * MAX_PAIRS + n_poses:
+            threshold /= 4.0  # nothing is settled yet: start lower
+            if threshold < 1e-12 * typical:  # millions of coincident poses
+                return Tree(0.0, False, np.zeros((0, 2), dtype=np.int64))
+            continue
+        if not first and lengths.sum() > MAX_PAIRS:
+            previous = threshold / 1.5
+            bound = weight + (components - 1) * previous + restore
+            return Tree(bound, False, np.concatenate(edges))
+        found = tree.query_ball_point(scaled[active], radius, p=np.inf)
+        u = np.repeat(active, lengths)
+        v = np.fromiter((j for row in found for j in row), np.int64, int(lengths.sum()))
         nu, nv = owner[u], owner[v]
         t = model.time(poses[u], poses[v]) + pi[nu] + pi[nv]
         keep = (t <= threshold) & (labels[nu] != labels[nv])
@@ -130,12 +137,11 @@ def staged_mst(
         cu, cv = labels[nu], labels[nv]
         lo, hi = np.minimum(cu, cv), np.maximum(cu, cv)
         keys, once = np.unique(lo * m + hi, return_index=True)
-        shift = 1.0 - min(float(t.min()), 0.0) if t.size else 1.0
         graph = coo_matrix(
-            (t[once] + shift, (lo[once], hi[once])), shape=(components, components)
+            (t[once] + 1.0, (lo[once], hi[once])), shape=(components, components)
         ).tocsr()
         forest = minimum_spanning_tree(graph).tocoo()
-        weight += float(forest.data.sum()) - forest.nnz * shift
+        weight += float(forest.data.sum()) - forest.nnz * 1.0
         # The forest's edges, back to the nodes that made them.
         a, b = np.minimum(forest.row, forest.col), np.maximum(forest.row, forest.col)
         picked = once[np.searchsorted(keys, a.astype(np.int64) * m + b)]
@@ -143,9 +149,9 @@ def staged_mst(
         components, merged = connected_components(forest, directed=False)
         labels = merged[labels]
         if components == 1:
-            return Tree(weight, True, np.concatenate(edges))
+            return Tree(weight + restore, True, np.concatenate(edges))
         first = False
-        threshold = low + (threshold - low) * 1.5
+        threshold *= 1.5
 
 
 def mst_bound(model: TravelModel, points: FloatArray) -> tuple[float, bool]:
@@ -243,7 +249,7 @@ def _held_karp(
     exact_tree = staged_mst(model, poses, owner, best_pi)
     x = int(np.argmin(best_pi[:start]))
     value = exact_tree.weight + best_pi[start] + best_pi[x] - 2.0 * float(best_pi.sum())
-    return Bounds(mst.weight, max(value, mst.weight), mst.exact and exact_tree.exact, taken)
+    return Bounds(mst.weight, float(max(value, mst.weight)), mst.exact and exact_tree.exact, taken)
 
 
 def _relaxed_times(

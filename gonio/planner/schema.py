@@ -96,8 +96,8 @@ class PlanSpec(Strict):
     # target + 100 (`gonio.planner.ordering.default_moves`). A count, not a time, so the
     # same plan file orders the same on any machine.
     max_moves: int | None = Field(None, ge=0)
-    # Kicks of the iterated local search after the descents; None: 2 per kept target,
-    # at most 20 000 (`gonio.planner.ordering.default_kicks`). A count too: the kicks
+    # Kicks of the iterated local search after the descents; None: 3 per 2 kept targets,
+    # at most 15 000 (`gonio.planner.ordering.default_kicks`). A count too: the kicks
     # are drawn from `sampling.seed`, so the same file orders the same on any machine.
     kicks: int | None = Field(None, ge=0)
     # A safety cap on the wall time of improving the order; when it binds the summary

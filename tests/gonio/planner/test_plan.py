@@ -187,11 +187,11 @@ def test_the_default_budget_converges_and_says_so(rigs: dict[str, Rig]) -> None:
     assert s.converged and s.stopped == "converged"
     assert s.max_moves == ordering.default_moves(300) == 3100
     assert 0 < s.moves < s.max_moves
-    assert s.max_kicks == ordering.default_kicks(300) == 600 == s.kicks
+    assert s.max_kicks == ordering.default_kicks(300) == 450 == s.kicks
     assert 0 < s.kicks_kept < s.kicks
     assert (
-        f"ordering                  converged after {s.moves} moves, then 600 kicks "
-        f"({s.kicks_kept} kept); budgets 3,100 and 600"
+        f"ordering                  converged after {s.moves} moves, then 450 kicks "
+        f"({s.kicks_kept} kept); budgets 3,100 and 450"
     ) in render_summary(plan)
 
 
