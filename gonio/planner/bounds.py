@@ -134,7 +134,7 @@ def staged_mst(
         # spanning forest of the same graph has as many edges: the shift is exact).
         by_time = np.argsort(t, kind="stable")
         nu, nv, t = nu[by_time], nv[by_time], t[by_time]
-        cu, cv = labels[nu], labels[nv]
+        cu, cv = labels[nu], labels[nv]  # int64: lo·m + hi exceeds 2³¹ past 46 340 nodes
         lo, hi = np.minimum(cu, cv), np.maximum(cu, cv)
         keys, once = np.unique(lo * m + hi, return_index=True)
         graph = coo_matrix(
@@ -147,7 +147,7 @@ def staged_mst(
         picked = once[np.searchsorted(keys, a.astype(np.int64) * m + b)]
         edges.append(np.stack([nu[picked], nv[picked]], axis=1).astype(np.int64))
         components, merged = connected_components(forest, directed=False)
-        labels = merged[labels]
+        labels = merged[labels].astype(np.int64)  # csgraph's int32 would overflow lo·m
         if components == 1:
             return Tree(weight + restore, True, np.concatenate(edges))
         first = False
