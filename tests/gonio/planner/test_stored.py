@@ -28,7 +28,11 @@ PLANS = CONFIGS / "plans"
 
 
 def spec(**fields: Any) -> PlanSpec:
-    data: dict[str, Any] = {"name": "stored", "sampling": {"strategy": "sobol", "target": 150}}
+    data: dict[str, Any] = {
+        "name": "stored",
+        "sampling": {"strategy": "sobol", "target": 150},
+        "kicks": 50,  # a short search: these tests are about storing, not the tour
+    }
     data.update(fields)
     return PlanSpec.model_validate(data)
 
