@@ -26,7 +26,7 @@ import numpy as np
 
 from gonio import params
 from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml, spec_text
-from gonio.planner import poses, sampling
+from gonio.planner import lkh, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import exposures
 from gonio.planner.ordering import (
@@ -376,8 +376,10 @@ def build(
         kicks=kicks, seed=spec.sampling.seed, time_budget_s=spec.time_budget_s,
     )  # fmt: skip
     result = joint.ordering
-    chosen = sel[given[joint.order]]
-    angles, travel = joint.angles, joint.travel
+    order, angles, travel = joint.order, joint.angles, joint.travel
+    if spec.ordering == "lkh":
+        order, angles, travel = _lkh(rig, cand, usable, order, angles, travel, where)
+    chosen = sel[given[order]]
     ordering_s = time.perf_counter() - started
     stopped: Stop = result.stopped
     figures: dict[str, Any] = {}
@@ -437,6 +439,26 @@ def build(
         plan_text=spec_text(spec) if text is None else text,
         ordering=result,
     )
+
+
+def _lkh(
+    rig: Rig,
+    cand: FloatArray,
+    usable: np.ndarray,
+    order: np.ndarray,
+    angles: FloatArray,
+    travel: FloatArray,
+    where: str,
+) -> tuple[np.ndarray, FloatArray, FloatArray]:
+    """LKH-3's order of the chosen poses, the solutions chosen again along it; kept if
+    shorter than the search's (order, angles, travel)."""
+    if not lkh.available():
+        raise ConfigError(f"{where}: ordering: lkh needs elkai: pip install 'gonio[lkh]'")
+    again = order[lkh.lkh_order(rig.travel, angles, rig.home)]
+    lk_angles, lk_travel = poses.choose(cand[again], usable[again], rig.home, rig.travel_time)
+    if float(lk_travel.sum()) < float(travel.sum()):
+        return again, lk_angles, lk_travel
+    return order, angles, travel
 
 
 def hms(seconds: float) -> str:

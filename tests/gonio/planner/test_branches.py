@@ -12,7 +12,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gonio.planner import build
+from gonio.config import ConfigError
+from gonio.planner import build, lkh
 from gonio.planner.ordering import order_jointly, order_targets
 from gonio.planner.poses import Relaxed, choose
 from gonio.planner.schema import PlanSpec
@@ -167,3 +168,23 @@ def test_small_instances_near_the_any_branch_optimum(rig: Rig) -> None:
         )
         joint = order_jointly(model, cand, usable, cand[:, 0], start, kicks=50)
         assert best - 1e-9 <= joint.ordering.travel_s <= 1.2 * best
+
+
+def test_lkh_ordering_is_kept_only_where_shorter(rigs: dict[str, Rig]) -> None:
+    pytest.importorskip("elkai")
+    rig = rigs["in_plane"]
+    small = {"sampling": {"strategy": "sobol", "target": 120, "seed": 5}, "kicks": 100}
+    search_plan = build(spec(False, **small), rig)
+    lkh_plan = build(spec(False, ordering="lkh", **small), rig)
+    assert lkh_plan.summary.travel_s <= search_plan.summary.travel_s
+    assert sorted(lkh_plan.generated.tolist()) == sorted(search_plan.generated.tolist())
+    lo, hi = rig.limits[:, 0], rig.limits[:, 1]
+    assert np.all((lkh_plan.angles >= lo) & (lkh_plan.angles <= hi))
+
+
+def test_lkh_without_elkai_is_one_line(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(lkh, "available", lambda: False)
+    with pytest.raises(ConfigError, match=r"^here: ordering: lkh needs elkai: pip install"):
+        build(spec(True, ordering="lkh", kicks=0), rigs["arch"], where="here")
