@@ -32,6 +32,8 @@ from gonio.types import FloatArray
 
 #: Pairs the staged Kruskal may hold in memory before it gives up on exactness.
 MAX_PAIRS = 10_000_000
+#: Bands of penalty the staged Kruskal queries separately.
+BANDS = 8
 #: Subgradient steps of the Held–Karp ascent.
 ASCENT_STEPS = 150
 
@@ -99,32 +101,47 @@ def staged_mst(
     labels = np.arange(m)  # component of each node
     components, weight = m, 0.0
     edges: list[np.ndarray] = [np.zeros((0, 2), dtype=np.int64)]
+    # Poses in bands of their node's penalty: band b is queried with the radius
+    # T − π_u − (its least π), so a pose of small π does not collect the many poses
+    # whose penalty puts them out of reach.
+    cuts = np.unique(np.quantile(pi, np.linspace(0.0, 1.0, BANDS + 1))[:-1])
+    band = np.searchsorted(cuts, pi, side="right") - 1  # per node
+    members = [np.flatnonzero(band[owner] == b) for b in range(len(cuts))]
     first = True
     while True:
         reach = np.maximum(model.reach(threshold), 1e-300)
         scaled = poses / reach
-        tree = cKDTree(scaled)
+        trees = [cKDTree(scaled[m_b]) for m_b in members]
         if first:
             active = np.arange(n_poses)
         else:
             largest = np.argmax(np.bincount(labels))
             active = np.flatnonzero(labels[owner] != largest)
-        left = threshold - pi[owner[active]]
-        active, left = active[left >= 0.0], left[left >= 0.0]
-        radius = np.max(model.reach(left[:, None]) / reach, axis=1) * (1.0 + 1e-12)
-        lengths = tree.query_ball_point(scaled[active], radius, p=np.inf, return_length=True)
-        if first and lengths.sum() > 2 * MAX_PAIRS + n_poses:
+        queries = []
+        for b, tree in enumerate(trees):
+            left = threshold - pi[owner[active]] - cuts[b]
+            mine = active[left >= 0.0]
+            radius = np.max(model.reach(left[left >= 0.0][:, None]) / reach, axis=1)
+            radius *= 1.0 + 1e-12
+            lengths = tree.query_ball_point(scaled[mine], radius, p=np.inf, return_length=True)
+            queries.append((tree, mine, radius, np.asarray(lengths, dtype=np.int64), b))
+        total = sum(int(q[3].sum()) for q in queries)
+        if first and total > 2 * MAX_PAIRS + n_poses:
             threshold /= 4.0  # nothing is settled yet: start lower
             if threshold < 1e-12 * typical:  # millions of coincident poses
                 return Tree(0.0, False, np.zeros((0, 2), dtype=np.int64))
             continue
-        if not first and lengths.sum() > MAX_PAIRS:
+        if not first and total > MAX_PAIRS:
             previous = threshold / 1.5
             bound = weight + (components - 1) * previous + restore
             return Tree(bound, False, np.concatenate(edges))
-        found = tree.query_ball_point(scaled[active], radius, p=np.inf)
-        u = np.repeat(active, lengths)
-        v = np.fromiter((j for row in found for j in row), np.int64, int(lengths.sum()))
+        us, vs = [], []
+        for tree, mine, radius, lengths, b in queries:
+            found = tree.query_ball_point(scaled[mine], radius, p=np.inf)
+            us.append(np.repeat(mine, lengths))
+            local = np.fromiter((j for row in found for j in row), np.int64, int(lengths.sum()))
+            vs.append(members[b][local])
+        u, v = np.concatenate(us), np.concatenate(vs)
         nu, nv = owner[u], owner[v]
         t = model.time(poses[u], poses[v]) + pi[nu] + pi[nv]
         keep = (t <= threshold) & (labels[nu] != labels[nv])
