@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from gonio.planner.poses import choose
 from gonio.planner.search import path_time
 from gonio.rig.travel import TravelModel
-from gonio.types import FloatArray
+from gonio.types import BoolArray, FloatArray
 
 #: Weights are written in this unit (s) and rounded to integers.
 UNIT_S = 1e-6
@@ -82,3 +83,22 @@ def lkh_order(
         tour = [s, *tour[1:][::-1]]
     assert tour[-1] == e
     return np.asarray(tour[1:-1], dtype=np.int64)
+
+
+def improve(
+    model: TravelModel,
+    start: FloatArray,
+    candidates: FloatArray,
+    usable: BoolArray,
+    order: np.ndarray,
+    angles: FloatArray,
+    travel: FloatArray,
+) -> tuple[np.ndarray, FloatArray, FloatArray]:
+    """LKH-3's order of the chosen poses ``angles`` (N, A) (the targets ``order`` of
+    ``candidates`` (M, K, A), ``usable`` (M, K)), the solutions chosen again along it;
+    kept if shorter than (order, angles, travel)."""
+    again = order[lkh_order(model, angles, start)]
+    lk_angles, lk_travel = choose(candidates[again], usable[again], start, model.time)
+    if float(lk_travel.sum()) < float(travel.sum()):
+        return again, lk_angles, lk_travel
+    return order, angles, travel

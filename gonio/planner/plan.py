@@ -378,7 +378,11 @@ def build(
     result = joint.ordering
     order, angles, travel = joint.order, joint.angles, joint.travel
     if spec.ordering == "lkh":
-        order, angles, travel = _lkh(rig, cand, usable, order, angles, travel, where)
+        if not lkh.available():
+            raise ConfigError(f"{where}: ordering: lkh needs elkai: pip install 'gonio[lkh]'")
+        order, angles, travel = lkh.improve(
+            rig.travel, rig.home, cand, usable, order, angles, travel
+        )
     chosen = sel[given[order]]
     ordering_s = time.perf_counter() - started
     stopped: Stop = result.stopped
@@ -439,26 +443,6 @@ def build(
         plan_text=spec_text(spec) if text is None else text,
         ordering=result,
     )
-
-
-def _lkh(
-    rig: Rig,
-    cand: FloatArray,
-    usable: np.ndarray,
-    order: np.ndarray,
-    angles: FloatArray,
-    travel: FloatArray,
-    where: str,
-) -> tuple[np.ndarray, FloatArray, FloatArray]:
-    """LKH-3's order of the chosen poses, the solutions chosen again along it; kept if
-    shorter than the search's (order, angles, travel)."""
-    if not lkh.available():
-        raise ConfigError(f"{where}: ordering: lkh needs elkai: pip install 'gonio[lkh]'")
-    again = order[lkh.lkh_order(rig.travel, angles, rig.home)]
-    lk_angles, lk_travel = poses.choose(cand[again], usable[again], rig.home, rig.travel_time)
-    if float(lk_travel.sum()) < float(travel.sum()):
-        return again, lk_angles, lk_travel
-    return order, angles, travel
 
 
 def hms(seconds: float) -> str:
