@@ -1,82 +1,172 @@
-"""Ordering the planner's targets: how close to the lower bound, how much faster than
-generation order, and how long it takes.
+"""Ordering the planner's targets: how close to LKH-3 and to the lower bound, how much
+faster than generation order, and how long it takes.
 
-For both shipped rigs, anisotropic plans (every axis moves) and isotropic plans (the
-sample rotation stays home) of 5 000 and 50 000 Sobol targets uniform in the hybrid
-coordinates go through the real planner (`gonio.planner.plan.build`); the table gives
-the move time (travel only: settle and exposure do not depend on the order) in
-generation order (with the same choice of inverse-kinematics solutions), after the
-constructive order (on the solutions nearest home), of the final plan (2-opt/Or-opt,
-solutions re-chosen along the order, improved again), the minimum spanning tree over
-the poses measured, the ratios the issue sets targets for (ordered ≤ 1.3 × MST,
-generation order ≥ 2 × ordered), the improving moves the ordering applied (the default
-budget is 10 per target + 100: "(budget)" if it bound, "(time cap)" if the wall-clock
-safety cap did, which makes the order machine-dependent) and the wall time of ordering
-(construction, improvement and the choice of solutions; safety cap 30 s) and of the
-lower bound (`build(..., bounds=True)`).
-Run: .venv/bin/python benchmarks/planner.py [--sizes 5000,50000]
+Three tables (moves only: settle and exposure do not depend on the order):
+
+1. ``shipped``: every shipped plan on every shipped rig through the real planner
+   (`gonio.planner.plan.build`, ``bounds=True``, default budgets): the ordered moves
+   against the Held–Karp bound and the MST (both on the relaxed any-branch time: they
+   bound every order with every choice of inverse-kinematics solutions) and against
+   LKH-3's tour on the very poses the planner chose (`gonio.planner.lkh`, where `elkai`
+   is installed: minutes for 5 000 targets), generation order against ordered, the
+   kicks tried and the wall times. Targets: ordered ≤ 1.01 × LKH, ≤ 1.02 × the bound.
+2. ``trade``: time against tour length, the kick budget varied on a 5 000-target plan
+   per rig (0 kicks is the descent alone).
+3. ``large``: 5 000 and 50 000 Sobol targets uniform in the hybrid coordinates, both
+   rigs, isotropic and anisotropic, default budgets (targets: ≤ 15 s and ≤ 60 s).
+
+Run: .venv/bin/python benchmarks/planner.py [--tables shipped,trade,large]
+[--sizes 5000,50000] [--no-lkh]
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import describe
 
-from gonio.planner.plan import build, hms
+from gonio.planner import lkh
+from gonio.planner.ordering import default_kicks
+from gonio.planner.plan import Plan, build, hms, load_plan
 from gonio.planner.schema import PlanSpec
+from gonio.planner.search import path_time
 from gonio.rig.model import Rig
 
 ROOT = Path(__file__).resolve().parent.parent
-RIGS = {"arch": ROOT / "configs/rigs/arch.yaml", "in_plane": ROOT / "configs/rigs/in_plane.yaml"}
+RIGS = {name: ROOT / f"configs/rigs/{name}.yaml" for name in ("arch", "in_plane", "arch_point")}
+PLANS = {
+    name: ROOT / f"configs/plans/{name}.yaml"
+    for name in ("quick", "isotropic_hybrid", "anisotropic")
+}
+#: LKH-3 is run up to this many targets (the full matrix as text: ~1 GB at 10 000).
+LKH_MAX = 6000
+FLAG = {"converged": "", "move budget": " (budget)", "time cap": " (time cap)"}
+
+
+def lkh_figures(plan: Plan) -> tuple[float, float] | None:
+    """(LKH-3's tour on the plan's poses (s), its wall time (s)), or None."""
+    if not lkh.available() or len(plan) > LKH_MAX:
+        return None
+    rig = plan.rig
+    started = time.perf_counter()
+    order = lkh.lkh_order(rig.travel, plan.angles, rig.home)
+    wall = time.perf_counter() - started
+    return path_time(rig.travel, rig.home, plan.angles[order]), wall
+
+
+def shipped(use_lkh: bool) -> None:
+    print(
+        "| plan | rig | targets | ordered | Held–Karp bound | ordered / bound | LKH-3 "
+        "| ordered / LKH | ordered / MST | generation / ordered | kicks (kept) "
+        "| ordering (s) | bound (s) | LKH (s) |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for plan_name, plan_path in PLANS.items():
+        spec, _ = load_plan(plan_path)
+        for rig_name, rig_path in RIGS.items():
+            plan = build(spec, Rig.from_yaml(rig_path), bounds=True)
+            s = plan.summary
+            assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
+            assert s.naive_travel_s is not None and s.bound_wall_s is not None
+            ref = lkh_figures(plan) if use_lkh else None
+            lk = "—" if ref is None else hms(ref[0])
+            ratio = "—" if ref is None else f"{s.travel_s / ref[0]:.4f}"
+            wall = "—" if ref is None else f"{ref[1]:.0f}"
+            print(
+                f"| {plan_name} | {rig_name} | {len(plan):,} | {hms(s.travel_s)} "
+                f"| {hms(s.lower_bound_travel_s)} | {s.travel_s / s.lower_bound_travel_s:.4f} "
+                f"| {lk} | {ratio} | {s.travel_s / s.mst_travel_s:.3f} "
+                f"| {s.naive_travel_s / s.travel_s:.1f} "
+                f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} | {s.ordering_s:.1f} "
+                f"| {s.bound_wall_s:.1f} | {wall} |",
+                flush=True,
+            )
+
+
+def sobol_spec(n: int, isotropic: bool, kicks: int | None = None) -> PlanSpec:
+    return PlanSpec.model_validate(
+        {
+            "name": "bench",
+            "isotropic": isotropic,
+            "sampling": {"strategy": "sobol", "target": n, "seed": 7},
+            "kicks": kicks,
+            "time_budget_s": 600.0,
+        }
+    )
+
+
+def trade() -> None:
+    print("| rig | plan | targets | kicks | ordered | ordered / bound | ordering (s) |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    spec, _ = load_plan(PLANS["isotropic_hybrid"])
+    for rig_name in ("arch", "in_plane"):
+        rig = Rig.from_yaml(RIGS[rig_name])
+        bound = None
+        for per_target in (0.0, 0.5, 1.5, 4.0):
+            n = spec.sampling.target or 0
+            kicks = int(per_target * n)
+            plan = build(spec.model_copy(update={"kicks": kicks}), rig, bounds=bound is None)
+            s = plan.summary
+            if bound is None:
+                bound = s.lower_bound_travel_s
+            assert bound is not None
+            default = " (default)" if kicks == default_kicks(n) else ""
+            print(
+                f"| {rig_name} | isotropic_hybrid | {len(plan):,} | {s.kicks:,}{default} "
+                f"| {hms(s.travel_s)} | {s.travel_s / bound:.4f} | {s.ordering_s:.1f} |",
+                flush=True,
+            )
+
+
+def large(sizes: list[int]) -> None:
+    print(
+        "| rig | plan | targets | generation order | ordered | Held–Karp bound "
+        "| ordered / bound | ordered / MST | kicks (kept) | ordering (s) | bound (s) |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for rig_name in ("arch", "in_plane"):
+        rig = Rig.from_yaml(RIGS[rig_name])
+        for isotropic in (False, True):
+            for n in sizes:
+                plan = build(sobol_spec(n, isotropic), rig, bounds=True)
+                s = plan.summary
+                assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
+                assert s.naive_travel_s is not None and s.bound_wall_s is not None
+                kind = "isotropic" if isotropic else "anisotropic"
+                print(
+                    f"| {rig_name} | {kind} | {len(plan):,} | {hms(s.naive_travel_s)} "
+                    f"| {hms(s.travel_s)} | {hms(s.lower_bound_travel_s)}"
+                    f"{'' if s.lower_bound_exact else ' (weak)'} "
+                    f"| {s.travel_s / s.lower_bound_travel_s:.4f} "
+                    f"| {s.travel_s / s.mst_travel_s:.3f} "
+                    f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} "
+                    f"| {s.ordering_s:.1f} | {s.bound_wall_s:.1f} |",
+                    flush=True,
+                )
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--tables", default="shipped,trade,large")
     parser.add_argument("--sizes", default="5000,50000")
-    parser.add_argument("--budget", type=float, default=30.0)
+    parser.add_argument("--no-lkh", action="store_true")
     args = parser.parse_args()
-    sizes = [int(s) for s in args.sizes.split(",")]
+    tables = args.tables.split(",")
     print(describe())
-    print()
-    print(
-        "| rig | plan | targets | generation order | constructed | ordered | MST bound "
-        "| ordered / MST | generation / ordered | moves | ordering (s) | bound (s) |"
-    )
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    for rig_name, rig_path in RIGS.items():
-        rig = Rig.from_yaml(rig_path)
-        for isotropic in (False, True):
-            for n in sizes:
-                spec = PlanSpec.model_validate(
-                    {
-                        "name": "bench",
-                        "isotropic": isotropic,
-                        "sampling": {"strategy": "sobol", "target": n, "seed": 7},
-                        "time_budget_s": args.budget,
-                    }
-                )
-                plan = build(spec, rig, bounds=True)
-                o, s = plan.ordering, plan.summary
-                assert o is not None
-                assert s.naive_travel_s is not None and s.lower_bound_travel_s is not None
-                flag = {"converged": "", "move budget": " (budget)", "time cap": " (time cap)"}
-                kind = "isotropic" if isotropic else "anisotropic"
-                print(
-                    f"| {rig_name} | {kind} | {len(plan)} | {hms(s.naive_travel_s)} "
-                    f"| {hms(o.constructed_s)} | {hms(s.travel_s)} "
-                    f"| {hms(s.lower_bound_travel_s)}"
-                    f"{'' if s.lower_bound_exact else ' (weak)'} "
-                    f"| {s.travel_s / s.lower_bound_travel_s:.3f} "
-                    f"| {s.naive_travel_s / s.travel_s:.1f} "
-                    f"| {s.moves:,}{flag[s.stopped]} "
-                    f"| {s.ordering_s:.1f} "
-                    f"| {s.bound_wall_s:.1f} |",
-                    flush=True,
-                )
+    print(f"LKH-3 (elkai): {'installed' if lkh.available() else 'not installed'}")
+    if "shipped" in tables:
+        print()
+        shipped(not args.no_lkh)
+    if "trade" in tables:
+        print()
+        trade()
+    if "large" in tables:
+        print()
+        large([int(s) for s in args.sizes.split(",")])
 
 
 if __name__ == "__main__":

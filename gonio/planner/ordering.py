@@ -1,61 +1,87 @@
-"""Ordering motor targets: a short open path from the start pose through every target.
+"""Ordering motor targets: a short open path from the start pose through every target,
+with each target's inverse-kinematics solution chosen along the way.
 
 The cost of a move is the rig's travel time (`gonio.rig.travel.TravelModel`, a metric on
 joint space). The path starts at the given pose and ends anywhere.
 
 - Construction: the given order (a serpentine over a grid) or nearest neighbour.
-- Improvement: 2-opt and Or-opt (segments of 1 to 3 targets, either orientation) over
-  neighbour lists with don't-look bits, until no move improves or a budget of improving
-  moves is spent (`default_moves`: a count, so the result is the same on any machine);
-  a wall-clock cap stays as a safety net, and when it binds the result says so, since
-  the order then depends on the machine's speed.
-- Lower bound: the exact minimum spanning tree of the travel-time graph over the start
-  and the targets (any path through them is a spanning tree), found with Kruskal on the
-  graph of moves up to a threshold time, raised until that graph is connected.
-
-The local search is sequential by nature (each move changes the next one's costs), so
-it runs as a Python loop over nodes with scalar costs; everything else is vectorized.
+- Improvement (`gonio.planner.search`): a 2-opt/Or-opt descent over neighbour lists,
+  then iterated local search (seeded double-bridge kicks, each kept only if the path got
+  shorter). Budgets are counts (improving moves of the descent, `default_moves`; kicks,
+  `default_kicks`), so a plan is the same on any machine; a wall-clock cap stays as a
+  safety net, and when it binds the result says so.
+- Branches (`order_jointly`): the order is first improved on the relaxed any-branch time
+  (`gonio.planner.poses.Relaxed`: between two targets, the shortest move between any of
+  their usable solutions), then the exact choice of solutions along it (Viterbi,
+  `gonio.planner.poses.choose`), then improved on those poses and chosen again, while
+  that shortens the path.
+- Lower bounds: `gonio.planner.bounds` (MST and Held–Karp).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections import deque
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
+from gonio.planner import search
+from gonio.planner.bounds import MAX_PAIRS, mst_bound, typical_move
+from gonio.planner.poses import Relaxed, choose
+from gonio.planner.search import EPSILON, Path, Stop, path_time
 from gonio.rig.travel import TravelModel
-from gonio.types import FloatArray
+from gonio.types import BoolArray, FloatArray
+
+__all__ = [
+    "EPSILON",
+    "MAX_PAIRS",
+    "Joint",
+    "Ordering",
+    "Stop",
+    "default_kicks",
+    "default_moves",
+    "mst_lower_bound",
+    "nearest_neighbour",
+    "neighbour_lists",
+    "order_jointly",
+    "order_targets",
+    "path_time",
+]
 
 Method = Literal["given", "nearest", "auto"]
-#: Why the local search stopped: no improving move left, the move budget spent, or the
-#: wall-clock cap reached (only the last depends on the machine).
-Stop = Literal["converged", "move budget", "time cap"]
 
 #: Neighbours per node the local search considers.
 NEIGHBOURS = 10
-#: Improvements smaller than this (s) are not moves: they would cycle on rounding.
-EPSILON = 1e-9
-#: Pairs the lower bound may hold in memory before it gives up on exactness.
-MAX_PAIRS = 10_000_000
-#: Added to every edge so that csgraph keeps zero-time moves (it drops explicit zeros).
-TINY = 1e-300
-#: The default budget of improving moves: this many per target, plus `MOVES_EXTRA`. The
-#: shipped plans converge after at most 1.5 moves per target, a random given order of
-#: uniform poses after at most 3, so the budget binds only on something unusual.
+#: The default budget of improving moves of the descents: this many per target, plus
+#: `MOVES_EXTRA`. The shipped plans' descents converge after at most 1.5 moves per
+#: target, a random given order of uniform poses after at most 3, so it binds only on
+#: something unusual.
 MOVES_PER_TARGET = 10
 MOVES_EXTRA = 100
+#: The default budget of kicks of the iterated local search: 3 per 2 targets, at most
+#: `MAX_KICKS` (a kick and its repair take about 1 ms: README, the trade measured).
+KICKS_PER_TWO_TARGETS = 3
+MAX_KICKS = 15_000
+#: Rounds of "improve on the chosen poses, choose again" after the relaxed order; the
+#: first `KICK_ROUNDS` share the kicks the relaxed phase leaves (`RELAXED_SHARE`).
+ROUNDS = 4
+KICK_ROUNDS = 2
+RELAXED_SHARE = 1 / 3
+
+mst_lower_bound = mst_bound  # the name before the bounds had their own module
 
 
 def default_moves(n: int) -> int:
-    """The budget of improving moves for ``n`` targets when none is given."""
+    """The budget of improving moves (descents) for ``n`` targets when none is given."""
     return MOVES_PER_TARGET * n + MOVES_EXTRA
+
+
+def default_kicks(n: int) -> int:
+    """The budget of kicks (iterated local search) for ``n`` targets when none is given."""
+    return min(KICKS_PER_TWO_TARGETS * n // 2, MAX_KICKS)
 
 
 @dataclass(frozen=True)
@@ -68,36 +94,20 @@ class Ordering:
     given_s: float  # the targets in the order given
     lower_bound_s: float  # the minimum spanning tree over the start and the targets
     lower_bound_exact: bool  # False if memory forced a weaker bound
-    moves: int  # improving moves applied
-    converged: bool  # no improving move left
+    moves: int  # improving moves of the descent
+    converged: bool  # the descent ended with no improving move left
     stopped: Stop = "converged"  # why the improvement ended
     max_moves: int = 0  # the budget of improving moves it had
     order_wall_s: float = 0.0  # wall time spent constructing and improving
     bound_wall_s: float = 0.0  # wall time spent on the lower bound
-
-
-def path_time(model: TravelModel, start: FloatArray, targets: FloatArray) -> float:
-    """Travel time (s) from ``start`` through ``targets`` (N, A) in the given order."""
-    if len(targets) == 0:
-        return 0.0
-    previous = np.vstack([np.asarray(start, dtype=np.float64)[None, :], targets[:-1]])
-    return float(model.time(previous, targets).sum())
+    kicks: int = 0  # kicks of the iterated local search tried
+    kicks_kept: int = 0  # … that shortened the path
+    max_kicks: int = 0  # the budget of kicks
 
 
 def _scaled(model: TravelModel, points: FloatArray, t: float) -> FloatArray:
     """Coordinates where the Chebyshev distance ≤ 1 is exactly a move of ≤ t seconds."""
     return np.asarray(points / np.maximum(model.reach(t), 1e-300), dtype=np.float64)
-
-
-def _typical_move(model: TravelModel, points: FloatArray) -> float:
-    """The median nearest-neighbour move time (s), for scaling the proxy metric."""
-    tree = cKDTree(points / model.velocity)
-    k = min(2, len(points))
-    _, idx = tree.query(points / model.velocity, k=k, p=np.inf)
-    idx = np.asarray(idx).reshape(len(points), k)
-    t = model.time(points, points[idx[:, -1]])
-    positive = t[t > 0]
-    return float(np.median(positive)) if positive.size else 1.0
 
 
 def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarray:
@@ -108,7 +118,7 @@ def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarra
     k = min(k, n - 1)
     if k <= 0:
         return np.zeros((n, 0), dtype=np.int64)
-    scaled = _scaled(model, points, _typical_move(model, points))
+    scaled = _scaled(model, points, typical_move(model, points))
     tree = cKDTree(scaled)
     _, idx = tree.query(scaled, k=min(2 * k + 1, n), p=np.inf)
     idx = np.asarray(idx, dtype=np.int64)
@@ -122,69 +132,6 @@ def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarra
     return np.asarray(np.take_along_axis(idx, rank, axis=1), dtype=np.int64)
 
 
-def mst_lower_bound(model: TravelModel, points: FloatArray) -> tuple[float, bool]:
-    """(weight of the minimum spanning tree over ``points`` (N, A) in travel time, exact).
-
-    Kruskal in stages of growing threshold T: after a stage every move ≤ T has been
-    considered, so the forest is part of the MST. The next stage (T × 1.5) needs only
-    the moves between different components, and every such move has an end outside the
-    largest component: those points are the only ones queried, so the late stages,
-    where one component holds nearly everything, stay cheap. The k-d tree's box query in
-    `_scaled` coordinates is exactly "moves ≤ T". If the first stage's pairs would not
-    fit in memory, it starts at a quarter of T, and so on. If a later stage's would not,
-    the bound so far is returned: every remaining MST edge joins two components and is
-    longer than the last threshold T' fully considered, so w(forest) + (components − 1)·T'
-    is still a lower bound on any path (exact = False).
-    """
-    n = len(points)
-    if n <= 1:
-        return 0.0, True
-    threshold = _typical_move(model, points)
-    labels = np.arange(n)  # component of each point
-    components, weight = n, 0.0
-    first = True
-    while True:
-        scaled = _scaled(model, points, threshold)
-        tree = cKDTree(scaled)
-        radius = 1.0 + 1e-12
-        if first:
-            if tree.count_neighbors(tree, radius, p=np.inf) > 2 * MAX_PAIRS + n:
-                # Nothing is settled yet: start lower (at a small enough threshold only
-                # the points themselves are within reach).
-                threshold /= 4.0
-                if threshold < 1e-12:  # millions of coincident poses: no useful bound
-                    return 0.0, False
-                continue
-            pairs = tree.query_pairs(radius, p=np.inf, output_type="ndarray")
-            u, v = pairs[:, 0], pairs[:, 1]
-        else:
-            largest = np.argmax(np.bincount(labels))
-            active = np.flatnonzero(labels != largest)
-            lengths = tree.query_ball_point(scaled[active], radius, p=np.inf, return_length=True)
-            if lengths.sum() > MAX_PAIRS:
-                return weight + (components - 1) * threshold / 1.5, False
-            found = tree.query_ball_point(scaled[active], radius, p=np.inf)
-            u = np.repeat(active, lengths)
-            v = np.fromiter((j for row in found for j in row), np.int64, int(lengths.sum()))
-        t = model.time(points[u], points[v])
-        keep = (t <= threshold) & (labels[u] != labels[v])
-        cu, cv, t = labels[u[keep]], labels[v[keep]], t[keep]
-        # One edge per pair of components, the shortest (coo → csr would sum repeats).
-        by_time = np.argsort(t, kind="stable")
-        lo, hi = np.minimum(cu, cv)[by_time], np.maximum(cu, cv)[by_time]
-        _, once = np.unique(lo * n + hi, return_index=True)
-        lo, hi, t = lo[once], hi[once], t[by_time][once]
-        graph = coo_matrix((t + TINY, (lo, hi)), shape=(components, components)).tocsr()
-        forest = minimum_spanning_tree(graph)
-        weight += float(forest.sum()) - forest.nnz * TINY
-        components, merged = connected_components(forest, directed=False)
-        labels = merged[labels]
-        if components == 1:
-            return weight, True
-        first = False
-        threshold *= 1.5
-
-
 def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray) -> np.ndarray:
     """Greedy order: from the start, to the nearest unvisited target by travel time among
     the few nearest in a proxy metric (a k-d tree, rebuilt as targets run out): nearly
@@ -194,7 +141,7 @@ def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray)
     if n == 0:
         return order
     time_of = model.scalar()
-    scale = model.reach(_typical_move(model, points))
+    scale = model.reach(typical_move(model, points))
     scale = np.maximum(scale, 1e-300)
     rows = points.tolist()
     visited = np.zeros(n, dtype=np.bool_)
@@ -224,176 +171,74 @@ def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray)
     return order
 
 
-class _Path:
-    """An open path with fixed ends: node S (the start) first, node E (a free end: every
-    move into it costs nothing) last; targets 0..n-1 in between."""
+def _lists(neighbours: np.ndarray, times: FloatArray) -> search.Neighbours:
+    """Neighbour lists (N, k) with their move times (N, k) as Python lists of (node,
+    time), padding (−1) dropped."""
+    return [
+        [(c, t) for c, t in zip(row, trow, strict=True) if c >= 0]
+        for row, trow in zip(neighbours.tolist(), times.tolist(), strict=True)
+    ]
 
-    def __init__(
-        self, model: TravelModel, points: FloatArray, start: FloatArray, order: np.ndarray
-    ):
-        n = len(points)
-        self.n = n
-        self.S, self.E = n, n + 1
-        self.rows = [*points.tolist(), np.asarray(start, dtype=np.float64).tolist()]
-        self.nodes = np.concatenate([[self.S], order, [self.E]]).astype(np.int64)
-        self.pos = np.empty(n + 2, dtype=np.int64)
-        self.pos[self.nodes] = np.arange(n + 2)
-        time_of = model.scalar()
-        rows, end = self.rows, self.E
 
-        def cost(u: int, v: int) -> float:
-            if u == end or v == end:
-                return 0.0
-            return time_of(rows[u], rows[v])
+def _fixed_neighbours(model: TravelModel, points: FloatArray) -> search.Neighbours:
+    nbr = neighbour_lists(model, points, NEIGHBOURS)
+    return _lists(nbr, model.time(points[:, None, :], points[nbr]))
 
-        self.cost = cost
 
-    def reverse(self, lo: int, hi: int) -> None:
-        """Reverse the nodes at positions lo..hi (inclusive)."""
-        segment = self.nodes[lo : hi + 1][::-1].copy()
-        self.nodes[lo : hi + 1] = segment
-        self.pos[segment] = np.arange(lo, hi + 1)
+def _relaxed_neighbours(relaxed: Relaxed) -> search.Neighbours:
+    scale = typical_move(relaxed.model, relaxed.flat()[0])
+    return _lists(*relaxed.neighbour_lists(NEIGHBOURS, scale))
 
-    def move_segment(self, i: int, length: int, after: int, flip: bool) -> None:
-        """Move the nodes at positions i..i+length-1 to follow the node now at position
-        ``after`` (outside the segment), reversed if ``flip``."""
-        nodes = self.nodes
-        segment = nodes[i : i + length].copy()
-        if flip:
-            segment = segment[::-1]
-        if after < i:  # the segment moves back: the nodes in between shift forward
-            lo, hi = after + 1, i + length - 1
-            between = nodes[after + 1 : i].copy()
-            block = np.concatenate([segment, between])
-        else:  # the segment moves forward
-            lo, hi = i, after
-            between = nodes[i + length : after + 1].copy()
-            block = np.concatenate([between, segment])
-        nodes[lo : hi + 1] = block
-        self.pos[block] = np.arange(lo, hi + 1)
+
+@dataclass(frozen=True)
+class _Effort:
+    """What one improvement spent and why it ended."""
+
+    moves: int = 0
+    kicks: int = 0
+    kept: int = 0
+    stopped: Stop = "converged"
+
+    def __add__(self, other: _Effort) -> _Effort:
+        both = (self.stopped, other.stopped)
+        worst: Stop = next(s for s in ("time cap", "move budget", "converged") if s in both)
+        return _Effort(
+            self.moves + other.moves, self.kicks + other.kicks, self.kept + other.kept, worst
+        )
 
 
 def _improve(
-    path: _Path, neighbours: np.ndarray, max_moves: int, deadline: float
-) -> tuple[int, Stop]:
-    """2-opt and Or-opt moves from each node whose don't-look bit is clear, until none
-    improves, ``max_moves`` have been applied or ``deadline`` (`time.perf_counter`) has
-    passed. Returns (moves applied, why it stopped).
+    path: Path,
+    neighbours: search.Neighbours,
+    max_moves: int,
+    kicks: int,
+    rng: np.random.Generator,
+    deadline: float,
+) -> _Effort:
+    """A descent from every target, then ``kicks`` kicks (none if the descent did not
+    converge)."""
+    moves, _, stopped = search.descend(path, neighbours, max_moves, deadline)
+    if stopped != "converged" or kicks <= 0:
+        return _Effort(moves, 0, 0, stopped)
+    tried, kept, _, ended = search.iterate(path, neighbours, kicks, rng, deadline)
+    return _Effort(moves, tried, kept, "time cap" if ended == "time cap" else "converged")
 
-    Everything but the deadline is deterministic: the queue starts in target order,
-    neighbours are visited nearest first (`neighbour_lists`), the first improving move
-    found is applied. Each node visit costs a bounded number of cost evaluations and a
-    move wakes at most 7 nodes, so ``max_moves`` bounds the work as well.
-    """
-    cost, pos, nodes = path.cost, path.pos, path.nodes
-    S, E = path.S, path.E
-    nbr = neighbours.tolist()
-    queue = deque(range(path.n))
-    queued = np.ones(path.n + 2, dtype=np.bool_)
-    queued[[S, E]] = True  # the ends never enter the queue
-    moves = 0
 
-    def wake(*nodes_: int) -> None:
-        for u in nodes_:
-            if not queued[u]:
-                queued[u] = True
-                queue.append(u)
+def _construct(
+    model: TravelModel, targets: FloatArray, start: FloatArray, method: Method, given_s: float
+) -> np.ndarray:
+    order = np.arange(len(targets))
+    if method in ("nearest", "auto"):
+        greedy = nearest_neighbour(model, targets, start)
+        if method == "nearest" or path_time(model, start, targets[greedy]) < given_s:
+            order = greedy
+    return order
 
-    def two_opt(a: int) -> bool:
-        i = int(pos[a])
-        # Successor side: drop (a, a+), (c, c+); add (a, c), (a+, c+).
-        b = int(nodes[i + 1])
-        d_ab = cost(a, b)
-        for c in nbr[a]:
-            g1 = d_ab - cost(a, c)
-            if g1 <= EPSILON:
-                break
-            j = int(pos[c])
-            if c == b:  # (c is never E: E is in no neighbour list)
-                continue
-            d = int(nodes[j + 1])
-            if d == a:
-                continue
-            gain = g1 + cost(c, d) - cost(b, d)
-            if gain > EPSILON:
-                lo, hi = (i + 1, j) if j > i else (j + 1, i)
-                path.reverse(lo, hi)
-                wake(a, b, c, d)
-                return True
-        # Predecessor side: drop (a-, a), (c-, c); add (a, c), (a-, c-).
-        b = int(nodes[i - 1])
-        d_ab = cost(b, a)
-        for c in nbr[a]:
-            g1 = d_ab - cost(a, c)
-            if g1 <= EPSILON:
-                break
-            j = int(pos[c])
-            if c == b or j == 0:
-                continue
-            d = int(nodes[j - 1])
-            if d == a:
-                continue
-            gain = g1 + cost(d, c) - cost(b, d)
-            if gain > EPSILON:
-                lo, hi = (i, j - 1) if j > i else (j, i - 1)
-                path.reverse(lo, hi)
-                wake(a, b, c, d)
-                return True
-        return False
 
-    def or_opt(a: int) -> bool:
-        i0 = int(pos[a])
-        for length in (1, 2, 3):
-            for i in (i0, i0 - length + 1):  # segments starting or ending at a
-                if i < 1 or i + length > path.n + 1 or (length == 1 and i != i0):
-                    continue
-                segment = nodes[i : i + length].tolist()
-                first, last = segment[0], segment[-1]
-                p, q = int(nodes[i - 1]), int(nodes[i + length])
-                removed = cost(p, first) + cost(last, q) - cost(p, q)
-                if removed <= EPSILON:
-                    continue
-                for end in (first, last):
-                    for c in nbr[end]:
-                        g1 = removed - cost(end, c)
-                        if g1 <= EPSILON:
-                            break
-                        j = int(pos[c])
-                        if i <= j < i + length:
-                            continue
-                        # Insert between c and its successor, then its predecessor.
-                        for x, y, at in (
-                            (c, int(nodes[j + 1]) if j <= path.n else -1, j),
-                            (int(nodes[j - 1]) if j >= 1 else -1, c, j - 1),
-                        ):
-                            if x < 0 or y < 0:  # S first and E last: never between
-                                continue
-                            if i <= pos[x] < i + length or i <= pos[y] < i + length:
-                                continue
-                            # `end` sits next to c; the other end goes to the other side.
-                            head, tail = (end, first if end == last else last)
-                            if x == c:
-                                added = cost(x, head) + cost(tail, y) - cost(x, y)
-                                flip = head != first
-                            else:
-                                added = cost(x, tail) + cost(head, y) - cost(x, y)
-                                flip = tail != first
-                            if removed - added > EPSILON:
-                                path.move_segment(i, length, at, flip)
-                                wake(p, q, x, y, *segment)
-                                return True
-        return False
-
-    while queue:
-        if moves >= max_moves:
-            return moves, "move budget"
-        if time.perf_counter() > deadline:
-            return moves, "time cap"
-        a = queue.popleft()
-        queued[a] = False
-        if two_opt(a) or or_opt(a):
-            moves += 1
-    return moves, "converged"
+def _fixed_cost(model: TravelModel, points: FloatArray, start: FloatArray) -> search.Cost:
+    time_of = model.scalar()
+    rows = [*points.tolist(), np.asarray(start, dtype=np.float64).tolist()]
+    return lambda u, v: time_of(rows[u], rows[v])
 
 
 def order_targets(
@@ -403,6 +248,8 @@ def order_targets(
     *,
     method: Method = "auto",
     max_moves: int | None = None,
+    kicks: int | None = None,
+    seed: int = 0,
     time_budget_s: float = 120.0,
     lower_bound: bool = True,
 ) -> Ordering:
@@ -410,37 +257,124 @@ def order_targets(
 
     ``method``: "given" improves the order given (e.g. a serpentine), "nearest" starts
     from nearest neighbour, "auto" starts from whichever of the two is shorter. The
-    improvement stops when no move improves, after ``max_moves`` improving moves
-    (default `default_moves`), or, as a safety cap, ``time_budget_s`` seconds of wall
-    time from the call (the construction, O(n log n), always runs to the end). Unless
-    the cap binds (``stopped == "time cap"``) the result depends only on the inputs.
-    With ``lower_bound`` the MST bound over the start and the targets is computed too.
+    descent stops when no move improves or after ``max_moves`` improving moves (default
+    `default_moves`); then ``kicks`` kicks (default `default_kicks`) drawn with
+    ``seed``. ``time_budget_s`` of wall time from the call is a safety cap (the
+    construction, O(n log n), always runs to the end). Unless the cap binds
+    (``stopped == "time cap"``) the result depends only on the inputs. With
+    ``lower_bound`` the MST bound over the start and the targets is computed too.
     """
     targets = np.asarray(targets, dtype=np.float64)
     start = np.asarray(start, dtype=np.float64)
     n = len(targets)
     budget = default_moves(n) if max_moves is None else max_moves
+    kick_budget = default_kicks(n) if kicks is None else kicks
     started = time.perf_counter()
     deadline = started + time_budget_s
     given_s = path_time(model, start, targets)
     if n == 0:
         return Ordering(np.zeros(0, np.int64), 0.0, 0.0, 0.0, 0.0, True, 0, True, max_moves=budget)
-    order = np.arange(n)
-    if method in ("nearest", "auto"):
-        greedy = nearest_neighbour(model, targets, start)
-        if method == "nearest" or path_time(model, start, targets[greedy]) < given_s:
-            order = greedy
+    order = _construct(model, targets, start, method, given_s)
     constructed_s = path_time(model, start, targets[order])
     everything = np.vstack([targets, start[None, :]])  # node n is the start
-    neighbours = neighbour_lists(model, everything, NEIGHBOURS)
-    path = _Path(model, targets, start, order)
-    moves, stopped = _improve(path, neighbours, budget, deadline)
-    order = path.nodes[1:-1].copy()
+    neighbours = _fixed_neighbours(model, everything)
+    path = Path(n, order, _fixed_cost(model, targets, start))
+    rng = np.random.default_rng(seed)
+    effort = _improve(path, neighbours, budget, kick_budget, rng, deadline)
+    order = path.order()
     travel_s = path_time(model, start, targets[order])
     ordered = time.perf_counter()
-    bound, exact = mst_lower_bound(model, everything) if lower_bound else (0.0, False)
+    bound, exact = mst_bound(model, everything) if lower_bound else (0.0, False)
     return Ordering(
-        order, travel_s, constructed_s, given_s, bound, exact, moves, stopped == "converged",
-        stopped=stopped, max_moves=budget,
+        order, travel_s, constructed_s, given_s, bound, exact, effort.moves,
+        effort.stopped == "converged", stopped=effort.stopped, max_moves=budget,
         order_wall_s=ordered - started, bound_wall_s=time.perf_counter() - ordered,
+        kicks=effort.kicks, kicks_kept=effort.kept, max_kicks=kick_budget,
     )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Joint:
+    """An order with one solution per target. ``order`` indexes the targets; ``angles``
+    (N, A) and ``travel`` (N,) (the move into each, s) follow it."""
+
+    order: np.ndarray
+    angles: FloatArray
+    travel: FloatArray
+    ordering: Ordering  # the figures of the search (its order is ``order``)
+    relaxed_s: float  # the order's length in the relaxed any-branch time (≤ travel)
+    rounds: int  # rounds of improving on the chosen poses and choosing again
+
+
+def order_jointly(
+    model: TravelModel,
+    candidates: FloatArray,
+    usable: BoolArray,
+    nearest: FloatArray,
+    start: FloatArray,
+    *,
+    method: Method = "auto",
+    max_moves: int | None = None,
+    kicks: int | None = None,
+    seed: int = 0,
+    time_budget_s: float = 120.0,
+) -> Joint:
+    """Order targets and choose their solutions together.
+
+    ``candidates`` (N, K, A) with ``usable`` (N, K) (at least one per target);
+    ``nearest`` (N, A) each target's solution nearest ``start``, on which the order is
+    constructed (``method`` as in `order_targets`). Where some target has a choice, half
+    the kicks go to the relaxed any-branch time; then solutions are chosen along the
+    order (Viterbi), the order is improved on them with the other half, and chosen
+    again; further rounds (descents only, at most `ROUNDS` in all) while the path
+    shortens. Returned poses are always usable candidates.
+    """
+    nearest = np.asarray(nearest, dtype=np.float64)
+    start = np.asarray(start, dtype=np.float64)
+    n = len(nearest)
+    budget = default_moves(n) if max_moves is None else max_moves
+    kick_budget = default_kicks(n) if kicks is None else kicks
+    started = time.perf_counter()
+    deadline = started + time_budget_s
+    given_s = path_time(model, start, nearest)
+    if n == 0:
+        empty = Ordering(np.zeros(0, np.int64), 0.0, 0.0, 0.0, 0.0, True, 0, True)
+        return Joint(np.zeros(0, np.int64), nearest, np.zeros(0), empty, 0.0, 0)
+    order = _construct(model, nearest, start, method, given_s)
+    constructed_s = path_time(model, start, nearest[order])
+    rng = np.random.default_rng(seed)
+    relaxed = Relaxed.of(model, candidates, usable, start)
+    effort = _Effort()
+    choice = bool((relaxed.usable.sum(axis=1) > 1).any())
+    if choice:
+        neighbours = _relaxed_neighbours(relaxed)
+        path = Path(n, order, relaxed.scalar())
+        share = int(kick_budget * RELAXED_SHARE)
+        effort = _improve(path, neighbours, budget, share, rng, deadline)
+        order = path.order()
+    relaxed_s = float(relaxed.times(np.concatenate([[n], order[:-1]]), order).sum())
+    angles, travel = choose(candidates[order], usable[order], start, model.time)
+    rounds = 0
+    while rounds < ROUNDS and effort.stopped == "converged":
+        rounds += 1
+        before = float(travel.sum())
+        everything = np.vstack([angles, start[None, :]])
+        neighbours = _fixed_neighbours(model, everything)
+        path = Path(n, np.arange(n), _fixed_cost(model, angles, start))
+        left = 0
+        if rounds <= KICK_ROUNDS:  # the rest of the kicks, shared
+            left = (kick_budget - effort.kicks) // (KICK_ROUNDS - rounds + 1)
+        effort += _improve(path, neighbours, budget - effort.moves, left, rng, deadline)
+        again = path.order()
+        order = order[again]
+        angles, travel = choose(candidates[order], usable[order], start, model.time)
+        if rounds >= KICK_ROUNDS and not float(travel.sum()) < before - EPSILON:
+            break
+    travel_s = float(travel.sum())
+    ordering = Ordering(
+        order, travel_s, constructed_s, given_s, 0.0, False, effort.moves,
+        effort.stopped == "converged", stopped=effort.stopped, max_moves=budget,
+        order_wall_s=time.perf_counter() - started, kicks=effort.kicks,
+        kicks_kept=effort.kept, max_kicks=kick_budget,
+    )  # fmt: skip
+    return Joint(order, angles, travel, ordering, relaxed_s, rounds)

@@ -26,16 +26,18 @@ import numpy as np
 
 from gonio import params
 from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml, spec_text
-from gonio.planner import poses, sampling
+from gonio.planner import lkh, poses, sampling
+from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import exposures
 from gonio.planner.ordering import (
     Method,
     Ordering,
     Stop,
+    default_kicks,
     default_moves,
-    mst_lower_bound,
-    order_targets,
+    order_jointly,
 )
+from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray
@@ -84,16 +86,21 @@ class Summary:
     travel_s: float  # ordered, moves only
     dwell_s: float  # settle + exposure × averages, summed
     ordering_s: float  # time spent ordering (wall clock)
-    moves: int = 0  # improving moves the ordering applied (both passes)
+    moves: int = 0  # improving moves of the ordering's descents
     max_moves: int = 0  # the budget of improving moves
+    kicks: int = 0  # kicks of the iterated local search tried
+    kicks_kept: int = 0  # … that shortened the path
+    max_kicks: int = 0  # the budget of kicks
     stopped: Stop = "converged"  # why the ordering stopped
     time_cap_s: float = 0.0  # the ordering's wall-clock safety cap
     grid_shape: tuple[int, ...] | None = None
     target: int | None = None  # the kept targets asked for, if the plan gave a number
     naive_travel_s: float | None = None  # in generation order (bounds only)
-    lower_bound_travel_s: float | None = None  # the MST of the travel-time graph (bounds only)
-    lower_bound_exact: bool | None = None  # False: memory forced a weaker bound than the MST
-    bound_wall_s: float | None = None  # time spent on the lower bound (wall clock)
+    # Lower bounds on the moves of any order with any choice of solutions (bounds only):
+    lower_bound_travel_s: float | None = None  # Held–Karp 1-tree (`gonio.planner.bounds`)
+    mst_travel_s: float | None = None  # the minimum spanning tree (cheaper, looser)
+    lower_bound_exact: bool | None = None  # False: memory forced a weaker MST somewhere
+    bound_wall_s: float | None = None  # time spent on the lower bounds (wall clock)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))
@@ -144,7 +151,7 @@ class Plan:
     Frozen: every array is a private read-only copy (change a plan with
     `dataclasses.replace`, which makes a new one). ``==`` is "the same stored plan":
     spec, plan and rig texts, coordinate names and summary equal, every array identical
-    bit for bit; ``ordering`` (diagnostics of the first pass, not stored) is left out.
+    bit for bit; ``ordering`` (the search's diagnostics, not stored) is left out.
     """
 
     spec: PlanSpec
@@ -161,7 +168,7 @@ class Plan:
     arrival_s: FloatArray  # predicted time of arrival at each target
     summary: Summary
     plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
-    ordering: Ordering | None = None  # the first ordering (on the solutions nearest home)
+    ordering: Ordering | None = None  # the search's figures (constructed length, …)
 
     def __post_init__(self) -> None:
         n = len(self.coords)
@@ -358,42 +365,42 @@ def build(
     else:
         given, targets = np.arange(sel.size), solution.angles[sel]
         method = "auto"
-    # Order on each target's solution nearest home, then let every target take the
-    # solution that suits its neighbours (`poses.choose`), improve the order on those
-    # poses with what is left of the move budget (and of the time cap), and choose again.
+    # Order on the relaxed any-branch time from each target's solution nearest home,
+    # then choose solutions along the order and improve on them (`order_jointly`).
     budget = default_moves(sel.size) if spec.max_moves is None else spec.max_moves
+    kicks = default_kicks(sel.size) if spec.kicks is None else spec.kicks
     started = time.perf_counter()
-    result = order_targets(
-        rig.travel, targets, rig.home, method=method, max_moves=budget,
-        time_budget_s=spec.time_budget_s, lower_bound=False,
+    cand, usable = solution.candidates[sel][given], solution.usable[sel][given]
+    joint = order_jointly(
+        rig.travel, cand, usable, targets, rig.home, method=method, max_moves=budget,
+        kicks=kicks, seed=spec.sampling.seed, time_budget_s=spec.time_budget_s,
     )  # fmt: skip
-    chosen = sel[given[result.order]]
-    angles, _ = poses.choose(
-        solution.candidates[chosen], solution.usable[chosen], rig.home, rig.travel_time
-    )
-    left = max(spec.time_budget_s - (time.perf_counter() - started), 0.0)
-    again = order_targets(
-        rig.travel, angles, rig.home, method="given", max_moves=budget - result.moves,
-        time_budget_s=left, lower_bound=False,
-    )  # fmt: skip
-    chosen = chosen[again.order]
-    angles, travel = poses.choose(
-        solution.candidates[chosen], solution.usable[chosen], rig.home, rig.travel_time
-    )
+    result = joint.ordering
+    order, angles, travel = joint.order, joint.angles, joint.travel
+    if spec.ordering == "lkh":
+        if not lkh.available():
+            raise ConfigError(f"{where}: ordering: lkh needs elkai: pip install 'gonio[lkh]'")
+        order, angles, travel = lkh.improve(
+            rig.travel, rig.home, cand, usable, order, angles, travel
+        )
+    chosen = sel[given[order]]
     ordering_s = time.perf_counter() - started
-    stops = {result.stopped, again.stopped}
-    stopped: Stop = next(s for s in ("time cap", "move budget", "converged") if s in stops)
+    stopped: Stop = result.stopped
     figures: dict[str, Any] = {}
     if bounds:
-        # The bound: the MST over the poses measured (any order of these poses is at
-        # least this long). Generation order gets the same choice of solutions.
-        bound, exact = mst_lower_bound(rig.travel, np.vstack([angles, rig.home[None, :]]))
+        # Bounds on every order with every choice of solutions (the relaxed time), and
+        # generation order with the exact choice of solutions along it.
+        relaxed = Relaxed.of(rig.travel, cand, usable, rig.home)
+        b = held_karp_bound(relaxed, float(travel.sum()))
         figures["bound_wall_s"] = time.perf_counter() - started - ordering_s
         _, naive = poses.choose(
             solution.candidates[sel], solution.usable[sel], rig.home, rig.travel_time
         )
         figures.update(
-            naive_travel_s=float(naive.sum()), lower_bound_travel_s=bound, lower_bound_exact=exact
+            naive_travel_s=float(naive.sum()),
+            lower_bound_travel_s=b.held_karp_s,
+            mst_travel_s=b.mst_s,
+            lower_bound_exact=b.exact,
         )
     order = np.searchsorted(sel, chosen)  # positions in generation order
     mwi, mwo = rig.forward(angles)  # the pair the chosen pose measures
@@ -408,8 +415,11 @@ def build(
         travel_s=float(travel.sum()),
         dwell_s=float(dwell.sum()),
         ordering_s=ordering_s,
-        moves=result.moves + again.moves,
+        moves=result.moves,
         max_moves=budget,
+        kicks=result.kicks,
+        kicks_kept=result.kicks_kept,
+        max_kicks=kicks,
         stopped=stopped,
         time_cap_s=spec.time_budget_s,
         grid_shape=shape,
@@ -472,11 +482,16 @@ def render_summary(plan: Plan) -> str:
             f"({s.naive_total_s / s.total_s:.2f}× the ordered plan)"
         )
     if s.lower_bound_s is not None and s.lower_bound_travel_s is not None:
+        weak = "" if s.lower_bound_exact else "; memory forced a weaker bound"
         lines.append(
-            f"  {'lower bound (MST)':<26}{hms(s.lower_bound_s):>9}   "
-            f"(ordered moves = {s.travel_s / max(s.lower_bound_travel_s, 1e-12):.2f}× the MST"
-            + ("" if s.lower_bound_exact else "; memory forced a weaker bound")
-            + ")"
+            f"  {'lower bound (Held–Karp)':<26}{hms(s.lower_bound_s):>9}   "
+            f"(ordered / bound = {s.travel_s / max(s.lower_bound_travel_s, 1e-12):.3f}"
+            f" in moves, any order and solutions{weak})"
+        )
+    if s.mst_travel_s is not None:
+        lines.append(
+            f"  {'lower bound (MST)':<26}{hms(s.mst_travel_s + s.dwell_s):>9}   "
+            f"(ordered / bound = {s.travel_s / max(s.mst_travel_s, 1e-12):.3f} in moves)"
         )
     lines += [
         f"  {'ordering':<26}{ordering_line(s)}",
@@ -487,11 +502,16 @@ def render_summary(plan: Plan) -> str:
 
 def ordering_line(s: Summary) -> str:
     """How the ordering ended, for the summary table."""
+    kicks = f"{s.kicks:,} kicks ({s.kicks_kept:,} kept)"
     if s.stopped == "converged":
-        return f"converged after {s.moves:,} moves (budget {s.max_moves:,})"
+        return (
+            f"converged after {s.moves:,} moves, then {kicks}; budgets {s.max_moves:,} "
+            f"and {s.max_kicks:,}"
+        )
     if s.stopped == "move budget":
         return f"stopped at the move budget ({s.max_moves:,} moves): not converged"
     return (
         f"stopped at the time cap ({s.time_cap_s:g} s, after {s.moves:,} of {s.max_moves:,} "
-        "moves): not converged, and this order depends on the machine's speed"
+        f"moves, {s.kicks:,} of {s.max_kicks:,} kicks): not converged, and this order "
+        "depends on the machine's speed"
     )

@@ -150,6 +150,14 @@ class PlanSpec(Strict):
     # target + 100 (`gonio.planner.ordering.default_moves`). A count, not a time, so the
     # same plan file orders the same on any machine.
     max_moves: int | None = Field(None, ge=0)
+    # Kicks of the iterated local search after the descents; None: 3 per 2 kept targets,
+    # at most 15 000 (`gonio.planner.ordering.default_kicks`). A count too: the kicks
+    # are drawn from `sampling.seed`, so the same file orders the same on any machine.
+    kicks: int | None = Field(None, ge=0)
+    # "search": the iterated local search (seconds); "lkh": then LKH-3 on the chosen
+    # poses through the optional `elkai` package (minutes, gigabytes past ~10 000
+    # targets), kept where it is shorter.
+    ordering: Literal["search", "lkh"] = "search"
     # A safety cap on the wall time of improving the order; when it binds the summary
     # says so (the order then depends on the machine).
     time_budget_s: float = Field(120.0, gt=0)

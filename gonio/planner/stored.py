@@ -270,7 +270,7 @@ def read_plan(path: str | Path, rig: Rig | str | Path | None = None) -> Plan:
     plan file carries. Any problem (not a stored plan, another format version, a header
     line missing, a text or the targets not matching their hash, a missing column, a
     value that is not a finite number, a different rig) raises `ConfigError` with one
-    line naming the file. ``ordering`` (first-pass diagnostics) is not stored: None.
+    line naming the file. ``ordering`` (the search's diagnostics) is not stored: None.
     """
     path = Path(path)
     try:

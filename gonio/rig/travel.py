@@ -44,9 +44,10 @@ class TravelModel:
         t = np.where(d < v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
         return np.asarray(np.max(t, axis=-1), dtype=np.float64)
 
-    def reach(self, t: float) -> FloatArray:
+    def reach(self, t: float | FloatArray) -> FloatArray:
         """Per-axis largest |Δθ| (rad) covered within t seconds: t(p, q) ≤ t exactly when
-        |q_j − p_j| ≤ reach(t)_j on every axis."""
+        |q_j − p_j| ≤ reach(t)_j on every axis. ``t`` a number, or times (..., 1) for
+        reaches (..., A)."""
         v, a = self.velocity, self.acceleration
         return np.asarray(
             np.where(t < 2.0 * v / a, a * t * t / 4.0, v * (t - v / a)), dtype=np.float64

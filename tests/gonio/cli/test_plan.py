@@ -66,7 +66,8 @@ def test_convergence_is_printed(run_gonio: Gonio) -> None:
     assert code == 0
     line = next(x for x in out.splitlines() if x.startswith("  ordering  "))
     words = line.split()
-    assert words[1:3] == ["converged", "after"] and words[4:] == ["moves", "(budget", "5,100)"]
+    assert words[1:3] == ["converged", "after"] and words[4:7] == ["moves,", "then", "500"]
+    assert words[7:] == ["kicks", words[8], "kept);", "budgets", "5,100", "and", "500"]
     assert 0 < int(words[3].replace(",", "")) < 5100
     assert "ordering took" in out
 
@@ -91,16 +92,18 @@ def test_bounds_only_with_the_option(run_gonio: Gonio) -> None:
     _, plain, _ = gonio_plan(run_gonio, QUICK)
     code, bounds, _ = gonio_plan(run_gonio, QUICK, "--bounds")
     assert code == 0
-    for label in ("in generation order", "lower bound (MST)"):
+    for label in ("in generation order", "lower bound (Held–Karp)", "lower bound (MST)"):
         assert label not in plain
         assert label in bounds
     generation = next(x for x in bounds.splitlines() if "in generation order" in x)
     assert generation.endswith("× the ordered plan)")
     assert float(generation.split("(")[1].split("×")[0]) >= 2.0
+    held_karp = next(x for x in bounds.splitlines() if "lower bound (Held–Karp)" in x)
+    assert 1.0 <= float(held_karp.split("= ")[1].split()[0]) <= 1.02
     mst = next(x for x in bounds.splitlines() if "lower bound (MST)" in x)
-    assert float(mst.split("= ")[1].split("×")[0]) <= 1.3
+    assert 1.0 <= float(mst.split("= ")[1].split()[0]) <= 1.3
     # Everything else is the same table.
-    kept = [x for x in bounds.splitlines() if x not in (generation, mst)]
+    kept = [x for x in bounds.splitlines() if x not in (generation, held_karp, mst)]
     without_took = [x for x in kept if "ordering took" not in x]
     assert without_took == [x for x in plain.splitlines() if "ordering took" not in x]
 

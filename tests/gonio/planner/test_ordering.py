@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import minimum_spanning_tree
 
-from gonio.planner import ordering
+from gonio.planner import bounds, ordering
 from gonio.planner.ordering import mst_lower_bound, order_targets, path_time
 from gonio.rig.model import Rig
 from gonio.rig.travel import TravelModel
@@ -70,7 +70,7 @@ def test_mst_bound_stays_a_bound_when_memory_runs_out(
     model = rigs["in_plane"].travel
     points = poses(np.random.default_rng(5), 400, model)
     exact_bound, _ = mst_lower_bound(model, points)
-    monkeypatch.setattr(ordering, "MAX_PAIRS", 50)
+    monkeypatch.setattr(bounds, "MAX_PAIRS", 50)
     weak, exact = mst_lower_bound(model, points)
     assert not exact
     assert 0.0 < weak <= exact_bound
@@ -90,7 +90,7 @@ def test_weak_bound_never_exceeds_the_mst(
     points = np.vstack([line, clusters])
     exact, is_exact = mst_lower_bound(model, points)
     assert is_exact
-    monkeypatch.setattr(ordering, "MAX_PAIRS", limit)
+    monkeypatch.setattr(bounds, "MAX_PAIRS", limit)
     weak, flag = mst_lower_bound(model, points)
     assert not flag
     assert 0.0 <= weak <= exact
