@@ -87,7 +87,7 @@ def test_demo_prints_the_tables(run_gonio: Gonio) -> None:
 
 @pytest.mark.parametrize(
     "args",
-    [["plan", "configs/plans/quick.yaml"], ["--help"]],
+    [["plan", "configs/plans/rehearsal.yaml"], ["--help"]],  # 30 targets: quick to plan
     ids=["plan", "help"],
 )
 def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:

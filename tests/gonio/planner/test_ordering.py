@@ -175,7 +175,7 @@ def test_shuffled_line_is_recovered(rigs: dict[str, Rig]) -> None:
 
 def test_uniform_targets_near_the_bound_and_far_below_generation_order(rig: Rig) -> None:
     model = rig.travel
-    targets = poses(np.random.default_rng(11), 3000, model, spread=1.4)
+    targets = poses(np.random.default_rng(11), 1500, model, spread=1.4)
     result = order_targets(model, targets, np.zeros(4), time_budget_s=60.0)
     assert result.travel_s <= 1.3 * result.lower_bound_s
     assert result.given_s >= 2.0 * result.travel_s

@@ -342,10 +342,12 @@ def test_constant_exposure_without_adapt(plans: dict[str, Plan]) -> None:
 @pytest.mark.parametrize("name", ["quick", "isotropic_hybrid", "anisotropic"])
 def test_shipped_plans_build(name: str) -> None:
     s, rig = load_plan(PLANS / f"{name}.yaml")
-    plan = build(s.model_copy(update={"kicks": 100}), rig, bounds=True)  # a few: fast
+    # A few kicks, and the bounds (seconds at 5 000 targets) on the small plan only: fast.
+    plan = build(s.model_copy(update={"kicks": 100}), rig, bounds=name == "quick")
     assert len(plan) > 0
-    assert plan.summary.lower_bound_travel_s is not None
-    assert plan.summary.travel_s <= 1.05 * plan.summary.lower_bound_travel_s
+    if name == "quick":
+        assert plan.summary.lower_bound_travel_s is not None
+        assert plan.summary.travel_s <= 1.05 * plan.summary.lower_bound_travel_s
     # The default move budget leaves the shipped plans converged, as the time budget did.
     assert plan.summary.converged and plan.summary.moves < plan.summary.max_moves
     text = render_summary(plan)
