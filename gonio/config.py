@@ -10,13 +10,16 @@ path and what was expected, e.g.::
 
 from __future__ import annotations
 
+import math
 import os
+import types
+import typing
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 from pydantic_core import ErrorDetails
 
 from gonio.errors import GonioError
@@ -32,6 +35,56 @@ class Strict(BaseModel):
     """Base of every configuration model: unknown fields are mistakes, values are frozen."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _plain_numbers(cls, data: Any) -> Any:
+        """No yes/no where a number is expected (pydantic would read ``true`` as 1), no
+        integer beyond 64 bits, no duration (``…_s``) beyond `MAX_SECONDS`."""
+        if not isinstance(data, dict):
+            return data
+        for name, value in data.items():
+            field = cls.model_fields.get(name) if isinstance(name, str) else None
+            if field is None:
+                continue
+            kinds = _scalar_kinds(field.annotation)
+            items = value if isinstance(value, list | tuple) else [value]
+            for item in items:
+                if isinstance(item, bool):
+                    if bool not in kinds and kinds & {int, float}:
+                        raise field_error(name, f"expected a number, not yes/no (got {item})")
+                elif isinstance(item, int | float):
+                    if int in kinds and float not in kinds and abs(item) >= 2**63:
+                        raise field_error(
+                            name, f"expected an integer below 2**63 (got {excerpt(item)})"
+                        )
+                    if name.endswith("_s") and MAX_SECONDS < abs(item) < math.inf:
+                        raise field_error(
+                            name, f"expected at most {MAX_SECONDS:g} s (got {excerpt(item)})"
+                        )
+        return data
+
+
+#: The longest duration a configuration may give (an exposure, a timeout), in seconds.
+MAX_SECONDS = 1e10
+
+
+def _scalar_kinds(annotation: Any) -> set[Any]:
+    """The scalar types an annotation admits (through unions, containers and
+    `Annotated`, not into models)."""
+    if annotation in (bool, int, float):
+        return {annotation}
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return set()
+    out: set[Any] = set()
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _scalar_kinds(typing.get_args(annotation)[0])
+    if origin is not None or isinstance(annotation, types.UnionType):
+        for arg in typing.get_args(annotation):
+            if arg is not Ellipsis:
+                out |= _scalar_kinds(arg)
+    return out
 
 
 def read_bytes(path: Path) -> bytes:
