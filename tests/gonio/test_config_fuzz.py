@@ -8,7 +8,9 @@ traceback."""
 
 from __future__ import annotations
 
+import copy
 import math
+import os
 import resource
 import shutil
 import signal
@@ -33,6 +35,12 @@ from tests.conftest import CONFIGS, CliResult
 CASE_SECONDS = 10
 #: Growth of the process's peak memory one case may cause, in KiB.
 CASE_KIB = 300 * 1024
+
+
+def examples(default: int) -> int:
+    """Examples per property: lean in the suite, ``FUZZ_EXAMPLES=N`` for a longer search."""
+    return int(os.environ.get("FUZZ_EXAMPLES", default))
+
 
 LOADERS: dict[str, Callable[[Path], object]] = {
     "plans": load_plan_source,
@@ -119,7 +127,7 @@ def mutants(draw: st.DrawFn, shipped: Path, *, text_level: bool = True) -> bytes
         path = draw(st.sampled_from(where))
         parent = parent_of(data, path)
         if op == "replace":
-            parent[path[-1]] = draw(WEIRD)
+            parent[path[-1]] = copy.deepcopy(draw(WEIRD))
         elif isinstance(parent, dict):
             del parent[path[-1]]
         else:
@@ -183,7 +191,7 @@ def check_loader(configs: Path, shipped: Path, raw: bytes) -> None:
 
 
 @pytest.mark.parametrize("shipped", SHIPPED, ids=str)
-@settings(max_examples=25, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=examples(25), suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_mutated_configs_load_or_are_refused_in_one_line(
     configs: Path, shipped: Path, data: st.DataObject
@@ -192,7 +200,7 @@ def test_mutated_configs_load_or_are_refused_in_one_line(
 
 
 @pytest.mark.parametrize("kind", sorted(LOADERS))
-@settings(max_examples=25, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=examples(25), suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(document=DOCUMENTS)
 def test_generated_documents_load_or_are_refused_in_one_line(
     configs: Path, kind: str, document: Any
@@ -204,7 +212,7 @@ def test_generated_documents_load_or_are_refused_in_one_line(
 QUICK = Path("plans") / "quick.yaml"
 
 
-@settings(max_examples=15, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=examples(15), suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(raw=mutants(QUICK))
 def test_gonio_plan_exits_0_or_2_in_at_most_3_lines(
     configs: Path, run_gonio: Callable[..., CliResult], raw: bytes
