@@ -14,7 +14,7 @@ import math
 import os
 import types
 import typing
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -48,25 +48,37 @@ class Strict(BaseModel):
             if field is None:
                 continue
             kinds = _scalar_kinds(field.annotation)
-            items = value if isinstance(value, list | tuple) else [value]
-            for item in items:
+            for where, item in _leaves(name, value):
                 if isinstance(item, bool):
                     if bool not in kinds and kinds & {int, float}:
-                        raise field_error(name, f"expected a number, not yes/no (got {item})")
+                        raise field_error(where, f"expected a number, not yes/no (got {item})")
                 elif isinstance(item, int | float):
                     if int in kinds and float not in kinds and abs(item) >= 2**63:
                         raise field_error(
-                            name, f"expected an integer below 2**63 (got {excerpt(item)})"
+                            where, f"expected an integer below 2**63 (got {excerpt(item)})"
                         )
                     if name.endswith("_s") and MAX_SECONDS < abs(item) < math.inf:
                         raise field_error(
-                            name, f"expected at most {MAX_SECONDS:g} s (got {excerpt(item)})"
+                            where, f"expected at most {MAX_SECONDS:g} s (got {excerpt(item)})"
                         )
         return data
 
 
 #: The longest duration a configuration may give (an exposure, a timeout), in seconds.
 MAX_SECONDS = 1e10
+
+
+def _leaves(path: str, value: Any, levels: int = 2) -> Iterator[tuple[str, Any]]:
+    """(dotted path, value) of ``value`` and of the items of its lists and mappings,
+    ``levels`` deep (a field's own nested models check themselves)."""
+    if isinstance(value, list | tuple) and levels:
+        for i, item in enumerate(value):
+            yield from _leaves(f"{path}.{i}", item, levels - 1)
+    elif isinstance(value, dict) and levels:
+        for key, item in value.items():
+            yield from _leaves(f"{path}.{key}", item, levels - 1)
+    else:
+        yield path, value
 
 
 def _scalar_kinds(annotation: Any) -> set[Any]:

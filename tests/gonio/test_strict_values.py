@@ -14,6 +14,7 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.planner.plan import load_plan_source
+from gonio.rig.model import Rig
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
@@ -118,3 +119,17 @@ def test_meaningful_materials_still_load(tmp_path: Path) -> None:
             MATTE.replace(MATTE_MATERIAL, material).replace("../rigs/", f"{CONFIGS}/rigs/")
         )
         load_scene(path)
+
+
+def test_yes_inside_a_mapping_of_numbers(tmp_path: Path) -> None:
+    def counts(data: dict[str, Any]) -> None:
+        data["sampling"]["counts"] = {"hbar": True}
+
+    assert plan_error(tmp_path, counts).startswith("sampling.counts.hbar: expected a number")
+    rig = tmp_path / "rig.yaml"
+    text = (CONFIGS / "rigs" / "arch.yaml").read_text()
+    rig.write_text(text.replace("light_elevation: [55, 85]", "light_elevation: [yes, 85]", 1))
+    with pytest.raises(ConfigError) as caught:
+        Rig.from_yaml(rig)
+    assert ".ranges_deg.light_elevation.0: expected a number, not yes/no" in str(caught.value)
+    assert str(caught.value).startswith(f"{rig}:58: ")
