@@ -301,7 +301,13 @@ def located(error: ErrorDetails) -> tuple[tuple[int | str, ...], str]:
 def describe(error: ErrorDetails) -> str:
     """'field.path: message (got …)' for one pydantic error."""
     loc, message = located(error)
-    return f"{'.'.join(str(p) for p in loc) or '(top level)'}: {message}"
+    return f"{dotted(loc)}: {message}"
+
+
+def dotted(loc: Sequence[int | str]) -> str:
+    """A field path as ``a.b.0.c``, each part cut to a short excerpt (a key can be long)."""
+    parts = (str(p) if len(str(p)) <= EXCERPT else f"{str(p)[: EXCERPT - 1]}…" for p in loc)
+    return ".".join(parts) or "(top level)"
 
 
 def check_output(path: Path, option: str) -> None:
@@ -368,5 +374,5 @@ def load(
         where = f"{path}:{line}" if line is not None else str(path)
         more = exc.error_count() - 1
         extra = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-        field = ".".join(str(p) for p in loc) or "(top level)"
+        field = dotted(loc)
         raise ConfigError(f"{where}: {field}: {message}{extra}") from None

@@ -143,3 +143,12 @@ def test_same_data_and_lines_from_both_loaders() -> None:
         fast, fast_node = read_yaml(path)
         assert fast == slow
         assert yaml.serialize(fast_node) == yaml.serialize(slow_node)
+
+
+def test_a_long_unknown_key_is_cut(tmp_path: Path) -> None:
+    plan = tmp_path / "plan.yaml"
+    text = (CONFIGS / "plans" / "quick.yaml").read_text().replace("../rigs/arch.yaml", str(ARCH))
+    plan.write_text(f"{text}? {'k' * 100_000}\n: 1\n")
+    with pytest.raises(ConfigError) as caught:
+        load_plan_source(plan)
+    assert len(str(caught.value)) < 300 and "kkk…: Extra inputs" in str(caught.value)
