@@ -200,8 +200,7 @@ def _check_events(path: Path, text: str, loader_class: type[yaml.SafeLoader]) ->
         if stack[0][0] + sum(s[0] for s in stack[1:]) > MAX_NODES:
             raise refuse(
                 event,
-                f"more than {MAX_NODES} values with its aliases expanded; "
-                "expected a smaller document",
+                f"more than {MAX_NODES} values (aliases expanded); expected a smaller document",
             )
 
     for event in yaml.parse(text, Loader=loader_class):
