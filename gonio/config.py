@@ -10,13 +10,16 @@ path and what was expected, e.g.::
 
 from __future__ import annotations
 
+import math
 import os
-from collections.abc import Sequence
+import types
+import typing
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
 from pydantic_core import ErrorDetails
 
 from gonio.errors import GonioError
@@ -33,6 +36,68 @@ class Strict(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
+    @model_validator(mode="before")
+    @classmethod
+    def _plain_numbers(cls, data: Any) -> Any:
+        """No yes/no where a number is expected (pydantic would read ``true`` as 1), no
+        integer beyond 64 bits, no duration (``…_s``) beyond `MAX_SECONDS`."""
+        if not isinstance(data, dict):
+            return data
+        for name, value in data.items():
+            field = cls.model_fields.get(name) if isinstance(name, str) else None
+            if field is None:
+                continue
+            kinds = _scalar_kinds(field.annotation)
+            for where, item in _leaves(name, value):
+                if isinstance(item, bool):
+                    if bool not in kinds and kinds & {int, float}:
+                        raise field_error(where, f"expected a number, not yes/no (got {item})")
+                elif isinstance(item, int | float):
+                    if int in kinds and float not in kinds and abs(item) >= 2**63:
+                        raise field_error(
+                            where, f"expected an integer below 2**63 (got {excerpt(item)})"
+                        )
+                    if name.endswith("_s") and MAX_SECONDS < abs(item) < math.inf:
+                        raise field_error(
+                            where, f"expected at most {MAX_SECONDS:g} s (got {excerpt(item)})"
+                        )
+        return data
+
+
+#: The longest duration a configuration may give (an exposure, a timeout), in seconds.
+MAX_SECONDS = 1e10
+
+
+def _leaves(path: str, value: Any, levels: int = 2) -> Iterator[tuple[str, Any]]:
+    """(dotted path, value) of ``value`` and of the items of its lists and mappings,
+    ``levels`` deep (a field's own nested models check themselves)."""
+    if isinstance(value, list | tuple) and levels:
+        for i, item in enumerate(value):
+            yield from _leaves(f"{path}.{i}", item, levels - 1)
+    elif isinstance(value, dict) and levels:
+        for key, item in value.items():
+            yield from _leaves(f"{path}.{key}", item, levels - 1)
+    else:
+        yield path, value
+
+
+def _scalar_kinds(annotation: Any) -> set[Any]:
+    """The scalar types an annotation admits (through unions, containers and
+    `Annotated`, not into models)."""
+    if annotation in (bool, int, float):
+        return {annotation}
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return set()
+    out: set[Any] = set()
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _scalar_kinds(typing.get_args(annotation)[0])
+    if origin is not None or isinstance(annotation, types.UnionType):
+        for arg in typing.get_args(annotation):
+            if arg is not Ellipsis:
+                out |= _scalar_kinds(arg)
+    return out
+
 
 def read_bytes(path: Path) -> bytes:
     """The file's bytes, as UTF-8 text checked; ConfigError if it cannot be read."""
@@ -45,37 +110,144 @@ def read_bytes(path: Path) -> bytes:
     return raw
 
 
+#: The largest configuration file read, in bytes (the shipped ones are under 5 KB).
+MAX_BYTES = 1 << 20
+#: The deepest nesting of mappings and lists, aliases expanded.
+MAX_DEPTH = 64
+#: The most aliases (``*name``) in one document.
+MAX_ALIASES = 1000
+#: The most values in one document with every alias expanded (a "billion laughs"
+#: document expands a few hundred bytes to billions of values).
+MAX_NODES = 100_000
+#: The longest excerpt of a value a message shows.
+EXCERPT = 40
+
+#: PyYAML's safe loader, its C version (libyaml, about ten times faster) when installed.
+Loader: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def excerpt(value: Any) -> str:
+    """``repr(value)`` cut to a short excerpt (a message never echoes a whole value)."""
+    text = repr(value)
+    return text if len(text) <= EXCERPT else f"{text[: EXCERPT - 1]}…"
+
+
 def read_yaml(path: Path, raw: bytes | None = None) -> tuple[Any, yaml.Node | None]:
     """(data, node tree) of a YAML file (or of its bytes ``raw``, already read);
-    ConfigError if it cannot be read or parsed."""
-    text = (read_bytes(path) if raw is None else raw).decode("utf-8")
+    ConfigError if it cannot be read or parsed, or exceeds the bounds above (size,
+    nesting, aliases and their expansion), or gives a key twice in a mapping."""
+    raw = read_bytes(path) if raw is None else raw
+    if len(raw) > MAX_BYTES:
+        raise ConfigError(
+            f"{path}: the file has {len(raw)} bytes; expected at most {MAX_BYTES} "
+            "for a configuration file"
+        )
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: cannot read the file: {exc}") from None
+    try:
+        return _parse(path, text, Loader)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"{where}: not valid YAML: {problem}") from None
-    if node is not None:
-        _refuse_duplicate_keys(path, node)
-    return data, node
+        error = exc
+    if Loader is not yaml.SafeLoader:  # the pure-Python loader's words for the mistake
+        try:
+            _parse(path, text, yaml.SafeLoader)
+        except yaml.YAMLError as exc:
+            error = exc
+    mark = getattr(error, "problem_mark", None)
+    where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+    problem = getattr(error, "problem", None) or str(error).splitlines()[0]
+    raise ConfigError(f"{where}: not valid YAML: {problem}") from None
+
+
+def _parse(
+    path: Path, text: str, loader_class: type[yaml.SafeLoader]
+) -> tuple[Any, yaml.Node | None]:
+    """`read_yaml` with one loader; `yaml.YAMLError` if the text is not YAML."""
+    _check_events(path, text, loader_class)
+    loader = loader_class(text)
+    try:
+        node = loader.get_single_node()
+        if node is not None:
+            _refuse_duplicate_keys(path, node)
+        return (None if node is None else loader.construct_document(node)), node
+    finally:
+        loader.dispose()
+
+
+def _check_events(path: Path, text: str, loader_class: type[yaml.SafeLoader]) -> None:
+    """`ConfigError` unless the document's nesting, aliases and size with every alias
+    expanded are within bounds: one pass over the parser's events (linear time and no
+    recursion, however deep or aliased the document)."""
+    # Per open collection: [values under it, deepest nesting under it, anchor or None].
+    stack: list[list[Any]] = [[0, 0, None]]
+    anchors: dict[str, tuple[int, int]] = {}  # anchor -> (values, nesting) it expands to
+    aliases = 0
+
+    def refuse(event: yaml.Event, what: str) -> ConfigError:
+        mark = event.start_mark
+        return ConfigError(f"{path}:{mark.line + 1}: {what}" if mark else f"{path}: {what}")
+
+    def add(values: int, depth: int, event: yaml.Event) -> None:
+        top = stack[-1]
+        top[0] += values
+        top[1] = max(top[1], depth + 1)
+        if len(stack) - 1 + depth > MAX_DEPTH:
+            raise refuse(
+                event, f"nested more than {MAX_DEPTH} levels deep; expected a flatter document"
+            )
+        if stack[0][0] + sum(s[0] for s in stack[1:]) > MAX_NODES:
+            raise refuse(
+                event,
+                f"more than {MAX_NODES} values (aliases expanded); expected a smaller document",
+            )
+
+    for event in yaml.parse(text, Loader=loader_class):
+        if isinstance(event, yaml.AliasEvent):
+            aliases += 1
+            if aliases > MAX_ALIASES:
+                raise refuse(event, f"more than {MAX_ALIASES} aliases; expected fewer")
+            if event.anchor not in anchors:
+                if any(s[2] == event.anchor for s in stack):
+                    raise refuse(
+                        event, f"*{str(event.anchor)[:EXCERPT]}: an alias inside the value it names"
+                    )
+                continue  # undefined: the composer says so
+            values, depth = anchors[event.anchor]
+            add(values, depth, event)
+        elif isinstance(event, yaml.ScalarEvent):
+            add(1, 0, event)
+            if event.anchor is not None:
+                anchors[event.anchor] = (1, 0)
+        elif isinstance(event, yaml.CollectionStartEvent):
+            stack.append([1, 1, event.anchor])
+            add(0, 0, event)
+        elif isinstance(event, yaml.CollectionEndEvent):
+            values, depth, anchor = stack.pop()
+            if anchor is not None:
+                anchors[anchor] = (values, depth)
+            add(values, depth, event)
 
 
 def _refuse_duplicate_keys(path: Path, node: yaml.Node) -> None:
     """`ConfigError` at the second occurrence of a key in any mapping (PyYAML would keep
-    the last value silently)."""
+    the last value silently); each node visited once, however often it is aliased."""
     stack = [node]
+    visited: set[int] = set()
     while stack:
         n = stack.pop()
+        if id(n) in visited:
+            continue
+        visited.add(id(n))
         if isinstance(n, yaml.MappingNode):
             seen: set[str] = set()
             for key, value in n.value:
                 if isinstance(key, yaml.ScalarNode):
                     if key.value in seen:
                         raise ConfigError(
-                            f"{path}:{key.start_mark.line + 1}: {key.value}: this key is "
-                            "given twice in the same mapping; expected each key once"
+                            f"{path}:{key.start_mark.line + 1}: {key.value[:EXCERPT]}: this key "
+                            "is given twice in the same mapping; expected each key once"
                         )
                     seen.add(key.value)
                 stack.append(value)
@@ -121,14 +293,20 @@ def located(error: ErrorDetails) -> tuple[tuple[int | str, ...], str]:
         loc += tuple(int(p) if p.isdigit() else p for p in path.split("."))
         return loc, message
     got = error.get("input")
-    shown = "" if error["type"] == "missing" or isinstance(got, dict) else f" (got {got!r})"
+    shown = "" if error["type"] == "missing" or isinstance(got, dict) else f" (got {excerpt(got)})"
     return loc, f"{message}{shown}"
 
 
 def describe(error: ErrorDetails) -> str:
     """'field.path: message (got …)' for one pydantic error."""
     loc, message = located(error)
-    return f"{'.'.join(str(p) for p in loc) or '(top level)'}: {message}"
+    return f"{dotted(loc)}: {message}"
+
+
+def dotted(loc: Sequence[int | str]) -> str:
+    """A field path as ``a.b.0.c``, each part cut to a short excerpt (a key can be long)."""
+    parts = (str(p) if len(str(p)) <= EXCERPT else f"{str(p)[: EXCERPT - 1]}…" for p in loc)
+    return ".".join(parts) or "(top level)"
 
 
 def check_output(path: Path, option: str) -> None:
@@ -195,5 +373,5 @@ def load(
         where = f"{path}:{line}" if line is not None else str(path)
         more = exc.error_count() - 1
         extra = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-        field = ".".join(str(p) for p in loc) or "(top level)"
+        field = dotted(loc)
         raise ConfigError(f"{where}: {field}: {message}{extra}") from None

@@ -28,8 +28,8 @@ from pydantic import (
 )
 
 from gonio import brdf
+from gonio.brdf.material import MaterialError, build
 from gonio.config import ConfigError, Strict, field_error, load
-from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from sim.faults import FaultRule
 
@@ -41,7 +41,7 @@ class MaterialSpec(Strict):
     """A `gonio.brdf` model: ``name`` and its parameters (numbers, strings, RGB lists)."""
 
     name: str
-    params: dict[str, float | str | list[float]] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(default_factory=dict)  # checked by gonio.brdf.material
 
     @model_validator(mode="before")
     @classmethod
@@ -59,9 +59,9 @@ class MaterialSpec(Strict):
 
     def model(self) -> brdf.BRDF:
         try:
-            return brdf.create(self.name, **self.params)
-        except GonioError as exc:
-            raise field_error("name", str(exc)) from None
+            return build(self.name, self.params)
+        except MaterialError as exc:
+            raise field_error(exc.param or "name", str(exc)) from None
 
 
 class SourceSpec(Strict):

@@ -8,13 +8,13 @@ how to place points, and how long to expose each target.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
 from gonio import brdf, params
+from gonio.brdf.material import MaterialError, build
 from gonio.config import Strict, field_error
-from gonio.errors import GonioError
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random"]
 
@@ -30,7 +30,7 @@ class SamplingSpec(Strict):
     strategy: Strategy = "sobol"
     counts: dict[str, int] | None = None  # per coordinate (grid, stratified)
     target: int | None = Field(None, gt=0)  # kept targets wanted (all strategies)
-    seed: int = 0
+    seed: int = Field(0, ge=0)
     warps: dict[str, Warp] = Field(default_factory=dict)
 
     @model_validator(mode="after")
@@ -56,7 +56,7 @@ class AdaptSpec(Strict):
     `gonio.planner.exposure`); exposure = base × s_ref / s clipped to [min_s, max_s],
     with s_ref the median over the plan's targets."""
 
-    material: dict[str, float | str | list[float]] = Field(min_length=1)
+    material: dict[str, Any] = Field(min_length=1)  # checked by gonio.brdf.material
     min_s: float = Field(gt=0)
     max_s: float = Field(gt=0)
     max_averages: int = Field(1, ge=1)
@@ -73,15 +73,15 @@ class AdaptSpec(Strict):
     def model(self) -> brdf.BRDF:
         """The expected material as a `gonio.brdf` model."""
         material = dict(self.material)
-        name = str(material.pop("name"))
+        name = material.pop("name")
         try:
-            return brdf.create(name, **material)
-        except GonioError as exc:
-            raise field_error("material", str(exc)) from None
+            return build(name, material)
+        except MaterialError as exc:
+            raise field_error(f"material.{exc.param or 'name'}", str(exc)) from None
 
 
 class ExposureSpec(Strict):
-    seconds: float = Field(0.1, gt=0)
+    seconds: float = Field(0.1, gt=0, le=3600)
     averages: int = Field(1, ge=1)
     adapt: AdaptSpec | None = None
 

@@ -70,7 +70,7 @@ CASES = [
     (
         "bad-parameter",
         {"material": {"name": "cook_torrance", "alpha": -1}},
-        "material.name",
+        "material.alpha",
         "parameter alpha must lie in",
     ),
     ("unknown-effect", {"effects": ["shot_noise", "lens_flare"]}, "effects.lens_flare", "Extra"),

@@ -155,8 +155,8 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
         lambda d: d["exposure"].update(
             adapt={"material": {"name": "velvet"}, "min_s": 0.1, "max_s": 1.0}
         ),
-        "exposure.adapt.material",
-        ("exposure", "adapt", "material"),
+        "exposure.adapt.material.name",
+        ("exposure", "adapt", "material", "name"),
         "unknown BRDF model 'velvet'",
     ),
     (
@@ -164,8 +164,8 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
         lambda d: d["exposure"].update(
             adapt={"material": {"name": "cook_torrance", "alpha": -1}, "min_s": 0.1, "max_s": 1}
         ),
-        "exposure.adapt.material",
-        ("exposure", "adapt", "material"),
+        "exposure.adapt.material.alpha",
+        ("exposure", "adapt", "material", "alpha"),
         "parameter alpha must lie in",
     ),
     (

@@ -1,0 +1,83 @@
+"""A material from a configuration file: a `gonio.brdf` model whose parameters are
+checked to be physically meaningful, each mistake attributed to the parameter it is
+about (`MaterialError.param`).
+
+Reflectances (``albedo``, ``ks``, ``kd``, ``f0``) lie in [0, 1] and the model conserves
+energy at normal incidence, channel by channel: ``ks + kd ≤ 1`` for the cosine lobes
+(their lobe's albedo is exactly ks there), and ``kd + F(0°) ≤ 1`` for the microfacet
+models (their specular albedo is at most the Fresnel reflectance at normal incidence,
+as the masking term is at most 1)."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+
+from gonio.brdf.base import BRDF
+from gonio.brdf.registry import create
+from gonio.errors import DomainError, GonioError
+
+#: Parameters that are reflectances, in [0, 1].
+REFLECTANCES = ("albedo", "ks", "kd", "f0")
+#: The longest message about a parameter (a huge list is not echoed whole).
+MAX_MESSAGE = 240
+
+
+class MaterialError(DomainError):
+    """A material that cannot be used; ``param`` names the parameter it is about (None:
+    the model's name, or a parameter missing)."""
+
+    def __init__(self, param: str | None, message: str) -> None:
+        if len(message) > MAX_MESSAGE:
+            message = message[: MAX_MESSAGE - 1] + "…"
+        super().__init__(message)
+        self.param = param
+
+
+def build(name: object, params: dict[str, Any]) -> BRDF:
+    """The model ``name`` with ``params``, checked as above; `MaterialError` otherwise."""
+    if not isinstance(name, str):
+        raise MaterialError(None, f"expected the name of a gonio.brdf model, got {name!r}")
+    for key, value in params.items():
+        if isinstance(value, bool):
+            raise MaterialError(key, f"expected a number or a name, not yes/no (got {value})")
+    try:
+        model = create(name, **params)
+    except GonioError as exc:
+        message = str(exc)
+        words = re.findall(r"[A-Za-z_]\w*", message)
+        param = next((w for w in words if w in params), None)
+        raise MaterialError(param, message) from None
+    for key in REFLECTANCES:
+        if key in model.params:
+            value = np.asarray(model.params[key], dtype=np.float64)
+            if np.any(value > 1.0):
+                raise MaterialError(
+                    key, f"a reflectance is at most 1 (energy conservation), got {_show(value)}"
+                )
+    if "kd" in model.params:
+        kd = np.asarray(model.params["kd"], dtype=np.float64)
+        other, what = _specular_albedo(model)
+        if other is not None and np.any(kd + other > 1.0 + 1e-12):
+            raise MaterialError(
+                "kd",
+                f"kd + {what} is {_show(kd + other)}; expected at most 1 (energy conservation)",
+            )
+    return model
+
+
+def _specular_albedo(model: BRDF) -> tuple[np.ndarray | None, str]:
+    """An upper bound of the specular part's albedo at normal incidence, and its words."""
+    if "ks" in model.params:
+        return np.asarray(model.params["ks"], dtype=np.float64), "ks"
+    fresnel = getattr(model, "fresnel", None)
+    if callable(fresnel):
+        f = np.asarray(fresnel(np.ones(1 if not getattr(fresnel, "is_rgb", False) else (1, 1))))
+        return f.reshape(-1), "the Fresnel reflectance at normal incidence"
+    return None, ""
+
+
+def _show(value: np.ndarray) -> str:
+    return ", ".join(f"{v:.4g}" for v in np.ravel(value))
