@@ -132,8 +132,9 @@ class PipeProgress:
     """A `gonio.acquire.progress.Progress` that writes ``t INDEX`` to a pipe for every
     target finished (called after its sample or skip was committed)."""
 
-    def __init__(self, fd: int) -> None:
+    def __init__(self, fd: int, pause_s: float = 0.0) -> None:
         self.fd = fd
+        self.pause_s = pause_s  # wall time per target: a run slow enough to signal
         self.todo: list[int] = []
 
     def start(self, plan: Plan, todo: np.ndarray) -> None:
@@ -141,6 +142,8 @@ class PipeProgress:
 
     def advance(self, done: int) -> None:
         os.write(self.fd, b"t %d\n" % self.todo[done - 1])
+        if self.pause_s:
+            time.sleep(self.pause_s)
 
     def close(self) -> None:
         pass

@@ -74,8 +74,8 @@ def test_a_second_signal_stops_at_once(
     pid = os.fork()
     if pid == 0:  # pragma: no cover - the child
         os.close(r)
-        try:
-            files.start(path, progress=PipeProgress(w))
+        try:  # 2 ms per target: the run is still going when the signals come
+            files.start(path, progress=PipeProgress(w, pause_s=0.002))
         finally:
             os._exit(0)
     os.close(w)
