@@ -325,6 +325,50 @@ def _kept(spec: PlanSpec, rig: Rig, coords: FloatArray) -> np.ndarray:
     return ok
 
 
+def _check_detector(spec: PlanSpec, rig: Rig, where: str, text: bytes | None) -> None:
+    """`ConfigError` unless every exposure and averaging count the plan can ask for is
+    one the rig's detector accepts (``detector.exposure_range_s``, ``max_averages``)."""
+    detector = rig.spec.detector
+    lo, hi = detector.exposure_range_s
+    e = spec.exposure
+    problems: list[tuple[tuple[str, ...], str]] = []
+    if e.adapt is None:
+        if not lo <= e.seconds <= hi:
+            problems.append((("exposure", "seconds"), f"{e.seconds:g} s"))
+    else:
+        for name in ("min_s", "max_s"):
+            value = getattr(e.adapt, name)
+            if not lo <= value <= hi:
+                problems.append((("exposure", "adapt", name), f"{value:g} s"))
+    for path, got in problems:
+        line = _line_in(where, text, path)
+        raise ConfigError(
+            f"{where}{line}: {'.'.join(path)}: {got} is outside the detector's exposure range "
+            f"[{lo:g}, {hi:g}] s (the rig file's detector.exposure_range_s)"
+        )
+    most = max(e.averages, e.adapt.max_averages if e.adapt is not None else 0)
+    if detector.max_averages is not None and most > detector.max_averages:
+        path = ("exposure", "averages" if e.averages == most else "adapt")
+        if path[1] == "adapt":
+            path = ("exposure", "adapt", "max_averages")
+        raise ConfigError(
+            f"{where}{_line_in(where, text, path)}: {'.'.join(path)}: up to {most} averages; "
+            f"the detector takes at most {detector.max_averages} (the rig file's "
+            "detector.max_averages)"
+        )
+
+
+def _line_in(where: str, text: bytes | None, path: tuple[str, ...]) -> str:
+    """``:LINE`` of ``path`` in the plan file's text, or nothing."""
+    if text is None:
+        return ""
+    try:
+        line = line_of(read_yaml(Path(where), text)[1], path)
+    except ConfigError:
+        return ""
+    return "" if line is None else f":{line}"
+
+
 def build(
     spec: PlanSpec,
     rig: Rig,
@@ -339,6 +383,7 @@ def build(
     generation-order duration (a second choice of solutions) and the MST lower bound
     (otherwise None in the summary). ``text``: the plan file's bytes, for the content
     hash (`load_plan_source` gives them; default: the spec as YAML, `spec_text`)."""
+    _check_detector(spec, rig, where, text)
     names = spec.coordinates()
     coords, shape = _place(spec, rig, where)
     valid, wi, wo = _directions(spec, coords)

@@ -358,3 +358,25 @@ def test_output_paths_are_checked_before_planning(
     code, out, err = run_plan(run_gonio, str(plan), *(a.format(tmp=tmp_path) for a in args))
     assert code == 2 and out == ""
     assert err.startswith("gonio: error: " + message.format(tmp=tmp_path))
+
+
+@pytest.mark.parametrize(
+    ("exposure", "field", "message"),
+    [
+        ({"seconds": 100}, "exposure.seconds", "100 s is outside the detector's exposure range "
+         "[0.0001, 60] s (the rig file's detector.exposure_range_s)"),
+        ({"seconds": 0.1, "averages": 100}, "exposure.averages", "up to 100 averages; the "
+         "detector takes at most 64 (the rig file's detector.max_averages)"),
+        ({"seconds": 0.1, "adapt": {"material": {"name": "lambert", "albedo": 0.5},
+          "min_s": 1e-6, "max_s": 1.0}}, "exposure.adapt.min_s",
+         "1e-06 s is outside the detector's exposure range"),
+    ],
+)  # fmt: skip
+def test_exposures_the_detector_cannot_take_are_refused_before_planning(
+    tmp_path: Path, run_gonio: Gonio, exposure: dict[str, Any], field: str, message: str
+) -> None:
+    path = write(tmp_path, edit(lambda d: d.update(exposure=exposure)))
+    code, out, err = run_plan(run_gonio, str(path))
+    assert code == 2 and out == ""
+    assert err.startswith(f"gonio: error: {path}:") and f": {field}: {message}" in err
+    assert err.count("\n") == 1
