@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from gonio.planner.schema import ExposureSpec
+from gonio.config import ConfigError, line_of, read_yaml
+from gonio.planner.schema import ExposureSpec, PlanSpec
 from gonio.radiometry import SourceKind, relative_geometry
+from gonio.rig.model import Rig
 from gonio.types import FloatArray
 
 
@@ -40,3 +44,47 @@ def exposures(
         spec.averages * extra, spec.averages, max(spec.averages, spec.adapt.max_averages)
     )
     return np.asarray(time_s, dtype=np.float64), averages
+
+
+def check_detector(spec: PlanSpec, rig: Rig, where: str, text: bytes | None) -> None:
+    """`ConfigError` unless every exposure and averaging count the plan can ask for is
+    one the rig's detector accepts (``detector.exposure_range_s``, ``max_averages``)."""
+    detector = rig.spec.detector
+    lo, hi = detector.exposure_range_s
+    e = spec.exposure
+    problems: list[tuple[tuple[str, ...], str]] = []
+    if e.adapt is None:
+        if not lo <= e.seconds <= hi:
+            problems.append((("exposure", "seconds"), f"{e.seconds:g} s"))
+    else:
+        for name in ("min_s", "max_s"):
+            value = getattr(e.adapt, name)
+            if not lo <= value <= hi:
+                problems.append((("exposure", "adapt", name), f"{value:g} s"))
+    for path, got in problems:
+        line = _line_in(where, text, path)
+        raise ConfigError(
+            f"{where}{line}: {'.'.join(path)}: {got} is outside the detector's exposure range "
+            f"[{lo:g}, {hi:g}] s (the rig file's detector.exposure_range_s)"
+        )
+    most = max(e.averages, e.adapt.max_averages if e.adapt is not None else 0)
+    if detector.max_averages is not None and most > detector.max_averages:
+        path = ("exposure", "averages" if e.averages == most else "adapt")
+        if path[1] == "adapt":
+            path = ("exposure", "adapt", "max_averages")
+        raise ConfigError(
+            f"{where}{_line_in(where, text, path)}: {'.'.join(path)}: up to {most} averages; "
+            f"the detector takes at most {detector.max_averages} (the rig file's "
+            "detector.max_averages)"
+        )
+
+
+def _line_in(where: str, text: bytes | None, path: tuple[str, ...]) -> str:
+    """``:LINE`` of ``path`` in the plan file's text, or nothing."""
+    if text is None:
+        return ""
+    try:
+        line = line_of(read_yaml(Path(where), text)[1], path)
+    except ConfigError:
+        return ""
+    return "" if line is None else f":{line}"

@@ -14,7 +14,6 @@ says so). It writes itself to a file and reads back bit for bit (`Plan.write`,
 from __future__ import annotations
 
 import hashlib
-import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -24,11 +23,10 @@ from typing import Any
 
 import numpy as np
 
-from gonio import params
 from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml, spec_text
 from gonio.planner import lkh, poses, sampling
 from gonio.planner.bounds import held_karp_bound
-from gonio.planner.exposure import exposures
+from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.ordering import (
     Method,
     Ordering,
@@ -37,16 +35,11 @@ from gonio.planner.ordering import (
     default_moves,
     order_jointly,
 )
+from gonio.planner.placement import directions, place
 from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray
-
-#: Sequence strategies draw in batches of this many points (a power of two for Sobol).
-BATCH = 4096
-#: A plan asking for a target count stops drawing after this many points.
-MAX_DRAWN = 4_000_000
-
 
 #: Framing of `content_hash` (the version names the framing, not gonio's).
 _HASH_MAGIC = b"gonio content v1\n"
@@ -251,124 +244,6 @@ def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[Pla
     return source.spec, source.rig
 
 
-def _place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, ...] | None]:
-    """The points placed in the coordinate box, in generation order, and the grid shape."""
-    p = params.get(spec.parametrization)
-    names = spec.coordinates()
-    bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
-    powers = np.array(
-        [spec.sampling.warps[n].power if n in spec.sampling.warps else 1.0 for n in names]
-    )
-    s = spec.sampling
-    if s.target is not None and s.target > MAX_DRAWN:
-        raise ConfigError(
-            f"{where}: sampling.target: expected at most {MAX_DRAWN:,} targets, got {s.target:,}"
-        )
-    if s.strategy in ("grid", "stratified"):
-        if s.counts is not None:
-            shape = tuple(s.counts[n] for n in names)
-            field = "sampling.counts"
-        else:
-            assert s.target is not None
-            pilot = sampling.to_box(
-                sampling.Sequence("sobol", len(names), s.seed).draw(BATCH), bounds, powers
-            )
-            rate = max(_kept(spec, rig, pilot).mean(), 1.0 / BATCH)
-            shape = sampling.grid_shape_for((s.target / rate) ** (1.0 / len(names)), len(names))
-            field = "sampling.target"
-        cells = math.prod(shape)
-        if cells > MAX_DRAWN:
-            raise ConfigError(
-                f"{where}: {field}: a {'×'.join(map(str, shape))} grid is {cells:,} points; "
-                f"expected at most {MAX_DRAWN:,}"
-            )
-        jitter = np.random.default_rng(s.seed) if s.strategy == "stratified" else None
-        unit = sampling.grid(shape, jitter=jitter)
-        return sampling.to_box(unit, bounds, powers), shape
-    assert s.target is not None
-    stream = sampling.Sequence(s.strategy, len(names), s.seed)
-    drawn: list[FloatArray] = []
-    usable: list[np.ndarray] = []
-    kept = 0
-    while kept < s.target:
-        if sum(len(d) for d in drawn) >= MAX_DRAWN:
-            raise ConfigError(
-                f"{where}: sampling.target: only {kept} of {s.target} targets are reachable "
-                f"after {MAX_DRAWN} points; lower the target or relax the rig's constraints"
-            )
-        batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
-        usable.append(_kept(spec, rig, batch))
-        kept += int(usable[-1].sum())
-        drawn.append(batch)
-    points = np.concatenate(drawn)
-    keep = np.cumsum(np.concatenate(usable))
-    last = int(np.searchsorted(keep, s.target)) + 1  # the point that completes the target
-    return points[:last], None
-
-
-def _directions(spec: PlanSpec, coords: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:
-    """(valid mask, ωi, ωo of the valid points)."""
-    p = params.get(spec.parametrization)
-    if spec.isotropic:
-        valid = p.valid_iso(coords)
-        wi, wo = p.inverse_iso(coords[valid])
-    else:
-        valid = p.valid(coords)
-        wi, wo = p.inverse(coords[valid])
-    return valid, wi, wo
-
-
-def _kept(spec: PlanSpec, rig: Rig, coords: FloatArray) -> np.ndarray:
-    valid, wi, wo = _directions(spec, coords)
-    ok = np.zeros(len(coords), dtype=np.bool_)
-    ok[valid] = rig.solve(wi, wo, isotropic=spec.isotropic).ok
-    return ok
-
-
-def _check_detector(spec: PlanSpec, rig: Rig, where: str, text: bytes | None) -> None:
-    """`ConfigError` unless every exposure and averaging count the plan can ask for is
-    one the rig's detector accepts (``detector.exposure_range_s``, ``max_averages``)."""
-    detector = rig.spec.detector
-    lo, hi = detector.exposure_range_s
-    e = spec.exposure
-    problems: list[tuple[tuple[str, ...], str]] = []
-    if e.adapt is None:
-        if not lo <= e.seconds <= hi:
-            problems.append((("exposure", "seconds"), f"{e.seconds:g} s"))
-    else:
-        for name in ("min_s", "max_s"):
-            value = getattr(e.adapt, name)
-            if not lo <= value <= hi:
-                problems.append((("exposure", "adapt", name), f"{value:g} s"))
-    for path, got in problems:
-        line = _line_in(where, text, path)
-        raise ConfigError(
-            f"{where}{line}: {'.'.join(path)}: {got} is outside the detector's exposure range "
-            f"[{lo:g}, {hi:g}] s (the rig file's detector.exposure_range_s)"
-        )
-    most = max(e.averages, e.adapt.max_averages if e.adapt is not None else 0)
-    if detector.max_averages is not None and most > detector.max_averages:
-        path = ("exposure", "averages" if e.averages == most else "adapt")
-        if path[1] == "adapt":
-            path = ("exposure", "adapt", "max_averages")
-        raise ConfigError(
-            f"{where}{_line_in(where, text, path)}: {'.'.join(path)}: up to {most} averages; "
-            f"the detector takes at most {detector.max_averages} (the rig file's "
-            "detector.max_averages)"
-        )
-
-
-def _line_in(where: str, text: bytes | None, path: tuple[str, ...]) -> str:
-    """``:LINE`` of ``path`` in the plan file's text, or nothing."""
-    if text is None:
-        return ""
-    try:
-        line = line_of(read_yaml(Path(where), text)[1], path)
-    except ConfigError:
-        return ""
-    return "" if line is None else f":{line}"
-
-
 def build(
     spec: PlanSpec,
     rig: Rig,
@@ -383,10 +258,10 @@ def build(
     generation-order duration (a second choice of solutions) and the MST lower bound
     (otherwise None in the summary). ``text``: the plan file's bytes, for the content
     hash (`load_plan_source` gives them; default: the spec as YAML, `spec_text`)."""
-    _check_detector(spec, rig, where, text)
+    check_detector(spec, rig, where, text)
     names = spec.coordinates()
-    coords, shape = _place(spec, rig, where)
-    valid, wi, wo = _directions(spec, coords)
+    coords, shape = place(spec, rig, where)
+    valid, wi, wo = directions(spec, coords)
     solution: Solution = rig.solve(wi, wo, isotropic=spec.isotropic)
     reasons = np.full(len(coords), -1, dtype=np.int8)  # -1: outside the domain
     reasons[valid] = solution.reasons

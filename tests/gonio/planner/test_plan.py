@@ -14,8 +14,7 @@ import pytest
 
 from gonio import brdf, params
 from gonio.config import ConfigError
-from gonio.planner import build, load_plan, ordering, sampling
-from gonio.planner import plan as plan_module
+from gonio.planner import build, load_plan, ordering, placement, sampling
 from gonio.planner.plan import Plan, hms, render_summary
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig
@@ -212,14 +211,14 @@ def test_sequence_strategies_keep_the_first_points_that_fit(
     plan = build(s, rigs["in_plane"])
 
     stream = sampling.Sequence(strategy, 3, 3)
-    batches = -(-plan.summary.requested // plan_module.BATCH)
-    unit = np.vstack([stream.draw(plan_module.BATCH) for _ in range(batches)])
+    batches = -(-plan.summary.requested // placement.BATCH)
+    unit = np.vstack([stream.draw(placement.BATCH) for _ in range(batches)])
     drawn = sampling.to_box(
         unit[: plan.summary.requested],
         params.get("hybrid").iso_bounds,
         np.ones(3),
     )
-    kept = plan_module._kept(s, rigs["in_plane"], drawn)
+    kept = placement.kept_mask(s, rigs["in_plane"], drawn)
     assert kept.sum() == 200 and kept[-1]
     assert sorted(map(tuple, plan.coords)) == sorted(map(tuple, drawn[kept]))
 
@@ -253,7 +252,7 @@ def test_warp_densifies_near_the_specular_peak(rigs: dict[str, Rig]) -> None:
 def test_unreachable_target_count_is_a_config_error(
     rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(plan_module, "MAX_DRAWN", 8192)
+    monkeypatch.setattr(placement, "MAX_DRAWN", 8192)
     with pytest.raises(ConfigError, match=r"^here: sampling.target: only \d+ of 8000"):
         build(spec(sampling={"strategy": "random", "target": 8000}), rigs["arch"], where="here")
 

@@ -1,0 +1,96 @@
+"""Placing a plan's points: uniform (or warped) in the parametrization's coordinate box
+or its isotropic reduction, by grid, stratified, Sobol, Halton or random sampling; a
+sequence is drawn in batches until enough points are kept (valid coordinates the rig
+can reach)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gonio import params
+from gonio.config import ConfigError
+from gonio.planner import sampling
+from gonio.planner.schema import PlanSpec
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+
+#: Sequence strategies draw in batches of this many points (a power of two for Sobol).
+BATCH = 4096
+#: A plan asking for a target count stops drawing after this many points.
+MAX_DRAWN = 4_000_000
+
+
+def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, ...] | None]:
+    """The points placed in the coordinate box, in generation order, and the grid shape."""
+    p = params.get(spec.parametrization)
+    names = spec.coordinates()
+    bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
+    powers = np.array(
+        [spec.sampling.warps[n].power if n in spec.sampling.warps else 1.0 for n in names]
+    )
+    s = spec.sampling
+    if s.target is not None and s.target > MAX_DRAWN:
+        raise ConfigError(
+            f"{where}: sampling.target: expected at most {MAX_DRAWN:,} targets, got {s.target:,}"
+        )
+    if s.strategy in ("grid", "stratified"):
+        if s.counts is not None:
+            shape = tuple(s.counts[n] for n in names)
+            field = "sampling.counts"
+        else:
+            assert s.target is not None
+            pilot = sampling.to_box(
+                sampling.Sequence("sobol", len(names), s.seed).draw(BATCH), bounds, powers
+            )
+            rate = max(kept_mask(spec, rig, pilot).mean(), 1.0 / BATCH)
+            shape = sampling.grid_shape_for((s.target / rate) ** (1.0 / len(names)), len(names))
+            field = "sampling.target"
+        cells = math.prod(shape)
+        if cells > MAX_DRAWN:
+            raise ConfigError(
+                f"{where}: {field}: a {'×'.join(map(str, shape))} grid is {cells:,} points; "
+                f"expected at most {MAX_DRAWN:,}"
+            )
+        jitter = np.random.default_rng(s.seed) if s.strategy == "stratified" else None
+        unit = sampling.grid(shape, jitter=jitter)
+        return sampling.to_box(unit, bounds, powers), shape
+    assert s.target is not None
+    stream = sampling.Sequence(s.strategy, len(names), s.seed)
+    drawn: list[FloatArray] = []
+    usable: list[np.ndarray] = []
+    kept = 0
+    while kept < s.target:
+        if sum(len(d) for d in drawn) >= MAX_DRAWN:
+            raise ConfigError(
+                f"{where}: sampling.target: only {kept} of {s.target} targets are reachable "
+                f"after {MAX_DRAWN} points; lower the target or relax the rig's constraints"
+            )
+        batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
+        usable.append(kept_mask(spec, rig, batch))
+        kept += int(usable[-1].sum())
+        drawn.append(batch)
+    points = np.concatenate(drawn)
+    keep = np.cumsum(np.concatenate(usable))
+    last = int(np.searchsorted(keep, s.target)) + 1  # the point that completes the target
+    return points[:last], None
+
+
+def directions(spec: PlanSpec, coords: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:
+    """(valid mask, ωi, ωo of the valid points)."""
+    p = params.get(spec.parametrization)
+    if spec.isotropic:
+        valid = p.valid_iso(coords)
+        wi, wo = p.inverse_iso(coords[valid])
+    else:
+        valid = p.valid(coords)
+        wi, wo = p.inverse(coords[valid])
+    return valid, wi, wo
+
+
+def kept_mask(spec: PlanSpec, rig: Rig, coords: FloatArray) -> np.ndarray:
+    valid, wi, wo = directions(spec, coords)
+    ok = np.zeros(len(coords), dtype=np.bool_)
+    ok[valid] = rig.solve(wi, wo, isotropic=spec.isotropic).ok
+    return ok
