@@ -35,7 +35,8 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import describe
 
-from gonio.acquire.engine import Engine, RunTime
+from gonio.acquire.engine import Engine
+from gonio.acquire.runtime import RunTime
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.stored import plan_bytes
 from gonio.store.journal import Journal

@@ -22,8 +22,9 @@ from dataclasses import dataclass, field
 from typing import IO, Any, Literal
 
 from drivers.base import StageTarget, SystemClock
+from gonio.acquire.calibration import Stage
 from gonio.acquire.devices import Devices
-from gonio.acquire.engine import RunTime, Stage, wall_offset
+from gonio.acquire.runtime import RunTime, wall_offset
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
 

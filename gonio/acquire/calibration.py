@@ -14,10 +14,15 @@ turns the journaled readings into BRDF values.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
+from drivers.base import Reading, StageTarget
 from gonio import radiometry
+from gonio.acquire.devices import Devices
+from gonio.acquire.measure import Measured, measure_target
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError
 from gonio.rig.model import Reason, Rig
@@ -101,3 +106,78 @@ def reference_pose(rig: Rig) -> FloatArray:
             f"({geometry_label(rig)}; {Reason(solution.reasons[0]).label.replace('_', ' ')})"
         )
     return np.asarray(solution.angles[0], dtype=np.float64)
+
+
+class Stage(Protocol):
+    """Puts the sample or the reference standard in view (a simulated stage, or an
+    operator asked to swap them)."""
+
+    def show(self, target: StageTarget) -> None: ...
+
+
+#: Sample indices of calibration readings start here, far above any plan's indices
+#: (reading ``k`` of the reference uses CALIBRATION_INDEX + 2k, its dark + 2k + 1).
+CALIBRATION_INDEX = 1 << 40
+
+
+@dataclass(frozen=True)
+class StandardReadings:
+    """Calibration ``k``: the reference standard measured at its pose (read-back angles
+    included), the dark reading at the same pose and exposure (None if not taken), and
+    that exposure (s, as asked)."""
+
+    reference: Measured
+    dark: Reading | None
+    exposure_s: float
+
+
+def read_standard(
+    devices: Devices,
+    stage: Stage,
+    rig: Rig,
+    k: int,
+    exposure_s: float,
+    averages: int,
+    *,
+    dark: bool,
+    timeout_s: float,
+) -> StandardReadings:
+    """Put the reference standard in view, read it at the rig's calibration pose with
+    ``exposure_s`` halved until it does not saturate, then (``dark``) with the light off;
+    the sample back in view whatever happens."""
+    pose = dict(zip(rig.axes, reference_pose(rig).tolist(), strict=True))
+    shortest = devices.detector.exposure_range_s[0]
+
+    def read(index: int) -> Measured:
+        return measure_target(
+            devices, index, pose, exposure_s, averages, settle_s=rig.spec.settle_s,
+            timeout_s=timeout_s,
+        )  # fmt: skip
+
+    stage.show("reference")
+    try:
+        reference = read(CALIBRATION_INDEX + 2 * k)
+        while reference.reading.saturated and exposure_s > shortest:
+            exposure_s = max(exposure_s / 2.0, shortest)
+            reference = read(CALIBRATION_INDEX + 2 * k)
+        if reference.reading.saturated:
+            raise GonioError(
+                f"the reference standard saturates the detector even at {shortest:g} s: "
+                "lower the source's power or the detector's aperture"
+            )
+        dark_reading = None
+        if dark:
+            light = devices.light
+            if light is None:
+                raise GonioError(
+                    "the rig's light cannot be switched: a dark reading needs it off; set "
+                    "acquisition.calibration.dark: false in the plan (darks then count as 0)"
+                )
+            light.off()
+            try:
+                dark_reading = read(CALIBRATION_INDEX + 2 * k + 1).reading
+            finally:
+                light.on()
+    finally:
+        stage.show("sample")
+    return StandardReadings(reference, dark_reading, exposure_s)

@@ -26,11 +26,9 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
 import numpy as np
 
@@ -42,11 +40,13 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Reading,
-    StageTarget,
 )
+from gonio.acquire.calibration import Stage, read_standard
 from gonio.acquire.devices import Devices
-from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target
+from gonio.acquire.health import assess
+from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target, reading_fields
 from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.schedule import Every
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.errors import GonioError
@@ -55,33 +55,7 @@ from gonio.planner.schema import AcquisitionSpec
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run
 
-#: Sample indices of calibration readings start here, far above any plan's indices
-#: (reading ``k`` of the reference uses CALIBRATION_INDEX + 2k, its dark + 2k + 1).
-CALIBRATION_INDEX = 1 << 40
-
 Outcome = Literal["completed", "interrupted", "fault", "aborted", "paused", "journal"]
-
-
-def utc_now() -> str:
-    return datetime.now(UTC).isoformat(timespec="microseconds")
-
-
-@dataclass(frozen=True)
-class RunTime:
-    """Run time (s) from the devices' clock: ``clock() + offset``."""
-
-    clock: Callable[[], float]
-    offset: float = 0.0
-
-    def now(self) -> float:
-        return self.clock() + self.offset
-
-
-class Stage(Protocol):
-    """Puts the sample or the reference standard in view (a simulated stage, or an
-    operator asked to swap them)."""
-
-    def show(self, target: StageTarget) -> None: ...
 
 
 @dataclass
@@ -166,7 +140,7 @@ class Engine:
             self.health_due.done(int(last_check["count"]), checks[-1].t_s)
             self._unhealthy = bool(last_check["problems"] or last_check["flags"])
             if int(last_check["count"]) == self.count:  # the next sample's temperatures
-                self._temperatures = _json_temperatures(last_check["temperatures_c"])
+                self._temperatures = dumps(dict(last_check["temperatures_c"]))
 
     def _latest_snapshot(self) -> Any:
         """The simulated backend's state when the journal's last entry was written."""
@@ -394,7 +368,7 @@ class Engine:
         plan = self.plan
         back = [measured.read_back[a] for a in self.axes]
         wi, wo = self.rig.forward(np.array(back, dtype=np.float64))
-        offset = self.time.offset
+        fields = reading_fields(reading, exposure, self.time.offset)
         commanded = [f"{a}_commanded_rad" for a in self.axes]
         coords = [f"coord_{c}" for c in plan.coordinate_names]
         row: dict[str, Any] = {
@@ -405,16 +379,16 @@ class Engine:
             "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
             "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
             **dict(zip(coords, plan.coords[i].tolist(), strict=True)),
-            "exposure_s": exposure if reading.exposure_s is None else reading.exposure_s,
+            "exposure_s": fields["exposure_s"],
             "averages": int(plan.averages[i]),
             "n": reading.n,
             "counts": reading.value,
-            "counts_std": reading.std if math.isfinite(reading.std) else None,
+            "counts_std": fields["std"],
             "saturated": int(reading.saturated),
             "remeasured": remeasured,
-            "settled_s": measured.settled_s + offset,
-            "started_s": reading.started_s + offset,
-            "ended_s": reading.ended_s + offset,
+            "settled_s": measured.settled_s + self.time.offset,
+            "started_s": fields["started_s"],
+            "ended_s": fields["ended_s"],
             "utc": utc_now(),
             "temperatures_c": self._temperatures,
             "sim_state": None,
@@ -435,29 +409,11 @@ class Engine:
         started = self.time.now()
         paused = False
         while True:
-            health = self.devices.bus.health()
-            temperatures = {a: h.temperature_c for a, h in health.items()}
-            problems = [
-                f"{a} at {h.temperature_c:g} °C (limit {limits.max_temperature_c:g})"
-                for a, h in health.items()
-                if h.temperature_c > limits.max_temperature_c
-            ] + [
-                f"{a} supply {h.voltage_v:g} V (limits {limits.min_voltage_v:g}–"
-                f"{limits.max_voltage_v:g})"
-                for a, h in health.items()
-                if not limits.min_voltage_v <= h.voltage_v <= limits.max_voltage_v
-            ]
-            flagged = {a: list(h.error_flags) for a, h in health.items() if h.error_flags}
-            data = {
-                "count": self.count,
-                "temperatures_c": temperatures,
-                "voltages_v": {a: h.voltage_v for a, h in health.items()},
-                "problems": problems,
-                "flags": flagged,
-            }
-            self._event("health", {**data, **self._sim()})
+            found = assess(self.devices.bus.health(), limits)
+            problems, flagged = found.problems, found.flags
+            self._event("health", {**found.data(self.count), **self._sim()})
             self.health_due.done(self.count, self.time.now())
-            self._temperatures = _json_temperatures(temperatures)
+            self._temperatures = dumps(found.temperatures_c)
             if flagged:
                 axis, flags = next(iter(flagged.items()))
                 raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
@@ -484,49 +440,29 @@ class Engine:
     def _calibrate(self, why: str) -> None:
         """Read the reference standard (and a dark reading) and journal them as one
         ``calibration`` event."""
-        from gonio.acquire.calibration import reference_pose
-
-        pose = reference_pose(self.rig)
-        goal = dict(zip(self.axes, pose.tolist(), strict=True))
         spec = self.spec.calibration
-        k = self.calibrations
-        detector = self.devices.detector
-        shortest, longest = detector.exposure_range_s
         exposure = self.reference_exposure_s
         if exposure is None:
+            shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
-        averages = spec.averages
-        self.stage.show("reference")
-        try:
-            reference = self._reference_reading(CALIBRATION_INDEX + 2 * k, goal, exposure, averages)
-            while reference.reading.saturated and exposure > shortest:
-                exposure = max(exposure / 2.0, shortest)
-                reference = self._reference_reading(
-                    CALIBRATION_INDEX + 2 * k, goal, exposure, averages
-                )
-            if reference.reading.saturated:
-                raise GonioError(
-                    f"the reference standard saturates the detector even at {shortest:g} s: "
-                    "lower the source's power or the detector's aperture"
-                )
-            dark = None
-            if spec.dark:
-                dark = self._dark_reading(CALIBRATION_INDEX + 2 * k + 1, goal, exposure, averages)
-        finally:
-            self.stage.show("sample")
-        self.reference_exposure_s = exposure
-        wi, wo = self.rig.forward(np.array(list(reference.read_back.values())))
+        read = read_standard(
+            self.devices, self.stage, self.rig, self.calibrations, exposure, spec.averages,
+            dark=spec.dark, timeout_s=self.move_timeout_s,
+        )  # fmt: skip
+        self.reference_exposure_s = read.exposure_s
+        back = [read.reference.read_back[a] for a in self.axes]
+        wi, wo = self.rig.forward(np.array(back))
         data: dict[str, Any] = {
             "why": why,
-            "k": k,
+            "k": self.calibrations,
             "count": self.count,
             "albedo": self.rig.spec.reference.albedo,
             "source_kind": self.rig.source_kind,
             "wi": wi.tolist(),
             "wo": wo.tolist(),
-            "pose_rad": [reference.read_back[a] for a in self.axes],
-            "reference": self._reading_data(reference.reading, exposure),
-            "dark": None if dark is None else self._reading_data(dark, exposure),
+            "pose_rad": back,
+            "reference": self._reading_data(read.reference.reading, read.exposure_s),
+            "dark": None if read.dark is None else self._reading_data(read.dark, read.exposure_s),
             **self._sim(),
         }
         self._event("calibration", data)
@@ -535,46 +471,5 @@ class Engine:
         self.calibration_due.done(self.count, self.time.now())
 
     def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
-        offset = self.time.offset
-        return {
-            "value": reading.value,
-            "std": reading.std if math.isfinite(reading.std) else None,
-            "n": reading.n,
-            "saturated": reading.saturated,
-            "exposure_s": exposure if reading.exposure_s is None else reading.exposure_s,
-            "started_s": reading.started_s + offset,
-            "ended_s": reading.ended_s + offset,
-        }
-
-    def _reference_reading(
-        self, index: int, goal: dict[str, float], exposure: float, averages: int
-    ) -> Measured:
-        return measure_target(
-            self.devices, index, goal, exposure, averages,
-            settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
-        )  # fmt: skip
-
-    def _dark_reading(
-        self, index: int, goal: dict[str, float], exposure: float, averages: int
-    ) -> Reading:
-        light = self.devices.light
-        if light is None:
-            raise GonioError(
-                "the rig's light cannot be switched: a dark reading needs it off; set "
-                "acquisition.calibration.dark: false in the plan (darks then count as 0)"
-            )
-        light.off()
-        try:
-            return self._reference_reading(index, goal, exposure, averages).reading
-        finally:
-            light.on()
-
-
-def _json_temperatures(temperatures: Mapping[str, float]) -> str:
-    return dumps(dict(temperatures))
-
-
-def wall_offset(clock_now: float, run_started_unix: float) -> float:
-    """The `RunTime` offset of a hardware session: run time = seconds since the run's
-    first start (wall clock), from a monotonic clock reading ``clock_now``."""
-    return (time.time() - run_started_unix) - clock_now
+        fields = reading_fields(reading, exposure, self.time.offset)
+        return {"value": reading.value, "n": reading.n, "saturated": reading.saturated, **fields}

@@ -10,8 +10,10 @@ streams and injected faults) through `drivers.base.Simulated`, when it offers it
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from drivers.base import Reading
 from gonio.acquire.devices import Devices
@@ -54,3 +56,15 @@ def measure_target(
     read_back = bus.positions()
     true = simulation.true_positions() if simulation is not None else None
     return Measured(read_back, true, settled, devices.detector.measure(exposure_s, averages))
+
+
+def reading_fields(reading: Reading, asked_s: float, offset_s: float) -> dict[str, Any]:
+    """What the journal keeps of a reading: its spread (None where the device gave none),
+    the exposure the device integrated (``asked_s`` unless it says otherwise) and its
+    start and end in run time (clock + ``offset_s``)."""
+    return {
+        "std": reading.std if math.isfinite(reading.std) else None,
+        "exposure_s": asked_s if reading.exposure_s is None else reading.exposure_s,
+        "started_s": reading.started_s + offset_s,
+        "ended_s": reading.ended_s + offset_s,
+    }

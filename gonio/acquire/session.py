@@ -28,8 +28,9 @@ from gonio import __version__
 from gonio.acquire import backends
 from gonio.acquire.backends import BackendKind
 from gonio.acquire.calibration import geometry_label, reference_pose
-from gonio.acquire.engine import Engine, Report, utc_now
+from gonio.acquire.engine import Engine, Report
 from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gonio import radiometry
-from gonio.acquire.engine import CALIBRATION_INDEX
+from gonio.acquire.calibration import CALIBRATION_INDEX
 from gonio.acquire.measure import measure_target
 from gonio.planner import build
 from gonio.planner.plan import Plan, load_plan_source

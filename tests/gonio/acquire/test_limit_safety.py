@@ -18,7 +18,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from drivers.dynamixel.axis import AxisConfig
-from gonio.acquire.engine import Engine, Report, RunTime
+from gonio.acquire.engine import Engine, Report
+from gonio.acquire.runtime import RunTime
 from gonio.planner.plan import ARRAYS, Plan, load_plan_source
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal

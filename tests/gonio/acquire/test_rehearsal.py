@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from gonio.acquire.calibrated import calibrate
-from gonio.acquire.engine import Engine, RunTime
+from gonio.acquire.engine import Engine
+from gonio.acquire.runtime import RunTime
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.stored import plan_bytes
 from gonio.rig.model import Rig
