@@ -11,7 +11,6 @@ path and what was expected, e.g.::
 from __future__ import annotations
 
 import math
-import os
 import types
 import typing
 from collections.abc import Iterator, Sequence
@@ -307,18 +306,6 @@ def dotted(loc: Sequence[int | str]) -> str:
     """A field path as ``a.b.0.c``, each part cut to a short excerpt (a key can be long)."""
     parts = (str(p) if len(str(p)) <= EXCERPT else f"{str(p)[: EXCERPT - 1]}…" for p in loc)
     return ".".join(parts) or "(top level)"
-
-
-def check_output(path: Path, option: str) -> None:
-    """`ConfigError` unless a file can be written at ``path`` (checked before long work,
-    so a typo in an output path costs nothing)."""
-    if path.is_dir():
-        raise ConfigError(f"{option} {path}: is a directory; expected a file name")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(f"{option} {path}: the folder {parent} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ConfigError(f"{option} {path}: the folder {parent} is not writable")
 
 
 def untagged(data: Any, loc: Sequence[int | str]) -> tuple[int | str, ...]:

@@ -66,9 +66,6 @@ class Report:
     measured: int  # targets measured in this session
     skipped: int  # targets skipped in this session
     message: str = ""
-    t_start_s: float = 0.0
-    t_end_s: float = 0.0
-    calibrations: int = 0
 
 
 class _Stop(Exception):
@@ -169,7 +166,7 @@ class Engine:
         A signal that ends the session early raises `RunInterrupted` after the pause
         was journaled and the devices closed."""
         todo = self.todo()
-        report = self._session = Report("completed", 0, 0, t_start_s=self.time.now())
+        report = self._session = Report("completed", 0, 0)
         interrupted: RunInterrupted | None = None
         # The session ends in the journal while the signal handlers are still ours: a
         # late second Ctrl-C must not skip it.
@@ -210,8 +207,6 @@ class Engine:
                     self._hold_all()
                 finally:
                     self.progress.close()
-            report.t_end_s = self.time.now()
-            report.calibrations = self.calibrations
             self._end_session(report.outcome)
         if interrupted is not None:
             raise interrupted
@@ -245,7 +240,7 @@ class Engine:
         # A restored simulation keeps the uninterrupted run's schedule of health checks,
         # unless it stopped in a pause (then it goes on checking).
         if not restored or self._unhealthy:
-            self._check_health(force=True)
+            self._check_health()
         if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
             self._calibrate("start" if self.calibrations == 0 else "resume")
 
@@ -402,7 +397,7 @@ class Engine:
         self._session.measured += 1
 
     # -- health --------------------------------------------------------------------------
-    def _check_health(self, *, force: bool = False) -> None:
+    def _check_health(self) -> None:
         """Read every motor's health; pause while beyond the rig's limits."""
         limits = self.rig.spec.health
         spec = self.spec.health
