@@ -1,0 +1,1 @@
+"""Reconstruction of a measured BRDF from a run's samples (docs/reconstruction.md)."""

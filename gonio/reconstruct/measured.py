@@ -1,0 +1,131 @@
+"""A run's samples as BRDF measurements: the direction pairs from the read-back angles,
+the calibrated values and their 1σ uncertainty, the rig that measured them and, for a
+simulated run, the scene it measured (the truth to compare with).
+
+A run is one channel (the detector's band). An RGB measurement is three runs of the
+same plan seen in the r, g and b bands, combined with `Measured.rgb`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from gonio.acquire.calibrated import calibrate
+from gonio.errors import GonioError
+from gonio.rig.model import Rig
+from gonio.store.read import Run, open_run
+from gonio.types import BrdfEval, FloatArray
+
+
+@dataclass(frozen=True)
+class Measured:
+    """Measured samples (N of them).
+
+    wi, wo: (N, 3) unit directions (sample frame, z = normal, away from the surface).
+    f, sigma: (N,) BRDF values and 1σ uncertainties in sr⁻¹, or (N, 3) for RGB.
+    parametrization, isotropic: the plan's (the reconstruction's defaults).
+    rig: the rig that measured them (its measurable domain bounds a reconstruction).
+    scene_text: the simulated scene's YAML (None for a run on hardware).
+    band: the detector's band(s) ("luminance", "r", "g", "b", or "rgb").
+    """
+
+    wi: FloatArray
+    wo: FloatArray
+    f: FloatArray
+    sigma: FloatArray
+    parametrization: str
+    isotropic: bool
+    rig: Rig
+    scene_text: str | None
+    band: str
+    source: str
+
+    def __len__(self) -> int:
+        return len(self.wi)
+
+    @property
+    def is_rgb(self) -> bool:
+        return self.f.ndim == 2
+
+    @classmethod
+    def from_run(cls, run: Run | str) -> Measured:
+        """The calibrated samples of a run (a `Run` or a run file's path); `GonioError`
+        (one line) when it has no sample or no calibration."""
+        if not isinstance(run, Run):
+            run = open_run(run)
+        if len(run) == 0:
+            raise GonioError(f"{run.path}: the run has no sample yet")
+        calibrated = calibrate(run)
+        wi, wo = run.directions()
+        rig = Rig.from_yaml(
+            str(run.meta.get("rig_path", run.path)), raw=_bytes(run.meta["rig_text"])
+        )
+        scene_text = run.meta.get("scene_text")
+        band = "luminance"
+        if scene_text is not None:
+            band = _scene_band(scene_text)
+        ok = np.isfinite(calibrated.brdf) & np.isfinite(calibrated.sigma)
+        return cls(
+            wi=wi[ok],
+            wo=wo[ok],
+            f=calibrated.brdf[ok],
+            sigma=calibrated.sigma[ok],
+            parametrization=run.plan.spec.parametrization,
+            isotropic=run.plan.spec.isotropic,
+            rig=rig,
+            scene_text=scene_text,
+            band=band,
+            source=str(run.path),
+        )
+
+    @classmethod
+    def rgb(cls, red: Measured, green: Measured, blue: Measured) -> Measured:
+        """Three single-band measurements of the same pairs as one RGB measurement
+        (`GonioError` unless their bands are r, g, b and their pairs agree to 1e-9)."""
+        parts = (red, green, blue)
+        if tuple(m.band for m in parts) != ("r", "g", "b"):
+            raise GonioError(
+                "an RGB measurement needs three runs seen in the r, g and b bands, in that "
+                f"order; got {', '.join(m.band for m in parts)}"
+            )
+        for m in (green, blue):
+            if len(m) != len(red) or not (
+                np.allclose(m.wi, red.wi, atol=1e-9, rtol=0)
+                and np.allclose(m.wo, red.wo, atol=1e-9, rtol=0)
+            ):
+                raise GonioError(f"{m.source}: its pairs differ from {red.source}'s")
+        return replace(
+            red,
+            f=np.stack([m.f for m in parts], axis=-1),
+            sigma=np.stack([m.sigma for m in parts], axis=-1),
+            band="rgb",
+            source=" + ".join(m.source for m in parts),
+        )
+
+    def scene_truth(self) -> BrdfEval:
+        """f(ωi, ωo) of the simulated scene's material as this measurement's band sees
+        it (RGB: the three channels). `GonioError` for a run on hardware."""
+        if self.scene_text is None:
+            raise GonioError(f"{self.source}: a run on hardware has no scene to compare with")
+        from sim.physics.optics import band_eval
+        from sim.scene import load_scene
+
+        model = load_scene("scene", raw=self.scene_text.encode()).material.model()
+        if self.band == "rgb":
+            return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
+        return band_eval(model, self.band)
+
+
+def _bytes(text: str | bytes) -> bytes:
+    return text if isinstance(text, bytes) else text.encode()
+
+
+def _scene_band(scene_text: str) -> str:
+    import yaml
+
+    data = yaml.safe_load(scene_text)
+    detector = data.get("detector") if isinstance(data, dict) else None
+    band = detector.get("band") if isinstance(detector, dict) else None
+    return str(band) if band else "luminance"
