@@ -11,6 +11,7 @@ stopped by Ctrl-C or SIGTERM (resumable).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shlex
 import sys
 from pathlib import Path
@@ -18,6 +19,7 @@ from pathlib import Path
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
 from gonio.config import ConfigError
+from gonio.planner import progress as planning
 
 #: Exit code of a run that ended early but can be resumed.
 EXIT_RESUMABLE = 3
@@ -96,7 +98,8 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         )
         if args.output is not None:
             session.check_output(args.output, args.overwrite)
-        plan = source.build()
+        with planning.quiet() if args.quiet else contextlib.nullcontext():
+            plan = source.build()
         print(render_summary(plan), flush=True)
         if args.dry_run:
             for line in session.dry_run(

@@ -11,6 +11,7 @@ the run journal lives in memory and nothing is written.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 from pathlib import Path
 
@@ -19,6 +20,7 @@ import numpy as np
 from gonio.acquire import progress as progress_module
 from gonio.acquire import session
 from gonio.acquire.summary import error_figures, render
+from gonio.planner import progress as planning
 from gonio.planner.plan import load_plan_source
 from sim.session import Result, simulate_plan
 
@@ -140,7 +142,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     files = session.Files(
         source.path, source.text, source.rig.source, source.rig.text, args.scene, text
     )
-    plan = source.build()
+    with planning.quiet() if args.quiet else contextlib.nullcontext():
+        plan = source.build()
     result = simulate_plan(
         plan, scene, args.seed, files=files, output=args.output, overwrite=args.overwrite,
         progress=progress_module.for_stream(args.quiet),

@@ -28,7 +28,7 @@ from typing import Literal
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gonio.planner import search
+from gonio.planner import progress, search
 from gonio.planner.bounds import MAX_PAIRS, mst_bound, typical_move
 from gonio.planner.poses import Relaxed, choose
 from gonio.planner.search import EPSILON, Path, Stop, path_time
@@ -149,25 +149,28 @@ def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray)
     tree = cKDTree(points / scale)
     here = np.asarray(start, dtype=np.float64)
     here_row = here.tolist()
-    for step in range(n):
-        if len(remaining) > 64 and (n - step) * 4 < len(remaining):  # mostly visited
-            remaining = np.flatnonzero(~visited)
-            tree = cKDTree(points[remaining] / scale)
-        k = 8
-        best, best_t = -1, math.inf
-        while best < 0:
-            k = min(k, len(remaining))
-            _, found = tree.query(here / scale, k=k, p=np.inf)
-            for j in np.atleast_1d(found).tolist():
-                c = int(remaining[j])
-                if not visited[c]:
-                    t = time_of(here_row, rows[c])
-                    if t < best_t:
-                        best, best_t = c, t
-            k *= 4
-        order[step] = best
-        visited[best] = True
-        here, here_row = points[best], rows[best]
+    with progress.stage("nearest-neighbour construction", n) as shown:
+        for step in range(n):
+            if step & 4095 == 4095:
+                shown.update(4096)
+            if len(remaining) > 64 and (n - step) * 4 < len(remaining):  # mostly visited
+                remaining = np.flatnonzero(~visited)
+                tree = cKDTree(points[remaining] / scale)
+            k = 8
+            best, best_t = -1, math.inf
+            while best < 0:
+                k = min(k, len(remaining))
+                _, found = tree.query(here / scale, k=k, p=np.inf)
+                for j in np.atleast_1d(found).tolist():
+                    c = int(remaining[j])
+                    if not visited[c]:
+                        t = time_of(here_row, rows[c])
+                        if t < best_t:
+                            best, best_t = c, t
+                k *= 4
+            order[step] = best
+            visited[best] = True
+            here, here_row = points[best], rows[best]
     return order
 
 
@@ -217,10 +220,11 @@ def _improve(
 ) -> _Effort:
     """A descent from every target, then ``kicks`` kicks (none if the descent did not
     converge)."""
-    moves, _, stopped = search.descend(path, neighbours, max_moves, deadline)
-    if stopped != "converged" or kicks <= 0:
-        return _Effort(moves, 0, 0, stopped)
-    tried, kept, _, ended = search.iterate(path, neighbours, kicks, rng, deadline)
+    with progress.stage("improving the order", None, unit="visit") as shown:
+        moves, _, stopped = search.descend(path, neighbours, max_moves, deadline, None, shown)
+        if stopped != "converged" or kicks <= 0:
+            return _Effort(moves, 0, 0, stopped)
+        tried, kept, _, ended = search.iterate(path, neighbours, kicks, rng, deadline, shown)
     return _Effort(moves, tried, kept, "time cap" if ended == "time cap" else "converged")
 
 

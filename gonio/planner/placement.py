@@ -11,7 +11,7 @@ import numpy as np
 
 from gonio import params
 from gonio.config import ConfigError
-from gonio.planner import sampling
+from gonio.planner import progress, sampling
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
@@ -61,16 +61,20 @@ def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, 
     drawn: list[FloatArray] = []
     usable: list[np.ndarray] = []
     kept = 0
-    while kept < s.target:
-        if sum(len(d) for d in drawn) >= MAX_DRAWN:
-            raise ConfigError(
-                f"{where}: sampling.target: only {kept} of {s.target} targets are reachable "
-                f"after {MAX_DRAWN} points; lower the target or relax the rig's constraints"
-            )
-        batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
-        usable.append(kept_mask(spec, rig, batch))
-        kept += int(usable[-1].sum())
-        drawn.append(batch)
+    with progress.stage("placing the targets", s.target) as shown:
+        while kept < s.target:
+            if sum(len(d) for d in drawn) >= MAX_DRAWN:
+                raise ConfigError(
+                    f"{where}: sampling.target: only {kept} of {s.target} targets are "
+                    f"reachable after {MAX_DRAWN} points; lower the target or relax the "
+                    "rig's constraints"
+                )
+            batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
+            usable.append(kept_mask(spec, rig, batch))
+            new = int(usable[-1].sum())
+            shown.update(min(new, s.target - kept))
+            kept += new
+            drawn.append(batch)
     points = np.concatenate(drawn)
     keep = np.cumsum(np.concatenate(usable))
     last = int(np.searchsorted(keep, s.target)) + 1  # the point that completes the target

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from gonio.planner import progress
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 
@@ -137,8 +138,9 @@ def choose(
 
     ``candidates`` (N, K, A) with ``usable`` (N, K) (every target has at least one).
     Only usable candidates are ever returned. The moves between consecutive targets'
-    candidates are computed at once (N, K′, K′) over the K′ usable slots packed first;
-    the recursion (each choice depends on the one before) runs over Python floats.
+    candidates are computed `CHUNK` targets at a time (CHUNK, K′, K′) over the K′ usable
+    slots packed first (memory: O(N · K′) for the back pointers, whatever N); the
+    recursion (each choice depends on the one before) runs over Python floats.
     """
     n = len(candidates)
     if n == 0:
@@ -147,32 +149,40 @@ def choose(
     slots = np.argsort(~usable, axis=1, kind="stable")[:, :k]  # usable ones first
     packed = np.take_along_axis(candidates, slots[:, :, None], axis=1)
     ok = np.take_along_axis(usable, slots, axis=1)
-    first = np.where(ok[0], travel(start, packed[0]), np.inf).tolist()
-    steps = np.where(
-        ok[:-1, :, None] & ok[1:, None, :],
-        travel(packed[:-1, :, None, :], packed[1:, None, :, :]),
-        np.inf,
-    ).tolist()  # (N − 1, K′, K′): from slot a of target i to slot b of target i + 1
-    cost = first
-    back: list[list[int]] = []
+    cost = np.where(ok[0], travel(start, packed[0]), np.inf).tolist()
+    back = np.zeros((max(n - 1, 0), k), dtype=np.int64)  # best slot of i given i + 1's
     span = range(k)
-    for step in steps:
-        best_from = []
-        new = []
-        for b in span:
-            best, arg = math.inf, 0
-            for a in span:
-                t = cost[a] + step[a][b]
-                if t < best:
-                    best, arg = t, a
-            new.append(best)
-            best_from.append(arg)
-        back.append(best_from)
-        cost = new
-    pick = [min(span, key=lambda b: cost[b])]
-    for best_from in reversed(back):
-        pick.append(best_from[pick[-1]])
-    chosen = np.asarray(pick[::-1], dtype=np.int64)
+    with progress.stage("choosing the poses", n) as shown:
+        for lo in range(0, n - 1, CHUNK):
+            hi = min(lo + CHUNK, n - 1)
+            steps = np.where(
+                ok[lo:hi, :, None] & ok[lo + 1 : hi + 1, None, :],
+                travel(packed[lo:hi, :, None, :], packed[lo + 1 : hi + 1, None, :, :]),
+                np.inf,
+            ).tolist()  # (chunk, K′, K′): from slot a of target i to slot b of target i + 1
+            best_from = []
+            for step in steps:
+                new = []
+                row = []
+                for b in span:
+                    best, arg = math.inf, 0
+                    for a in span:
+                        t = cost[a] + step[a][b]
+                        if t < best:
+                            best, arg = t, a
+                    new.append(best)
+                    row.append(arg)
+                best_from.append(row)
+                cost = new
+            back[lo:hi] = best_from
+            shown.update(hi - lo)
+    chosen = np.empty(n, dtype=np.int64)
+    last = min(span, key=lambda b: cost[b])
+    chosen[n - 1] = last
+    pointer = back.item
+    for i in range(n - 2, -1, -1):
+        last = pointer(i, last)
+        chosen[i] = last
     angles = packed[np.arange(n), chosen]
     previous = np.vstack([start[None, :], angles[:-1]])
     return np.asarray(angles, dtype=np.float64), np.asarray(

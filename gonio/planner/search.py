@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 
+from gonio.planner.progress import Silent, Stage
 from gonio.rig.travel import TravelModel
 from gonio.types import FloatArray
 
@@ -132,6 +133,7 @@ def descend(
     max_moves: int,
     deadline: float,
     queue_from: Iterable[int] | None = None,
+    shown: Stage | None = None,
 ) -> tuple[int, float, Stop]:
     """2-opt and Or-opt moves from each queued node (default: every target in index
     order), until none improves, ``max_moves`` have been applied or ``deadline``
@@ -141,6 +143,7 @@ def descend(
     Deterministic but for the deadline: neighbours are visited nearest first, the first
     improving move found is applied, a move wakes the nodes at its ends. Each node visit
     costs a bounded number of cost evaluations, so ``max_moves`` bounds the work too.
+    ``shown`` counts the node visits (`gonio.planner.progress`).
     """
     cost, pos, nodes = path.cost, path.pos, path.nodes
     at, node = pos.item, nodes.item  # Python ints, faster than int(array[i])
@@ -150,7 +153,8 @@ def descend(
     queued = np.zeros(n + 2, dtype=np.bool_)
     queued[list(queue)] = True
     queued[[S, E]] = True  # the ends never enter the queue
-    moves, gained = 0, 0.0
+    moves, gained, visits = 0, 0.0, 0
+    show = (Silent() if shown is None else shown).update
 
     def wake(*nodes_: int) -> None:
         for u in nodes_:
@@ -250,6 +254,9 @@ def descend(
             return moves, gained, "time cap"
         a = queue.popleft()
         queued[a] = False
+        visits += 1
+        if visits & 4095 == 0:
+            show(4096)
         gain = two_opt(a) or or_opt(a)
         if gain > 0.0:
             moves += 1
@@ -263,6 +270,7 @@ def iterate(
     kicks: int,
     rng: np.random.Generator,
     deadline: float,
+    shown: Stage | None = None,
 ) -> tuple[int, int, float, Stop]:
     """Up to ``kicks`` kicks, each followed by a descent from the nodes it touched and
     undone unless the path got shorter. Returns (kicks tried, kicks kept, time gained
@@ -292,7 +300,8 @@ def iterate(
         delta = cost(a, c0) + cost(c1, b0) + cost(b1, d) - cost(a, b0) - cost(b1, c0) - cost(c1, d)
         path.journal = []
         path._write(i, np.concatenate([nodes[j:m], nodes[i:j]]))
-        _, won, stop = descend(path, neighbours, 1 << 62, deadline, (a, b0, b1, c0, c1, d))
+        touched = (a, b0, b1, c0, c1, d)
+        _, won, stop = descend(path, neighbours, 1 << 62, deadline, touched, shown)
         if won - delta > EPSILON:
             kept += 1
             gained += won - delta
