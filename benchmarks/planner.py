@@ -14,15 +14,22 @@ Three tables (moves only: settle and exposure do not depend on the order):
    per rig (0 kicks is the descent alone).
 3. ``large``: 5 000 and 50 000 Sobol targets uniform in the hybrid coordinates, both
    rigs, isotropic and anisotropic, default budgets (targets: ≤ 15 s and ≤ 60 s).
+4. ``memory``: the peak resident memory, CPU and wall time of `gonio plan` on Sobol plans
+   of 50 000, 500 000 and 1 000 000 targets (the cap, `placement.MAX_TARGETS`) on the
+   arch rig, each in its own process, the search capped at 60 s; and how fast a plan
+   over the cap is refused.
 
-Run: .venv/bin/python benchmarks/planner.py [--tables shipped,trade,large]
-[--sizes 5000,50000] [--no-lkh]
+Run: .venv/bin/python benchmarks/planner.py [--tables shipped,trade,large,memory]
+[--sizes 5000,50000] [--memory-sizes 50000,500000,1000000] [--no-lkh]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -149,9 +156,52 @@ def large(sizes: list[int]) -> None:
                 )
 
 
+#: One plan in a child process: prints its peak RSS (KiB), CPU and wall seconds as JSON.
+_CHILD = """
+import json, resource, sys, time
+from gonio.cli import main
+started = time.perf_counter()
+code = main(["plan", sys.argv[1]])
+usage = resource.getrusage(resource.RUSAGE_SELF)
+print(json.dumps({"code": code, "rss_kib": usage.ru_maxrss, "cpu_s": usage.ru_utime +
+    usage.ru_stime, "wall_s": time.perf_counter() - started}), file=sys.stderr)
+"""
+
+
+def memory(sizes: list[int]) -> None:
+    print("| targets | peak memory | per target | CPU | wall | search |")
+    print("|---:|---:|---:|---:|---:|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for n in [*sizes, 4_000_000]:
+            path = Path(folder) / f"plan{n}.yaml"
+            path.write_text(
+                f"name: memory\nrig: {RIGS['arch']}\nsampling: {{strategy: sobol, target: {n}, "
+                "seed: 7}\nexposure: {seconds: 0.05}\ntime_budget_s: 60\n"
+            )
+            child = subprocess.run(
+                [sys.executable, "-c", _CHILD, str(path)], capture_output=True, text=True
+            )
+            figures = json.loads(child.stderr.strip().splitlines()[-1])
+            if figures["code"] != 0:
+                refusal = child.stderr.strip().splitlines()[0]
+                print(f"| {n:,} | refused in {figures['wall_s']:.2f} s: {refusal} | | | | |")
+                continue
+            rss = figures["rss_kib"] * 1024
+            search = next(
+                (line.split(None, 1)[1] for line in child.stdout.splitlines()
+                 if line.strip().startswith("ordering ")), "?"
+            )  # fmt: skip
+            print(
+                f"| {n:,} | {rss / 2**30:.2f} GiB | {rss / n / 1024:.1f} KiB "
+                f"| {figures['cpu_s']:.0f} s | {figures['wall_s']:.0f} s | {search.strip()} |",
+                flush=True,
+            )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--tables", default="shipped,trade,large")
+    parser.add_argument("--tables", default="shipped,trade,large,memory")
+    parser.add_argument("--memory-sizes", default="50000,500000,1000000")
     parser.add_argument("--sizes", default="5000,50000")
     parser.add_argument("--no-lkh", action="store_true")
     args = parser.parse_args()
@@ -167,6 +217,9 @@ def main() -> None:
     if "large" in tables:
         print()
         large([int(s) for s in args.sizes.split(",")])
+    if "memory" in tables:
+        print()
+        memory([int(s) for s in args.memory_sizes.split(",")])
 
 
 if __name__ == "__main__":

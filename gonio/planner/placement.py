@@ -18,8 +18,23 @@ from gonio.types import FloatArray
 
 #: Sequence strategies draw in batches of this many points (a power of two for Sobol).
 BATCH = 4096
-#: A plan asking for a target count stops drawing after this many points.
+#: A plan asking for a target count stops drawing after this many points; a grid has at
+#: most this many cells.
 MAX_DRAWN = 4_000_000
+#: The most targets a plan may keep, and why (benchmarks/planner.py, table ``memory``).
+MAX_TARGETS = 1_000_000
+WHY_MAX_TARGETS = (
+    "planning needs about 4 KB of memory and 0.2 ms of CPU per target, and a million "
+    "targets are days of instrument time: split the acquisition into several plans"
+)
+
+
+def too_many(where: str, field: str, count: int) -> ConfigError:
+    """The error of a plan that would keep more than `MAX_TARGETS` targets."""
+    return ConfigError(
+        f"{where}: {field}: expected at most {MAX_TARGETS:,} targets, got {count:,} "
+        f"({WHY_MAX_TARGETS})"
+    )
 
 
 def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, ...] | None]:
@@ -31,10 +46,8 @@ def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, 
         [spec.sampling.warps[n].power if n in spec.sampling.warps else 1.0 for n in names]
     )
     s = spec.sampling
-    if s.target is not None and s.target > MAX_DRAWN:
-        raise ConfigError(
-            f"{where}: sampling.target: expected at most {MAX_DRAWN:,} targets, got {s.target:,}"
-        )
+    if s.target is not None and s.target > MAX_TARGETS:
+        raise too_many(where, "sampling.target", s.target)
     if s.strategy in ("grid", "stratified"):
         if s.counts is not None:
             shape = tuple(s.counts[n] for n in names)

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml, spec_text
-from gonio.planner import lkh, poses, sampling
+from gonio.planner import lkh, placement, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.ordering import (
@@ -35,7 +35,7 @@ from gonio.planner.ordering import (
     default_moves,
     order_jointly,
 )
-from gonio.planner.placement import directions, place
+from gonio.planner.placement import directions, place, too_many
 from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
@@ -267,6 +267,10 @@ def build(
     reasons[valid] = solution.reasons
     refused = {r.label: int(np.count_nonzero(reasons == r)) for r in Reason if r != Reason.OK}
     kept_idx = np.flatnonzero(reasons == Reason.OK)
+    if kept_idx.size > placement.MAX_TARGETS:
+        raise too_many(
+            where, "sampling.counts" if spec.sampling.counts else "sampling", kept_idx.size
+        )
     if kept_idx.size == 0:
         detail = ", ".join(f"{k} {v}" for k, v in refused.items() if v)
         raise ConfigError(

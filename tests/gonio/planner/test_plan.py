@@ -260,10 +260,14 @@ def test_unreachable_target_count_is_a_config_error(
 @pytest.mark.parametrize(
     ("sampling", "field"),
     [
-        ({"strategy": "sobol", "target": 5_000_000}, "sampling.target: expected at most"),
         (
-            {"strategy": "stratified", "target": 4_000_000},
-            r"sampling.target: a \d+×\d+×\d+ grid is [\d,]+ points; expected at most",
+            {"strategy": "sobol", "target": 1_000_001},
+            r"sampling.target: expected at most 1,000,000 targets, got 1,000,001 \(planning "
+            r"needs about 4 KB of memory",
+        ),
+        (
+            {"strategy": "stratified", "target": 2_000_000},
+            "sampling.target: expected at most 1,000,000 targets, got 2,000,000",
         ),
         (
             {"strategy": "grid", "counts": {"hbar": 1000, "k": 1000, "phi_k_minus_phi_h": 10}},
@@ -277,6 +281,15 @@ def test_plans_too_large_are_refused_before_any_work(
 ) -> None:
     with pytest.raises(ConfigError, match=f"^here: {field}"):
         build(spec(sampling=sampling), rigs["arch"], where="here")
+
+
+def test_a_grid_keeping_more_targets_than_the_cap_is_refused(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(placement, "MAX_TARGETS", 1000)
+    counts = {"hbar": 20, "k": 20, "phi_k_minus_phi_h": 10}
+    with pytest.raises(ConfigError, match=r"^here: sampling.counts: expected at most 1,000 "):
+        build(spec(sampling={"strategy": "grid", "counts": counts}), rigs["arch"], where="here")
 
 
 def test_csv_part_reads_with_any_csv_reader(plans: dict[str, Plan], tmp_path: Path) -> None:
