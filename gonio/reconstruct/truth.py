@@ -116,7 +116,10 @@ def _material_file(path: Path) -> BRDF:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f":{mark.line + 1}" if mark is not None else ""
-        raise GonioError(f"{path}{where}: not valid YAML") from None
+        problem = getattr(exc, "problem", None)
+        raise GonioError(
+            f"{path}{where}: not valid YAML" + (f" ({problem})" if problem else "")
+        ) from None
     if isinstance(data, dict) and isinstance(data.get("material"), dict):
         data = data["material"]
     if not isinstance(data, dict) or "name" not in data:
