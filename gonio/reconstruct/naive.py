@@ -22,6 +22,7 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
 
 from gonio import params
+from gonio.errors import GonioError
 from gonio.reconstruct.measured import Measured
 from gonio.types import BoolArray, FloatArray
 
@@ -48,6 +49,8 @@ class NaiveReconstruction:
         parametrization: str | None = None,
         nodes: int | None = None,
     ) -> None:
+        if len(measured) == 0:
+            raise GonioError(f"{measured.source}: no sample to reconstruct from")
         self.parametrization = params.get(parametrization or measured.parametrization)
         self.isotropic = measured.isotropic
         p = self.parametrization

@@ -45,8 +45,9 @@ class TestSet:
 
 
 def uniform_cap(rng: np.random.Generator, n: int, theta_max: float) -> FloatArray:
-    """``n`` unit directions uniform in solid angle over the cap θ ≤ ``theta_max`` (rad)."""
-    z = rng.uniform(math.cos(theta_max), 1.0, n)
+    """``n`` unit directions uniform in solid angle over the cap θ ≤ ``theta_max`` (rad;
+    at most the hemisphere)."""
+    z = rng.uniform(max(math.cos(theta_max), 0.0), 1.0, n)
     phi = rng.uniform(0.0, 2.0 * math.pi, n)
     s = np.sqrt(np.maximum(1.0 - z * z, 0.0))
     return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)

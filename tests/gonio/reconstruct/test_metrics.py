@@ -6,6 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from gonio.reconstruct.metrics import (
     METRICS,
@@ -34,6 +37,22 @@ def test_a_perfect_candidate_scores_zero_everywhere() -> None:
     s = scores(t.copy(), t, rng.uniform(0, 1, 1000))
     assert s.count == 1000
     assert all(getattr(s, m) == 0.0 for m in METRICS)
+
+
+values = hnp.arrays(np.float64, st.integers(1, 20), elements=st.floats(0.0, 1e4))
+
+
+@given(values, st.floats(0.0, 1.0))
+def test_log_metrics_are_symmetric_and_zero_only_for_equal_values(
+    t: np.ndarray, cos: float
+) -> None:
+    c = t[::-1].copy()
+    cosines = np.full(len(t), cos)
+    forward, backward = scores(c, t, cosines), scores(t, c, cosines)
+    assert forward.log_rmse == pytest.approx(backward.log_rmse, rel=1e-12, abs=1e-300)
+    assert forward.cos_log_rmse == pytest.approx(backward.cos_log_rmse, rel=1e-12, abs=1e-300)
+    assert (forward.log_rmse == 0.0) == np.array_equal(c, t)
+    assert all(getattr(forward, m) >= 0.0 for m in METRICS)
 
 
 def test_rgb_channels_pool_as_separate_values() -> None:

@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from gonio.errors import GonioError
 from gonio.reconstruct import testset
 from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.metrics import scores
@@ -117,6 +118,9 @@ def test_the_parametrization_and_grid_can_be_chosen(arch: Rig, queries: testset.
     )
     with pytest.raises(ValueError, match="at least 2 nodes"):
         NaiveReconstruction(measured, nodes=1)
+    empty = replace(measured, wi=measured.wi[:0], wo=measured.wo[:0], f=measured.f[:0])
+    with pytest.raises(GonioError, match="synthetic: no sample to reconstruct from"):
+        NaiveReconstruction(empty)
 
 
 def test_default_nodes_are_about_one_per_sample() -> None:
