@@ -43,6 +43,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.acquire",
         "measure a plan on the rig (simulated or hardware), journaling every sample",
     ),
+    "evaluate": (
+        "gonio.cli.evaluate",
+        "score a run's reconstruction against a truth (the scene, a model, another run)",
+    ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "motors": (
         "gonio.cli.motors",

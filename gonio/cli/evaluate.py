@@ -1,0 +1,102 @@
+"""`gonio evaluate RUN`: a reconstruction of a run scored against a truth (the simulated
+scene by default) on the fixed test set, overall and by region (docs/evaluation.md)."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from gonio.errors import GonioError
+
+if TYPE_CHECKING:
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.truth import Candidate
+
+#: The method of the naive reference (`gonio.reconstruct.naive`); the others are
+#: `gonio.reconstruct.build`'s.
+NAIVE = "naive"
+DEFAULT_METHOD = "linear"
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help=help_,
+        description="Reconstruct a run's BRDF and score it against a truth on a fixed, "
+        "seeded set of pairs the rig can measure: log-RMSE, cosine-weighted log-RMSE, "
+        "relative RMSE, median and 95th-percentile relative error, overall and near the "
+        "mirror direction, near retro-reflection, at grazing angles and elsewhere.",
+    )
+    p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
+    p.add_argument(
+        "--truth",
+        metavar="SPEC",
+        help="what to compare with: scene (a simulated run's scene, the default), a model "
+        "NAME:key=value,... (e.g. cook_torrance:alpha=0.1), a material or scene YAML file, "
+        "or another run file (reconstructed the same way)",
+    )
+    p.add_argument(
+        "--method",
+        default=DEFAULT_METHOD,
+        help=f"the reconstruction: {NAIVE} (the reference grid) or a method of "
+        f"gonio.reconstruct.build (default {DEFAULT_METHOD})",
+    )
+    p.add_argument(
+        "--parametrization",
+        metavar="P",
+        help="the parametrization to reconstruct in (default: the run's plan's)",
+    )
+    p.add_argument("--json", action="store_true", help="print the scores as JSON")
+    p.set_defaults(func=cmd_evaluate)
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    from gonio.reconstruct.evaluate import evaluate
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.truth import truth_from_spec
+
+    if args.parametrization is not None:
+        from gonio import params
+
+        params.get(args.parametrization)  # an unknown name fails before any work
+    measured = Measured.from_run(str(args.run))
+    truth = truth_from_spec(
+        args.truth,
+        measured,
+        reconstruct=lambda other: _reconstruction(other, args.method, args.parametrization),
+    )
+    candidate = _reconstruction(measured, args.method, args.parametrization)
+    parametrization = args.parametrization or measured.parametrization
+    label = f"{args.method} ({parametrization}, {len(measured)} samples of {args.run})"
+    result = evaluate(
+        candidate, truth, measured.rig, isotropic=measured.isotropic, candidate_label=label
+    )
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2, ensure_ascii=False))
+    else:
+        print(result.table())
+    return 0
+
+
+def _reconstruction(measured: Measured, method: str, parametrization: str | None) -> Candidate:
+    """The reconstruction of ``measured`` by ``method`` (`GonioError` if there is none)."""
+    if method == NAIVE:
+        from gonio.reconstruct.naive import NaiveReconstruction
+
+        return NaiveReconstruction(measured, parametrization=parametrization)
+    try:
+        build = importlib.import_module("gonio.reconstruct.build")
+    except ModuleNotFoundError as exc:
+        if exc.name != "gonio.reconstruct.build":
+            raise
+        raise GonioError(
+            f"method {method!r} is not available: this gonio reconstructs only with {NAIVE!r}"
+        ) from None
+    if method not in build.METHODS:
+        known = ", ".join([NAIVE, *build.METHODS])
+        raise GonioError(f"unknown method {method!r}; expected one of {known}")
+    result: Candidate = build.reconstruct(measured, method=method, parametrization=parametrization)
+    return result
