@@ -29,7 +29,7 @@ from gonio.store.read import Run
 if TYPE_CHECKING:
     from gonio.export import Options
 
-_DTYPES = {"b": "boolean", "i": "integer", "f": "number", "U": "string", "O": "string"}
+_DTYPES = {"b": "boolean", "i": "integer", "f": "number", "U": "string"}
 
 
 def _event_model() -> Any:
@@ -50,14 +50,14 @@ def _json_values(values: np.ndarray) -> list[Any]:
     """Plain Python values, NaN as None."""
     if values.dtype.kind == "f":
         return [None if np.isnan(v) else v for v in values.tolist()]
-    return list(values.astype(str).tolist() if values.dtype.kind == "O" else values.tolist())
+    return list(values.tolist())
 
 
 def data_key(column: Column, source: str) -> dict[str, Any]:
     """The event-model data key describing ``column``."""
     return {
         "dtype": _DTYPES[column.values.dtype.kind],
-        "dtype_numpy": column.values.dtype.str if column.values.dtype.kind != "O" else "|O8",
+        "dtype_numpy": column.values.dtype.str,
         "shape": [],
         "source": source,
         "units": column.unit,
@@ -150,7 +150,7 @@ def documents(run: Run) -> list[tuple[str, dict[str, Any]]]:
     outcome = run.sessions[-1].outcome if run.sessions else None
     status = "success" if outcome == "completed" else "fail" if outcome == "fault" else "abort"
     ended = run.sessions[-1].ended_utc if run.sessions else None
-    last = max([started] + [t for _, d in docs[1:] for t in [d.get("time", started)]])
+    last = max(float(d["time"]) for _, d in docs)  # the stop comes after every document
     stop = bundle.compose_stop(
         exit_status=status,
         reason="" if status == "success" else f"last session: {outcome or 'did not end'}",
