@@ -141,9 +141,11 @@ class MerlTable(BRDF):
         self._sums = tuple(_pad(np.where(present, channel, 0.0)) for channel in table)
 
     def _eval(self, p: Pair) -> FloatArray:
-        above = p.above
-        wi = np.stack([np.where(above, c, d) for c, d in ((p.xi, 0), (p.yi, 0), (p.zi, 1))], -1)
-        wo = np.stack([np.where(above, c, d) for c, d in ((p.xo, 0), (p.yo, 0), (p.zo, 1))], -1)
+        # Pairs below the horizon are discarded by `eval`; the normal stands in for them.
+        normal = np.array([0.0, 0.0, 1.0])
+        above = p.above[..., None]
+        wi = np.where(above, np.stack([p.xi, p.yi, p.zi], axis=-1), normal)
+        wo = np.where(above, np.stack([p.xo, p.yo, p.zo], axis=-1), normal)
         theta_h, theta_d, phi_d = np.moveaxis(params.get("rusinkiewicz").forward_iso(wi, wo), -1, 0)
         return self.at(theta_h, theta_d, phi_d)
 

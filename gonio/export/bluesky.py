@@ -61,7 +61,6 @@ def data_key(column: Column, source: str) -> dict[str, Any]:
         "shape": [],
         "source": source,
         "units": column.unit,
-        "object_name": column.description,
     }
 
 
@@ -78,9 +77,11 @@ def documents(run: Run) -> list[tuple[str, dict[str, Any]]]:
     def uid(what: str) -> str:
         return str(uuid.uuid5(namespace, what))
 
+    columns = sample_columns(run)
     metadata = {
         "gonio": {k: v for k, v in meta.items() if k not in ("started_unix",)},
         "plan_name": meta.get("plan_name"),
+        "columns": {c.key: {"units": c.unit, "description": c.description} for c in columns},
         "sessions": [
             {
                 "id": s.id,
@@ -96,7 +97,6 @@ def documents(run: Run) -> list[tuple[str, dict[str, Any]]]:
     docs: list[tuple[str, dict[str, Any]]] = [("start", dict(bundle.start_doc))]
     source = f"gonio:{run.path.name}"
 
-    columns = sample_columns(run)
     primary = bundle.compose_descriptor(
         name="primary",
         data_keys={c.key: data_key(c, source) for c in columns},

@@ -45,6 +45,7 @@ def test_start_descriptors_events_stop_in_order(docs, run_file):
     assert stop["num_events"] == {"primary": len(run), "journal": len(run.events)}
     assert start["gonio"]["plan_name"] == run.meta["plan_name"]
     assert start["gonio"]["hashes"] == run.meta["hashes"]
+    assert start["columns"]["brdf_per_sr"]["units"] == "sr^-1"
 
 
 def test_one_primary_event_per_sample_with_the_runs_values(docs, run_file):

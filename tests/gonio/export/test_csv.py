@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from gonio.acquire.calibrated import calibrate
 from gonio.cli import main
@@ -82,3 +84,15 @@ def test_a_run_file_that_is_not_one_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "x.sqlite" in err
     assert not (tmp_path / "o.csv").exists()
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=1, max_size=20))
+def test_floats_read_back_bit_for_bit(values):
+    column = Column("x_s", "s", "", np.array(values, dtype=np.float64))
+    rows = list(csv.reader(to_text([column]).splitlines()))
+    back = _floats([row[0] for row in rows[1:]])
+    original = np.array(values, dtype=np.float64)
+    assert np.array_equal(np.isnan(back), np.isnan(original))
+    finite = ~np.isnan(original)
+    assert back[finite].tobytes() == original[finite].tobytes()  # −0.0 stays −0.0
