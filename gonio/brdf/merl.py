@@ -132,7 +132,10 @@ class MerlTable(BRDF):
     def __init__(self, path: object) -> None:
         if not isinstance(path, str | os.PathLike):
             raise GonioError(f"parameter path must be a file name, got {path!r}")
-        table = read_table(os.fspath(path))
+        try:
+            table = read_table(os.fspath(path))
+        except GonioError as exc:  # named, so a scene file's error points at the parameter
+            raise GonioError(f"parameter path: {exc}") from None
         super().__init__({"path": os.fspath(path)})
         self.is_rgb = True
         present = ~np.isnan(table[0])

@@ -8,10 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from gonio import brdf, params
+from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.reconstruct.measured import Measured
+from sim.physics.optics import band_eval
+from sim.scene import load_scene
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 HALF_PI = np.pi / 2
@@ -137,7 +141,16 @@ def test_a_scene_measures_the_tabulated_material(tables, tmp_path):
     )
     run = simulated_run(folder, plan_spec(40), scene)
     measured = Measured.from_run(run)
-    from sim.physics.optics import band_eval
-
     truth = band_eval(MODEL, measured.band)(measured.wi, measured.wo)
     np.testing.assert_allclose(measured.f, truth, rtol=0.02)
+
+
+def test_a_scene_naming_a_missing_file_is_one_line_at_the_parameter(tmp_path):
+    spec = scene_spec("glossy_metal", material={"name": "merl", "path": "absent.binary"})
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    with pytest.raises(ConfigError) as err:
+        load_scene(path)
+    message = str(err.value)
+    assert "material.path" in message and str(tmp_path / "absent.binary") in message
+    assert "\n" not in message
