@@ -73,12 +73,17 @@ def pairs_at(theta_h, theta_d, phi_d):
 
 
 @pytest.fixture(scope="module")
-def table(tmp_path_factory: pytest.TempPathFactory) -> np.ndarray:
+def written(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("merl") / "model.binary"
     with reserve_output(path, "-o") as out:
         summary = write(out, MODEL)
     assert "34992012 bytes" in summary
-    return read_merl(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def table(written: Path) -> np.ndarray:
+    return read_merl(written)
 
 
 @pytest.fixture(scope="module")
@@ -149,3 +154,15 @@ def test_a_run_needs_the_reconstruction_for_now(run_file, tmp_path, capsys):
     err = capsys.readouterr().err
     assert "needs the reconstruction" in err and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_gonios_reader_takes_gonios_file_back(written, sample):
+    """The whole round trip: model → MERL file → `gonio.brdf.create("merl")`, equal at
+    the supported bin centres."""
+    th, td, pd = (a[idx] for a, idx in zip(centre_reading(), sample, strict=True))
+    wi, wo, _ = pairs_at(th, td, pd)
+    inside = MODEL.supported(wi, wo)
+    table = brdf.create("merl", path=str(written))
+    np.testing.assert_allclose(
+        table.eval(wi[inside], wo[inside]), MODEL.eval(wi[inside], wo[inside]), rtol=1e-9
+    )
