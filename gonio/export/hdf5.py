@@ -5,7 +5,7 @@ Layout (every unit and convention an attribute beside the data it describes)::
 
     /                 attrs: format = "gonio-run", format_version = 1, gonio_version,
                       source (the run file's name), conventions (frame, directions, units)
-    /meta             attrs: every journal metadata key, its value as JSON text
+    /meta             one scalar string per journal metadata key: its value as JSON text
     /plan             attrs: parametrization, isotropic, coordinate_names (JSON);
                       datasets: stored (the ``# gonio-plan v1`` file's bytes, uint8),
                       coords (M, d), wi, wo (M, 3), angles (M, A) rad, exposure_s,
@@ -82,8 +82,10 @@ def write_run(h5: Any, run: Run) -> None:
         conventions=CONVENTIONS,
     )
     meta = h5.create_group("meta")
-    for key, value in run.meta.items():
-        meta.attrs[key] = json.dumps(value, ensure_ascii=False)
+    for key, value in run.meta.items():  # datasets: attributes are limited to 64 kB
+        meta.create_dataset(
+            key, data=json.dumps(value, ensure_ascii=False), dtype=h5py.string_dtype()
+        )
 
     plan = h5.create_group("plan")
     plan.attrs.update(

@@ -50,7 +50,7 @@ def test_samples_with_units_are_the_runs(out, run_file):
 def test_metadata_plan_events_and_sessions(out, run_file):
     run = open_run(run_file)
     with h5py.File(out, "r") as h5:
-        meta = {k: json.loads(v) for k, v in h5["meta"].attrs.items()}
+        meta = {k: json.loads(v.asstr()[()]) for k, v in h5["meta"].items()}
         assert meta == json.loads(json.dumps(dict(run.meta)))
         stored = h5["plan/stored"][()].tobytes()
         assert stored.startswith(b"# gonio-plan v1")
