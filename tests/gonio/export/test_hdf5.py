@@ -107,3 +107,17 @@ def test_the_grid_needs_the_reconstruction_for_now(run_file, tmp_path, capsys):
     assert main([*args, "-o", str(tmp_path / "x.h5")]) == 2
     assert "reconstruction" in capsys.readouterr().err
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_the_plain_h5py_example_of_the_docs_runs(out, run_file):
+    text = (Path(__file__).resolve().parents[3] / "docs" / "formats.md").read_text()
+    section = text[text.index('<a id="hdf5"></a>') : text.index('<a id="alta"></a>')]
+    code = section.split("```python\n")[1].split("```")[0].replace('"run.h5"', repr(str(out)))
+    scope: dict[str, object] = {}
+    exec(code, scope)
+    run = open_run(run_file)
+    np.testing.assert_array_equal(scope["f"], calibrate(run).brdf)
+    assert scope["units"] == "sr^-1"
+    assert scope["meta"]["plan_name"] == run.meta["plan_name"]
+    assert list(scope["kinds"]) == [e.kind for e in run.events]
+    assert scope["plan_file"].startswith(b"# gonio-plan v1")
