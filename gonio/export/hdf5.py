@@ -171,20 +171,26 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
 
 
 def write(
-    path: Path, run: Run, model: Evaluable | None = None, options: Options | None = None
+    path: Path,
+    run: Run,
+    model: Evaluable | None = None,
+    parametrization: str = "hybrid",
+    points: int = 32,
 ) -> None:
-    """The HDF5 file of ``run`` (and of ``model``'s grid when given) at ``path``."""
+    """The HDF5 file of ``run`` at ``path``, with ``model`` (the run's reconstruction)
+    on the grid of ``parametrization`` when given."""
     h5py = _h5py()
     with h5py.File(path, "w") as h5:
         write_run(h5, run)
-        if model is not None and options is not None and options.grid is not None:
-            write_grid(h5, model, options.grid, options.grid_points)
+        if model is not None:
+            write_grid(h5, model, parametrization, points)
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     _h5py()
     if options.grid is not None:
-        # The integrator passes the run's reconstruction to `write` here.
+        # The integrator wires: out.write_with(lambda path: write(path, run,
+        # reconstruction, options.grid, options.grid_points)).
         raise GonioError("--grid needs the reconstruction (gonio.reconstruct), not available yet")
     out.write_with(lambda path: write(path, run))
     return f"wrote {len(run)} samples, {len(run.events)} events and the plan to {out.path} (hdf5)"

@@ -13,7 +13,6 @@ import pytest
 from gonio import brdf, params
 from gonio.acquire.calibrated import calibrate
 from gonio.cli import main
-from gonio.export import Options
 from gonio.export.hdf5 import write
 from gonio.planner.stored import parse_plan
 from gonio.store import open_run
@@ -80,7 +79,7 @@ class _Supported:
 def test_the_reconstruction_grid_at_cell_centres(run_file, tmp_path):
     path = tmp_path / "grid.h5"
     model = _Supported()
-    write(path, open_run(run_file), model, Options(grid="rusinkiewicz", grid_points=6))
+    write(path, open_run(run_file), model, "rusinkiewicz", 6)
     with h5py.File(path, "r") as h5:
         g = h5["reconstruction"]
         assert g.attrs["parametrization"] == "rusinkiewicz"
