@@ -5,7 +5,7 @@ Layout (docs/formats.md#merl, after MERL's ``BRDFRead.cpp``): three int32 (90, 9
 then the 1 458 000 red, the 1 458 000 green and the 1 458 000 blue float64 values, each
 channel a C-ordered array over (θh, θd, φd) with φd varying fastest; 34 992 012 bytes,
 little-endian. A channel's BRDF value (sr⁻¹) is the stored value times its scale
-(`SCALES`); a negative stored value marks a missing bin. Bin (i, j, k) holds
+(`SCALES`); a negative (or NaN) stored value marks a missing bin. Bin (i, j, k) holds
 θh ∈ [(i/90)², ((i+1)/90)²]·π/2 (the square-root mapping MERL's reader inverts),
 θd ∈ [j, j+1]·π/180, φd ∈ [k, k+1]·π/180 (φd folded into [0, π) by reciprocity).
 
@@ -116,7 +116,7 @@ def _read(path: str, _mtime_ns: int, size: int) -> FloatArray:
         raise GonioError(f"{path}: MERL header {dims}, expected {SHAPE}")
     stored = raw.reshape((3, *SHAPE))
     scales = np.asarray(SCALES)[:, None, None, None]
-    missing = np.any(stored < 0.0, axis=0)
+    missing = np.any(~(stored >= 0.0), axis=0)  # negative, or NaN
     table = np.where(missing[None], np.nan, stored * scales)
     table.setflags(write=False)
     return table
