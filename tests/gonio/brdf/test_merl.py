@@ -154,3 +154,19 @@ def test_a_scene_naming_a_missing_file_is_one_line_at_the_parameter(tmp_path):
     message = str(err.value)
     assert "material.path" in message and str(tmp_path / "absent.binary") in message
     assert "\n" not in message
+
+
+def test_a_block_of_missing_bins_reads_0_inside_and_the_present_mean_at_its_border(
+    tmp_path, centres
+):
+    _, _, ok = centres
+    missing = ~ok
+    missing[:, 40:50, :] = True  # θd in [40°, 50°) not measured
+    rgb = np.broadcast_to(np.array([0.1, 0.2, 0.3]), (*ok.shape, 3))
+    table = brdf.create("merl", path=str(write_merl(tmp_path / "hole.binary", rgb, missing)))
+    th = np.full(5, np.radians(10.0))
+    td = np.radians([39.2, 40.3, 45.0, 49.7, 50.8])
+    got = table.at(th, td, np.full(5, 1.0))
+    # 39.2°, 40.3° and 49.7°, 50.8° interpolate with present corners only: the constant.
+    np.testing.assert_allclose(got[[0, 1, 3, 4]], np.tile([0.1, 0.2, 0.3], (4, 1)), rtol=1e-12)
+    np.testing.assert_array_equal(got[2], [0.0, 0.0, 0.0])  # no corner present
