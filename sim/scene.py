@@ -45,11 +45,16 @@ class MaterialSpec(Strict):
 
     @model_validator(mode="before")
     @classmethod
-    def _flat(cls, data: Any) -> Any:
-        """Accept ``{name: ggx, alpha: 0.1}`` as well as ``{name: ggx, params: {...}}``."""
+    def _flat(cls, data: Any, info: ValidationInfo) -> Any:
+        """Accept ``{name: ggx, alpha: 0.1}`` as well as ``{name: ggx, params: {...}}``; a
+        relative ``path`` (a tabulated material's file) is relative to the scene file."""
         if isinstance(data, dict) and "params" not in data:
             rest = {k: v for k, v in data.items() if k != "name"}
-            return {"name": data.get("name"), "params": rest}
+            data = {"name": data.get("name"), "params": rest}
+        folder = Path((info.context or {}).get("path", "")).parent
+        given = data.get("params") if isinstance(data, dict) else None
+        if isinstance(given, dict) and isinstance(given.get("path"), str):
+            data = {**data, "params": {**given, "path": str(folder / given["path"])}}
         return data
 
     @model_validator(mode="after")

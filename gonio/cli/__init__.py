@@ -48,6 +48,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "score a run's reconstruction against a truth (the scene, a model, another run)",
     ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
+    "export": (
+        "gonio.cli.export",
+        "write a run as csv, hdf5, alta, bluesky documents or a MERL table",
+    ),
     "motors": (
         "gonio.cli.motors",
         "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",

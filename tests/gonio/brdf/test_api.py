@@ -38,7 +38,8 @@ def test_names_lists_every_required_model():
 
 
 def test_every_registered_model_has_an_example():
-    assert {name for name, _ in EXAMPLES} == set(brdf.names())
+    # The tabulated MERL model needs a 35 MB file: tests/gonio/brdf/test_merl.py writes one.
+    assert {name for name, _ in EXAMPLES} == set(brdf.names()) - {"merl"}
 
 
 def test_unknown_name_lists_the_known_ones():

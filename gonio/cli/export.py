@@ -1,0 +1,65 @@
+"""`gonio export RUN.sqlite --format F -o PATH`: a run in another program's format
+(csv, hdf5, alta, bluesky; merl from the run's reconstruction). docs/formats.md."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS
+
+    p = sub.add_parser(
+        "export",
+        help=help_,
+        description="Write a run in another program's format: "
+        + "; ".join(f"{name}: {what}" for name, (_, what) in FORMATS.items())
+        + ". The output is written whole or not at all (an existing file is replaced). "
+        "Layouts, units and what each format loses: docs/formats.md.",
+    )
+    p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
+    p.add_argument("--format", required=True, choices=list(FORMATS), help="the output format")
+    p.add_argument("-o", "--output", required=True, type=Path, help="the file to write")
+    p.add_argument(
+        "--alta-param",
+        choices=ALTA_PARAMS,
+        default="stark_3d",
+        help="alta: the input parametrization (default stark_3d, ALTA's STARK_3D)",
+    )
+    p.add_argument(
+        "--merl-fill",
+        choices=MERL_FILLS,
+        default="missing",
+        help="merl: bins outside the measured support are written missing (negative, "
+        "the default) or filled by the reconstruction's extrapolation",
+    )
+    p.add_argument(
+        "--grid",
+        metavar="PARAMETRIZATION",
+        help="hdf5: also write the reconstruction on a regular grid of this "
+        "parametrization's isotropic coordinates",
+    )
+    p.add_argument(
+        "--grid-points", type=int, default=32, help="hdf5: grid points per coordinate (32)"
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.set_defaults(func=cmd_export)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from gonio import params
+    from gonio.export import Options, export
+
+    if args.grid is not None:
+        params.get(args.grid)  # an unknown name: one line, before any work
+    options = Options(
+        alta_param=args.alta_param,
+        merl_fill=args.merl_fill,
+        grid=args.grid,
+        grid_points=args.grid_points,
+    )
+    summary = export(args.run, args.format, args.output, options)
+    if not args.quiet:
+        print(summary)
+    return 0

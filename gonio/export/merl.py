@@ -1,0 +1,113 @@
+"""``--format merl``: a reconstruction tabulated in MERL's binary layout
+(`gonio.brdf.merl`, docs/formats.md#merl).
+
+Each bin holds the reconstruction evaluated at the bin's representative pair: the pair
+with φh = 0 at the bin's centre in index coordinates, θh = ((i + ½)/90)²·π/2,
+θd = (j + ½)·π/180, φd = (k + ½)·π/180 (`gonio.brdf.merl.bin_centres`), which MERL's
+own index mapping sends back to the bin (a bin's lower corner does not always: float
+rounding of the square root can land in the bin below). Written missing (negative):
+bins whose centre has no direction pair (a direction below the horizon), and bins
+whose pair lies outside the measured support unless the reconstruction's extrapolation
+is asked for (``fill="extrapolate"``). A one-channel reconstruction is written grey
+(the same values in red, green and blue); negative or non-finite values of the
+reconstruction are written 0 and missing respectively (a negative value would read as
+missing).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from gonio import params
+from gonio.brdf import merl
+from gonio.errors import GonioError
+from gonio.output import PendingOutput
+from gonio.store.read import Run
+from gonio.types import ArrayLike, BoolArray, FloatArray
+
+if TYPE_CHECKING:
+    from gonio.export import Options
+
+
+class Reconstruction(Protocol):
+    """What the MERL writer needs of a reconstruction: f(ωi, ωo) in sr⁻¹, (...,) or
+    (..., 3), and the measured support, True where f is backed by measurements."""
+
+    def eval(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray: ...
+
+    def supported(self, wi: ArrayLike, wo: ArrayLike) -> BoolArray: ...
+
+
+@dataclass(frozen=True)
+class Table:
+    """The filled table: ``values`` (3, 90, 90, 180) in sr⁻¹, ``missing`` (90, 90, 180),
+    and how many bins have no pair, lie outside the support, or were extrapolated."""
+
+    values: FloatArray
+    missing: BoolArray
+    no_pair: int
+    unsupported: int
+    extrapolated: int
+
+
+def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
+    """(ωi, ωo) (90, 90, 180, 3) at every bin's centre, and where that pair exists
+    (elsewhere the pair is a placeholder, ωi = ωo = n)."""
+    theta_h, theta_d, phi_d = merl.bin_centres()
+    coords = np.stack(np.broadcast_arrays(theta_h, np.zeros(1), theta_d, phi_d), axis=-1)
+    p = params.get("rusinkiewicz")
+    ok = p.valid(coords)
+    wi, wo = p.inverse(np.where(ok[..., None], coords, 0.0))
+    return wi, wo, ok
+
+
+def fill(reconstruction: Reconstruction, *, extrapolate: bool = False) -> Table:
+    """The reconstruction evaluated at every bin (see the module docstring)."""
+    wi, wo, ok = representative_pairs()
+    supported = np.asarray(reconstruction.supported(wi, wo), dtype=bool) & ok
+    f = np.asarray(reconstruction.eval(wi, wo), dtype=np.float64)
+    if f.shape == ok.shape:
+        f = np.broadcast_to(f[..., None], (*ok.shape, 3))
+    if f.shape != (*ok.shape, 3):
+        raise GonioError(
+            f"the reconstruction gave values of shape {f.shape}, expected one or three channels"
+        )
+    values = np.moveaxis(f, -1, 0)
+    keep = ok & (supported | extrapolate)
+    finite = np.all(np.isfinite(values), axis=0)
+    missing = ~(keep & finite)
+    return Table(
+        values=np.where(missing[None], 0.0, np.maximum(values, 0.0)),
+        missing=missing,
+        no_pair=int(np.count_nonzero(~ok)),
+        unsupported=int(np.count_nonzero(ok & ~supported)),
+        extrapolated=int(np.count_nonzero(ok & ~supported & finite)) if extrapolate else 0,
+    )
+
+
+def write(out: PendingOutput, reconstruction: Reconstruction, *, extrapolate: bool = False) -> str:
+    """Fill the table and write it to ``out``; the one-line summary."""
+    table = fill(reconstruction, extrapolate=extrapolate)
+    out.write_bytes(merl.to_bytes(table.values, table.missing))
+    written = merl.BINS - int(np.count_nonzero(table.missing))
+    what = (
+        f"{table.extrapolated} extrapolated"
+        if extrapolate
+        else f"{table.unsupported} outside the measured support written missing"
+    )
+    return (
+        f"wrote {out.path} (MERL, {merl.FILE_SIZE} bytes): {written} of {merl.BINS} bins, "
+        f"{table.no_pair} without a direction pair, {what}"
+    )
+
+
+def export_run(run: Run, out: PendingOutput, options: Options) -> str:
+    # The integrator wires: write(out, reconstruct(Measured.from_run(run)),
+    # extrapolate=options.merl_fill == "extrapolate").
+    raise GonioError(
+        f"{run.path}: --format merl needs the reconstruction (gonio.reconstruct), "
+        "not available in this build"
+    )
