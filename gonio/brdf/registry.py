@@ -17,6 +17,7 @@ from gonio.brdf.characteristic import (
     SpecularTestFunction,
 )
 from gonio.brdf.cook_torrance import CookTorrance, GGXAnisotropic
+from gonio.brdf.factored import Factored
 from gonio.brdf.models import (
     BlinnPhong,
     CosineQuadratic,
@@ -41,6 +42,7 @@ _MODELS: dict[str, type[BRDF]] = {
         FresnelTestFunction,
         SpecularTestFunction,
         GrazingTestFunction,
+        Factored,
     )
 }
 

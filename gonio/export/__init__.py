@@ -1,0 +1,1 @@
+"""Writers of reconstructed BRDFs in other programs' formats."""
