@@ -4,10 +4,11 @@
 ``path + ".cdf"`` (`gonio.brdf.factored_file`). Conventions as everywhere in gonio: ``wi``
 toward the light, ``wo`` toward the detector (the view), unit vectors (..., 3), z = normal.
 
-eval: f(wi, wo) = Σⱼ Fⱼ(θo, φo) Gⱼ(θh, φh) / cos θi (sr⁻¹): the files hold f · cos θi,
-the cosine of the *sampled* direction (see docs/formats_factored.md for why not the
-seed's cos θo); nearest-bin lookup; 0 where cos θi = 0. RGB files multiply by
-Fc(ωo) Gc(ĥ) per channel.
+eval: f(wi, wo) = Σⱼ Fⱼ(θo, φo) Gⱼ(θh, φh) / cos θi' (sr⁻¹), looked up in the bins of
+(wo, ĥ): the files hold f · cos θi, the cosine of the *sampled* direction (see
+docs/formats_factored.md for why not the seed's cos θo), tabulated at the bins'
+centres, and θi' is the θi of those centres. 0 where cos θi = 0 or cos θi' ≤ 0. RGB
+files multiply by Fc(ωo) Gc(ĥ) per channel.
 
 Sampling, given the view ``wo``, draws the halfway vector ĥ from the mixture of the
 L = J·K terms Fⱼ(ωo) uⱼₖ(θh) vⱼₖ(φh), term (j, k) chosen with probability ∝ its energy
@@ -79,16 +80,32 @@ class Factored(BRDF):
 
     def _eval(self, p: Pair) -> FloatArray:
         t = self.tables
-        io, jo = self._view_bins(p.xo, p.yo, p.zo)
-        hx, hy, hz = p.halfway()
+        # 1-d components: the angle helpers work in place on arrays, not numpy scalars.
+        xo, yo, zo, ci = (np.ravel(a) for a in (p.xo, p.yo, p.zo, p.ci))
+        hx, hy, hz = (np.ravel(a) for a in p.halfway())
+        io, jo = self._view_bins(xo, yo, zo)
         norm = np.sqrt(hx * hx + hy * hy + hz * hz)
         norm = np.where(norm > 0.0, norm, 1.0)
         ih, jh = self._halfway_bins(*polar(hx / norm, hy / norm, np.maximum(hz, 0.0) / norm))
         intensity = np.sum(t.F[:, io, jo] * t.G[:, ih, jh], axis=0)
-        f = np.where(p.ci > 0.0, intensity / np.where(p.ci > 0.0, p.ci, 1.0), 0.0)
+        # cos θi of the pair of bin centres the table was sampled at: f is looked up
+        # bin by bin, and f cos θi → 0 at the horizon (dividing by the pair's own
+        # cos θi would turn a bin's value into a 1/cos θi spike there).
+        c = self._centre_cos_i(io, jo, ih, jh)
+        f = np.where((c > 0.0) & (ci > 0.0), intensity / np.where(c > 0.0, c, 1.0), 0.0)
         if not self.is_rgb:
-            return np.asarray(f, dtype=np.float64)
-        return np.asarray(f[..., None] * t.Fc[io, jo] * t.Gc[ih, jh], dtype=np.float64)
+            return np.asarray(f.reshape(p.shape), dtype=np.float64)
+        rgb = f[:, None] * t.Fc[io, jo] * t.Gc[ih, jh]
+        return np.asarray(rgb.reshape(*p.shape, 3), dtype=np.float64)
+
+    def _centre_cos_i(
+        self, io: ff.IntArray, jo: ff.IntArray, ih: ff.IntArray, jh: ff.IntArray
+    ) -> FloatArray:
+        """cos θi of wi = 2 (wo·ĥ) ĥ − wo for wo, ĥ at the centres of their bins."""
+        (n_to, n_po), (n_th, n_ph) = self.tables.F.shape[1:], self.tables.G.shape[1:]
+        wo = direction((io + 0.5) * (ff.HALF_PI / n_to), (jo + 0.5) * (ff.TWO_PI / n_po))
+        h = direction((ih + 0.5) * (ff.HALF_PI / n_th), (jh + 0.5) * (ff.TWO_PI / n_ph))
+        return np.asarray(2.0 * np.sum(wo * h, axis=-1) * h[:, 2] - wo[:, 2], dtype=np.float64)
 
     # -- sampling ------------------------------------------------------------------------
 
