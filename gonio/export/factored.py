@@ -34,9 +34,9 @@ from gonio.output import reserve_output
 from gonio.params.cases import direction
 from gonio.types import FloatArray
 
-#: Alternating updates of the colour fit (each halves the error or better; 30 reach
-#: the fit's floor to ~1e-10 on the models tested).
-COLOUR_ITERATIONS = 30
+#: Alternating updates of the colour fit: 5 already reach the fit's floor to 1e-12 in
+#: the colour error (measured on gold-like Cook-Torrance and an RGB Lambert).
+COLOUR_ITERATIONS = 10
 
 
 @dataclass(frozen=True)
