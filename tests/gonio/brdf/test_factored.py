@@ -272,3 +272,23 @@ def test_a_factored_file_is_a_scene_material(files, tmp_path_factory):
     # edge within the rig's beam and footprint (8 % at most here).
     assert np.median(np.abs(ratio - 1.0)) < 1e-6
     assert np.all(np.abs(ratio - 1.0) < 0.2)
+
+
+def test_named_extremes_are_finite_and_warning_free(glossy):
+    """Normal, grazing (z = 0 exactly), wi = wo, wi = −wo on the horizon, random pairs."""
+    rng = np.random.default_rng(2)
+    v = rng.normal(size=(2, 5000, 3))
+    v[..., 2] = np.abs(v[..., 2])
+    wi, wo = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    grazing = np.array([np.cos(0.7), np.sin(0.7), 0.0])
+    named_i = np.array([[0, 0, 1.0], grazing, grazing, -grazing, [0, 0, 1.0], wi[0]])
+    named_o = np.array([[0, 0, 1.0], grazing, [0, 0, 1.0], grazing, grazing, wi[0]])
+    wi, wo = np.concatenate([wi, named_i]), np.concatenate([wo, named_o])
+    with np.errstate(all="raise", under="ignore"):
+        f = glossy.eval(wi, wo)
+        p = glossy.pdf(wo, wi)
+        drawn, q = glossy.sample(wo, rng.random(wo.shape))
+    assert np.all(np.isfinite(f)) and np.all(f >= 0.0)
+    assert np.all(np.isfinite(p)) and np.all(p >= 0.0)
+    assert np.all(np.isfinite(drawn)) and np.all(np.isfinite(q)) and np.all(q >= 0.0)
+    np.testing.assert_allclose(np.linalg.norm(drawn, axis=-1), 1.0, atol=1e-14)
