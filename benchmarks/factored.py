@@ -47,12 +47,12 @@ class SeedCosine:
     """The model with the view's cosine: its table is the seed's f cos θo."""
 
     def __init__(self, model: brdf.BRDF) -> None:
-        self.model, self.is_rgb = model, model.is_rgb
+        self.model = model
 
     def eval(self, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
         ratio = wo[..., 2] / np.maximum(wi[..., 2], 1e-300)
         f = self.model.eval(wi, wo)
-        return f * (ratio[..., None] if self.is_rgb else ratio)
+        return f * (ratio[..., None] if self.model.is_rgb else ratio)
 
 
 def error_table() -> None:
@@ -81,7 +81,7 @@ def albedo_variances(folder: Path) -> None:
     print(f"\nexport of the gold model, J = 4, K = 2, {res}: {dt:.2f} s; ", end="")
     print(f"factor file {sizes[0] / 1e6:.2f} MB, CDF file {sizes[1] / 1e6:.2f} MB")
     print(f"error {ours.error:.4f}")
-    export(SeedCosine(model), folder / "seed.txt", 4, 2, res)  # type: ignore[arg-type]
+    export(SeedCosine(model), folder / "seed.txt", 4, 2, res)
     seed_selection = brdf.create("factored", path=str(folder / "gold.txt"))
     seed_selection._energy = np.ones_like(seed_selection._energy)  # type: ignore[attr-defined]
     samplers = {

@@ -24,11 +24,11 @@ import warnings
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
 from gonio.brdf import factored_file as ff
-from gonio.brdf.base import BRDF
 from gonio.errors import GonioError
 from gonio.output import reserve_output
 from gonio.params.cases import direction
@@ -64,17 +64,25 @@ class Factorization:
     colour_error: float
 
 
-def table(model: BRDF, res: Resolution) -> FloatArray:
-    """y = f cos θi on the bin centres: (θo, φo, θh, φh), plus (3,) if RGB."""
+class Evaluable(Protocol):
+    """Anything with ``eval(wi, wo)`` in sr⁻¹ on (..., 3) directions: (...,) or (..., 3)."""
+
+    def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray: ...
+
+
+def table(model: Evaluable, res: Resolution) -> FloatArray:
+    """y = f cos θi on the bin centres: (θo, φo, θh, φh), plus (3,) if f is RGB."""
     wo = _centres(res.theta_out, res.phi_out)[:, :, None, None, :]
     h = _centres(res.theta_p, res.phi_p)[None, None, :, :, :]
     d = np.sum(wo * h, axis=-1, keepdims=True)
     wi = 2.0 * d * h - wo
     wo = np.broadcast_to(wo, wi.shape)
     lit = wi[..., 2] > 0.0
-    out = np.zeros(lit.shape + ((3,) if model.is_rgb else ()), dtype=np.float64)
-    values = model.eval(wi[lit], wo[lit])
-    out[lit] = values * (wi[lit][:, 2][:, None] if model.is_rgb else wi[lit][:, 2])
+    values = np.asarray(model.eval(wi[lit], wo[lit]), dtype=np.float64)
+    cos_i = wi[lit][:, 2]
+    rgb = values.ndim == 2
+    out = np.zeros(lit.shape + values.shape[1:], dtype=np.float64)
+    out[lit] = values * (cos_i[:, None] if rgb else cos_i)
     return out
 
 
@@ -120,7 +128,7 @@ def _colour(y: FloatArray, approx: FloatArray) -> tuple[FloatArray, FloatArray]:
 
 
 def factorize(
-    model: BRDF,
+    model: Evaluable,
     outer: int = 2,
     inner: int = 2,
     res: Resolution | None = None,
@@ -133,8 +141,9 @@ def factorize(
     if outer < 1 or inner < 1 or inner > min(res.theta_p, res.phi_p):
         raise GonioError(f"factored: need J ≥ 1 and 1 ≤ K ≤ {min(res.theta_p, res.phi_p)}")
     y = table(model, res)
+    rgb = y.ndim == 5
     rows, cols = res.theta_out * res.phi_out, res.theta_p * res.phi_p
-    intensity = (y.mean(axis=-1) if model.is_rgb else y).reshape(rows, cols)
+    intensity = (y.mean(axis=-1) if rgb else y).reshape(rows, cols)
     F, G = _nmf(intensity, outer, seed, max_iter)
     dz = ff.cell_dz(res.theta_p)
     dphi = ff.TWO_PI / res.phi_p
@@ -151,7 +160,7 @@ def factorize(
     approx = F @ G3.reshape(outer, cols)
     full = F @ np.einsum("jka,jkb->jab", u, v).reshape(outer, cols)
     size = max(float(np.linalg.norm(intensity)), np.finfo(np.float64).tiny)
-    if model.is_rgb:
+    if rgb:
         a, b = _colour(y.reshape(rows, cols, 3), approx)
         fitted = a[:, None, :] * b[None, :, :] * approx[..., None]
         colour_error = float(np.linalg.norm(y.reshape(rows, cols, 3) - fitted))
@@ -178,7 +187,7 @@ def factorize(
 
 
 def export(
-    model: BRDF,
+    model: Evaluable,
     path: Path | str,
     outer: int = 2,
     inner: int = 2,
