@@ -17,6 +17,7 @@ from gonio.brdf.characteristic import (
     SpecularTestFunction,
 )
 from gonio.brdf.cook_torrance import CookTorrance, GGXAnisotropic
+from gonio.brdf.factored import Factored
 from gonio.brdf.merl import MerlTable
 from gonio.brdf.models import (
     BlinnPhong,
@@ -43,6 +44,7 @@ _MODELS: dict[str, type[BRDF]] = {
         SpecularTestFunction,
         GrazingTestFunction,
         MerlTable,
+        Factored,
     )
 }
 
