@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.params import cases, get
+from gonio.params.conditioning import condition_number, singular_values, tangent_jacobian
 from gonio.types import FloatArray
 
 EPS = float(np.finfo(np.float64).eps)  # 2⁻⁵², one ulp of 1
@@ -126,8 +127,6 @@ def path_study(
     """Conditioning (`gonio.params.conditioning`) and round-trip error along paths
     approaching each extreme (`cases.near` with one seed: the same paths at every
     distance), per parametrization."""
-    from gonio.params.conditioning import condition_number, singular_values, tangent_jacobian
-
     rows = []
     for extreme in extremes or list(cases.EXTREMES):
         for distance in distances:

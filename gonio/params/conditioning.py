@@ -44,8 +44,10 @@ def _zero(n: int) -> Grad:
 
 
 def _tangent_norm(v: Vec, what: str) -> FloatArray:
+    """‖v̄‖, required nonzero; as in the forward maps, a tangent part whose square
+    underflows (below about 1e-154) counts as zero (its azimuth is 0 there)."""
     r = np.hypot(v[0], v[1])
-    _require(r > 0.0, what)
+    _require(r * r > 0.0, what)
     return r
 
 
@@ -143,8 +145,7 @@ def _rows(name: str, wi: Vec, wo: Vec) -> list[tuple[Grad, Grad]]:
         radius_k = _norm_grad(k, "k = 0, retro-reflection (φk is undefined)")
         rk = _tangent_norm(k, "k̄ = 0, retro-reflection (φk is undefined)")
     else:
-        get(name)  # raises UnknownNameError
-        raise AssertionError(name)
+        raise AssertionError(name)  # `cartesian_jacobian` checked the name
     phi_k = _azimuth_grad(k, rk)
     # The norms are of h = (ωi + ωo)/2 and k, half those of the sums used here: ½ ∇;
     # the azimuths do not see the factor.
@@ -158,6 +159,7 @@ def _rows(name: str, wi: Vec, wo: Vec) -> list[tuple[Grad, Grad]]:
 
 def cartesian_jacobian(name: str, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
     """∂c/∂(ωi, ωo) (..., 4, 6) at unit directions (..., 3) (see the module docstring)."""
+    get(name)  # UnknownNameError for a name that is not registered
     lead, a, b = pair_components(wi, wo)
     rows = _rows(name, a, b)
     out = np.stack([np.concatenate([gi, go], axis=-1) for gi, go in rows], axis=1)

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gonio import params
-from gonio.errors import DomainError
+from gonio.errors import DomainError, UnknownNameError
 from gonio.params import cases, conditioning, exact
 from gonio.params.accuracy import PATH_DISTANCES, path_study
 
@@ -134,6 +134,17 @@ def test_the_jacobian_is_refused_where_it_does_not_exist() -> None:
         conditioning.tangent_jacobian("rusinkiewicz", w, w)
     with pytest.raises(DomainError, match="h̄ = 0"):
         conditioning.tangent_jacobian("orthographic", [0.6, 0.8, 0.0], [-0.6, -0.8, 0.0])
+
+
+def test_an_unknown_name_is_refused_by_name() -> None:
+    with pytest.raises(UnknownNameError, match="unknown parametrization 'polar'"):
+        conditioning.tangent_jacobian("polar", *cases.away(1))
+
+
+def test_a_tangent_part_that_underflows_counts_as_zero() -> None:
+    tiny = np.array([1e-170, 0.0, 1.0])
+    with pytest.raises(DomainError, match="ωi = n"):
+        conditioning.tangent_jacobian("spherical", tiny, cases.direction(0.5, 1.0))
 
 
 def test_a_singular_jacobian_has_an_infinite_condition_number() -> None:
