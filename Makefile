@@ -44,6 +44,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/extremes.py
+	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/rehearsal.py
 	$(BIN)/python benchmarks/planner.py

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.params import cases, get
+from gonio.params.conditioning import condition_number, singular_values, tangent_jacobian
 from gonio.types import FloatArray
 
 EPS = float(np.finfo(np.float64).eps)  # 2⁻⁵², one ulp of 1
@@ -89,6 +90,67 @@ def extreme_study(
                 rows.append(
                     ExtremeRow(
                         name, extreme, distance, samples, float(errors.max()), bound, pair_ratio
+                    )
+                )
+    return rows
+
+
+#: Distances (radians) of `path_study`: two per decade, 1e-1 … 1e-12.
+PATH_DISTANCES: tuple[float, ...] = tuple(float(10.0 ** (-i / 2)) for i in range(2, 25))
+
+
+@dataclass(frozen=True)
+class PathRow:
+    """One point of the conditioning study: ``samples`` one-parameter paths (fixed seed,
+    so each path keeps its other parameters) at ``distance`` from ``extreme``."""
+
+    parametrization: str
+    extreme: str
+    distance: float
+    samples: int
+    sigma_max: float  # median over the paths of the tangent Jacobian's largest singular value
+    sigma_min: float  # median of the smallest
+    cond: float  # median condition number σmax/σmin
+    cond_worst: float  # largest condition number over the paths
+    roundtrip: float  # worst float64 round-trip error
+    bound: float  # worst error float64 coordinates impose (mpmath), NaN if not computed
+
+
+def path_study(
+    names: list[str],
+    extremes: list[str] | None = None,
+    distances: tuple[float, ...] = PATH_DISTANCES,
+    samples: int = 16,
+    seed: int = 0,
+    with_bound: bool = False,
+) -> list[PathRow]:
+    """Conditioning (`gonio.params.conditioning`) and round-trip error along paths
+    approaching each extreme (`cases.near` with one seed: the same paths at every
+    distance), per parametrization."""
+    rows = []
+    for extreme in extremes or list(cases.EXTREMES):
+        for distance in distances:
+            wi, wo = cases.near(extreme, distance, samples, seed)
+            for name in names:
+                jacobian = tangent_jacobian(name, wi, wo)
+                s, cond = singular_values(jacobian), condition_number(jacobian)
+                bound = float("nan")
+                if with_bound:
+                    from gonio.params import exact
+
+                    bound = float(exact.roundtrip_bounds(name, wi, wo).max())
+                rows.append(
+                    PathRow(
+                        name,
+                        extreme,
+                        distance,
+                        samples,
+                        float(np.median(s[:, 0])),
+                        float(np.median(s[:, -1])),
+                        float(np.median(cond)),
+                        float(cond.max()),
+                        float(measured_errors(name, wi, wo).max()),
+                        bound,
                     )
                 )
     return rows

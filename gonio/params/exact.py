@@ -65,7 +65,12 @@ def _to_hemisphere(v: Vec) -> Vec:
 def forward(name: str, wi: Sequence[float], wo: Sequence[float]) -> list[Any]:
     """Exact coordinates of the exactly normalized pair."""
     with mp.workdps(DIGITS):
-        a, b = _vec(wi), _vec(wo)
+        return forward_unit(name, _vec(wi), _vec(wo))
+
+
+def forward_unit(name: str, a: Vec, b: Vec) -> list[Any]:
+    """Exact coordinates of unit vectors given as mpf (e.g. a pair moved exactly)."""
+    with mp.workdps(DIGITS):
         h = [(x + y) / 2 for x, y in zip(a, b, strict=True)]
         k = [(x - y) / 2 for x, y in zip(a, b, strict=True)]
         if name == "spherical":
@@ -174,3 +179,34 @@ def _output_rounding(v: Vec) -> float:
 def roundtrip_bounds(name: str, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
     """`roundtrip_bound` over (n, 3) arrays (a loop: this is the slow reference)."""
     return np.array([roundtrip_bound(name, a, b) for a, b in zip(wi, wo, strict=True)])
+
+
+#: The step (radians of arc) of `tangent_jacobian`'s central differences: at ``DIGITS``
+#: digits their truncation error is about (step/d)² relative at distance d from a
+#: singular configuration, their rounding 10^-DIGITS/step.
+JACOBIAN_STEP = mp.mpf("1e-20")
+
+
+def tangent_jacobian(name: str, wi: Sequence[float], wo: Sequence[float], frame: Any) -> Any:
+    """∂c/∂s (4 × 4 floats) along the four tangent vectors ``frame`` (6, 4), the columns
+    split into ωi's rows and ωo's rows: central differences of `forward_unit` with
+    `JACOBIAN_STEP`, on the exactly normalized pair moved as (ω + s e)/‖ω + s e‖."""
+    with mp.workdps(DIGITS):
+        a, b = _vec(wi), _vec(wo)
+        out = np.zeros((4, 4))
+        for j in range(4):
+            e_i = [mp.mpf(float(x)) for x in frame[:3, j]]
+            e_o = [mp.mpf(float(x)) for x in frame[3:, j]]
+            ends = []
+            for s in (JACOBIAN_STEP, -JACOBIAN_STEP):
+                moved_i = [x + s * y for x, y in zip(a, e_i, strict=True)]
+                moved_o = [x + s * y for x, y in zip(b, e_o, strict=True)]
+                unit_i = [x / _norm(moved_i) for x in moved_i]
+                unit_o = [x / _norm(moved_o) for x in moved_o]
+                ends.append(forward_unit(name, unit_i, unit_o))
+            for row in range(4):
+                diff = ends[0][row] - ends[1][row]
+                if row in (1, 3):  # azimuths: the difference modulo 2π, in (−π, π]
+                    diff -= 2 * mp.pi * mp.floor((diff + mp.pi) / (2 * mp.pi))
+                out[row, j] = float(diff / (2 * JACOBIAN_STEP))
+        return out
