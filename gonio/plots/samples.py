@@ -4,7 +4,9 @@ plan's coordinates (the isotropic reduction for an isotropic plan, three project
 the coordinate box), coloured by value (log10 f) or by residual against a truth.
 
 The residual of a sample is (f − truth) / σ: how many of its own 1σ uncertainties it is
-away from the truth (drawn clipped to ±`RESIDUAL_CLIP`).
+away from the truth (drawn clipped to ±`RESIDUAL_CLIP`). A run with a sample whose σ is 0
+(a noise-free simulation) has no σ to count in: its samples are coloured by the relative
+residual (f − truth) / max(|truth|, `FLOOR`) instead (clipped to ±`RELATIVE_CLIP`).
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from gonio.types import BrdfEval, FloatArray
 COLOURS = ("value", "residual")
 #: The residual colour scale spans ± this many σ.
 RESIDUAL_CLIP = 5.0
+#: The relative residual's colour scale spans ± this.
+RELATIVE_CLIP = 1.0
 #: Values below this (sr⁻¹) are coloured as it.
 FLOOR = 1e-4
 #: The figure's size (inches).
@@ -79,8 +83,12 @@ def coverage(
             raise GonioError("--colour residual needs a truth (--truth SPEC, or a simulated run)")
         t = np.asarray(truth(wi, wo), dtype=np.float64)
         t = t.mean(axis=-1) if t.ndim == 2 else t
-        colour = (f - t) / sigma
-        colour_label = "residual (f − truth) / σ"
+        if np.all(sigma > 0.0):
+            colour = (f - t) / sigma
+            colour_label = "residual (f − truth) / σ"
+        else:  # a noise-free simulation: no σ to count in
+            colour = (f - t) / np.maximum(np.abs(t), FLOOR)
+            colour_label = "relative residual (f − truth) / |truth| (some σ = 0)"
     return Coverage(
         wi=wi, wo=wo, coords=coords, names=tuple(names), bounds=bounds, colour=colour,
         colour_by=colour_by, colour_label=colour_label, parametrization=p.name,
@@ -95,9 +103,13 @@ def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None
     if data.colour_by == "value":
         style: dict[str, Any] = {"cmap": "viridis"}
     else:
-        style = {"cmap": "RdBu_r", "vmin": -RESIDUAL_CLIP, "vmax": RESIDUAL_CLIP}
-    fig = plt.figure(figsize=FIGSIZE, constrained_layout=True)
-    grid = fig.add_gridspec(2, 3)
+        clip = RESIDUAL_CLIP if data.colour_label.endswith("/ σ") else RELATIVE_CLIP
+        style = {"cmap": "RdBu_r", "vmin": -clip, "vmax": clip}
+    width, height = FIGSIZE
+    fig = plt.figure(figsize=FIGSIZE)
+    # A fixed layout (inches from the edges): constrained layout costs seconds here.
+    grid = fig.add_gridspec(2, 3, left=0.8 / width, right=1 - 1.6 / width, bottom=0.6 / height,
+                            top=1 - 0.8 / height, wspace=0.3, hspace=0.3)  # fmt: skip
     dots = None
     for j, (w, name) in enumerate(((data.wi, "ωi (light)"), (data.wo, "ωo (detector)"))):
         ax = fig.add_subplot(grid[0, j])
@@ -116,7 +128,8 @@ def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None
         ax.set_ylabel(label(data.names[b]))
         ax.set_title(f"{data.parametrization} coordinates")
     if dots is not None:
-        fig.colorbar(dots, ax=fig.axes, label=data.colour_label, shrink=0.8)
+        bar = fig.add_axes((1 - 1.1 / width, 0.15, 0.15 / width, 0.7))
+        fig.colorbar(dots, cax=bar, label=data.colour_label)
     fig.suptitle(data.title)
     save(fig, path, format)
 

@@ -33,7 +33,7 @@ DEFAULT_ANGLES_DEG = (0.0, 45.0, 90.0)
 #: Values below this (sr⁻¹) are shaded as it (a log scale has no 0).
 FLOOR = 1e-4
 #: Figure size (inches) of one slice.
-PANEL_IN = (3.6, 3.2)
+PANEL_IN = (3.4, 3.0)
 #: Outside the domain, no data.
 OUTSIDE, UNSUPPORTED = "0.35", "0.85"
 
@@ -123,7 +123,7 @@ def _slice(surface: Surface, p: params.Parametrization, angle: float, n: int) ->
 def figure_size(data: Slices) -> tuple[float, float]:
     """The figure's size in inches."""
     rows, cols = len(data.rows), len(data.rows[0])
-    return PANEL_IN[0] * cols + 1.2, PANEL_IN[1] * rows + 0.6
+    return PANEL_IN[0] * cols + 2.2, PANEL_IN[1] * rows + 1.4
 
 
 def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
@@ -140,10 +140,12 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
     levels = np.arange(math.floor(2 * lo) / 2, hi + 0.5, 0.5)
     background = ListedColormap([OUTSIDE, UNSUPPORTED])
 
-    fig, axes = plt.subplots(
-        len(data.rows), len(data.rows[0]), figsize=figure_size(data),
-        squeeze=False, constrained_layout=True,
-    )  # fmt: skip
+    # A fixed layout (inches from the edges): constrained layout costs seconds here.
+    width, height = figure_size(data)
+    fig, axes = plt.subplots(len(data.rows), len(data.rows[0]), figsize=(width, height),
+                             squeeze=False)  # fmt: skip
+    fig.subplots_adjust(left=0.7 / width, right=1 - 1.5 / width, bottom=0.5 / height,
+                        top=1 - 0.9 / height, wspace=0.3, hspace=0.45)  # fmt: skip
     image = None
     for row, ax_row in zip(data.rows, axes, strict=True):
         for s, ax in zip(row, ax_row, strict=True):
@@ -154,15 +156,16 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
                 s.x, s.y, shade, shading="nearest", cmap="magma", vmin=lo, vmax=hi
             )
             if np.count_nonzero(~s.masked) > 3:
-                ax.contour(s.x, s.y, shade, levels=levels, colors="w", linewidths=0.6)
+                ax.contour(s.x, s.y, shade, levels=levels, colors="w", linewidths=0.6,
+                           linestyles="solid")  # fmt: skip
             ax.set_xlabel(label(s.names[0]))
             ax.set_ylabel(label(s.names[1]))
             third = label(s.names[2]).removesuffix(" (rad)")
             ax.set_title(f"{s.parametrization}, {third} = {math.degrees(s.angle):g}°")
             ax.set_aspect("auto")
     if image is not None:
-        fig.colorbar(image, ax=axes, label="log10 f (sr⁻¹); iso-lines every ½ decade",
-                     shrink=0.8)  # fmt: skip
+        bar = fig.add_axes((1 - 1.1 / width, 0.15, 0.15 / width, 0.7))
+        fig.colorbar(image, cax=bar, label="log10 f (sr⁻¹); iso-lines every ½ decade")
     fig.suptitle(
         data.title + "\ndark grey: outside the domain, light grey: no data (not supported)"
     )
