@@ -6,8 +6,8 @@ for halfway/difference), ln-shaded values with iso-lines.
 
 Each pixel is a point of the parametrization's isotropic box; its pair comes from
 ``inverse_iso`` (φh = 0). A pixel is masked where the point is outside the valid domain
-(drawn dark grey) or where the surface has no data there (its ``supported`` is False;
-drawn light grey): only what the surface measured is shaded.
+(drawn dark grey) or where the surface has no data there (its ``supported`` is False,
+or its value is NaN; drawn light grey): only what the surface measured is shaded.
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ class Slice:
     """One slice: the surface at ``coords`` (R, R, 3), rows along the second coordinate
     (``y``), columns along the first (``x``), the third fixed at ``angle`` (rad).
     ``f``: values in sr⁻¹, NaN where not ``valid`` (outside the domain); ``masked``: not
-    valid or not supported (what the figure leaves unshaded)."""
+    valid, not supported, or where the surface declines to answer (NaN): what the figure
+    leaves unshaded."""
 
     parametrization: str
     names: tuple[str, str, str]
@@ -57,7 +58,7 @@ class Slice:
 
     @property
     def masked(self) -> BoolArray:
-        return np.asarray(~(self.valid & self.supported), dtype=np.bool_)
+        return np.asarray(~(self.valid & self.supported & np.isfinite(self.f)), dtype=np.bool_)
 
 
 @dataclass(frozen=True)

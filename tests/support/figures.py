@@ -38,3 +38,18 @@ class Lobe:
 
     def supported(self, wi: FloatArray, wo: FloatArray) -> BoolArray:
         return np.asarray((wi[..., 2] > 0.5) & (wo[..., 2] > 0.5), dtype=np.bool_)
+
+
+def capture(monkeypatch: object, module: object) -> list[object]:
+    """The figures ``module`` saves (its ``save`` still writes them), for tests that
+    check what was drawn, not only what was computed."""
+    import gonio.plots
+
+    figures: list[object] = []
+
+    def spy(fig: object, path: object, format: str | None = None) -> None:
+        figures.append(fig)
+        gonio.plots.save(fig, path, format)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(module, "save", spy)  # type: ignore[attr-defined]
+    return figures

@@ -5,6 +5,7 @@ are exactly those near each plane, at their signed θo."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from hypothesis import strategies as st
 
 from gonio.errors import GonioError
 from gonio.plots import polar
-from tests.support.figures import Lobe
+from tests.support.figures import Lobe, capture, pixels, png_size
 
 THETA_MAX = math.radians(80.0)
 
@@ -112,3 +113,29 @@ def test_an_angle_of_incidence_beyond_the_rig_is_refused(theta_i: float) -> None
     expected = r"--theta-i .*: expected an angle in degrees in \[0, 80\]"
     with pytest.raises(GonioError, match=expected):
         polar.polar(Lobe(), (np.empty((0, 3)),) * 2 + (np.empty(0),) * 2, THETA_MAX, (theta_i,))
+
+
+def test_the_figure_draws_the_curves_and_samples_and_is_a_png_of_its_size(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    lobe = Lobe()
+    wi, wo = polar.in_plane(math.radians(30.0), np.radians([10.0, 30.0, 50.0]))
+    f = lobe.eval(wi, wo)
+    data = polar.polar(lobe, (wi, wo, f, 0.1 * f), THETA_MAX, (30.0,), truth=lobe.eval,
+                       truth_label="the lobe")  # fmt: skip
+    figures = capture(monkeypatch, polar)
+    path = tmp_path / "polar.png"
+    polar.draw(data, path)
+    assert png_size(path) == pixels(polar.FIGSIZE) == (900, 550)
+    (ax,) = figures[0].axes  # type: ignore[attr-defined]
+    solid, dotted, dashed = ax.lines[:3]
+    c = data.curves[0]
+    deg = np.degrees(c.theta_o)
+    for line in (solid, dotted, dashed):
+        np.testing.assert_array_equal(line.get_xdata(), deg)
+    np.testing.assert_array_equal(solid.get_ydata(), np.where(c.supported, c.surface, np.nan))
+    np.testing.assert_array_equal(dotted.get_ydata(), np.where(c.supported, np.nan, c.surface))
+    np.testing.assert_array_equal(dashed.get_ydata(), c.truth)
+    points = ax.lines[3]  # the error bars' markers
+    np.testing.assert_allclose(points.get_xdata(), [10.0, 30.0, 50.0])
+    np.testing.assert_array_equal(points.get_ydata(), f)

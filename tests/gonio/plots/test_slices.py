@@ -13,7 +13,7 @@ import pytest
 from gonio import params
 from gonio.errors import GonioError
 from gonio.plots import slices
-from tests.support.figures import Lobe, pixels, png_size
+from tests.support.figures import Lobe, capture, pixels, png_size
 
 
 @pytest.fixture(scope="module")
@@ -73,7 +73,35 @@ def test_an_angle_outside_0_180_is_refused(angle: float) -> None:
         slices.slices(Lobe(), (angle,))
 
 
-def test_the_figure_is_a_png_of_its_size(data: slices.Slices, tmp_path: Path) -> None:
+def test_a_value_the_surface_declines_to_give_is_masked() -> None:
+    class Partial(Lobe):
+        def eval(self, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+            f = super().eval(wi, wo)
+            return np.where(wi[:, 0] > 0.3, np.nan, f)
+
+    (s,) = slices.slices(Partial(), (90.0,), parametrizations=("hybrid",), resolution=15).rows[0]
+    declined = s.valid & np.isnan(s.f)
+    assert declined.any()
+    assert s.masked[declined].all()
+
+
+def test_the_figure_shades_the_data_and_is_a_png_of_its_size(
+    data: slices.Slices, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from matplotlib.collections import QuadMesh
+
+    figures = capture(monkeypatch, slices)
     path = tmp_path / "slices.png"
     slices.draw(data, path)
     assert png_size(path) == pixels(slices.figure_size(data)) == (900, 1040)
+    (fig,) = figures
+    panels = [ax for ax in fig.axes if ax.get_title()]  # type: ignore[attr-defined]
+    assert len(panels) == 6
+    for ax, s in zip(panels, [s for row in data.rows for s in row], strict=True):
+        background, shade = (c for c in ax.collections if isinstance(c, QuadMesh))
+        shown = shade.get_array()
+        np.testing.assert_array_equal(np.ma.getmaskarray(shown).reshape(s.f.shape), s.masked)
+        np.testing.assert_allclose(
+            shown.reshape(s.f.shape)[~s.masked], np.log10(np.maximum(s.f[~s.masked], 1e-4))
+        )
+        np.testing.assert_array_equal(background.get_array().reshape(s.f.shape), s.valid)
