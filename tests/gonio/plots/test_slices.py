@@ -58,13 +58,20 @@ def test_hybrid_equals_orthographic_at_90_degrees(data: slices.Slices) -> None:
     np.testing.assert_allclose(hybrid.f, orthographic.f, rtol=1e-12, equal_nan=True)
 
 
-def test_a_surface_without_support_is_masked_only_outside_the_domain() -> None:
+def test_a_flat_surface_without_support_is_masked_only_outside_the_domain(
+    tmp_path: Path,
+) -> None:
+    """…and is drawn without iso-lines (none in its range) and without a warning."""
+
     class Flat:
         def eval(self, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
             return np.full(len(wi), 1 / math.pi)
 
-    (s,) = slices.slices(Flat(), (30.0,), parametrizations=("hybrid",), resolution=9).rows[0]
+    data = slices.slices(Flat(), (30.0,), parametrizations=("hybrid",), resolution=9)
+    (s,) = data.rows[0]
     np.testing.assert_array_equal(s.masked, ~s.valid)
+    slices.draw(data, tmp_path / "flat.png")  # a warning would fail the test
+    assert png_size(tmp_path / "flat.png") == pixels(slices.figure_size(data))
 
 
 @pytest.mark.parametrize("angle", [-1.0, 180.0, math.nan])
