@@ -156,8 +156,9 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
             image = ax.pcolormesh(
                 s.x, s.y, shade, shading="nearest", cmap="magma", vmin=lo, vmax=hi
             )
-            inside = levels[(levels > shade.min()) & (levels < shade.max())]
-            if len(inside) and np.count_nonzero(~s.masked) > 3:  # else no line to draw
+            drawn = shade.compressed()
+            inside = levels[(levels > drawn.min()) & (levels < drawn.max())] if drawn.size else []
+            if len(inside):  # else no iso-line crosses the slice
                 ax.contour(s.x, s.y, shade, levels=inside, colors="w", linewidths=0.6,
                            linestyles="solid")  # fmt: skip
             ax.set_xlabel(label(s.names[0]))

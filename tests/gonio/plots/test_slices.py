@@ -112,3 +112,14 @@ def test_the_figure_shades_the_data_and_is_a_png_of_its_size(
             shown.reshape(s.f.shape)[~s.masked], np.log10(np.maximum(s.f[~s.masked], 1e-4))
         )
         np.testing.assert_array_equal(background.get_array().reshape(s.f.shape), s.valid)
+
+
+def test_a_surface_with_no_data_anywhere_is_drawn_grey(tmp_path: Path) -> None:
+    class Nowhere(Lobe):
+        def supported(self, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:
+            return np.zeros(len(wi), dtype=bool)
+
+    data = slices.slices(Nowhere(), (10.0,), parametrizations=("orthographic",), resolution=9)
+    assert data.rows[0][0].masked.all()
+    slices.draw(data, tmp_path / "grey.png")
+    assert png_size(tmp_path / "grey.png") == pixels(slices.figure_size(data))
