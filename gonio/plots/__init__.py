@@ -95,11 +95,15 @@ class Surface(Protocol):
     def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray: ...
 
 
-def values(surface: Surface, wi: FloatArray, wo: FloatArray) -> FloatArray:
-    """``surface``'s values (N,) at the pairs; an RGB value is drawn as the mean of its
-    channels."""
-    f = np.asarray(surface.eval(wi, wo), dtype=np.float64)
+def one_channel(values: object) -> FloatArray:
+    """Values (N,) as drawn: an RGB value (N, 3) is drawn as the mean of its channels."""
+    f = np.asarray(values, dtype=np.float64)
     return np.asarray(f.mean(axis=-1) if f.ndim == 2 else f, dtype=np.float64)
+
+
+def values(surface: Surface, wi: FloatArray, wo: FloatArray) -> FloatArray:
+    """``surface``'s values (N,) at the pairs (`one_channel`)."""
+    return one_channel(surface.eval(wi, wo))
 
 
 def supported(surface: object, wi: FloatArray, wo: FloatArray) -> BoolArray:

@@ -18,7 +18,15 @@ import numpy as np
 from scipy.stats import binned_statistic_2d
 
 from gonio import params
-from gonio.plots import Surface, label, require_matplotlib, save, supported, values
+from gonio.plots import (
+    Surface,
+    label,
+    one_channel,
+    require_matplotlib,
+    save,
+    supported,
+    values,
+)
 from gonio.reconstruct.metrics import REGIONS, Scores, region_masks, scores
 from gonio.reconstruct.testset import TestSet
 from gonio.types import BoolArray, BrdfEval, FloatArray
@@ -78,8 +86,7 @@ def errors(
     docstring), mapped in ``parametrization``'s isotropic coordinates;
     ``truth_supported``: where a truth that is itself a reconstruction is defined."""
     wi, wo = test_set.wi, test_set.wo
-    t = np.asarray(truth(wi, wo), dtype=np.float64)
-    t = t.mean(axis=-1) if t.ndim == 2 else t
+    t = one_channel(truth(wi, wo))
     keep = np.isfinite(t)
     if truth_supported is not None:
         keep &= truth_supported

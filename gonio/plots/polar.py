@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.plots import Surface, require_matplotlib, save, supported, values
+from gonio.plots import Surface, one_channel, require_matplotlib, save, supported, values
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 #: The default angles of incidence (degrees).
@@ -128,7 +128,7 @@ def polar(
     sigma) near each plane (see the module docstring)."""
     check_theta_i(theta_i_deg, theta_max)
     swi, swo, sf, ssigma = (np.asarray(a, dtype=np.float64) for a in samples)
-    sf, ssigma = (a.mean(axis=-1) if a.ndim == 2 else a for a in (sf, ssigma))
+    sf, ssigma = one_channel(sf), one_channel(ssigma)
     theta_o = np.linspace(-theta_max, theta_max, POINTS)
     tolerance = math.radians(tolerance_deg)
     curves = []
@@ -144,18 +144,13 @@ def polar(
                 wo=wo,
                 surface=values(surface, wi, wo),
                 supported=supported(surface, wi, wo),
-                truth=None if truth is None else values(_Eval(truth), wi, wo),
+                truth=None if truth is None else one_channel(truth(wi, wo)),
                 sample_theta_o=sample_theta_o[near],
                 sample_f=sf[near],
                 sample_sigma=ssigma[near],
             )
         )
     return Polar(curves, surface_label, truth_label if truth is not None else None, title)
-
-
-@dataclass(frozen=True)
-class _Eval:
-    eval: BrdfEval
 
 
 def draw(data: Polar, path: str | Path, *, format: str | None = None) -> None:

@@ -19,7 +19,7 @@ import numpy as np
 
 from gonio import params
 from gonio.errors import GonioError
-from gonio.plots import label, require_matplotlib, save
+from gonio.plots import label, one_channel, require_matplotlib, save
 from gonio.types import BrdfEval, FloatArray
 
 #: What the samples can be coloured by.
@@ -70,7 +70,7 @@ def coverage(
     if colour_by not in COLOURS:
         raise GonioError(f"--colour {colour_by}: expected one of {', '.join(COLOURS)}")
     wi, wo, f, sigma = (np.asarray(a, dtype=np.float64) for a in samples)
-    f, sigma = (a.mean(axis=-1) if a.ndim == 2 else a for a in (f, sigma))
+    f, sigma = one_channel(f), one_channel(sigma)
     p = params.get(parametrization)
     coords = p.forward_iso(wi, wo) if isotropic else p.forward(wi, wo)
     names = p.iso_names if isotropic else p.names
@@ -81,8 +81,7 @@ def coverage(
     else:
         if truth is None:
             raise GonioError("--colour residual needs a truth (--truth SPEC, or a simulated run)")
-        t = np.asarray(truth(wi, wo), dtype=np.float64)
-        t = t.mean(axis=-1) if t.ndim == 2 else t
+        t = one_channel(truth(wi, wo))
         if np.all(sigma > 0.0):
             colour = (f - t) / sigma
             colour_label = "residual (f − truth) / σ"
