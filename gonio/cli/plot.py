@@ -33,7 +33,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument("--kind", required=True, choices=KINDS, help="the figure to draw")
     p.add_argument(
-        "-o", "--output", type=Path, required=True,
+        "-o", "--output", type=Path, required=True, metavar="FILE",
         help="the figure file; its suffix names the format (.png, .svg, .pdf, …)",
     )  # fmt: skip
     p.add_argument(
