@@ -47,6 +47,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.evaluate",
         "score a run's reconstruction against a truth (the scene, a model, another run)",
     ),
+    "plot": (
+        "gonio.cli.plot",
+        "draw a run: reconstruction slices, in-plane curves, sample coverage, error by region",
+    ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "export": (
         "gonio.cli.export",

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 from types import ModuleType
+from typing import Any, Protocol
+
+import numpy as np
 
 from gonio.errors import GonioError
+from gonio.types import BoolArray, FloatArray
 
 
 class PlotUnavailable(GonioError):
@@ -40,3 +44,71 @@ def check_figure_format(path: Path, option: str) -> None:
             f"{option} {path}: matplotlib cannot write '.{suffix}' figures; "
             f"name a file ending in one of {', '.join('.' + f for f in sorted(formats))}"
         )
+
+
+#: Resolution of every figure of `gonio plot` (a figure of W × H inches is W·DPI × H·DPI
+#: pixels: the figures are saved without tight cropping).
+DPI = 100
+
+#: Pretty axis labels of the parametrizations' coordinate names.
+LABELS = {
+    "hbar": "‖h̄‖",
+    "k": "‖k‖",
+    "kbar": "‖k̄‖",
+    "phi_h": "φh (rad)",
+    "phi_k": "φk (rad)",
+    "phi_k_minus_phi_h": "φk − φh (rad)",
+    "theta_h": "θh (rad)",
+    "theta_d": "θd (rad)",
+    "phi_d": "φd (rad)",
+    "theta_i": "θi (rad)",
+    "theta_o": "θo (rad)",
+    "phi_i": "φi (rad)",
+    "phi_o": "φo (rad)",
+    "phi_o_minus_phi_i": "φo − φi (rad)",
+}
+
+
+def label(name: str) -> str:
+    """The axis label of a coordinate name (the name itself if it has none)."""
+    return LABELS.get(name, name)
+
+
+def save(fig: Any, path: str | Path, format: str | None = None) -> None:
+    """Write ``fig`` at `DPI` (``format``: matplotlib's name, default from the suffix,
+    PNG without one) and close it."""
+    plt = require_matplotlib()
+    try:
+        fig.savefig(path, dpi=DPI, format=format or _format_of(Path(path)))
+    finally:
+        plt.close(fig)
+
+
+def _format_of(path: Path) -> str:
+    return path.suffix.lower().removeprefix(".") or "png"
+
+
+class Surface(Protocol):
+    """What the figures draw: a BRDF f(ωi, ωo) (a reconstruction, a model) in sr⁻¹ for
+    pairs (N, 3); a reconstruction may also say where it has data (``supported``)."""
+
+    def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray: ...
+
+
+def one_channel(values: object) -> FloatArray:
+    """Values (N,) as drawn: an RGB value (N, 3) is drawn as the mean of its channels."""
+    f = np.asarray(values, dtype=np.float64)
+    return np.asarray(f.mean(axis=-1) if f.ndim == 2 else f, dtype=np.float64)
+
+
+def values(surface: Surface, wi: FloatArray, wo: FloatArray) -> FloatArray:
+    """``surface``'s values (N,) at the pairs (`one_channel`)."""
+    return one_channel(surface.eval(wi, wo))
+
+
+def supported(surface: object, wi: FloatArray, wo: FloatArray) -> BoolArray:
+    """Where ``surface`` has data: its ``supported(wi, wo)``, or everywhere."""
+    fn = getattr(surface, "supported", None)
+    if fn is None:
+        return np.ones(len(wi), dtype=np.bool_)
+    return np.asarray(fn(wi, wo), dtype=np.bool_).reshape(len(wi))

@@ -1,0 +1,198 @@
+"""`gonio plot RUN --kind slices|polar|coverage|error -o FILE.png`: a figure of a run, its
+reconstruction and a truth (docs/plots.md). The figure is reserved before any work and
+replaced whole (`gonio.output`)."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from gonio.cli.evaluate import DEFAULT_METHOD, NAIVE
+from gonio.output import reserve_output
+
+if TYPE_CHECKING:
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.truth import Candidate, Truth
+
+#: The figures, in the order of --help.
+KINDS = ("slices", "polar", "coverage", "error")
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "plot",
+        help=help_,
+        description="Draw one figure of a run (needs matplotlib): slices of its "
+        "reconstruction in the hybrid, orthographic and halfway/difference coordinates "
+        "(--kind slices), the in-plane BRDF with the samples and the truth (polar), the "
+        "samples on the hemisphere and in the plan's coordinates (coverage), or the "
+        "reconstruction's error against a truth over the domain and by region (error).",
+    )
+    p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
+    p.add_argument("--kind", required=True, choices=KINDS, help="the figure to draw")
+    p.add_argument(
+        "-o", "--output", type=Path, required=True, metavar="FILE",
+        help="the figure file; its suffix names the format (.png, .svg, .pdf, …)",
+    )  # fmt: skip
+    p.add_argument(
+        "--method",
+        default=DEFAULT_METHOD,
+        help=f"the reconstruction: {NAIVE} (the reference grid) or a method of "
+        f"gonio.reconstruct.build (default {DEFAULT_METHOD}); not used by coverage",
+    )
+    p.add_argument(
+        "--parametrization",
+        metavar="P",
+        help="the parametrization to reconstruct in (default: the run's plan's); coverage "
+        "and error draw in it too",
+    )
+    p.add_argument(
+        "--truth",
+        metavar="SPEC",
+        help="what to compare with: scene (a simulated run's scene, the default where there "
+        "is one), a model NAME:key=value,... (e.g. a fitted model), a material or scene "
+        "YAML file, or another run file",
+    )
+    p.add_argument(
+        "--phi-k", type=float, nargs="+", metavar="DEG",
+        help="slices: the values of φk − φh (hybrid, orthographic) and φd (halfway/"
+        "difference) in degrees, in [0, 180) (default 0 45 90)",
+    )  # fmt: skip
+    p.add_argument(
+        "--theta-i", type=float, nargs="+", metavar="DEG",
+        help="polar: the angles of incidence in degrees (default 0 30 60)",
+    )  # fmt: skip
+    p.add_argument(
+        "--colour", choices=("value", "residual"), default="value",
+        help="coverage: colour the samples by log10 f or by (f − truth) / σ (default value)",
+    )  # fmt: skip
+    p.set_defaults(func=cmd_plot)
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    from gonio.plots import check_figure_format
+
+    check_figure_format(args.output, "-o")
+    if args.phi_k is not None:
+        from gonio.plots.slices import check_angles
+
+        check_angles(args.phi_k)
+    if args.parametrization is not None:
+        from gonio import params
+
+        params.get(args.parametrization)  # an unknown name fails before any work
+    with reserve_output(args.output, "-o") as figure:
+        from gonio.reconstruct.measured import Measured
+
+        measured = Measured.from_run(str(args.run))
+        draw = _FIGURES[args.kind](args, measured)
+        kind = args.output.suffix.lower().removeprefix(".") or "png"
+        figure.write_with(lambda path: draw(path, kind))
+    print(f"drew the {args.kind} of {args.run} in {args.output}")
+    return 0
+
+
+Drawing = Callable[[Path, str], None]
+
+
+def _slices(args: argparse.Namespace, measured: Measured) -> Drawing:
+    from gonio.plots import slices
+
+    surface = _surface(args, measured)
+    data = slices.slices(
+        surface,
+        args.phi_k if args.phi_k is not None else slices.DEFAULT_ANGLES_DEG,
+        title=f"{_label(args, measured)} of {args.run} ({len(measured)} samples)",
+    )
+    return lambda path, kind: slices.draw(data, path, format=kind)
+
+
+def _polar(args: argparse.Namespace, measured: Measured) -> Drawing:
+    from gonio.plots import polar
+
+    theta_i = args.theta_i if args.theta_i is not None else polar.DEFAULT_THETA_I_DEG
+    polar.check_theta_i(theta_i, measured.rig.theta_max)
+    truth = None
+    if args.truth is not None or measured.scene_text is not None:
+        truth = _truth(args, measured)
+    data = polar.polar(
+        _surface(args, measured),
+        (measured.wi, measured.wo, measured.f, measured.sigma),
+        measured.rig.theta_max,
+        theta_i,
+        truth=None if truth is None else truth.eval,
+        surface_label=_label(args, measured),
+        truth_label=None if truth is None else truth.label,
+        title=f"in-plane BRDF of {args.run} ({len(measured)} samples)",
+    )
+    return lambda path, kind: polar.draw(data, path, format=kind)
+
+
+def _coverage(args: argparse.Namespace, measured: Measured) -> Drawing:
+    from gonio.plots import samples
+
+    truth = _truth(args, measured) if args.colour == "residual" else None
+    data = samples.coverage(
+        (measured.wi, measured.wo, measured.f, measured.sigma),
+        args.parametrization or measured.parametrization,
+        isotropic=measured.isotropic,
+        theta_max=measured.rig.theta_max,
+        colour_by=args.colour,
+        truth=None if truth is None else truth.eval,
+        title=f"the {len(measured)} samples of {args.run}"
+        + ("" if truth is None else f" against {truth.label}"),
+    )
+    return lambda path, kind: samples.draw(data, path, format=kind)
+
+
+def _error(args: argparse.Namespace, measured: Measured) -> Drawing:
+    from gonio.plots import error
+    from gonio.reconstruct import testset
+
+    truth = _truth(args, measured)
+    surface = _surface(args, measured)
+    pairs = testset.draw(measured.rig, isotropic=measured.isotropic)
+    truth_supported = None
+    if truth.supported is not None:
+        truth_supported = truth.supported(pairs.wi, pairs.wo)
+    data = error.errors(
+        surface,
+        truth.eval,
+        pairs,
+        args.parametrization or measured.parametrization,
+        truth_supported=truth_supported,
+        title=f"{_label(args, measured)} of {args.run} against {truth.label} "
+        f"({len(pairs)} test pairs, seed {pairs.seed})",
+    )
+    return lambda path, kind: error.draw(data, path, format=kind)
+
+
+_FIGURES: dict[str, Callable[[argparse.Namespace, Measured], Drawing]] = {
+    "slices": _slices,
+    "polar": _polar,
+    "coverage": _coverage,
+    "error": _error,
+}
+
+
+def _surface(args: argparse.Namespace, measured: Measured) -> Candidate:
+    from gonio.cli.evaluate import _reconstruction
+
+    return _reconstruction(measured, args.method, args.parametrization)
+
+
+def _truth(args: argparse.Namespace, measured: Measured) -> Truth:
+    from gonio.cli.evaluate import _reconstruction
+    from gonio.reconstruct.truth import truth_from_spec
+
+    return truth_from_spec(
+        args.truth,
+        measured,
+        reconstruct=lambda other: _reconstruction(other, args.method, args.parametrization),
+    )
+
+
+def _label(args: argparse.Namespace, measured: Measured) -> str:
+    return f"{args.method} reconstruction ({args.parametrization or measured.parametrization})"
