@@ -16,6 +16,7 @@ from gonio.brdf.characteristic import (
     GrazingTestFunction,
     SpecularTestFunction,
 )
+from gonio.brdf.composite import Sum
 from gonio.brdf.cook_torrance import CookTorrance, GGXAnisotropic
 from gonio.brdf.models import (
     BlinnPhong,
@@ -41,6 +42,7 @@ _MODELS: dict[str, type[BRDF]] = {
         FresnelTestFunction,
         SpecularTestFunction,
         GrazingTestFunction,
+        Sum,
     )
 }
 
