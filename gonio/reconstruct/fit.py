@@ -1,0 +1,204 @@
+"""Weighted least-squares fits of a model family to measured BRDF samples (docs/fitting.md).
+
+The residual of sample i (channel c in an RGB fit) is r = (f_model − f)/σ, σ the
+sample's 1σ uncertainty raised to at least `SIGMA_FLOOR` × the median positive σ of
+its channel (a sample that claims to be exact would otherwise own the fit); a run
+whose every σ is 0 is fitted unweighted (σ = 1: χ² is then only a scale).
+`scipy.optimize.least_squares` (trust-region reflective, bounded) runs from several
+starts (`gonio.reconstruct.starts`) and keeps the lowest χ².
+
+Uncertainty: cov = (JᵀJ)⁻¹ · χ²_red with J the Jacobian of r at the optimum and
+χ²_red = χ²/(M − P) (M residuals, P free parameters), plus the calibration's common
+scale: every value of channel c shares the relative 1σ error u_c of the reference
+readings it was divided by, which moves the parameters by g_c = J⁺ (f/σ)|_c per unit
+scale; cov += Σ_c u_c² g_c g_cᵀ. Standard errors are √diag(cov).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from gonio.acquire.calibrated import calibrate
+from gonio.brdf import BRDF
+from gonio.brdf.composite import spec_of
+from gonio.errors import GonioError
+from gonio.reconstruct import regions as pair_regions
+from gonio.reconstruct.family import Family, parse
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.starts import starts as make_starts
+from gonio.store.read import Run, open_run
+from gonio.types import FloatArray
+
+#: σ below this fraction of the channel's median positive σ is raised to it.
+SIGMA_FLOOR = 1e-3
+#: Starts tried by default (the moment estimate and jittered copies of it).
+STARTS = 4
+
+
+@dataclass(frozen=True)
+class RegionResidual:
+    """The weighted residuals of one region: count of samples, χ² per residual and
+    mean residual (a bias shows as |mean| ≫ 1/√count)."""
+
+    count: int
+    chi2: float
+    mean: float
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """A fitted family. ``names``, ``values``, ``stderr`` and ``covariance`` follow the
+    fitted vector (``label.param`` or ``label.param[r]``)."""
+
+    spec: str
+    model: BRDF
+    names: tuple[str, ...]
+    values: FloatArray
+    stderr: FloatArray
+    covariance: FloatArray
+    chi2: float
+    dof: int
+    chi2_red: float
+    regions: dict[str, RegionResidual]
+    samples: int
+    starts: int
+    success: bool
+
+    def params(self) -> dict[str, tuple[float, float]]:
+        """name → (value, standard error)."""
+        pairs = zip(self.names, self.values, self.stderr, strict=True)
+        return {n: (float(v), float(s)) for n, v, s in pairs}
+
+    def material(self) -> dict[str, Any]:
+        """The fitted model as a scene's ``material:`` mapping."""
+        return spec_of(self.model)
+
+    def figures(self) -> dict[str, Any]:
+        """Everything as JSON-ready values."""
+        return {
+            "model": self.spec,
+            "samples": self.samples,
+            "chi2": self.chi2,
+            "dof": self.dof,
+            "chi2_red": self.chi2_red,
+            "success": self.success,
+            "starts": self.starts,
+            "params": {n: {"value": v, "stderr": s} for n, (v, s) in self.params().items()},
+            "regions": {k: vars(r) for k, r in self.regions.items()},
+            "material": self.material(),
+        }
+
+
+def fit(
+    measured: Measured,
+    spec: str | Family,
+    *,
+    starts: int = STARTS,
+    seed: int = 0,
+    scale_sigma: float | Sequence[float] = 0.0,
+) -> FitResult:
+    """Fit the family ``spec`` (a SPEC string or a parsed `Family`) to ``measured``.
+
+    ``scale_sigma``: relative 1σ of the calibration's common scale, one per channel or
+    one for all (`calibration_scale_sigma` of the run). `GonioError` (one line) when
+    there are fewer samples than free parameters or no start is finite."""
+    family = spec if isinstance(spec, Family) else parse(spec)
+    rgb = measured.is_rgb
+    slots = family.slots(rgb)
+    f = measured.f.reshape(len(measured), -1)
+    sigma = _floored(measured.sigma.reshape(f.shape))
+    m, p = f.size, len(slots)
+    if m <= p:
+        raise GonioError(
+            f"{measured.source}: {len(measured)} samples cannot fit {p} free parameters"
+        )
+    low = np.array([s.low for s in slots])
+    high = np.array([s.high for s in slots])
+
+    def residuals(x: FloatArray) -> FloatArray:
+        value = family.model(slots, x).eval(measured.wi, measured.wo).reshape(f.shape)
+        return np.asarray(((value - f) / sigma).ravel(), dtype=np.float64)
+
+    best = None
+    tried = make_starts(family, slots, measured, count=max(starts, 1), seed=seed)
+    for x0 in tried:
+        result = least_squares(
+            residuals, np.clip(x0, low, high), bounds=(low, high), x_scale="jac", method="trf"
+        )
+        if np.isfinite(result.cost) and (best is None or result.cost < best.cost):
+            best = result
+    if best is None:
+        raise GonioError(f"{measured.source}: model {family.spec!r}: no start gave a finite fit")
+    r = np.asarray(best.fun, dtype=np.float64)
+    chi2 = float(r @ r)
+    dof = m - p
+    cov = _covariance(np.asarray(best.jac, dtype=np.float64), chi2 / dof, f / sigma, scale_sigma)
+    return FitResult(
+        spec=family.spec,
+        model=family.model(slots, best.x),
+        names=tuple(s.name(family.terms) for s in slots),
+        values=np.asarray(best.x, dtype=np.float64),
+        stderr=np.sqrt(np.maximum(np.diag(cov), 0.0)),
+        covariance=cov,
+        chi2=chi2,
+        dof=dof,
+        chi2_red=chi2 / dof,
+        regions=_by_region(measured, r.reshape(f.shape)),
+        samples=len(measured),
+        starts=len(tried),
+        success=bool(best.success),
+    )
+
+
+def calibration_scale_sigma(run: Run | str) -> float:
+    """Relative 1σ of the common scale a run's values share through its reference
+    readings: √(Σ_k var(S_k)/S_k²)/K over its K calibrations (every sample divided by
+    their mean; interpolation in time weighs them unevenly, which this ignores)."""
+    series = calibrate(run if isinstance(run, Run) else open_run(run)).series
+    relative = series.rate_var / series.rate**2
+    return float(np.sqrt(relative.sum()) / relative.size)
+
+
+def _floored(sigma: FloatArray) -> FloatArray:
+    """σ with the floor of the module docstring, per channel (columns)."""
+    out = np.array(sigma, dtype=np.float64)
+    for c in range(out.shape[1]):
+        positive = out[:, c][out[:, c] > 0.0]
+        floor = SIGMA_FLOOR * float(np.median(positive)) if positive.size else 0.0
+        out[:, c] = np.maximum(out[:, c], floor) if floor > 0.0 else 1.0
+    return out
+
+
+def _covariance(
+    jac: FloatArray, chi2_red: float, scaled: FloatArray, scale_sigma: float | Sequence[float]
+) -> FloatArray:
+    """(JᵀJ)⁻¹ χ²_red plus the calibration scale's part (module docstring)."""
+    pinv = np.linalg.pinv(jac)
+    cov = np.asarray(pinv @ pinv.T * chi2_red, dtype=np.float64)
+    channels = scaled.shape[1]
+    u = np.broadcast_to(np.asarray(scale_sigma, dtype=np.float64), (channels,))
+    for c in range(channels):
+        if u[c] > 0.0:
+            column = np.zeros_like(scaled)
+            column[:, c] = scaled[:, c]
+            g = pinv @ column.ravel()
+            cov = cov + u[c] ** 2 * np.outer(g, g)
+    return cov
+
+
+def _by_region(measured: Measured, r: FloatArray) -> dict[str, RegionResidual]:
+    out = {}
+    for name, mask in pair_regions.regions(measured.wi, measured.wo).items():
+        part = r[mask]
+        count = int(mask.sum())
+        out[name] = RegionResidual(
+            count=count,
+            chi2=float(np.mean(part**2)) if count else 0.0,
+            mean=float(np.mean(part)) if count else 0.0,
+        )
+    return out
