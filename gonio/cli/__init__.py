@@ -44,6 +44,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "measure a plan on the rig (simulated or hardware), journaling every sample",
     ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
+    "fit": (
+        "gonio.cli.fit",
+        "fit a BRDF model (or a sum, lambert+ggx) to a run's samples, with uncertainties",
+    ),
     "motors": (
         "gonio.cli.motors",
         "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
