@@ -19,6 +19,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from gonio.brdf import BRDF, create
+from gonio.brdf.composite import Sum
+from gonio.brdf.registry import model_class
 from gonio.errors import DomainError, GonioError, UnknownNameError
 
 #: name → (gonio.brdf model, preset parameters).
@@ -128,15 +130,15 @@ class Family:
         return params
 
     def term_models(self, slots: tuple[Slot, ...], x: Any) -> list[BRDF]:
-        """Each term's model for the vector ``x``."""
-        return [
-            create(t.model, **p) for t, p in zip(self.terms, self.params(slots, x), strict=True)
-        ]
+        """Each term's model for the vector ``x`` (`parse` checked the names, so the
+        classes are called directly: `create` would inspect their signatures each time)."""
+        params = self.params(slots, x)
+        return [model_class(t.model)(**p) for t, p in zip(self.terms, params, strict=True)]
 
     def model(self, slots: tuple[Slot, ...], x: Any) -> BRDF:
         """The model for the vector ``x`` (a `Sum` when the family has several terms)."""
         built = self.term_models(slots, x)
-        return built[0] if len(built) == 1 else create("sum", components=built)
+        return built[0] if len(built) == 1 else Sum(built)
 
     def typical(self, slots: tuple[Slot, ...]) -> list[float]:
         """A start inside the bounds (for checking a SPEC and seeding a fit)."""
@@ -157,7 +159,8 @@ def parse(spec: str) -> Family:
     family = Family(spec, tuple(terms))
     slots = family.slots(rgb=False)
     try:
-        family.model(slots, family.typical(slots))
+        for term, params in zip(terms, family.params(slots, family.typical(slots)), strict=True):
+            create(term.model, **params)
     except GonioError as exc:
         raise DomainError(f"model {spec!r}: {exc}") from None
     return family

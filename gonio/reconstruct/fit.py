@@ -1,9 +1,11 @@
 """Weighted least-squares fits of a model family to measured BRDF samples (docs/fitting.md).
 
 The residual of sample i (channel c in an RGB fit) is r = (f_model − f)/σ, σ the
-sample's 1σ uncertainty raised to at least `SIGMA_FLOOR` × the median positive σ of
-its channel (a sample that claims to be exact would otherwise own the fit); a run
-whose every σ is 0 is fitted unweighted (σ = 1: χ² is then only a scale).
+sample's 1σ uncertainty. A σ of 0 says no estimate (a detector that averages on its
+own reports no spread), not an exact value: it is replaced by the median positive σ of
+its channel; a positive σ is raised to at least `SIGMA_FLOOR` × that median (a sample
+claiming near-exactness would otherwise own the fit). A run whose every σ is 0 is
+fitted unweighted (σ = 1: χ² is then only a scale).
 `scipy.optimize.least_squares` (trust-region reflective, bounded) runs from several
 starts (`gonio.reconstruct.starts`) and keeps the lowest χ².
 
@@ -34,7 +36,7 @@ from gonio.reconstruct.starts import starts as make_starts
 from gonio.store.read import Run, open_run
 from gonio.types import FloatArray
 
-#: σ below this fraction of the channel's median positive σ is raised to it.
+#: A positive σ below this fraction of its channel's median positive σ is raised to it.
 SIGMA_FLOOR = 1e-3
 #: Starts tried by default (the moment estimate and jittered copies of it).
 STARTS = 4
@@ -168,9 +170,13 @@ def _floored(sigma: FloatArray) -> FloatArray:
     """σ with the floor of the module docstring, per channel (columns)."""
     out = np.array(sigma, dtype=np.float64)
     for c in range(out.shape[1]):
-        positive = out[:, c][out[:, c] > 0.0]
-        floor = SIGMA_FLOOR * float(np.median(positive)) if positive.size else 0.0
-        out[:, c] = np.maximum(out[:, c], floor) if floor > 0.0 else 1.0
+        column = out[:, c]
+        positive = column[column > 0.0]
+        if not positive.size:
+            out[:, c] = 1.0
+            continue
+        typical = float(np.median(positive))
+        out[:, c] = np.where(column > 0.0, np.maximum(column, SIGMA_FLOOR * typical), typical)
     return out
 
 
