@@ -39,8 +39,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 def cmd_fit(args: argparse.Namespace) -> int:
     from gonio.config import ConfigError
     from gonio.reconstruct.family import parse
-    from gonio.reconstruct.fit import calibration_scale_sigma, fit
+    from gonio.reconstruct.fit import fit
     from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.shared import shared_error
 
     if len(args.runs) not in (1, 3):
         raise ConfigError(f"expected one run, or three (r, g, b bands); got {len(args.runs)}")
@@ -55,8 +56,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
             pending = outputs.enter_context(reserve_output(args.output, "-o"))
         parts = [Measured.from_run(str(path)) for path in args.runs]
         measured = parts[0] if len(parts) == 1 else Measured.rgb(*parts)
-        scale = [calibration_scale_sigma(str(path)) for path in args.runs]
-        result = fit(measured, family, starts=args.starts, seed=args.seed, scale_sigma=scale)
+        shared = [shared_error(str(path)) for path in args.runs]
+        result = fit(measured, family, starts=args.starts, seed=args.seed, shared=shared)
         if args.json:
             print(json.dumps(result.figures(), indent=2, ensure_ascii=False))
         else:

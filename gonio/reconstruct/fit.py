@@ -10,10 +10,12 @@ fitted unweighted (σ = 1: χ² is then only a scale).
 starts (`gonio.reconstruct.starts`) and keeps the lowest χ².
 
 Uncertainty: cov = (JᵀJ)⁻¹ · χ²_red with J the Jacobian of r at the optimum and
-χ²_red = χ²/(M − P) (M residuals, P free parameters), plus the calibration's common
-scale: every value of channel c shares the relative 1σ error u_c of the reference
-readings it was divided by, which moves the parameters by g_c = J⁺ (f/σ)|_c per unit
-scale; cov += Σ_c u_c² g_c g_cᵀ. Standard errors are √diag(cov).
+χ²_red = χ²/(M − P) (M residuals, P free parameters), plus the error the values share
+through the run's reference readings (`gonio.reconstruct.shared`): reading k of
+channel c, of relative 1σ u_k, moves the parameters by g_k = J⁺ (w_k f/σ)|_c per unit
+relative error, so cov += Σ u_k² g_k g_kᵀ. (σ already holds each sample's share as if
+it were its own; counting it twice keeps the errors on the safe side.) Standard errors
+are √diag(cov).
 """
 
 from __future__ import annotations
@@ -25,15 +27,14 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from gonio.acquire.calibrated import calibrate
 from gonio.brdf import BRDF
 from gonio.brdf.composite import spec_of
 from gonio.errors import GonioError
 from gonio.reconstruct import regions as pair_regions
 from gonio.reconstruct.family import Family, parse
 from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.shared import SharedError
 from gonio.reconstruct.starts import starts as make_starts
-from gonio.store.read import Run, open_run
 from gonio.types import FloatArray
 
 #: A positive σ below this fraction of its channel's median positive σ is raised to it.
@@ -102,12 +103,13 @@ def fit(
     *,
     starts: int = STARTS,
     seed: int = 0,
-    scale_sigma: float | Sequence[float] = 0.0,
+    shared: SharedError | Sequence[SharedError] | None = None,
 ) -> FitResult:
     """Fit the family ``spec`` (a SPEC string or a parsed `Family`) to ``measured``.
 
-    ``scale_sigma``: relative 1σ of the calibration's common scale, one per channel or
-    one for all (`calibration_scale_sigma` of the run). `GonioError` (one line) when
+    ``shared``: the errors the samples share through their calibration
+    (`gonio.reconstruct.shared.shared_error` of the run; one per channel in an RGB
+    fit), None to leave them out. `GonioError` (one line) when
     there are fewer samples than free parameters or no start is finite."""
     family = spec if isinstance(spec, Family) else parse(spec)
     rgb = measured.is_rgb
@@ -139,7 +141,7 @@ def fit(
     r = np.asarray(best.fun, dtype=np.float64)
     chi2 = float(r @ r)
     dof = m - p
-    cov = _covariance(np.asarray(best.jac, dtype=np.float64), chi2 / dof, f / sigma, scale_sigma)
+    cov = _covariance(np.asarray(best.jac, dtype=np.float64), chi2 / dof, f / sigma, shared)
     return FitResult(
         spec=family.spec,
         model=family.model(slots, best.x),
@@ -157,15 +159,6 @@ def fit(
     )
 
 
-def calibration_scale_sigma(run: Run | str) -> float:
-    """Relative 1σ of the common scale a run's values share through its reference
-    readings: √(Σ_k var(S_k)/S_k²)/K over its K calibrations (every sample divided by
-    their mean; interpolation in time weighs them unevenly, which this ignores)."""
-    series = calibrate(run if isinstance(run, Run) else open_run(run)).series
-    relative = series.rate_var / series.rate**2
-    return float(np.sqrt(relative.sum()) / relative.size)
-
-
 def _floored(sigma: FloatArray) -> FloatArray:
     """σ with the floor of the module docstring, per channel (columns)."""
     out = np.array(sigma, dtype=np.float64)
@@ -181,19 +174,29 @@ def _floored(sigma: FloatArray) -> FloatArray:
 
 
 def _covariance(
-    jac: FloatArray, chi2_red: float, scaled: FloatArray, scale_sigma: float | Sequence[float]
+    jac: FloatArray,
+    chi2_red: float,
+    scaled: FloatArray,
+    shared: SharedError | Sequence[SharedError] | None,
 ) -> FloatArray:
-    """(JᵀJ)⁻¹ χ²_red plus the calibration scale's part (module docstring)."""
+    """(JᵀJ)⁻¹ χ²_red plus the shared calibration errors' part (module docstring);
+    ``scaled`` is f/σ, (N, channels)."""
     pinv = np.linalg.pinv(jac)
     cov = np.asarray(pinv @ pinv.T * chi2_red, dtype=np.float64)
-    channels = scaled.shape[1]
-    u = np.broadcast_to(np.asarray(scale_sigma, dtype=np.float64), (channels,))
-    for c in range(channels):
-        if u[c] > 0.0:
-            column = np.zeros_like(scaled)
-            column[:, c] = scaled[:, c]
-            g = pinv @ column.ravel()
-            cov = cov + u[c] ** 2 * np.outer(g, g)
+    if shared is None:
+        return cov
+    errors = [shared] if isinstance(shared, SharedError) else list(shared)
+    rows, channels = scaled.shape
+    if len(errors) != channels or any(len(e) != rows for e in errors):
+        raise GonioError(
+            f"the calibration errors cover {[len(e) for e in errors]} samples; expected "
+            f"{channels} of {rows} (one per channel)"
+        )
+    for c, error in enumerate(errors):
+        design = np.zeros((rows, channels, error.weights.shape[1]))
+        design[:, c, :] = scaled[:, c, None] * error.weights
+        g = pinv @ design.reshape(rows * channels, -1)  # (P, K)
+        cov = cov + (g * error.relative**2) @ g.T
     return cov
 
 

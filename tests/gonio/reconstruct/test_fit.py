@@ -24,9 +24,10 @@ import numpy as np
 import pytest
 
 from gonio.errors import GonioError
-from gonio.reconstruct.fit import SIGMA_FLOOR, calibration_scale_sigma, fit
+from gonio.reconstruct.fit import SIGMA_FLOOR, fit
 from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.regions import NAMES
+from gonio.reconstruct.shared import SharedError, shared_error
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 REALIZATIONS = 20
@@ -71,6 +72,12 @@ def realizations(measured: Measured) -> list[Measured]:
     ]  # fmt: skip
 
 
+def shared_parts(run: Path) -> list[SharedError]:
+    """The shared calibration error of each of `realizations`."""
+    error = shared_error(run)
+    return [error.take(slice(j, None, REALIZATIONS)) for j in range(REALIZATIONS)]
+
+
 def coverage(fits: list[Any], truth: dict[str, float]) -> dict[str, float]:
     """Per parameter, the fraction of fits whose ±2σ interval holds the truth."""
     z = np.array(
@@ -80,14 +87,17 @@ def coverage(fits: list[Any], truth: dict[str, float]) -> dict[str, float]:
 
 
 @pytest.fixture(scope="module")
-def matte(runs_dir: Path) -> tuple[Measured, float]:
+def matte(runs_dir: Path) -> tuple[Measured, list[SharedError]]:
     run = measure(runs_dir, long_plan(), scene_spec("matte", effects=NOISE, seed=11))
-    return Measured.from_run(run), calibration_scale_sigma(run)
+    return Measured.from_run(run), shared_parts(run)
 
 
 def test_matte_parameters_are_recovered_within_their_uncertainty(matte):
-    measured, scale = matte
-    fits = [fit(m, "lambert+ggx", starts=2, scale_sigma=scale) for m in realizations(measured)]
+    measured, shared = matte
+    fits = [
+        fit(m, "lambert+ggx", starts=2, shared=e)
+        for m, e in zip(realizations(measured), shared, strict=True)
+    ]
     truth = {"lambert.albedo": 0.6, "ggx.alpha": 0.5, "ggx.f0": 0.04}
     assert min(coverage(fits, truth).values()) >= 0.9
     assert 0.7 < np.median([r.chi2_red for r in fits]) < 1.3
@@ -102,10 +112,10 @@ def test_glossy_conductor_rgb_parameters_are_recovered(runs_dir):
         for j, band in enumerate("rgb")
     ]  # fmt: skip
     parts = [realizations(Measured.from_run(run)) for run in runs]
-    scale = [calibration_scale_sigma(run) for run in runs]
+    shared = [shared_parts(run) for run in runs]
     fits = [
-        fit(Measured.rgb(*rgb), "ggx:fresnel=conductor", starts=2, scale_sigma=scale)
-        for rgb in zip(*parts, strict=True)
+        fit(Measured.rgb(*rgb), "ggx:fresnel=conductor", starts=2, shared=errors)
+        for rgb, errors in zip(zip(*parts, strict=True), zip(*shared, strict=True), strict=True)
     ]
     truth = {"ggx.alpha": GOLD["alpha"]}
     for j, c in enumerate("rgb"):
@@ -118,9 +128,9 @@ def test_anisotropic_roughness_is_recovered(runs_dir):
     run = measure(
         runs_dir, long_plan(isotropic=False), scene_spec("brushed_metal", effects=NOISE, seed=11)
     )
-    scale = calibration_scale_sigma(run)
     spec = "ggx_anisotropic:fresnel=conductor,ior=1.2,k=7"
-    fits = [fit(m, spec, starts=2, scale_sigma=scale) for m in realizations(Measured.from_run(run))]
+    parts = zip(realizations(Measured.from_run(run)), shared_parts(run), strict=True)
+    fits = [fit(m, spec, starts=2, shared=e) for m, e in parts]
     truth = {"ggx_anisotropic.alpha_x": 0.05, "ggx_anisotropic.alpha_y": 0.25}
     assert min(coverage(fits, truth).values()) >= 0.9
 
@@ -146,12 +156,13 @@ def test_residuals_by_region_cover_every_sample(matte):
     assert result.dof == len(measured) - 3
 
 
-def test_the_calibration_scale_moves_the_parameters_as_a_refit_would(matte):
-    """The scale's part of the uncertainty is what rescaling the data by 1 + u does."""
+def test_a_shared_scale_moves_the_parameters_as_a_refit_would(matte):
+    """A shared error's part of the uncertainty is what rescaling the data by 1 + u does."""
     measured = realizations(matte[0])[0]
     u = 1e-2
     plain = fit(measured, "lambert+ggx", starts=1)
-    scaled = fit(measured, "lambert+ggx", starts=1, scale_sigma=u)
+    common = SharedError.common(len(measured), u)
+    scaled = fit(measured, "lambert+ggx", starts=1, shared=common)
     refit = fit(replace(measured, f=measured.f * (1.0 + u)), "lambert+ggx", starts=1)
     expected = np.hypot(plain.stderr, refit.values - plain.values)
     np.testing.assert_allclose(scaled.stderr, expected, rtol=0.05)
