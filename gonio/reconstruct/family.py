@@ -140,9 +140,32 @@ class Family:
         built = self.term_models(slots, x)
         return built[0] if len(built) == 1 else Sum(built)
 
+    def canonical(self, slots: tuple[Slot, ...], x: Any) -> list[int]:
+        """A reordering of the slots that sorts repeated terms (same model and fixed
+        parameters) by their first free parameter, ascending: ``ggx`` is the narrower
+        lobe of ``lambert+ggx+ggx`` whichever start found it. ``x[order]`` is sorted."""
+        order = list(range(len(self.terms)))
+        for j, term in enumerate(self.terms):
+            if not term.free:
+                continue
+            same = [
+                k for k, t in enumerate(self.terms)
+                if (t.model, t.fixed, t.free) == (term.model, term.fixed, term.free)
+            ]  # fmt: skip
+            key = {k: float(x[_first(slots, k)]) for k in same}
+            ranked = sorted(same, key=lambda k: key[k])
+            order[j] = ranked[same.index(j)]
+        return [
+            i for j in range(len(self.terms)) for i, s in enumerate(slots) if s.term == order[j]
+        ]
+
     def typical(self, slots: tuple[Slot, ...]) -> list[float]:
         """A start inside the bounds (for checking a SPEC and seeding a fit)."""
         return [TYPICAL.get(s.param, TYPICAL_DEFAULT) for s in slots]
+
+
+def _first(slots: tuple[Slot, ...], term: int) -> int:
+    return next(i for i, s in enumerate(slots) if s.term == term)
 
 
 def parse(spec: str) -> Family:

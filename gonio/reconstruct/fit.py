@@ -138,15 +138,18 @@ def fit(
             best = result
     if best is None:
         raise GonioError(f"{measured.source}: model {family.spec!r}: no start gave a finite fit")
+    order = family.canonical(slots, best.x)
+    x = np.asarray(best.x, dtype=np.float64)[order]
     r = np.asarray(best.fun, dtype=np.float64)
     chi2 = float(r @ r)
     dof = m - p
-    cov = _covariance(np.asarray(best.jac, dtype=np.float64), chi2 / dof, f / sigma, shared)
+    jac = np.asarray(best.jac, dtype=np.float64)[:, order]
+    cov = _covariance(jac, chi2 / dof, f / sigma, shared)
     return FitResult(
         spec=family.spec,
-        model=family.model(slots, best.x),
+        model=family.model(slots, x),
         names=tuple(s.name(family.terms) for s in slots),
-        values=np.asarray(best.x, dtype=np.float64),
+        values=x,
         stderr=np.sqrt(np.maximum(np.diag(cov), 0.0)),
         covariance=cov,
         chi2=chi2,

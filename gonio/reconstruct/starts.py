@@ -1,14 +1,15 @@
 """Starting points of a fit: a fast moment estimate of the lobe, then jittered copies.
 
 The moment estimate reads the data once: the diffuse level is a low percentile of f
-(`FLOOR_PERCENTILE`); the excess e = f − floor weights the slopes of the halfway
-vector, whose second moments give the roughness (Beckmann: ⟨tan² θh⟩ = α², per axis
-⟨s_x²⟩ = α_x²/2) and the shininess (cos^n x ≈ exp(−n x²/2): n = 2/⟨x²⟩ with x = θh,
-or the angle ψ to the mirror direction for Phong). A family's k-th lobe starts 3^k
-times broader. Given the shapes, the weights (albedo, ks, f0) are the non-negative
-least-squares scales of each term at weight 1, per channel. Later starts multiply the
-shape parameters by log-normal factors (σ = `JITTER` in log) and solve the weights
-again. Parameters with no estimate start at `gonio.reconstruct.family.TYPICAL`.
+(`FLOOR_PERCENTILE`); the squared excess e² (e = f − floor; squared so that the peak
+outweighs the heavy tails of GGX) weights the slopes of the halfway vector. For a
+Beckmann lobe D² ∝ exp(−2 tan² θh/α²): ⟨tan² θh⟩ = α²/2, per axis ⟨s_x²⟩ = α_x²/4;
+for a cosine power cos^2n x ≈ exp(−n x²): ⟨x²⟩ = 1/n, with x = θh, or the angle ψ to
+the mirror direction for Phong. A family's k-th lobe starts 3^k times broader. Given
+the shapes, the weights (albedo, ks, f0) are the non-negative least-squares scales of
+each term at weight 1, per channel. Later starts multiply the shape parameters by
+log-normal factors (σ = `JITTER` in log) and solve the weights again. Parameters with
+no estimate start at `gonio.reconstruct.family.TYPICAL`.
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ def starts(
 def _moments(measured: Measured, f: FloatArray) -> dict[str, float]:
     """Shape estimates from the excess over the diffuse floor (module docstring)."""
     y = f.mean(axis=1)
-    excess = np.maximum(y - np.percentile(y, FLOOR_PERCENTILE), 0.0)
+    excess = np.maximum(y - np.percentile(y, FLOOR_PERCENTILE), 0.0) ** 2
     total = float(excess.sum())
     if total <= 0.0:
         return {}
@@ -73,11 +74,11 @@ def _moments(measured: Measured, f: FloatArray) -> dict[str, float]:
     psi2 = float(excess @ (2.0 * (1.0 - p.cos_psi()))) / total
     tan2 = sx2 + sy2
     return {
-        "alpha": float(np.sqrt(tan2)),
-        "alpha_x": float(np.sqrt(2.0 * sx2)),
-        "alpha_y": float(np.sqrt(2.0 * sy2)),
-        "n": 2.0 / max(tan2, 1e-12),
-        "phong_n": 2.0 / max(psi2, 1e-12),
+        "alpha": float(np.sqrt(2.0 * tan2)),
+        "alpha_x": float(2.0 * np.sqrt(sx2)),
+        "alpha_y": float(2.0 * np.sqrt(sy2)),
+        "n": 1.0 / max(tan2, 1e-12),
+        "phong_n": 1.0 / max(psi2, 1e-12),
     }
 
 
