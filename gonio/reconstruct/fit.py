@@ -107,10 +107,11 @@ def fit(
 ) -> FitResult:
     """Fit the family ``spec`` (a SPEC string or a parsed `Family`) to ``measured``.
 
-    ``shared``: the errors the samples share through their calibration
+    ``starts``: starting points tried (the moment estimate, then jittered copies drawn
+    from ``seed``). ``shared``: the errors the samples share through their calibration
     (`gonio.reconstruct.shared.shared_error` of the run; one per channel in an RGB
-    fit), None to leave them out. `GonioError` (one line) when
-    there are fewer samples than free parameters or no start is finite."""
+    fit), None to leave them out. `GonioError` (one line) when there are no more
+    residuals than free parameters or no start gives a finite fit."""
     family = spec if isinstance(spec, Family) else parse(spec)
     rgb = measured.is_rgb
     slots = family.slots(rgb)
