@@ -38,6 +38,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 def cmd_fit(args: argparse.Namespace) -> int:
     from gonio.config import ConfigError
+    from gonio.errors import GonioError
     from gonio.reconstruct.family import parse
     from gonio.reconstruct.fit import fit
     from gonio.reconstruct.measured import Measured
@@ -54,9 +55,17 @@ def cmd_fit(args: argparse.Namespace) -> int:
             from gonio.output import reserve_output
 
             pending = outputs.enter_context(reserve_output(args.output, "-o"))
-        parts = [Measured.from_run(str(path)) for path in args.runs]
+        parts, shared = [], []
+        for path in args.runs:
+            try:
+                parts.append(Measured.from_run(str(path)))
+                shared.append(shared_error(str(path)))
+            except GonioError as exc:
+                message = str(exc)
+                raise GonioError(
+                    message if str(path) in message else f"{path}: {message}"
+                ) from None
         measured = parts[0] if len(parts) == 1 else Measured.rgb(*parts)
-        shared = [shared_error(str(path)) for path in args.runs]
         result = fit(measured, family, starts=args.starts, seed=args.seed, shared=shared)
         if args.json:
             print(json.dumps(result.figures(), indent=2, ensure_ascii=False))

@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import shutil
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -90,6 +92,19 @@ def test_a_missing_run_and_bands_out_of_order_are_one_line(runs, run_gonio, tmp_
     swapped = [str(runs[b]) for b in "grb"]
     r = run_gonio("fit", *swapped, "--model", "ggx")
     assert r.returncode == 2 and "r, g and b bands" in r.stderr
+
+
+def test_a_run_without_calibration_is_one_line_naming_it(runs, run_gonio, tmp_path):
+    copy = tmp_path / "uncalibrated.sqlite"
+    shutil.copyfile(runs["matte"], copy)
+    with contextlib.closing(sqlite3.connect(copy)) as db, db:
+        db.execute("DELETE FROM events WHERE kind = 'calibration'")
+    r = run_gonio("fit", str(copy), "--model", "ggx")
+    assert r.returncode == 2
+    assert (
+        r.stderr.strip()
+        == f"gonio: error: {copy}: the run has no calibration reading: no BRDF can be derived"
+    )
 
 
 def test_an_invalid_material_is_not_written(runs, run_gonio, tmp_path):

@@ -5,9 +5,10 @@ Coverage needs many independent noisy measurements of one scene. A run's cost is
 mostly per run (~0.3 s), not per sample (~1 ms), so each scene is measured once with
 `REALIZATIONS` × `SAMPLES` targets (calibrated every `SAMPLES` targets) and split
 into `REALIZATIONS` interleaved subsets (every K-th sample in the measured order),
-each spread over the whole domain with its own noise: K independent measurements of
-`SAMPLES` samples. They share the run's calibration readings (the common scale,
-~1e-5, is part of every fit's uncertainty), which correlates them only weakly. The
+each spread over the whole domain with its own noise. The subsets share the run's
+reference readings, whose error is part of each fit's uncertainty
+(`gonio.reconstruct.shared`) but alike across subsets: their z-scores are correlated
+where that error matters, so 20 subsets are fewer than 20 independent trials. The
 scenes keep only noise effects: aperture integration and the footprint bias f by
 design, and a fit would rightly find the biased values.
 """
