@@ -97,7 +97,10 @@ def _weights(
     out = x.copy()
     for c in range(f.shape[1]):
         basis = np.stack([np.broadcast_to(t, f.shape)[:, c] for t in terms], axis=1)
-        scale = np.maximum(np.abs(f[:, c]), 1e-12 * float(np.max(np.abs(f[:, c])) + 1e-300))
+        peak = float(np.max(np.abs(f[:, c])))
+        if not peak > 0.0:  # a black channel: nothing to scale to
+            continue
+        scale = np.maximum(np.abs(f[:, c]), 1e-6 * peak)  # relative residuals, bounded
         try:
             coef, _ = nnls(basis / scale[:, None], f[:, c] / scale)
         except RuntimeError:  # no convergence: keep the current weights

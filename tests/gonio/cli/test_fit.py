@@ -77,6 +77,7 @@ def test_three_band_runs_make_an_rgb_fit(runs, run_gonio):
         (["--model", "lambert+gx"], "unknown family 'gx'"),
         (["--model", "ggx:alpha"], "expected KEY=VALUE"),
         (["--model", "ggx", "--starts", "0"], "--starts 0: expected at least 1"),
+        (["--model", "ggx", "--seed", "-1"], "--seed -1: expected a number ≥ 0"),
         (["EXTRA", "--model", "ggx"], "expected one run, or three"),
     ],
 )

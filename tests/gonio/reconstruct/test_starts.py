@@ -49,3 +49,10 @@ def test_phong_shininess_from_the_mirror_angle():
     family = parse("phong")
     n, ks = starts(family, family.slots(False), _measured(truth), count=1, seed=0)[0]
     assert 50.0 < n < 800.0 and 0.3 < ks <= 1.0
+
+
+def test_black_data_keep_finite_starts():
+    black = brdf.create("lambert", albedo=0.0)
+    family = parse("lambert+ggx")
+    for x in starts(family, family.slots(False), _measured(black, 200), count=2, seed=0):
+        assert np.all(np.isfinite(x))
