@@ -49,6 +49,24 @@ EXAMPLES: tuple[tuple[str, dict[str, object]], ...] = (
     ("fresnel_test_function", {}),
     ("specular_test_function", {}),
     ("grazing_test_function", {}),
+    (
+        "sum",
+        {
+            "components": [
+                {"name": "lambert", "albedo": 0.5},
+                {"name": "cook_torrance", "alpha": 0.2, "f0": 0.04},
+            ]
+        },
+    ),
+    (
+        "sum",
+        {
+            "components": [
+                {"name": "lambert", "albedo": (0.05, 0.1, 0.15)},
+                {"name": "cook_torrance", "alpha": 0.05, "distribution": "beckmann"},
+            ]
+        },
+    ),
 )
 
 

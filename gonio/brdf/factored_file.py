@@ -133,7 +133,7 @@ def format_factors(t: FactoredTables) -> str:
     """The factor file's text."""
     j, k = t.outer, t.inner
     counts = (j, k, *t.F.shape[1:], t.G.shape[1], t.z_count, t.G.shape[2])
-    out = ["# factored BRDF (Lawrence et al. 2004) written by gonio; layout: docs/formats_factored.md\n"]
+    out = ["# factored BRDF (Lawrence et al. 2004) by gonio: docs/formats_factored.md\n"]
     out.append("param: halfangle\n")
     out.extend(f"{label}: {n}\n" for (_, label), n in zip(_HEADER[1:], counts, strict=True))
     out.append("INTENSITY DATA\n")
@@ -150,7 +150,7 @@ def format_factors(t: FactoredTables) -> str:
 
 def format_cdfs(t: FactoredTables) -> str:
     """The CDF file's text."""
-    out = ["# factored BRDF CDFs written by gonio; term j*K + k; layout: docs/formats_factored.md\n"]
+    out = ["# factored BRDF CDFs by gonio, term j*K + k: docs/formats_factored.md\n"]
     out.append("CDF DATA\n")
     for i in range(t.cdf_phi.shape[0]):
         out.append(f"P(phi_p|term {i})\n{_rows(t.cdf_phi[i])}P(z|term {i})\n{_rows(t.cdf_z[i])}")

@@ -6,7 +6,8 @@ Reflectances (``albedo``, ``ks``, ``kd``, ``f0``) lie in [0, 1] and the model co
 energy at normal incidence, channel by channel: ``ks + kd ≤ 1`` for the cosine lobes
 (their lobe's albedo is exactly ks there), and ``kd + F(0°) ≤ 1`` for the microfacet
 models (their specular albedo is at most the Fresnel reflectance at normal incidence,
-as the masking term is at most 1)."""
+as the masking term is at most 1). A ``sum`` (`gonio.brdf.composite`) checks each
+component so, and the sum of their bounds (Lambert: its albedo) against 1."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from gonio.brdf.base import BRDF
+from gonio.brdf.composite import Sum
 from gonio.brdf.registry import create
 from gonio.errors import DomainError, GonioError
 
@@ -40,6 +42,8 @@ def build(name: object, params: dict[str, Any]) -> BRDF:
     """The model ``name`` with ``params``, checked as above; `MaterialError` otherwise."""
     if not isinstance(name, str):
         raise MaterialError(None, f"expected the name of a gonio.brdf model, got {name!r}")
+    if name == "sum":
+        return _build_sum(params)
     for key, value in params.items():
         if isinstance(value, bool):
             raise MaterialError(key, f"expected a number or a name, not yes/no (got {value})")
@@ -66,6 +70,44 @@ def build(name: object, params: dict[str, Any]) -> BRDF:
                 f"kd + {what} is {_show(kd + other)}; expected at most 1 (energy conservation)",
             )
     return model
+
+
+def _build_sum(params: dict[str, Any]) -> BRDF:
+    """A `Sum` whose components are each checked by `build`, then their albedos' bound."""
+    components = params.get("components")
+    if set(params) != {"components"} or not isinstance(components, list) or not components:
+        raise MaterialError("components", "a sum takes one parameter, components: a list of models")
+    built = []
+    for j, item in enumerate(components):
+        if not isinstance(item, dict):
+            raise MaterialError("components", f"components.{j}: expected a model, got {item!r}")
+        rest = {k: v for k, v in item.items() if k != "name"}
+        try:
+            built.append(build(item.get("name"), rest))
+        except MaterialError as exc:
+            where = f"components.{j}" + (f".{exc.param}" if exc.param else ".name")
+            raise MaterialError(where, str(exc)) from None
+    model = Sum(built)
+    total = sum(np.atleast_1d(albedo_bound(c)) for c in built)
+    if np.any(total > 1.0 + 1e-12):
+        raise MaterialError(
+            "components",
+            f"the components' albedos add up to {_show(np.asarray(total))}; expected at most 1 "
+            "(energy conservation)",
+        )
+    return model
+
+
+def albedo_bound(model: BRDF) -> np.ndarray:
+    """An upper bound of ``model``'s directional albedo at normal incidence, per channel
+    (shape () or (3,)); 0 for a model with no known bound."""
+    if "albedo" in model.params:
+        return np.asarray(model.params["albedo"], dtype=np.float64)
+    if isinstance(model, Sum):
+        return np.asarray(sum(albedo_bound(c) for c in model.components), dtype=np.float64)
+    spec, _ = _specular_albedo(model)
+    kd = np.asarray(model.params.get("kd", 0.0), dtype=np.float64)
+    return np.asarray(kd if spec is None else kd + spec, dtype=np.float64)
 
 
 def _specular_albedo(model: BRDF) -> tuple[np.ndarray | None, str]:

@@ -16,6 +16,7 @@ from gonio.brdf.characteristic import (
     GrazingTestFunction,
     SpecularTestFunction,
 )
+from gonio.brdf.composite import Sum
 from gonio.brdf.cook_torrance import CookTorrance, GGXAnisotropic
 from gonio.brdf.factored import Factored
 from gonio.brdf.merl import MerlTable
@@ -45,6 +46,7 @@ _MODELS: dict[str, type[BRDF]] = {
         GrazingTestFunction,
         MerlTable,
         Factored,
+        Sum,
     )
 }
 

@@ -56,6 +56,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.export",
         "write a run as csv, hdf5, alta, bluesky documents or a MERL table",
     ),
+    "fit": (
+        "gonio.cli.fit",
+        "fit a BRDF model (or a sum, lambert+ggx) to a run's samples, with uncertainties",
+    ),
     "motors": (
         "gonio.cli.motors",
         "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
