@@ -1,5 +1,5 @@
-"""Error metrics of a candidate BRDF against a truth, and the regions they are split by
-(docs/evaluation.md has the formulas).
+"""Error metrics of a candidate BRDF against a truth, split by the regions of
+`gonio.reconstruct.regions` (docs/evaluation.md has the formulas).
 
 For values c (candidate) and t (truth) in sr⁻¹ on the same pairs, every channel of an
 RGB value counting as one term (means run over pairs × channels):
@@ -21,7 +21,19 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from gonio.types import BoolArray, FloatArray
+from gonio.reconstruct.regions import NAMES as REGIONS
+from gonio.reconstruct.regions import regions as region_masks
+from gonio.types import FloatArray
+
+__all__ = [
+    "METRICS",
+    "REGIONS",
+    "TRUTH_FLOOR",
+    "Scores",
+    "region_masks",
+    "relative_error",
+    "scores",
+]
 
 #: Below this truth value (sr⁻¹) the relative error divides by it instead: the absolute
 #: error in units of 10⁻⁴ sr⁻¹ (1/π ≈ 0.32 sr⁻¹ is a white Lambertian surface).
@@ -29,15 +41,6 @@ TRUTH_FLOOR = 1e-4
 
 #: The metric names, in table order.
 METRICS = ("log_rmse", "cos_log_rmse", "rel_rmse", "rel_median", "rel_p95")
-
-#: The regions, in the order a pair in several is assigned: the first that matches.
-REGIONS = ("grazing", "mirror", "retro", "rest")
-#: Within this angle (degrees) of the mirror direction (ωo vs ωi mirrored about n): "mirror".
-MIRROR_DEG = 10.0
-#: Within this angle of retro-reflection (ωo vs ωi): "retro".
-RETRO_DEG = 10.0
-#: Either polar angle above this: "grazing".
-GRAZING_DEG = 70.0
 
 
 @dataclass(frozen=True)
@@ -87,36 +90,3 @@ def scores(candidate: FloatArray, truth: FloatArray, cos_theta_i: FloatArray) ->
 
 def _rms(x: FloatArray) -> float:
     return math.sqrt(float(np.mean(np.square(x))))
-
-
-def region_masks(wi: FloatArray, wo: FloatArray) -> dict[str, BoolArray]:
-    """One mask (N,) per region of `REGIONS`, disjoint and covering every pair:
-
-    - ``grazing``: θi or θo above `GRAZING_DEG`;
-    - ``mirror``: ωo within `MIRROR_DEG` of the mirror direction (−ωi,x, −ωi,y, ωi,z);
-    - ``retro``: ωo within `RETRO_DEG` of ωi;
-    - ``rest``: the others.
-
-    A pair that matches several goes to the first in that order (near normal incidence
-    the mirror and retro cones overlap: such pairs are "mirror").
-    """
-    wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
-    wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
-    cos_grazing = math.cos(math.radians(GRAZING_DEG))
-    grazing = (wi[:, 2] < cos_grazing) | (wo[:, 2] < cos_grazing)
-    mirrored = wi * np.array([-1.0, -1.0, 1.0])
-    mirror = _angle(wo, mirrored) <= math.radians(MIRROR_DEG)
-    retro = _angle(wo, wi) <= math.radians(RETRO_DEG)
-    taken = grazing.copy()
-    out = {"grazing": grazing}
-    for name, mask in (("mirror", mirror), ("retro", retro)):
-        out[name] = mask & ~taken
-        taken |= mask
-    out["rest"] = ~taken
-    return out
-
-
-def _angle(a: FloatArray, b: FloatArray) -> FloatArray:
-    """The angle (rad) between unit directions, accurate near 0 (atan2 of |a×b|, a·b)."""
-    cross = np.linalg.norm(np.cross(a, b), axis=-1)
-    return np.asarray(np.arctan2(cross, np.sum(a * b, axis=-1)), dtype=np.float64)

@@ -2,10 +2,10 @@
 
 Every pair falls in exactly one region, taken in the order of `NAMES`:
 
+    grazing   θi or θo above `GRAZING_DEG` (whatever else holds)
     mirror    wo within `MIRROR_DEG` of the mirror direction of wi (the specular peak)
     retro     wo within `RETRO_DEG` of wi (retro-reflection; at normal incidence the
               mirror and retro directions coincide and the pair counts as mirror)
-    grazing   θi or θo above `GRAZING_DEG`
     rest      every other pair
 
 Directions are unit vectors (..., 3) in the sample frame (z = normal), pointing away
@@ -22,7 +22,7 @@ from gonio.brdf.geometry import pair
 from gonio.types import ArrayLike, BoolArray
 
 #: Region names, in the order a pair is assigned to the first that holds it.
-NAMES: tuple[str, ...] = ("mirror", "retro", "grazing", "rest")
+NAMES: tuple[str, ...] = ("grazing", "mirror", "retro", "rest")
 #: Largest angle (degrees) between wo and the mirror direction of wi in "mirror".
 MIRROR_DEG = 10.0
 #: Largest angle (degrees) between wo and wi in "retro".
@@ -41,7 +41,7 @@ def regions(wi: ArrayLike, wo: ArrayLike) -> dict[str, BoolArray]:
     grazing = (p.zi < cos_grazing) | (p.zo < cos_grazing)
     masks: dict[str, BoolArray] = {}
     taken = np.zeros(p.shape, dtype=bool)
-    for name, hit in zip(NAMES, (near_mirror, near_retro, grazing), strict=False):
+    for name, hit in zip(NAMES, (grazing, near_mirror, near_retro), strict=False):
         masks[name] = np.asarray(hit & ~taken, dtype=bool)
         taken = taken | hit
     masks["rest"] = np.asarray(~taken, dtype=bool)
