@@ -28,6 +28,8 @@ class Measured:
     parametrization, isotropic: the plan's (the reconstruction's defaults).
     rig: the rig that measured them (its measurable domain bounds a reconstruction).
     scene_text: the simulated scene's YAML (None for a run on hardware).
+    scene_path: where that scene file was (a material's relative ``path`` resolves
+        against it).
     band: the detector's band(s) ("luminance", "r", "g", "b", or "rgb").
     """
 
@@ -41,6 +43,7 @@ class Measured:
     scene_text: str | None
     band: str
     source: str
+    scene_path: str | None = None
 
     def __len__(self) -> int:
         return len(self.wi)
@@ -76,6 +79,7 @@ class Measured:
             isotropic=run.plan.spec.isotropic,
             rig=rig,
             scene_text=scene_text,
+            scene_path=run.meta.get("scene_path"),
             band=band,
             source=str(run.path),
         )
@@ -112,7 +116,9 @@ class Measured:
         from sim.physics.optics import band_eval
         from sim.scene import load_scene
 
-        model = load_scene("scene", raw=self.scene_text.encode()).material.model()
+        model = load_scene(
+            self.scene_path or "scene", raw=self.scene_text.encode()
+        ).material.model()
         if self.band == "rgb":
             return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
         return band_eval(model, self.band)

@@ -130,7 +130,7 @@ def test_a_file_of_another_layout_is_one_line(tmp_path):
         brdf.create("merl", path=str(tmp_path / "absent.binary"))
 
 
-def test_a_scene_measures_the_tabulated_material(tables, tmp_path):
+def test_a_scene_measures_the_tabulated_material(tables, tmp_path, monkeypatch):
     """A scene whose material is the file, named relative to the scene file: the
     simulated run (noise-free) measures what the analytic model it tabulates gives."""
     folder = tmp_path / "scene"
@@ -143,6 +143,10 @@ def test_a_scene_measures_the_tabulated_material(tables, tmp_path):
     measured = Measured.from_run(run)
     truth = band_eval(MODEL, measured.band)(measured.wi, measured.wo)
     np.testing.assert_allclose(measured.f, truth, rtol=0.02)
+    # The run's scene, read back as the truth, finds its table beside the scene file
+    # whatever the working directory.
+    monkeypatch.chdir(tmp_path)
+    np.testing.assert_allclose(measured.scene_truth()(measured.wi, measured.wo), truth, rtol=0.02)
 
 
 def test_a_scene_naming_a_missing_file_is_one_line_at_the_parameter(tmp_path):
