@@ -28,7 +28,10 @@ METHODS = ("linear", "rbf", "grid", "model+residual")
 #: What an unsupported query may be filled with (None: NaN).
 EXTRAPOLATIONS = (None, "nearest", "model")
 #: The transform interpolated by default (chosen by measurement: docs/reconstruction.md).
-DEFAULT_TRANSFORM = "log1p"
+DEFAULT_TRANSFORM = "log"
+#: Seam copies are made of the samples within this many typical spacings of a seam
+#: (enough for the triangulation to join the two sides; `typical_spacing`).
+PAD_SPACINGS = 2.0
 #: Samples closer than this (scaled units) are one sample measured repeatedly.
 REPEAT = 1e-12
 
@@ -86,9 +89,10 @@ def reconstruct(
     x, wi, wo, f, sigma = _merge_repeats(x, wi, wo, f, _columns(measured.sigma))
     table = np.concatenate([chosen.encode(f, wi, wo), chosen.slope(f, wi, wo) * sigma], axis=1)
 
+    spacing = typical_spacing(x)
     if max_distance is None:
-        max_distance = DISTANCE_FACTOR * typical_spacing(x)
-    padded = space.pad(x, max_distance)
+        max_distance = DISTANCE_FACTOR * spacing
+    padded = space.pad(x, PAD_SPACINGS * spacing)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
     interpolant: Interpolant

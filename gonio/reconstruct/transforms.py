@@ -8,6 +8,7 @@ around 0) count as 0 in the logarithmic ones: a BRDF is never negative.
 
 - ``identity``: g = f.
 - ``log1p``: g = log(1 + f·1 sr) — linear for dim values, logarithmic for peaks.
+- ``log``: g = log(f + ε), ε = `LOG_FLOOR` — relative errors, whatever the level.
 - ``log_cos``: g = log(f cos θi + ε), ε = `LOG_COS_FLOOR` — the reflected radiance
   factor, which tames the 1/cos θi growth of grazing values.
 - ``ratio`` (the model+residual method): g = log((f + ε)/(m + ε)) for a model m,
@@ -21,6 +22,8 @@ import numpy as np
 from gonio.errors import GonioError, UnknownNameError
 from gonio.types import BrdfEval, FloatArray
 
+#: ε of ``log`` (sr⁻¹): below it, values are interpolated linearly, not in log.
+LOG_FLOOR = 1e-2
 #: ε of ``log_cos`` (sr⁻¹): below it, values are interpolated linearly, not in log.
 LOG_COS_FLOOR = 1e-2
 #: ε of ``ratio`` (sr⁻¹): keeps the ratio finite where the model is 0.
@@ -65,6 +68,22 @@ class Log1p(Transform):
 
     def decode(self, g: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
         return np.expm1(g)
+
+    def gain(self, g: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
+        return np.exp(g)
+
+
+class Log(Transform):
+    name = "log"
+
+    def encode(self, f: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
+        return np.log(np.maximum(f, 0.0) + LOG_FLOOR)
+
+    def slope(self, f: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
+        return 1.0 / (np.maximum(f, 0.0) + LOG_FLOOR)
+
+    def decode(self, g: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
+        return np.exp(g) - LOG_FLOOR
 
     def gain(self, g: FloatArray, wi: FloatArray, wo: FloatArray) -> FloatArray:
         return np.exp(g)
@@ -123,7 +142,7 @@ class Ratio(Transform):
 
 #: The transforms a reconstruction may interpolate (``ratio`` needs a model: it is
 #: the model+residual method's, not chosen by name).
-TRANSFORMS: dict[str, type[Transform]] = {t.name: t for t in (Transform, Log1p, LogCos)}
+TRANSFORMS: dict[str, type[Transform]] = {t.name: t for t in (Transform, Log1p, Log, LogCos)}
 
 
 def get(name: str) -> Transform:
