@@ -92,7 +92,8 @@ def reconstruct(
     spacing = typical_spacing(x)
     if max_distance is None:
         max_distance = DISTANCE_FACTOR * spacing
-    padded = space.pad(x, PAD_SPACINGS * spacing)
+    margin = PAD_SPACINGS * spacing
+    padded = space.pad(x, margin)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
     interpolant: Interpolant
@@ -123,6 +124,7 @@ def reconstruct(
         extrapolate=extrapolate,
         model=None if model is None else model.eval,
         channels=f.shape[1],
+        seam_band=0.5 * margin,
     )
 
 

@@ -41,6 +41,7 @@ class Reconstruction:
     extrapolate: str | None
     model: BrdfEval | None
     channels: int
+    seam_band: float  # scaled width over which the two sides of a seam are blended
 
     @property
     def parametrization(self) -> str:
@@ -87,7 +88,7 @@ class Reconstruction:
     def _above(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         x = self.space.scaled(wi, wo)
         distance, nearest = self.domain.nearest(x)
-        columns, defined = self.interpolant(x, nearest)
+        columns, defined = self._blended(x, nearest, 0)
         ok = defined & (distance <= self.domain.max_distance)
         ok[ok] = self.domain.reachable(wi[ok], wo[ok])
 
@@ -104,3 +105,33 @@ class Reconstruction:
             m = np.asarray(self.model(wi[out], wo[out]), dtype=np.float64)
             f[out] = m[:, None] if m.ndim == 1 else m
         return f, sigma, ok
+
+    def _blended(
+        self, x: FloatArray, nearest: np.ndarray, level: int
+    ) -> tuple[FloatArray, BoolArray]:
+        """The interpolant, blended across each periodic seam (docs/reconstruction.md).
+
+        Within `seam_band` of a seam, a query also has a representation one period
+        away, inside the seam copies; the two interpolants there are built from
+        different triangulations, so the result is their blend with weights going from
+        ½ each at the seam to 1 for the query's own at the band's edge — the same
+        value from both sides, continuous everywhere (a tensor-product blend when
+        there are two periodic azimuths).
+        """
+        if level == len(self.space.periods):
+            return self.interpolant(x, nearest)
+        columns, defined = self._blended(x, nearest, level + 1)
+        axis, period = self.space.periods[level]
+        low = x[:, axis] < period / 2
+        gap = np.where(low, x[:, axis], period - x[:, axis])
+        rows = np.flatnonzero(gap < self.seam_band)
+        if len(rows) == 0:
+            return columns, defined
+        other = x[rows].copy()
+        other[:, axis] += np.where(low[rows], period, -period)
+        _, near_other = self.domain.nearest(other)
+        other_columns, other_defined = self._blended(other, near_other, level + 1)
+        w = 0.5 * (1.0 - gap[rows] / self.seam_band)
+        columns[rows] = (1.0 - w[:, None]) * columns[rows] + w[:, None] * other_columns
+        defined[rows] &= other_defined
+        return columns, defined
