@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gonio import params
 from gonio.brdf.base import BRDF
 from gonio.errors import GonioError
 from gonio.reconstruct.build import reconstruct
@@ -50,3 +51,21 @@ def test_the_grid_reconstruction_is_exact_at_its_nodes(grid_iso: Measured) -> No
     # Nodes whose every neighbouring cell misses a corner are not supported.
     assert ok.mean() > 0.5
     np.testing.assert_allclose(f[ok], grid_iso.f[ok], rtol=1e-12)
+
+
+def test_values_either_side_of_the_grids_seam_agree(grid_iso: Measured) -> None:
+    r = reconstruct(grid_iso, method="grid")
+    p = params.get("hybrid")
+    coords = np.random.default_rng(5).uniform(0.1, 0.5, (400, 3))
+    sides = []
+    for phi in (1e-9, np.pi - 1e-9):
+        c = coords.copy()
+        c[:, 2] = phi
+        sides.append(c)
+    keep = p.valid_iso(sides[0]) & p.valid_iso(sides[1])
+    (a, oka), (b, okb) = (
+        (r.eval(*p.inverse_iso(c[keep])), r.supported(*p.inverse_iso(c[keep]))) for c in sides
+    )
+    both = oka & okb
+    assert both.sum() > 50
+    np.testing.assert_allclose(a[both], b[both], rtol=1e-6)
