@@ -55,8 +55,12 @@ def timing(args: argparse.Namespace) -> None:
     f = scene_f("matte")
     print("| samples | coordinates | method | samples used | build (s) | eval (pairs/s) |")
     print("| ---: | --- | --- | ---: | ---: | ---: |")
+    caps = {}
     for isotropic in (True, False):
         queries = placed(rig, "hybrid", isotropic, args.pairs, seed=11)
+        start = time.perf_counter()
+        rig.reachable(*queries, isotropic=isotropic)
+        caps[isotropic] = len(queries[0]) / (time.perf_counter() - start)
         for n in args.sizes:
             for method in ("linear", "grid", "rbf"):
                 grid = grid_per_axis(rig, "hybrid", isotropic, n) if method == "grid" else None

@@ -54,7 +54,7 @@ _FULL_SEAMS: dict[str, tuple[Periodic, Poles]] = {
 #: (a sample on the spherical diagonal θi = θo, Δφ ∈ {0, π} is its own reciprocal).
 SAME_POINT = 1e-9
 #: The displacement (scaled units) given to seam copies (see `Space.pad`).
-JITTER = 1e-9
+JITTER = 1e-6
 
 
 @dataclass(frozen=True)

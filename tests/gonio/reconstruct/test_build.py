@@ -46,7 +46,8 @@ def test_a_sample_is_reproduced_exactly_by_every_interpolating_method(
 ) -> None:
     for method in ("linear", "rbf"):
         f = reconstruct(matte_iso, method=method).eval(matte_iso.wi[:200], matte_iso.wo[:200])
-        np.testing.assert_allclose(f, matte_iso.f[:200], rtol=1e-9, equal_nan=False)
+        # To the 1e-6 displacement of the seam copies a sample near a seam is blended with.
+        np.testing.assert_allclose(f, matte_iso.f[:200], rtol=1e-6, equal_nan=False)
 
 
 def test_model_plus_residual_with_the_true_model_returns_the_model(
