@@ -46,10 +46,14 @@ class Domain:
             raise GonioError(f"max_distance: expected a positive distance, got {max_distance}")
         self.max_distance = float(max_distance)
 
-    def nearest(self, x: FloatArray) -> tuple[FloatArray, np.ndarray]:
-        """Distance to and index of the nearest padded point, for scaled points (M, d)."""
-        distance, index = self.tree.query(x, workers=-1)
-        return np.asarray(distance, dtype=np.float64), np.asarray(index, dtype=np.intp)
+    def nearest(self, x: FloatArray, *, bounded: bool = True) -> tuple[FloatArray, np.ndarray]:
+        """Distance to and index of the nearest padded point, for scaled points (M, d);
+        ``bounded``: only within ``max_distance`` (a faster search), beyond it the
+        distance is inf and the index 0."""
+        bound = self.max_distance if bounded else np.inf
+        distance, index = self.tree.query(x, distance_upper_bound=bound, workers=-1)
+        far = index >= self.tree.n
+        return np.asarray(distance, dtype=np.float64), np.where(far, 0, index).astype(np.intp)
 
     def reachable(self, wi: FloatArray, wo: FloatArray) -> BoolArray:
         """The rig can measure the pairs (M, 3) (isotropic as the run was)."""

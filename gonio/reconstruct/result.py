@@ -88,8 +88,13 @@ class Reconstruction:
     def _above(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         x = self.space.scaled(wi, wo)
         distance, nearest = self.domain.nearest(x)
-        columns, defined = self._blended(x, nearest, 0)
-        ok = defined & (distance <= self.domain.max_distance)
+        near = np.flatnonzero(distance <= self.domain.max_distance)
+        # In the order of their nearest sample (the samples follow a Z-order curve), so
+        # that neighbouring queries read neighbouring simplices.
+        near = near[np.argsort(nearest[near], kind="stable")]
+        columns = np.full((len(x), 2 * self.channels), np.nan)
+        ok = np.zeros(len(x), dtype=np.bool_)
+        columns[near], ok[near] = self._blended(x[near], nearest[near], 0)
         ok[ok] = self.domain.reachable(wi[ok], wo[ok])
 
         c = self.channels
@@ -100,7 +105,8 @@ class Reconstruction:
         sigma[ok] = self.transform.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
         out = ~ok
         if self.extrapolate == "nearest":
-            f[out] = self.samples_f[self.source[nearest[out]]]
+            _, anywhere = self.domain.nearest(x[out], bounded=False)
+            f[out] = self.samples_f[self.source[anywhere]]
         elif self.extrapolate == "model" and self.model is not None:
             m = np.asarray(self.model(wi[out], wo[out]), dtype=np.float64)
             f[out] = m[:, None] if m.ndim == 1 else m
@@ -129,8 +135,13 @@ class Reconstruction:
             return columns, defined
         other = x[rows].copy()
         other[:, axis] += np.where(low[rows], period, -period)
-        _, near_other = self.domain.nearest(other)
-        other_columns, other_defined = self._blended(other, near_other, level + 1)
+        distance, near_other = self.domain.nearest(other)
+        close = distance <= self.domain.max_distance
+        other_columns = np.full((len(rows), columns.shape[1]), np.nan)
+        other_defined = np.zeros(len(rows), dtype=np.bool_)
+        other_columns[close], other_defined[close] = self._blended(
+            other[close], near_other[close], level + 1
+        )
         w = 0.5 * (1.0 - gap[rows] / self.seam_band)
         columns[rows] = (1.0 - w[:, None]) * columns[rows] + w[:, None] * other_columns
         defined[rows] &= other_defined
