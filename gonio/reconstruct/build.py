@@ -31,7 +31,7 @@ EXTRAPOLATIONS = (None, "nearest", "model")
 DEFAULT_TRANSFORM = "log"
 #: Seam copies are made of the samples within this many typical spacings of a seam
 #: (enough for the triangulation to join the two sides; `typical_spacing`).
-PAD_SPACINGS = 2.0
+PAD_SPACINGS = 1.0
 #: Samples closer than this (scaled units) are one sample measured repeatedly.
 REPEAT = 1e-12
 

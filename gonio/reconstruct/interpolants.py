@@ -27,6 +27,8 @@ from gonio.types import BoolArray, FloatArray
 FLAT_SIMPLEX = 1e-10
 #: Barycentric coordinates down to −`INSIDE` count as inside a simplex (scipy's eps).
 INSIDE = 100 * float(np.finfo(np.float64).eps)
+#: ... and down to −`BROAD` for a query that would leave the hull (scipy's eps_broad).
+BROAD = float(np.sqrt(INSIDE))
 #: Steps of the vectorized walk before the remaining queries are left to scipy.
 MAX_STEPS = 64
 #: Neighbours of each query the ``rbf`` method solves with (scipy's ``neighbors``).
@@ -96,9 +98,11 @@ class Linear(Interpolant):
             # A flat simplex has no coordinates: leave it across a face chosen by turns.
             k[flat] = (step + active[flat]) % c.shape[1]
             lowest = c[np.arange(len(active)), k]
-            inside = ~flat & (lowest >= -INSIDE)
-            found[active[inside]] = s[active[inside]]
             after = self.tri.neighbors[s[active], k]
+            # At the hull a query may lean out by rounding (a sliver's coordinates carry
+            # more): scipy's broad tolerance then decides.
+            inside = ~flat & ((lowest >= -INSIDE) | ((after < 0) & (lowest >= -BROAD)))
+            found[active[inside]] = s[active[inside]]
             onward = ~inside & (after >= 0)
             onward[flat & (after < 0)] = True  # keep it: the next turn picks another face
             after = np.where(after >= 0, after, s[active])

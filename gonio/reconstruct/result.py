@@ -142,7 +142,9 @@ class Reconstruction:
         other_columns[close], other_defined[close] = self._blended(
             other[close], near_other[close], level + 1
         )
-        w = 0.5 * (1.0 - gap[rows] / self.seam_band)
+        # Where the copy falls outside the samples' hull (at its edge), the query's own
+        # value stands alone.
+        w = np.where(other_defined, 0.5 * (1.0 - gap[rows] / self.seam_band), 0.0)
+        other_columns[~other_defined] = 0.0
         columns[rows] = (1.0 - w[:, None]) * columns[rows] + w[:, None] * other_columns
-        defined[rows] &= other_defined
         return columns, defined
