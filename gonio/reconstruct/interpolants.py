@@ -51,7 +51,7 @@ class Linear(Interpolant):
     estimate each (5 s for the 130 000 simplices of 20 000 points in 3-D, 19 s in
     4-D; here one batched inverse), and its walk starts from the previous query's
     simplex and falls back to a search of every simplex when it meets a flat one
-    (seam copies make exactly cocircular points, hence flat simplices): 4.5 s per
+    (exact seam copies made cocircular points, hence flat simplices): 4.5 s per
     100 000 queries. Here all queries walk at once, each from a simplex of its nearest
     sample (a step or two), leaving a flat simplex across a face chosen by turns;
     the rare query not arrived after `MAX_STEPS` is left to scipy.

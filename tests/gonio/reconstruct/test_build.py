@@ -194,9 +194,10 @@ def test_a_real_simulated_run_agrees_with_its_scene(simulated_matte: Measured) -
     f, _, ok = r.evaluate(wi, wo)
     assert ok.mean() > 0.9
     rel = np.abs(f[ok] - truth(wi, wo)[ok]) / truth(wi, wo)[ok]
-    # 300 samples of a smooth material, through the detector's aperture and footprint.
-    assert np.median(rel) < 0.02
-    assert np.percentile(rel, 95) < 0.1
+    # 300 samples of a smooth material, through the detector's aperture and footprint
+    # (measured: median 5e-4, 95th percentile 1.9e-2).
+    assert np.median(rel) < 2e-3
+    assert np.percentile(rel, 95) < 4e-2
 
 
 @settings(max_examples=25)
