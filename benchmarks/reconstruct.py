@@ -76,8 +76,14 @@ def timing(args: argparse.Namespace) -> None:
                 rate = len(pairs[0]) / (time.perf_counter() - start)
                 kind = "isotropic (3)" if isotropic else "anisotropic (4)"
                 print(
-                    f"| {n:,} | {kind} | {method} | {len(measured):,} | {built:.2f} | {rate:,.0f} |"
+                    f"| {n:,} | {kind} | {method} | {len(measured):,} | {built:.2f} | "
+                    f"{rate:,.0f} |",
+                    flush=True,
                 )
+    print(
+        f"\nrig.reachable alone on the same pairs (part of every evaluation): "
+        f"{caps[True]:,.0f} pairs/s isotropic, {caps[False]:,.0f} anisotropic"
+    )
 
 
 def study(args: argparse.Namespace) -> None:
