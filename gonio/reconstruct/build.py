@@ -96,6 +96,7 @@ def reconstruct(
     padded = space.pad(x, margin)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
+    domain = Domain(points, x, measured.rig, measured.isotropic, max_distance)
     interpolant: Interpolant
     if method == "grid":
         grid = detect(x)
@@ -118,7 +119,7 @@ def reconstruct(
         space=space,
         transform=chosen,
         interpolant=interpolant,
-        domain=Domain(points, x, measured.rig, measured.isotropic, max_distance),
+        domain=domain,
         source=source,
         samples_f=f,
         extrapolate=extrapolate,
