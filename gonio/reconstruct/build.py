@@ -117,7 +117,7 @@ def reconstruct(
     return Reconstruction(
         method=method,
         space=space,
-        transform=chosen,
+        codec=chosen,
         interpolant=interpolant,
         domain=domain,
         source=source,

@@ -26,14 +26,14 @@ from gonio.types import ArrayLike, BoolArray, BrdfEval, FloatArray
 class Reconstruction:
     """A BRDF reconstructed from N samples (see the module docstring).
 
-    method, transform_name: how (`gonio.reconstruct.build.METHODS`, the transform's
+    method, transform: how (`gonio.reconstruct.build.METHODS`, the transform's
     name); parametrization, isotropic: the coordinates interpolated in; extrapolate:
     None, "nearest" or "model"; channels: 1, or 3 for RGB.
     """
 
     method: str
     space: Space
-    transform: Transform
+    codec: Transform  # the transform itself (`transform` is its name)
     interpolant: Interpolant
     domain: Domain
     source: np.ndarray  # padded point → the measured sample it copies
@@ -52,8 +52,8 @@ class Reconstruction:
         return self.space.isotropic
 
     @property
-    def transform_name(self) -> str:
-        return self.transform.name
+    def transform(self) -> str:
+        return self.codec.name
 
     @property
     def is_rgb(self) -> bool:
@@ -101,8 +101,8 @@ class Reconstruction:
         f = np.full((len(x), c), np.nan)
         sigma = np.full((len(x), c), np.nan)
         g = columns[ok, :c]
-        f[ok] = self.transform.decode(g, wi[ok], wo[ok])
-        sigma[ok] = self.transform.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
+        f[ok] = self.codec.decode(g, wi[ok], wo[ok])
+        sigma[ok] = self.codec.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
         out = ~ok
         if self.extrapolate == "nearest":
             _, anywhere = self.domain.nearest(x[out], bounded=False)

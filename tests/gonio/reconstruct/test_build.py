@@ -56,7 +56,7 @@ def test_model_plus_residual_with_the_true_model_returns_the_model(
     r = reconstruct(matte_iso, method="model+residual", model=matte)
     f, _, ok = r.evaluate(*queries)
     np.testing.assert_allclose(f[ok], matte.eval(*queries)[ok], rtol=1e-12)
-    assert r.transform_name == "ratio"
+    assert r.transform == "ratio"
 
 
 @pytest.mark.parametrize(
@@ -254,7 +254,7 @@ def test_bad_options_are_one_line_errors(
 def test_every_method_is_named_and_reported(matte_iso: Measured, matte: BRDF) -> None:
     assert METHODS == ("linear", "rbf", "grid", "model+residual")
     r = reconstruct(matte_iso, method="rbf", parametrization="spherical")
-    assert (r.method, r.parametrization, r.isotropic, r.transform_name) == (
+    assert (r.method, r.parametrization, r.isotropic, r.transform) == (
         "rbf",
         "spherical",
         True,
