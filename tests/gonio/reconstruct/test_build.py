@@ -59,6 +59,17 @@ def test_model_plus_residual_with_the_true_model_returns_the_model(
     assert r.transform == "ratio"
 
 
+def test_model_plus_residual_corrects_a_wrong_model(
+    matte_iso: Measured, matte: BRDF, queries: tuple[np.ndarray, np.ndarray]
+) -> None:
+    wrong = brdf.create(
+        "cook_torrance", alpha=0.3, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.4
+    )
+    assert np.median(np.abs(wrong.eval(*queries) / matte.eval(*queries) - 1.0)) > 0.2
+    rel = _relative(reconstruct(matte_iso, method="model+residual", model=wrong), matte, *queries)
+    assert np.median(rel) < 2e-3
+
+
 @pytest.mark.parametrize(
     ("name", "isotropic"),
     [("hybrid", True), ("rusinkiewicz", True), ("spherical", True), ("hybrid", False)],
