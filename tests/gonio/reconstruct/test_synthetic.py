@@ -1,4 +1,4 @@
-"""`uniform_samples` gives what a noise-free simulated run of the same plan measures."""
+"""`synthesize` gives what a noise-free simulated run of the same plan measures."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 
 from gonio import params
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.study import uniform_samples
+from gonio.reconstruct.synthetic import synthesize
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 MATERIAL = {
@@ -31,9 +31,7 @@ def test_the_samples_are_a_noise_free_run_of_the_same_plan(
     run = Measured.from_run(
         simulated_run(tmp_path, plan_spec(150, parametrization=parametrization), scene)
     )
-    study = uniform_samples(
-        run.scene_truth(), run.rig, parametrization=parametrization, targets=150
-    )
+    study = synthesize(run.scene_truth(), run.rig, parametrization, True, 150, seed=3)
     assert len(study) == len(run) == 150
     # The run measures the plan's pairs in its travel order, each turned about the normal
     # as the rig reaches it (an isotropic plan): match them by their isotropic coordinates.

@@ -1,0 +1,150 @@
+"""`Reconstruction`: a measured BRDF one evaluates like an analytic model.
+
+``eval(wi, wo)`` takes unit directions (..., 3) (sample frame, pointing away from the
+surface, broadcast against each other) and returns f in sr⁻¹ of shape (...), plus a
+trailing 3 for an RGB measurement; 0 where either direction is below the horizon, NaN
+where the measurement does not support the pair (`supported` is False there) unless
+the reconstruction extrapolates. ``uncertainty`` is the 1σ of ``eval`` (how it is
+propagated: docs/reconstruction.md#uncertainty); NaN where a value is extrapolated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gonio.directions import as_direction_pair
+from gonio.reconstruct.coordinates import Space
+from gonio.reconstruct.domain import Domain
+from gonio.reconstruct.interpolants import Interpolant
+from gonio.reconstruct.transforms import Transform
+from gonio.types import ArrayLike, BoolArray, BrdfEval, FloatArray
+
+
+@dataclass(frozen=True)
+class Reconstruction:
+    """A BRDF reconstructed from N samples (see the module docstring).
+
+    method, transform: how (`gonio.reconstruct.build.METHODS`, the transform's
+    name); parametrization, isotropic: the coordinates interpolated in; extrapolate:
+    None, "nearest" or "model"; channels: 1, or 3 for RGB.
+    """
+
+    method: str
+    space: Space
+    codec: Transform  # the transform itself (`transform` is its name)
+    interpolant: Interpolant
+    domain: Domain
+    source: np.ndarray  # padded point → the measured sample it copies
+    samples_f: FloatArray  # (N, C) measured values, for the "nearest" fill
+    extrapolate: str | None
+    model: BrdfEval | None
+    channels: int
+    seam_band: float  # scaled width over which the two sides of a seam are blended
+
+    @property
+    def parametrization(self) -> str:
+        return self.space.parametrization
+
+    @property
+    def isotropic(self) -> bool:
+        return self.space.isotropic
+
+    @property
+    def transform(self) -> str:
+        return self.codec.name
+
+    @property
+    def is_rgb(self) -> bool:
+        return self.channels == 3
+
+    def eval(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
+        """f(wi, wo) in sr⁻¹ (see the module docstring)."""
+        return self.evaluate(wi, wo)[0]
+
+    def uncertainty(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
+        """The 1σ uncertainty of `eval` (sr⁻¹), same shape; 0 below the horizon."""
+        return self.evaluate(wi, wo)[1]
+
+    def supported(self, wi: ArrayLike, wo: ArrayLike) -> BoolArray:
+        """True where the measurement supports the pair (docs/reconstruction.md)."""
+        return self.evaluate(wi, wo)[2]
+
+    def evaluate(self, wi: ArrayLike, wo: ArrayLike) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """(f, σ, supported) at once."""
+        a, b = as_direction_pair(wi, wo)
+        lead = a.shape[:-1]
+        wi2, wo2 = a.reshape(-1, 3), b.reshape(-1, 3)
+        f = np.zeros((len(wi2), self.channels))
+        sigma = np.zeros_like(f)
+        ok = np.zeros(len(wi2), dtype=np.bool_)
+        rows = np.flatnonzero((wi2[:, 2] >= 0.0) & (wo2[:, 2] >= 0.0))
+        if len(rows):
+            f[rows], sigma[rows], ok[rows] = self._above(wi2[rows], wo2[rows])
+        shape = lead + ((3,) if self.is_rgb else ())
+        return f.reshape(shape), sigma.reshape(shape), ok.reshape(lead)
+
+    def _above(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+        x = self.space.scaled(wi, wo)
+        distance, nearest = self.domain.nearest(x)
+        near = np.flatnonzero(distance <= self.domain.max_distance)
+        # In the order of their nearest sample (the samples follow a Z-order curve), so
+        # that neighbouring queries read neighbouring simplices.
+        near = near[np.argsort(nearest[near], kind="stable")]
+        columns = np.full((len(x), 2 * self.channels), np.nan)
+        ok = np.zeros(len(x), dtype=np.bool_)
+        columns[near], ok[near] = self._blended(x[near], nearest[near], 0)
+        ok[ok] = self.domain.reachable(wi[ok], wo[ok])
+
+        c = self.channels
+        f = np.full((len(x), c), np.nan)
+        sigma = np.full((len(x), c), np.nan)
+        g = columns[ok, :c]
+        f[ok] = self.codec.decode(g, wi[ok], wo[ok])
+        sigma[ok] = self.codec.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
+        out = ~ok
+        if self.extrapolate == "nearest":
+            _, anywhere = self.domain.nearest(x[out], bounded=False)
+            f[out] = self.samples_f[self.source[anywhere]]
+        elif self.extrapolate == "model" and self.model is not None:
+            m = np.asarray(self.model(wi[out], wo[out]), dtype=np.float64)
+            f[out] = m[:, None] if m.ndim == 1 else m
+        return f, sigma, ok
+
+    def _blended(
+        self, x: FloatArray, nearest: np.ndarray, level: int
+    ) -> tuple[FloatArray, BoolArray]:
+        """The interpolant, blended across each periodic seam (docs/reconstruction.md).
+
+        Within `seam_band` of a seam, a query also has a representation one period
+        away, inside the seam copies; the two interpolants there are built from
+        different triangulations, so the result is their blend with weights going from
+        ½ each at the seam to 1 for the query's own at the band's edge — the same
+        value from both sides, continuous everywhere (a tensor-product blend when
+        there are two periodic azimuths).
+        """
+        if level == len(self.space.periods):
+            return self.interpolant(x, nearest)
+        columns, defined = self._blended(x, nearest, level + 1)
+        axis, period = self.space.periods[level]
+        low = x[:, axis] < period / 2
+        gap = np.where(low, x[:, axis], period - x[:, axis])
+        rows = np.flatnonzero(gap < self.seam_band)
+        if len(rows) == 0:
+            return columns, defined
+        other = x[rows].copy()
+        other[:, axis] += np.where(low[rows], period, -period)
+        distance, near_other = self.domain.nearest(other)
+        close = distance <= self.domain.max_distance
+        other_columns = np.full((len(rows), columns.shape[1]), np.nan)
+        other_defined = np.zeros(len(rows), dtype=np.bool_)
+        other_columns[close], other_defined[close] = self._blended(
+            other[close], near_other[close], level + 1
+        )
+        # Where the copy falls outside the samples' hull (at its edge), the query's own
+        # value stands alone.
+        w = np.where(other_defined, 0.5 * (1.0 - gap[rows] / self.seam_band), 0.0)
+        other_columns[~other_defined] = 0.0
+        columns[rows] = (1.0 - w[:, None]) * columns[rows] + w[:, None] * other_columns
+        return columns, defined

@@ -1,0 +1,81 @@
+"""Measured samples synthesized without the acquisition engine, for benchmarks, studies
+and tests of the reconstruction.
+
+A noise-free simulated run with no optical effect measures f(ωi, ωo) of the scene's
+material exactly at the pairs its plan reached; `synthesize` gives those measurements
+directly: the plan's points placed by the planner in a parametrization's coordinates
+(Sobol, or a grid), kept where valid and reachable, valued by a BRDF function. The
+ordering and the acquisition, which do not change the values, are skipped
+(tests/gonio/reconstruct/test_synthetic.py holds this to a real run)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gonio import params
+from gonio.planner.placement import directions, place
+from gonio.planner.schema import PlanSpec
+from gonio.reconstruct.measured import Measured
+from gonio.rig.model import Rig
+from gonio.types import BrdfEval, FloatArray
+
+
+def placed(
+    rig: Rig,
+    parametrization: str,
+    isotropic: bool,
+    n: int,
+    *,
+    seed: int = 0,
+    grid: int | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """The pairs a plan of ``parametrization`` keeps, each (N, 3): ``n`` of a Sobol
+    sequence, or the kept cells of a ``grid``-per-axis grid, placed by the planner
+    (`gonio.planner.placement`) and kept where valid and reachable."""
+    p = params.get(parametrization)
+    names = p.iso_names if isotropic else p.names
+    sampling: dict[str, object] = (
+        {"strategy": "sobol", "target": n, "seed": seed}
+        if grid is None
+        else {"strategy": "grid", "counts": dict.fromkeys(names, grid)}
+    )
+    spec = PlanSpec.model_validate(
+        {
+            "name": "synthetic",
+            "parametrization": parametrization,
+            "isotropic": isotropic,
+            "sampling": sampling,
+        }
+    )
+    coords, _ = place(spec, rig, "synthetic")
+    _, wi, wo = directions(spec, coords)
+    ok = rig.solve(wi, wo, isotropic=isotropic).ok
+    return wi[ok], wo[ok]
+
+
+def synthesize(
+    f: BrdfEval,
+    rig: Rig,
+    parametrization: str,
+    isotropic: bool,
+    n: int,
+    *,
+    seed: int = 0,
+    grid: int | None = None,
+    relative_sigma: float = 0.01,
+) -> Measured:
+    """A `Measured` of ``f`` at `placed` pairs, noise-free, with σ = relative_sigma·|f|."""
+    wi, wo = placed(rig, parametrization, isotropic, n, seed=seed, grid=grid)
+    values = np.asarray(f(wi, wo), dtype=np.float64)
+    return Measured(
+        wi=wi,
+        wo=wo,
+        f=values,
+        sigma=relative_sigma * np.abs(values),
+        parametrization=parametrization,
+        isotropic=isotropic,
+        rig=rig,
+        scene_text=None,
+        band="rgb" if values.ndim == 2 else "luminance",
+        source=f"synthetic {parametrization} {'isotropic' if isotropic else 'anisotropic'}",
+    )

@@ -1,0 +1,50 @@
+"""Fixtures of the reconstruction tests: measurements synthesized from analytic models
+(each built once) and one real simulated run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from gonio import brdf
+from gonio.brdf.base import BRDF
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.synthetic import synthesize
+from gonio.rig.model import Rig
+from tests.support.runs import plan_spec, scene_spec, simulated_run
+
+ARCH = Path(__file__).resolve().parents[3] / "configs" / "rigs" / "arch.yaml"
+
+
+@pytest.fixture(scope="session")
+def arch() -> Rig:
+    return Rig.from_yaml(ARCH)
+
+
+@pytest.fixture(scope="session")
+def matte() -> BRDF:
+    """The matte scene's material: smooth, grey."""
+    return brdf.create(
+        "cook_torrance", alpha=0.5, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.6
+    )
+
+
+@pytest.fixture(scope="session")
+def brushed() -> BRDF:
+    """An anisotropic material, wide enough to be sampled by a few thousand points."""
+    return brdf.create("ggx_anisotropic", alpha_x=0.2, alpha_y=0.5, fresnel="schlick", f0=0.5)
+
+
+@pytest.fixture(scope="session")
+def matte_iso(arch: Rig, matte: BRDF) -> Measured:
+    """1 500 samples of the matte material, hybrid isotropic."""
+    return synthesize(matte.eval, arch, "hybrid", True, 1500)
+
+
+@pytest.fixture(scope="session")
+def simulated_matte(tmp_path_factory: pytest.TempPathFactory) -> Measured:
+    """A real simulated run: 300 targets on the matte scene, noise off."""
+    folder = tmp_path_factory.mktemp("runs")
+    path = simulated_run(folder, plan_spec(300), scene_spec("matte", noise=False))
+    return Measured.from_run(path)
