@@ -47,6 +47,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.evaluate",
         "score a run's reconstruction against a truth (the scene, a model, another run)",
     ),
+    "tradeoff": (
+        "gonio.cli.tradeoff",
+        "sweep plans over scenes and axes: error against instrument time, the fastest plan",
+    ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "motors": (
         "gonio.cli.motors",
