@@ -74,7 +74,7 @@ def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
     with client:
         futures = client.map(runner.run, list(tasks), pure=False)
         try:
-            for future in distributed.as_completed(futures):
+            for future in distributed.as_completed(futures, loop=client.loop):
                 done(future.result())
         except BaseException:
             client.cancel(futures)

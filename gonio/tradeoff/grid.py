@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -96,7 +97,7 @@ def load_sweep(path: str | Path) -> Sweep:
         line = line_of(node, loc)
         return ConfigError(f"{path}{'' if line is None else f':{line}'}: {dotted(loc)}: {message}")
 
-    rig_path = path.parent / spec.rig
+    rig_path = _beside(path, spec.rig)
     if rig_path.is_dir():
         raise refuse(("rig",), f"{rig_path} is a folder; expected a rig file")
     rig = Rig.from_yaml(rig_path)
@@ -139,6 +140,12 @@ def load_sweep(path: str | Path) -> Sweep:
     return Sweep(path, spec, rig, scenes, tuple(tasks))
 
 
+def _beside(sweep: Path, name: str) -> Path:
+    """A file the sweep names, relative to the sweep file's folder (``..`` resolved in
+    the name only, as the shell would)."""
+    return Path(os.path.normpath(sweep.parent / name))
+
+
 def scaled_rig(rig: Rig, scale: float) -> bytes:
     """The rig file's bytes with every axis's max velocity × ``scale`` and max
     acceleration × ``scale``² (the same trapezoidal profiles, run ``scale`` times as
@@ -178,7 +185,7 @@ def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFi
 
     out: list[SceneFile] = []
     for k, name in enumerate(spec.scenes):
-        scene_path = path.parent / name
+        scene_path = _beside(path, name)
         if scene_path.is_dir():
             raise refuse(("scenes", k), f"{scene_path} is a folder; expected a scene file")
         text = read_bytes(scene_path)

@@ -17,11 +17,20 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from gonio.acquire.summary import figures
 from gonio.errors import GonioError
+from gonio.planner import progress as planning
+from gonio.planner.plan import build
+from gonio.reconstruct import testset
+from gonio.reconstruct.evaluate import evaluate
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import METRICS, REGIONS
 from gonio.reconstruct.testset import TestSet
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import Task
+from sim.scene import load_scene
+from sim.session import simulate_plan
 
 #: The figures of a row after its inputs: counts, predicted and simulated instrument
 #: time (s), why the ordering stopped, then each metric and coverage, over every test
@@ -64,15 +73,6 @@ def run(task: Task) -> dict[str, Any]:
 
 
 def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
-    from gonio.acquire.summary import figures
-    from gonio.planner import progress as planning
-    from gonio.planner.plan import build
-    from gonio.reconstruct.evaluate import evaluate
-    from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.methods import reconstruction
-    from sim.scene import load_scene
-    from sim.session import simulate_plan
-
     rig = _rig(task.rig_path, task.rig_text)
     scene = load_scene(Path(task.scene_path), rig, raw=task.scene_text).with_effects(task.effects)
     started = time.perf_counter()
@@ -119,6 +119,4 @@ def _rig(path: str, text: bytes) -> Rig:
 
 @lru_cache(maxsize=8)
 def _test_set(path: str, text: bytes, isotropic: bool, pairs: int, seed: int) -> TestSet:
-    from gonio.reconstruct import testset
-
     return testset.draw(_rig(path, text), isotropic=isotropic, size=pairs, seed=seed)
