@@ -14,7 +14,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from gonio.config import ConfigError, dotted, line_of, load, read_bytes, read_yaml, spec_text
+from pydantic import ValidationError
+
+from gonio.config import (
+    ConfigError,
+    describe,
+    dotted,
+    excerpt,
+    line_of,
+    load,
+    read_bytes,
+    read_yaml,
+    spec_text,
+)
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
@@ -97,9 +109,7 @@ def load_sweep(path: str | Path) -> Sweep:
         line = line_of(node, loc)
         return ConfigError(f"{path}{'' if line is None else f':{line}'}: {dotted(loc)}: {message}")
 
-    rig_path = _beside(path, spec.rig)
-    if rig_path.is_dir():
-        raise refuse(("rig",), f"{rig_path} is a folder; expected a rig file")
+    rig_path = _named_file(path, spec.rig, ("rig",), refuse)
     rig = Rig.from_yaml(rig_path)
     _check_detector(spec, rig, refuse)
     rigs = {}
@@ -140,10 +150,18 @@ def load_sweep(path: str | Path) -> Sweep:
     return Sweep(path, spec, rig, scenes, tuple(tasks))
 
 
-def _beside(sweep: Path, name: str) -> Path:
-    """A file the sweep names, relative to the sweep file's folder (``..`` resolved in
-    the name only, as the shell would)."""
-    return Path(os.path.normpath(sweep.parent / name))
+def _named_file(sweep: Path, name: str, loc: tuple[str | int, ...], refuse: Any) -> Path:
+    """The file a sweep names at ``loc``, relative to the sweep file's folder (``..``
+    resolved in the name, as a shell would); refused if it is a folder or its name is
+    too long to look up (reading it says what else is wrong)."""
+    path = Path(os.path.normpath(sweep.parent / name))
+    try:
+        folder = path.is_dir()
+    except OSError as exc:
+        raise refuse(loc, f"{excerpt(name)}: {exc.strerror or exc}") from None
+    if folder:
+        raise refuse(loc, f"{path} is a folder; expected a file")
+    return path
 
 
 def scaled_rig(rig: Rig, scale: float) -> bytes:
@@ -155,8 +173,11 @@ def scaled_rig(rig: Rig, scale: float) -> bytes:
     data = rig.spec.model_dump(mode="json")
     for axis in data["axes"].values():
         axis["max_velocity_deg_s"] *= scale
-        axis["max_acceleration_deg_s2"] *= scale**2
-    spec = RigSpec.model_validate(data)
+        axis["max_acceleration_deg_s2"] *= scale * scale
+    try:
+        spec = RigSpec.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(describe(exc.errors(include_url=False)[0])) from None
     Rig(spec)  # the checks of a rig file (motor limits)
     return spec_text(spec)
 
@@ -185,13 +206,13 @@ def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFi
 
     out: list[SceneFile] = []
     for k, name in enumerate(spec.scenes):
-        scene_path = _beside(path, name)
-        if scene_path.is_dir():
-            raise refuse(("scenes", k), f"{scene_path} is a folder; expected a scene file")
+        scene_path = _named_file(path, name, ("scenes", k), refuse)
         text = read_bytes(scene_path)
         scene = load_scene(scene_path, rig, raw=text)
         if any(s.name == scene.name for s in out):
-            raise refuse(("scenes", k), f"another scene of the sweep is named {scene.name!r}")
+            raise refuse(
+                ("scenes", k), f"another scene of the sweep is named {excerpt(scene.name)}"
+            )
         effects = scene.effects.model_dump(mode="json")
         out.append(SceneFile(scene.name, scene_path, text, effects))
     return tuple(out)

@@ -16,8 +16,7 @@ from typing import Any, Literal, get_args
 from pydantic import Field, field_validator, model_validator
 
 from gonio import params
-from gonio.config import Strict, field_error
-from gonio.errors import GonioError
+from gonio.config import Strict, excerpt, field_error
 from gonio.planner.schema import AcquisitionSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
@@ -107,7 +106,7 @@ class Axes(Strict):
             if name not in params.names():
                 raise field_error(
                     f"parametrization.{k}",
-                    f"unknown parametrization {name!r}; "
+                    f"unknown parametrization {excerpt(name)}; "
                     f"expected one of {', '.join(params.names())}",
                 )
         for k, name in enumerate(self.sampling):
@@ -115,20 +114,23 @@ class Axes(Strict):
                 why = " (not available yet)" if name == "adaptive" else ""
                 raise field_error(
                     f"sampling.{k}",
-                    f"unknown strategy {name!r}{why}; expected one of {', '.join(STRATEGIES)}",
+                    f"unknown strategy {excerpt(name)}{why}; "
+                    f"expected one of {', '.join(STRATEGIES)}",
                 )
         for k, method in enumerate(self.method):
-            try:
-                methods.check(method)
-            except GonioError as exc:
-                raise field_error(f"method.{k}", str(exc)) from None
+            if method not in methods.names():
+                raise field_error(
+                    f"method.{k}",
+                    f"unknown reconstruction method {excerpt(method)}; expected one of "
+                    f"{', '.join(methods.names())}",
+                )
         for k, effects in enumerate(self.effects):
             _check_effects(f"effects.{k}", effects)
         for name in type(self).model_fields:
             labels = [_label(v) for v in getattr(self, name)]
             twice = next((i for i, v in enumerate(labels) if v in labels[:i]), None)
             if twice is not None:
-                raise field_error(f"{name}.{twice}", f"{labels[twice]} is given twice")
+                raise field_error(f"{name}.{twice}", f"{excerpt(labels[twice])} is given twice")
         return self
 
 
@@ -142,7 +144,7 @@ def _check_effects(where: str, effects: Effects) -> None:
             raise field_error(
                 where,
                 f"expected {SCENE} (the scene's effects), {NONE}, a list of effect names or "
-                f"{{without: [names]}}, got {effects!r}",
+                f"{{without: [names]}}, got {excerpt(effects)}",
             )
         return
     names = effects.without if isinstance(effects, Without) else effects
@@ -150,7 +152,7 @@ def _check_effects(where: str, effects: Effects) -> None:
         if name not in EFFECT_NAMES:
             path = f"{where}.without.{k}" if isinstance(effects, Without) else f"{where}.{k}"
             raise field_error(
-                path, f"unknown effect {name!r}; expected one of {', '.join(EFFECT_NAMES)}"
+                path, f"unknown effect {excerpt(name)}; expected one of {', '.join(EFFECT_NAMES)}"
             )
 
 
@@ -195,7 +197,8 @@ class SweepSpec(Strict):
     def _consistent(self) -> SweepSpec:
         if self.metric not in METRICS:
             raise field_error(
-                "metric", f"unknown metric {self.metric!r}; expected one of {', '.join(METRICS)}"
+                "metric",
+                f"unknown metric {excerpt(self.metric)}; expected one of {', '.join(METRICS)}",
             )
         for k, pattern in enumerate(self.exclude):
             if not pattern:
