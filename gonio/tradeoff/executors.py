@@ -15,16 +15,21 @@ from __future__ import annotations
 
 import importlib
 import multiprocessing
+import re
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any
 
-from gonio.config import ConfigError
+from gonio.config import ConfigError, excerpt
 from gonio.tradeoff import runner
 from gonio.tradeoff.grid import Task
 
 Done = Callable[[dict[str, Any]], None]
 
+#: A scheduler's address: [PROTOCOL://]HOST:PORT (an IPv6 host in brackets).
+ADDRESS = re.compile(r"([a-z][a-z0-9+.-]*://)?(\[[0-9a-fA-F:.]+\]|[^\s/:\[\]]+):[0-9]{1,5}")
+#: Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT_S = 30.0
 #: Tasks queued ahead per worker of the local pool (a killed sweep loses what is queued
 #: too: it is in flight).
 AHEAD = 2
@@ -61,6 +66,8 @@ def run_local(tasks: Sequence[Task], jobs: int, done: Done) -> None:
 
 def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
     """On the Dask cluster whose scheduler is at ``scheduler`` (``tcp://HOST:PORT``)."""
+    if not ADDRESS.fullmatch(scheduler):
+        raise ConfigError(f"--scheduler {excerpt(scheduler)}: expected an address tcp://HOST:PORT")
     try:  # (untyped: used through Any)
         distributed: Any = importlib.import_module("distributed")
     except ImportError:
@@ -68,7 +75,7 @@ def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
             "--scheduler needs dask.distributed: pip install 'gonio[distributed]'"
         ) from None
     try:
-        client = distributed.Client(scheduler, timeout=30, set_as_default=False)
+        client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigError(f"--scheduler {scheduler}: cannot reach the scheduler: {exc}") from None
     with client:

@@ -127,10 +127,11 @@ class Axes(Strict):
         for k, effects in enumerate(self.effects):
             _check_effects(f"effects.{k}", effects)
         for name in type(self).model_fields:
-            labels = [_label(v) for v in getattr(self, name)]
+            values = getattr(self, name)
+            labels = [_label(v) for v in values]
             twice = next((i for i, v in enumerate(labels) if v in labels[:i]), None)
             if twice is not None:
-                raise field_error(f"{name}.{twice}", f"{excerpt(labels[twice])} is given twice")
+                raise field_error(f"{name}.{twice}", f"{excerpt(values[twice])} is given twice")
         return self
 
 
