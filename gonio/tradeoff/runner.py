@@ -7,11 +7,13 @@ set (`gonio.reconstruct.evaluate`).
 A row depends only on its task: the same task gives the same row, bit for bit, in any
 process on any machine, except for the wall times (`WALL_COLUMNS`). A combination the
 library refuses (`GonioError`: nothing reachable, no sample, …) is a row too, with the
-reason in ``error`` and no figures; anything else is a bug and propagates.
+reason in ``error`` and no figures; anything else is a bug and propagates. A figure
+that is not a finite number is None (empty in the CSV).
 """
 
 from __future__ import annotations
 
+import math
 import time
 from functools import lru_cache
 from pathlib import Path
@@ -69,7 +71,7 @@ def run(task: Task) -> dict[str, Any]:
         row["error"] = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     walls["wall_s"] = time.perf_counter() - started
     row.update(walls)
-    return row
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()}
 
 
 def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
