@@ -39,8 +39,14 @@ class Store:
     def append(self, row: dict[str, Any]) -> None:
         """Add a finished row: one line written and flushed to the disk before return."""
         line = json.dumps(row, ensure_ascii=False, allow_nan=False) + "\n"
-        os.write(self._fd, line.encode("utf-8"))
-        os.fsync(self._fd)
+        try:
+            os.write(self._fd, line.encode("utf-8"))
+            os.fsync(self._fd)
+        except OSError as exc:
+            raise ConfigError(
+                f"-o {self.folder}: cannot write {RESULTS_JSONL}: {exc.strerror or exc}; the "
+                "rows written so far are kept (run the sweep again to go on)"
+            ) from None
         self.rows[row["id"]] = row
 
 
