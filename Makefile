@@ -50,6 +50,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/planner.py
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/fit.py
+	$(BIN)/python benchmarks/tradeoff.py
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis

@@ -51,6 +51,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.plot",
         "draw a run: reconstruction slices, in-plane curves, sample coverage, error by region",
     ),
+    "tradeoff": (
+        "gonio.cli.tradeoff",
+        "sweep plans over scenes and axes: error against instrument time, the fastest plan",
+    ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "export": (
         "gonio.cli.export",

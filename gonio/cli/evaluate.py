@@ -4,21 +4,11 @@ scene by default) on the fixed test set, overall and by region (docs/evaluation.
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from gonio.errors import GonioError
-
-if TYPE_CHECKING:
-    from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.truth import Candidate
-
-#: The method of the naive reference (`gonio.reconstruct.naive`); the others are
-#: `gonio.reconstruct.build`'s.
-NAIVE = "naive"
-DEFAULT_METHOD = "linear"
+from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE
+from gonio.reconstruct.methods import reconstruction as _reconstruction
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -79,24 +69,3 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     else:
         print(result.table())
     return 0
-
-
-def _reconstruction(measured: Measured, method: str, parametrization: str | None) -> Candidate:
-    """The reconstruction of ``measured`` by ``method`` (`GonioError` if there is none)."""
-    if method == NAIVE:
-        from gonio.reconstruct.naive import NaiveReconstruction
-
-        return NaiveReconstruction(measured, parametrization=parametrization)
-    try:
-        build = importlib.import_module("gonio.reconstruct.build")
-    except ModuleNotFoundError as exc:
-        if exc.name != "gonio.reconstruct.build":
-            raise
-        raise GonioError(
-            f"method {method!r} is not available: this gonio reconstructs only with {NAIVE!r}"
-        ) from None
-    if method not in build.METHODS:
-        known = ", ".join([NAIVE, *build.METHODS])
-        raise GonioError(f"unknown method {method!r}; expected one of {known}")
-    result: Candidate = build.reconstruct(measured, method=method, parametrization=parametrization)
-    return result

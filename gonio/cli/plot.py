@@ -9,8 +9,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gonio.cli.evaluate import DEFAULT_METHOD, NAIVE
 from gonio.output import reserve_output
+from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE
 
 if TYPE_CHECKING:
     from gonio.reconstruct.measured import Measured
@@ -178,19 +178,19 @@ _FIGURES: dict[str, Callable[[argparse.Namespace, Measured], Drawing]] = {
 
 
 def _surface(args: argparse.Namespace, measured: Measured) -> Candidate:
-    from gonio.cli.evaluate import _reconstruction
+    from gonio.reconstruct.methods import reconstruction
 
-    return _reconstruction(measured, args.method, args.parametrization)
+    return reconstruction(measured, args.method, args.parametrization)
 
 
 def _truth(args: argparse.Namespace, measured: Measured) -> Truth:
-    from gonio.cli.evaluate import _reconstruction
+    from gonio.reconstruct.methods import reconstruction
     from gonio.reconstruct.truth import truth_from_spec
 
     return truth_from_spec(
         args.truth,
         measured,
-        reconstruct=lambda other: _reconstruction(other, args.method, args.parametrization),
+        reconstruct=lambda other: reconstruction(other, args.method, args.parametrization),
     )
 
 

@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 from gonio.config import ConfigError
 from gonio.planner.plan import load_plan_source
 from gonio.rig.model import Rig
+from gonio.tradeoff.grid import load_sweep
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
@@ -46,6 +47,7 @@ LOADERS: dict[str, Callable[[Path], object]] = {
     "plans": load_plan_source,
     "rigs": Rig.from_yaml,
     "scenes": load_scene,
+    "sweeps": load_sweep,
 }
 SHIPPED = sorted(p.relative_to(CONFIGS) for p in CONFIGS.glob("*/*.yaml"))
 

@@ -9,9 +9,6 @@ from pathlib import Path
 
 import pytest
 
-from gonio.cli.evaluate import _reconstruction
-from gonio.errors import GonioError
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.metrics import METRICS, REGIONS
 from gonio.reconstruct.testset import DEFAULT_SIZE
 from tests.conftest import CliResult
@@ -97,14 +94,9 @@ def test_a_missing_run_file_is_one_line(run_gonio: Gonio, tmp_path: Path) -> Non
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "none.sqlite" in r.stderr
 
 
-def test_naive_is_always_there_and_other_methods_come_from_build(run: Path) -> None:
-    measured = Measured.from_run(run)
-    assert type(_reconstruction(measured, "naive", None)).__name__ == "NaiveReconstruction"
-    try:
-        from gonio.reconstruct import build  # type: ignore[attr-defined]
-    except ImportError:
-        with pytest.raises(GonioError, match="method 'linear' is not available"):
-            _reconstruction(measured, "linear", None)
-    else:
-        assert "linear" in build.METHODS
-        assert hasattr(_reconstruction(measured, "linear", None), "eval")
+def test_every_method_scores_the_demo_like_run(run_gonio: Gonio, run: Path) -> None:
+    for method in ("naive", "linear", "rbf", "model+residual"):
+        r = run_gonio("evaluate", str(run), "--method", method, "--json")
+        assert r.returncode == 0, r.stderr
+        scores = json.loads(r.stdout)["regions"]["all"]
+        assert 0.0 <= scores["log_rmse"] < 0.2, (method, scores)

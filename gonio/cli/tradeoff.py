@@ -1,0 +1,130 @@
+"""`gonio tradeoff SWEEP.yaml -o OUTDIR`: every combination of a sweep planned, acquired
+on the simulated backend, reconstructed and scored, on a local process pool or a Dask
+cluster; the results, the Pareto front of error against instrument time, figures and,
+with --target-error, the fastest plan meeting it (docs/tradeoff.md)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from gonio.planner.plan import hms
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _jobs(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}")
+    return value
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "tradeoff",
+        help=help_,
+        description="Run every combination of a sweep file (scenes × parametrization, "
+        "sampling, sample count, exposure, averages, motor velocity, reconstruction method, "
+        "effects): plan it, acquire it on the simulated backend, reconstruct and score it "
+        "against the scene. OUTDIR gets results.jsonl (one line per finished combination; a "
+        "reused OUTDIR skips them), results.csv, report.md with the Pareto front of error "
+        "against instrument time, and PNG figures.",
+    )
+    p.add_argument("sweep", type=Path, help="the sweep file (YAML)")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
+                   help="the output folder (created; a reused one resumes)")  # fmt: skip
+    p.add_argument(
+        "--target-error",
+        type=_positive,
+        metavar="E",
+        help="also write, for each scene, the fastest plan whose error (the sweep's metric) "
+        "is at most E, as OUTDIR/plans/SCENE.yaml for gonio acquire",
+    )
+    p.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run on this Dask cluster (needs the distributed extra) instead of local processes",
+    )
+    p.add_argument(
+        "-j",
+        "--jobs",
+        type=_jobs,
+        default=os.cpu_count() or 1,
+        help="local worker processes (default: one per CPU; 1: in this process)",
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_tradeoff)
+
+
+class Bar:
+    """A tqdm bar over the combinations on standard error (only on a terminal)."""
+
+    def __init__(self) -> None:
+        self._bar: Any = None
+
+    def start(self, todo: int, finished: int) -> None:
+        from tqdm import tqdm
+
+        self._bar = tqdm(total=todo, desc="combinations", unit="comb", file=sys.stderr,
+                         disable=None, leave=False, mininterval=0.5)  # fmt: skip
+
+    def advance(self) -> None:
+        self._bar.update(1)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+
+
+def cmd_tradeoff(args: argparse.Namespace) -> int:
+    from gonio.tradeoff.grid import load_sweep
+    from gonio.tradeoff.sweep import run_sweep
+
+    sweep = load_sweep(args.sweep)
+    where = (
+        f"the Dask cluster at {args.scheduler}"
+        if args.scheduler
+        else "this process"
+        if args.jobs == 1
+        else f"{args.jobs} local processes"
+    )
+    print(
+        f"sweep {sweep.spec.name!r}: {len(sweep.tasks)} combinations over "
+        f"{len(sweep.scenes)} scene(s), into {args.output} on {where}",
+        flush=True,
+    )
+    outcome = run_sweep(
+        sweep, args.output, jobs=args.jobs, scheduler=args.scheduler, target=args.target_error,
+        progress=None if args.quiet else Bar(),
+    )  # fmt: skip
+    pace = f" ({60 * outcome.ran / outcome.wall_s:.1f} per minute)" if outcome.wall_s > 0 else ""
+    print(
+        f"ran {outcome.ran} combinations in {hms(outcome.wall_s)}{pace}; "
+        f"{outcome.reused} were already in {args.output}"
+    )
+    failed = sum(1 for r in outcome.rows if r.get("error"))
+    if failed:
+        print(f"{failed} combinations failed: their reasons are in report.md")
+    if args.target_error is not None:
+        for scene in sweep.scenes:
+            plan = outcome.plans.get(scene.name)
+            met = f"wrote {plan}" if plan else "no combination meets it"
+            print(f"target {sweep.spec.metric} ≤ {args.target_error:g} on {scene.name}: {met}")
+    print(f"wrote {len(outcome.files)} files into {args.output} (report.md, results.csv, figures)")
+    return 0

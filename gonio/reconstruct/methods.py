@@ -1,0 +1,59 @@
+"""The reconstruction methods by name, as commands and sweeps choose them: ``naive`` (the
+reference grid, `gonio.reconstruct.naive`) and those of `gonio.reconstruct.build`
+(``linear``, ``rbf``, ``grid``, ``model+residual``). For ``model+residual`` the model is
+fitted to the samples first (`gonio.reconstruct.fit`, family `DEFAULT_MODEL` unless
+another is named): the model carries the shape, the samples correct it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from gonio.errors import UnknownNameError
+from gonio.reconstruct.build import METHODS, reconstruct
+
+if TYPE_CHECKING:
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.truth import Candidate
+
+#: The method of the naive reference (`gonio.reconstruct.naive`).
+NAIVE = "naive"
+DEFAULT_METHOD = "linear"
+#: The family fitted for ``model+residual`` unless another is named (docs/fitting.md).
+DEFAULT_MODEL = "lambert+ggx"
+
+
+def names() -> tuple[str, ...]:
+    """Every method, ``naive`` first."""
+    return (NAIVE, *METHODS)
+
+
+def check(method: str) -> None:
+    """`UnknownNameError` (one line) unless ``method`` names a reconstruction."""
+    if method not in names():
+        raise UnknownNameError(f"unknown method {method!r}; expected one of {', '.join(names())}")
+
+
+def reconstruction(
+    measured: Measured,
+    method: str,
+    parametrization: str | None,
+    *,
+    model: str = DEFAULT_MODEL,
+) -> Candidate:
+    """The reconstruction of ``measured`` by ``method`` in ``parametrization`` (None:
+    the run's); ``model``: the family ``model+residual`` fits (a `gonio fit` SPEC)."""
+    check(method)
+    if method == NAIVE:
+        from gonio.reconstruct.naive import NaiveReconstruction
+
+        return NaiveReconstruction(measured, parametrization=parametrization)
+    fitted = None
+    if method == "model+residual":
+        from gonio.reconstruct.fit import fit
+
+        fitted = fit(measured, model).model
+    result: Candidate = reconstruct(
+        measured, method=method, parametrization=parametrization, model=fitted
+    )
+    return result

@@ -1,0 +1,8 @@
+"""The speed-versus-accuracy trade, measured: sweeps of plan → simulated acquisition →
+reconstruction → evaluation over the axes of a sweep file (docs/tradeoff.md).
+
+`grid.load_sweep` reads a sweep file into tasks, `runner.run` turns one task into a
+results row, `sweep.run_sweep` runs the missing ones (here, on a local pool or on Dask:
+`executors`) into an output folder (`store`) and writes the report (`report`, `plots`,
+`front`, `target`).
+"""

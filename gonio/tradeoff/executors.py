@@ -1,0 +1,88 @@
+"""Where a sweep's combinations run: in this process (one job), on a local process pool
+(`concurrent.futures.ProcessPoolExecutor`, the default), or on a Dask cluster
+(`dask.distributed`, the optional ``distributed`` extra) given its scheduler's address.
+Each finished row is handed to ``done`` in this process as it arrives (in the order
+they finish), so the caller can store it at once; `gonio.tradeoff.runner.run` makes the
+same row wherever it runs.
+
+The pool's workers are forked from a server process that imported the runner once
+(``forkserver`` with the runner preloaded): a worker starts in milliseconds, and no
+thread of this process is forked. Dask workers need gonio installed (the same version);
+a task carries its sweep's file bytes, so they need none of its files.
+"""
+
+from __future__ import annotations
+
+import importlib
+import multiprocessing
+import re
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any
+
+from gonio.config import ConfigError, excerpt
+from gonio.tradeoff import runner
+from gonio.tradeoff.grid import Task
+
+Done = Callable[[dict[str, Any]], None]
+
+#: A scheduler's address: [PROTOCOL://]HOST:PORT (an IPv6 host in brackets).
+ADDRESS = re.compile(r"([a-z][a-z0-9+.-]*://)?(\[[0-9a-fA-F:.]+\]|[^\s/:\[\]]+):[0-9]{1,5}")
+#: Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT_S = 30.0
+#: Tasks queued ahead per worker of the local pool (a killed sweep loses what is queued
+#: too: it is in flight).
+AHEAD = 2
+
+
+def run_here(tasks: Sequence[Task], done: Done) -> None:
+    """One after the other in this process."""
+    for task in tasks:
+        done(runner.run(task))
+
+
+def run_local(tasks: Sequence[Task], jobs: int, done: Done) -> None:
+    """On ``jobs`` local worker processes, at most `AHEAD` tasks queued per worker."""
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["gonio.tradeoff.runner"])
+    pending: set[Future[dict[str, Any]]] = set()
+    queue = iter(tasks)
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        try:
+            while True:
+                for task in queue:
+                    pending.add(pool.submit(runner.run, task))
+                    if len(pending) >= AHEAD * jobs:
+                        break
+                if not pending:
+                    return
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    done(future.result())
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+
+
+def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
+    """On the Dask cluster whose scheduler is at ``scheduler`` (``tcp://HOST:PORT``)."""
+    if not ADDRESS.fullmatch(scheduler):
+        raise ConfigError(f"--scheduler {excerpt(scheduler)}: expected an address tcp://HOST:PORT")
+    try:  # (untyped: used through Any)
+        distributed: Any = importlib.import_module("distributed")
+    except ImportError:
+        raise ConfigError(
+            "--scheduler needs dask.distributed: pip install 'gonio[distributed]'"
+        ) from None
+    try:
+        client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ConfigError(f"--scheduler {scheduler}: cannot reach the scheduler: {exc}") from None
+    with client:
+        futures = client.map(runner.run, list(tasks), pure=False)
+        try:
+            for future in distributed.as_completed(futures, loop=client.loop):
+                done(future.result())
+        except BaseException:
+            client.cancel(futures)
+            raise

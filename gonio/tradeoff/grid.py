@@ -1,0 +1,300 @@
+"""A sweep file read with its rig and scenes, and its combinations: one `Task` each,
+named by a stable id (a hash of everything that determines its result) from which its
+seeds are drawn, and carrying every byte a worker needs (no file is read on a worker).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from gonio.config import (
+    ConfigError,
+    describe,
+    dotted,
+    excerpt,
+    line_of,
+    load,
+    read_bytes,
+    read_yaml,
+    spec_text,
+)
+from gonio.planner.schema import PlanSpec
+from gonio.rig.model import Rig
+from gonio.rig.schema import RigSpec
+from gonio.tradeoff.spec import (
+    AXIS_NAMES,
+    NONE,
+    SCENE,
+    WARPED,
+    Effects,
+    SweepSpec,
+    Without,
+    effects_label,
+)
+
+#: The most combinations one sweep may hold (a few seconds each: weeks of CPU).
+MAX_COMBINATIONS = 100_000
+#: Framing of a combination's id (the version names the framing, not gonio's).
+_ID_MAGIC = "gonio tradeoff combination v1"
+#: The input columns of a results row, in order (the figures follow: `runner`).
+INPUT_COLUMNS = ("id", "scene", *AXIS_NAMES, "replicate", "plan_seed", "run_seed")
+
+
+@dataclass(frozen=True)
+class SceneFile:
+    """A scene file of the sweep: its name (the scene's ``name``), path and bytes."""
+
+    name: str
+    path: Path
+    text: bytes
+    effects: dict[str, Any]  # the scene's own, as listed in the file (with parameters)
+
+
+@dataclass(frozen=True)
+class Task:
+    """One combination, ready to run anywhere: its results-row inputs, the plan it asks
+    for, the scene (bytes and the effects to model), the rig (bytes, scaled) and how it
+    is scored."""
+
+    id: str
+    inputs: dict[str, Any]  # `INPUT_COLUMNS` → value
+    plan: dict[str, Any]  # a `PlanSpec`'s fields (no rig: the rig comes with the task)
+    scene_path: str
+    scene_text: bytes
+    effects: dict[str, Any]
+    rig_path: str
+    rig_text: bytes
+    run_seed: int
+    method: str
+    test_pairs: int
+    test_seed: int
+
+    def plan_spec(self) -> PlanSpec:
+        return PlanSpec.model_validate(self.plan)
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A sweep file as read: the spec, the rig, the scenes and every combination's task
+    (scenes outermost, then the axes in the file's order, replicates innermost)."""
+
+    path: Path
+    spec: SweepSpec
+    rig: Rig
+    scenes: tuple[SceneFile, ...]
+    tasks: tuple[Task, ...]
+
+    def task(self, id_: str) -> Task:
+        return next(t for t in self.tasks if t.id == id_)
+
+
+def load_sweep(path: str | Path) -> Sweep:
+    """Read and check a sweep file, its rig and scenes (`ConfigError`, one line, on any
+    mistake), and lay out its combinations."""
+    path = Path(path)
+    raw = read_bytes(path)
+    spec = load(path, SweepSpec, raw=raw)
+    node = read_yaml(path, raw)[1]
+
+    def refuse(loc: Sequence[int | str], message: str) -> ConfigError:
+        line = line_of(node, loc)
+        return ConfigError(f"{path}{'' if line is None else f':{line}'}: {dotted(loc)}: {message}")
+
+    rig_path = _named_file(path, spec.rig, ("rig",), refuse)
+    rig = Rig.from_yaml(rig_path)
+    _check_detector(spec, rig, refuse)
+    rigs = {}
+    for k, scale in enumerate(spec.axes.velocity_scale):
+        try:
+            rigs[scale] = scaled_rig(rig, scale)
+        except ConfigError as exc:
+            raise refuse(
+                ("axes", "velocity_scale", k), f"the scaled rig is refused: {exc}"
+            ) from None
+    scenes = _scenes(spec, path, rig, refuse)
+    size = len(scenes) * spec.replicates
+    for name in AXIS_NAMES:
+        size *= len(getattr(spec.axes, name))
+    if size > MAX_COMBINATIONS:
+        raise refuse(
+            ("axes",), f"{size:,} combinations; expected at most {MAX_COMBINATIONS:,} in one sweep"
+        )
+    tasks = []
+    for scene in scenes:
+        for values in itertools.product(*(getattr(spec.axes, n) for n in AXIS_NAMES)):
+            combination = dict(zip(AXIS_NAMES, values, strict=True))
+            if spec.excluded(combination):
+                continue
+            if combination["sampling"] == WARPED and not spec.warps_of(
+                combination["parametrization"]
+            ):
+                raise refuse(
+                    ("warps", combination["parametrization"]),
+                    f"warped sampling in {combination['parametrization']} needs a warp (there "
+                    "is no default for it); give one, or exclude {parametrization: "
+                    f"{combination['parametrization']}, sampling: {WARPED}}}",
+                )
+            for replicate in range(spec.replicates):
+                tasks.append(_task(spec, scene, rigs, rig_path, combination, replicate))
+    if not tasks:
+        raise refuse(("exclude",), "every combination is excluded; expected some to run")
+    return Sweep(path, spec, rig, scenes, tuple(tasks))
+
+
+def _named_file(sweep: Path, name: str, loc: tuple[str | int, ...], refuse: Any) -> Path:
+    """The file a sweep names at ``loc``, relative to the sweep file's folder (``..``
+    resolved in the name, as a shell would); refused if it is a folder or its name is
+    too long to look up (reading it says what else is wrong)."""
+    path = Path(os.path.normpath(sweep.parent / name))
+    try:
+        folder = path.is_dir()
+    except OSError as exc:
+        raise refuse(loc, f"{excerpt(name)}: {exc.strerror or exc}") from None
+    if folder:
+        raise refuse(loc, f"{path} is a folder; expected a file")
+    return path
+
+
+def scaled_rig(rig: Rig, scale: float) -> bytes:
+    """The rig file's bytes with every axis's max velocity × ``scale`` and max
+    acceleration × ``scale``² (the same trapezoidal profiles, run ``scale`` times as
+    fast: each move takes 1/``scale`` of the time); the file itself for 1."""
+    if scale == 1.0:
+        return rig.text
+    data = rig.spec.model_dump(mode="json")
+    for axis in data["axes"].values():
+        axis["max_velocity_deg_s"] *= scale
+        axis["max_acceleration_deg_s2"] *= scale * scale
+    try:
+        spec = RigSpec.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(describe(exc.errors(include_url=False)[0])) from None
+    Rig(spec)  # the checks of a rig file (motor limits)
+    return spec_text(spec)
+
+
+def _check_detector(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
+    detector = rig.spec.detector
+    lo, hi = detector.exposure_range_s
+    for k, seconds in enumerate(spec.axes.exposure_s):
+        if not lo <= seconds <= hi:
+            raise refuse(
+                ("axes", "exposure_s", k),
+                f"{seconds:g} s is outside the detector's exposure range [{lo:g}, {hi:g}] s "
+                f"(detector.exposure_range_s of {rig.source})",
+            )
+    for k, averages in enumerate(spec.axes.averages):
+        if detector.max_averages is not None and averages > detector.max_averages:
+            raise refuse(
+                ("axes", "averages", k),
+                f"{averages} averages; the detector takes at most {detector.max_averages} "
+                f"(detector.max_averages of {rig.source})",
+            )
+
+
+def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFile, ...]:
+    from sim.scene import load_scene
+
+    out: list[SceneFile] = []
+    for k, name in enumerate(spec.scenes):
+        scene_path = _named_file(path, name, ("scenes", k), refuse)
+        text = read_bytes(scene_path)
+        scene = load_scene(scene_path, rig, raw=text)
+        if any(s.name == scene.name for s in out):
+            raise refuse(
+                ("scenes", k), f"another scene of the sweep is named {excerpt(scene.name)}"
+            )
+        effects = scene.effects.model_dump(mode="json")
+        out.append(SceneFile(scene.name, scene_path, text, effects))
+    return tuple(out)
+
+
+def resolved_effects(effects: Effects, scene: SceneFile) -> dict[str, Any]:
+    """The effects a combination models: the scene's own (``scene``), none, only those
+    named (with the scene's parameters where it lists them, else the defaults), or the
+    scene's less those named."""
+    if effects == SCENE:
+        return dict(scene.effects)
+    if effects == NONE:
+        return {}
+    if isinstance(effects, Without):
+        return {k: v for k, v in scene.effects.items() if k not in effects.without}
+    assert isinstance(effects, list)
+    return {name: scene.effects.get(name, {}) for name in effects}
+
+
+def _task(
+    spec: SweepSpec,
+    scene: SceneFile,
+    rigs: dict[float, bytes],
+    rig_path: Path,
+    combination: dict[str, Any],
+    replicate: int,
+) -> Task:
+    parametrization, strategy = combination["parametrization"], combination["sampling"]
+    effects = resolved_effects(combination["effects"], scene)
+    warps = spec.warps_of(parametrization) if strategy == WARPED else {}
+    rig_text = rigs[combination["velocity_scale"]]
+    identity = {
+        "magic": _ID_MAGIC,
+        "seed": spec.seed,
+        "scene_sha256": hashlib.sha256(scene.text).hexdigest(),
+        "rig_sha256": hashlib.sha256(rig_text).hexdigest(),
+        "isotropic": spec.isotropic,
+        **{n: v for n, v in combination.items() if n != "effects"},
+        "effects": effects,
+        "effects_label": effects_label(combination["effects"]),
+        "warps": {c: w.power for c, w in warps.items()},
+        "plan": spec.plan.model_dump(mode="json"),
+        "evaluation": spec.evaluation.model_dump(mode="json"),
+        "replicate": replicate,
+    }
+    digest = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
+    id_ = digest[:16]
+    plan_seed, run_seed = int(digest[16:24], 16), int(digest[24:32], 16)
+    plan = {
+        "name": f"{spec.name}-{id_}",
+        "parametrization": parametrization,
+        "isotropic": spec.isotropic,
+        "sampling": {
+            "strategy": "sobol" if strategy == WARPED else strategy,
+            "target": combination["samples"],
+            "seed": plan_seed,
+            "warps": {c: {"power": w.power} for c, w in warps.items()},
+        },
+        "exposure": {"seconds": combination["exposure_s"], "averages": combination["averages"]},
+        **spec.plan.model_dump(mode="json"),
+    }
+    inputs = {
+        "id": id_,
+        "scene": scene.name,
+        **combination,
+        "effects": effects_label(combination["effects"]),
+        "replicate": replicate,
+        "plan_seed": plan_seed,
+        "run_seed": run_seed,
+    }
+    assert tuple(inputs) == INPUT_COLUMNS
+    return Task(
+        id=id_,
+        inputs=inputs,
+        plan=plan,
+        scene_path=str(scene.path),
+        scene_text=scene.text,
+        effects=effects,
+        rig_path=str(rig_path),
+        rig_text=rig_text,
+        run_seed=run_seed,
+        method=combination["method"],
+        test_pairs=spec.evaluation.pairs,
+        test_seed=spec.evaluation.seed,
+    )

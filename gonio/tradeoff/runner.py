@@ -1,0 +1,124 @@
+"""One combination of a sweep → one results row: plan it (`gonio.planner.plan.build`),
+acquire it on the simulated backend in memory (`sim.session.simulate_plan`: the engine,
+journal and calibration of `gonio acquire`), reconstruct it
+(`gonio.reconstruct.methods`) and score it against the scene's truth on the sweep's test
+set (`gonio.reconstruct.evaluate`).
+
+A row depends only on its task: the same task gives the same row, bit for bit, in any
+process on any machine, except for the wall times (`WALL_COLUMNS`). A combination the
+library refuses (`GonioError`: nothing reachable, no sample, …) is a row too, with the
+reason in ``error`` and no figures; anything else is a bug and propagates. A figure
+that is not a finite number is None (empty in the CSV).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from gonio.acquire.summary import figures
+from gonio.errors import GonioError
+from gonio.planner import progress as planning
+from gonio.planner.plan import build
+from gonio.reconstruct import testset
+from gonio.reconstruct.evaluate import evaluate
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.methods import reconstruction
+from gonio.reconstruct.metrics import METRICS, REGIONS
+from gonio.reconstruct.testset import TestSet
+from gonio.rig.model import Rig
+from gonio.tradeoff.grid import Task
+from sim.scene import load_scene
+from sim.session import simulate_plan
+
+#: The figures of a row after its inputs: counts, predicted and simulated instrument
+#: time (s), why the ordering stopped, then each metric and coverage, over every test
+#: pair ("log_rmse", "coverage", …) and by region ("mirror_log_rmse", …).
+SCORE_COLUMNS = tuple(
+    f"{'' if region == 'all' else f'{region}_'}{name}"
+    for region in ("all", *REGIONS)
+    for name in (*METRICS, "coverage")
+)
+FIGURE_COLUMNS = (
+    "targets",
+    "measured",
+    "skipped",
+    "saturated",
+    "predicted_s",
+    "instrument_s",
+    "ordering",
+    *SCORE_COLUMNS,
+    "error",
+)
+#: Wall-clock seconds: planning, acquiring, reconstructing and scoring, and in all (the
+#: only columns that differ between two runs of the same task).
+WALL_COLUMNS = ("plan_wall_s", "acquire_wall_s", "evaluate_wall_s", "wall_s")
+
+
+def run(task: Task) -> dict[str, Any]:
+    """The results row of ``task`` (see the module docstring)."""
+    started = time.perf_counter()
+    row: dict[str, Any] = dict(task.inputs)
+    row.update(dict.fromkeys(FIGURE_COLUMNS))
+    walls: dict[str, float | None] = dict.fromkeys(WALL_COLUMNS)
+    try:
+        row.update(_measure(task, walls))
+        row["error"] = ""
+    except GonioError as exc:
+        row["error"] = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    walls["wall_s"] = time.perf_counter() - started
+    row.update(walls)
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()}
+
+
+def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
+    rig = _rig(task.rig_path, task.rig_text)
+    scene = load_scene(Path(task.scene_path), rig, raw=task.scene_text).with_effects(task.effects)
+    started = time.perf_counter()
+    with planning.quiet():
+        plan = build(task.plan_spec(), rig, where=f"combination {task.id}")
+    walls["plan_wall_s"] = time.perf_counter() - started
+    result = simulate_plan(plan, scene, task.run_seed)
+    walls["acquire_wall_s"] = result.wall_s
+    started = time.perf_counter()
+    measured = Measured.from_run(result.run)
+    candidate = reconstruction(measured, task.method, None)
+    scored = evaluate(
+        candidate,
+        measured.scene_truth(),
+        rig,
+        isotropic=plan.spec.isotropic,
+        test_set=_test_set(task.rig_path, task.rig_text, plan.spec.isotropic, task.test_pairs,
+                           task.test_seed),
+        candidate_label=f"{task.method} ({task.id})",
+    )  # fmt: skip
+    walls["evaluate_wall_s"] = time.perf_counter() - started
+    run_figures = figures(result.run)
+    out: dict[str, Any] = {
+        "targets": len(plan),
+        "measured": run_figures["measured"],
+        "skipped": run_figures["skipped"],
+        "saturated": run_figures["saturated"],
+        "predicted_s": plan.summary.total_s,
+        "instrument_s": run_figures["instrument_time_s"],
+        "ordering": plan.summary.stopped,
+    }
+    for region, figures_of in scored.regions.items():
+        prefix = "" if region == "all" else f"{region}_"
+        for name in METRICS:
+            out[f"{prefix}{name}"] = getattr(figures_of.scores, name)
+        out[f"{prefix}coverage"] = figures_of.coverage
+    return out
+
+
+@lru_cache(maxsize=8)
+def _rig(path: str, text: bytes) -> Rig:
+    return Rig.from_yaml(path, raw=text)
+
+
+@lru_cache(maxsize=8)
+def _test_set(path: str, text: bytes, isotropic: bool, pairs: int, seed: int) -> TestSet:
+    return testset.draw(_rig(path, text), isotropic=isotropic, size=pairs, seed=seed)

@@ -1,0 +1,258 @@
+"""The sweep file (YAML), validated: the scenes, the rig and the axes a trade-off study
+sweeps (docs/tradeoff.md).
+
+Every combination of the axes' values (their Cartesian product, less the ``exclude``
+patterns) is planned, acquired on the simulated backend, reconstructed and scored. The
+file is checked whole when it is read — names, coordinates, effects, reconstruction
+methods, and (in `gonio.tradeoff.grid.load_sweep`, with the rig and scenes) exposures
+against the detector, the scaled rigs and the size of the grid — so a mistake is one line
+``FILE:LINE: field: …`` before anything runs.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal, get_args
+
+from pydantic import Field, field_validator, model_validator
+
+from gonio import params
+from gonio.config import Strict, excerpt, field_error
+from gonio.planner.schema import AcquisitionSpec, Strategy, Warp
+from gonio.reconstruct import methods
+from gonio.reconstruct.metrics import METRICS
+from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
+
+#: Strategies a sweep may name: the planner's own, and ``warped`` (Sobol with the
+#: sweep's ``warps`` for the parametrization).
+WARPED = "warped"
+STRATEGIES: tuple[str, ...] = (*get_args(Strategy), WARPED)
+
+#: The effects of a scene that a sweep may toggle (`sim.scene.EffectsSpec`).
+EFFECT_NAMES = (
+    "shot_noise",
+    "read_noise",
+    "dark_current",
+    "quantization",
+    "saturation",
+    "source_drift",
+    "aperture_integration",
+    "footprint",
+    "position_error",
+    "stray_light",
+)
+#: ``effects`` values: the scene's own effects, or none at all.
+SCENE, NONE = "scene", "none"
+
+#: The warps of ``warped`` sampling when the sweep gives none for a parametrization:
+#: u ↦ u² on the half-vector coordinate, denser toward the specular peak.
+DEFAULT_WARPS: dict[str, dict[str, Warp]] = {
+    "hybrid": {"hbar": Warp(power=2.0)},
+    "orthographic": {"hbar": Warp(power=2.0)},
+    "rusinkiewicz": {"theta_h": Warp(power=2.0)},
+}
+
+
+class Without(Strict):
+    """The scene's effects less these."""
+
+    without: list[str] = Field(min_length=1)
+
+
+Effects = str | list[str] | Without
+
+
+def effects_label(effects: Effects) -> str:
+    """The value as a results column shows it: ``scene``, ``none``, ``a+b`` (only those)
+    or ``without:a+b`` (the scene's less those)."""
+    if isinstance(effects, Without):
+        return "without:" + "+".join(effects.without)
+    if isinstance(effects, list):
+        return "+".join(effects) if effects else NONE
+    return effects
+
+
+class Axes(Strict):
+    """The values swept, each a list; a combination takes one value of each."""
+
+    parametrization: list[str] = Field(["hybrid"], min_length=1)
+    sampling: list[str] = Field(["sobol"], min_length=1)
+    samples: list[int] = Field(min_length=1)  # kept targets asked for (sampling.target)
+    exposure_s: list[float] = Field([0.05], min_length=1)
+    averages: list[int] = Field([1], min_length=1)
+    # Each axis's max velocity × v and max acceleration × v²: every move takes 1/v the time.
+    velocity_scale: list[float] = Field([1.0], min_length=1)
+    method: list[str] = Field([methods.NAIVE], min_length=1)
+    effects: list[Effects] = Field([SCENE], min_length=1)
+
+    @field_validator("samples", "averages")
+    @classmethod
+    def _positive_counts(cls, values: list[int]) -> list[int]:
+        for k, value in enumerate(values):
+            if value < 1:
+                raise field_error(str(k), f"expected a positive count, got {value}")
+        return values
+
+    @field_validator("exposure_s", "velocity_scale")
+    @classmethod
+    def _positive_numbers(cls, values: list[float]) -> list[float]:
+        for k, value in enumerate(values):
+            if not value > 0:
+                raise field_error(str(k), f"expected a positive number, got {value}")
+        return values
+
+    @model_validator(mode="after")
+    def _known_values(self) -> Axes:
+        for k, name in enumerate(self.parametrization):
+            if name not in params.names():
+                raise field_error(
+                    f"parametrization.{k}",
+                    f"unknown parametrization {excerpt(name)}; "
+                    f"expected one of {', '.join(params.names())}",
+                )
+        for k, name in enumerate(self.sampling):
+            if name not in STRATEGIES:
+                why = " (not available yet)" if name == "adaptive" else ""
+                raise field_error(
+                    f"sampling.{k}",
+                    f"unknown strategy {excerpt(name)}{why}; "
+                    f"expected one of {', '.join(STRATEGIES)}",
+                )
+        for k, method in enumerate(self.method):
+            if method not in methods.names():
+                raise field_error(
+                    f"method.{k}",
+                    f"unknown reconstruction method {excerpt(method)}; expected one of "
+                    f"{', '.join(methods.names())}",
+                )
+        for k, effects in enumerate(self.effects):
+            _check_effects(f"effects.{k}", effects)
+        for name in type(self).model_fields:
+            values = getattr(self, name)
+            labels = [_label(v) for v in values]
+            twice = next((i for i, v in enumerate(labels) if v in labels[:i]), None)
+            if twice is not None:
+                raise field_error(f"{name}.{twice}", f"{excerpt(values[twice])} is given twice")
+        return self
+
+
+def _label(value: Any) -> str:
+    return effects_label(value) if isinstance(value, list | Without) else str(value)
+
+
+def _check_effects(where: str, effects: Effects) -> None:
+    if isinstance(effects, str):
+        if effects not in (SCENE, NONE):
+            raise field_error(
+                where,
+                f"expected {SCENE} (the scene's effects), {NONE}, a list of effect names or "
+                f"{{without: [names]}}, got {excerpt(effects)}",
+            )
+        return
+    names = effects.without if isinstance(effects, Without) else effects
+    for k, name in enumerate(names):
+        if name not in EFFECT_NAMES:
+            path = f"{where}.without.{k}" if isinstance(effects, Without) else f"{where}.{k}"
+            raise field_error(
+                path, f"unknown effect {excerpt(name)}; expected one of {', '.join(EFFECT_NAMES)}"
+            )
+
+
+class PlanSettings(Strict):
+    """What every combination's plan shares (the plan file's fields of those names)."""
+
+    max_moves: int | None = Field(None, ge=0)
+    kicks: int | None = Field(None, ge=0)
+    ordering: Literal["search", "lkh"] = "search"
+    # Generous: a cap that binds makes the order depend on the machine's load.
+    time_budget_s: float = Field(600.0, gt=0)
+    acquisition: AcquisitionSpec = Field(default_factory=AcquisitionSpec)
+
+
+class EvaluationSettings(Strict):
+    """The test set every combination is scored on (`gonio.reconstruct.testset`)."""
+
+    pairs: int = Field(DEFAULT_SIZE, ge=1, le=1_000_000)
+    seed: int = Field(DEFAULT_SEED, ge=0)
+
+
+AXIS_NAMES = tuple(Axes.model_fields)
+
+
+class SweepSpec(Strict):
+    name: str = Field(min_length=1)
+    rig: str  # a rig file, relative to the sweep file
+    scenes: list[str] = Field(min_length=1)  # scene files, relative to the sweep file
+    isotropic: bool = True
+    axes: Axes
+    # Leave out every combination that matches all the fields of one pattern (a value,
+    # or a list of values).
+    exclude: list[dict[str, Any]] = Field(default_factory=list)
+    warps: dict[str, dict[str, Warp]] = Field(default_factory=dict)  # for ``warped``
+    replicates: int = Field(1, ge=1, le=1000)  # each combination with other seeds
+    seed: int = Field(0, ge=0)  # mixed into every combination's id (and so its seeds)
+    plan: PlanSettings = Field(default_factory=PlanSettings)
+    evaluation: EvaluationSettings = Field(default_factory=EvaluationSettings)
+    metric: str = "log_rmse"  # the error the report, the front and --target-error use
+
+    @model_validator(mode="after")
+    def _consistent(self) -> SweepSpec:
+        if self.metric not in METRICS:
+            raise field_error(
+                "metric",
+                f"unknown metric {excerpt(self.metric)}; expected one of {', '.join(METRICS)}",
+            )
+        for k, pattern in enumerate(self.exclude):
+            if not pattern:
+                raise field_error(f"exclude.{k}", "expected at least one axis: value")
+            unknown = sorted(set(pattern) - set(AXIS_NAMES))
+            if unknown:
+                raise field_error(
+                    f"exclude.{k}.{unknown[0]}",
+                    f"not an axis; expected one of {', '.join(AXIS_NAMES)}",
+                )
+        for name, table in self.warps.items():
+            if name not in params.names():
+                raise field_error(
+                    f"warps.{name}",
+                    f"unknown parametrization; expected one of {', '.join(params.names())}",
+                )
+            p = params.get(name)
+            coords = p.iso_names if self.isotropic else p.names
+            unknown = sorted(set(table) - set(coords))
+            if unknown:
+                raise field_error(
+                    f"warps.{name}.{unknown[0]}",
+                    f"not a coordinate of {'isotropic ' if self.isotropic else ''}{name}; "
+                    f"expected one of {', '.join(coords)}",
+                )
+        return self
+
+    def warps_of(self, parametrization: str) -> dict[str, Warp]:
+        """The warps of ``warped`` sampling in ``parametrization`` (the sweep's, else
+        `DEFAULT_WARPS`; coordinates of the anisotropic form do not apply isotropically)."""
+        if parametrization in self.warps:
+            return self.warps[parametrization]
+        p = params.get(parametrization)
+        coords = p.iso_names if self.isotropic else p.names
+        table = DEFAULT_WARPS.get(parametrization, {})
+        return {c: w for c, w in table.items() if c in coords}
+
+    def excluded(self, combination: dict[str, Any]) -> bool:
+        """Whether a combination (axis → value) matches an ``exclude`` pattern: every
+        axis the pattern names has the value given there, or one of the values listed
+        (effects written as their label: ``scene``, ``none``, ``a+b``, ``without:a``)."""
+        return any(
+            all(_matches(combination[name], wanted) for name, wanted in pattern.items())
+            for pattern in self.exclude
+        )
+
+
+def _matches(value: Any, wanted: Any) -> bool:
+    for option in wanted if isinstance(wanted, list) else [wanted]:
+        numbers = (int, float)
+        if isinstance(value, numbers) and isinstance(option, numbers):
+            if not isinstance(option, bool) and value == option:
+                return True
+        elif _label(value) == str(option):
+            return True
+    return False

@@ -1,0 +1,23 @@
+"""One combination → one row: every column, in order; a combination the planner
+refuses is a row with the reason and no figures, not a crash of the sweep."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gonio.tradeoff.grid import load_sweep
+from gonio.tradeoff.runner import FIGURE_COLUMNS, run
+from gonio.tradeoff.sweep import COLUMNS
+from tests.gonio.tradeoff.conftest import SMALL, write_sweep
+
+
+def test_a_refused_combination_is_a_row_with_the_reason(tmp_path: Path) -> None:
+    axes = {**SMALL["axes"], "parametrization": ["hybrid"], "sampling": ["sobol"],
+            "samples": [2_000_000]}  # fmt: skip
+    task = load_sweep(write_sweep(tmp_path, axes=axes)).tasks[0]
+    row = run(task)
+    assert tuple(row) == COLUMNS
+    assert "expected at most 1,000,000 targets" in row["error"] and "\n" not in row["error"]
+    assert all(row[c] is None for c in FIGURE_COLUMNS if c != "error")
+    assert row["wall_s"] is not None and row["wall_s"] >= 0
+    assert {k: row[k] for k in task.inputs} == task.inputs
