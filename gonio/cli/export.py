@@ -43,21 +43,39 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--grid-points", type=int, default=32, help="hdf5: grid points per coordinate (32)"
     )
+    p.add_argument(
+        "--method",
+        default="linear",
+        help="merl, factored, hdf5 --grid: the reconstruction tabulated (naive, linear, rbf, "
+        "grid, model+residual; default linear)",
+    )
+    p.add_argument("--outer", type=int, default=2, help="factored: outer terms J (default 2)")
+    p.add_argument(
+        "--inner", type=int, default=2, help="factored: inner terms K per outer term (default 2)"
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(func=cmd_export)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from gonio import params
+    from gonio.errors import GonioError
     from gonio.export import Options, export
+    from gonio.reconstruct import methods
 
     if args.grid is not None:
         params.get(args.grid)  # an unknown name: one line, before any work
+    methods.check(args.method)
+    if args.outer < 1 or args.inner < 1:
+        raise GonioError(f"--outer {args.outer} --inner {args.inner}: expected at least 1 each")
     options = Options(
         alta_param=args.alta_param,
         merl_fill=args.merl_fill,
         grid=args.grid,
         grid_points=args.grid_points,
+        outer=args.outer,
+        inner=args.inner,
+        method=args.method,
     )
     summary = export(args.run, args.format, args.output, options)
     if not args.quiet:

@@ -19,6 +19,11 @@ FORMATS: dict[str, tuple[str, str]] = {
     "csv": ("gonio.export.csv", "one row per sample, units in the column names"),
     "hdf5": ("gonio.export.hdf5", "samples, events, metadata and plan (needs h5py)"),
     "merl": ("gonio.export.merl", "the reconstruction tabulated in MERL's binary layout"),
+    "factored": (
+        "gonio.export.factored",
+        "the reconstruction factored (Lawrence et al. 2004) with its sampling CDFs (needs "
+        "scikit-learn)",
+    ),
     "alta": ("gonio.export.alta", "ALTA's text data format with confidence intervals"),
     "bluesky": ("gonio.export.bluesky", "event-model documents, JSON lines (needs event-model)"),
 }
@@ -33,12 +38,17 @@ MERL_FILLS = ("missing", "extrapolate")
 class Options:
     """Format options: ALTA's input parametrization; MERL's bins outside the measured
     support (written missing, or the reconstruction's extrapolation); the HDF5 file's
-    reconstruction grid (a parametrization name, and points per coordinate)."""
+    reconstruction grid (a parametrization name, and points per coordinate); the
+    factored format's outer and inner terms; the reconstruction method of the formats
+    that tabulate one (`gonio.reconstruct.methods`)."""
 
     alta_param: str = "stark_3d"
     merl_fill: str = "missing"
     grid: str | None = None
     grid_points: int = 32
+    outer: int = 2
+    inner: int = 2
+    method: str = "linear"
 
 
 def names() -> list[str]:

@@ -24,15 +24,19 @@ import warnings
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gonio.brdf import factored_file as ff
 from gonio.errors import GonioError
-from gonio.output import reserve_output
+from gonio.output import PendingOutput, reserve_output
 from gonio.params.cases import direction
-from gonio.types import FloatArray
+from gonio.store.read import Run
+from gonio.types import Evaluable, FloatArray
+
+if TYPE_CHECKING:
+    from gonio.export import Options
 
 #: Alternating updates of the colour fit: 5 already reach the fit's floor to 1e-12 in
 #: the colour error (measured on gold-like Cook-Torrance and an RGB Lambert).
@@ -62,12 +66,6 @@ class Factorization:
     outer_error: float
     error: float
     colour_error: float
-
-
-class Evaluable(Protocol):
-    """Anything with ``eval(wi, wo)`` in sr⁻¹ on (..., 3) directions: (...,) or (..., 3)."""
-
-    def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray: ...
 
 
 def table(model: Evaluable, res: Resolution) -> FloatArray:
@@ -206,3 +204,25 @@ def export(
         factors.write_bytes(ff.format_factors(result.tables).encode("utf-8"))
         cdfs.write_bytes(ff.format_cdfs(result.tables).encode("utf-8"))
     return result
+
+
+def export_run(run: Run, out: PendingOutput, options: Options) -> str:
+    """`gonio export --format factored`: the run's reconstruction (filled by its nearest
+    sample outside the measured support: the factorization needs every bin) factored
+    into ``out`` and its CDF file beside it (``out`` + ``.cdf``)."""
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.methods import reconstruction
+
+    cdf_path = out.path.with_name(out.path.name + ff.CDF_SUFFIX)
+    with reserve_output(cdf_path, "factored CDF file") as cdfs:
+        surface = reconstruction(
+            Measured.from_run(run), options.method, None, extrapolate="nearest"
+        )
+        result = factorize(surface, options.outer, options.inner, seed=0)
+        out.write_bytes(ff.format_factors(result.tables).encode("utf-8"))
+        cdfs.write_bytes(ff.format_cdfs(result.tables).encode("utf-8"))
+    return (
+        f"wrote {out.path} and {cdf_path} (factored, J = {options.outer}, K = "
+        f"{options.inner}): relative error {result.error:.3g} of the {options.method} "
+        "reconstruction"
+    )

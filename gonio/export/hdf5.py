@@ -26,7 +26,7 @@ Strings are UTF-8 variable-length strings; JSON text keeps nested metadata whole
 from __future__ import annotations
 
 import json
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from gonio.output import PendingOutput
 from gonio.planner.plan import ARRAYS
 from gonio.planner.stored import plan_bytes
 from gonio.store.read import Run
-from gonio.types import ArrayLike, FloatArray
+from gonio.types import Evaluable, FloatArray
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -50,13 +50,6 @@ CONVENTIONS = (
     "wo toward the detector; angles in radians, azimuths in [0, 2π); BRDF values in sr^-1, "
     "cosine factor excluded; times in seconds (run time) or ISO 8601 UTC"
 )
-
-
-class Evaluable(Protocol):
-    """What a reconstruction grid needs: f(ωi, ωo) in sr⁻¹ (and, optionally,
-    ``supported(wi, wo)``, the measured support)."""
-
-    def eval(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray: ...
 
 
 def _h5py() -> Any:
@@ -189,8 +182,16 @@ def write(
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     _h5py()
     if options.grid is not None:
-        # The integrator wires: out.write_with(lambda path: write(path, run,
-        # reconstruction, options.grid, options.grid_points)).
-        raise GonioError("--grid needs the reconstruction (gonio.reconstruct), not available yet")
+        from gonio.reconstruct.measured import Measured
+        from gonio.reconstruct.methods import reconstruction
+
+        grid = options.grid
+        surface = reconstruction(Measured.from_run(run), options.method, grid)
+        out.write_with(lambda path: write(path, run, surface, grid, options.grid_points))
+        return (
+            f"wrote {len(run)} samples, {len(run.events)} events, the plan and the "
+            f"{options.method} reconstruction on a {options.grid_points}-point {grid} grid "
+            f"to {out.path} (hdf5)"
+        )
     out.write_with(lambda path: write(path, run))
     return f"wrote {len(run)} samples, {len(run.events)} events and the plan to {out.path} (hdf5)"

@@ -17,7 +17,7 @@ missing).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,19 +26,10 @@ from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.output import PendingOutput
 from gonio.store.read import Run
-from gonio.types import ArrayLike, BoolArray, FloatArray
+from gonio.types import BoolArray, FloatArray, Surface
 
 if TYPE_CHECKING:
     from gonio.export import Options
-
-
-class Reconstruction(Protocol):
-    """What the MERL writer needs of a reconstruction: f(ωi, ωo) in sr⁻¹, (...,) or
-    (..., 3), and the measured support, True where f is backed by measurements."""
-
-    def eval(self, wi: ArrayLike, wo: ArrayLike) -> FloatArray: ...
-
-    def supported(self, wi: ArrayLike, wo: ArrayLike) -> BoolArray: ...
 
 
 @dataclass(frozen=True)
@@ -64,11 +55,16 @@ def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
     return wi, wo, ok
 
 
-def fill(reconstruction: Reconstruction, *, extrapolate: bool = False) -> Table:
+def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     """The reconstruction evaluated at every bin (see the module docstring)."""
     wi, wo, ok = representative_pairs()
-    supported = np.asarray(reconstruction.supported(wi, wo), dtype=bool) & ok
-    f = np.asarray(reconstruction.eval(wi, wo), dtype=np.float64)
+    both = getattr(reconstruction, "evaluate", None)  # a Reconstruction's one pass
+    if callable(both):
+        values_at, _, supported_at = both(wi, wo)
+    else:
+        values_at, supported_at = reconstruction.eval(wi, wo), reconstruction.supported(wi, wo)
+    supported = np.asarray(supported_at, dtype=bool) & ok
+    f = np.asarray(values_at, dtype=np.float64)
     if f.shape == ok.shape:
         f = np.broadcast_to(f[..., None], (*ok.shape, 3))
     if f.shape != (*ok.shape, 3):
@@ -88,7 +84,7 @@ def fill(reconstruction: Reconstruction, *, extrapolate: bool = False) -> Table:
     )
 
 
-def write(out: PendingOutput, reconstruction: Reconstruction, *, extrapolate: bool = False) -> str:
+def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = False) -> str:
     """Fill the table and write it to ``out``; the one-line summary."""
     table = fill(reconstruction, extrapolate=extrapolate)
     out.write_bytes(merl.to_bytes(table.values, table.missing))
@@ -105,9 +101,11 @@ def write(out: PendingOutput, reconstruction: Reconstruction, *, extrapolate: bo
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    # The integrator wires: write(out, reconstruct(Measured.from_run(run)),
-    # extrapolate=options.merl_fill == "extrapolate").
-    raise GonioError(
-        f"{run.path}: --format merl needs the reconstruction (gonio.reconstruct), "
-        "not available in this build"
+    from gonio.reconstruct.measured import Measured
+    from gonio.reconstruct.methods import reconstruction
+
+    extrapolate = options.merl_fill == "extrapolate"
+    surface = reconstruction(
+        Measured.from_run(run), options.method, None, extrapolate="nearest" if extrapolate else None
     )
+    return write(out, surface, extrapolate=extrapolate)

@@ -14,7 +14,7 @@ from gonio.reconstruct.build import METHODS, reconstruct
 
 if TYPE_CHECKING:
     from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.truth import Candidate
+    from gonio.types import Surface
 
 #: The method of the naive reference (`gonio.reconstruct.naive`).
 NAIVE = "naive"
@@ -40,9 +40,13 @@ def reconstruction(
     parametrization: str | None,
     *,
     model: str = DEFAULT_MODEL,
-) -> Candidate:
+    extrapolate: str | None = None,
+) -> Surface:
     """The reconstruction of ``measured`` by ``method`` in ``parametrization`` (None:
-    the run's); ``model``: the family ``model+residual`` fits (a `gonio fit` SPEC)."""
+    the run's); ``model``: the family ``model+residual`` fits (a `gonio fit` SPEC);
+    ``extrapolate``: how a build method fills pairs outside the measured support
+    (`gonio.reconstruct.build.EXTRAPOLATIONS`; the naive grid always fills by its
+    nearest node)."""
     check(method)
     if method == NAIVE:
         from gonio.reconstruct.naive import NaiveReconstruction
@@ -53,7 +57,11 @@ def reconstruction(
         from gonio.reconstruct.fit import fit
 
         fitted = fit(measured, model).model
-    result: Candidate = reconstruct(
-        measured, method=method, parametrization=parametrization, model=fitted
+    result: Surface = reconstruct(
+        measured,
+        method=method,
+        parametrization=parametrization,
+        model=fitted,
+        extrapolate=extrapolate,
     )
     return result

@@ -261,7 +261,31 @@ class Rig:
         pick = np.argmin(cost, axis=1)
         rows = np.arange(len(wi))
         angles = cand[rows, pick]
+        reasons = self._reasons(wi, wo, limits_ok, usable)
 
+        measured_wi, measured_wo = wi, wo
+        if isotropic:
+            turn = psi[rows, pick] - self.home[self._rotation_index]
+            measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
+        return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
+
+    def reachable(
+        self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False
+    ) -> tuple[BoolArray, np.ndarray]:
+        """(mask, reasons) for pairs (N, 3): True where the rig can measure the pair (the
+        reasons of `solve`, without choosing a pose)."""
+        wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
+        wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
+        cand, _ = self.candidates(wi, wo, isotropic=isotropic)
+        limits_ok = self._within_limits(cand)
+        reasons = self._reasons(wi, wo, limits_ok, limits_ok & ~self._collides(cand))
+        return reasons == Reason.OK, reasons
+
+    def _reasons(
+        self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
+    ) -> np.ndarray:
+        """Why each pair (N, 3) is refused (`Reason`; OK where it is not), given which of
+        its candidates (N, K) are within the limits and which are also collision-free."""
         reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
         theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
         c = self.spec.constraints
@@ -283,19 +307,7 @@ class Rig:
         ]
         for reason, refused in reversed(checks):  # the first check that fails wins
             reasons[refused] = reason
-
-        measured_wi, measured_wo = wi, wo
-        if isotropic:
-            turn = psi[rows, pick] - self.home[self._rotation_index]
-            measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
-        return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
-
-    def reachable(
-        self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False
-    ) -> tuple[BoolArray, np.ndarray]:
-        """(mask, reasons) for pairs (N, 3): True where the rig can measure the pair."""
-        solution = self.solve(wi, wo, isotropic=isotropic)
-        return solution.ok, solution.reasons
+        return reasons
 
     # -- the instrument ------------------------------------------------------------------
     @property

@@ -10,9 +10,13 @@ import numpy as np
 import pytest
 
 import gonio.brdf as brdf
+from gonio.cli import main
 from gonio.config import ConfigError
 from gonio.errors import GonioError
+from gonio.export import factored as factored_export
 from gonio.export.factored import Factorization, Resolution, export, factorize
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.methods import reconstruction
 
 RES = Resolution(theta_out=8, phi_out=16, theta_p=16, phi_p=32, z=256)
 GOLD = {
@@ -154,3 +158,21 @@ def test_export_refuses_a_missing_folder_before_the_work_and_bad_term_counts(tmp
     with pytest.raises(GonioError, match="J"):
         factorize(model, 0, 1, RES)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_run_is_factored_from_its_reconstruction(run_file, tmp_path, monkeypatch):
+    """`gonio export --format factored` writes what the library writes of the run's
+    linear reconstruction filled by its nearest sample (the factorization itself is
+    held to its error bounds above); coarse tables keep it quick."""
+    coarse = Resolution(theta_out=6, phi_out=12, theta_p=12, phi_p=24, z=64)
+    monkeypatch.setattr(factored_export, "Resolution", lambda: coarse)
+    out = tmp_path / "run.factored"
+    args = ["export", str(run_file), "--format", "factored", "--outer", "2", "--inner", "1"]
+    assert main([*args, "-o", str(out), "-q"]) == 0
+    surface = reconstruction(Measured.from_run(run_file), "linear", None, extrapolate="nearest")
+    export(surface, tmp_path / "library.factored", 2, 1, coarse, seed=0)
+    for suffix in ("", ".cdf"):
+        cli = (tmp_path / f"run.factored{suffix}").read_bytes()
+        assert cli == (tmp_path / f"library.factored{suffix}").read_bytes()
+    normal = np.array([0.0, 0.0, 1.0])
+    assert brdf.create("factored", path=str(out)).eval(normal, normal) > 0

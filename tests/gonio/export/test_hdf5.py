@@ -15,6 +15,8 @@ from gonio.acquire.calibrated import calibrate
 from gonio.cli import main
 from gonio.export.hdf5 import write
 from gonio.planner.stored import parse_plan
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.methods import reconstruction
 from gonio.store import open_run
 
 
@@ -101,11 +103,23 @@ def test_the_reconstruction_grid_at_cell_centres(run_file, tmp_path):
     np.testing.assert_array_equal(supported[~below], model.supported(wi, wo))
 
 
-def test_the_grid_needs_the_reconstruction_for_now(run_file, tmp_path, capsys):
-    args = ["export", str(run_file), "--format", "hdf5", "--grid", "hybrid"]
-    assert main([*args, "-o", str(tmp_path / "x.h5")]) == 2
-    assert "reconstruction" in capsys.readouterr().err
-    assert not (tmp_path / "x.h5").exists()
+def test_the_grid_holds_the_runs_reconstruction(run_file, tmp_path):
+    out = tmp_path / "grid.h5"
+    args = ["export", str(run_file), "--format", "hdf5", "--grid", "rusinkiewicz"]
+    assert main([*args, "--grid-points", "6", "-o", str(out), "-q"]) == 0
+    with h5py.File(out, "r") as h5:
+        group = h5["reconstruction"]
+        assert group.attrs["parametrization"] == "rusinkiewicz"
+        axes = [group[f"axes/{n}"][()] for n in json.loads(group.attrs["coordinate_names"])]
+        values, supported = group["values"][()], group["supported"][()]
+    p = params.get("rusinkiewicz")
+    coords = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+    ok = p.valid_iso(coords)
+    wi, wo = p.inverse_iso(coords[ok])
+    surface = reconstruction(Measured.from_run(run_file), "linear", "rusinkiewicz")
+    np.testing.assert_array_equal(supported[ok], surface.supported(wi, wo))
+    np.testing.assert_allclose(values[ok], surface.eval(wi, wo), rtol=1e-12, equal_nan=True)
+    assert supported.any() and np.all(np.isnan(values[~ok]))
 
 
 def test_the_plain_h5py_example_of_the_docs_runs(out, run_file):

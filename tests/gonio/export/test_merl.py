@@ -13,6 +13,8 @@ from gonio import brdf, params
 from gonio.cli import main
 from gonio.export.merl import fill, write
 from gonio.output import reserve_output
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.methods import reconstruction
 
 HALF_PI = np.pi / 2
 SCALES = np.array([1.0, 1.15, 1.66]) / 1500.0
@@ -148,12 +150,25 @@ def test_extrapolation_on_request_fills_the_bins_outside_the_support():
     assert np.count_nonzero(extrapolated.missing) == extrapolated.no_pair
 
 
-def test_a_run_needs_the_reconstruction_for_now(run_file, tmp_path, capsys):
-    out = tmp_path / "x.binary"
-    assert main(["export", str(run_file), "--format", "merl", "-o", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "needs the reconstruction" in err and err.count("\n") == 1
-    assert not out.exists()
+def test_a_run_is_written_from_its_reconstruction(run_file, tmp_path, sample):
+    """`gonio export --format merl`: the run's linear reconstruction at the bin centres
+    where it is supported, the rest missing (negative), or filled on request."""
+    out = tmp_path / "run.binary"
+    assert main(["export", str(run_file), "--format", "merl", "-o", str(out), "-q"]) == 0
+    stored = read_merl(out)
+    surface = reconstruction(Measured.from_run(run_file), "linear", None)
+    th, td, pd = (a[idx] for a, idx in zip(centre_reading(), sample, strict=True))
+    wi, wo, ok = pairs_at(th, td, pd)
+    i, j, k = (idx[ok] for idx in sample)
+    got = stored[:, i, j, k]
+    inside = surface.supported(wi, wo)
+    assert 0.05 < inside.mean() < 0.95  # a 60-sample run supports part of the table
+    np.testing.assert_allclose(got[0, inside], surface.eval(wi, wo)[inside], rtol=1e-12)
+    assert np.all(got[:, ~inside] < 0)  # written missing
+    filled = tmp_path / "filled.binary"
+    args = ["export", str(run_file), "--format", "merl", "--merl-fill", "extrapolate"]
+    assert main([*args, "-o", str(filled), "-q"]) == 0
+    assert np.all(read_merl(filled)[:, i, j, k] >= 0)
 
 
 def test_gonios_reader_takes_gonios_file_back(written, sample):

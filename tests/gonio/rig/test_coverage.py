@@ -103,6 +103,9 @@ def test_reaches_the_claimed_domain(rigs: dict[str, Rig], name: str) -> None:
     rig = rigs[name]
     wi, wo = sample(11)
     _, reasons = rig.reachable(wi, wo)
+    for isotropic in (False, True):  # reachable skips choosing a pose: same reasons
+        got = rig.reachable(wi, wo, isotropic=isotropic)[1]
+        assert np.array_equal(got, rig.solve(wi, wo, isotropic=isotropic).reasons)
     expected = expected_reasons(rig, wi, wo)
     wrong = reasons != expected
     assert not wrong.any(), Counter(
