@@ -20,12 +20,14 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(PIP) install -e '.[test]'
 	touch $@ $(VENV)/.installed
 
-# The main job on the simulated rig, then what its run file holds (re-running replaces it).
+# The main job on the simulated rig, then what its run file holds and how well its
+# reconstruction matches the scene (re-running replaces it).
 demo: $(VENV)/.installed
 	@mkdir -p runs
 	$(BIN)/gonio acquire configs/plans/quickstart.yaml --scene configs/scenes/glossy_metal.yaml \
 		-o runs/quickstart.sqlite --overwrite
 	$(BIN)/gonio info runs/quickstart.sqlite
+	$(BIN)/gonio evaluate runs/quickstart.sqlite
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
