@@ -149,6 +149,13 @@ def _run(argv: list[str]) -> int:
     except (GonioError, DriverError) as exc:
         print(f"gonio: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        # A path the kernel refuses where no loader expected it (a name too long, say):
+        # still one line about that path.
+        if exc.filename is None:
+            raise
+        print(f"gonio: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
 
 
 def _broken_pipe() -> int:

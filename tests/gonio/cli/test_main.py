@@ -158,3 +158,17 @@ def test_usage_errors_are_one_line(run_gonio: Gonio, args: list[str], line: str)
     assert r.stdout == ""
     assert len(r.stderr.splitlines()) == 1, r.stderr
     assert r.stderr.startswith(f"gonio: error: {line}")
+
+
+def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
+    """A name longer than the filesystem allows, as a plan's rig or as -o: one line
+    naming the path, exit 2 (it was an OSError traceback)."""
+    long_name = "r" * 300
+    plan = tmp_path / "plan.yaml"
+    plan.write_text(f"name: p\nrig: {long_name}.yaml\nsampling: {{strategy: sobol, target: 10}}\n")
+    r = run_gonio("plan", str(plan))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1
+    assert f"{long_name}.yaml: File name too long" in r.stderr
+    quickstart = Path(__file__).resolve().parents[3] / "configs" / "plans" / "quickstart.yaml"
+    r = run_gonio("acquire", str(quickstart), "-o", str(tmp_path / f"{long_name}.sqlite"))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "File name too long" in r.stderr
