@@ -21,6 +21,9 @@ from gonio.reconstruct.interpolants import Interpolant
 from gonio.reconstruct.transforms import Transform
 from gonio.types import ArrayLike, BoolArray, BrdfEval, FloatArray
 
+#: Samples averaged by the nearest fill (`Reconstruction._nearby`).
+FILL_NEIGHBOURS = 8
+
 
 @dataclass(frozen=True)
 class Reconstruction:
@@ -105,12 +108,24 @@ class Reconstruction:
         sigma[ok] = self.codec.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
         out = ~ok
         if self.extrapolate == "nearest":
-            _, anywhere = self.domain.nearest(x[out], bounded=False)
-            f[out] = self.samples_f[self.source[anywhere]]
+            f[out] = self._nearby(x[out])
         elif self.extrapolate == "model" and self.model is not None:
             m = np.asarray(self.model(wi[out], wo[out]), dtype=np.float64)
             f[out] = m[:, None] if m.ndim == 1 else m
         return f, sigma, ok
+
+    def _nearby(self, x: FloatArray) -> FloatArray:
+        """The fill of ``extrapolate="nearest"`` at scaled points (M, d): the mean of
+        log(1 + f) over the `FILL_NEIGHBOURS` nearest samples weighted by 1/distance²
+        (the nearest sample's value where a query sits on it)."""
+        k = min(FILL_NEIGHBOURS, self.domain.tree.n)
+        distance, index = self.domain.tree.query(x, k=k, workers=-1)
+        distance = np.asarray(distance, dtype=np.float64).reshape(len(x), k)
+        index = np.asarray(index, dtype=np.intp).reshape(len(x), k)
+        weight = 1.0 / np.maximum(distance, 1e-12) ** 2
+        weight /= weight.sum(axis=1, keepdims=True)
+        g = np.log1p(np.maximum(self.samples_f[self.source[index]], 0.0))  # (M, k, C)
+        return np.asarray(np.expm1(np.einsum("mk,mkc->mc", weight, g)), dtype=np.float64)
 
     def _blended(
         self, x: FloatArray, nearest: np.ndarray, level: int
