@@ -84,12 +84,25 @@ def _bounds(parametrization: str, isotropic: bool) -> FloatArray:
     return np.asarray(p.iso_bounds if isotropic else p.bounds, dtype=np.float64)
 
 
+_MEASURES: dict[tuple[bytes, str, bool, tuple[int, ...]], FloatArray] = {}
+
+
 def measure_density(
     rig: Rig, parametrization: str, isotropic: bool, shape: tuple[int, ...]
 ) -> FloatArray:
     """The test measure's share of each cell (cells,), summing to 1: pairs uniform in
     dωi dωo over the rig's cap and reach, mapped to the unit box and counted per cell,
-    smoothed over one cell (the count is an estimate)."""
+    smoothed over one cell (the count is an estimate). Kept per rig text (seconds)."""
+    key = (rig.text, parametrization, isotropic, shape)
+    if key not in _MEASURES:
+        _MEASURES[key] = _measure_density(rig, parametrization, isotropic, shape)
+        _MEASURES[key].setflags(write=False)
+    return _MEASURES[key]
+
+
+def _measure_density(
+    rig: Rig, parametrization: str, isotropic: bool, shape: tuple[int, ...]
+) -> FloatArray:
     rng = np.random.default_rng(MEASURE_SEED)
     wi = uniform_cap(rng, MEASURE_PAIRS, rig.theta_max)
     wo = uniform_cap(rng, MEASURE_PAIRS, rig.theta_max)
