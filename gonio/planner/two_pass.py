@@ -23,6 +23,7 @@ from gonio import params
 from gonio.planner import adaptive
 from gonio.planner.placement import draw_kept
 from gonio.planner.plan import Plan, build
+from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 
@@ -39,11 +40,25 @@ def is_survey(plan: Plan) -> bool:
 def extend(first: Plan, measured: Measured, *, where: str = "plan") -> Plan:
     """The whole adaptive plan: ``first`` (the survey, as built) and the second pass
     planned from ``measured`` (the survey's samples; see the module)."""
+    spec, rig = first.spec, first.rig
+    assert spec.sampling.target is not None and is_survey(first)
+    coords = second_pass_points(spec, rig, measured, spec.sampling.target - len(first), where)
+    second = build(
+        spec, rig, where=where, text=first.plan_text, placed=coords, start=first.angles[-1]
+    )
+    return joined(first, second)
+
+
+def second_pass_points(
+    spec: PlanSpec, rig: Rig, measured: Measured, count: int, where: str = "plan"
+) -> FloatArray:
+    """The second pass's points in the coordinate box (generation order: every point
+    drawn, ``count`` of them kept): the ``model`` family fitted to ``measured``, its
+    density (`adaptive.density`), a share ``edge`` of the points moved onto the edge of
+    the rig's cap."""
     from gonio.reconstruct.fit import fit
 
-    spec, rig = first.spec, first.rig
     options = spec.sampling.options()
-    assert spec.sampling.target is not None and is_survey(first)
     model = fit(measured, options.model).model
     density = adaptive.density(
         model.eval, rig, spec.parametrization, spec.isotropic, floor=options.floor
@@ -54,19 +69,15 @@ def extend(first: Plan, measured: Measured, *, where: str = "plan") -> Plan:
     def inside(stream: adaptive.Stream, n: int, edge: bool) -> FloatArray:
         return draw_points(stream, n, bounds, rig, spec.parametrization, spec.isotropic, edge)
 
-    rest = spec.sampling.target - len(first)
-    on_edge = math.floor(options.edge * rest)
+    on_edge = math.floor(options.edge * count)
     seed = spec.sampling.seed
     shaped = adaptive.Stream(density, seed + 1)
-    coords = draw_kept(spec, rig, where, lambda n: inside(shaped, n, False), rest - on_edge)
+    coords = draw_kept(spec, rig, where, lambda n: inside(shaped, n, False), count - on_edge)
     if on_edge:
         edged = adaptive.Stream(density, seed + 2)
         edge = draw_kept(spec, rig, where, lambda n: inside(edged, n, True), on_edge)
         coords = np.concatenate([coords, edge])
-    second = build(
-        spec, rig, where=where, text=first.plan_text, placed=coords, start=first.angles[-1]
-    )
-    return joined(first, second)
+    return coords
 
 
 def draw_points(
