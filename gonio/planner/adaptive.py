@@ -84,7 +84,7 @@ def _bounds(parametrization: str, isotropic: bool) -> FloatArray:
     return np.asarray(p.iso_bounds if isotropic else p.bounds, dtype=np.float64)
 
 
-_MEASURES: dict[tuple[bytes, str, bool, tuple[int, ...]], FloatArray] = {}
+_MEASURES: dict[tuple[bytes, str, bool, tuple[int, ...], int], FloatArray] = {}
 
 
 def measure_density(
@@ -93,7 +93,7 @@ def measure_density(
     """The test measure's share of each cell (cells,), summing to 1: pairs uniform in
     dωi dωo over the rig's cap and reach, mapped to the unit box and counted per cell,
     smoothed over one cell (the count is an estimate). Kept per rig text (seconds)."""
-    key = (rig.text, parametrization, isotropic, shape)
+    key = (rig.text, parametrization, isotropic, shape, MEASURE_PAIRS)
     if key not in _MEASURES:
         _MEASURES[key] = _measure_density(rig, parametrization, isotropic, shape)
         _MEASURES[key].setflags(write=False)
@@ -182,7 +182,8 @@ def onto_edge(
     coords: FloatArray, rig: Rig, parametrization: str, isotropic: bool
 ) -> tuple[FloatArray, np.ndarray]:
     """Points (N, d) moved onto the edge of the rig's cap: the direction of each pair
-    with the larger polar angle turned to θmax − `EDGE_MARGIN`, its azimuth kept; and
+    with the larger polar angle (and the other one too if it is beyond the edge) turned
+    to θmax − `EDGE_MARGIN`, its azimuth kept; and
     a mask (N,) of the points moved (those in the parametrization's domain).
 
     A piecewise-linear reconstruction answers only inside the hull of its samples, and
@@ -195,9 +196,11 @@ def onto_edge(
     out = np.array(coords, dtype=np.float64)
     wi, wo = p.inverse_iso(coords[valid]) if isotropic else p.inverse(coords[valid])
     edge = math.cos(rig.theta_max - EDGE_MARGIN)
-    incident = (wi[:, 2] <= wo[:, 2])[:, None]
-    wi = np.where(incident, _with_cos(wi, edge), wi)
-    wo = np.where(incident, wo, _with_cos(wo, edge))
+    # The lower direction goes onto the edge, the other too if it is beyond it.
+    incident = (wi[:, 2] <= wo[:, 2]) | (wi[:, 2] < edge)
+    outgoing = (wo[:, 2] < wi[:, 2]) | (wo[:, 2] < edge)
+    wi = np.where(incident[:, None], _with_cos(wi, edge), wi)
+    wo = np.where(outgoing[:, None], _with_cos(wo, edge), wo)
     out[valid] = p.forward_iso(wi, wo) if isotropic else p.forward(wi, wo)
     return out, np.asarray(valid, dtype=np.bool_)
 
