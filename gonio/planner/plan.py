@@ -400,6 +400,13 @@ def render_summary(plan: Plan) -> str:
             if s.target is not None and s.grid_shape is not None and s.kept != s.target
             else ""
         ),
+    ]
+    if spec.sampling.strategy == "adaptive" and s.target is not None and s.kept < s.target:
+        lines.append(
+            f"  {'':<26}{'':>9}   (the survey: the other {s.target - s.kept} targets are "
+            "planned from its measurements during the run, docs/adaptive.md)"
+        )
+    lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
         f"settle + exposure {hms(s.dwell_s)})",

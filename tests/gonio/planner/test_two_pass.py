@@ -14,7 +14,7 @@ from pydantic import ValidationError
 from gonio import brdf
 from gonio.planner import adaptive
 from gonio.planner.placement import directions
-from gonio.planner.plan import ARRAYS, Plan, build, same_bits
+from gonio.planner.plan import ARRAYS, Plan, build, render_summary, same_bits
 from gonio.planner.schema import PlanSpec
 from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import extend, is_survey, second_pass_points
@@ -67,6 +67,8 @@ def planned(rig: Rig) -> tuple[Plan, Plan]:
 def test_the_survey_then_the_second_pass(planned: tuple[Plan, Plan]) -> None:
     survey, whole = planned
     assert is_survey(survey) and len(survey) == 40
+    assert "the other 50 targets are planned from its measurements" in render_summary(survey)
+    assert "planned from its measurements" not in render_summary(whole)
     assert not is_survey(whole) and len(whole) == 90 and whole.summary.kept == 90
     for name in ("coords", "angles", "arrival_s", "generated"):
         np.testing.assert_array_equal(getattr(whole, name)[:40], getattr(survey, name))
