@@ -8,10 +8,10 @@ in dωi dωo over what the rig measures, θ ≤ 80°; `extrapolate="nearest"`). 
 samples each needs for log-RMSE 0.01 (log-log between the counts measured) and the
 ratios: adaptive error / best uniform error at equal counts, adaptive samples / best
 uniform samples for 0.01. No material below is a Beckmann one: the steering model's
-family never contains the scene's.
+family never contains the scene's (``--model survey`` steers with no model at all).
 
 Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 500 1000 2000 4000]
-[--methods linear rbf] [--survey 128] [--floor 0.2] [--edge 0.0]
+[--methods linear rbf] [--survey 128] [--floor 0.2] [--edge 0.0] [--model survey]
 """
 
 from __future__ import annotations
@@ -136,13 +136,19 @@ def main() -> None:
     parser.add_argument("--survey", type=int, default=128)
     parser.add_argument("--floor", type=float, default=0.2)
     parser.add_argument("--edge", type=float, default=0.0)
+    parser.add_argument(
+        "--model",
+        default="lambert+beckmann",
+        help="the family steering the second pass, or 'survey' (no model)",
+    )
     args = parser.parse_args()
-    options = {"survey": args.survey, "model": "lambert+beckmann", "floor": args.floor,
+    options = {"survey": args.survey, "model": args.model, "floor": args.floor,
                "edge": args.edge}  # fmt: skip
     counts = args.targets
     print(describe())
-    print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by a "
-          f"lambert+beckmann fit, floor {args.floor}, edge {args.edge}")  # fmt: skip
+    steer = "its own rbf reconstruction" if args.model == "survey" else f"a {args.model} fit"
+    print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
+          f"floor {args.floor}, edge {args.edge}")  # fmt: skip
     summary = []
     for name in args.scenes:
         make, rig_name, isotropic, what = SCENES[name]

@@ -29,14 +29,27 @@ class Warp(Strict):
 class AdaptiveSpec(Strict):
     """The adaptive strategy (docs/adaptive.md): a Sobol survey of ``survey`` kept
     targets is measured first; a model of family ``model`` (a `gonio fit` spec) fitted
-    to it estimates where a reconstruction errs; the rest of the target is then placed
+    to it (``survey``: the survey's own reconstruction, no model) estimates where a
+    reconstruction errs; the rest of the target is then placed
     with the density of `gonio.planner.adaptive`, a share ``floor`` of it uniform and a
     share ``edge`` moved onto the edge of the rig's cap."""
 
     survey: int = Field(128, ge=16)
-    model: str = "lambert+beckmann"
+    model: str = "lambert+beckmann"  # or "survey": the survey's rbf reconstruction
     floor: float = Field(0.2, ge=0.0, le=1.0)
     edge: float = Field(0.0, ge=0.0, lt=1.0)
+
+    @model_validator(mode="after")
+    def _known_model(self) -> AdaptiveSpec:
+        if self.model != "survey":  # refused when the file is read, not after the survey
+            from gonio.errors import GonioError
+            from gonio.reconstruct.family import parse
+
+            try:
+                parse(self.model)
+            except GonioError as exc:
+                raise field_error("model", f"{exc} (or survey: no model)") from None
+        return self
 
 
 class SamplingSpec(Strict):

@@ -25,10 +25,13 @@ from gonio.planner.placement import draw_kept
 from gonio.planner.plan import Plan, build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
-from gonio.types import FloatArray
+from gonio.types import BrdfEval, FloatArray
 
 if TYPE_CHECKING:
     from gonio.reconstruct.measured import Measured
+
+#: The ``model`` that steers by the survey's own reconstruction instead of a fit.
+SURVEY = "survey"
 
 
 def is_survey(plan: Plan) -> bool:
@@ -56,13 +59,11 @@ def second_pass_points(
     drawn, ``count`` of them kept): the ``model`` family fitted to ``measured``, its
     density (`adaptive.density`), a share ``edge`` of the points moved onto the edge of
     the rig's cap."""
-    from gonio.reconstruct.fit import fit
-
     options = spec.sampling.options()
-    model = fit(measured, options.model).model
     density = adaptive.density(
-        model.eval, rig, spec.parametrization, spec.isotropic, floor=options.floor
-    )
+        estimate(measured, options.model), rig, spec.parametrization, spec.isotropic,
+        floor=options.floor,
+    )  # fmt: skip
     p = params.get(spec.parametrization)
     bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
 
@@ -78,6 +79,18 @@ def second_pass_points(
         edge = draw_kept(spec, rig, where, lambda n: inside(edged, n, True), on_edge)
         coords = np.concatenate([coords, edge])
     return coords
+
+
+def estimate(measured: Measured, model: str) -> BrdfEval:
+    """The BRDF the density is taken from: the ``model`` family fitted to the survey, or
+    for ``survey`` the survey's own rbf reconstruction (no model at all)."""
+    if model == SURVEY:
+        from gonio.reconstruct.build import reconstruct
+
+        return reconstruct(measured, method="rbf", extrapolate="nearest").eval
+    from gonio.reconstruct.fit import fit
+
+    return fit(measured, model).model.eval
 
 
 def draw_points(

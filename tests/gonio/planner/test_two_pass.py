@@ -125,3 +125,18 @@ def test_adaptive_beats_uniform_at_equal_count(rig: Rig) -> None:
         return value.scores.log_rmse
 
     assert error(both) < 0.75 * error(uniform)  # measured: 0.0098 against 0.0156
+
+
+def test_an_unknown_steering_model_is_refused_when_the_plan_is_read() -> None:
+    with pytest.raises(ValidationError, match=r"unknown family 'gxx'.*or survey: no model"):
+        spec(200, 100, model="lambert+gxx")
+
+
+def test_steering_by_the_survey_alone_is_deterministic(rig: Rig) -> None:
+    plan = spec(200, 64, model="survey")
+    survey = synthesize(GLOSSY, rig, "rusinkiewicz", True, 64, seed=4)
+    a = second_pass_points(plan, rig, survey, 136)
+    b = second_pass_points(plan, rig, survey, 136)
+    assert a.tobytes() == b.tobytes()
+    fitted = second_pass_points(spec(200, 64), rig, survey, 136)
+    assert not np.array_equal(a, fitted)
