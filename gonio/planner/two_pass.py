@@ -2,8 +2,9 @@
 measurements and appended to the survey's plan.
 
 `build` of an adaptive plan gives the first pass, a Sobol survey of ``survey`` kept
-targets. Once it is measured, `extend` fits the ``model`` family to its samples, takes
-the density of `gonio.planner.adaptive` from the fitted model, places the rest of the
+targets. Once it is measured, `extend` fits the ``model`` family to its samples (or,
+for ``survey``, reconstructs them), takes the density of `gonio.planner.adaptive` from
+that estimate, places the rest of the
 target with it (a share ``edge`` moved onto the edge of the rig's cap), orders those
 targets from the survey's last pose, and returns the whole plan: the survey's targets
 unchanged, first, then the new ones. The engine stores that plan in the run in place
@@ -56,9 +57,9 @@ def second_pass_points(
     spec: PlanSpec, rig: Rig, measured: Measured, count: int, where: str = "plan"
 ) -> FloatArray:
     """The second pass's points in the coordinate box (generation order: every point
-    drawn, ``count`` of them kept): the ``model`` family fitted to ``measured``, its
-    density (`adaptive.density`), a share ``edge`` of the points moved onto the edge of
-    the rig's cap."""
+    drawn, ``count`` of them kept): the density (`adaptive.density`) of the estimate
+    from ``measured`` (`estimate`), a share ``edge`` of the points moved onto the edge
+    of the rig's cap."""
     options = spec.sampling.options()
     density = adaptive.density(
         estimate(measured, options.model), rig, spec.parametrization, spec.isotropic,
