@@ -16,7 +16,7 @@ import shutil
 import socket
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan, sha256
 from gonio.planner.stored import parse_plan, plan_bytes
+from gonio.planner.two_pass import extend, is_survey
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, remove_run_file
 from gonio.store.read import Run, read_run
@@ -161,21 +162,45 @@ def _run_engine(
     retry_skipped: bool = False,
     argv: list[str],
 ) -> Outcome:
-    journal.start_session(utc_now(), _session_info(backend.kind, argv))
-    engine = Engine(
-        plan=plan,
-        devices=backend.devices,
-        journal=journal,
-        stage=backend.stage,
-        time=backend.time,
-        history=history,
-        calibrate_on_resume=backend.calibrate_on_resume,
-        retry_skipped=retry_skipped,
-        progress=progress,
-        stops=StopRequests(),
-    )
-    report = engine.run()
-    return Outcome(report, journal.path, read_run(journal.conn, journal.path or Path(":memory:")))
+    """Run the engine on what is missing; an adaptive plan's survey, once measured, is
+    followed by its second pass (`_second_pass`) in a new session."""
+    path = journal.path or Path(":memory:")
+    measured = skipped = 0
+    while True:
+        journal.start_session(utc_now(), _session_info(backend.kind, argv))
+        engine = Engine(
+            plan=plan,
+            devices=backend.devices,
+            journal=journal,
+            stage=backend.stage,
+            time=backend.time,
+            history=history,
+            calibrate_on_resume=backend.calibrate_on_resume,
+            retry_skipped=retry_skipped,
+            progress=progress,
+            stops=StopRequests(),
+        )
+        report = engine.run()
+        measured, skipped = measured + report.measured, skipped + report.skipped
+        run = read_run(journal.conn, path)
+        if report.outcome != "completed" or not is_survey(plan):
+            report = replace(report, measured=measured, skipped=skipped)
+            return Outcome(report, journal.path, run)
+        plan = _second_pass(journal, run)
+        history = read_run(journal.conn, path)
+
+
+def _second_pass(journal: Journal, run: Run) -> Plan:
+    """The adaptive plan's second pass planned from the survey's samples in the journal
+    (`gonio.planner.two_pass`), stored in the run in place of the survey's plan (one
+    statement: a crash leaves either) and journaled; the whole plan."""
+    from gonio.reconstruct.measured import Measured
+
+    whole = extend(run.plan, Measured.from_run(run), where=str(run.path))
+    journal.replace_plan(plan_bytes(whole))
+    t_s = float(np.max(run.samples["ended_s"])) if len(run) else 0.0
+    journal.event("second_pass", t_s, utc_now(), {"survey": len(run.plan), "targets": len(whole)})
+    return whole
 
 
 def start(

@@ -6,6 +6,7 @@ can reach)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -70,28 +71,40 @@ def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, 
         unit = sampling.grid(shape, jitter=jitter)
         return sampling.to_box(unit, bounds, powers), shape
     assert s.target is not None
-    stream = sampling.Sequence(s.strategy, len(names), s.seed)
+    # The adaptive strategy's first pass is a Sobol survey (`gonio.planner.two_pass`).
+    adaptive = s.strategy == "adaptive"
+    target = s.options().survey if adaptive else s.target
+    stream = sampling.Sequence("sobol" if adaptive else s.strategy, len(names), s.seed)
+    return draw_kept(spec, rig, where, lambda n: sampling.to_box(stream.draw(n), bounds, powers),
+                     target), None  # fmt: skip
+
+
+def draw_kept(
+    spec: PlanSpec, rig: Rig, where: str, draw: Callable[[int], FloatArray], target: int
+) -> FloatArray:
+    """Points drawn in batches from ``draw`` until ``target`` are kept (valid and
+    reachable): every point drawn up to the one completing the target, in order."""
     drawn: list[FloatArray] = []
     usable: list[np.ndarray] = []
     kept = 0
-    with progress.stage("placing the targets", s.target) as shown:
-        while kept < s.target:
+    with progress.stage("placing the targets", target) as shown:
+        while kept < target:
             if sum(len(d) for d in drawn) >= MAX_DRAWN:
                 raise ConfigError(
-                    f"{where}: sampling.target: only {kept} of {s.target} targets are "
+                    f"{where}: sampling.target: only {kept} of {target} targets are "
                     f"reachable after {MAX_DRAWN} points; lower the target or relax the "
                     "rig's constraints"
                 )
-            batch = sampling.to_box(stream.draw(BATCH), bounds, powers)
+            batch = draw(BATCH)
             usable.append(kept_mask(spec, rig, batch))
             new = int(usable[-1].sum())
-            shown.update(min(new, s.target - kept))
+            shown.update(min(new, target - kept))
             kept += new
             drawn.append(batch)
     points = np.concatenate(drawn)
     keep = np.cumsum(np.concatenate(usable))
-    last = int(np.searchsorted(keep, s.target)) + 1  # the point that completes the target
-    return points[:last], None
+    last = int(np.searchsorted(keep, target)) + 1  # the point that completes the target
+    return points[:last]
 
 
 def directions(spec: PlanSpec, coords: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:

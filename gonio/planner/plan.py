@@ -251,16 +251,22 @@ def build(
     where: str = "plan",
     bounds: bool = False,
     text: bytes | None = None,
+    placed: FloatArray | None = None,
+    start: FloatArray | None = None,
 ) -> Plan:
     """The ordered, timed plan (`ConfigError` if the rig can reach none of it).
 
     ``bounds``: also compute the figures the benchmarks compare against, the
     generation-order duration (a second choice of solutions) and the MST lower bound
     (otherwise None in the summary). ``text``: the plan file's bytes, for the content
-    hash (`load_plan_source` gives them; default: the spec as YAML, `spec_text`)."""
+    hash (`load_plan_source` gives them; default: the spec as YAML, `spec_text`).
+    ``placed``: points already placed (generation order; the adaptive strategy's second
+    pass, `gonio.planner.two_pass`) instead of the spec's; ``start``: the pose the
+    motors leave from (default the rig's home)."""
     check_detector(spec, rig, where, text)
     names = spec.coordinates()
-    coords, shape = place(spec, rig, where)
+    coords, shape = place(spec, rig, where) if placed is None else (placed, None)
+    home = rig.home if start is None else np.asarray(start, dtype=np.float64)
     valid, wi, wo = directions(spec, coords)
     solution: Solution = rig.solve(wi, wo, isotropic=spec.isotropic)
     reasons = np.full(len(coords), -1, dtype=np.int8)  # -1: outside the domain
@@ -296,7 +302,7 @@ def build(
     started = time.perf_counter()
     cand, usable = solution.candidates[sel][given], solution.usable[sel][given]
     joint = order_jointly(
-        rig.travel, cand, usable, targets, rig.home, method=method, max_moves=budget,
+        rig.travel, cand, usable, targets, home, method=method, max_moves=budget,
         kicks=kicks, seed=spec.sampling.seed, time_budget_s=spec.time_budget_s,
     )  # fmt: skip
     result = joint.ordering
@@ -304,9 +310,7 @@ def build(
     if spec.ordering == "lkh":
         if not lkh.available():
             raise ConfigError(f"{where}: ordering: lkh needs elkai: pip install 'gonio[lkh]'")
-        order, angles, travel = lkh.improve(
-            rig.travel, rig.home, cand, usable, order, angles, travel
-        )
+        order, angles, travel = lkh.improve(rig.travel, home, cand, usable, order, angles, travel)
     chosen = sel[given[order]]
     ordering_s = time.perf_counter() - started
     stopped: Stop = result.stopped
@@ -314,11 +318,11 @@ def build(
     if bounds:
         # Bounds on every order with every choice of solutions (the relaxed time), and
         # generation order with the exact choice of solutions along it.
-        relaxed = Relaxed.of(rig.travel, cand, usable, rig.home)
+        relaxed = Relaxed.of(rig.travel, cand, usable, home)
         b = held_karp_bound(relaxed, float(travel.sum()))
         figures["bound_wall_s"] = time.perf_counter() - started - ordering_s
         _, naive = poses.choose(
-            solution.candidates[sel], solution.usable[sel], rig.home, rig.travel_time
+            solution.candidates[sel], solution.usable[sel], home, rig.travel_time
         )
         figures.update(
             naive_travel_s=float(naive.sum()),
@@ -396,6 +400,13 @@ def render_summary(plan: Plan) -> str:
             if s.target is not None and s.grid_shape is not None and s.kept != s.target
             else ""
         ),
+    ]
+    if spec.sampling.strategy == "adaptive" and s.target is not None and s.kept < s.target:
+        lines.append(
+            f"  {'':<26}{'':>9}   (the survey: the other {s.target - s.kept} targets are "
+            "planned from its measurements during the run, docs/adaptive.md)"
+        )
+    lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
         f"settle + exposure {hms(s.dwell_s)})",

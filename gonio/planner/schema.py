@@ -16,7 +16,7 @@ from gonio import brdf, params
 from gonio.brdf.material import MaterialError, build
 from gonio.config import Strict, field_error
 
-Strategy = Literal["grid", "stratified", "sobol", "halton", "random"]
+Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
 
 
 class Warp(Strict):
@@ -26,17 +26,54 @@ class Warp(Strict):
     power: float = Field(gt=0)
 
 
+class AdaptiveSpec(Strict):
+    """The adaptive strategy (docs/adaptive.md): a Sobol survey of ``survey`` kept
+    targets is measured first; a model of family ``model`` (a `gonio fit` spec) fitted
+    to it (``survey``: the survey's own reconstruction, no model) estimates where a
+    reconstruction errs; the rest of the target is then placed
+    with the density of `gonio.planner.adaptive`, a share ``floor`` of it uniform and a
+    share ``edge`` moved onto the edge of the rig's cap."""
+
+    survey: int = Field(128, ge=16)
+    model: str = "lambert+beckmann"  # or "survey": the survey's rbf reconstruction
+    floor: float = Field(0.2, ge=0.0, le=1.0)
+    edge: float = Field(0.0, ge=0.0, lt=1.0)
+
+    @model_validator(mode="after")
+    def _known_model(self) -> AdaptiveSpec:
+        if self.model != "survey":  # refused when the file is read, not after the survey
+            from gonio.errors import GonioError
+            from gonio.reconstruct.family import parse
+
+            try:
+                parse(self.model)
+            except GonioError as exc:
+                raise field_error("model", f"{exc} (or survey: no model)") from None
+        return self
+
+
 class SamplingSpec(Strict):
     strategy: Strategy = "sobol"
     counts: dict[str, int] | None = None  # per coordinate (grid, stratified)
     target: int | None = Field(None, gt=0)  # kept targets wanted (all strategies)
     seed: int = Field(0, ge=0)
     warps: dict[str, Warp] = Field(default_factory=dict)
+    adaptive: AdaptiveSpec | None = None  # the adaptive strategy's options
 
     @model_validator(mode="after")
     def _counts_or_target(self) -> SamplingSpec:
         if (self.counts is None) == (self.target is None):
             raise ValueError("give exactly one of counts (per coordinate) or target (a total)")
+        if self.adaptive is not None and self.strategy != "adaptive":
+            raise field_error("adaptive", f"options of the adaptive strategy, not {self.strategy}")
+        if self.strategy == "adaptive":
+            if self.warps:
+                raise field_error("warps", "the adaptive strategy places its own density")
+            survey = self.options().survey
+            if self.target is not None and self.target <= survey:
+                raise field_error(
+                    "target", f"expected more targets than the survey's {survey}, got {self.target}"
+                )
         if self.counts is not None:
             for name, count in self.counts.items():
                 if count < 1:
@@ -48,6 +85,10 @@ class SamplingSpec(Strict):
                 "counts", f"counts apply to grid and stratified sampling, not {self.strategy}"
             )
         return self
+
+    def options(self) -> AdaptiveSpec:
+        """The adaptive strategy's options (the defaults unless given)."""
+        return self.adaptive or AdaptiveSpec()
 
 
 class AdaptSpec(Strict):

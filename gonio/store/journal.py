@@ -283,6 +283,11 @@ class Journal:
             (utc, outcome, self.session),
         )
 
+    def replace_plan(self, plan_file: bytes) -> None:
+        """Store a new plan in place of the run's (an adaptive plan's second pass appended
+        to its survey: the targets measured keep their indices)."""
+        self._write("UPDATE meta SET value = ? WHERE key = 'plan_file'", (plan_file,))
+
     def sample(self, row: Mapping[str, Any]) -> None:
         """Commit one measured target (every column of `sample_columns` but ``session``)."""
         values = [self.session if c == "session" else row[c] for c in self.columns]

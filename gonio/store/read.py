@@ -103,8 +103,12 @@ class Run:
 
     @property
     def complete(self) -> bool:
-        """The last session ended the run (every target measured or skipped)."""
-        return bool(self.sessions) and self.sessions[-1].outcome == "completed"
+        """The last session ended the run (every target measured or skipped; for an
+        adaptive plan, its second pass too)."""
+        from gonio.planner.two_pass import is_survey
+
+        done = bool(self.sessions) and self.sessions[-1].outcome == "completed"
+        return done and not is_survey(self.plan)
 
 
 def check_version(conn: sqlite3.Connection, path: Path) -> None:

@@ -243,6 +243,8 @@ def _task(
     parametrization, strategy = combination["parametrization"], combination["sampling"]
     effects = resolved_effects(combination["effects"], scene)
     warps = spec.warps_of(parametrization) if strategy == WARPED else {}
+    options = spec.adaptive.model_dump(mode="json")
+    adaptive = {"adaptive": options} if strategy == "adaptive" else {}
     rig_text = rigs[combination["velocity_scale"]]
     identity = {
         "magic": _ID_MAGIC,
@@ -254,6 +256,7 @@ def _task(
         "effects": effects,
         "effects_label": effects_label(combination["effects"]),
         "warps": {c: w.power for c, w in warps.items()},
+        **adaptive,
         "plan": spec.plan.model_dump(mode="json"),
         "evaluation": spec.evaluation.model_dump(mode="json"),
         "replicate": replicate,
@@ -270,6 +273,7 @@ def _task(
             "target": combination["samples"],
             "seed": plan_seed,
             "warps": {c: {"power": w.power} for c, w in warps.items()},
+            **adaptive,
         },
         "exposure": {"seconds": combination["exposure_s"], "averages": combination["averages"]},
         **spec.plan.model_dump(mode="json"),

@@ -82,6 +82,7 @@ def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
         plan = build(task.plan_spec(), rig, where=f"combination {task.id}")
     walls["plan_wall_s"] = time.perf_counter() - started
     result = simulate_plan(plan, scene, task.run_seed)
+    plan = result.run.plan  # an adaptive plan's survey is followed by its second pass
     walls["acquire_wall_s"] = result.wall_s
     started = time.perf_counter()
     measured = Measured.from_run(result.run)

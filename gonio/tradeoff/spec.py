@@ -17,7 +17,7 @@ from pydantic import Field, field_validator, model_validator
 
 from gonio import params
 from gonio.config import Strict, excerpt, field_error
-from gonio.planner.schema import AcquisitionSpec, Strategy, Warp
+from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
@@ -111,11 +111,9 @@ class Axes(Strict):
                 )
         for k, name in enumerate(self.sampling):
             if name not in STRATEGIES:
-                why = " (not available yet)" if name == "adaptive" else ""
                 raise field_error(
                     f"sampling.{k}",
-                    f"unknown strategy {excerpt(name)}{why}; "
-                    f"expected one of {', '.join(STRATEGIES)}",
+                    f"unknown strategy {excerpt(name)}; expected one of {', '.join(STRATEGIES)}",
                 )
         for k, method in enumerate(self.method):
             if method not in methods.names():
@@ -188,6 +186,7 @@ class SweepSpec(Strict):
     # or a list of values).
     exclude: list[dict[str, Any]] = Field(default_factory=list)
     warps: dict[str, dict[str, Warp]] = Field(default_factory=dict)  # for ``warped``
+    adaptive: AdaptiveSpec = Field(default_factory=AdaptiveSpec)  # for ``adaptive``
     replicates: int = Field(1, ge=1, le=1000)  # each combination with other seeds
     seed: int = Field(0, ge=0)  # mixed into every combination's id (and so its seeds)
     plan: PlanSettings = Field(default_factory=PlanSettings)

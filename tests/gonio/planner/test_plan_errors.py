@@ -125,7 +125,8 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
         lambda d: d["sampling"].update(strategy="latin"),
         "sampling.strategy",
         ("sampling", "strategy"),
-        "Input should be 'grid', 'stratified', 'sobol', 'halton' or 'random' (got 'latin')",
+        "Input should be 'grid', 'stratified', 'sobol', 'halton', 'random' or 'adaptive' "
+        "(got 'latin')",
     ),
     (
         "negative-warp",

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
+from gonio.planner import adaptive
 from gonio.tradeoff.grid import load_sweep
 from gonio.tradeoff.runner import FIGURE_COLUMNS, run
 from gonio.tradeoff.sweep import COLUMNS
@@ -21,3 +24,18 @@ def test_a_refused_combination_is_a_row_with_the_reason(tmp_path: Path) -> None:
     assert all(row[c] is None for c in FIGURE_COLUMNS if c != "error")
     assert row["wall_s"] is not None and row["wall_s"] >= 0
     assert {k: row[k] for k in task.inputs} == task.inputs
+
+
+def test_an_adaptive_combination_counts_both_passes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(adaptive, "MEASURE_PAIRS", 1 << 15)  # a faster density
+    axes = {**SMALL["axes"], "parametrization": ["rusinkiewicz"], "sampling": ["adaptive"],
+            "samples": [60], "method": ["linear"]}  # fmt: skip
+    sweep = load_sweep(write_sweep(tmp_path, axes=axes, adaptive={"survey": 24, "model": "survey"}))
+    (task,) = sweep.tasks
+    assert task.plan["sampling"]["adaptive"]["model"] == "survey"
+    row = run(task)
+    assert row["error"] == ""
+    assert row["targets"] == 60 and row["measured"] == 60
+    assert row["log_rmse"] is not None and row["log_rmse"] > 0

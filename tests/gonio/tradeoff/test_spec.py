@@ -21,8 +21,8 @@ AXES: dict[str, Any] = SMALL["axes"]
     [
         ({"axes": {**AXES, "parametrization": ["hybird"]}}, "axes.parametrization.0",
          "unknown parametrization 'hybird'; expected one of"),
-        ({"axes": {**AXES, "sampling": ["adaptive"]}}, "axes.sampling.0",
-         "'adaptive' (not available yet)"),
+        ({"axes": {**AXES, "sampling": ["adaptiv"]}}, "axes.sampling.0",
+         "unknown strategy 'adaptiv'; expected one of"),
         ({"axes": {**AXES, "samples": [100, 0]}}, "axes.samples.1", "expected a positive count"),
         ({"axes": {**AXES, "samples": [100, 100]}}, "axes.samples.1", "100 is given twice"),
         ({"axes": {**AXES, "exposure_s": [0.05, 100]}}, "axes.exposure_s.1",
