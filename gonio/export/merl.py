@@ -60,17 +60,21 @@ def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     wi, wo, ok = representative_pairs()
     both = getattr(reconstruction, "evaluate", None)  # a Reconstruction's one pass
     if callable(both):
-        values_at, _, supported_at = both(wi, wo)
+        values_at, _, supported_at = both(wi[ok], wo[ok])
     else:
-        values_at, supported_at = reconstruction.eval(wi, wo), reconstruction.supported(wi, wo)
-    supported = np.asarray(supported_at, dtype=bool) & ok
-    f = np.asarray(values_at, dtype=np.float64)
-    if f.shape == ok.shape:
-        f = np.broadcast_to(f[..., None], (*ok.shape, 3))
-    if f.shape != (*ok.shape, 3):
+        values_at = reconstruction.eval(wi[ok], wo[ok])
+        supported_at = reconstruction.supported(wi[ok], wo[ok])
+    supported = np.zeros(ok.shape, dtype=bool)
+    supported[ok] = np.asarray(supported_at, dtype=bool)
+    got = np.asarray(values_at, dtype=np.float64)
+    if got.shape == (int(ok.sum()),):
+        got = got[:, None]
+    if got.shape[1:] not in ((1,), (3,)):
         raise GonioError(
-            f"the reconstruction gave values of shape {f.shape}, expected one or three channels"
+            f"the reconstruction gave values of shape {got.shape}, expected one or three channels"
         )
+    f = np.zeros((*ok.shape, 3))
+    f[ok] = got  # a grey reconstruction broadcasts to the three channels
     values = np.moveaxis(f, -1, 0)
     keep = ok & (supported | extrapolate)
     finite = np.all(np.isfinite(values), axis=0)
