@@ -1,0 +1,255 @@
+"""The shipped study's engine parts (issue 16 §3, docs/tradeoff.md "The study"): tables
+and figures from the results.csv of `gonio tradeoff` runs of configs/sweeps/study_*.yaml,
+with the noise-free curves of benchmarks/study.py placed on the instrument-time axis.
+
+    uniform   per scene and parametrization: instrument time and log-RMSE, noise on and
+              off, against the samples measured; the instrument time per sample fitted
+              (least squares, t = a + b·n) and the time each parametrization needs for
+              log-RMSE 0.01 and 0.03 (from the noise-free curves, beyond 4 000 samples by
+              that fit: an extrapolation); one PNG per scene
+    exposure  error against instrument time for each exposure, and the best row within
+              each time budget
+    effects   per effect: simulated wall time per sample and the change of the error
+
+Run: .venv/bin/python benchmarks/study_engine.py uniform --runs DIR ... --curves
+runs/study/curves.csv [--img docs/img]; `exposure --runs DIR`; `effects --runs DIR`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import statistics
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from study import TARGETS, needed
+
+COLOURS = {"hybrid": "C0", "rusinkiewicz": "C1", "orthographic": "C2", "spherical": "C3"}
+#: scene name in a sweep → the scene file stem of benchmarks/study.py
+STEMS = {
+    "matte": "matte",
+    "glossy-metal": "glossy_metal",
+    "brushed-metal": "brushed_metal",
+    "seed000-specular": "seed000_specular",
+}
+
+
+def rows_of(dirs: list[str]) -> list[dict[str, str]]:
+    rows: list[dict[str, str]] = []
+    for d in dirs:
+        with (Path(d) / "results.csv").open(encoding="utf-8") as fh:
+            rows += [r for r in csv.DictReader(fh) if not r["error"]]
+    return rows
+
+
+def fit_time(rows: list[dict[str, str]]) -> tuple[float, float]:
+    """(a, b) of instrument_s ≈ a + b·measured, least squares."""
+    n = np.array([float(r["measured"]) for r in rows])
+    t = np.array([float(r["instrument_s"]) for r in rows])
+    b, a = np.polyfit(n, t, 1)
+    return float(a), float(b)
+
+
+def uniform(args: argparse.Namespace) -> None:
+    rows = rows_of(args.runs)
+    synthetic: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
+    if args.curves:
+        with open(args.curves, encoding="utf-8") as fh:
+            for r in csv.DictReader(fh):
+                if r["method"] == args.method:
+                    key = (r["scene"], r["parametrization"])
+                    synthetic[key][int(r["samples"])] = float(r["log_rmse"])
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        mine = [r for r in rows if r["scene"] == scene]
+        names = list(dict.fromkeys(r["parametrization"] for r in mine))
+        counts = sorted({int(r["samples"]) for r in mine})
+        print(f"\n### {scene}: log-RMSE noise on / off, and instrument time (s)\n")
+        print("| parametrization | " + " | ".join(f"{n:,}" for n in counts) + " | s per sample |")
+        print("|---|" + "---:|" * (len(counts) + 1))
+        fits = {}
+        for name in names:
+            ours = [r for r in mine if r["parametrization"] == name]
+            fits[name] = fit_time(ours)
+            cells = []
+            for n in counts:
+                on = [r for r in ours if int(r["samples"]) == n and r["effects"] == "scene"]
+                off = [r for r in ours if int(r["samples"]) == n and r["effects"] == "none"]
+                if on and off:
+                    cells.append(
+                        f"{float(on[0]['log_rmse']):.4f} / "
+                        f"{float(off[0]['log_rmse']):.4f} ({float(on[0]['instrument_s']):,.0f})"
+                    )
+                else:
+                    cells.append("—")
+            print(f"| {name} | " + " | ".join(cells) + f" | {fits[name][1]:.3f} |")
+        stem = STEMS.get(scene, scene)
+        if any((stem, name) in synthetic for name in names):
+            print(
+                f"\n{scene}: noise-free samples and instrument time (extrapolated beyond "
+                "4 000 samples) for each target\n"
+            )
+            print(
+                "| parametrization | "
+                + " | ".join(f"n for {t} | time for {t}" for t in TARGETS)
+                + " |"
+            )
+            print("|---|" + "---:|---:|" * len(TARGETS))
+            for name in names:
+                curve = synthetic.get((stem, name), {})
+                ns = sorted(curve)
+                cells = []
+                for target in TARGETS:
+                    n = needed(ns, [curve[k] for k in ns], target)
+                    a, b = fits[name]
+                    cells += (
+                        ["> " + f"{ns[-1]:,}", "—"]
+                        if math.isinf(n)
+                        else [f"{n:,.0f}", f"{(a + b * n) / 3600:.2f} h"]
+                    )
+                print(f"| {name} | " + " | ".join(cells) + " |")
+        if args.img:
+            plot(scene, mine, names, fits, synthetic, stem, Path(args.img))
+
+
+def plot(
+    scene: str,
+    rows: list[dict[str, str]],
+    names: list[str],
+    fits: dict[str, tuple[float, float]],
+    synthetic: dict[tuple[str, str], dict[int, float]],
+    stem: str,
+    img: Path,
+) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.6, 3.6), dpi=90)
+    for name in names:
+        colour = COLOURS.get(name, "k")
+        for effects, marker in (("scene", "o"), ("none", "x")):
+            pts = sorted(
+                (float(r["instrument_s"]), float(r["log_rmse"]))
+                for r in rows
+                if r["parametrization"] == name and r["effects"] == effects
+            )
+            if pts:
+                x, y = zip(*pts, strict=True)
+                ax.plot(
+                    np.array(x) / 3600,
+                    y,
+                    marker,
+                    color=colour,
+                    ms=4,
+                    mfc="none" if effects == "none" else colour,
+                )
+        curve = synthetic.get((stem, name))
+        if curve:
+            a, b = fits[name]
+            ns = sorted(curve)
+            ax.plot(
+                [(a + b * n) / 3600 for n in ns],
+                [curve[n] for n in ns],
+                "-",
+                color=colour,
+                lw=1,
+                label=name,
+            )
+    for target in TARGETS:
+        ax.axhline(target, color="0.6", lw=0.6, ls=":")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("instrument time (h; beyond 4 000 samples extrapolated)")
+    ax.set_ylabel("log-RMSE")
+    ax.set_title(f"{scene}: uniform Sobol, linear (o noise on, x off, line noise-free)", fontsize=8)
+    ax.legend(fontsize=7)
+    ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    out = img / f"study-{stem}.png"
+    fig.savefig(out)
+    plt.close(fig)
+    print(f"\nwrote {out} ({out.stat().st_size / 1024:.0f} KB)")
+
+
+def exposure(args: argparse.Namespace) -> None:
+    rows = rows_of(args.runs)
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        mine = [r for r in rows if r["scene"] == scene]
+        exposures = sorted({float(r["exposure_s"]) for r in mine})
+        counts = sorted({int(r["samples"]) for r in mine})
+        print(f"\n### {scene}: log-RMSE (instrument time, h) by exposure (rows) and samples\n")
+        print("| exposure s | " + " | ".join(f"{n:,}" for n in counts) + " |")
+        print("|---:|" + "---:|" * len(counts))
+        for e in exposures:
+            cells = []
+            for n in counts:
+                r = [x for x in mine if float(x["exposure_s"]) == e and int(x["samples"]) == n]
+                cells.append(
+                    f"{float(r[0]['log_rmse']):.4f} ({float(r[0]['instrument_s']) / 3600:.2f})"
+                    if r
+                    else "—"
+                )
+            print(f"| {e:g} | " + " | ".join(cells) + " |")
+        print("\nbest within each instrument-time budget:\n")
+        print("| budget (h) | samples | exposure s | log-RMSE | time (h) |")
+        print("|---:|---:|---:|---:|---:|")
+        for budget_h in args.budgets:
+            fit = [r for r in mine if float(r["instrument_s"]) <= budget_h * 3600]
+            if fit:
+                best = min(fit, key=lambda r: float(r["log_rmse"]))
+                print(
+                    f"| {budget_h:g} | {int(best['samples']):,} | {float(best['exposure_s']):g} | "
+                    f"{float(best['log_rmse']):.4f} | {float(best['instrument_s']) / 3600:.2f} |"
+                )
+
+
+def effects(args: argparse.Namespace) -> None:
+    rows = rows_of(args.runs)
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        mine = [r for r in rows if r["scene"] == scene]
+        groups: dict[str, list[dict[str, str]]] = defaultdict(list)
+        for r in mine:
+            groups[r["effects"]].append(r)
+        base = statistics.mean(float(r["log_rmse"]) for r in groups["none"])
+        base_ms = statistics.mean(
+            1e3 * float(r["acquire_wall_s"]) / float(r["measured"]) for r in groups["none"]
+        )
+        print(
+            f"\n### {scene}: {len(groups['none'])} replicates each; none = "
+            f"{base:.4f} log-RMSE, {base_ms:.2f} ms per sample\n"
+        )
+        print("| effects | ms per sample (acquire) | × none | log-RMSE mean | min–max | vs none |")
+        print("|---|---:|---:|---:|---:|---:|")
+        for label, group in groups.items():
+            errs = [float(r["log_rmse"]) for r in group]
+            ms = statistics.mean(
+                1e3 * float(r["acquire_wall_s"]) / float(r["measured"]) for r in group
+            )
+            mean = statistics.mean(errs)
+            print(
+                f"| {label} | {ms:.2f} | {ms / base_ms:.2f} | {mean:.4f} | "
+                f"{min(errs):.4f}–{max(errs):.4f} | {mean - base:+.4f} |"
+            )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("part", choices=("uniform", "exposure", "effects"))
+    parser.add_argument("--runs", nargs="+", required=True, help="gonio tradeoff OUTDIRs")
+    parser.add_argument("--curves", help="curves.csv of benchmarks/study.py")
+    parser.add_argument("--method", default="linear", help="the curves' method")
+    parser.add_argument("--img", help="write PNGs here")
+    parser.add_argument("--budgets", type=float, nargs="+", default=[0.1, 0.2, 0.5, 1.0])
+    args = parser.parse_args()
+    {"uniform": uniform, "exposure": exposure, "effects": effects}[args.part](args)
+
+
+if __name__ == "__main__":
+    main()
