@@ -3,10 +3,11 @@ and figures from the results.csv of `gonio tradeoff` runs of configs/sweeps/stud
 with the noise-free curves of benchmarks/study.py placed on the instrument-time axis.
 
     uniform   per scene and parametrization: instrument time and log-RMSE, noise on and
-              off, against the samples measured; the instrument time per sample fitted
-              (least squares, t = a + b·n) and the time each parametrization needs for
-              log-RMSE 0.01 and 0.03 (from the noise-free curves, beyond 4 000 samples by
-              that fit: an extrapolation); one PNG per scene
+              off, against the samples measured; the instrument time fitted (t = floor·n
+              + c·n^p: settle and exposure, then the moves and calibrations as a power
+              law fitted log-log) and the time each parametrization needs for log-RMSE
+              0.01 and 0.03 (from the noise-free curves; beyond 4 000 samples by that
+              fit, an extrapolation); one PNG per scene
     exposure  error against instrument time for each exposure, and the best row within
               each time budget
     effects   per effect: simulated wall time per sample and the change of the error
@@ -48,12 +49,19 @@ def rows_of(dirs: list[str]) -> list[dict[str, str]]:
     return rows
 
 
-def fit_time(rows: list[dict[str, str]]) -> tuple[float, float]:
-    """(a, b) of instrument_s ≈ a + b·measured, least squares."""
+def fit_time(rows: list[dict[str, str]], floor_s: float) -> tuple[float, float, float]:
+    """(floor, c, p) of instrument_s ≈ floor·n + c·n^p: ``floor_s`` per sample (settle and
+    exposure) plus the moves and calibrations, a power law fitted log-log (denser plans
+    make shorter moves)."""
     n = np.array([float(r["measured"]) for r in rows])
-    t = np.array([float(r["instrument_s"]) for r in rows])
-    b, a = np.polyfit(n, t, 1)
-    return float(a), float(b)
+    rest = np.array([float(r["instrument_s"]) for r in rows]) - floor_s * n
+    p, log_c = np.polyfit(np.log(n), np.log(rest), 1)
+    return floor_s, float(math.exp(log_c)), float(p)
+
+
+def predict(fit: tuple[float, float, float], n: float) -> float:
+    floor_s, c, p = fit
+    return floor_s * n + c * n**p
 
 
 def uniform(args: argparse.Namespace) -> None:
@@ -70,12 +78,12 @@ def uniform(args: argparse.Namespace) -> None:
         names = list(dict.fromkeys(r["parametrization"] for r in mine))
         counts = sorted({int(r["samples"]) for r in mine})
         print(f"\n### {scene}: log-RMSE noise on / off, and instrument time (s)\n")
-        print("| parametrization | " + " | ".join(f"{n:,}" for n in counts) + " | s per sample |")
+        print("| parametrization | " + " | ".join(f"{n:,}" for n in counts) + " | moves ∝ n^p |")
         print("|---|" + "---:|" * (len(counts) + 1))
         fits = {}
         for name in names:
             ours = [r for r in mine if r["parametrization"] == name]
-            fits[name] = fit_time(ours)
+            fits[name] = fit_time(ours, args.floor)
             cells = []
             for n in counts:
                 on = [r for r in ours if int(r["samples"]) == n and r["effects"] == "scene"]
@@ -87,7 +95,7 @@ def uniform(args: argparse.Namespace) -> None:
                     )
                 else:
                     cells.append("—")
-            print(f"| {name} | " + " | ".join(cells) + f" | {fits[name][1]:.3f} |")
+            print(f"| {name} | " + " | ".join(cells) + f" | {fits[name][2]:.2f} |")
         stem = STEMS.get(scene, scene)
         if any((stem, name) in synthetic for name in names):
             print(
@@ -106,11 +114,10 @@ def uniform(args: argparse.Namespace) -> None:
                 cells = []
                 for target in TARGETS:
                     n = needed(ns, [curve[k] for k in ns], target)
-                    a, b = fits[name]
                     cells += (
                         ["> " + f"{ns[-1]:,}", "—"]
                         if math.isinf(n)
-                        else [f"{n:,.0f}", f"{(a + b * n) / 3600:.2f} h"]
+                        else [f"{n:,.0f}", f"{predict(fits[name], n) / 3600:.2f} h"]
                     )
                 print(f"| {name} | " + " | ".join(cells) + " |")
         if args.img:
@@ -121,7 +128,7 @@ def plot(
     scene: str,
     rows: list[dict[str, str]],
     names: list[str],
-    fits: dict[str, tuple[float, float]],
+    fits: dict[str, tuple[float, float, float]],
     synthetic: dict[tuple[str, str], dict[int, float]],
     stem: str,
     img: Path,
@@ -152,10 +159,9 @@ def plot(
                 )
         curve = synthetic.get((stem, name))
         if curve:
-            a, b = fits[name]
             ns = sorted(curve)
             ax.plot(
-                [(a + b * n) / 3600 for n in ns],
+                [predict(fits[name], n) / 3600 for n in ns],
                 [curve[n] for n in ns],
                 "-",
                 color=colour,
@@ -246,6 +252,9 @@ def main() -> None:
     parser.add_argument("--curves", help="curves.csv of benchmarks/study.py")
     parser.add_argument("--method", default="linear", help="the curves' method")
     parser.add_argument("--img", help="write PNGs here")
+    parser.add_argument(
+        "--floor", type=float, default=0.25, help="s per sample: settle + exposure × averages"
+    )
     parser.add_argument("--budgets", type=float, nargs="+", default=[0.1, 0.2, 0.5, 1.0])
     args = parser.parse_args()
     {"uniform": uniform, "exposure": exposure, "effects": effects}[args.part](args)
