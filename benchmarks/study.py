@@ -95,7 +95,7 @@ def score(measured: Measured, method: str, truth: BrdfEval, rig: Rig, iso: bool)
     out: dict[str, Any] = {"log_rmse": result.regions["all"].scores.log_rmse}
     out.update({f"{r}_log_rmse": result.regions[r].scores.log_rmse for r in REGIONS})
     out["answered"] = result.regions["all"].scores.count / result.regions["all"].pairs
-    if isinstance(candidate, Reconstruction) and candidate.extrapolate is None:
+    if isinstance(candidate, Reconstruction) and out["answered"] < 1.0:
         filled = dataclasses.replace(candidate, extrapolate="nearest")
         everywhere = evaluate(filled, truth, rig, isotropic=iso, test_set=pairs)
         out["log_rmse_nearest"] = everywhere.regions["all"].scores.log_rmse
@@ -197,7 +197,8 @@ def where(args: argparse.Namespace) -> None:
         test_regions = regions(wi, wo)
         print(
             f"\n### {scene}: {args.count:,} samples, {method}; the error's share "
-            "(mean square, % of the total) and the samples' share against the test set's\n"
+            "(mean square, % of the total; outside the samples' hull the nearest sample's value) "
+            "and the samples' density against the test set's\n"
         )
         bins = {
             "‖k‖": (k, (0.0, 0.25, 0.5, 0.75, 1.0)),
@@ -216,7 +217,10 @@ def where(args: argparse.Namespace) -> None:
         share_test = [float(np.mean(test_regions[r])) for r in REGIONS]
         for name in params.names():
             samples = synthesize(truth, rig, name, iso, args.count, seed=SEED)
-            c = np.asarray(reconstruction(samples, method, None).eval(wi, wo), dtype=np.float64)
+            candidate = reconstruction(samples, method, None)
+            if isinstance(candidate, Reconstruction):
+                candidate = dataclasses.replace(candidate, extrapolate="nearest")
+            c = np.asarray(candidate.eval(wi, wo), dtype=np.float64)
             sq = np.square(np.log1p(np.maximum(c, 0)) - np.log1p(np.maximum(t, 0)))
             sq = sq.reshape(len(wi), -1).mean(axis=1)
             total = float(np.sum(sq))
