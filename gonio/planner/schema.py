@@ -3,8 +3,9 @@
 A plan names the parametrization to sample uniformly (default ``rusinkiewicz``: its
 uniform plans reach a given error with the fewest samples on every shipped scene,
 docs/tradeoff.md "The study"), whether the material is isotropic (three coordinates:
-the pair's azimuth is rotated out and the reciprocity fold applies) or anisotropic (four; the sample rotation stage is used),
-how to place points, and how long to expose each target.
+the pair's azimuth is rotated out and the reciprocity fold applies) or anisotropic
+(four; the sample rotation stage is used), how to place points, and how long to expose
+each target.
 """
 
 from __future__ import annotations
