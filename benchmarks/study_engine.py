@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from study import TARGETS, needed
+from study import TARGETS, fmt_needed, needed
 
 COLOURS = {"hybrid": "C0", "rusinkiewicz": "C1", "orthographic": "C2", "spherical": "C3"}
 #: scene name in a sweep → the scene file stem of benchmarks/study.py
@@ -102,26 +102,21 @@ def uniform(args: argparse.Namespace) -> None:
                 f"\n{scene}: noise-free samples and instrument time (extrapolated beyond "
                 "4 000 samples) for each target\n"
             )
-            print(
-                "| parametrization | "
-                + " | ".join(f"n for {t} | time for {t}" for t in TARGETS)
-                + " |"
-            )
-            print("|---|" + "---:|---:|" * len(TARGETS))
+            targets = args.targets or TARGETS
+            heads = " | ".join(f"n for {t} | time for {t}" for t in targets)
+            print(f"| parametrization | {heads} |")
+            print("|---|" + "---:|---:|" * len(targets))
             for name in names:
                 curve = synthetic.get((stem, name), {})
                 ns = sorted(curve)
                 cells = []
-                for target in TARGETS:
+                for target in targets:
                     n = needed(ns, [curve[k] for k in ns], target)
-                    cells += (
-                        ["> " + f"{ns[-1]:,}", "—"]
-                        if math.isinf(n)
-                        else [f"{n:,.0f}", f"{predict(fits[name], n) / 3600:.2f} h"]
-                    )
+                    hours = "—" if math.isinf(n) else f"{predict(fits[name], n) / 3600:.2f} h"
+                    cells += [fmt_needed(n, ns), hours]
                 print(f"| {name} | " + " | ".join(cells) + " |")
         if args.img:
-            plot(scene, mine, names, fits, synthetic, stem, Path(args.img))
+            plot(scene, mine, names, fits, synthetic, stem, Path(args.img), args.method)
 
 
 def plot(
@@ -132,6 +127,7 @@ def plot(
     synthetic: dict[tuple[str, str], dict[int, float]],
     stem: str,
     img: Path,
+    method: str,
 ) -> None:
     import matplotlib
 
@@ -174,7 +170,10 @@ def plot(
     ax.set_yscale("log")
     ax.set_xlabel("instrument time (h; beyond 4 000 samples extrapolated)")
     ax.set_ylabel("log-RMSE")
-    ax.set_title(f"{scene}: uniform Sobol, linear (o noise on, x off, line noise-free)", fontsize=8)
+    ax.set_title(
+        f"{scene}, uniform Sobol: engine, linear (o noise on, x off); noise-free {method} (line)",
+        fontsize=8,
+    )
     ax.legend(fontsize=7)
     ax.tick_params(labelsize=7)
     fig.tight_layout()
@@ -252,6 +251,7 @@ def main() -> None:
     parser.add_argument("--curves", help="curves.csv of benchmarks/study.py")
     parser.add_argument("--method", default="linear", help="the curves' method")
     parser.add_argument("--img", help="write PNGs here")
+    parser.add_argument("--targets", type=float, nargs="+", help="log-RMSE targets")
     parser.add_argument(
         "--floor", type=float, default=0.25, help="s per sample: settle + exposure × averages"
     )
