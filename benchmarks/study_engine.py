@@ -11,6 +11,8 @@ with the noise-free curves of benchmarks/study.py placed on the instrument-time 
     exposure  error against instrument time for each exposure, and the best row within
               each time budget
     effects   per effect: simulated wall time per sample and the change of the error
+    timing    per effect: the simulated acquisition's wall time per sample, measured in
+              one process one run after another (the sweep's wall times vary with load)
 
 Run: .venv/bin/python benchmarks/study_engine.py uniform --runs DIR ... --curves
 runs/study/curves.csv [--img docs/img]; `exposure --runs DIR`; `effects --runs DIR`.
@@ -184,34 +186,43 @@ def plot(
 
 
 def exposure(args: argparse.Namespace) -> None:
+    """Mean log-RMSE and instrument time over replicates, by exposure and sample count;
+    then the best (exposure, samples) within each instrument-time budget."""
     rows = rows_of(args.runs)
     for scene in dict.fromkeys(r["scene"] for r in rows):
-        mine = [r for r in rows if r["scene"] == scene]
-        exposures = sorted({float(r["exposure_s"]) for r in mine})
-        counts = sorted({int(r["samples"]) for r in mine})
-        print(f"\n### {scene}: log-RMSE (instrument time, h) by exposure (rows) and samples\n")
+        cells: dict[tuple[float, int], tuple[float, float, float, float]] = {}
+        for key in {(float(r["exposure_s"]), int(r["samples"])) for r in rows}:
+            group = [
+                r
+                for r in rows
+                if r["scene"] == scene and (float(r["exposure_s"]), int(r["samples"])) == key
+            ]
+            if group:
+                errs = [float(r["log_rmse"]) for r in group]
+                hours = statistics.mean(float(r["instrument_s"]) for r in group) / 3600
+                cells[key] = (statistics.mean(errs), min(errs), max(errs), hours)
+        exposures = sorted({e for e, _ in cells})
+        counts = sorted({n for _, n in cells})
+        print(f"\n### {scene}: mean log-RMSE (instrument time, h) by exposure and samples\n")
         print("| exposure s | " + " | ".join(f"{n:,}" for n in counts) + " |")
         print("|---:|" + "---:|" * len(counts))
         for e in exposures:
-            cells = []
-            for n in counts:
-                r = [x for x in mine if float(x["exposure_s"]) == e and int(x["samples"]) == n]
-                cells.append(
-                    f"{float(r[0]['log_rmse']):.4f} ({float(r[0]['instrument_s']) / 3600:.2f})"
-                    if r
-                    else "—"
-                )
-            print(f"| {e:g} | " + " | ".join(cells) + " |")
-        print("\nbest within each instrument-time budget:\n")
-        print("| budget (h) | samples | exposure s | log-RMSE | time (h) |")
-        print("|---:|---:|---:|---:|---:|")
+            row = [
+                f"{cells[e, n][0]:.4f} ({cells[e, n][3]:.2f})" if (e, n) in cells else "—"
+                for n in counts
+            ]
+            print(f"| {e:g} | " + " | ".join(row) + " |")
+        print("\nbest within each instrument-time budget (mean over replicates):\n")
+        print("| budget (h) | samples | exposure s | log-RMSE | min–max | time (h) |")
+        print("|---:|---:|---:|---:|---:|---:|")
         for budget_h in args.budgets:
-            fit = [r for r in mine if float(r["instrument_s"]) <= budget_h * 3600]
+            fit = [k for k, v in cells.items() if v[3] <= budget_h]
             if fit:
-                best = min(fit, key=lambda r: float(r["log_rmse"]))
+                e, n = min(fit, key=lambda k: cells[k][0])
+                mean, lo, hi, hours = cells[e, n]
                 print(
-                    f"| {budget_h:g} | {int(best['samples']):,} | {float(best['exposure_s']):g} | "
-                    f"{float(best['log_rmse']):.4f} | {float(best['instrument_s']) / 3600:.2f} |"
+                    f"| {budget_h:g} | {n:,} | {e:g} | {mean:.4f} | {lo:.4f}–{hi:.4f} | "
+                    f"{hours:.2f} |"
                 )
 
 
@@ -244,10 +255,73 @@ def effects(args: argparse.Namespace) -> None:
             )
 
 
+def timing(args: argparse.Namespace) -> None:
+    """Simulated wall time per sample of one plan (Rusinkiewicz Sobol, ``args.samples``
+    targets, built once) acquired with no effect, each effect alone and the scene's own,
+    in this process one after another (best of ``args.repeats``)."""
+    import time
+
+    from gonio.planner import progress as planning
+    from gonio.planner.plan import build
+    from gonio.planner.schema import PlanSpec
+    from gonio.rig.model import Rig
+    from sim.scene import load_scene
+    from sim.session import simulate_plan
+
+    root = Path(__file__).resolve().parent.parent
+    rig = Rig.from_yaml(root / "configs/rigs/arch.yaml")
+    spec = PlanSpec.model_validate(
+        {
+            "name": "timing",
+            "parametrization": "rusinkiewicz",
+            "kicks": 50,
+            "sampling": {"strategy": "sobol", "target": args.samples, "seed": 1},
+        }
+    )
+    with planning.quiet():
+        plan = build(spec, rig)
+    print(
+        f"\n{len(plan):,} targets; ms per sample of the simulated acquisition, best of "
+        f"{args.repeats}\n"
+    )
+    names = (
+        "shot_noise",
+        "read_noise",
+        "dark_current",
+        "quantization",
+        "saturation",
+        "source_drift",
+        "aperture_integration",
+        "footprint",
+        "position_error",
+    )
+    for stem in args.scenes:
+        scene = load_scene(root / f"configs/scenes/{stem}.yaml", rig)
+        own = scene.effects.model_dump(mode="json")
+        cases: dict[str, dict[str, object]] = {"none": {}}
+        cases.update({n: {n: own.get(n) or {}} for n in names})
+        cases["scene"] = own
+        print(f"| {stem} | " + " | ".join(cases) + " |")
+        print("|---|" + "---:|" * len(cases))
+        cells = []
+        for effects in cases.values():
+            variant = scene.with_effects(effects)
+            best = math.inf
+            for _ in range(args.repeats):
+                started = time.perf_counter()
+                simulate_plan(plan, variant, 7)
+                best = min(best, time.perf_counter() - started)
+            cells.append(f"{1e3 * best / len(plan):.2f}")
+        print("| ms per sample | " + " | ".join(cells) + " |\n", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("part", choices=("uniform", "exposure", "effects"))
-    parser.add_argument("--runs", nargs="+", required=True, help="gonio tradeoff OUTDIRs")
+    parser.add_argument("part", choices=("uniform", "exposure", "effects", "timing"))
+    parser.add_argument("--runs", nargs="+", default=[], help="gonio tradeoff OUTDIRs")
+    parser.add_argument("--scenes", nargs="+", default=["matte", "glossy_metal"])
+    parser.add_argument("--samples", type=int, default=1000, help="targets of `timing`")
+    parser.add_argument("--repeats", type=int, default=3, help="runs of `timing`")
     parser.add_argument("--curves", help="curves.csv of benchmarks/study.py")
     parser.add_argument("--method", default="linear", help="the curves' method")
     parser.add_argument("--img", help="write PNGs here")
@@ -257,7 +331,8 @@ def main() -> None:
     )
     parser.add_argument("--budgets", type=float, nargs="+", default=[0.1, 0.2, 0.5, 1.0])
     args = parser.parse_args()
-    {"uniform": uniform, "exposure": exposure, "effects": effects}[args.part](args)
+    parts = {"uniform": uniform, "exposure": exposure, "effects": effects, "timing": timing}
+    parts[args.part](args)
 
 
 if __name__ == "__main__":
