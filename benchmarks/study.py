@@ -136,11 +136,11 @@ def curves(args: argparse.Namespace) -> None:
             writer.writeheader()
         for scene in args.scenes:
             rig, iso, truth = setting(scene)
-            for name, n in itertools.product(params.names(), args.counts):
+            for name, n in itertools.product(args.params, args.counts):
                 todo = [m for m in args.methods if (scene, name, m, str(n)) not in done]
                 if not todo:
                     continue
-                samples = synthesize(truth, rig, name, iso, n, seed=SEED)
+                samples = synthesize(truth, rig, name, iso, n, seed=args.seed)
                 for method in todo:
                     started = time.perf_counter()
                     row = {
@@ -342,6 +342,8 @@ def main() -> None:
     parser.add_argument("-o", "--out", default="runs/study")
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     parser.add_argument("--counts", type=int, nargs="+", default=list(COUNTS))
+    parser.add_argument("--params", nargs="+", default=list(params.names()))
+    parser.add_argument("--seed", type=int, default=SEED, help="the Sobol seed of `curves`")
     parser.add_argument("--targets", type=float, nargs="+", default=list(TARGETS))
     parser.add_argument("--count", type=int, default=4000, help="samples of `where`")
     parser.add_argument("--methods", nargs="+", default=["linear", "rbf"])
