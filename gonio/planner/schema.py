@@ -1,9 +1,11 @@
 """The plan file (YAML), validated.
 
-A plan names the parametrization to sample uniformly (default ``hybrid``), whether the
-material is isotropic (three coordinates: the pair's azimuth is rotated out and the
-reciprocity fold applies) or anisotropic (four; the sample rotation stage is used),
-how to place points, and how long to expose each target.
+A plan names the parametrization to sample uniformly (default ``rusinkiewicz``: its
+uniform plans reach a given error with the fewest samples on every shipped scene,
+docs/tradeoff.md "The study"), whether the material is isotropic (three coordinates:
+the pair's azimuth is rotated out and the reciprocity fold applies) or anisotropic
+(four; the sample rotation stage is used), how to place points, and how long to expose
+each target.
 """
 
 from __future__ import annotations
@@ -183,7 +185,7 @@ class AcquisitionSpec(Strict):
 class PlanSpec(Strict):
     name: str
     rig: str | None = None  # a rig file, relative to the plan file
-    parametrization: str = "hybrid"
+    parametrization: str = "rusinkiewicz"
     isotropic: bool = True
     sampling: SamplingSpec
     exposure: ExposureSpec = Field(default_factory=ExposureSpec)

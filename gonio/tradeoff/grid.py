@@ -121,6 +121,7 @@ def load_sweep(path: str | Path) -> Sweep:
                 ("axes", "velocity_scale", k), f"the scaled rig is refused: {exc}"
             ) from None
     scenes = _scenes(spec, path, rig, refuse)
+    _check_effects(spec, scenes, refuse)
     size = len(scenes) * spec.replicates
     for name in AXIS_NAMES:
         size *= len(getattr(spec.axes, name))
@@ -216,6 +217,27 @@ def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFi
         effects = scene.effects.model_dump(mode="json")
         out.append(SceneFile(scene.name, scene_path, text, effects))
     return tuple(out)
+
+
+def _check_effects(spec: SweepSpec, scenes: tuple[SceneFile, ...], refuse: Any) -> None:
+    """Refuse an effects value a scene cannot model (an effect named without the
+    parameters it needs, which the scene does not list either), before anything runs."""
+    from pydantic import ValidationError
+
+    from sim.scene import EffectsSpec
+
+    for k, effects in enumerate(spec.axes.effects):
+        for scene in scenes:
+            try:
+                EffectsSpec.model_validate(resolved_effects(effects, scene))
+            except ValidationError as exc:
+                first = exc.errors()[0]
+                where = ".".join(str(part) for part in first["loc"])
+                raise refuse(
+                    ("axes", "effects", k),
+                    f"{where}: {first['msg'].lower()} (scene {excerpt(scene.name)} does not "
+                    "list the effect; expected its parameters in the scene file)",
+                ) from None
 
 
 def resolved_effects(effects: Effects, scene: SceneFile) -> dict[str, Any]:

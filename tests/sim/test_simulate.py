@@ -31,6 +31,7 @@ def small_plan(rig: Rig, *, isotropic: bool = True, n: int = 120, seed: int = 0)
     spec = PlanSpec.model_validate(
         {
             "name": "t",
+            "parametrization": "hybrid",
             "isotropic": isotropic,
             "sampling": {"strategy": "sobol", "target": n, "seed": seed},
             "exposure": {"seconds": 0.01, "averages": 1},

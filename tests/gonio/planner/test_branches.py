@@ -101,6 +101,7 @@ def spec(isotropic: bool, **fields: object) -> PlanSpec:
     return PlanSpec.model_validate(
         {
             "name": "branches",
+            "parametrization": "hybrid",
             "isotropic": isotropic,
             "sampling": {"strategy": "sobol", "target": 200, "seed": 5},
             **fields,

@@ -28,6 +28,7 @@ def spec(**fields: Any) -> PlanSpec:
     given (None: the default budget): these tests are about the plan, not its length."""
     data: dict[str, Any] = {
         "name": "test",
+        "parametrization": "hybrid",
         "sampling": {"strategy": "sobol", "target": 300},
         "kicks": 50,
     }

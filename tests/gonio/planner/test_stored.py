@@ -30,6 +30,7 @@ PLANS = CONFIGS / "plans"
 def spec(**fields: Any) -> PlanSpec:
     data: dict[str, Any] = {
         "name": "stored",
+        "parametrization": "hybrid",
         "sampling": {"strategy": "sobol", "target": 150},
         "kicks": 50,  # a short search: these tests are about storing, not the tour
     }

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import load_sweep, resolved_effects, scaled_rig
 from gonio.tradeoff.spec import Without
@@ -74,6 +75,19 @@ def test_the_effects_a_combination_models(tmp_path: Path) -> None:
     labels = {t.inputs["effects"] for t in load_sweep(write_sweep(
         tmp_path, scenes=[glossy], axes={**AXES, "effects": effects})).tasks}  # fmt: skip
     assert labels == {"aperture_integration", "without:saturation", "none"}
+
+
+def test_an_effect_without_its_parameters_is_one_line(tmp_path: Path) -> None:
+    matte = str(CONFIGS / "scenes" / "matte.yaml")
+    path = write_sweep(
+        tmp_path, scenes=[matte], axes={**AXES, "effects": ["none", ["stray_light"]]}
+    )
+    with pytest.raises(ConfigError) as caught:
+        load_sweep(path)
+    message = str(caught.value)
+    assert "\n" not in message
+    assert "axes.effects[1]" in message or "axes.effects.1" in message, message
+    assert "stray_light.power_w: field required" in message, message
 
 
 @pytest.mark.parametrize("scale", [0.25, 0.7, 2.0, 3.9])
