@@ -17,7 +17,7 @@ from pydantic import Field, field_validator, model_validator
 
 from gonio import params
 from gonio.config import Strict, excerpt, field_error
-from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, Strategy, Warp
+from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
@@ -74,7 +74,11 @@ def effects_label(effects: Effects) -> str:
 class Axes(Strict):
     """The values swept, each a list; a combination takes one value of each."""
 
-    parametrization: list[str] = Field(["hybrid"], min_length=1)
+    # The planner's default unless the sweep names them (one source of truth).
+    parametrization: list[str] = Field(
+        default_factory=lambda: [PlanSpec.model_fields["parametrization"].default],
+        min_length=1,
+    )
     sampling: list[str] = Field(["sobol"], min_length=1)
     samples: list[int] = Field(min_length=1)  # kept targets asked for (sampling.target)
     exposure_s: list[float] = Field([0.05], min_length=1)

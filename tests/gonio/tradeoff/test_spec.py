@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from gonio.config import ConfigError
+from gonio.planner.schema import PlanSpec
 from gonio.tradeoff.grid import load_sweep
 from tests.gonio.tradeoff.conftest import SMALL, write_sweep
 
@@ -95,3 +96,10 @@ def test_the_shipped_quick_sweep_has_at_least_200_combinations() -> None:
     assert len(sweep.tasks) >= 200
     assert len({t.id for t in sweep.tasks}) == len(sweep.tasks)
     assert yaml.safe_load(sweep.path.read_text())["name"] == sweep.spec.name
+
+
+def test_the_parametrization_axis_defaults_to_the_planners(tmp_path: Path) -> None:
+    axes = {k: v for k, v in AXES.items() if k != "parametrization"}
+    sweep = load_sweep(write_sweep(tmp_path, axes=axes))
+    default = PlanSpec.model_fields["parametrization"].default
+    assert {t.inputs["parametrization"] for t in sweep.tasks} == {default} == {"rusinkiewicz"}
