@@ -265,6 +265,7 @@ def timing(args: argparse.Namespace) -> None:
     from gonio.planner.plan import build
     from gonio.planner.schema import PlanSpec
     from gonio.rig.model import Rig
+    from gonio.tradeoff.spec import EFFECT_NAMES
     from sim.scene import load_scene
     from sim.session import simulate_plan
 
@@ -284,17 +285,8 @@ def timing(args: argparse.Namespace) -> None:
         f"\n{len(plan):,} targets; ms per sample of the simulated acquisition, best of "
         f"{args.repeats}\n"
     )
-    names = (
-        "shot_noise",
-        "read_noise",
-        "dark_current",
-        "quantization",
-        "saturation",
-        "source_drift",
-        "aperture_integration",
-        "footprint",
-        "position_error",
-    )
+    # Every effect but stray light, which has no default power to switch on.
+    names = [n for n in EFFECT_NAMES if n != "stray_light"]
     for stem in args.scenes:
         scene = load_scene(root / f"configs/scenes/{stem}.yaml", rig)
         own = scene.effects.model_dump(mode="json")

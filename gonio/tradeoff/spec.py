@@ -21,25 +21,15 @@ from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strate
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
+from sim.scene import EffectsSpec
 
 #: Strategies a sweep may name: the planner's own, and ``warped`` (Sobol with the
 #: sweep's ``warps`` for the parametrization).
 WARPED = "warped"
 STRATEGIES: tuple[str, ...] = (*get_args(Strategy), WARPED)
 
-#: The effects of a scene that a sweep may toggle (`sim.scene.EffectsSpec`).
-EFFECT_NAMES = (
-    "shot_noise",
-    "read_noise",
-    "dark_current",
-    "quantization",
-    "saturation",
-    "source_drift",
-    "aperture_integration",
-    "footprint",
-    "position_error",
-    "stray_light",
-)
+#: The effects of a scene that a sweep may toggle: those `sim.scene.EffectsSpec` models.
+EFFECT_NAMES: tuple[str, ...] = tuple(EffectsSpec.model_fields)
 #: ``effects`` values: the scene's own effects, or none at all.
 SCENE, NONE = "scene", "none"
 
