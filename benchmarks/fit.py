@@ -34,13 +34,8 @@ from gonio.reconstruct.shared import shared_error
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 NOISE = ["shot_noise", "read_noise"]
-GOLD = {
-    "name": "cook_torrance",
-    "alpha": 0.05,
-    "fresnel": "conductor",
-    "ior": [0.18, 0.42, 1.37],
-    "k": [3.42, 2.35, 1.77],
-}
+#: The glossy metal scene's own material (GGX α = 0.05, gold's complex index per channel).
+GOLD = scene_spec("glossy_metal")["material"]
 BECKMANN = {"name": "cook_torrance", "alpha": 0.2, "distribution": "beckmann", "f0": 0.9}
 
 

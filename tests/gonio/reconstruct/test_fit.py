@@ -34,13 +34,8 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 REALIZATIONS = 20
 SAMPLES = 120
 NOISE = ["shot_noise", "read_noise"]
-GOLD = {
-    "name": "cook_torrance",
-    "alpha": 0.05,
-    "fresnel": "conductor",
-    "ior": [0.18, 0.42, 1.37],
-    "k": [3.42, 2.35, 1.77],
-}
+#: The glossy metal scene's own material (GGX α = 0.05, gold's complex index per channel).
+GOLD = scene_spec("glossy_metal")["material"]
 
 
 @pytest.fixture(scope="session")
