@@ -36,6 +36,7 @@ from gonio.export.columns import coordinate_unit, sample_columns
 from gonio.output import PendingOutput
 from gonio.planner.plan import ARRAYS
 from gonio.planner.stored import plan_bytes
+from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import Evaluable, FloatArray
 
@@ -144,7 +145,7 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
     coords = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
     ok = p.valid_iso(coords)
     wi, wo = p.inverse_iso(np.where(ok[..., None], coords, [a[0] for a in axes]))
-    values = np.asarray(model.eval(wi, wo), dtype=np.float64)
+    values, supported = values_and_support(model, wi, wo)
     mask = ok[..., None] if values.ndim == ok.ndim + 1 else ok
     group = h5.create_group("reconstruction")
     group.attrs.update(
@@ -158,9 +159,8 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
         group[f"axes/{name}"].attrs["units"] = coordinate_unit(name)
     group.create_dataset("values", data=np.where(mask, values, np.nan))
     group["values"].attrs["units"] = "sr^-1"
-    supported = getattr(model, "supported", None)
-    if callable(supported):
-        group.create_dataset("supported", data=np.asarray(supported(wi, wo), bool) & ok)
+    if supported is not None:
+        group.create_dataset("supported", data=supported & ok)
 
 
 def write(

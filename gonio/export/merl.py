@@ -25,6 +25,7 @@ from gonio import params
 from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.output import PendingOutput
+from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import BoolArray, FloatArray, Surface
 
@@ -58,15 +59,9 @@ def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
 def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     """The reconstruction evaluated at every bin (see the module docstring)."""
     wi, wo, ok = representative_pairs()
-    both = getattr(reconstruction, "evaluate", None)  # a Reconstruction's one pass
-    if callable(both):
-        values_at, _, supported_at = both(wi[ok], wo[ok])
-    else:
-        values_at = reconstruction.eval(wi[ok], wo[ok])
-        supported_at = reconstruction.supported(wi[ok], wo[ok])
+    got, supported_at = values_and_support(reconstruction, wi[ok], wo[ok])
     supported = np.zeros(ok.shape, dtype=bool)
-    supported[ok] = np.asarray(supported_at, dtype=bool)
-    got = np.asarray(values_at, dtype=np.float64)
+    supported[ok] = True if supported_at is None else supported_at
     if got.shape == (int(ok.sum()),):
         got = got[:, None]
     if got.shape[1:] not in ((1,), (3,)):

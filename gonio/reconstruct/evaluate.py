@@ -20,6 +20,7 @@ import numpy as np
 from gonio.errors import GonioError
 from gonio.reconstruct import testset
 from gonio.reconstruct.metrics import METRICS, REGIONS, Scores, region_masks, scores
+from gonio.reconstruct.result import values_and_support
 from gonio.reconstruct.testset import TestSet
 from gonio.reconstruct.truth import Candidate, Truth
 from gonio.rig.model import Rig
@@ -120,14 +121,9 @@ def evaluate(
     if truth.supported is not None:
         defined &= np.asarray(truth.supported(wi, wo), dtype=np.bool_)
     wi, wo, t = wi[defined], wo[defined], t[defined]
-    c = np.asarray(candidate.eval(wi, wo), dtype=np.float64)
+    c, mask = values_and_support(candidate, wi, wo)
     c, t = _matched(c, t, candidate_label, truth.label)
-    supported_fn = getattr(candidate, "supported", None)
-    supported: BoolArray = (
-        np.ones(len(wi), dtype=np.bool_)
-        if supported_fn is None
-        else np.asarray(supported_fn(wi, wo), dtype=np.bool_)
-    )
+    supported: BoolArray = np.ones(len(wi), dtype=np.bool_) if mask is None else mask
     answered = _finite_rows(c)
     masks = {ALL: np.ones(len(wi), dtype=np.bool_), **region_masks(wi, wo)}
     regions = {}

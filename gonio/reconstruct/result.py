@@ -19,7 +19,7 @@ from gonio.reconstruct.coordinates import Space
 from gonio.reconstruct.domain import Domain
 from gonio.reconstruct.interpolants import Interpolant
 from gonio.reconstruct.transforms import Transform
-from gonio.types import ArrayLike, BoolArray, BrdfEval, FloatArray
+from gonio.types import ArrayLike, BoolArray, BrdfEval, Evaluable, FloatArray
 
 #: Samples averaged by the nearest fill (`Reconstruction._nearby`).
 FILL_NEIGHBOURS = 8
@@ -163,3 +163,17 @@ class Reconstruction:
         other_columns[~other_defined] = 0.0
         columns[rows] = (1.0 - w[:, None]) * columns[rows] + w[:, None] * other_columns
         return columns, defined
+
+
+def values_and_support(
+    surface: Evaluable, wi: FloatArray, wo: FloatArray
+) -> tuple[FloatArray, BoolArray | None]:
+    """f at the pairs and where ``surface`` has data (None when it does not say), at
+    once: a `Reconstruction`'s ``eval`` and ``supported`` each run its whole evaluation,
+    so it is evaluated once; anything else by its ``eval`` and ``supported``."""
+    if isinstance(surface, Reconstruction):
+        f, _, ok = surface.evaluate(wi, wo)
+        return f, ok
+    supported = getattr(surface, "supported", None)
+    mask = None if supported is None else np.asarray(supported(wi, wo), dtype=np.bool_)
+    return np.asarray(surface.eval(wi, wo), dtype=np.float64), mask
