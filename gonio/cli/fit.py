@@ -37,12 +37,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
+    from gonio.acquire.calibrated import calibrate
     from gonio.config import ConfigError
     from gonio.errors import GonioError
     from gonio.reconstruct.family import parse
     from gonio.reconstruct.fit import fit
     from gonio.reconstruct.measured import Measured
     from gonio.reconstruct.shared import shared_error
+    from gonio.store.read import open_run
 
     if len(args.runs) not in (1, 3):
         raise ConfigError(f"expected one run, or three (r, g, b bands); got {len(args.runs)}")
@@ -60,8 +62,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
         parts, shared = [], []
         for path in args.runs:
             try:
-                parts.append(Measured.from_run(str(path)))
-                shared.append(shared_error(str(path)))
+                run = open_run(path)  # read and calibrated once for both
+                calibrated = calibrate(run) if len(run) else None  # (from_run says why)
+                parts.append(Measured.from_run(run, calibrated))
+                shared.append(shared_error(run, calibrated))
             except GonioError as exc:
                 message = str(exc)
                 raise GonioError(

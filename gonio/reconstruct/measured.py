@@ -12,11 +12,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gonio.acquire.calibrated import calibrate
+from gonio.acquire.calibrated import Calibrated, calibrate
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from gonio.store.read import Run, open_run
-from gonio.types import BrdfEval, FloatArray
+from gonio.types import BoolArray, BrdfEval, FloatArray
 
 
 @dataclass(frozen=True)
@@ -53,14 +53,15 @@ class Measured:
         return self.f.ndim == 2
 
     @classmethod
-    def from_run(cls, run: Run | str) -> Measured:
-        """The calibrated samples of a run (a `Run` or a run file's path); `GonioError`
-        (one line) when it has no sample or no calibration."""
+    def from_run(cls, run: Run | str, calibrated: Calibrated | None = None) -> Measured:
+        """The calibrated samples of a run (a `Run` or a run file's path; ``calibrated``:
+        its `calibrate`, when the caller has it already) that have a finite value and σ
+        (`kept`); `GonioError` (one line) when it has no sample or no calibration."""
         if not isinstance(run, Run):
             run = open_run(run)
         if len(run) == 0:
             raise GonioError(f"{run.path}: the run has no sample yet")
-        calibrated = calibrate(run)
+        calibrated = calibrate(run) if calibrated is None else calibrated
         wi, wo = run.directions()
         rig = Rig.from_yaml(
             str(run.meta.get("rig_path", run.path)), raw=_bytes(run.meta["rig_text"])
@@ -69,7 +70,7 @@ class Measured:
         band = "luminance"
         if scene_text is not None:
             band = _scene_band(scene_text)
-        ok = np.isfinite(calibrated.brdf) & np.isfinite(calibrated.sigma)
+        ok = kept(calibrated)
         return cls(
             wi=wi[ok],
             wo=wo[ok],
@@ -122,6 +123,11 @@ class Measured:
         if self.band == "rgb":
             return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
         return band_eval(model, self.band)
+
+
+def kept(calibrated: Calibrated) -> BoolArray:
+    """The samples a measurement keeps, in the run's order: a finite value and σ."""
+    return np.isfinite(calibrated.brdf) & np.isfinite(calibrated.sigma)
 
 
 def _bytes(text: str | bytes) -> bytes:

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.acquire.calibrated import calibrate
+from gonio.acquire.calibrated import Calibrated, calibrate
+from gonio.reconstruct.measured import kept
 from gonio.store.read import Run, open_run
 from gonio.types import FloatArray
 
@@ -40,14 +41,15 @@ class SharedError:
         return SharedError(self.weights[index], self.relative)
 
 
-def shared_error(run: Run | str) -> SharedError:
+def shared_error(run: Run | str, calibrated: Calibrated | None = None) -> SharedError:
     """The shared calibration error of a run's samples, in the order and selection of
-    `gonio.reconstruct.measured.Measured.from_run` (samples with a finite value and σ)."""
+    `gonio.reconstruct.measured.Measured.from_run` (`kept`); ``calibrated``: the run's
+    `calibrate`, when the caller has it already."""
     if not isinstance(run, Run):
         run = open_run(run)
-    calibrated = calibrate(run)
+    calibrated = calibrate(run) if calibrated is None else calibrated
     series = calibrated.series
-    keep = np.isfinite(calibrated.brdf) & np.isfinite(calibrated.sigma)
+    keep = kept(calibrated)
     s = run.samples
     t = (0.5 * (s["started_s"] + s["ended_s"]))[keep]
     k = len(series.t)
