@@ -21,23 +21,18 @@ import itertools
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import numpy as np
 from _machine import describe
 
 from gonio import brdf, params
-from gonio.planner.placement import directions, place
-from gonio.planner.schema import PlanSpec
-from gonio.planner.two_pass import second_pass_points
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.synthetic import synthesize
+from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 
@@ -81,34 +76,6 @@ def score(samples: Measured, method: str, truth: BrdfEval, rig: Rig, pairs: test
     value = result.regions["all"].scores.log_rmse
     assert value is not None
     return value
-
-
-def adaptive_samples(truth: BrdfEval, rig: Rig, parametrization: str, isotropic: bool, n: int,
-                     options: dict[str, object]) -> Measured:  # fmt: skip
-    """The samples of an adaptive plan of ``n`` targets, noise-free (no ordering)."""
-    spec = PlanSpec.model_validate({
-        "name": "adaptive", "parametrization": parametrization, "isotropic": isotropic,
-        "sampling": {"strategy": "adaptive", "target": n, "seed": SEED, "adaptive": options},
-    })  # fmt: skip
-    coords, _ = place(spec, rig, "survey")
-    survey = _valued(truth, rig, spec, coords)
-    rest = second_pass_points(spec, rig, survey, n - len(survey))
-    second = _valued(truth, rig, spec, rest)
-    return replace(
-        survey,
-        wi=np.concatenate([survey.wi, second.wi]),
-        wo=np.concatenate([survey.wo, second.wo]),
-        f=np.concatenate([survey.f, second.f]),
-        sigma=np.concatenate([survey.sigma, second.sigma]),
-    )
-
-
-def _valued(truth: BrdfEval, rig: Rig, spec: PlanSpec, coords: np.ndarray) -> Measured:
-    _, wi, wo = directions(spec, coords)
-    ok = rig.solve(wi, wo, isotropic=spec.isotropic).ok
-    f = np.asarray(truth(wi[ok], wo[ok]), dtype=np.float64)
-    return Measured(wi[ok], wo[ok], f, 0.01 * np.abs(f), spec.parametrization, spec.isotropic,
-                    rig, None, "luminance", "adaptive")  # fmt: skip
 
 
 def needed(counts: list[int], errors: list[float]) -> float | None:
@@ -168,8 +135,8 @@ def main() -> None:
                     if kind == "uniform":
                         samples = synthesize(truth, rig, parametrization, isotropic, n, seed=SEED)
                     else:
-                        samples = adaptive_samples(
-                            truth, rig, parametrization, isotropic, n, options
+                        samples = synthesize_adaptive(
+                            truth, rig, parametrization, isotropic, n, seed=SEED, adaptive=options
                         )
                     for method in args.methods:
                         key = (kind, parametrization, method)

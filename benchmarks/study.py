@@ -15,7 +15,9 @@ sweeps (configs/sweeps/study_*.yaml) give the noisy curves and the instrument ti
     lobes    seed 003's lobes as stand-ins for Blinn-Phong cos^n θh: time against error
 
 Run: .venv/bin/python benchmarks/study.py curves -o runs/study [--scenes matte ...]
-[--counts 250 ... 30000] [--methods linear rbf]; `where`, `budget`, `lobes` likewise.
+[--counts 250 ... 30000] [--methods linear rbf] [--sampling sobol adaptive]
+[--adaptive-model survey]; `where`, `budget`, `lobes` likewise. `--sampling adaptive`:
+the two-pass plans of docs/adaptive.md (`gonio.reconstruct.synthetic.synthesize_adaptive`).
 `curves` appends to OUT/curves.csv and skips the rows it holds (resumable).
 """
 
@@ -46,7 +48,7 @@ from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.regions import NAMES as REGIONS
 from gonio.reconstruct.regions import regions
 from gonio.reconstruct.result import Reconstruction
-from gonio.reconstruct.synthetic import synthesize
+from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 from sim.physics.optics import band_eval
@@ -65,6 +67,7 @@ TARGETS = (0.01, 0.03)
 SEED = 3
 COLUMNS = (
     "scene",
+    "sampling",
     "parametrization",
     "method",
     "samples",
@@ -126,7 +129,7 @@ def curves(args: argparse.Namespace) -> None:
     if out.exists():
         with out.open(encoding="utf-8") as fh:
             done = {
-                (r["scene"], r["parametrization"], r["method"], r["samples"])
+                (r["scene"], r["sampling"], r["parametrization"], r["method"], r["samples"])
                 for r in csv.DictReader(fh)
             }
     new = not out.exists()
@@ -136,15 +139,21 @@ def curves(args: argparse.Namespace) -> None:
             writer.writeheader()
         for scene in args.scenes:
             rig, iso, truth = setting(scene)
-            for name, n in itertools.product(args.params, args.counts):
-                todo = [m for m in args.methods if (scene, name, m, str(n)) not in done]
+            for kind, name, n in itertools.product(args.sampling, args.params, args.counts):
+                todo = [m for m in args.methods if (scene, kind, name, m, str(n)) not in done]
                 if not todo:
                     continue
-                samples = synthesize(truth, rig, name, iso, n, seed=args.seed)
+                if kind == "adaptive":
+                    samples = synthesize_adaptive(
+                        truth, rig, name, iso, n, seed=args.seed, adaptive=args.adaptive
+                    )
+                else:
+                    samples = synthesize(truth, rig, name, iso, n, seed=args.seed)
                 for method in todo:
                     started = time.perf_counter()
                     row = {
                         "scene": scene,
+                        "sampling": kind,
                         "parametrization": name,
                         "method": method,
                         "samples": n,
@@ -154,7 +163,7 @@ def curves(args: argparse.Namespace) -> None:
                     row["wall_s"] = round(time.perf_counter() - started, 3)
                     writer.writerow(row)
                     fh.flush()
-                    print(scene, name, method, n, f"{row['log_rmse']:.4f}", flush=True)
+                    print(scene, kind, name, method, n, f"{row['log_rmse']:.4f}", flush=True)
     report(out, tuple(args.targets))
 
 
@@ -168,19 +177,20 @@ def report(path: Path, targets: tuple[float, ...] = TARGETS) -> None:
         print(f"\n### {scene} (noise-free, log-RMSE)\n")
         heads = " | ".join(f"{n:,}" for n in counts)
         needs = " | ".join(f"n for {t}" for t in targets)
-        print(f"| parametrization | method | {heads} | {needs} |")
-        print("|---|---|" + "---:|" * (len(counts) + len(targets)))
-        for name, method in dict.fromkeys((r["parametrization"], r["method"]) for r in mine):
+        print(f"| sampling | parametrization | method | {heads} | {needs} |")
+        print("|---|---|---|" + "---:|" * (len(counts) + len(targets)))
+        plans = dict.fromkeys((r["sampling"], r["parametrization"], r["method"]) for r in mine)
+        for kind, name, method in plans:
             by_n = {
                 int(r["samples"]): float(r["log_rmse"])
                 for r in mine
-                if r["parametrization"] == name and r["method"] == method
+                if (r["sampling"], r["parametrization"], r["method"]) == (kind, name, method)
             }
             ns = [n for n in counts if n in by_n]
             errs = [by_n[n] for n in ns]
             cells = " | ".join(f"{by_n[n]:.4f}" if n in by_n else "—" for n in counts)
             need = " | ".join(fmt_needed(needed(ns, errs, t), ns) for t in targets)
-            print(f"| {name} | {method} | {cells} | {need} |")
+            print(f"| {kind} | {name} | {method} | {cells} | {need} |")
 
 
 def where(args: argparse.Namespace) -> None:
@@ -343,6 +353,18 @@ def main() -> None:
     parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     parser.add_argument("--counts", type=int, nargs="+", default=list(COUNTS))
     parser.add_argument("--params", nargs="+", default=list(params.names()))
+    parser.add_argument(
+        "--sampling",
+        nargs="+",
+        default=["sobol"],
+        choices=("sobol", "adaptive"),
+        help="uniform Sobol plans, or adaptive ones (`curves`)",
+    )
+    parser.add_argument(
+        "--adaptive-model",
+        default=None,
+        help="the adaptive plans' steering (a fit family, or 'survey'; default the planner's)",
+    )
     parser.add_argument("--seed", type=int, default=SEED, help="the Sobol seed of `curves`")
     parser.add_argument("--targets", type=float, nargs="+", default=list(TARGETS))
     parser.add_argument("--count", type=int, default=4000, help="samples of `where`")
@@ -350,6 +372,7 @@ def main() -> None:
     parser.add_argument("--lobe-samples", type=int, nargs="+", default=[2000, 8000])
     parser.add_argument("--shininess", type=float, nargs="+", default=[20.0, 100.0, 500.0])
     args = parser.parse_args()
+    args.adaptive = {} if args.adaptive_model is None else {"model": args.adaptive_model}
     print(describe())
     if args.part == "report":
         report(Path(args.out) / "curves.csv", tuple(args.targets))

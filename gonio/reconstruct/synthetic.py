@@ -6,9 +6,13 @@ material exactly at the pairs its plan reached; `synthesize` gives those measure
 directly: the plan's points placed by the planner in a parametrization's coordinates
 (Sobol, or a grid), kept where valid and reachable, valued by a BRDF function. The
 ordering and the acquisition, which do not change the values, are skipped
-(tests/gonio/reconstruct/test_synthetic.py holds this to a real run)."""
+(tests/gonio/reconstruct/test_synthetic.py holds this to a real run).
+`synthesize_adaptive` does the same for the two passes of an adaptive plan."""
 
 from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +22,9 @@ from gonio.planner.schema import PlanSpec
 from gonio.reconstruct.measured import Measured
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
+
+if TYPE_CHECKING:
+    from collections.abc import Mapping
 
 
 def placed(
@@ -39,7 +46,13 @@ def placed(
         if grid is None
         else {"strategy": "grid", "counts": dict.fromkeys(names, grid)}
     )
-    spec = PlanSpec.model_validate(
+    spec = _spec(parametrization, isotropic, sampling)
+    coords, _ = place(spec, rig, "synthetic")
+    return _kept(spec, rig, coords)
+
+
+def _spec(parametrization: str, isotropic: bool, sampling: dict[str, object]) -> PlanSpec:
+    return PlanSpec.model_validate(
         {
             "name": "synthetic",
             "parametrization": parametrization,
@@ -47,9 +60,11 @@ def placed(
             "sampling": sampling,
         }
     )
-    coords, _ = place(spec, rig, "synthetic")
+
+
+def _kept(spec: PlanSpec, rig: Rig, coords: FloatArray) -> tuple[FloatArray, FloatArray]:
     _, wi, wo = directions(spec, coords)
-    ok = rig.solve(wi, wo, isotropic=isotropic).ok
+    ok = rig.solve(wi, wo, isotropic=spec.isotropic).ok
     return wi[ok], wo[ok]
 
 
@@ -66,6 +81,53 @@ def synthesize(
 ) -> Measured:
     """A `Measured` of ``f`` at `placed` pairs, noise-free, with σ = relative_sigma·|f|."""
     wi, wo = placed(rig, parametrization, isotropic, n, seed=seed, grid=grid)
+    return _valued(f, rig, parametrization, isotropic, wi, wo, relative_sigma)
+
+
+def synthesize_adaptive(
+    f: BrdfEval,
+    rig: Rig,
+    parametrization: str,
+    isotropic: bool,
+    n: int,
+    *,
+    seed: int = 0,
+    adaptive: Mapping[str, object] | None = None,
+    relative_sigma: float = 0.01,
+) -> Measured:
+    """A `Measured` of ``f`` at the pairs of an adaptive plan of ``n`` kept targets
+    (``adaptive``: its options, `gonio.planner.schema.AdaptiveSpec`): the Sobol survey
+    valued like `synthesize`, then the second pass planned from those values
+    (`gonio.planner.two_pass.second_pass_points`) and valued too, survey first."""
+    from gonio.planner.two_pass import second_pass_points
+
+    sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
+    spec = _spec(parametrization, isotropic, sampling)
+    coords, _ = place(spec, rig, "synthetic")
+    wi, wo = _kept(spec, rig, coords)
+    survey = _valued(f, rig, parametrization, isotropic, wi, wo, relative_sigma)
+    wi2, wo2 = _kept(spec, rig, second_pass_points(spec, rig, survey, n - len(survey)))
+    second = _valued(f, rig, parametrization, isotropic, wi2, wo2, relative_sigma)
+    return replace(
+        survey,
+        wi=np.concatenate([survey.wi, second.wi]),
+        wo=np.concatenate([survey.wo, second.wo]),
+        f=np.concatenate([survey.f, second.f]),
+        sigma=np.concatenate([survey.sigma, second.sigma]),
+        source=f"synthetic adaptive {parametrization} "
+        f"{'isotropic' if isotropic else 'anisotropic'}",
+    )
+
+
+def _valued(
+    f: BrdfEval,
+    rig: Rig,
+    parametrization: str,
+    isotropic: bool,
+    wi: FloatArray,
+    wo: FloatArray,
+    relative_sigma: float,
+) -> Measured:
     values = np.asarray(f(wi, wo), dtype=np.float64)
     return Measured(
         wi=wi,
