@@ -1,0 +1,210 @@
+"""How far placing samples by a density can go (issue 16 §2, docs/adaptive.md "The
+limit of density placement"), noise-free, on GGX α 0.1 over kd 0.2 (F0 0.04), arch rig,
+Rusinkiewicz coordinates, rbf reconstruction, log-RMSE on log(1 + f) over the default
+test set.
+
+Plans at each count, each reconstructed the same way:
+
+    uniform    Sobol, the best uniform plan of benchmarks/adaptive.py
+    shipped    the adaptive strategy as shipped: a 128-target survey, a lambert+beckmann
+               fit of it steering one second pass (`synthesize_adaptive`)
+    own error  a 64-target survey, then passes doubling the samples, each placed by the
+               reconstruction's own error: the discrepancy between the rbf of all samples
+               and the rbf of a random half, per cell of the density grid
+    oracle     the same passes placed by the reconstruction's true error (the scene is
+               known here: no instrument can do this; it bounds every indicator)
+
+Each pass's density is the optimal total density for the indicator e² (error of the
+current density ρ₀, falling as ρ^(−2/d)) minus the samples already there:
+ρ* ∝ (w e² ρ₀^(4/d))^(d/(d+4)), new samples ∝ max(ρ* − ρ₀, 0), a share 0.2 uniform.
+Then where the oracle's error sits at the largest count, by θh.
+
+Run: .venv/bin/python benchmarks/adaptive_limit.py [--alpha 0.1] [--counts 250 500 1000 2000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import numpy as np
+from _machine import describe
+from scipy import ndimage
+
+from gonio import brdf, params
+from gonio.planner import adaptive
+from gonio.planner.placement import directions, draw_kept
+from gonio.planner.schema import PlanSpec
+from gonio.planner.two_pass import draw_points
+from gonio.reconstruct import testset
+from gonio.reconstruct.build import reconstruct
+from gonio.reconstruct.evaluate import evaluate
+from gonio.reconstruct.measured import Measured
+from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
+from gonio.rig.model import Rig
+from gonio.types import BrdfEval, FloatArray
+
+ROOT = Path(__file__).resolve().parent.parent
+PARAMETRIZATION = "rusinkiewicz"
+SEED = 3
+SURVEY = 64
+FLOOR = 0.2
+#: Gaussian smoothing of the indicator, in cells of the density grid.
+SMOOTH = 1.0
+#: Gaussian smoothing of the samples' counts per cell (ρ₀), in cells.
+SPREAD = 2.0
+#: Indicator: (samples, cell-centre pairs wi, wo, rbf of all samples at them) → e² per pair.
+Indicator = Callable[[Measured, FloatArray, FloatArray, FloatArray], FloatArray]
+
+
+def subset(m: Measured, keep: np.ndarray) -> Measured:
+    return replace(m, wi=m.wi[keep], wo=m.wo[keep], f=m.f[keep], sigma=m.sigma[keep])
+
+
+def joined(a: Measured, b: Measured) -> Measured:
+    return replace(
+        a,
+        wi=np.concatenate([a.wi, b.wi]),
+        wo=np.concatenate([a.wo, b.wo]),
+        f=np.concatenate([a.f, b.f]),
+        sigma=np.concatenate([a.sigma, b.sigma]),
+    )
+
+
+def own_error(m: Measured, wi: FloatArray, wo: FloatArray, full: FloatArray) -> FloatArray:
+    half = np.sort(np.random.default_rng(0).permutation(len(m))[: len(m) // 2])
+    other = reconstruct(subset(m, half), method="rbf", extrapolate="nearest").eval(wi, wo)
+    return np.asarray((full - np.log1p(np.maximum(other, 0.0))) ** 2, dtype=np.float64)
+
+
+def oracle(truth: BrdfEval) -> Indicator:
+    def true_error(m: Measured, wi: FloatArray, wo: FloatArray, full: FloatArray) -> FloatArray:
+        return np.asarray((full - np.log1p(truth(wi, wo))) ** 2, dtype=np.float64)
+
+    return true_error
+
+
+def passes(truth: BrdfEval, rig: Rig, n: int, indicator: Indicator) -> Measured:
+    """A survey of `SURVEY` Sobol targets, then passes doubling the samples up to ``n``,
+    each placed by the density the indicator gives (module docstring)."""
+    spec = PlanSpec.model_validate({
+        "name": "limit", "parametrization": PARAMETRIZATION, "isotropic": True,
+        "sampling": {"strategy": "sobol", "target": n, "seed": SEED},
+    })  # fmt: skip
+    m = synthesize(truth, rig, PARAMETRIZATION, True, SURVEY, seed=SEED)
+    p = params.get(PARAMETRIZATION)
+    bounds = np.asarray(p.iso_bounds, dtype=np.float64)
+    shape = (adaptive.CELLS[3],) * 3
+    w = adaptive.measure_density(rig, PARAMETRIZATION, True, shape)
+    reached = (w > 0) / np.count_nonzero(w)
+    box = bounds[:, 0] + adaptive.centres(shape) * (bounds[:, 1] - bounds[:, 0])
+    valid = p.valid_iso(box)
+    wi, wo = p.inverse_iso(box[valid])
+    step = 0
+    while len(m) < n:
+        step += 1
+        following = min(n, 2 * len(m))
+        full = np.log1p(
+            np.maximum(reconstruct(m, method="rbf", extrapolate="nearest").eval(wi, wo), 0)
+        )
+        e2 = np.zeros(len(box))
+        e2[valid] = indicator(m, wi, wo, full)
+        _, nearest = ndimage.distance_transform_edt(~valid.reshape(shape), return_indices=True)
+        e2 = ndimage.gaussian_filter(e2.reshape(shape)[tuple(nearest)], SMOOTH, mode="nearest")
+        rho0 = ndimage.gaussian_filter(counts(m, shape, bounds), SPREAD, mode="nearest").ravel()
+        rho0 *= len(m) / rho0.sum()
+        best = np.power(w * e2.ravel() * np.power(rho0, 4.0 / 3.0), 3.0 / 7.0)
+        new = np.maximum(best * following / best.sum() - rho0, 0.0)
+        shaped = new / new.sum() if new.sum() > 0 else reached
+        stream = adaptive.Stream(adaptive.Density(shape, (1 - FLOOR) * shaped + FLOOR * reached),
+                                 SEED + step)  # fmt: skip
+        points = draw_kept(
+            spec, rig, "limit",
+            lambda k, stream=stream: draw_points(
+                stream, k, bounds, rig, PARAMETRIZATION, True, False
+            ),
+            following - len(m),
+        )  # fmt: skip
+        _, pwi, pwo = directions(spec, points)
+        ok = rig.solve(pwi, pwo, isotropic=True).ok
+        f = np.asarray(truth(pwi[ok], pwo[ok]), dtype=np.float64)
+        m = joined(m, replace(m, wi=pwi[ok], wo=pwo[ok], f=f, sigma=0.01 * np.abs(f)))
+    return m
+
+
+def counts(m: Measured, shape: tuple[int, ...], bounds: FloatArray) -> FloatArray:
+    """The samples per cell of the density grid (shape)."""
+    unit = (params.get(PARAMETRIZATION).forward_iso(m.wi, m.wo) - bounds[:, 0]) / (
+        bounds[:, 1] - bounds[:, 0]
+    )
+    index = np.clip(np.floor(unit * np.asarray(shape)).astype(np.int64), 0, np.asarray(shape) - 1)
+    flat = np.ravel_multi_index(tuple(index.T), shape)
+    return np.bincount(flat, minlength=math.prod(shape)).astype(np.float64).reshape(shape)
+
+
+def theta_h(wi: FloatArray, wo: FloatArray) -> FloatArray:
+    h = wi + wo
+    return np.asarray(np.degrees(np.arccos(np.clip(h[:, 2] / np.linalg.norm(h, axis=1), -1, 1))))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--alpha", type=float, default=0.1)
+    parser.add_argument("--counts", type=int, nargs="+", default=[250, 500, 1000, 2000])
+    args = parser.parse_args()
+    print(describe())
+    truth = brdf.create(
+        "cook_torrance", alpha=args.alpha, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.2
+    ).eval
+    rig = Rig.from_yaml(ROOT / "configs/rigs/arch.yaml")
+    pairs = testset.draw(rig, isotropic=True)
+    plans: dict[str, Callable[[int], Measured]] = {
+        "uniform": lambda n: synthesize(truth, rig, PARAMETRIZATION, True, n, seed=SEED),
+        "shipped": lambda n: synthesize_adaptive(truth, rig, PARAMETRIZATION, True, n, seed=SEED),
+        "own error": lambda n: passes(truth, rig, n, own_error),
+        "oracle": lambda n: passes(truth, rig, n, oracle(truth)),
+    }
+    print(f"\nGGX α {args.alpha}, {PARAMETRIZATION}, rbf; log-RMSE (uniform / plan)\n")
+    print("| plan | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
+    print("|---|" + "---:|" * len(args.counts))
+    errors: dict[str, list[float]] = {}
+    last: Measured | None = None
+    for name, make in plans.items():
+        errors[name] = []
+        for n in args.counts:
+            samples = make(n)
+            candidate = reconstruct(samples, method="rbf", extrapolate="nearest")
+            result = evaluate(candidate, truth, rig, isotropic=True, test_set=pairs)
+            value = result.regions["all"].scores.log_rmse
+            assert value is not None
+            errors[name].append(value)
+            if name == "oracle" and n == args.counts[-1]:
+                last = samples
+        cells = [
+            f"{e:.4f}" if name == "uniform" else f"{e:.4f} ({u / e:.1f}×)"
+            for e, u in zip(errors[name], errors["uniform"], strict=True)
+        ]
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+    assert last is not None
+    candidate = reconstruct(last, method="rbf", extrapolate="nearest")
+    got = np.log1p(candidate.eval(pairs.wi, pairs.wo))
+    square = (got - np.log1p(truth(pairs.wi, pairs.wo))) ** 2
+    test_h, sample_h = theta_h(pairs.wi, pairs.wo), theta_h(last.wi, last.wo)
+    print(f"\nThe oracle's plan at {args.counts[-1]:,}: where its squared error sits, by θh\n")
+    print("| θh | test pairs | samples | squared error |")
+    print("|---|---:|---:|---:|")
+    for lo, hi in ((0, 2.5), (2.5, 5), (5, 10), (10, 20), (20, 90)):
+        t = (test_h >= lo) & (test_h < hi)
+        s = (sample_h >= lo) & (sample_h < hi)
+        print(f"| {lo}°–{hi}° | {t.mean():.1%} | {s.mean():.1%} | "
+              f"{square[t].sum() / square.sum():.1%} |")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
