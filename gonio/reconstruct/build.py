@@ -16,7 +16,7 @@ from scipy.spatial import QhullError
 from gonio.errors import GonioError, UnknownNameError
 from gonio.reconstruct import transforms
 from gonio.reconstruct.coordinates import Space, morton_order
-from gonio.reconstruct.domain import DISTANCE_FACTOR, Domain, typical_spacing
+from gonio.reconstruct.domain import Domain, typical_spacing
 from gonio.reconstruct.grid import GridInterpolant, detect, refuse
 from gonio.reconstruct.interpolants import Interpolant, Linear, Rbf
 from gonio.reconstruct.measured import Measured
@@ -90,13 +90,11 @@ def reconstruct(
     table = np.concatenate([chosen.encode(f, wi, wo), chosen.slope(f, wi, wo) * sigma], axis=1)
 
     spacing = typical_spacing(x)
-    if max_distance is None:
-        max_distance = DISTANCE_FACTOR * spacing
     margin = PAD_SPACINGS * spacing
     padded = space.pad(x, margin)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
-    domain = Domain(points, x, measured.rig, measured.isotropic, max_distance)
+    domain = Domain(points, source, x, measured.rig, measured.isotropic, max_distance)
     interpolant: Interpolant
     if method == "grid":
         grid = detect(x)

@@ -3,13 +3,19 @@
 A query pair is supported when both directions are above the horizon, the rig can
 measure it (`Rig.reachable`: within θmax, outside the blind spot, inside the footprint,
 axis limits and clear of collisions; the rig's own rule, isotropic as the run was), a
-measured sample (or a seam copy of one) lies within ``max_distance`` of it in the
-scaled coordinate space, and the interpolant is defined there (inside the samples'
-hull; for a grid, every corner of its cell measured). Elsewhere a value would be
-invented: the reconstruction returns NaN unless asked to extrapolate.
+measured sample (or a seam copy of one) lies close enough to it in the scaled
+coordinate space, and the interpolant is defined there (inside the samples' hull; for
+a grid, every corner of its cell measured). Elsewhere a value would be invented: the
+reconstruction returns NaN unless asked to extrapolate.
 
-``max_distance`` defaults to `DISTANCE_FACTOR` times the median distance from a
-sample to its nearest neighbour (scaled units), which follows the plan's density.
+Close enough: within `DISTANCE_FACTOR` times the *local* spacing of one of its
+`SPACING_NEIGHBOURS` nearest samples — a sample's local spacing being the median, over
+it and its `SPACING_NEIGHBOURS` − 1 nearest neighbours, of each one's distance to its
+own nearest neighbour (scaled units). For a
+uniform plan that is the plan's median spacing everywhere; for a plan denser in one
+region (adaptive sampling) each region keeps its own, where one global median (the
+dense region's) would leave the sparse regions unsupported. An explicit
+``max_distance`` sets one distance for every sample instead.
 """
 
 from __future__ import annotations
@@ -21,8 +27,11 @@ from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from gonio.types import BoolArray, FloatArray
 
-#: The default ``max_distance`` in median nearest-neighbour distances of the samples.
+#: The default support distance in local nearest-neighbour spacings of the samples.
 DISTANCE_FACTOR = 4.0
+#: Samples whose nearest-neighbour distances give a sample's local spacing (itself
+#: included).
+SPACING_NEIGHBOURS = 8
 
 
 class Domain:
@@ -31,20 +40,27 @@ class Domain:
     def __init__(
         self,
         points: FloatArray,
+        source: np.ndarray,
         samples: FloatArray,
         rig: Rig,
         isotropic: bool,
         max_distance: float | None = None,
     ) -> None:
-        """``points``: the padded samples (scaled); ``samples``: the measured ones."""
+        """``points``: the padded samples (scaled), ``source``: the measured sample each
+        one copies; ``samples``: the measured ones (scaled)."""
         self.tree = cKDTree(points)
         self.rig = rig
         self.isotropic = isotropic
         if max_distance is None:
-            max_distance = DISTANCE_FACTOR * typical_spacing(samples)
+            reach = DISTANCE_FACTOR * local_spacing(samples)
         elif not max_distance > 0.0:
             raise GonioError(f"max_distance: expected a positive distance, got {max_distance}")
-        self.max_distance = float(max_distance)
+        else:
+            reach = np.full(len(samples), float(max_distance))
+        #: The support distance around each padded point (its sample's).
+        self.reach = np.asarray(reach[source], dtype=np.float64)
+        #: The largest of them (the bound of every nearest-sample search).
+        self.max_distance = float(self.reach.max()) if len(self.reach) else 0.0
 
     def nearest(self, x: FloatArray, *, bounded: bool = True) -> tuple[FloatArray, np.ndarray]:
         """Distance to and index of the nearest padded point, for scaled points (M, d);
@@ -54,6 +70,24 @@ class Domain:
         distance, index = self.tree.query(x, distance_upper_bound=bound, workers=-1)
         far = index >= self.tree.n
         return np.asarray(distance, dtype=np.float64), np.where(far, 0, index).astype(np.intp)
+
+    def close(self, x: FloatArray, distance: FloatArray, nearest: np.ndarray) -> BoolArray:
+        """The scaled points (M, d), at ``distance`` from their ``nearest`` padded point,
+        lie within the support distance of one of their `SPACING_NEIGHBOURS` nearest
+        padded points (the nearest one's, checked first, settles most)."""
+        ok = np.asarray(distance <= self.reach[nearest], dtype=np.bool_)
+        rest = np.flatnonzero(~ok & np.isfinite(distance))
+        if len(rest):
+            k = min(SPACING_NEIGHBOURS, self.tree.n)
+            d, i = self.tree.query(
+                x[rest], k=k, distance_upper_bound=self.max_distance, workers=-1
+            )
+            d = np.asarray(d, dtype=np.float64).reshape(len(rest), k)
+            i = np.asarray(i, dtype=np.intp).reshape(len(rest), k)
+            found = i < self.tree.n
+            reach = np.where(found, self.reach[np.where(found, i, 0)], -1.0)
+            ok[rest] = (d <= reach).any(axis=1)
+        return ok
 
     def reachable(self, wi: FloatArray, wo: FloatArray) -> BoolArray:
         """The rig can measure the pairs (M, 3) (isotropic as the run was)."""
@@ -68,3 +102,16 @@ def typical_spacing(samples: FloatArray) -> float:
         return 1.0
     distance, _ = cKDTree(samples).query(samples, k=2)
     return float(np.median(distance[:, 1]))
+
+
+def local_spacing(samples: FloatArray) -> FloatArray:
+    """Each sample's local spacing (N,): the median nearest-neighbour distance over it
+    and its `SPACING_NEIGHBOURS` − 1 nearest samples (1.0 for a lone sample)."""
+    if len(samples) < 2:
+        return np.ones(len(samples))
+    tree = cKDTree(samples)
+    own, _ = tree.query(samples, k=2, workers=-1)
+    k = min(SPACING_NEIGHBOURS, len(samples))
+    _, around = tree.query(samples, k=k, workers=-1)
+    around = np.asarray(around, dtype=np.intp).reshape(len(samples), k)
+    return np.asarray(np.median(own[:, 1][around], axis=1), dtype=np.float64)

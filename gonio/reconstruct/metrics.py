@@ -89,4 +89,9 @@ def scores(candidate: FloatArray, truth: FloatArray, cos_theta_i: FloatArray) ->
 
 
 def _rms(x: FloatArray) -> float:
-    return math.sqrt(float(np.mean(np.square(x))))
+    """The root mean square, scaled by the largest |x| so that tiny differences do not
+    underflow to 0 when squared (nor huge ones overflow)."""
+    top = float(np.max(np.abs(x))) if np.size(x) else 0.0
+    if top == 0.0 or not math.isfinite(top):
+        return top
+    return top * math.sqrt(float(np.mean(np.square(np.asarray(x) / top))))

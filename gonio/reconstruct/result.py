@@ -91,7 +91,7 @@ class Reconstruction:
     def _above(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         x = self.space.scaled(wi, wo)
         distance, nearest = self.domain.nearest(x)
-        near = np.flatnonzero(distance <= self.domain.max_distance)
+        near = np.flatnonzero(self.domain.close(x, distance, nearest))
         # In the order of their nearest sample (the samples follow a Z-order curve), so
         # that neighbouring queries read neighbouring simplices.
         near = near[np.argsort(nearest[near], kind="stable")]
@@ -151,7 +151,7 @@ class Reconstruction:
         other = x[rows].copy()
         other[:, axis] += np.where(low[rows], period, -period)
         distance, near_other = self.domain.nearest(other)
-        close = distance <= self.domain.max_distance
+        close = self.domain.close(other, distance, near_other)
         other_columns = np.full((len(rows), columns.shape[1]), np.nan)
         other_defined = np.zeros(len(rows), dtype=np.bool_)
         other_columns[close], other_defined[close] = self._blended(

@@ -39,7 +39,12 @@ def test_a_perfect_candidate_scores_zero_everywhere() -> None:
     assert all(getattr(s, m) == 0.0 for m in METRICS)
 
 
-values = hnp.arrays(np.float64, st.integers(1, 20), elements=st.floats(0.0, 1e4))
+# Subnormal values are left out: an RMS below the smallest subnormal (5e-324) is 0 when
+# correctly rounded. Normal ones as small as 1e-307 must still give a positive error
+# (a plain sqrt(mean(d²)) underflowed for d = 2e-218).
+values = hnp.arrays(
+    np.float64, st.integers(1, 20), elements=st.floats(0.0, 1e4, allow_subnormal=False)
+)
 
 
 @given(values, st.floats(0.0, 1.0))
@@ -120,3 +125,10 @@ def test_regions_are_disjoint_and_cover_every_pair() -> None:
     total = sum(m.astype(int) for m in masks.values())
     assert np.all(total == 1)
     assert all(m.any() for m in masks.values())
+
+
+def test_tiny_and_huge_differences_neither_underflow_nor_overflow() -> None:
+    s = scores(np.array([2e-218, 0.0]), np.array([0.0, 0.0]), np.ones(2))
+    assert s.log_rmse == pytest.approx(2e-218 / math.sqrt(2), rel=1e-15)
+    s = scores(np.array([1e300, 0.0]), np.array([0.0, 1e300]), np.ones(2))
+    assert s.rel_rmse is not None and math.isfinite(s.rel_rmse)
