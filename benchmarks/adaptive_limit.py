@@ -13,13 +13,26 @@ Plans at each count, each reconstructed the same way:
                and the rbf of a random half, per cell of the density grid
     oracle     the same passes placed by the reconstruction's true error (the scene is
                known here: no instrument can do this; it bounds every indicator)
+    simulated  a 128-target survey; a lambert+beckmann fit of it; a uniform plan of the
+               same count simulated on the fit and reconstructed; the rest placed in one
+               pass by that simulated plan's error per cell (the cell shares below, 8³)
+    oracle cells  one pass placed by the uniform plan's true error per cell (16³), with
+               the shares below: the best a density can do, measured
 
-Each pass's density is the optimal total density for the indicator e² (error of the
+The passes' density is the optimal total density for the indicator e² (error of the
 current density ρ₀, falling as ρ^(−2/d)) minus the samples already there:
 ρ* ∝ (w e² ρ₀^(4/d))^(d/(d+4)), new samples ∝ max(ρ* − ρ₀, 0), a share 0.2 uniform.
-Then where the oracle's error sits at the largest count, by θh.
+Then where the oracle's error sits at the largest count, by θh; and the ceiling of
+any density: with the uniform plan's squared error E_c per cell of a grid on the
+coordinate box (test pairs' error, weighted by their share of the test measure), its
+share of the samples v_c, and a local error falling as ρ^(−β) (β fitted to the
+uniform curve: error ∝ N^(−β)), the best sample shares s_c ∝ v_c^(2β/(1+2β))
+E_c^(1/(1+2β)) give Σ E_c (v_c/s_c)^(2β) = (Σ (E_c v_c^(2β))^(1/(1+2β)))^(1+2β): the
+uniform error over that is the largest gain a density can give at that count (finer
+cells see more of the error's concentration, and a noisier estimate of it).
 
-Run: .venv/bin/python benchmarks/adaptive_limit.py [--alpha 0.1] [--counts 250 500 1000 2000]
+Run: .venv/bin/python benchmarks/adaptive_limit.py [--alpha 0.1] [--counts 250 ... 4000]
+[--plans shipped 'own error' oracle] (about 15 minutes on 2 cores)
 """
 
 from __future__ import annotations
@@ -45,8 +58,9 @@ from gonio.planner.two_pass import draw_points
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
+from gonio.reconstruct.fit import fit
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
+from gonio.reconstruct.synthetic import placed, synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 
@@ -55,6 +69,8 @@ PARAMETRIZATION = "rusinkiewicz"
 SEED = 3
 SURVEY = 64
 FLOOR = 0.2
+#: The exponent of the uniform curve, error ∝ N^−β (the fit this script prints, α 0.1).
+BETA = 0.86
 #: Gaussian smoothing of the indicator, in cells of the density grid.
 SMOOTH = 1.0
 #: Gaussian smoothing of the samples' counts per cell (ρ₀), in cells.
@@ -138,14 +154,89 @@ def passes(truth: BrdfEval, rig: Rig, n: int, indicator: Indicator) -> Measured:
     return m
 
 
-def counts(m: Measured, shape: tuple[int, ...], bounds: FloatArray) -> FloatArray:
-    """The samples per cell of the density grid (shape)."""
-    unit = (params.get(PARAMETRIZATION).forward_iso(m.wi, m.wo) - bounds[:, 0]) / (
+def cell_of(
+    wi: FloatArray, wo: FloatArray, shape: tuple[int, ...], bounds: FloatArray
+) -> np.ndarray:
+    """The flat index of each pair's cell in a grid of ``shape`` on the coordinate box."""
+    unit = (params.get(PARAMETRIZATION).forward_iso(wi, wo) - bounds[:, 0]) / (
         bounds[:, 1] - bounds[:, 0]
     )
     index = np.clip(np.floor(unit * np.asarray(shape)).astype(np.int64), 0, np.asarray(shape) - 1)
-    flat = np.ravel_multi_index(tuple(index.T), shape)
+    return np.asarray(np.ravel_multi_index(tuple(index.T), shape))
+
+
+def counts(m: Measured, shape: tuple[int, ...], bounds: FloatArray) -> FloatArray:
+    """The samples per cell of the density grid (shape)."""
+    flat = cell_of(m.wi, m.wo, shape, bounds)
     return np.bincount(flat, minlength=math.prod(shape)).astype(np.float64).reshape(shape)
+
+
+def error_cells(
+    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, cells: int,
+    volume: tuple[FloatArray, FloatArray],
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+    """Per cell of a ``cells``³ grid on the coordinate box: the squared log error E_c of
+    the uniform plan of ``n`` samples of ``truth`` (rbf), each test pair weighted by its
+    share of the test measure; and the share v_c of a uniform plan's samples."""
+    bounds = np.asarray(params.get(PARAMETRIZATION).iso_bounds, dtype=np.float64)
+    uniform = synthesize(truth, rig, PARAMETRIZATION, True, n, seed=SEED)
+    got = reconstruct(uniform, method="rbf", extrapolate="nearest").eval(pairs.wi, pairs.wo)
+    square = (np.log1p(got) - np.log1p(truth(pairs.wi, pairs.wo))) ** 2
+    shape = (cells,) * 3
+    mass = np.bincount(cell_of(pairs.wi, pairs.wo, shape, bounds), square, minlength=cells**3)
+    share = np.bincount(cell_of(*volume, shape, bounds), minlength=cells**3) / len(volume[0])
+    return mass / len(square), share
+
+
+def best_shares(mass: FloatArray, share: FloatArray, beta: float) -> FloatArray:
+    """The sample shares s_c ∝ v_c^(2β/(1+2β)) E_c^(1/(1+2β)) (module docstring), summing to 1."""
+    best = np.where(share > 0, (share ** (2 * beta) * mass) ** (1 / (1 + 2 * beta)), 0.0)
+    return np.asarray(best / best.sum(), dtype=np.float64)
+
+
+def cell_shares(
+    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, cells: int, beta: float,
+    volume: tuple[FloatArray, FloatArray],
+) -> adaptive.Density:  # fmt: skip
+    """The density on ``cells``³ cells whose kept samples follow `best_shares` for
+    `error_cells` of ``truth``, 10 % of them as a uniform plan's."""
+    mass, share = error_cells(truth, rig, pairs, n, cells, volume)
+    wanted = 0.9 * best_shares(mass, share, beta) + 0.1 * share
+    # Points are uniform in a cell's box: the kept share of a cell is p·v_c.
+    p = np.where(share > 0, wanted / np.maximum(share, 1e-300), 0.0)
+    return adaptive.Density((cells,) * 3, p / p.sum())
+
+
+def one_pass(
+    truth: BrdfEval, rig: Rig, density: adaptive.Density, n: int, first: Measured | None
+) -> Measured:
+    """``first`` (or nothing) and ``n`` − len(first) samples drawn from ``density``."""
+    spec = PlanSpec.model_validate({
+        "name": "limit", "parametrization": PARAMETRIZATION, "isotropic": True,
+        "sampling": {"strategy": "sobol", "target": n, "seed": SEED},
+    })  # fmt: skip
+    bounds = np.asarray(params.get(PARAMETRIZATION).iso_bounds, dtype=np.float64)
+    stream = adaptive.Stream(density, SEED + 7)
+    points = draw_kept(
+        spec, rig, "limit",
+        lambda k: draw_points(stream, k, bounds, rig, PARAMETRIZATION, True, False),
+        n - (len(first) if first is not None else 0),
+    )  # fmt: skip
+    _, wi, wo = directions(spec, points)
+    ok = rig.solve(wi, wo, isotropic=True).ok
+    f = np.asarray(truth(wi[ok], wo[ok]), dtype=np.float64)
+    template = first if first is not None else synthesize(truth, rig, PARAMETRIZATION, True, 16)
+    new = replace(template, wi=wi[ok], wo=wo[ok], f=f, sigma=0.01 * np.abs(f))
+    return new if first is None else joined(first, new)
+
+
+def simulated(
+    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, beta: float,
+    volume: tuple[FloatArray, FloatArray],
+) -> Measured:  # fmt: skip
+    survey = synthesize(truth, rig, PARAMETRIZATION, True, 128, seed=SEED)
+    model = fit(survey, "lambert+beckmann").model.eval
+    return one_pass(truth, rig, cell_shares(model, rig, pairs, n, 8, beta, volume), n, survey)
 
 
 def theta_h(wi: FloatArray, wo: FloatArray) -> FloatArray:
@@ -156,7 +247,13 @@ def theta_h(wi: FloatArray, wo: FloatArray) -> FloatArray:
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--alpha", type=float, default=0.1)
-    parser.add_argument("--counts", type=int, nargs="+", default=[250, 500, 1000, 2000])
+    parser.add_argument("--counts", type=int, nargs="+", default=[250, 500, 1000, 2000, 4000])
+    parser.add_argument(
+        "--plans",
+        nargs="+",
+        default=["shipped", "own error", "oracle", "simulated", "oracle cells"],
+        help="besides uniform: shipped, 'own error', oracle, simulated, 'oracle cells'",
+    )
     args = parser.parse_args()
     print(describe())
     truth = brdf.create(
@@ -164,11 +261,18 @@ def main() -> None:
     ).eval
     rig = Rig.from_yaml(ROOT / "configs/rigs/arch.yaml")
     pairs = testset.draw(rig, isotropic=True)
+    volume = placed(rig, PARAMETRIZATION, True, 1 << 16, seed=SEED + 1)
+    # The uniform curve's exponent (error ∝ N^−β), measured with this module's defaults.
+    beta = BETA
     plans: dict[str, Callable[[int], Measured]] = {
         "uniform": lambda n: synthesize(truth, rig, PARAMETRIZATION, True, n, seed=SEED),
         "shipped": lambda n: synthesize_adaptive(truth, rig, PARAMETRIZATION, True, n, seed=SEED),
         "own error": lambda n: passes(truth, rig, n, own_error),
         "oracle": lambda n: passes(truth, rig, n, oracle(truth)),
+        "simulated": lambda n: simulated(truth, rig, pairs, n, beta, volume),
+        "oracle cells": lambda n: one_pass(
+            truth, rig, cell_shares(truth, rig, pairs, n, 16, beta, volume), n, None
+        ),
     }
     print(f"\nGGX α {args.alpha}, {PARAMETRIZATION}, rbf; log-RMSE (uniform / plan)\n")
     print("| plan | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
@@ -176,6 +280,8 @@ def main() -> None:
     errors: dict[str, list[float]] = {}
     last: Measured | None = None
     for name, make in plans.items():
+        if name != "uniform" and name not in args.plans:
+            continue
         errors[name] = []
         for n in args.counts:
             samples = make(n)
@@ -191,7 +297,21 @@ def main() -> None:
             for e, u in zip(errors[name], errors["uniform"], strict=True)
         ]
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
-    assert last is not None
+    beta = -np.polyfit(np.log(args.counts), np.log(errors["uniform"]), 1)[0]
+    print(f"\nThe ceiling of any density (uniform error ∝ N^−{beta:.2f}): uniform log-RMSE / "
+          "the best a density can give\n")  # fmt: skip
+    print("| cells | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
+    print("|---|" + "---:|" * len(args.counts))
+    for cells in (4, 8, 16):
+        gains = []
+        for n in args.counts:
+            mass, share = error_cells(truth, rig, pairs, n, cells, volume)
+            used = share > 0
+            best = np.sum((mass[used] * share[used] ** (2 * beta)) ** (1 / (1 + 2 * beta)))
+            gains.append(math.sqrt(mass.sum() / best ** (1 + 2 * beta)))
+        print(f"| {cells}³ | " + " | ".join(f"{g:.1f}×" for g in gains) + " |", flush=True)
+    if last is None:
+        return
     candidate = reconstruct(last, method="rbf", extrapolate="nearest")
     got = np.log1p(candidate.eval(pairs.wi, pairs.wo))
     square = (got - np.log1p(truth(pairs.wi, pairs.wo))) ** 2
