@@ -72,7 +72,8 @@ def uniform(args: argparse.Namespace) -> None:
     if args.curves:
         with open(args.curves, encoding="utf-8") as fh:
             for r in csv.DictReader(fh):
-                if r["method"] == args.method:
+                # The uniform curves (an older curves.csv has no sampling column).
+                if r["method"] == args.method and r.get("sampling", "sobol") == "sobol":
                     key = (r["scene"], r["parametrization"])
                     synthetic[key][int(r["samples"])] = float(r["log_rmse"])
     for scene in dict.fromkeys(r["scene"] for r in rows):
