@@ -79,9 +79,7 @@ class Domain:
         rest = np.flatnonzero(~ok & np.isfinite(distance))
         if len(rest):
             k = min(SPACING_NEIGHBOURS, self.tree.n)
-            d, i = self.tree.query(
-                x[rest], k=k, distance_upper_bound=self.max_distance, workers=-1
-            )
+            d, i = self.tree.query(x[rest], k=k, distance_upper_bound=self.max_distance, workers=-1)
             d = np.asarray(d, dtype=np.float64).reshape(len(rest), k)
             i = np.asarray(i, dtype=np.intp).reshape(len(rest), k)
             found = i < self.tree.n
