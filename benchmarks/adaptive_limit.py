@@ -297,32 +297,37 @@ def main() -> None:
             for e, u in zip(errors[name], errors["uniform"], strict=True)
         ]
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
-    beta = -np.polyfit(np.log(args.counts), np.log(errors["uniform"]), 1)[0]
-    print(f"\nThe ceiling of any density (uniform error ∝ N^−{beta:.2f}): uniform log-RMSE / "
-          "the best a density can give\n")  # fmt: skip
-    print("| cells | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
-    print("|---|" + "---:|" * len(args.counts))
-    for cells in (4, 8, 16):
-        gains = []
-        for n in args.counts:
-            mass, share = error_cells(truth, rig, pairs, n, cells, volume)
-            used = share > 0
-            best = np.sum((mass[used] * share[used] ** (2 * beta)) ** (1 / (1 + 2 * beta)))
-            gains.append(math.sqrt(mass.sum() / best ** (1 + 2 * beta)))
-        print(f"| {cells}³ | " + " | ".join(f"{g:.1f}×" for g in gains) + " |", flush=True)
+    if len(args.counts) > 1:  # the ceiling needs the uniform curve's slope
+        beta = -np.polyfit(np.log(args.counts), np.log(errors["uniform"]), 1)[0]
+        print(f"\nThe ceiling of any density (uniform error ∝ N^−{beta:.2f}): uniform log-RMSE / "
+              "the best a density can give\n")  # fmt: skip
+        print("| cells | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
+        print("|---|" + "---:|" * len(args.counts))
+        for cells in (4, 8, 16):
+            gains = []
+            for n in args.counts:
+                mass, share = error_cells(truth, rig, pairs, n, cells, volume)
+                used = share > 0
+                best = np.sum((mass[used] * share[used] ** (2 * beta)) ** (1 / (1 + 2 * beta)))
+                gains.append(math.sqrt(mass.sum() / best ** (1 + 2 * beta)))
+            print(f"| {cells}³ | " + " | ".join(f"{g:.1f}×" for g in gains) + " |", flush=True)
     if last is None:
         return
     candidate = reconstruct(last, method="rbf", extrapolate="nearest")
     got = np.log1p(candidate.eval(pairs.wi, pairs.wo))
     square = (got - np.log1p(truth(pairs.wi, pairs.wo))) ** 2
     test_h, sample_h = theta_h(pairs.wi, pairs.wo), theta_h(last.wi, last.wo)
-    print(f"\nThe oracle's plan at {args.counts[-1]:,}: where its squared error sits, by θh\n")
-    print("| θh | test pairs | samples | squared error |")
-    print("|---|---:|---:|---:|")
+    uniform = synthesize(truth, rig, PARAMETRIZATION, True, args.counts[-1], seed=SEED)
+    uniform_h = theta_h(uniform.wi, uniform.wo)
+    print(f"\nThe oracle's plan at {args.counts[-1]:,}: where its squared error sits, by θh "
+          "(and the uniform plan's samples)\n")  # fmt: skip
+    print("| θh | test pairs | uniform plan's samples | oracle's samples | its squared error |")
+    print("|---|---:|---:|---:|---:|")
     for lo, hi in ((0, 2.5), (2.5, 5), (5, 10), (10, 20), (20, 90)):
         t = (test_h >= lo) & (test_h < hi)
         s = (sample_h >= lo) & (sample_h < hi)
-        print(f"| {lo}°–{hi}° | {t.mean():.1%} | {s.mean():.1%} | "
+        u = (uniform_h >= lo) & (uniform_h < hi)
+        print(f"| {lo}°–{hi}° | {t.mean():.1%} | {u.mean():.1%} | {s.mean():.1%} | "
               f"{square[t].sum() / square.sum():.1%} |")  # fmt: skip
 
 

@@ -168,9 +168,12 @@ def curves(args: argparse.Namespace) -> None:
 
 
 def report(path: Path, targets: tuple[float, ...] = TARGETS) -> None:
-    """Markdown tables of curves.csv: error by count, then the counts for each target."""
+    """Markdown tables of curves.csv: error by count, then the counts for each target;
+    where adaptive plans were measured too, the best of each kind against the other."""
     with path.open(encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
+    for r in rows:
+        r.setdefault("sampling", "sobol")  # a curves.csv of uniform plans only
     for scene in dict.fromkeys(r["scene"] for r in rows):
         mine = [r for r in rows if r["scene"] == scene]
         counts = sorted({int(r["samples"]) for r in mine})
@@ -191,6 +194,31 @@ def report(path: Path, targets: tuple[float, ...] = TARGETS) -> None:
             cells = " | ".join(f"{by_n[n]:.4f}" if n in by_n else "—" for n in counts)
             need = " | ".join(fmt_needed(needed(ns, errs, t), ns) for t in targets)
             print(f"| {kind} | {name} | {method} | {cells} | {need} |")
+        if {r["sampling"] for r in mine} >= {"sobol", "adaptive"}:
+            compare(mine, counts, targets)
+
+
+def compare(rows: list[dict[str, str]], counts: list[int], targets: tuple[float, ...]) -> None:
+    """The best uniform plan against the best adaptive one (over the parametrizations and
+    methods measured), at each count and in the samples each needs for each target."""
+    best = {
+        kind: {
+            n: min(float(r["log_rmse"]) for r in rows
+                   if r["sampling"] == kind and int(r["samples"]) == n)
+            for n in counts
+        }
+        for kind in ("sobol", "adaptive")
+    }  # fmt: skip
+    ratios = ", ".join(f"{best['sobol'][n] / best['adaptive'][n]:.2f}×" for n in counts)
+    print(
+        f"\nbest uniform / best adaptive error at {', '.join(f'{n:,}' for n in counts)}: {ratios}"
+    )
+    for t in targets:
+        u = needed(counts, [best["sobol"][n] for n in counts], t)
+        a = needed(counts, [best["adaptive"][n] for n in counts], t)
+        ratio = "" if math.isinf(u) or math.isinf(a) else f" (adaptive / uniform {a / u:.2f})"
+        print(f"samples for {t}: best uniform {fmt_needed(u, counts)}, best adaptive "
+              f"{fmt_needed(a, counts)}{ratio}")  # fmt: skip
 
 
 def where(args: argparse.Namespace) -> None:

@@ -13,9 +13,13 @@ with the noise-free curves of benchmarks/study.py placed on the instrument-time 
     effects   per effect: simulated wall time per sample and the change of the error
     timing    per effect: the simulated acquisition's wall time per sample, measured in
               one process one run after another (the sweep's wall times vary with load)
+    adaptive  uniform against adaptive plans of the same parametrization, method and
+              count (configs/sweeps/study_adaptive.yaml): log-RMSE noise on and off,
+              the error ratio and the instrument time of each
 
 Run: .venv/bin/python benchmarks/study_engine.py uniform --runs DIR ... --curves
-runs/study/curves.csv [--img docs/img]; `exposure --runs DIR`; `effects --runs DIR`.
+runs/study/curves.csv [--img docs/img]; `exposure --runs DIR`; `effects --runs DIR`;
+`adaptive --runs DIR`.
 """
 
 from __future__ import annotations
@@ -308,9 +312,29 @@ def timing(args: argparse.Namespace) -> None:
         print("| ms per sample | " + " | ".join(cells) + " |\n", flush=True)
 
 
+def adaptive(args: argparse.Namespace) -> None:
+    rows = rows_of(args.runs)
+    plans: dict[tuple[str, str, str, int, str], dict[str, dict[str, str]]] = defaultdict(dict)
+    for r in rows:
+        key = (r["scene"], r["parametrization"], r["method"], int(r["samples"]), r["effects"])
+        plans[key][r["sampling"]] = r
+    print("| scene | effects | samples | uniform | adaptive | uniform / adaptive | "
+          "instrument time, uniform → adaptive |")  # fmt: skip
+    print("|---|---|---:|---:|---:|---:|---|")
+    for (scene, _, _, n, effects), kinds in sorted(plans.items()):
+        if "adaptive" not in kinds or len(kinds) < 2:
+            continue
+        (other,) = (k for k in kinds if k != "adaptive")
+        u, a = kinds[other], kinds["adaptive"]
+        eu, ea = float(u["log_rmse"]), float(a["log_rmse"])
+        tu, ta = float(u["instrument_s"]), float(a["instrument_s"])
+        print(f"| {scene} | {effects} | {n:,} | {eu:.3g} | {ea:.3g} | {eu / ea:.1f}× | "
+              f"{tu:,.0f} s → {ta:,.0f} s |")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("part", choices=("uniform", "exposure", "effects", "timing"))
+    parser.add_argument("part", choices=("uniform", "exposure", "effects", "timing", "adaptive"))
     parser.add_argument("--runs", nargs="+", default=[], help="gonio tradeoff OUTDIRs")
     parser.add_argument("--scenes", nargs="+", default=["matte", "glossy_metal"])
     parser.add_argument("--samples", type=int, default=1000, help="targets of `timing`")
@@ -324,7 +348,13 @@ def main() -> None:
     )
     parser.add_argument("--budgets", type=float, nargs="+", default=[0.1, 0.2, 0.5, 1.0])
     args = parser.parse_args()
-    parts = {"uniform": uniform, "exposure": exposure, "effects": effects, "timing": timing}
+    parts = {
+        "uniform": uniform,
+        "exposure": exposure,
+        "effects": effects,
+        "timing": timing,
+        "adaptive": adaptive,
+    }
     parts[args.part](args)
 
 
