@@ -78,10 +78,12 @@ def synthesize(
     seed: int = 0,
     grid: int | None = None,
     relative_sigma: float = 0.01,
+    sigma_floor: float = 0.0,
 ) -> Measured:
-    """A `Measured` of ``f`` at `placed` pairs, noise-free, with σ = relative_sigma·|f|."""
+    """A `Measured` of ``f`` at `placed` pairs, noise-free, with
+    σ = relative_sigma·(|f| + sigma_floor) (``sigma_floor`` in sr⁻¹: an absolute part)."""
     wi, wo = placed(rig, parametrization, isotropic, n, seed=seed, grid=grid)
-    return _valued(f, rig, parametrization, isotropic, wi, wo, relative_sigma)
+    return _valued(f, rig, parametrization, isotropic, wi, wo, relative_sigma, sigma_floor)
 
 
 def synthesize_adaptive(
@@ -94,20 +96,23 @@ def synthesize_adaptive(
     seed: int = 0,
     adaptive: Mapping[str, object] | None = None,
     relative_sigma: float = 0.01,
+    sigma_floor: float = 0.0,
 ) -> Measured:
     """A `Measured` of ``f`` at the pairs of an adaptive plan of ``n`` kept targets
     (``adaptive``: its options, `gonio.planner.schema.AdaptiveSpec`): the Sobol survey
-    valued like `synthesize`, then the second pass planned from those values
-    (`gonio.planner.two_pass.second_pass_points`) and valued too, survey first."""
+    valued like `synthesize`, then the second pass planned from those values and σs
+    (`gonio.planner.two_pass.second_pass_points`: the σs weight the fit that steers it)
+    and valued too, survey first."""
     from gonio.planner.two_pass import second_pass_points
 
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
     wi, wo = _kept(spec, rig, coords)
-    survey = _valued(f, rig, parametrization, isotropic, wi, wo, relative_sigma)
+    sigma = (relative_sigma, sigma_floor)
+    survey = _valued(f, rig, parametrization, isotropic, wi, wo, *sigma)
     wi2, wo2 = _kept(spec, rig, second_pass_points(spec, rig, survey, n - len(survey)))
-    second = _valued(f, rig, parametrization, isotropic, wi2, wo2, relative_sigma)
+    second = _valued(f, rig, parametrization, isotropic, wi2, wo2, *sigma)
     return replace(
         survey,
         wi=np.concatenate([survey.wi, second.wi]),
@@ -127,13 +132,14 @@ def _valued(
     wi: FloatArray,
     wo: FloatArray,
     relative_sigma: float,
+    sigma_floor: float,
 ) -> Measured:
     values = np.asarray(f(wi, wo), dtype=np.float64)
     return Measured(
         wi=wi,
         wo=wo,
         f=values,
-        sigma=relative_sigma * np.abs(values),
+        sigma=relative_sigma * (np.abs(values) + sigma_floor),
         parametrization=parametrization,
         isotropic=isotropic,
         rig=rig,

@@ -71,3 +71,12 @@ def test_an_adaptive_plan_is_its_survey_then_a_pass_denser_at_the_peak(
     # GGX α 0.1 (Rusinkiewicz's uniform plans already give θh < 10° a fifth of their
     # samples): the adaptive plan gives it nearly half.
     assert near_peak(both) > 1.8 * near_peak(uniform) > 0
+
+
+def test_sigma_is_relative_with_an_optional_absolute_part() -> None:
+    truth = brdf.create(**MATERIAL).eval
+    rig = Rig.from_yaml(ARCH)
+    plain = synthesize(truth, rig, "rusinkiewicz", True, 40, seed=2)
+    floored = synthesize(truth, rig, "rusinkiewicz", True, 40, seed=2, sigma_floor=1.0)
+    np.testing.assert_allclose(plain.sigma, 0.01 * plain.f, rtol=1e-15)
+    np.testing.assert_allclose(floored.sigma, 0.01 * (1.0 + floored.f), rtol=1e-15)
