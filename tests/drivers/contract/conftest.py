@@ -96,7 +96,10 @@ def _dynamixel_motors(emulator: Callable[..., DxlEmulator], latency_ms: int) -> 
 
     def make(fault: str | None) -> MotorBus:
         state["fault"] = fault
-        bus = DynamixelBus(emu.path, config, latency_ms=latency_ms, retries=0)
+        # A lost reply must surface as the injected fault; other cases keep the driver's
+        # retries, so that a reply late on a loaded machine does not fail their set-up.
+        retries = 0 if fault == "comm_error" else 3
+        bus = DynamixelBus(emu.path, config, latency_ms=latency_ms, retries=retries)
         state["bus"] = bus
         return bus
 
