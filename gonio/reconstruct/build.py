@@ -16,7 +16,7 @@ from scipy.spatial import QhullError
 from gonio.errors import GonioError, UnknownNameError
 from gonio.reconstruct import transforms
 from gonio.reconstruct.coordinates import Space, morton_order
-from gonio.reconstruct.domain import Domain, typical_spacing
+from gonio.reconstruct.domain import Domain, spacings
 from gonio.reconstruct.grid import GridInterpolant, detect, refuse
 from gonio.reconstruct.interpolants import Interpolant, Linear, Rbf
 from gonio.reconstruct.measured import Measured
@@ -30,7 +30,7 @@ EXTRAPOLATIONS = (None, "nearest", "model")
 #: The transform interpolated by default (chosen by measurement: docs/reconstruction.md).
 DEFAULT_TRANSFORM = "log"
 #: Seam copies are made of the samples within this many typical spacings of a seam
-#: (enough for the triangulation to join the two sides; `typical_spacing`).
+#: (enough for the triangulation to join the two sides; `domain.spacings`).
 PAD_SPACINGS = 1.0
 #: Samples closer than this (scaled units) are one sample measured repeatedly.
 REPEAT = 1e-12
@@ -89,12 +89,12 @@ def reconstruct(
     x, wi, wo, f, sigma = _merge_repeats(x, wi, wo, f, _columns(measured.sigma))
     table = np.concatenate([chosen.encode(f, wi, wo), chosen.slope(f, wi, wo) * sigma], axis=1)
 
-    spacing = typical_spacing(x)
+    spacing, local = spacings(x)
     margin = PAD_SPACINGS * spacing
     padded = space.pad(x, margin)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
-    domain = Domain(points, source, x, measured.rig, measured.isotropic, max_distance)
+    domain = Domain(points, source, local, measured.rig, measured.isotropic, max_distance)
     interpolant: Interpolant
     if method == "grid":
         grid = detect(x)

@@ -41,22 +41,22 @@ class Domain:
         self,
         points: FloatArray,
         source: np.ndarray,
-        samples: FloatArray,
+        local: FloatArray,
         rig: Rig,
         isotropic: bool,
         max_distance: float | None = None,
     ) -> None:
         """``points``: the padded samples (scaled), ``source``: the measured sample each
-        one copies; ``samples``: the measured ones (scaled)."""
+        one copies; ``local``: each measured sample's local spacing (`spacings`)."""
         self.tree = cKDTree(points)
         self.rig = rig
         self.isotropic = isotropic
         if max_distance is None:
-            reach = DISTANCE_FACTOR * local_spacing(samples)
+            reach = DISTANCE_FACTOR * local
         elif not max_distance > 0.0:
             raise GonioError(f"max_distance: expected a positive distance, got {max_distance}")
         else:
-            reach = np.full(len(samples), float(max_distance))
+            reach = np.full(len(local), float(max_distance))
         #: The support distance around each padded point (its sample's).
         self.reach = np.asarray(reach[source], dtype=np.float64)
         #: The largest of them (the bound of every nearest-sample search).
@@ -94,22 +94,15 @@ class Domain:
         return np.asarray(self.rig.reachable(wi, wo, isotropic=self.isotropic)[0])
 
 
-def typical_spacing(samples: FloatArray) -> float:
-    """The median distance from a sample (N, d) to its nearest other sample."""
+def spacings(samples: FloatArray) -> tuple[float, FloatArray]:
+    """The median distance from a sample (N, d) to its nearest other sample, and each
+    sample's local spacing (N,): that distance's median over it and its
+    `SPACING_NEIGHBOURS` − 1 nearest samples (1.0 and ones for a lone sample); one
+    nearest-neighbour search for both."""
     if len(samples) < 2:
-        return 1.0
-    distance, _ = cKDTree(samples).query(samples, k=2)
-    return float(np.median(distance[:, 1]))
-
-
-def local_spacing(samples: FloatArray) -> FloatArray:
-    """Each sample's local spacing (N,): the median nearest-neighbour distance over it
-    and its `SPACING_NEIGHBOURS` − 1 nearest samples (1.0 for a lone sample)."""
-    if len(samples) < 2:
-        return np.ones(len(samples))
-    tree = cKDTree(samples)
-    own, _ = tree.query(samples, k=2, workers=-1)
+        return 1.0, np.ones(len(samples))
     k = min(SPACING_NEIGHBOURS, len(samples))
-    _, around = tree.query(samples, k=k, workers=-1)
+    distance, around = cKDTree(samples).query(samples, k=k, workers=-1)
+    own = np.asarray(distance, dtype=np.float64).reshape(len(samples), k)[:, 1]
     around = np.asarray(around, dtype=np.intp).reshape(len(samples), k)
-    return np.asarray(np.median(own[:, 1][around], axis=1), dtype=np.float64)
+    return float(np.median(own)), np.asarray(np.median(own[around], axis=1), dtype=np.float64)
