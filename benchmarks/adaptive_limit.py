@@ -41,16 +41,17 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np
 from _machine import describe
+from adaptive import ggx
 from scipy import ndimage
 
-from gonio import brdf, params
+from gonio import params
+from gonio.brdf.geometry import pair
 from gonio.planner import adaptive
 from gonio.planner.placement import directions, draw_kept
 from gonio.planner.schema import PlanSpec
@@ -79,23 +80,9 @@ SPREAD = 2.0
 Indicator = Callable[[Measured, FloatArray, FloatArray, FloatArray], FloatArray]
 
 
-def subset(m: Measured, keep: np.ndarray) -> Measured:
-    return replace(m, wi=m.wi[keep], wo=m.wo[keep], f=m.f[keep], sigma=m.sigma[keep])
-
-
-def joined(a: Measured, b: Measured) -> Measured:
-    return replace(
-        a,
-        wi=np.concatenate([a.wi, b.wi]),
-        wo=np.concatenate([a.wo, b.wo]),
-        f=np.concatenate([a.f, b.f]),
-        sigma=np.concatenate([a.sigma, b.sigma]),
-    )
-
-
 def own_error(m: Measured, wi: FloatArray, wo: FloatArray, full: FloatArray) -> FloatArray:
     half = np.sort(np.random.default_rng(0).permutation(len(m))[: len(m) // 2])
-    other = reconstruct(subset(m, half), method="rbf", extrapolate="nearest").eval(wi, wo)
+    other = reconstruct(m.subset(half), method="rbf", extrapolate="nearest").eval(wi, wo)
     return np.asarray((full - np.log1p(np.maximum(other, 0.0))) ** 2, dtype=np.float64)
 
 
@@ -109,10 +96,6 @@ def oracle(truth: BrdfEval) -> Indicator:
 def passes(truth: BrdfEval, rig: Rig, n: int, indicator: Indicator) -> Measured:
     """A survey of `SURVEY` Sobol targets, then passes doubling the samples up to ``n``,
     each placed by the density the indicator gives (module docstring)."""
-    spec = PlanSpec.model_validate({
-        "name": "limit", "parametrization": PARAMETRIZATION, "isotropic": True,
-        "sampling": {"strategy": "sobol", "target": n, "seed": SEED},
-    })  # fmt: skip
     m = synthesize(truth, rig, PARAMETRIZATION, True, SURVEY, seed=SEED)
     p = params.get(PARAMETRIZATION)
     bounds = np.asarray(p.iso_bounds, dtype=np.float64)
@@ -138,19 +121,8 @@ def passes(truth: BrdfEval, rig: Rig, n: int, indicator: Indicator) -> Measured:
         best = np.power(w * e2.ravel() * np.power(rho0, 4.0 / 3.0), 3.0 / 7.0)
         new = np.maximum(best * following / best.sum() - rho0, 0.0)
         shaped = new / new.sum() if new.sum() > 0 else reached
-        stream = adaptive.Stream(adaptive.Density(shape, (1 - FLOOR) * shaped + FLOOR * reached),
-                                 SEED + step)  # fmt: skip
-        points = draw_kept(
-            spec, rig, "limit",
-            lambda k, stream=stream: draw_points(
-                stream, k, bounds, rig, PARAMETRIZATION, True, False
-            ),
-            following - len(m),
-        )  # fmt: skip
-        _, pwi, pwo = directions(spec, points)
-        ok = rig.solve(pwi, pwo, isotropic=True).ok
-        f = np.asarray(truth(pwi[ok], pwo[ok]), dtype=np.float64)
-        m = joined(m, replace(m, wi=pwi[ok], wo=pwo[ok], f=f, sigma=0.01 * np.abs(f)))
+        density = adaptive.Density(shape, (1 - FLOOR) * shaped + FLOOR * reached)
+        m = m.joined(drawn(truth, rig, density, following - len(m), SEED + step))
     return m
 
 
@@ -161,8 +133,7 @@ def cell_of(
     unit = (params.get(PARAMETRIZATION).forward_iso(wi, wo) - bounds[:, 0]) / (
         bounds[:, 1] - bounds[:, 0]
     )
-    index = np.clip(np.floor(unit * np.asarray(shape)).astype(np.int64), 0, np.asarray(shape) - 1)
-    return np.asarray(np.ravel_multi_index(tuple(index.T), shape))
+    return adaptive.cell_index(unit, shape)
 
 
 def counts(m: Measured, shape: tuple[int, ...], bounds: FloatArray) -> FloatArray:
@@ -207,27 +178,25 @@ def cell_shares(
     return adaptive.Density((cells,) * 3, p / p.sum())
 
 
-def one_pass(
-    truth: BrdfEval, rig: Rig, density: adaptive.Density, n: int, first: Measured | None
-) -> Measured:
-    """``first`` (or nothing) and ``n`` − len(first) samples drawn from ``density``."""
+def drawn(truth: BrdfEval, rig: Rig, density: adaptive.Density, count: int, seed: int) -> Measured:
+    """``count`` kept samples of ``truth`` drawn from ``density`` (a stream seeded by
+    ``seed``), noise-free, σ = 1 % of f."""
     spec = PlanSpec.model_validate({
         "name": "limit", "parametrization": PARAMETRIZATION, "isotropic": True,
-        "sampling": {"strategy": "sobol", "target": n, "seed": SEED},
+        "sampling": {"strategy": "sobol", "target": count, "seed": SEED},
     })  # fmt: skip
     bounds = np.asarray(params.get(PARAMETRIZATION).iso_bounds, dtype=np.float64)
-    stream = adaptive.Stream(density, SEED + 7)
+    stream = adaptive.Stream(density, seed)
     points = draw_kept(
         spec, rig, "limit",
         lambda k: draw_points(stream, k, bounds, rig, PARAMETRIZATION, True, False),
-        n - (len(first) if first is not None else 0),
+        count,
     )  # fmt: skip
     _, wi, wo = directions(spec, points)
     ok = rig.solve(wi, wo, isotropic=True).ok
     f = np.asarray(truth(wi[ok], wo[ok]), dtype=np.float64)
-    template = first if first is not None else synthesize(truth, rig, PARAMETRIZATION, True, 16)
-    new = replace(template, wi=wi[ok], wo=wo[ok], f=f, sigma=0.01 * np.abs(f))
-    return new if first is None else joined(first, new)
+    return Measured(wi[ok], wo[ok], f, 0.01 * np.abs(f), PARAMETRIZATION, True, rig, None,
+                    "luminance", "limit")  # fmt: skip
 
 
 def simulated(
@@ -236,12 +205,13 @@ def simulated(
 ) -> Measured:  # fmt: skip
     survey = synthesize(truth, rig, PARAMETRIZATION, True, 128, seed=SEED)
     model = fit(survey, "lambert+beckmann").model.eval
-    return one_pass(truth, rig, cell_shares(model, rig, pairs, n, 8, beta, volume), n, survey)
+    density = cell_shares(model, rig, pairs, n, 8, beta, volume)
+    return survey.joined(drawn(truth, rig, density, n - len(survey), SEED + 7))
 
 
 def theta_h(wi: FloatArray, wo: FloatArray) -> FloatArray:
-    h = wi + wo
-    return np.asarray(np.degrees(np.arccos(np.clip(h[:, 2] / np.linalg.norm(h, axis=1), -1, 1))))
+    """θh in degrees."""
+    return np.asarray(np.degrees(np.arccos(np.clip(pair(wi, wo).cos_theta_h(), -1.0, 1.0))))
 
 
 def main() -> None:
@@ -256,9 +226,7 @@ def main() -> None:
     )
     args = parser.parse_args()
     print(describe())
-    truth = brdf.create(
-        "cook_torrance", alpha=args.alpha, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.2
-    ).eval
+    truth = ggx(args.alpha)
     rig = Rig.from_yaml(ROOT / "configs/rigs/arch.yaml")
     pairs = testset.draw(rig, isotropic=True)
     volume = placed(rig, PARAMETRIZATION, True, 1 << 16, seed=SEED + 1)
@@ -270,8 +238,8 @@ def main() -> None:
         "own error": lambda n: passes(truth, rig, n, own_error),
         "oracle": lambda n: passes(truth, rig, n, oracle(truth)),
         "simulated": lambda n: simulated(truth, rig, pairs, n, beta, volume),
-        "oracle cells": lambda n: one_pass(
-            truth, rig, cell_shares(truth, rig, pairs, n, 16, beta, volume), n, None
+        "oracle cells": lambda n: drawn(
+            truth, rig, cell_shares(truth, rig, pairs, n, 16, beta, volume), n, SEED + 7
         ),
     }
     print(f"\nGGX α {args.alpha}, {PARAMETRIZATION}, rbf; log-RMSE (uniform / plan)\n")

@@ -73,6 +73,14 @@ class Stream:
         return self.density.points(np.asarray(self._engine.random(n), dtype=np.float64))
 
 
+def cell_index(unit: FloatArray, shape: tuple[int, ...]) -> np.ndarray:
+    """The flat (C order) index of the cell of a ``shape`` grid on the unit box holding
+    each point (N, d); points on or beyond the box's faces go to the nearest cell."""
+    dims = np.asarray(shape)
+    index = np.clip(np.floor(unit * dims).astype(np.int64), 0, dims - 1)
+    return np.asarray(np.ravel_multi_index(tuple(index.T), shape))
+
+
 def centres(shape: tuple[int, ...]) -> FloatArray:
     """The cell centres (cells, d) of a grid on the unit box, C order."""
     axes = [(np.arange(n, dtype=np.float64) + 0.5) / n for n in shape]
@@ -111,10 +119,7 @@ def _measure_density(
     coords = p.forward_iso(wi[ok], wo[ok]) if isotropic else p.forward(wi[ok], wo[ok])
     bounds = _bounds(parametrization, isotropic)
     unit = (coords - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
-    dims = np.asarray(shape)
-    index = np.clip(np.floor(unit * dims).astype(np.int64), 0, dims - 1)
-    flat = np.ravel_multi_index(tuple(index.T), shape)
-    counts = np.bincount(flat, minlength=math.prod(shape)).astype(np.float64)
+    counts = np.bincount(cell_index(unit, shape), minlength=math.prod(shape)).astype(np.float64)
     smooth = ndimage.gaussian_filter(counts.reshape(shape), 1.0, mode="nearest").ravel()
     smooth = np.where(counts > 0, smooth, 0.0)  # cells nobody reaches stay empty
     return np.asarray(smooth / smooth.sum(), dtype=np.float64)

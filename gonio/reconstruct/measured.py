@@ -52,6 +52,22 @@ class Measured:
     def is_rgb(self) -> bool:
         return self.f.ndim == 2
 
+    def subset(self, index: np.ndarray | slice) -> Measured:
+        """The samples at ``index`` (a mask, indices or a slice), in that order."""
+        return replace(
+            self, wi=self.wi[index], wo=self.wo[index], f=self.f[index], sigma=self.sigma[index]
+        )
+
+    def joined(self, other: Measured) -> Measured:
+        """These samples, then ``other``'s (the rest of the measurement is this one's)."""
+        return replace(
+            self,
+            wi=np.concatenate([self.wi, other.wi]),
+            wo=np.concatenate([self.wo, other.wo]),
+            f=np.concatenate([self.f, other.f]),
+            sigma=np.concatenate([self.sigma, other.sigma]),
+        )
+
     @classmethod
     def from_run(cls, run: Run | str, calibrated: Calibrated | None = None) -> Measured:
         """The calibrated samples of a run (a `Run` or a run file's path; ``calibrated``:

@@ -114,11 +114,7 @@ def synthesize_adaptive(
     wi2, wo2 = _kept(spec, rig, second_pass_points(spec, rig, survey, n - len(survey)))
     second = _valued(f, rig, parametrization, isotropic, wi2, wo2, *sigma)
     return replace(
-        survey,
-        wi=np.concatenate([survey.wi, second.wi]),
-        wo=np.concatenate([survey.wo, second.wo]),
-        f=np.concatenate([survey.f, second.f]),
-        sigma=np.concatenate([survey.sigma, second.sigma]),
+        survey.joined(second),
         source=f"synthetic adaptive {parametrization} "
         f"{'isotropic' if isotropic else 'anisotropic'}",
     )

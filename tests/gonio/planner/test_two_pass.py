@@ -4,7 +4,6 @@ accurate than a uniform plan of as many samples on a glossy material."""
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +12,6 @@ from pydantic import ValidationError
 
 from gonio import brdf
 from gonio.planner import adaptive
-from gonio.planner.placement import directions
 from gonio.planner.plan import ARRAYS, Plan, build, render_summary, same_bits
 from gonio.planner.schema import PlanSpec
 from gonio.planner.stored import parse_plan, plan_bytes
@@ -22,7 +20,7 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.synthetic import synthesize
+from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 
@@ -105,16 +103,9 @@ def test_adaptive_options_are_checked() -> None:
 def test_adaptive_beats_uniform_at_equal_count(rig: Rig) -> None:
     n = 500
     pairs = testset.draw(rig, isotropic=True, size=4000)
-    plan = spec(n, 128)
-    survey = synthesize(GLOSSY, rig, "rusinkiewicz", True, 128, seed=4)
-    rest = second_pass_points(plan, rig, survey, n - len(survey))
-    _, wi, wo = directions(plan, rest)
-    ok = rig.solve(wi, wo, isotropic=True).ok
-    second = measured(GLOSSY, rig, wi[ok], wo[ok])
-    both = replace(survey, wi=np.concatenate([survey.wi, second.wi]),
-                   wo=np.concatenate([survey.wo, second.wo]),
-                   f=np.concatenate([survey.f, second.f]),
-                   sigma=np.concatenate([survey.sigma, second.sigma]))  # fmt: skip
+    # The second pass as `extend` plans it (`second_pass_points`), without the engine.
+    both = synthesize_adaptive(GLOSSY, rig, "rusinkiewicz", True, n, seed=4,
+                               adaptive={"survey": 128})  # fmt: skip
     uniform = synthesize(GLOSSY, rig, "rusinkiewicz", True, n, seed=4)
     assert len(both) == len(uniform) == n
 
