@@ -17,7 +17,6 @@ Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 50
 from __future__ import annotations
 
 import argparse
-import itertools
 import math
 import sys
 from collections.abc import Callable
@@ -26,6 +25,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _machine import describe
+from study import fmt_needed, needed
 
 from gonio import brdf, params
 from gonio.reconstruct import testset
@@ -76,22 +76,6 @@ def score(samples: Measured, method: str, truth: BrdfEval, rig: Rig, pairs: test
     value = result.regions["all"].scores.log_rmse
     assert value is not None
     return value
-
-
-def needed(counts: list[int], errors: list[float]) -> float | None:
-    """The sample count reaching `TARGET`, log-log between the bracketing counts (None:
-    not reached; the first count when already met there)."""
-    for (n0, e0), (n1, e1) in itertools.pairwise(zip(counts, errors, strict=True)):
-        if e0 > TARGET >= e1:
-            t = (math.log(e0) - math.log(TARGET)) / (math.log(e0) - math.log(e1))
-            return math.exp(math.log(n0) + t * (math.log(n1) - math.log(n0)))
-    return float(counts[0]) if errors and errors[0] <= TARGET else None
-
-
-def count_text(n: float | None, counts: list[int]) -> str:
-    if n is None:
-        return f"> {counts[-1]:,}"
-    return f"≤ {counts[0]:,}" if n == counts[0] else f"{n:,.0f}"
 
 
 def main() -> None:
@@ -146,7 +130,7 @@ def main() -> None:
                 for method in args.methods:
                     errors = rows[(kind, parametrization, method)]
                     cells = " | ".join(f"{e:.4f}" for e in errors)
-                    reach = count_text(needed(counts, errors), counts)
+                    reach = fmt_needed(needed(counts, errors, TARGET), counts)
                     print(f"| {kind} | {parametrization} | {method} | {cells} | {reach} |",
                           flush=True)  # fmt: skip
         best = {
@@ -154,19 +138,19 @@ def main() -> None:
             for kind in ("uniform", "adaptive")
         }
         ratios = [u / a for u, a in zip(best["uniform"], best["adaptive"], strict=True)]
-        nu, na = needed(counts, best["uniform"]), needed(counts, best["adaptive"])
-        sample_ratio = "n/a" if nu is None or na is None else f"{na / nu:.2f}"
+        nu, na = (needed(counts, best[k], TARGET) for k in ("uniform", "adaptive"))
+        sample_ratio = "n/a" if math.isinf(nu) or math.isinf(na) else f"{na / nu:.2f}"
         print(f"\nbest uniform / best adaptive error at equal counts: "
               f"{', '.join(f'{r:.2f}×' for r in ratios)}; samples for {TARGET}: uniform "
-              f"{count_text(nu, counts)}, adaptive {count_text(na, counts)} "
+              f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)} "
               f"(ratio {sample_ratio})")  # fmt: skip
         summary.append((name, ratios, nu, na, sample_ratio))
     print(f"\n| scene | error ratio at {', '.join(f'{n:,}' for n in counts)} | samples for "
           f"{TARGET}: uniform | adaptive | adaptive / uniform |")  # fmt: skip
     print("|---|---|---:|---:|---:|")
     for name, ratios, nu, na, sample_ratio in summary:
-        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {count_text(nu, counts)} "
-              f"| {count_text(na, counts)} | {sample_ratio} |")  # fmt: skip
+        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {fmt_needed(nu, counts)} "
+              f"| {fmt_needed(na, counts)} | {sample_ratio} |")  # fmt: skip
 
 
 if __name__ == "__main__":
