@@ -105,8 +105,22 @@ def read_bytes(path: Path) -> bytes:
         raw.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise ConfigError(f"{path}: cannot read the file: {reason}") from None
+        raise ConfigError(f"{shown_path(path)}: cannot read the file: {reason}") from None
     return raw
+
+
+#: The longest path a message shows whole; a longer one keeps its start and its end.
+PATH_SHOWN = 160
+
+
+def shown_path(path: Path | str) -> str:
+    """``path`` as a message shows it: whole, or cut in the middle when it is longer
+    than `PATH_SHOWN` characters (a file name nobody could have meant)."""
+    text = str(path)
+    if len(text) <= PATH_SHOWN:
+        return text
+    half = PATH_SHOWN // 2
+    return f"{text[:half]}…{text[-half:]}"
 
 
 #: The largest configuration file read, in bytes (the shipped ones are under 5 KB).

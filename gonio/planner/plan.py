@@ -231,7 +231,11 @@ def load_plan_source(path: str | Path, rig_path: str | Path | None = None) -> Pl
         if spec.rig is None:
             raise ConfigError(f"{path}: rig: no rig file named; give one here or with --rig")
         rig_path = path.parent / spec.rig
-        if Path(rig_path).is_dir():
+        try:
+            folder = Path(rig_path).is_dir()
+        except OSError:  # a name too long, say: reading the rig file below says why
+            folder = False
+        if folder:
             line = line_of(read_yaml(path, text)[1], ("rig",))
             raise ConfigError(f"{path}:{line}: rig: {rig_path} is a folder; expected a rig file")
     return PlanSource(path, text, spec, Rig.from_yaml(rig_path))

@@ -16,7 +16,7 @@ from pydantic import Field, model_validator
 
 from gonio import brdf, params
 from gonio.brdf.material import MaterialError, build
-from gonio.config import Strict, field_error
+from gonio.config import Strict, excerpt, field_error
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
 
@@ -211,7 +211,7 @@ class PlanSpec(Strict):
         if self.parametrization not in params.names():
             raise field_error(
                 "parametrization",
-                f"unknown parametrization {self.parametrization!r}; "
+                f"unknown parametrization {excerpt(self.parametrization)}; "
                 f"expected one of {', '.join(params.names())}",
             )
         p = params.get(self.parametrization)

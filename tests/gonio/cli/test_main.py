@@ -168,7 +168,9 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
     plan.write_text(f"name: p\nrig: {long_name}.yaml\nsampling: {{strategy: sobol, target: 10}}\n")
     r = run_gonio("plan", str(plan))
     assert r.returncode == 2 and r.stderr.count("\n") == 1
-    assert f"{long_name}.yaml: File name too long" in r.stderr
+    # The path is shown cut in the middle (gonio.config.shown_path), its end kept.
+    assert "rrr.yaml: cannot read the file: File name too long" in r.stderr
+    assert len(r.stderr) < 600
     quickstart = Path(__file__).resolve().parents[3] / "configs" / "plans" / "quickstart.yaml"
     r = run_gonio("acquire", str(quickstart), "-o", str(tmp_path / f"{long_name}.sqlite"))
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "File name too long" in r.stderr

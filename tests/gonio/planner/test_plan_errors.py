@@ -381,3 +381,22 @@ def test_exposures_the_detector_cannot_take_are_refused_before_planning(
     assert code == 2 and out == ""
     assert err.startswith(f"gonio: error: {path}:") and f": {field}: {message}" in err
     assert err.count("\n") == 1
+
+
+def test_a_long_unknown_name_and_an_unreadable_rig_path_are_one_short_line(
+    tmp_path: Path,
+) -> None:
+    from gonio.config import ConfigError
+    from gonio.planner.plan import load_plan_source
+
+    plan = tmp_path / "plan.yaml"
+    for field in ("parametrization", "rig"):
+        fields = {"parametrization": "rusinkiewicz", "rig": "../rigs/arch.yaml"}
+        fields[field] = "x" * 5000  # longer than a file name may be
+        plan.write_text(
+            f"name: long\nrig: {fields['rig']}\nparametrization: {fields['parametrization']}\n"
+            "sampling: {strategy: sobol, target: 10}\n"
+        )
+        with pytest.raises(ConfigError) as info:
+            load_plan_source(plan)
+        assert len(str(info.value)) < 600 and "\n" not in str(info.value)
