@@ -28,6 +28,7 @@ from types import FrameType, TracebackType
 from typing import Self
 
 from drivers.dynamixel.control_table import BAUD_RATES
+from sim import responsive
 from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.dynamixel.faults import Fault, FaultBook
 from sim.dynamixel.instructions import FastChain, Reply, Response, handle
@@ -131,6 +132,7 @@ class DxlEmulator:
         self._path = os.ttyname(self._slave)
         self._thread = threading.Thread(target=self._serve, name="dxl-emulator", daemon=True)
         self._thread.start()
+        responsive.serving_started()
         return self._path
 
     def stop(self) -> None:
@@ -140,6 +142,7 @@ class DxlEmulator:
         if thread is not None:
             os.write(self._wake_w, b"x")
             thread.join(timeout=2.0)
+            responsive.serving_stopped()
         for name in ("_master", "_slave", "_wake_r", "_wake_w"):
             fd = getattr(self, name)
             if fd >= 0:

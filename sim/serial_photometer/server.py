@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from types import TracebackType
 from typing import TYPE_CHECKING, Self
 
+from sim import responsive
 from sim.serial_photometer.protocol import _line
 
 _MAX_LINE = 256  # longest command the device accepts
@@ -107,6 +108,7 @@ class _PtyServer:
         self._stopping.clear()
         self._thread = threading.Thread(target=self._serve, name=f"photometer {path}", daemon=True)
         self._thread.start()
+        responsive.serving_started()
         return path
 
     def stop(self) -> None:
@@ -117,6 +119,7 @@ class _PtyServer:
         self._stopping.set()
         self._wakeup()
         thread.join(timeout=5.0)
+        responsive.serving_stopped()
         for fd in (self._master, self._slave, *(self._wake or ())):
             if fd is not None:
                 with contextlib.suppress(OSError):

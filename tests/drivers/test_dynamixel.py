@@ -223,6 +223,7 @@ def test_targets_outside_limits_are_refused_before_any_byte(
 ) -> None:
     emu, bus = bus_on()
     with bus:
+        bus.positions()  # a read: everything open sent has been served
         before = emu.stats.packets_in
         for bad in (1.0001, -2.0, math.nan, math.inf):
             with pytest.raises(LimitError, match="nothing was sent"):
@@ -410,21 +411,28 @@ def test_reply_timeout_covers_a_goal_write_still_on_the_wire(
     (2 × LATENCY_TIMER + 2 ms + the replies' bytes) leaves out the instruction's own wire
     time, the motors' return delays and a SYNC_WRITE of goals still on the line before
     the next SYNC_READ: a 4-motor poll needs 22 ms against a 21.4 ms budget (28 ms after
-    a goal write). The link's margin covers it; with the margin removed no poll gets
-    through, however many retries it gets (opening may: its hold reads only Present
-    Position)."""
+    a goal write). The link's margin covers it; with the margin removed the polls time
+    out. On an idle machine every one does; a host descheduled past the deadline finds the
+    late reply already waiting (on a 2-core machine loaded 150 %, about 1 attempt in 6),
+    so the check counts single attempts."""
     config = axes(4)
-    # Real time on a shared 2-core machine: allow one retry for scheduling hiccups (the
-    # deterministic part is below: without the margin the budget is short every time).
+    # Real time on a shared 2-core machine: allow one retry for scheduling hiccups.
     with DynamixelBus(emulator_process, config, latency_ms=0.0, retries=1) as bus:
         here = bus.positions()
         for _ in range(5):
             bus.move_to(here)
             bus.positions()
     monkeypatch.setattr("drivers.dynamixel.link.OUTBOUND_MARGIN_BYTES", 0)
-    bus = DynamixelBus(emulator_process, config, latency_ms=0.0, retries=3, configure=False)
-    with pytest.raises(CommError, match="There is no status packet"), bus:
-        bus.positions()
+    ids = [axis.motor_id for axis in config]
+    attempts, failed = 20, 0
+    with DynamixelLink(emulator_process, 57_600, latency_ms=0.0, retries=0) as link:
+        for _ in range(attempts):
+            link.sync_write("goal_position", dict.fromkeys(ids, 2048))
+            try:
+                link.sync_read(ids, "moving", "present_position")
+            except CommError:
+                failed += 1
+    assert failed >= attempts // 2, f"only {failed} of {attempts} polls timed out"
 
 
 @pytest.mark.parametrize("baud", [57_600, 115_200, 1_000_000, 4_000_000])

@@ -220,6 +220,7 @@ def test_the_link_refuses_eeprom_writes_while_torque_is_known_on(emulator: Emula
     with DynamixelLink(emu.path) as link:
         link.write(1, "torque_enable", 1)
         link.sync_write("torque_enable", {2: 1})
+        link.ping(2)  # a round trip: the broadcast before it has been served
         before = emu.stats.packets_in
         with pytest.raises(DriverError, match=r"motor 1: .*operating_mode = 4 .*torque is on"):
             link.write(1, "operating_mode", 4)
