@@ -34,11 +34,11 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-# Two passes: the CPU-bound tests on two workers, then the ones that talk to a pty alone
-# (their SDK busy-waits for replies; see tests/conftest.py).
+# Three workers on two cores: the tests that talk to a pty run one after another on one
+# worker (their devices keep real time; see tests/conftest.py) and its waits are filled
+# by CPU-bound tests from the other two.
 pytest: $(VENV)/.installed-test
-	$(BIN)/python -m pytest -q -n 2 -m "not pty"
-	$(BIN)/python -m pytest -q -m pty
+	$(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
 test: lint pytest
 
