@@ -49,13 +49,15 @@ settings.load_profile(
 )
 
 
-#: The SDK's packet timeouts scale with LATENCY_TIMER (ms). Tests pin it to the SDK's
-#: default: the SDK busy-waits for replies in the test's thread while the emulator
-#: serves from another thread of the same process, so under CPU load much shorter
-#: timeouts (4-8 ms) turned into flaky failures, and the few expected timeouts cost
-#: only ~35 ms each. The SDK's global is what plain SDK ports use; a `DynamixelLink`
-#: never reads or writes it (its port has its own timer: pass ``latency_ms``).
-TEST_LATENCY_TIMER = 16
+#: The SDK's packet timeouts scale with LATENCY_TIMER (ms): 2 × it + 2 ms + the reply's
+#: wire time. The SDK busy-waits for replies in the test's thread while the emulator
+#: serves from another thread of the same process; when the machine is busy (the other
+#: test workers, or a shared host) the OS can preempt the SDK's thread while it holds the
+#: GIL, and the SDK's default (16, a 34 ms budget) turned into rare timeouts of raw SDK
+#: calls, which have no retries. 50 gives 102 ms; the expected timeouts cost ~4 s in all.
+#: The SDK's global is what plain SDK ports use; a `DynamixelLink` never reads or writes
+#: it (its port has its own timer: pass ``latency_ms``).
+TEST_LATENCY_TIMER = 50
 
 
 @dataclass(frozen=True)
