@@ -53,7 +53,7 @@ from scipy import ndimage
 from gonio import params
 from gonio.brdf.geometry import pair
 from gonio.planner import adaptive
-from gonio.planner.placement import directions, draw_kept
+from gonio.planner.placement import draw_kept
 from gonio.planner.schema import PlanSpec
 from gonio.planner.two_pass import draw_points
 from gonio.reconstruct import testset
@@ -61,7 +61,7 @@ from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.fit import fit
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.synthetic import placed, synthesize, synthesize_adaptive
+from gonio.reconstruct.synthetic import measured_at, placed, synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 
@@ -192,11 +192,7 @@ def drawn(truth: BrdfEval, rig: Rig, density: adaptive.Density, count: int, seed
         lambda k: draw_points(stream, k, bounds, rig, PARAMETRIZATION, True, False),
         count,
     )  # fmt: skip
-    _, wi, wo = directions(spec, points)
-    ok = rig.solve(wi, wo, isotropic=True).ok
-    f = np.asarray(truth(wi[ok], wo[ok]), dtype=np.float64)
-    return Measured(wi[ok], wo[ok], f, 0.01 * np.abs(f), PARAMETRIZATION, True, rig, None,
-                    "luminance", "limit")  # fmt: skip
+    return measured_at(truth, spec, rig, points)
 
 
 def simulated(

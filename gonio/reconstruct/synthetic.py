@@ -108,15 +108,30 @@ def synthesize_adaptive(
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
-    wi, wo = _kept(spec, rig, coords)
-    sigma = (relative_sigma, sigma_floor)
-    survey = _valued(f, rig, parametrization, isotropic, wi, wo, *sigma)
-    wi2, wo2 = _kept(spec, rig, second_pass_points(spec, rig, survey, n - len(survey)))
-    second = _valued(f, rig, parametrization, isotropic, wi2, wo2, *sigma)
+    sigma = {"relative_sigma": relative_sigma, "sigma_floor": sigma_floor}
+    survey = measured_at(f, spec, rig, coords, **sigma)
+    rest = second_pass_points(spec, rig, survey, n - len(survey))
     return replace(
-        survey.joined(second),
+        survey.joined(measured_at(f, spec, rig, rest, **sigma)),
         source=f"synthetic adaptive {parametrization} "
         f"{'isotropic' if isotropic else 'anisotropic'}",
+    )
+
+
+def measured_at(
+    f: BrdfEval,
+    spec: PlanSpec,
+    rig: Rig,
+    coords: FloatArray,
+    *,
+    relative_sigma: float = 0.01,
+    sigma_floor: float = 0.0,
+) -> Measured:
+    """A `Measured` of ``f`` at a plan's points ``coords`` (``spec``'s coordinates), kept
+    where valid and reachable, valued like `synthesize`."""
+    wi, wo = _kept(spec, rig, coords)
+    return _valued(
+        f, rig, spec.parametrization, spec.isotropic, wi, wo, relative_sigma, sigma_floor
     )
 
 
