@@ -15,6 +15,8 @@ from typing import Any
 import pytest
 import yaml
 
+from gonio.config import ConfigError
+from gonio.planner.plan import load_plan_source
 from tests.conftest import CONFIGS, CliResult
 
 QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())
@@ -386,9 +388,6 @@ def test_exposures_the_detector_cannot_take_are_refused_before_planning(
 def test_a_long_unknown_name_and_an_unreadable_rig_path_are_one_short_line(
     tmp_path: Path,
 ) -> None:
-    from gonio.config import ConfigError
-    from gonio.planner.plan import load_plan_source
-
     plan = tmp_path / "plan.yaml"
     for field in ("parametrization", "rig"):
         fields = {"parametrization": "rusinkiewicz", "rig": "../rigs/arch.yaml"}
