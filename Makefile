@@ -48,6 +48,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes.py
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py
 	$(BIN)/python benchmarks/planner.py
 	$(BIN)/python benchmarks/simulator.py

@@ -3,10 +3,9 @@
 The ROBOTIS SDK polls its port in a tight loop while it waits for a reply. When the
 emulated device serves from another thread of the same process, every hand-off of the
 GIL to the server (waking on the request, each write of a reply) waits for the
-interpreter's switch interval, 5 ms by default: a 4-motor SYNC_READ then needed up to
-39 ms of its 44 ms budget on a loaded 2-core machine. While any server runs, the
-interval is lowered to `SERVING_SWITCH_INTERVAL_S` (the same read then took at most
-20 ms); the previous interval comes back when the last server stops.
+interpreter's switch interval, 5 ms by default. While any server runs, the interval
+is lowered to `SERVING_SWITCH_INTERVAL_S`; the previous interval comes back when the
+last server stops. `benchmarks/handoff.py` measures a 4-motor SYNC_READ both ways.
 """
 
 from __future__ import annotations
