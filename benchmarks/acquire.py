@@ -25,10 +25,11 @@ from pathlib import Path
 import numpy as np
 from _machine import describe
 
-from gonio.acquire import session
 from gonio.planner import load_plan_source
 from gonio.planner.plan import Plan
 from gonio.store.journal import Journal, sample_columns
+from gonio.workflows import session
+from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
 from sim.scene import Scene
 
@@ -47,7 +48,7 @@ def bare(plan: Plan, scene: Scene) -> float:
     """Wall seconds of the bare devices measuring every target (optics precomputed)."""
     with SimulatedInstrument(scene, plan.rig) as inst:
         t = time.perf_counter()
-        inst.run(plan)
+        measure_targets(inst, plan)
         return time.perf_counter() - t
 
 

@@ -28,10 +28,10 @@ from _machine import describe
 from study import fmt_needed, needed
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
@@ -48,7 +48,7 @@ def ggx(alpha: float) -> BrdfEval:
 
 
 def scene_material(name: str) -> BrdfEval:
-    from sim.physics.optics import band_eval
+    from gonio.radiometry.bands import band_eval
     from sim.scene import load_scene
 
     return band_eval(

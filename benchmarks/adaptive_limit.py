@@ -51,6 +51,7 @@ from adaptive import ggx
 from scipy import ndimage
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.brdf.geometry import pair
 from gonio.planner import adaptive
 from gonio.planner.placement import draw_kept
@@ -60,7 +61,6 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.fit import fit
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import measured_at, placed, synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray

@@ -19,9 +19,9 @@ from typing import Any
 import yaml
 from _machine import describe
 
+from gonio.analysis.measured import Measured
 from gonio.cli import main
 from gonio.reconstruct import evaluate, testset
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.naive import NaiveReconstruction
 from gonio.reconstruct.truth import truth_from_spec
 

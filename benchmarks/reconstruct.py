@@ -36,7 +36,7 @@ SCENES = ROOT / "configs" / "scenes"
 
 
 def scene_f(name: str) -> BrdfEval:
-    from sim.physics.optics import band_eval
+    from gonio.radiometry.bands import band_eval
     from sim.scene import load_scene
 
     scene = load_scene(SCENES / f"{name}.yaml")

@@ -40,7 +40,7 @@ from gonio.acquire.runtime import RunTime
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.stored import plan_bytes
 from gonio.store.journal import Journal
-from sim.rehearsal import rehearsal_devices
+from gonio.workflows.rehearsal import rehearsal_devices
 from sim.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]

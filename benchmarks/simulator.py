@@ -22,6 +22,7 @@ from _machine import describe
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
 from gonio.planner.plan import Plan
+from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
 from sim.record import SimRun
 from sim.scene import EffectsSpec, Scene, load_scene
@@ -47,13 +48,13 @@ ALL_EFFECTS = {
 def per_sample(plan: Plan, scene: Scene) -> SimRun:
     """Target by target through the protocols, the detector prepared with the poses."""
     with SimulatedInstrument(scene, plan.rig) as inst:
-        return inst.run(plan)
+        return measure_targets(inst, plan)
 
 
 def per_sample_cold(plan: Plan, scene: Scene) -> SimRun:
     """The same without preparing: the chain evaluated for each pose alone."""
     with SimulatedInstrument(scene, plan.rig) as inst:
-        return inst.run(plan, prepare=False)
+        return measure_targets(inst, plan, prepare=False)
 
 
 def timed(run: Callable[[], SimRun], repeat: int) -> tuple[float, SimRun]:

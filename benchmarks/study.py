@@ -39,11 +39,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import describe
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
+from gonio.radiometry.bands import band_eval
 from gonio.reconstruct import testset
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.regions import NAMES as REGIONS
 from gonio.reconstruct.regions import regions
@@ -51,7 +52,6 @@ from gonio.reconstruct.result import Reconstruction
 from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
-from sim.physics.optics import band_eval
 from sim.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -271,8 +271,8 @@ def timing(args: argparse.Namespace) -> None:
     from gonio.planner.schema import PlanSpec
     from gonio.rig.model import Rig
     from gonio.tradeoff.spec import EFFECT_NAMES
+    from gonio.workflows.simulate import simulate_plan
     from sim.scene import load_scene
-    from sim.session import simulate_plan
 
     root = Path(__file__).resolve().parent.parent
     rig = Rig.from_yaml(root / "configs/rigs/arch.yaml")

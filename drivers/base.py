@@ -68,6 +68,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Literal, Protocol, Self
@@ -355,3 +356,37 @@ class Simulated(Protocol):
     def restore(self, state: Any) -> None:
         """Continue from a `snapshot`."""
         ...
+
+
+@dataclass
+class Devices:
+    """The instrument one run drives: a motor bus, a detector, an optional switchable
+    light source, the clock they share and, for a simulated backend, its `Simulated`
+    side. A context manager that opens them all and closes them all (in reverse order,
+    also on an error), so the motors hold and every port is released whatever happens.
+    Backends are built by composition code (`gonio.workflows`) and handed to the
+    acquisition engine as `Devices`."""
+
+    bus: MotorBus
+    detector: Detector
+    clock: Clock
+    light: LightSource | None = None
+    simulation: Simulated | None = None
+    _stack: ExitStack = field(default_factory=ExitStack, repr=False)
+
+    def __enter__(self) -> Self:
+        with ExitStack() as stack:
+            stack.enter_context(self.bus)
+            stack.enter_context(self.detector)
+            if self.light is not None:
+                stack.enter_context(self.light)
+            self._stack = stack.pop_all()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self._stack.__exit__(exc_type, exc, tb)

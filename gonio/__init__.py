@@ -6,3 +6,5 @@ Subpackages: :mod:`gonio.params` (BRDF parametrizations), :mod:`gonio.brdf`
 """
 
 __version__ = "0.1.0"
+
+__all__ = ["__version__"]

@@ -145,6 +145,13 @@ def excerpt(value: Any) -> str:
     return text if len(text) <= EXCERPT else f"{text[: EXCERPT - 1]}…"
 
 
+def _key_label(key: str) -> str:
+    """A mapping key as a message shows it: as written when it is one printable word,
+    else as an excerpt of its repr (a key of blanks or line breaks stays on one line)."""
+    plain = key.isprintable() and key == key.strip() and key != ""
+    return key[:EXCERPT] if plain else excerpt(key)
+
+
 def read_yaml(path: Path, raw: bytes | None = None) -> tuple[Any, yaml.Node | None]:
     """(data, node tree) of a YAML file (or of its bytes ``raw``, already read);
     ConfigError if it cannot be read or parsed, or exceeds the bounds above (size,
@@ -259,7 +266,7 @@ def _refuse_duplicate_keys(path: Path, node: yaml.Node) -> None:
                 if isinstance(key, yaml.ScalarNode):
                     if key.value in seen:
                         raise ConfigError(
-                            f"{path}:{key.start_mark.line + 1}: {key.value[:EXCERPT]}: this key "
+                            f"{path}:{key.start_mark.line + 1}: {_key_label(key.value)}: this key "
                             "is given twice in the same mapping; expected each key once"
                         )
                     seen.add(key.value)

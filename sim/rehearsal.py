@@ -1,7 +1,7 @@
-"""The rehearsal backend of `gonio acquire --rehearse`: the hardware path without
+"""The simulated peers of `gonio acquire --rehearse`: the hardware path without
 hardware. Each device the rig file wires to a port runs as a simulated peer on its own
-pseudo-terminal, driven by the real driver built from the rig file exactly as
-`gonio.acquire.hardware` builds it (only the port is the pty's):
+pseudo-terminal, for the real driver built from the rig file exactly as for hardware
+(only the port is the pty's; the wiring is `gonio.workflows.rehearsal`):
 
 - the motors: the byte-level Dynamixel emulator, driven by `DynamixelBus` through the
   unmodified SDK;
@@ -20,24 +20,18 @@ scene's injected faults are not applied (inject faults into the peers instead).
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterator
-from contextlib import ExitStack, contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Detector, LightSource, StageTarget
+from drivers.base import StageTarget
 from drivers.dynamixel.axis import AxisConfig
-from gonio.acquire.devices import Devices
-from gonio.acquire.hardware import dynamixel_bus, light_switch, serial_detector
 from gonio.config import ConfigError
 from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.model import Rig
-from sim.clock import ScaledClock
-from sim.devices.detector import LightState, SimDetector, SimLightSource
-from sim.devices.instrument import emulated_bus
+from sim.clock import ScaledClock, TimeSource
+from sim.devices.detector import SimDetector
 from sim.dynamixel.emulator import DxlEmulator
-from sim.physics.streams import Streams
-from sim.scene import Scene
 from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
 from sim.serial_photometer.protocol import mismatch
@@ -99,7 +93,7 @@ def _where(rig: Rig) -> str:
     return str(rig.source) if rig.source else "rig"
 
 
-def _lamp(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
+def lamp_for(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
     """The simulated relay answering the rig's switch commands (`ConfigError` if the
     rig expects answers it does not give)."""
     answers = (("ack", "OK"), ("on_reply", "ON"), ("off_reply", "OFF"))
@@ -114,7 +108,7 @@ def _lamp(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
     return SerialLamp(commands=(switch.on_command, switch.off_command, query))
 
 
-def _photometer(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPhotometer:
+def photometer_for(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPhotometer:
     """The simulated photometer the rig's serial interface can talk to, reading each
     exposure's counts from ``physics`` (`ConfigError` if the rig's protocol is not the
     photometer's: docs/serial_detector.md)."""
@@ -136,40 +130,20 @@ def _photometer(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPho
     )
 
 
-@contextmanager
-def rehearsal_devices(
-    rig: Rig, scene: Scene, seed: int | None, speedup: float, *, wire_time: bool = False
-) -> Iterator[tuple[Devices, ScaledClock]]:
-    """The peers running (stopped on exit) and the unopened `Devices` driving them (their
-    ``simulation`` is a `RehearsalSide`). ``wire_time``: the emulated bus answers when a
-    real one would (`sim.devices.instrument.emulated_bus`)."""
-    clock = ScaledClock(speedup)
-    streams = Streams(scene.seed if seed is None else seed)
+def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:
+    """A (not yet started) byte-level emulator of the rig's motors, at home, in their
+    operating modes, at the rig's bus rate; as fast as the host reads, or with
+    ``wire_time`` as a real bus (bytes on the wire and the motors' return delays)."""
     axes = rig.bus_axes()
-    with ExitStack() as stack:
-        emulator = stack.enter_context(emulated_bus(rig, clock, wire_time=wire_time))
-        bus = dynamixel_bus(rig, port=emulator.path)
-        switch = rig.spec.light.switch
-        light: LightSource
-        state: LightState
-        lamp = photometer = None
-        if isinstance(switch, SerialSwitchSpec):
-            lamp = stack.enter_context(_lamp(rig, switch))
-            driver = light_switch(rig, clock, port=lamp.path)
-            assert driver is not None  # the switch is serial
-            light, state = driver, lamp
-        else:
-            light = state = SimLightSource()
-        truth = emulated_pose(emulator, axes)
-        serial = rig.spec.detector.interface.kind == "serial"
-        physics = SimDetector(
-            scene, rig, truth if serial else bus.positions, clock=clock, streams=streams,
-            light=state,
-        )  # fmt: skip
-        if serial:
-            photometer = stack.enter_context(_photometer(rig, physics, clock))
-            detector: Detector = serial_detector(rig, clock, port=photometer.path)
-        else:
-            detector = physics
-        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp))
-        yield Devices(bus, detector, clock, light, side), clock
+    emulator = DxlEmulator(
+        ids=[a.motor_id for a in axes],
+        baud=rig.spec.bus.baud,
+        clock=clock,
+        wire_time=wire_time,
+        return_delay=wire_time,
+    )
+    for axis, home in zip(axes, rig.home, strict=True):
+        motor = emulator.motors[axis.motor_id]
+        motor.set("operating_mode", axis.operating_mode)
+        motor.set("present_position", axis.to_ticks(float(home)))
+    return emulator

@@ -27,46 +27,10 @@ from pydantic import (
     model_validator,
 )
 
-from gonio import brdf
-from gonio.brdf.material import MaterialError, build
+from gonio.brdf.material import MaterialSpec
 from gonio.config import ConfigError, Strict, field_error, load
 from gonio.rig.model import Rig
 from sim.faults import FaultRule
-
-#: Rec. 709 luminance weights: how a grey detector sees an RGB material.
-LUMINANCE = (0.2126, 0.7152, 0.0722)
-
-
-class MaterialSpec(Strict):
-    """A `gonio.brdf` model: ``name`` and its parameters (numbers, strings, RGB lists)."""
-
-    name: str
-    params: dict[str, Any] = Field(default_factory=dict)  # checked by gonio.brdf.material
-
-    @model_validator(mode="before")
-    @classmethod
-    def _flat(cls, data: Any, info: ValidationInfo) -> Any:
-        """Accept ``{name: ggx, alpha: 0.1}`` as well as ``{name: ggx, params: {...}}``; a
-        relative ``path`` (a tabulated material's file) is relative to the scene file."""
-        if isinstance(data, dict) and "params" not in data:
-            rest = {k: v for k, v in data.items() if k != "name"}
-            data = {"name": data.get("name"), "params": rest}
-        folder = Path((info.context or {}).get("path", "")).parent
-        given = data.get("params") if isinstance(data, dict) else None
-        if isinstance(given, dict) and isinstance(given.get("path"), str):
-            data = {**data, "params": {**given, "path": str(folder / given["path"])}}
-        return data
-
-    @model_validator(mode="after")
-    def _buildable(self) -> MaterialSpec:
-        self.model()
-        return self
-
-    def model(self) -> brdf.BRDF:
-        try:
-            return build(self.name, self.params)
-        except MaterialError as exc:
-            raise field_error(exc.param or "name", str(exc)) from None
 
 
 class SourceSpec(Strict):

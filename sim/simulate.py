@@ -9,9 +9,10 @@ simulate tens of thousands of targets in a fraction of a second.
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
-from gonio.planner.plan import Plan
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.devices.detector import sensor_of
@@ -21,6 +22,21 @@ from sim.physics.optics import SceneOptics
 from sim.physics.streams import Streams
 from sim.record import SimRun
 from sim.scene import Scene
+
+
+class Targets(Protocol):
+    """What a simulation needs of a plan (`gonio.planner` builds one): the rig, and per
+    target the joint angles (rad, (N, A)), exposure (s) and number of exposures."""
+
+    @property
+    def rig(self) -> Rig: ...
+    @property
+    def angles(self) -> FloatArray: ...
+    @property
+    def exposure_s(self) -> FloatArray: ...
+    @property
+    def averages(self) -> np.ndarray: ...
+    def __len__(self) -> int: ...
 
 
 def _carry(values: FloatArray, where: np.ndarray) -> FloatArray:
@@ -60,7 +76,7 @@ def planned_poses(
     return goal, goal + error, previous
 
 
-def simulate(plan: Plan, scene: Scene, *, seed: int | None = None) -> SimRun:
+def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
     """Measure every target of ``plan`` in the simulated ``scene`` (see the module)."""
     rig = plan.rig
     streams = Streams(scene.seed if seed is None else int(seed))

@@ -5,4 +5,10 @@
 emulator and to check the SDK byte for byte), :mod:`drivers.dynamixel.link` one port
 through the unmodified ``dynamixel-sdk`` (with the corrections of
 :mod:`drivers.dynamixel.sdk_boundary`), :mod:`drivers.dynamixel.bus` the `MotorBus`.
+The package exports the axis configuration without the serial stack (a rig file is
+checked without opening a port); the bus is `drivers.dynamixel.bus.DynamixelBus`.
 """
+
+from drivers.dynamixel.axis import AxisConfig
+
+__all__ = ["AxisConfig"]

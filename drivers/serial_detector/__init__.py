@@ -25,7 +25,10 @@ The port may be a device path (``/dev/ttyACM0``, ``COM3``) or any pyserial URL:
 ``spy:///dev/ttyACM0?file=traffic.txt`` logs every byte, ``socket://host:port`` reaches a
 network serial server. The driver is not thread-safe: use one instance from one thread.
 
-The package: :mod:`~drivers.serial_detector.errors` (the failures),
+The package exports the configuration and the errors without the serial stack (a rig
+file is checked without opening anything); the driver is
+`drivers.serial_detector.detector.SerialDetector`. The package:
+:mod:`~drivers.serial_detector.errors` (the failures),
 :mod:`~drivers.serial_detector.config` (the configuration and its validation),
 :mod:`~drivers.serial_detector.lines` (reading lines from the port) and
 :mod:`~drivers.serial_detector.detector` (the driver). Its logger is
@@ -35,7 +38,6 @@ The package: :mod:`~drivers.serial_detector.errors` (the failures),
 from drivers.serial_detector.config import EXPOSURE_FIELDS as EXPOSURE_FIELDS
 from drivers.serial_detector.config import QUERY_FIELDS as QUERY_FIELDS
 from drivers.serial_detector.config import SerialDetectorConfig
-from drivers.serial_detector.detector import SerialDetector
 from drivers.serial_detector.errors import (
     ErrorKind,
     SerialDetectorError,
@@ -44,7 +46,6 @@ from drivers.serial_detector.errors import (
 
 __all__ = [
     "ErrorKind",
-    "SerialDetector",
     "SerialDetectorConfig",
     "SerialDetectorError",
     "SerialDetectorValueError",

@@ -7,7 +7,7 @@ where the standard would not fill what the ideal chain assumes (a collimated bea
 spot on the standard and in the detector's view; for a point source, the view on the
 standard), `reference_geometry` refuses the rig rather than move the standard to a
 geometry its albedo is not given for. The engine (`gonio.acquire.engine`) reads the
-standard and a dark reading there on the plan's schedule; `gonio.acquire.calibrated`
+standard and a dark reading there on the plan's schedule; `gonio.analysis.calibrated`
 turns the journaled readings into BRDF values.
 """
 
@@ -19,9 +19,8 @@ from typing import Protocol
 
 import numpy as np
 
-from drivers.base import Reading, StageTarget
+from drivers.base import Devices, Reading, StageTarget
 from gonio import radiometry
-from gonio.acquire.devices import Devices
 from gonio.acquire.measure import Measured, measure_target
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError

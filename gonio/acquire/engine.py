@@ -35,6 +35,7 @@ import numpy as np
 from drivers.base import (
     CommError,
     DetectorError,
+    Devices,
     DriverError,
     LimitError,
     MotionTimeout,
@@ -42,7 +43,6 @@ from drivers.base import (
     Reading,
 )
 from gonio.acquire.calibration import Stage, read_standard
-from gonio.acquire.devices import Devices
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target, reading_fields
 from gonio.acquire.progress import Progress, Quiet

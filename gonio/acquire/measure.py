@@ -15,8 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Reading
-from gonio.acquire.devices import Devices
+from drivers.base import Devices, Reading
 
 #: How long one move may take before `wait_settled` gives up (s).
 MOVE_TIMEOUT_S = 600.0

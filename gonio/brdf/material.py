@@ -12,13 +12,16 @@ component so, and the sum of their bounds (Lambert: its albedo) against 1."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import Field, ValidationInfo, model_validator
 
 from gonio.brdf.base import BRDF
 from gonio.brdf.composite import Sum
 from gonio.brdf.registry import create
+from gonio.config import Strict, field_error
 from gonio.errors import DomainError, GonioError
 
 #: Parameters that are reflectances, in [0, 1].
@@ -123,3 +126,35 @@ def _specular_albedo(model: BRDF) -> tuple[np.ndarray | None, str]:
 
 def _show(value: np.ndarray) -> str:
     return ", ".join(f"{v:.4g}" for v in np.ravel(value))
+
+
+class MaterialSpec(Strict):
+    """A `gonio.brdf` model: ``name`` and its parameters (numbers, strings, RGB lists)."""
+
+    name: str
+    params: dict[str, Any] = Field(default_factory=dict)  # checked by gonio.brdf.material
+
+    @model_validator(mode="before")
+    @classmethod
+    def _flat(cls, data: Any, info: ValidationInfo) -> Any:
+        """Accept ``{name: ggx, alpha: 0.1}`` as well as ``{name: ggx, params: {...}}``; a
+        relative ``path`` (a tabulated material's file) is relative to the scene file."""
+        if isinstance(data, dict) and "params" not in data:
+            rest = {k: v for k, v in data.items() if k != "name"}
+            data = {"name": data.get("name"), "params": rest}
+        folder = Path((info.context or {}).get("path", "")).parent
+        given = data.get("params") if isinstance(data, dict) else None
+        if isinstance(given, dict) and isinstance(given.get("path"), str):
+            data = {**data, "params": {**given, "path": str(folder / given["path"])}}
+        return data
+
+    @model_validator(mode="after")
+    def _buildable(self) -> MaterialSpec:
+        self.model()
+        return self
+
+    def model(self) -> BRDF:
+        try:
+            return build(self.name, self.params)
+        except MaterialError as exc:
+            raise field_error(exc.param or "name", str(exc)) from None

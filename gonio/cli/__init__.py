@@ -170,3 +170,5 @@ def _broken_pipe() -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
+
+__all__ = ["main"]

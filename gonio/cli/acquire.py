@@ -67,8 +67,9 @@ def _resume_command(path: Path | None) -> str:
 
 
 def cmd_acquire(args: argparse.Namespace) -> int:
-    from gonio.acquire import session, summary
+    from gonio.cli import run_table
     from gonio.planner.plan import load_plan_source, render_summary
+    from gonio.workflows import session
 
     progress = progress_module.for_stream(args.quiet)
     argv = ["gonio", *sys.argv[1:]]
@@ -118,7 +119,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             )  # fmt: skip
         except RunInterrupted:
             return _interrupted(path)
-    print(summary.render(outcome.run))
+    print(run_table.render(outcome.run))
     report = outcome.report
     if report.outcome == "completed":
         print(f"wrote {len(outcome.run)} samples to {path}")

@@ -44,8 +44,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    from gonio.analysis.measured import Measured
     from gonio.reconstruct.evaluate import evaluate
-    from gonio.reconstruct.measured import Measured
     from gonio.reconstruct.truth import truth_from_spec
 
     if args.parametrization is not None:

@@ -37,13 +37,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from gonio.acquire.calibrated import calibrate
+    from gonio.analysis.calibrated import calibrate
+    from gonio.analysis.measured import Measured
+    from gonio.analysis.shared import shared_error
     from gonio.config import ConfigError
     from gonio.errors import GonioError
     from gonio.reconstruct.family import parse
     from gonio.reconstruct.fit import fit
-    from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.shared import shared_error
     from gonio.store.read import open_run
 
     if len(args.runs) not in (1, 3):

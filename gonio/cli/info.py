@@ -21,13 +21,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    from gonio.acquire import summary
+    from gonio.analysis import summary
+    from gonio.cli import run_table
     from gonio.store import open_run
 
     run = open_run(args.run)
     if args.json:
         print(json.dumps(summary.figures(run), indent=2, ensure_ascii=False))
     else:
-        print(summary.render(run))
-        print(summary.render_details(run))
+        print(run_table.render(run))
+        print(run_table.render_details(run))
     return 0

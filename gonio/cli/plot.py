@@ -13,7 +13,7 @@ from gonio.output import reserve_output
 from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE
 
 if TYPE_CHECKING:
-    from gonio.reconstruct.measured import Measured
+    from gonio.analysis.measured import Measured
     from gonio.reconstruct.truth import Candidate, Truth
 
 #: The figures, in the order of --help.
@@ -84,7 +84,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
         params.get(args.parametrization)  # an unknown name fails before any work
     with reserve_output(args.output, "-o") as figure:
-        from gonio.reconstruct.measured import Measured
+        from gonio.analysis.measured import Measured
 
         measured = Measured.from_run(str(args.run))
         draw = _FIGURES[args.kind](args, measured)

@@ -1,5 +1,5 @@
 """`gonio simulate PLAN.yaml --scene SCENE.yaml`: the plan measured by the acquisition
-engine on the simulated backend (`sim.session.simulate_plan`: the loop, journal and
+engine on the simulated backend (`gonio.workflows.simulate.simulate_plan`: the loop, journal and
 calibration of `gonio acquire`), and what it cost and how accurate it was.
 
 The summary says how long the real rig would take, how long the simulation took, and
@@ -18,11 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from gonio.acquire import progress as progress_module
-from gonio.acquire import session
-from gonio.acquire.summary import error_figures, render
+from gonio.analysis.summary import error_figures
+from gonio.cli.run_table import render
 from gonio.planner import progress as planning
 from gonio.planner.plan import load_plan_source
-from sim.session import Result, simulate_plan
+from gonio.workflows import session
+from gonio.workflows.simulate import Result, simulate_plan
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:

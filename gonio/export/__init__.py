@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gonio.errors import UnknownNameError
+from gonio.output import reserve_output
+from gonio.store import open_run
 
 #: name → (module, what it writes).
 FORMATS: dict[str, tuple[str, str]] = {
@@ -61,9 +63,6 @@ def export(
 ) -> str:
     """Write the run at ``run_path`` as ``name`` to ``out_path``; the output is reserved
     first (a bad ``-o`` fails before any work) and written whole or not at all."""
-    from gonio.output import reserve_output
-    from gonio.store import open_run
-
     if name not in FORMATS:
         raise UnknownNameError(
             f"unknown export format {name!r}; expected one of {', '.join(FORMATS)}"
@@ -73,3 +72,6 @@ def export(
         run = open_run(run_path)
         summary: str = module.export_run(run, out, options or Options())
     return summary
+
+
+__all__ = ["ALTA_PARAMS", "FORMATS", "MERL_FILLS", "Options", "export", "names"]

@@ -32,9 +32,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.output import PendingOutput
-from gonio.reconstruct.measured import Measured
 from gonio.store.read import Run
 from gonio.types import FloatArray
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio import params
-from gonio.acquire.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate
 from gonio.store.read import Run
 
 

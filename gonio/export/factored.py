@@ -28,10 +28,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gonio.analysis.measured import Measured
 from gonio.brdf import factored_file as ff
 from gonio.errors import GonioError
 from gonio.output import PendingOutput, reserve_output
 from gonio.params.cases import direction
+from gonio.reconstruct.methods import reconstruction
 from gonio.store.read import Run
 from gonio.types import Evaluable, FloatArray
 
@@ -210,9 +212,6 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     """`gonio export --format factored`: the run's reconstruction (filled by its nearest
     sample outside the measured support: the factorization needs every bin) factored
     into ``out`` and its CDF file beside it (``out`` + ``.cdf``)."""
-    from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.methods import reconstruction
-
     cdf_path = out.path.with_name(out.path.name + ff.CDF_SUFFIX)
     with reserve_output(cdf_path, "factored CDF file") as cdfs:
         surface = reconstruction(

@@ -31,11 +31,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gonio import __version__, params
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.export.columns import coordinate_unit, sample_columns
 from gonio.output import PendingOutput
 from gonio.planner.plan import ARRAYS
 from gonio.planner.stored import plan_bytes
+from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import Evaluable, FloatArray
@@ -182,9 +184,6 @@ def write(
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     _h5py()
     if options.grid is not None:
-        from gonio.reconstruct.measured import Measured
-        from gonio.reconstruct.methods import reconstruction
-
         grid = options.grid
         surface = reconstruction(Measured.from_run(run), options.method, grid)
         out.write_with(lambda path: write(path, run, surface, grid, options.grid_points))

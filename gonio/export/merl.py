@@ -22,9 +22,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.output import PendingOutput
+from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import BoolArray, FloatArray, Surface
@@ -100,9 +102,6 @@ def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = Fa
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    from gonio.reconstruct.measured import Measured
-    from gonio.reconstruct.methods import reconstruction
-
     extrapolate = options.merl_fill == "extrapolate"
     surface = reconstruction(
         Measured.from_run(run), options.method, None, extrapolate="nearest" if extrapolate else None

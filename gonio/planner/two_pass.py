@@ -29,7 +29,7 @@ from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 
 if TYPE_CHECKING:
-    from gonio.reconstruct.measured import Measured
+    from gonio.analysis.measured import Measured
 
 #: The ``model`` that steers by the survey's own reconstruction instead of a fit.
 SURVEY = "survey"

@@ -112,3 +112,18 @@ def supported(surface: object, wi: FloatArray, wo: FloatArray) -> BoolArray:
     if fn is None:
         return np.ones(len(wi), dtype=np.bool_)
     return np.asarray(fn(wi, wo), dtype=np.bool_).reshape(len(wi))
+
+
+__all__ = [
+    "DPI",
+    "LABELS",
+    "PlotUnavailable",
+    "Surface",
+    "check_figure_format",
+    "label",
+    "one_channel",
+    "require_matplotlib",
+    "save",
+    "supported",
+    "values",
+]

@@ -1,7 +1,7 @@
 """Reconstruction of a measured BRDF from a run's samples (docs/reconstruction.md), and
 its evaluation against a truth (docs/evaluation.md).
 
-``reconstruct(Measured.from_run(path), method=...)`` returns a `Reconstruction` with
+``reconstruct(gonio.analysis.Measured.from_run(path), method=...)`` returns a `Reconstruction` with
 ``eval``, ``uncertainty`` and ``supported`` over direction pairs; `METHODS` lists the
 interpolation methods. ``evaluate(candidate, truth, rig, isotropic=…)`` scores any
 candidate against a truth.
@@ -9,7 +9,6 @@ candidate against a truth.
 
 from gonio.reconstruct.build import METHODS, reconstruct
 from gonio.reconstruct.evaluate import Evaluation, evaluate
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.result import Reconstruction
 
-__all__ = ["METHODS", "Evaluation", "Measured", "Reconstruction", "evaluate", "reconstruct"]
+__all__ = ["METHODS", "Evaluation", "Reconstruction", "evaluate", "reconstruct"]

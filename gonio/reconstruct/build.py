@@ -13,13 +13,13 @@ from typing import Protocol
 import numpy as np
 from scipy.spatial import QhullError
 
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError, UnknownNameError
 from gonio.reconstruct import transforms
 from gonio.reconstruct.coordinates import Space, morton_order
 from gonio.reconstruct.domain import Domain, spacings
 from gonio.reconstruct.grid import GridInterpolant, detect, refuse
 from gonio.reconstruct.interpolants import Interpolant, Linear, Rbf
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.result import Reconstruction
 from gonio.types import ArrayLike, FloatArray
 

@@ -11,7 +11,7 @@ starts (`gonio.reconstruct.starts`) and keeps the lowest χ².
 
 Uncertainty: cov = (JᵀJ)⁻¹ · χ²_red with J the Jacobian of r at the optimum and
 χ²_red = χ²/(M − P) (M residuals, P free parameters), plus the error the values share
-through the run's reference readings (`gonio.reconstruct.shared`): reading k of
+through the run's reference readings (`gonio.analysis.shared`): reading k of
 channel c, of relative 1σ u_k, moves the parameters by g_k = J⁺ (w_k f/σ)|_c per unit
 relative error, so cov += Σ u_k² g_k g_kᵀ. (σ already holds each sample's share as if
 it were its own; counting it twice keeps the errors on the safe side.) Standard errors
@@ -27,13 +27,13 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from gonio.analysis.measured import Measured
+from gonio.analysis.shared import SharedError
 from gonio.brdf import BRDF
 from gonio.brdf.composite import spec_of
 from gonio.errors import GonioError
 from gonio.reconstruct import regions as pair_regions
 from gonio.reconstruct.family import Family, parse
-from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.shared import SharedError
 from gonio.reconstruct.starts import starts as make_starts
 from gonio.types import FloatArray
 
@@ -109,7 +109,7 @@ def fit(
 
     ``starts``: starting points tried (the moment estimate, then jittered copies drawn
     from ``seed``). ``shared``: the errors the samples share through their calibration
-    (`gonio.reconstruct.shared.shared_error` of the run; one per channel in an RGB
+    (`gonio.analysis.shared.shared_error` of the run; one per channel in an RGB
     fit), None to leave them out. `GonioError` (one line) when there are no more
     residuals than free parameters or no start gives a finite fit."""
     family = spec if isinstance(spec, Family) else parse(spec)

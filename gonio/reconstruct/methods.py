@@ -11,9 +11,11 @@ from typing import TYPE_CHECKING
 
 from gonio.errors import UnknownNameError
 from gonio.reconstruct.build import METHODS, reconstruct
+from gonio.reconstruct.fit import fit
+from gonio.reconstruct.naive import NaiveReconstruction
 
 if TYPE_CHECKING:
-    from gonio.reconstruct.measured import Measured
+    from gonio.analysis.measured import Measured
     from gonio.types import Surface
 
 #: The method of the naive reference (`gonio.reconstruct.naive`).
@@ -49,13 +51,9 @@ def reconstruction(
     nearest node)."""
     check(method)
     if method == NAIVE:
-        from gonio.reconstruct.naive import NaiveReconstruction
-
         return NaiveReconstruction(measured, parametrization=parametrization)
     fitted = None
     if method == "model+residual":
-        from gonio.reconstruct.fit import fit
-
         fitted = fit(measured, model).model
     result: Surface = reconstruct(
         measured,

@@ -22,8 +22,8 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
-from gonio.reconstruct.measured import Measured
 from gonio.types import BoolArray, FloatArray
 
 #: The default nodes per axis are clipped to this range.

@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
+from gonio.analysis.measured import Measured
 from gonio.brdf.geometry import pair
 from gonio.reconstruct.family import Family, Slot
-from gonio.reconstruct.measured import Measured
 from gonio.types import FloatArray
 
 #: Percentile of f taken as the diffuse level.

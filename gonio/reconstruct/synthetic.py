@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
-from gonio.reconstruct.measured import Measured
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 

@@ -26,10 +26,11 @@ from typing import Any, Protocol
 import numpy as np
 import yaml
 
+from gonio.analysis.measured import Measured
 from gonio.brdf.base import BRDF
 from gonio.brdf.material import build
 from gonio.errors import GonioError
-from gonio.reconstruct.measured import Measured
+from gonio.radiometry.bands import band_eval
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 #: The default SPEC: the simulated run's own scene.
@@ -140,6 +141,4 @@ def _seen(model: BRDF, band: str) -> BrdfEval:
     """f of ``model`` as a measurement in ``band`` sees it (RGB kept for an RGB one)."""
     if band == "rgb" or not model.is_rgb:
         return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
-    from sim.physics.optics import band_eval  # the simulated detector's band weights
-
     return band_eval(model, band)

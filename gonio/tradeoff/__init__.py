@@ -6,3 +6,8 @@ results row, `sweep.run_sweep` runs the missing ones (here, on a local pool or o
 `executors`) into an output folder (`store`) and writes the report (`report`, `plots`,
 `front`, `target`).
 """
+
+from gonio.tradeoff.grid import Sweep, load_sweep
+from gonio.tradeoff.sweep import SweepResult, run_sweep
+
+__all__ = ["Sweep", "SweepResult", "load_sweep", "run_sweep"]

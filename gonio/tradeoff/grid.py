@@ -40,6 +40,7 @@ from gonio.tradeoff.spec import (
     Without,
     effects_label,
 )
+from sim.scene import EffectsSpec, load_scene
 
 #: The most combinations one sweep may hold (a few seconds each: weeks of CPU).
 MAX_COMBINATIONS = 100_000
@@ -203,8 +204,6 @@ def _check_detector(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
 
 
 def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFile, ...]:
-    from sim.scene import load_scene
-
     out: list[SceneFile] = []
     for k, name in enumerate(spec.scenes):
         scene_path = _named_file(path, name, ("scenes", k), refuse)
@@ -222,10 +221,6 @@ def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFi
 def _check_effects(spec: SweepSpec, scenes: tuple[SceneFile, ...], refuse: Any) -> None:
     """Refuse an effects value a scene cannot model (an effect named without the
     parameters it needs, which the scene does not list either), before anything runs."""
-    from pydantic import ValidationError
-
-    from sim.scene import EffectsSpec
-
     for k, effects in enumerate(spec.axes.effects):
         for scene in scenes:
             try:

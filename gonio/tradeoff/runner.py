@@ -1,5 +1,5 @@
 """One combination of a sweep → one results row: plan it (`gonio.planner.plan.build`),
-acquire it on the simulated backend in memory (`sim.session.simulate_plan`: the engine,
+acquire it on the simulated backend in memory (`gonio.workflows.simulate.simulate_plan`: the engine,
 journal and calibration of `gonio acquire`), reconstruct it
 (`gonio.reconstruct.methods`) and score it against the scene's truth on the sweep's test
 set (`gonio.reconstruct.evaluate`).
@@ -19,20 +19,20 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from gonio.acquire.summary import figures
+from gonio.analysis.measured import Measured
+from gonio.analysis.summary import figures
 from gonio.errors import GonioError
 from gonio.planner import progress as planning
 from gonio.planner.plan import build
 from gonio.reconstruct import testset
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import METRICS, REGIONS
 from gonio.reconstruct.testset import TestSet
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import Task
+from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
-from sim.session import simulate_plan
 
 #: The figures of a row after its inputs: counts, predicted and simulated instrument
 #: time (s), why the ordering stopped, then each metric and coverage, over every test

@@ -34,7 +34,7 @@ class Progress(Protocol):
 
 
 @dataclass(frozen=True)
-class Outcome:
+class SweepResult:
     """What a sweep did: combinations run now and reused, the wall time of running
     them, the rows (grid order) and the files written."""
 
@@ -54,7 +54,7 @@ def run_sweep(
     scheduler: str | None = None,
     target: float | None = None,
     progress: Progress | None = None,
-) -> Outcome:
+) -> SweepResult:
     """Run ``sweep`` into ``folder`` (see the module docstring): in this process for one
     job, else on ``jobs`` local processes, or on the Dask cluster at ``scheduler``."""
     with open_store(folder) as store:
@@ -82,7 +82,7 @@ def run_sweep(
         wall = time.perf_counter() - started
         rows = [store.rows[t.id] for t in sweep.tasks if t.id in store.rows]
         files, plans = write_outputs(sweep, folder, rows, target)
-    return Outcome(len(todo), reused, wall, rows, files, plans)
+    return SweepResult(len(todo), reused, wall, rows, files, plans)
 
 
 def write_outputs(

@@ -1,14 +1,12 @@
 """The simulated instrument: virtual motors, detector and light sharing one virtual
-clock, one run seed and the scene's injected faults; and the byte-level emulator of a
-rig's motors (`emulated_bus`), which the rehearsal backend (`sim.rehearsal`) drives
-with the real `DynamixelBus`.
+clock, one run seed and the scene's injected faults.
 
 `SimulatedInstrument` is the simulated backend as the engine sees it: `devices()` gives
-the `gonio.acquire.Devices` (the `drivers.base` contract), and the instrument itself is
+the `drivers.base.Devices` (the contract), and the instrument itself is
 their `drivers.base.Simulated` side (which sample comes next, sample or reference on the
-stage, the true joint angles, snapshots for resume). `run(plan)` measures a plan target
-by target through `gonio.acquire.measure`, the same step the engine takes;
-`sim.simulate.simulate` computes the same run vectorized.
+stage, the true joint angles, snapshots for resume). `sim.simulate.simulate` computes
+a whole run vectorized; `gonio.workflows.simulate.measure_targets` measures the same
+run target by target through the engine's own step.
 """
 
 from __future__ import annotations
@@ -17,18 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import Resource, StageTarget
-from gonio.acquire.devices import Devices
-from gonio.acquire.measure import measure_target
-from gonio.planner.plan import Plan
+from drivers.base import Devices, Resource, StageTarget
 from gonio.rig.model import Rig
-from sim.clock import ManualClock, TimeSource
+from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, SimLightSource
 from sim.devices.motors import MotorState, SimMotorBus
-from sim.dynamixel.emulator import DxlEmulator
 from sim.faults import FaultInjector
 from sim.physics.streams import Streams
-from sim.record import SimRun
 from sim.scene import Scene
 from sim.simulate import planned_poses
 
@@ -141,65 +134,3 @@ class SimulatedInstrument(Resource):
         self.bus.set_moves(sample, moves)
         self.detector.set_draws(sample, draws)
         self.bus.set_overheat(overheat)
-
-    # -- a whole plan ------------------------------------------------------------------
-    def run(
-        self, plan: Plan, *, start: int = 0, stop: int | None = None, prepare: bool = True
-    ) -> SimRun:
-        """Measure targets ``start``…``stop`` of ``plan`` one by one (stream index =
-        target index, so a run resumed at ``start`` equals the tail of a full run once
-        the motors are where the full run had them). With ``prepare`` the detector first
-        computes the optics at the poses the plan will reach, vectorized
-        (`SimDetector.prepare`); the readings are the same either way."""
-        stop = len(plan) if stop is None else stop
-        if prepare:
-            _, expected, _ = planned_poses(self.rig, plan.angles, self.scene, self.streams)
-            self.detector.prepare(expected[start:stop])
-        axes, settle = self.rig.axes, self.rig.spec.settle_s
-        rows = [
-            measure_target(
-                self._devices, i, dict(zip(axes, plan.angles[i].tolist(), strict=True)),
-                float(plan.exposure_s[i]), int(plan.averages[i]), settle_s=settle,
-            )
-            for i in range(start, stop)
-        ]  # fmt: skip
-        n = len(axes)
-        true = np.array([[m.true[a] for a in axes] for m in rows if m.true], dtype=np.float64)
-        true = true.reshape(-1, n)  # every row has its true pose: this backend is simulated
-        wi, wo = self.rig.forward(true)
-        return SimRun(
-            index=np.arange(start, stop, dtype=np.int64),
-            commanded=plan.angles[start:stop],
-            read_back=np.array(
-                [[m.read_back[a] for a in axes] for m in rows], dtype=np.float64
-            ).reshape(-1, n),
-            true=true,
-            wi=wi,
-            wo=wo,
-            exposure_s=plan.exposure_s[start:stop],
-            averages=plan.averages[start:stop],
-            settled_s=np.array([m.settled_s for m in rows], dtype=np.float64),
-            end_s=np.array([m.reading.ended_s for m in rows], dtype=np.float64),
-            value=np.array([m.reading.value for m in rows], dtype=np.float64),
-            std=np.array([m.reading.std for m in rows], dtype=np.float64),
-            saturated=np.array([m.reading.saturated for m in rows], dtype=np.bool_),
-        )
-
-
-def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:
-    """A (not yet started) byte-level emulator of the rig's motors, at home, in their
-    operating modes, at the rig's bus rate; as fast as the host reads, or with
-    ``wire_time`` as a real bus (bytes on the wire and the motors' return delays)."""
-    axes = rig.bus_axes()
-    emulator = DxlEmulator(
-        ids=[a.motor_id for a in axes],
-        baud=rig.spec.bus.baud,
-        clock=clock,
-        wire_time=wire_time,
-        return_delay=wire_time,
-    )
-    for axis, home in zip(axes, rig.home, strict=True):
-        motor = emulator.motors[axis.motor_id]
-        motor.set("operating_mode", axis.operating_mode)
-        motor.set("present_position", axis.to_ticks(float(home)))
-    return emulator

@@ -32,17 +32,10 @@ import numpy as np
 
 from drivers.base import StageTarget
 from gonio import brdf, radiometry
+from gonio.radiometry.bands import band_eval
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
-from sim.scene import LUMINANCE, Scene
-
-
-def band_eval(model: brdf.BRDF, band: str) -> BrdfEval:
-    """f(ωi, ωo) as the detector's band sees it (one value per pair)."""
-    if not model.is_rgb:
-        return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
-    weights = np.asarray(LUMINANCE) if band == "luminance" else np.eye(3)["rgb".index(band)]
-    return lambda wi, wo: np.asarray(model.eval(wi, wo) @ weights, dtype=np.float64)
+from sim.scene import Scene
 
 
 def source_of(scene: Scene, rig: Rig) -> radiometry.Source:

@@ -9,7 +9,8 @@ from collections.abc import Iterator
 import pytest
 
 from drivers.base import LightError
-from drivers.light import SerialLightConfig, SerialLightSwitch
+from drivers.light import SerialLightConfig
+from drivers.light.serial_switch import SerialLightSwitch
 from sim.clock import ManualClock
 from sim.serial_light import SerialLamp
 

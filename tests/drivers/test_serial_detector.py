@@ -25,11 +25,11 @@ import serial
 
 from drivers.base import DetectorError, DriverError, Reading
 from drivers.serial_detector import (
-    SerialDetector,
     SerialDetectorConfig,
     SerialDetectorError,
     SerialDetectorValueError,
 )
+from drivers.serial_detector.detector import SerialDetector
 from sim.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
 
 TIMEOUT_S = 0.2  # the per-line margin used throughout: deadlines are exposure + this

@@ -13,15 +13,15 @@ import pytest
 import yaml
 
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.light import SerialLightSwitch
-from drivers.serial_detector import SerialDetector
+from drivers.light.serial_switch import SerialLightSwitch
+from drivers.serial_detector.detector import SerialDetector
 from gonio.acquire.measure import measure_target
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
+from gonio.workflows.rehearsal import rehearsal_devices
 from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, SimLightSource
 from sim.physics.streams import Streams
-from sim.rehearsal import rehearsal_devices
 from sim.scene import Scene, load_scene
 from tests.conftest import CONFIGS, RIG_FILES
 

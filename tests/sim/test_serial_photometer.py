@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 import serial
 
-from drivers.serial_detector import SerialDetector, SerialDetectorConfig
+from drivers.serial_detector import SerialDetectorConfig
+from drivers.serial_detector.detector import SerialDetector
 from sim.serial_photometer import (
     BANNER,
     MALFORMED_LINE,

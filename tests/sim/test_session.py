@@ -1,4 +1,4 @@
-"""`sim.session.simulate_plan`: the acquisition engine on the simulated backend —
+"""`gonio.workflows.simulate.simulate_plan`: the acquisition engine on the simulated backend —
 reference, dark, the plan, reference — and the BRDF recovered through the journaled
 calibration."""
 
@@ -13,8 +13,8 @@ from gonio import radiometry
 from gonio.acquire.calibration import reference_pose
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
-from sim.session import simulate_plan
 from tests.conftest import CONFIGS
 
 

@@ -16,6 +16,7 @@ from gonio.planner import build
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
+from gonio.workflows.simulate import measure_targets
 from sim.clock import ManualClock
 from sim.devices.instrument import SimulatedInstrument
 from sim.physics.optics import SceneOptics
@@ -72,7 +73,7 @@ def test_vectorized_equals_target_by_target(
     plan = varied(small_plan(rig, isotropic=isotropic, n=60))
     fast = simulate(plan, scene)
     with SimulatedInstrument(scene, plan.rig) as inst:
-        slow = inst.run(plan)
+        slow = measure_targets(inst, plan)
     # Bit for bit: the same motion, times, optics and random numbers.
     for field in ("read_back", "true", "wi", "wo", "settled_s", "end_s", "value", "std"):
         np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
@@ -92,14 +93,14 @@ def test_resumed_run_equals_an_uninterrupted_one(rigs: dict[str, Rig]) -> None:
     scene = load_scene(SCENES / "brushed_metal.yaml")  # backlash, repeatability, drift, noise
     plan = varied(small_plan(rigs["in_plane"], isotropic=False, n=40))
     with SimulatedInstrument(scene, plan.rig) as inst:
-        full = inst.run(plan)
+        full = measure_targets(inst, plan)
     k = 23
     with SimulatedInstrument(scene, plan.rig) as first:
-        first.run(plan, stop=k)
+        measure_targets(first, plan, stop=k)
         state = first.snapshot()
     with SimulatedInstrument(scene, plan.rig, clock=ManualClock()) as second:
         second.restore(state)
-        tail = second.run(plan, start=k)
+        tail = measure_targets(second, plan, start=k)
     np.testing.assert_array_equal(tail.index, full.index[k:])
     np.testing.assert_array_equal(tail.value, full.value[k:])
     np.testing.assert_array_equal(tail.true, full.true[k:])
@@ -107,13 +108,13 @@ def test_resumed_run_equals_an_uninterrupted_one(rigs: dict[str, Rig]) -> None:
     # One sample alone: the same stream gives the same reading.
     with SimulatedInstrument(scene, plan.rig) as third:
         third.restore(full_state_before(scene, plan, 31))
-        one = third.run(plan, start=31, stop=32)
+        one = measure_targets(third, plan, start=31, stop=32)
     assert one.value[0] == full.value[31]
 
 
 def full_state_before(scene: Scene, plan: Plan, k: int) -> object:
     with SimulatedInstrument(scene, plan.rig) as inst:
-        inst.run(plan, stop=k)
+        measure_targets(inst, plan, stop=k)
         return inst.snapshot()
 
 

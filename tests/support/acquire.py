@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 import yaml
 
-from gonio.acquire import session
 from gonio.planner.plan import Plan, PlanSource, load_plan_source
 from gonio.store.read import Run
+from gonio.workflows import session
 from sim.scene import Scene
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -83,7 +83,7 @@ class RunFiles:
         )
         return _PLANS[key], files, scene
 
-    def start(self, output: Path | None, **kwargs: Any) -> session.Outcome:
+    def start(self, output: Path | None, **kwargs: Any) -> session.SessionResult:
         plan, files, scene = self.files()
         return session.start(plan, files, scene=scene, output=output, **kwargs)
 
@@ -167,7 +167,7 @@ def acquire_in_child(
     kill_signal: int = signal.SIGKILL,
     timeout_s: float = 60.0,
 ) -> ChildResult:
-    """Fork a child that runs ``work(progress)`` (a `session.Outcome` is reported as its
+    """Fork a child that runs ``work(progress)`` (a `session.SessionResult` is reported as its
     outcome, anything else as it is); the parent sends ``kill_signal`` once the child
     reported ``kill_after`` targets (None: never; 0: from the fork) and ``delay_s`` more
     seconds passed, and returns what the child reported."""
@@ -178,7 +178,7 @@ def acquire_in_child(
         try:
             os.close(r)
             value = work(PipeProgress(w))
-            if isinstance(value, session.Outcome):
+            if isinstance(value, session.SessionResult):
                 value = value.report.outcome
             os.write(w, f"done {value}\n".encode())
         except BaseException as exc:
@@ -266,7 +266,7 @@ def scene_file(folder: Path, extra: str = "", base: Path = MATTE, name: str = "s
 
 def acquire(
     plan_path: Path, scene_path: Path, output: Path | None, **kwargs: object
-) -> session.Outcome:
+) -> session.SessionResult:
     """`session.start` of a plan file in a scene (what `gonio acquire` does)."""
     source, plan = build_plan(plan_path)
     scene, text = session.load_scene_file(scene_path, source.rig)

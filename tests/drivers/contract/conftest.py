@@ -17,8 +17,8 @@ import pytest
 from drivers.base import Detector, LightSource, MotorBus
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.light import SerialLightSwitch
-from drivers.serial_detector import SerialDetector
+from drivers.light.serial_switch import SerialLightSwitch
+from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, SimLightSource

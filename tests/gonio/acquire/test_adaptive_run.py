@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import yaml
 
-from gonio.acquire import session
 from gonio.planner import adaptive
 from gonio.planner.two_pass import is_survey
 from gonio.store.read import Run, open_run
+from gonio.workflows import session
 from tests.support.acquire import (
     ARCH,
     RunFiles,

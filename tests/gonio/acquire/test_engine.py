@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire import session
-from gonio.acquire.calibrated import calibrate
-from gonio.acquire.summary import truth_of
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.summary import truth_of
 from gonio.store import open_run
+from gonio.workflows import session
 from tests.conftest import CliResult
 from tests.support.acquire import acquire, build_plan, plan_file, scene_file
 

@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 
-from gonio.acquire import backends, session
 from gonio.store.read import Run, open_run
+from gonio.workflows import backends, session
 from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus
 from tests.support.acquire import RunFiles, assert_same_samples

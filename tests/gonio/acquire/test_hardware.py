@@ -1,4 +1,4 @@
-"""`gonio.acquire.hardware`: a rig file's hardware backend — the real `DynamixelBus`,
+"""`gonio.workflows.hardware`: a rig file's hardware backend — the real `DynamixelBus`,
 `SerialDetector` and `SerialLightSwitch` built from the rig's sections — driven through
 the per-target step against the emulator, the simulated photometer and the simulated
 lamp, each on its own pseudo-terminal."""
@@ -12,12 +12,12 @@ from pathlib import Path
 import pytest
 import yaml
 
-from gonio.acquire.hardware import hardware_devices
 from gonio.acquire.measure import measure_target
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
+from gonio.workflows.hardware import hardware_devices
 from sim.clock import ScaledClock
-from sim.devices.instrument import emulated_bus
+from sim.rehearsal import emulated_bus
 from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
 from tests.conftest import RIG_FILES

@@ -23,7 +23,8 @@ from gonio.acquire.runtime import RunTime
 from gonio.planner.plan import ARRAYS, Plan, load_plan_source
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal
-from sim.rehearsal import RehearsalSide, rehearsal_devices
+from gonio.workflows.rehearsal import rehearsal_devices
+from sim.rehearsal import RehearsalSide
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, RIG_FILES
 

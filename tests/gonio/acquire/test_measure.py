@@ -12,6 +12,7 @@ from drivers.base import LimitError
 from gonio.acquire.measure import measure_target
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
 from sim.scene import load_scene
 from tests.conftest import CONFIGS
@@ -39,7 +40,7 @@ def test_the_settle_dwell_is_waited_once_and_the_plan_predicts_the_run(rig: Rig)
     spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
     plan = build(spec, rig)
     with SimulatedInstrument(MATTE.with_effects([]), rig) as inst:
-        run = inst.run(plan)
+        run = measure_targets(inst, plan)
     settle = rig.spec.settle_s
     arrival = run.settled_s - settle  # when each move ended
     np.testing.assert_allclose(arrival, plan.arrival_s, rtol=1e-12, atol=1e-9)

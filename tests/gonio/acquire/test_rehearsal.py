@@ -14,17 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.calibrated import calibrate
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
+from gonio.analysis.calibrated import calibrate
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.stored import plan_bytes
+from gonio.radiometry.bands import band_eval
 from gonio.rig.model import Rig
 from gonio.store import open_run
 from gonio.store.journal import Journal
 from gonio.store.read import read_run
-from sim.physics.optics import band_eval
-from sim.rehearsal import RehearsalSide, rehearsal_devices
+from gonio.workflows.rehearsal import rehearsal_devices
+from sim.rehearsal import RehearsalSide
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
@@ -145,7 +146,7 @@ def test_the_exposure_journaled_is_the_one_the_device_integrated(tmp_path: Path)
     """The rig's photometer takes whole milliseconds: a plan asking 1.5 ms gets 2 ms.
     The journal says 2 ms (the reading's `exposure_s`), so the calibrated BRDF is right;
     with the exposure asked it would come out a third too high."""
-    from gonio.acquire import session
+    from gonio.workflows import session
 
     source = load_plan_source(PLAN)
     plan = source.build()

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire import session
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.store.read import Run, open_run
+from gonio.workflows import session
 from tests.conftest import CliResult
 from tests.support.acquire import ARCH, RunFiles, assert_same_samples, plan_yaml
 

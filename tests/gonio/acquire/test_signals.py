@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 
 from gonio.acquire import progress as progress_module
-from gonio.acquire import session
 from gonio.cli import main
 from gonio.store.read import Run, open_run
+from gonio.workflows import session
 from tests.support.acquire import PipeProgress, RunFiles, acquire_in_child, assert_same_samples
 
 

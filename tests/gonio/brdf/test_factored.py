@@ -256,7 +256,7 @@ def test_a_missing_or_broken_cdf_file_is_refused(files, tmp_path):
 
 def test_a_factored_file_is_a_scene_material(files, tmp_path_factory):
     """A simulated run of a scene whose material is the factored file measures it."""
-    from gonio.reconstruct.measured import Measured
+    from gonio.analysis.measured import Measured
     from tests.support.runs import plan_spec, scene_spec, simulated_run
 
     material = {"name": "factored", "path": files["glossy"]}

@@ -11,10 +11,10 @@ import pytest
 import yaml
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.config import ConfigError
 from gonio.errors import GonioError
-from gonio.reconstruct.measured import Measured
-from sim.physics.optics import band_eval
+from gonio.radiometry.bands import band_eval
 from sim.scene import load_scene
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 

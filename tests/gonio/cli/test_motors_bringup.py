@@ -16,8 +16,8 @@ import yaml
 from drivers.dynamixel.link import DynamixelLink
 from gonio.rig.model import Rig
 from sim.clock import ScaledClock
-from sim.devices.instrument import emulated_bus
 from sim.dynamixel.emulator import DxlEmulator
+from sim.rehearsal import emulated_bus
 from tests.conftest import RIG_FILES, CliResult
 
 pytestmark = pytest.mark.pty

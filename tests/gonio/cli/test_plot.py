@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.plots import error, polar, samples, slices
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.naive import NaiveReconstruction
 from tests.conftest import CliResult
 from tests.support.figures import pixels, png_size

@@ -9,16 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.calibrated import calibrate
 from gonio.acquire.calibration import reference_pose
-from gonio.acquire.summary import truth_of
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.summary import truth_of
 from gonio.cli.simulate import render_result as render
 from gonio.errors import GonioError
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.store import open_run
+from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
-from sim.session import simulate_plan
 from tests.conftest import CONFIGS, CliResult
 from tests.support.rigs import rig_with
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gonio.analysis.measured import Measured
 from gonio.cli import main
-from gonio.reconstruct.measured import Measured
 
 
 def read_alta(path: Path) -> tuple[dict[str, str], np.ndarray]:

@@ -10,7 +10,7 @@ import event_model
 import numpy as np
 import pytest
 
-from gonio.acquire.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate
 from gonio.cli import main
 from gonio.store import open_run
 

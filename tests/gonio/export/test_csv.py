@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gonio.acquire.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate
 from gonio.cli import main
 from gonio.export.columns import Column
 from gonio.export.csv import to_text

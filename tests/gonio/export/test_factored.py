@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 import gonio.brdf as brdf
+from gonio.analysis.measured import Measured
 from gonio.cli import main
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.export import factored as factored_export
 from gonio.export.factored import Factorization, Resolution, export, factorize
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.methods import reconstruction
 
 RES = Resolution(theta_out=8, phi_out=16, theta_p=16, phi_p=32, z=256)

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from gonio import brdf, params
-from gonio.acquire.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.measured import Measured
 from gonio.cli import main
 from gonio.export.hdf5 import write
 from gonio.planner.stored import parse_plan
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.methods import reconstruction
 from gonio.store import open_run
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.cli import main
 from gonio.export.merl import fill, write
 from gonio.output import reserve_output
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.methods import reconstruction
 
 HALF_PI = np.pi / 2

@@ -11,6 +11,7 @@ import pytest
 from pydantic import ValidationError
 
 from gonio import brdf
+from gonio.analysis.measured import Measured
 from gonio.planner import adaptive
 from gonio.planner.plan import ARRAYS, Plan, build, render_summary, same_bits
 from gonio.planner.schema import PlanSpec
@@ -19,7 +20,6 @@ from gonio.planner.two_pass import extend, is_survey, second_pass_points
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from gonio import brdf
+from gonio.analysis.measured import Measured
 from gonio.brdf.base import BRDF
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
 from tests.support.runs import plan_spec, scene_spec, simulated_run

@@ -12,11 +12,11 @@ from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.brdf.base import BRDF
 from gonio.errors import GonioError
 from gonio.reconstruct import METHODS, Reconstruction, reconstruct
 from gonio.reconstruct.coordinates import Space
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import placed, synthesize
 from gonio.rig.model import Rig
 

@@ -7,7 +7,7 @@ mostly per run (~0.3 s), not per sample (~1 ms), so each scene is measured once 
 into `REALIZATIONS` interleaved subsets (every K-th sample in the measured order),
 each spread over the whole domain with its own noise. The subsets share the run's
 reference readings, whose error is part of each fit's uncertainty
-(`gonio.reconstruct.shared`) but alike across subsets: their z-scores are correlated
+(`gonio.analysis.shared`) but alike across subsets: their z-scores are correlated
 where that error matters, so 20 subsets are fewer than 20 independent trials. The
 scenes keep only noise effects: aperture integration and the footprint bias f by
 design, and a fit would rightly find the biased values.
@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 import pytest
 
+from gonio.analysis.measured import Measured
+from gonio.analysis.shared import SharedError, shared_error
 from gonio.errors import GonioError
 from gonio.reconstruct.fit import SIGMA_FLOOR, fit
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.regions import NAMES
-from gonio.reconstruct.shared import SharedError, shared_error
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 REALIZATIONS = 20

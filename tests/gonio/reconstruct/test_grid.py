@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from gonio import params
+from gonio.analysis.measured import Measured
 from gonio.brdf.base import BRDF
 from gonio.errors import GonioError
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.coordinates import Space
 from gonio.reconstruct.grid import detect
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.reconstruct import methods
 from gonio.reconstruct.build import METHODS
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.naive import NaiveReconstruction
 
 

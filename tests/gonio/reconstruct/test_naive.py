@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.reconstruct import testset
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.metrics import scores
 from gonio.reconstruct.naive import MAX_NODES, NaiveReconstruction, default_nodes
 from gonio.rig.model import Rig

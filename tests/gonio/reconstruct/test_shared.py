@@ -8,9 +8,9 @@ import io
 import numpy as np
 import pytest
 
-from gonio.acquire.calibrated import calibrate
-from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.shared import SharedError, shared_error
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.measured import Measured
+from gonio.analysis.shared import SharedError, shared_error
 from gonio.store.read import open_run
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 

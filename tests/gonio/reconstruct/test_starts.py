@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from gonio import brdf
+from gonio.analysis.measured import Measured
 from gonio.reconstruct.family import parse
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.starts import starts
 
 

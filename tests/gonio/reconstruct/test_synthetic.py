@@ -10,9 +10,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 from gonio import brdf, params
+from gonio.analysis.measured import Measured
 from gonio.brdf.geometry import pair
 from gonio.planner import adaptive
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from tests.support.acquire import ARCH

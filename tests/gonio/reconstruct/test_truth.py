@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from gonio import brdf
+from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
+from gonio.radiometry.bands import LUMINANCE
 from gonio.reconstruct import testset
-from gonio.reconstruct.measured import Measured
 from gonio.reconstruct.naive import NaiveReconstruction
 from gonio.reconstruct.truth import truth_from_spec
-from sim.scene import LUMINANCE
 from tests.support.runs import SCENES, plan_spec, scene_spec, simulated_run
 
 GLOSSY = "cook_torrance:alpha=0.05,fresnel=conductor,ior=[0.18, 0.42, 1.37],k=[3.42,2.35,1.77]"

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import yaml
 
-from drivers.serial_detector import SerialDetector, SerialDetectorConfig
+from drivers.serial_detector import SerialDetectorConfig
+from drivers.serial_detector.detector import SerialDetector
 from gonio.config import ConfigError
 from gonio.rig.instrument import NoSwitchSpec, SerialInterfaceSpec, SerialSwitchSpec
 from gonio.rig.model import Reason, Rig

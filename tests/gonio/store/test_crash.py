@@ -20,9 +20,9 @@ from pathlib import Path
 
 import pytest
 
-from gonio.acquire import session
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run
+from gonio.workflows import session
 from tests.support.acquire import (
     PipeProgress,
     RunFiles,
@@ -67,10 +67,10 @@ def test_kill_9_at_random_moments(
     kills = runs = 0
     in_flight = 0  # most samples committed but not reported by a killed child
 
-    def start(progress: PipeProgress) -> session.Outcome:
+    def start(progress: PipeProgress) -> session.SessionResult:
         return files.start(path, progress=progress)
 
-    def resume(progress: PipeProgress) -> session.Outcome:
+    def resume(progress: PipeProgress) -> session.SessionResult:
         return session.resume(path, progress=progress)
 
     while kills < KILLS_PER_SEED:  # one run after another until enough kills

@@ -9,8 +9,9 @@ import pytest
 
 from gonio.acquire.measure import measure_target
 from gonio.rig.model import Rig
+from gonio.workflows.rehearsal import rehearsal_devices
 from sim.devices.instrument import SimulatedInstrument
-from sim.rehearsal import RehearsalSide, rehearsal_devices
+from sim.rehearsal import RehearsalSide
 from sim.scene import load_scene
 from tests.conftest import CONFIGS
 

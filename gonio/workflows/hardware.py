@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from drivers.base import Clock, SystemClock
+from drivers.base import Clock, Devices, SystemClock
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.light import SerialLightSwitch
-from drivers.serial_detector import SerialDetector
-from gonio.acquire.devices import Devices
+from drivers.light.serial_switch import SerialLightSwitch
+from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.model import Rig
 

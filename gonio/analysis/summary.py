@@ -1,5 +1,6 @@
 """What a run file says about its run, as figures (`figures`, the JSON of ``gonio info
---json``) and as the table `gonio acquire`, `gonio simulate` and `gonio info` print."""
+--json``), the recovered BRDF's error against a truth (`error_figures`), and a simulated
+run's truth (`truth_of`) at the pairs its optics saw (`measured_pairs`)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from gonio.acquire.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.scene import scene_band, scene_truth
 from gonio.errors import GonioError
-from gonio.planner.plan import hms
 from gonio.store.read import Run
 from gonio.types import FloatArray
 
@@ -94,53 +95,6 @@ def error_figures(
     }
 
 
-def render(run: Run, errors: dict[str, float | int] | None = None, *, title: bool = True) -> str:
-    """The table (``title``: with a first line naming the run file, plan and rig)."""
-    f = figures(run)
-    lines = [
-        f"run {str(run.path)!r}: plan {f['plan']!r} on rig {f['rig']!r}, "
-        f"{f['backend']} backend, seed {f['seed']}",
-        f"  {'outcome':<24}{f['outcome'] or 'not ended':>10}   ({f['sessions']} session"
-        f"{'s' if f['sessions'] != 1 else ''})",
-        f"  {'targets measured':<24}{f['measured']:>10}   of {f['targets']} "
-        f"({f['skipped']} skipped, {f['missing']} missing)",
-        f"  {'instrument time':<24}{hms(f['instrument_time_s']):>10}   "
-        f"(the plan predicted {hms(f['predicted_s'])} without calibrations)",
-        f"  {'saturated readings':<24}{f['saturated']:>10}   "
-        f"({f['remeasured']} measured again at a shorter exposure)",
-        f"  {'faults':<24}{len(f['faults']):>10}   ({f['retries']} retries)",
-    ]
-    for fault in f["faults"][-3:]:
-        lines.append(f"    target {fault.get('target')}: {fault['message']}")
-    for reason, count in f["skip_reasons"].items():
-        lines.append(f"    skipped {count}: {reason}")
-    if f["pauses"]:
-        reasons = Counter(str(p.get("reason")) for p in f["pauses"])
-        lines.append(
-            f"  {'pauses':<24}{len(f['pauses']):>10}   "
-            f"({', '.join(f'{k} {v}' for k, v in reasons.items())})"
-        )
-    if f["calibrations"]:
-        dark = f["dark_counts_per_s"]
-        ti, to = f["reference_geometry_deg"]
-        lines.append(
-            f"  {'calibrations':<24}{f['calibrations']:>10}   reference standard (albedo "
-            f"{f['reference_albedo']:g}, {ti:.0f}°/{to:.0f}°) {f['reference_counts']:.1f} "
-            f"counts at {f['reference_exposure_s']:g} s; "
-            f"dark {'not read' if dark is None else f'{dark:.1f} counts/s'}; "
-            f"drift {100 * f['drift']:+.3f} % by the last, divided out"
-        )
-    if not title:
-        lines.pop(0)
-    if errors is not None and errors.get("n"):
-        lines.append(
-            f"  {'recovered BRDF error':<24}{100 * errors['median']:>9.3f}%   median; "
-            f"95th percentile {100 * errors['p95']:.3f} %, max {100 * errors['max']:.3f} % "
-            f"(vs the scene's model, {errors['n']} unsaturated targets)"
-        )
-    return "\n".join(lines)
-
-
 def measured_pairs(run: Run) -> tuple[FloatArray, FloatArray]:
     """(ωi, ωo) the optics really saw: from the simulated backend's true joint angles
     (its journaled state) when every sample has them, else from the read-back angles."""
@@ -158,38 +112,9 @@ def truth_of(run: Run, *, at_true_pairs: bool = False) -> FloatArray:
     text = run.meta.get("scene_text")
     if text is None:
         raise GonioError(f"{run.path}: the run has no scene: no truth to compare with")
-    from pathlib import Path
-
-    from sim.physics.optics import SceneOptics
-    from sim.scene import load_scene
-
-    scene = load_scene(Path(f"{run.path}#scene_text"), run.plan.rig, raw=str(text).encode())
+    scene_path = run.meta.get("scene_path")
+    model = scene_truth(
+        str(text), None if scene_path is None else str(scene_path), scene_band(text)
+    )
     wi, wo = measured_pairs(run) if at_true_pairs else run.directions()
-    return np.asarray(SceneOptics(scene, run.plan.rig).models["sample"](wi, wo), dtype=np.float64)
-
-
-def render_details(run: Run) -> str:
-    """What `gonio info` adds to the table: the sessions, the BRDF the counts give
-    through the calibration, the file."""
-    lines = ["  sessions"]
-    for session in run.sessions:
-        info = session.info
-        lines.append(
-            f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
-            f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
-        )
-    if len(run) and run.of_kind("calibration"):
-        cal = calibrate(run)
-        ok = np.isfinite(cal.brdf) & (cal.brdf > 0)
-        rel = cal.sigma[ok] / cal.brdf[ok]
-        lines.append(
-            f"  {'derived BRDF':<24}{int(ok.sum()):>10}   values, {cal.brdf[ok].min():.4g} to "
-            f"{cal.brdf[ok].max():.4g} sr⁻¹, median uncertainty {100 * np.median(rel):.3f} % (1σ)"
-        )
-    if run.path.is_file():
-        size = run.path.stat().st_size
-        lines.append(
-            f"  {'run file':<24}{size / 1024:>9.0f}K   schema v{run.meta['schema_version']}, "
-            f"{len(run.events)} events"
-        )
-    return "\n".join(lines)
+    return np.asarray(model(wi, wo), dtype=np.float64)

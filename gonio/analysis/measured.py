@@ -12,7 +12,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gonio.acquire.calibrated import Calibrated, calibrate
+from gonio.analysis.calibrated import Calibrated, calibrate
+from gonio.analysis.scene import scene_band, scene_truth
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from gonio.store.read import Run, open_run
@@ -85,7 +86,7 @@ class Measured:
         scene_text = run.meta.get("scene_text")
         band = "luminance"
         if scene_text is not None:
-            band = _scene_band(scene_text)
+            band = scene_band(scene_text)
         ok = kept(calibrated)
         return cls(
             wi=wi[ok],
@@ -130,15 +131,7 @@ class Measured:
         it (RGB: the three channels). `GonioError` for a run on hardware."""
         if self.scene_text is None:
             raise GonioError(f"{self.source}: a run on hardware has no scene to compare with")
-        from sim.physics.optics import band_eval
-        from sim.scene import load_scene
-
-        model = load_scene(
-            self.scene_path or "scene", raw=self.scene_text.encode()
-        ).material.model()
-        if self.band == "rgb":
-            return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
-        return band_eval(model, self.band)
+        return scene_truth(self.scene_text, self.scene_path, self.band)
 
 
 def kept(calibrated: Calibrated) -> BoolArray:
@@ -148,12 +141,3 @@ def kept(calibrated: Calibrated) -> BoolArray:
 
 def _bytes(text: str | bytes) -> bytes:
     return text if isinstance(text, bytes) else text.encode()
-
-
-def _scene_band(scene_text: str) -> str:
-    import yaml
-
-    data = yaml.safe_load(scene_text)
-    detector = data.get("detector") if isinstance(data, dict) else None
-    band = detector.get("band") if isinstance(detector, dict) else None
-    return str(band) if band else "luminance"

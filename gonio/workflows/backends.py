@@ -1,5 +1,4 @@
-"""The backends a run can drive, built from the rig file (composition code: the only
-place in `gonio.acquire` that imports the simulator, lazily).
+"""The backends a run can drive, built from the rig file.
 
 - ``simulated``: the rig's ``bus.kind`` is ``simulated``: virtual motors, detector and
   light on a virtual clock (`sim.devices.instrument.SimulatedInstrument`); the scene
@@ -19,14 +18,21 @@ import sys
 from collections.abc import Callable
 from contextlib import AbstractContextManager, ExitStack
 from dataclasses import dataclass, field
-from typing import IO, Any, Literal
+from typing import IO, Literal
 
-from drivers.base import StageTarget, SystemClock
+from drivers.base import Clock, Devices, StageTarget, SystemClock
+from drivers.dynamixel.bus import DynamixelBus
 from gonio.acquire.calibration import Stage
-from gonio.acquire.devices import Devices
 from gonio.acquire.runtime import RunTime, wall_offset
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
+from gonio.workflows.hardware import hardware_devices
+from gonio.workflows.rehearsal import rehearsal_devices
+from sim.devices.detector import SimDetector, SimLightSource
+from sim.devices.instrument import SimulatedInstrument
+from sim.physics.streams import Streams
+from sim.rehearsal import RehearsalSide
+from sim.scene import Scene
 
 BackendKind = Literal["simulated", "hardware", "rehearsal"]
 
@@ -87,10 +93,8 @@ def needs_scene(rig: Rig, kind: BackendKind) -> bool:
     return kind != "hardware" or rig.spec.detector.interface.kind == "simulated"
 
 
-def simulated(rig: Rig, scene: Any, seed: int | None, *, any_detector: bool = False) -> Backend:
+def simulated(rig: Rig, scene: Scene, seed: int | None, *, any_detector: bool = False) -> Backend:
     """``any_detector``: simulate the rig's detector whatever its interface says."""
-    from sim.devices.instrument import SimulatedInstrument
-
     if rig.spec.detector.interface.kind != "simulated" and not any_detector:
         raise GonioError(
             f"{rig.source}: detector.interface: a simulated rig (bus.kind: simulated) needs "
@@ -104,12 +108,15 @@ def simulated(rig: Rig, scene: Any, seed: int | None, *, any_detector: bool = Fa
 
 
 def hardware(
-    rig: Rig, scene: Any, seed: int | None, run_started_unix: float, stage: Stage | None = None
+    rig: Rig,
+    scene: Scene | None,
+    seed: int | None,
+    run_started_unix: float,
+    stage: Stage | None = None,
 ) -> Backend:
-    from gonio.acquire.hardware import hardware_devices
-
     clock = SystemClock()
     if rig.spec.detector.interface.kind == "simulated":
+        assert scene is not None  # needs_scene: the caller checked
         devices = _with_simulated_detector(rig, scene, seed, clock)
     else:
         devices = hardware_devices(rig, clock=clock)
@@ -119,12 +126,7 @@ def hardware(
     return Backend("hardware", devices, stage, time, durable=True, calibrate_on_resume=True)
 
 
-def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any) -> Devices:
-    from drivers.dynamixel.bus import DynamixelBus
-    from sim.devices.detector import SimDetector, SimLightSource
-    from sim.physics.streams import Streams
-    from sim.rehearsal import RehearsalSide
-
+def _with_simulated_detector(rig: Rig, scene: Scene, seed: int | None, clock: Clock) -> Devices:
     bus = DynamixelBus(rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud)
     light = SimLightSource()
     detector = SimDetector(
@@ -135,10 +137,8 @@ def _with_simulated_detector(rig: Rig, scene: Any, seed: int | None, clock: Any)
 
 
 def rehearsal(
-    rig: Rig, scene: Any, seed: int | None, run_started_unix: float, speedup: float
+    rig: Rig, scene: Scene, seed: int | None, run_started_unix: float, speedup: float
 ) -> Backend:
-    from sim.rehearsal import rehearsal_devices
-
     stack = ExitStack()
     devices, clock = stack.enter_context(rehearsal_devices(rig, scene, seed, speedup))
     time = RunTime(clock.now, wall_offset(clock.now(), run_started_unix))
@@ -152,7 +152,7 @@ def rehearsal(
 def build(
     kind: BackendKind,
     rig: Rig,
-    scene: Any,
+    scene: Scene | None,
     seed: int | None,
     run_started_unix: float,
     *,
@@ -160,8 +160,10 @@ def build(
     any_detector: bool = False,
 ) -> Backend:
     if kind == "simulated":
+        assert scene is not None  # needs_scene: the caller checked
         return simulated(rig, scene, seed, any_detector=any_detector)
     if kind == "rehearsal":
+        assert scene is not None
         return rehearsal(rig, scene, seed, run_started_unix, speedup)
     return hardware(rig, scene, seed, run_started_unix)
 

@@ -1,7 +1,7 @@
 """The error a run's values share through its reference readings.
 
 Every value of a run is divided by the reference rate S(t) interpolated linearly in
-run time between the K calibration readings (`gonio.acquire.calibrated`), so an error
+run time between the K calibration readings (`gonio.analysis.calibrated`), so an error
 δ_k in reading k moves sample i by −w_ik δ_k/S_k of its value, w_ik its interpolation
 weight. The samples' σ count that error as their own, independent of the others'; a fit
 needs it as what it is, one error shared by every sample near reading k. The dark
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.acquire.calibrated import Calibrated, calibrate
-from gonio.reconstruct.measured import kept
+from gonio.analysis.calibrated import Calibrated, calibrate
+from gonio.analysis.measured import kept
 from gonio.store.read import Run, open_run
 from gonio.types import FloatArray
 
@@ -43,7 +43,7 @@ class SharedError:
 
 def shared_error(run: Run | str, calibrated: Calibrated | None = None) -> SharedError:
     """The shared calibration error of a run's samples, in the order and selection of
-    `gonio.reconstruct.measured.Measured.from_run` (`kept`); ``calibrated``: the run's
+    `gonio.analysis.measured.Measured.from_run` (`kept`); ``calibrated``: the run's
     `calibrate`, when the caller has it already."""
     if not isinstance(run, Run):
         run = open_run(run)

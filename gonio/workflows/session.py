@@ -25,21 +25,23 @@ import numpy as np
 
 from drivers.base import DriverError
 from gonio import __version__
-from gonio.acquire import backends
-from gonio.acquire.backends import BackendKind
 from gonio.acquire.calibration import geometry_label, reference_pose
 from gonio.acquire.engine import Engine, Report
 from gonio.acquire.progress import Progress, Quiet
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
+from gonio.analysis.measured import Measured
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
-from gonio.planner.plan import Plan, sha256
+from gonio.planner.plan import Plan, content_hash, sha256
 from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import extend, is_survey
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, remove_run_file
 from gonio.store.read import Run, read_run
+from gonio.workflows import backends
+from gonio.workflows.backends import BackendKind
+from sim.scene import Scene, load_scene
 
 #: Journal bytes per sample, measured on the shipped plans (with a simulated
 #: snapshot), for the disk-space check of a dry run; doubled there for the WAL.
@@ -58,8 +60,6 @@ class Files:
     scene_text: bytes | None = None
 
     def hashes(self) -> dict[str, str | None]:
-        from gonio.planner.plan import content_hash
-
         return {
             "plan_sha256": sha256(self.plan_text),
             "rig_sha256": sha256(self.rig_text),
@@ -68,10 +68,8 @@ class Files:
         }
 
 
-def load_scene_file(path: Path, rig: Rig) -> tuple[Any, bytes]:
+def load_scene_file(path: Path, rig: Rig) -> tuple[Scene, bytes]:
     """(scene, its bytes)."""
-    from sim.scene import load_scene
-
     raw = read_bytes(path)
     return load_scene(path, rig, raw=raw), raw
 
@@ -146,7 +144,10 @@ def check_output(path: Path | None, overwrite: bool) -> None:
 
 
 @dataclass
-class Outcome:
+class SessionResult:
+    """What `start` or `resume` did: the engine's report (counts summed over an adaptive
+    plan's passes), the run file, and the journal as it stands after the session."""
+
     report: Report
     path: Path | None
     run: Run  # the journal as it stands after the session
@@ -161,7 +162,7 @@ def _run_engine(
     progress: Progress,
     retry_skipped: bool = False,
     argv: list[str],
-) -> Outcome:
+) -> SessionResult:
     """Run the engine on what is missing; an adaptive plan's survey, once measured, is
     followed by its second pass (`_second_pass`) in a new session."""
     path = journal.path or Path(":memory:")
@@ -185,7 +186,7 @@ def _run_engine(
         run = read_run(journal.conn, path)
         if report.outcome != "completed" or not is_survey(plan):
             report = replace(report, measured=measured, skipped=skipped)
-            return Outcome(report, journal.path, run)
+            return SessionResult(report, journal.path, run)
         plan = _second_pass(journal, run)
         history = read_run(journal.conn, path)
 
@@ -194,8 +195,6 @@ def _second_pass(journal: Journal, run: Run) -> Plan:
     """The adaptive plan's second pass planned from the survey's samples in the journal
     (`gonio.planner.two_pass`), stored in the run in place of the survey's plan (one
     statement: a crash leaves either) and journaled; the whole plan."""
-    from gonio.reconstruct.measured import Measured
-
     whole = extend(run.plan, Measured.from_run(run), where=str(run.path))
     journal.replace_plan(plan_bytes(whole))
     t_s = float(np.max(run.samples["ended_s"])) if len(run) else 0.0
@@ -207,7 +206,7 @@ def start(
     plan: Plan,
     files: Files,
     *,
-    scene: Any = None,
+    scene: Scene | None = None,
     output: Path | None,
     overwrite: bool = False,
     seed: int | None = None,
@@ -217,7 +216,7 @@ def start(
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     force_simulated: bool = False,
-) -> Outcome:
+) -> SessionResult:
     """Acquire ``plan`` into a new run file ``output`` (None: in memory);
     ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
     rig = plan.rig
@@ -331,7 +330,7 @@ def resume(
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     speedup: float | None = None,
-) -> Outcome:
+) -> SessionResult:
     """Measure what is missing from the run file at ``path`` (module docstring)."""
     journal = Journal.reopen(path, durable=False, max_page_count=max_page_count)
     try:
@@ -350,12 +349,10 @@ def resume(
         rig = run.plan.rig
         if changed:  # forced: the devices follow the rig file as it is now
             rig = Rig.from_yaml(files.rig_path or Path("rig"), files.rig_text)
-        scene = None
+        scene: Scene | None = None
         if backends.needs_scene(rig, kind):
             if files.scene_text is None:
                 raise ConfigError(f"{path}: the run's scene is not stored; give --scene")
-            from sim.scene import load_scene
-
             scene = load_scene(files.scene_path or Path("scene"), rig, raw=files.scene_text)
         seed = run.meta.get("seed")
         started = float(run.meta["started_unix"])
@@ -384,7 +381,7 @@ def resume(
         journal.close()
 
 
-def dry_run(plan: Plan, files: Files, *, scene: Any, output: Path | None, overwrite: bool,
+def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | None, overwrite: bool,
             rehearse: bool = False) -> list[str]:  # fmt: skip
     """Check what a run needs without moving anything; the lines to print (raises a
     `GonioError` at the first problem)."""

@@ -1,0 +1,87 @@
+"""The run table `gonio acquire`, `gonio simulate` and `gonio info` print, from the
+run's figures (`gonio.analysis.summary`)."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+
+from gonio.analysis.calibrated import calibrate
+from gonio.analysis.summary import figures
+from gonio.planner.plan import hms
+from gonio.store.read import Run
+
+
+def render(run: Run, errors: dict[str, float | int] | None = None, *, title: bool = True) -> str:
+    """The table (``title``: with a first line naming the run file, plan and rig)."""
+    f = figures(run)
+    lines = [
+        f"run {str(run.path)!r}: plan {f['plan']!r} on rig {f['rig']!r}, "
+        f"{f['backend']} backend, seed {f['seed']}",
+        f"  {'outcome':<24}{f['outcome'] or 'not ended':>10}   ({f['sessions']} session"
+        f"{'s' if f['sessions'] != 1 else ''})",
+        f"  {'targets measured':<24}{f['measured']:>10}   of {f['targets']} "
+        f"({f['skipped']} skipped, {f['missing']} missing)",
+        f"  {'instrument time':<24}{hms(f['instrument_time_s']):>10}   "
+        f"(the plan predicted {hms(f['predicted_s'])} without calibrations)",
+        f"  {'saturated readings':<24}{f['saturated']:>10}   "
+        f"({f['remeasured']} measured again at a shorter exposure)",
+        f"  {'faults':<24}{len(f['faults']):>10}   ({f['retries']} retries)",
+    ]
+    for fault in f["faults"][-3:]:
+        lines.append(f"    target {fault.get('target')}: {fault['message']}")
+    for reason, count in f["skip_reasons"].items():
+        lines.append(f"    skipped {count}: {reason}")
+    if f["pauses"]:
+        reasons = Counter(str(p.get("reason")) for p in f["pauses"])
+        lines.append(
+            f"  {'pauses':<24}{len(f['pauses']):>10}   "
+            f"({', '.join(f'{k} {v}' for k, v in reasons.items())})"
+        )
+    if f["calibrations"]:
+        dark = f["dark_counts_per_s"]
+        ti, to = f["reference_geometry_deg"]
+        lines.append(
+            f"  {'calibrations':<24}{f['calibrations']:>10}   reference standard (albedo "
+            f"{f['reference_albedo']:g}, {ti:.0f}°/{to:.0f}°) {f['reference_counts']:.1f} "
+            f"counts at {f['reference_exposure_s']:g} s; "
+            f"dark {'not read' if dark is None else f'{dark:.1f} counts/s'}; "
+            f"drift {100 * f['drift']:+.3f} % by the last, divided out"
+        )
+    if not title:
+        lines.pop(0)
+    if errors is not None and errors.get("n"):
+        lines.append(
+            f"  {'recovered BRDF error':<24}{100 * errors['median']:>9.3f}%   median; "
+            f"95th percentile {100 * errors['p95']:.3f} %, max {100 * errors['max']:.3f} % "
+            f"(vs the scene's model, {errors['n']} unsaturated targets)"
+        )
+    return "\n".join(lines)
+
+
+def render_details(run: Run) -> str:
+    """What `gonio info` adds to the table: the sessions, the BRDF the counts give
+    through the calibration, the file."""
+    lines = ["  sessions"]
+    for session in run.sessions:
+        info = session.info
+        lines.append(
+            f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
+            f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
+        )
+    if len(run) and run.of_kind("calibration"):
+        cal = calibrate(run)
+        ok = np.isfinite(cal.brdf) & (cal.brdf > 0)
+        rel = cal.sigma[ok] / cal.brdf[ok]
+        lines.append(
+            f"  {'derived BRDF':<24}{int(ok.sum()):>10}   values, {cal.brdf[ok].min():.4g} to "
+            f"{cal.brdf[ok].max():.4g} sr⁻¹, median uncertainty {100 * np.median(rel):.3f} % (1σ)"
+        )
+    if run.path.is_file():
+        size = run.path.stat().st_size
+        lines.append(
+            f"  {'run file':<24}{size / 1024:>9.0f}K   schema v{run.meta['schema_version']}, "
+            f"{len(run.events)} events"
+        )
+    return "\n".join(lines)

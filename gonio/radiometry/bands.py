@@ -1,0 +1,21 @@
+"""How a detector's band sees a BRDF: a grey detector sees an RGB material through the
+Rec. 709 luminance weights, a filtered one through a single channel."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gonio.brdf.base import BRDF
+from gonio.types import BrdfEval
+
+#: Rec. 709 luminance weights: how a grey detector sees an RGB material.
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+
+
+def band_eval(model: BRDF, band: str) -> BrdfEval:
+    """f(ωi, ωo) (sr⁻¹) as a detector in ``band`` ("luminance", "r", "g" or "b") sees
+    ``model``: one value per pair."""
+    if not model.is_rgb:
+        return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
+    weights = np.asarray(LUMINANCE) if band == "luminance" else np.eye(3)["rgb".index(band)]
+    return lambda wi, wo: np.asarray(model.eval(wi, wo) @ weights, dtype=np.float64)

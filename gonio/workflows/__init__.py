@@ -1,0 +1,21 @@
+"""The composition root: the one place that wires backends (simulated, hardware,
+rehearsal) to the acquisition engine, runs sessions (start, resume, dry run) and the
+adaptive plan's passes, and simulates a plan end to end.
+
+``from gonio.workflows import start, resume, simulate_plan`` is the programmatic
+``gonio acquire`` / ``gonio simulate``.
+"""
+
+from gonio.workflows.session import Files, SessionResult, dry_run, resume, start
+from gonio.workflows.simulate import Result, measure_targets, simulate_plan
+
+__all__ = [
+    "Files",
+    "Result",
+    "SessionResult",
+    "dry_run",
+    "measure_targets",
+    "resume",
+    "simulate_plan",
+    "start",
+]

@@ -1,0 +1,69 @@
+"""The rehearsal backend of `gonio acquire --rehearse`: the real drivers, built from
+the rig file as for hardware (`gonio.workflows.hardware`), wired to the simulated peers
+of `sim.rehearsal` on pseudo-terminals.
+
+Time runs ``speedup`` times faster than real time (motion profiles, settle dwells and
+exposures alike); waits for serial answers are real time, as they are the ports'. The
+scene's injected faults are not applied (inject faults into the peers instead).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
+
+from drivers.base import Detector, Devices, LightSource
+from gonio.rig.instrument import SerialSwitchSpec
+from gonio.rig.model import Rig
+from gonio.workflows.hardware import dynamixel_bus, light_switch, serial_detector
+from sim.clock import ScaledClock
+from sim.devices.detector import LightState, SimDetector, SimLightSource
+from sim.physics.streams import Streams
+from sim.rehearsal import (
+    Peers,
+    RehearsalSide,
+    emulated_bus,
+    emulated_pose,
+    lamp_for,
+    photometer_for,
+)
+from sim.scene import Scene
+
+
+@contextmanager
+def rehearsal_devices(
+    rig: Rig, scene: Scene, seed: int | None, speedup: float, *, wire_time: bool = False
+) -> Iterator[tuple[Devices, ScaledClock]]:
+    """The peers running (stopped on exit) and the unopened `Devices` driving them (their
+    ``simulation`` is a `RehearsalSide`). ``wire_time``: the emulated bus answers when a
+    real one would (`sim.rehearsal.emulated_bus`)."""
+    clock = ScaledClock(speedup)
+    streams = Streams(scene.seed if seed is None else seed)
+    axes = rig.bus_axes()
+    with ExitStack() as stack:
+        emulator = stack.enter_context(emulated_bus(rig, clock, wire_time=wire_time))
+        bus = dynamixel_bus(rig, port=emulator.path)
+        switch = rig.spec.light.switch
+        light: LightSource
+        state: LightState
+        lamp = photometer = None
+        if isinstance(switch, SerialSwitchSpec):
+            lamp = stack.enter_context(lamp_for(rig, switch))
+            driver = light_switch(rig, clock, port=lamp.path)
+            assert driver is not None  # the switch is serial
+            light, state = driver, lamp
+        else:
+            light = state = SimLightSource()
+        truth = emulated_pose(emulator, axes)
+        serial = rig.spec.detector.interface.kind == "serial"
+        physics = SimDetector(
+            scene, rig, truth if serial else bus.positions, clock=clock, streams=streams,
+            light=state,
+        )  # fmt: skip
+        if serial:
+            photometer = stack.enter_context(photometer_for(rig, physics, clock))
+            detector: Detector = serial_detector(rig, clock, port=photometer.path)
+        else:
+            detector = physics
+        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp))
+        yield Devices(bus, detector, clock, light, side), clock
