@@ -1,5 +1,5 @@
 """A simulated serial light switch (lamp relay or shutter) on a pseudo-terminal, the
-peer of `drivers.light.SerialLightSwitch`.
+peer of `drivers.light.serial_switch.SerialLightSwitch`.
 
 Protocol (lines end in CR LF on the way out; any line ending is accepted in):
 
