@@ -266,7 +266,7 @@ def timing(args: argparse.Namespace) -> None:
     in this process one after another (best of ``args.repeats``)."""
     import time
 
-    from gonio.planner import progress as planning
+    from gonio import progress as planning
     from gonio.planner.plan import build
     from gonio.planner.schema import PlanSpec
     from gonio.rig.model import Rig

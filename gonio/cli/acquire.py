@@ -16,10 +16,10 @@ import shlex
 import sys
 from pathlib import Path
 
+from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
 from gonio.config import ConfigError
-from gonio.planner import progress as planning
 
 #: Exit code of a run that ended early but can be resumed.
 EXIT_RESUMABLE = 3

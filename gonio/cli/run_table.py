@@ -9,7 +9,7 @@ import numpy as np
 
 from gonio.analysis.calibrated import calibrate
 from gonio.analysis.summary import figures
-from gonio.planner.plan import hms
+from gonio.progress import hms
 from gonio.store.read import Run
 
 

@@ -8,11 +8,9 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import sys
 from pathlib import Path
-from typing import Any
 
-from gonio.planner.plan import hms
+from gonio.progress import Bar, hms
 
 
 def _positive(text: str) -> float:
@@ -72,26 +70,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.set_defaults(func=cmd_tradeoff)
 
 
-class Bar:
-    """A tqdm bar over the combinations on standard error (only on a terminal)."""
-
-    def __init__(self) -> None:
-        self._bar: Any = None
-
-    def start(self, todo: int, finished: int) -> None:
-        from tqdm import tqdm
-
-        self._bar = tqdm(total=todo, desc="combinations", unit="comb", file=sys.stderr,
-                         disable=None, leave=False, mininterval=0.5)  # fmt: skip
-
-    def advance(self) -> None:
-        self._bar.update(1)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-
-
 def cmd_tradeoff(args: argparse.Namespace) -> int:
     from gonio.tradeoff.grid import load_sweep
     from gonio.tradeoff.sweep import run_sweep
@@ -111,7 +89,7 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     )
     outcome = run_sweep(
         sweep, args.output, jobs=args.jobs, scheduler=args.scheduler, target=args.target_error,
-        progress=None if args.quiet else Bar(),
+        progress=None if args.quiet else Bar(leave=False),
     )  # fmt: skip
     pace = f" ({60 * outcome.ran / outcome.wall_s:.1f} per minute)" if outcome.wall_s > 0 else ""
     print(

@@ -28,7 +28,8 @@ from typing import Literal
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gonio.planner import progress, search
+from gonio import progress
+from gonio.planner import search
 from gonio.planner.bounds import MAX_PAIRS, mst_bound, typical_move
 from gonio.planner.poses import Relaxed, choose
 from gonio.planner.search import EPSILON, Path, Stop, path_time
@@ -152,7 +153,7 @@ def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray)
     with progress.stage("nearest-neighbour construction", n) as shown:
         for step in range(n):
             if step & 4095 == 4095:
-                shown.update(4096)
+                shown.advance(4096)
             if len(remaining) > 64 and (n - step) * 4 < len(remaining):  # mostly visited
                 remaining = np.flatnonzero(~visited)
                 tree = cKDTree(points[remaining] / scale)

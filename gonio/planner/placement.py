@@ -10,9 +10,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gonio import params
+from gonio import params, progress
 from gonio.config import ConfigError
-from gonio.planner import progress, sampling
+from gonio.planner import sampling
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
@@ -98,7 +98,7 @@ def draw_kept(
             batch = draw(BATCH)
             usable.append(kept_mask(spec, rig, batch))
             new = int(usable[-1].sum())
-            shown.update(min(new, target - kept))
+            shown.advance(min(new, target - kept))
             kept += new
             drawn.append(batch)
     points = np.concatenate(drawn)

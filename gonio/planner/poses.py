@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from gonio.planner import progress
+from gonio import progress
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 
@@ -175,7 +175,7 @@ def choose(
                 best_from.append(row)
                 cost = new
             back[lo:hi] = best_from
-            shown.update(hi - lo)
+            shown.advance(hi - lo)
     chosen = np.empty(n, dtype=np.int64)
     last = min(span, key=lambda b: cost[b])
     chosen[n - 1] = last

@@ -28,7 +28,7 @@ from typing import Literal
 
 import numpy as np
 
-from gonio.planner.progress import Silent, Stage
+from gonio.progress import Progress, Quiet
 from gonio.rig.travel import TravelModel
 from gonio.types import FloatArray
 
@@ -133,7 +133,7 @@ def descend(
     max_moves: int,
     deadline: float,
     queue_from: Iterable[int] | None = None,
-    shown: Stage | None = None,
+    shown: Progress | None = None,
 ) -> tuple[int, float, Stop]:
     """2-opt and Or-opt moves from each queued node (default: every target in index
     order), until none improves, ``max_moves`` have been applied or ``deadline``
@@ -143,7 +143,7 @@ def descend(
     Deterministic but for the deadline: neighbours are visited nearest first, the first
     improving move found is applied, a move wakes the nodes at its ends. Each node visit
     costs a bounded number of cost evaluations, so ``max_moves`` bounds the work too.
-    ``shown`` counts the node visits (`gonio.planner.progress`).
+    ``shown`` counts the node visits (`gonio.progress`).
     """
     cost, pos, nodes = path.cost, path.pos, path.nodes
     at, node = pos.item, nodes.item  # Python ints, faster than int(array[i])
@@ -154,7 +154,7 @@ def descend(
     queued[list(queue)] = True
     queued[[S, E]] = True  # the ends never enter the queue
     moves, gained, visits = 0, 0.0, 0
-    show = (Silent() if shown is None else shown).update
+    show = (Quiet() if shown is None else shown).advance
 
     def wake(*nodes_: int) -> None:
         for u in nodes_:
@@ -270,7 +270,7 @@ def iterate(
     kicks: int,
     rng: np.random.Generator,
     deadline: float,
-    shown: Stage | None = None,
+    shown: Progress | None = None,
 ) -> tuple[int, int, float, Stop]:
     """Up to ``kicks`` kicks, each followed by a descent from the nodes it touched and
     undone unless the path got shorter. Returns (kicks tried, kicks kept, time gained

@@ -19,10 +19,10 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from gonio import progress as planning
 from gonio.analysis.measured import Measured
 from gonio.analysis.summary import figures
 from gonio.errors import GonioError
-from gonio.planner import progress as planning
 from gonio.planner.plan import build
 from gonio.reconstruct import testset
 from gonio.reconstruct.evaluate import evaluate

@@ -8,8 +8,9 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
+from gonio.progress import Progress
 from gonio.tradeoff import executors
 from gonio.tradeoff.front import fastest_meeting
 from gonio.tradeoff.grid import INPUT_COLUMNS, Sweep
@@ -21,16 +22,6 @@ from gonio.tradeoff.target import remove_target_plan, write_target_plan
 
 #: The columns of results.csv, in order.
 COLUMNS = (*INPUT_COLUMNS, *FIGURE_COLUMNS, *WALL_COLUMNS)
-
-
-class Progress(Protocol):
-    def start(self, todo: int, finished: int) -> None:
-        """``todo`` combinations are about to run; ``finished`` were already done."""
-
-    def advance(self) -> None:
-        """One more combination finished."""
-
-    def close(self) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -61,7 +52,7 @@ def run_sweep(
         todo = [t for t in sweep.tasks if t.id not in store.rows]
         reused = len(sweep.tasks) - len(todo)
         if progress is not None:
-            progress.start(len(todo), reused)
+            progress.start(len(todo), "combinations", unit="comb")
 
         def done(row: dict[str, Any]) -> None:
             store.append(row)

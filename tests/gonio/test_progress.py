@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import io
 
-from gonio.planner import build, progress
+from gonio import progress
+from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 
