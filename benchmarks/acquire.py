@@ -27,7 +27,8 @@ from _machine import describe
 
 from gonio.planner import load_plan_source
 from gonio.planner.plan import Plan
-from gonio.store.journal import Journal, sample_columns
+from gonio.store.journal import Journal
+from gonio.store.schema import samples_table
 from gonio.workflows import session
 from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
@@ -78,7 +79,7 @@ def commit_cost(folder: Path, durable: bool, n: int = 300) -> float:
     meta = {"axes": axes, "coordinate_names": coords}
     path = folder / f"commit-{durable}.sqlite"
     path.unlink(missing_ok=True)
-    row = dict.fromkeys(sample_columns(axes, coords), 0.5)
+    row = dict.fromkeys((c.name for c in samples_table(axes, coords)), 0.5)
     row.update(utc="2026-01-01T00:00:00", temperatures_c=None, sim_state=None)
     with Journal.create(path, meta, b"", durable=durable, overwrite=True) as journal:
         journal.start_session("t", {})

@@ -7,7 +7,8 @@ The layout (schema version `SCHEMA_VERSION`) is documented in docs/journal.md:
   texts and their hashes, the stored plan itself (`gonio.planner.stored`), the axes and
   coordinate names, the backend, the seed, the package versions, the host;
 - ``sessions``: one row per process that wrote to the run (start, end, how it ended);
-- ``samples``: one row per measured target (``target`` = its index in the plan);
+- ``samples``: one row per measured target (``target`` = its index in the plan), its
+  columns defined in `gonio.store.schema`;
 - ``events``: calibrations, darks, faults, retries, skips, pauses, resumes, health
   readings, the simulated backend's state snapshots.
 
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from gonio.errors import GonioError
+from gonio.store.schema import samples_ddl, samples_table
 
 #: The layout version this gonio writes (and the newest it reads).
 SCHEMA_VERSION = 1
@@ -41,34 +43,6 @@ APPLICATION_ID = 0x676F6E69
 
 class JournalError(GonioError):
     """The journal cannot be created, opened or written; the message is one line."""
-
-
-def sample_columns(axes: Sequence[str], coordinate_names: Sequence[str]) -> list[str]:
-    """The ``samples`` table's columns for a rig's axes and a plan's coordinates."""
-    return [
-        "target", "session", "attempts",
-        *(f"{a}_commanded_rad" for a in axes),
-        *(f"{a}_read_back_rad" for a in axes),
-        "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z",
-        *(f"coord_{c}" for c in coordinate_names),
-        "exposure_s", "averages", "n", "counts", "counts_std", "saturated", "remeasured",
-        "settled_s", "started_s", "ended_s", "utc",
-        "temperatures_c", "sim_state",
-    ]  # fmt: skip
-
-
-#: Columns that hold integers or text (the rest are REAL).
-_INTEGER = frozenset({"target", "session", "attempts", "averages", "n", "saturated", "remeasured"})
-_TEXT = frozenset({"utc", "temperatures_c", "sim_state"})
-#: counts_std is NULL when the device averaged and gave no spread.
-_NULLABLE = frozenset({"temperatures_c", "sim_state", "counts_std"})
-
-
-def _column_sql(name: str) -> str:
-    kind = "INTEGER" if name in _INTEGER else "TEXT" if name in _TEXT else "REAL"
-    null = "" if name in _NULLABLE else " NOT NULL"
-    key = " PRIMARY KEY" if name == "target" else ""
-    return f'"{name}" {kind}{null}{key}'
 
 
 _EVENTS_SQL = """CREATE TABLE events (
@@ -129,7 +103,7 @@ class Journal:
         self.session = 0
         axes = json.loads(self._meta_text("axes"))
         coords = json.loads(self._meta_text("coordinate_names"))
-        self.columns = sample_columns(axes, coords)
+        self.columns = [c.name for c in samples_table(axes, coords)]
         names = ", ".join(f'"{c}"' for c in self.columns)
         marks = ", ".join("?" for _ in self.columns)
         self._insert = f"INSERT INTO samples ({names}) VALUES ({marks})"
@@ -218,13 +192,13 @@ class Journal:
 
     @staticmethod
     def _write_schema(conn: sqlite3.Connection, meta: Mapping[str, Any], plan: bytes) -> None:
-        columns = sample_columns(meta["axes"], meta["coordinate_names"])
+        table = samples_table(meta["axes"], meta["coordinate_names"])
         conn.execute("BEGIN IMMEDIATE")
         conn.execute(f"PRAGMA application_id={APPLICATION_ID}")
         conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         conn.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value NOT NULL)")
         conn.execute(_SESSIONS_SQL)
-        conn.execute(f"CREATE TABLE samples ({', '.join(map(_column_sql, columns))})")
+        conn.execute(samples_ddl(table))
         conn.execute(_EVENTS_SQL)
         conn.execute("CREATE INDEX events_kind ON events (kind)")
         rows: list[tuple[str, str | bytes]] = [(k, dumps(v)) for k, v in meta.items()]
@@ -289,7 +263,8 @@ class Journal:
         self._write("UPDATE meta SET value = ? WHERE key = 'plan_file'", (plan_file,))
 
     def sample(self, row: Mapping[str, Any]) -> None:
-        """Commit one measured target (every column of `sample_columns` but ``session``)."""
+        """Commit one measured target (every column of `gonio.store.schema.samples_table`
+        but ``session``)."""
         values = [self.session if c == "session" else row[c] for c in self.columns]
         self._write(self._insert, values)
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -18,6 +18,7 @@ import numpy as np
 from gonio.planner.plan import Plan
 from gonio.planner.stored import parse_plan
 from gonio.store.journal import APPLICATION_ID, SCHEMA_VERSION, JournalError
+from gonio.store.schema import FLOAT64, Column, commanded, read_back, samples_table
 from gonio.types import FloatArray
 
 
@@ -72,7 +73,8 @@ class Run:
 
     def angles(self, which: str = "read_back") -> FloatArray:
         """(N, A) joint angles (rad) per sample, ``read_back`` or ``commanded``."""
-        cols = [self.samples[f"{a}_{which}_rad"] for a in self.axes]
+        column = {"read_back": read_back, "commanded": commanded}[which]
+        cols = [self.samples[column(a)] for a in self.axes]
         return np.stack(cols, axis=1) if cols else np.empty((0, 0))
 
     def directions(self) -> tuple[FloatArray, FloatArray]:
@@ -149,11 +151,12 @@ def read_run(conn: sqlite3.Connection, path: Path) -> Run:
         else:
             meta[key] = json.loads(value)
     plan = parse_plan(plan_file, f"{path}#plan_file")
+    table = samples_table(meta["axes"], meta["coordinate_names"])
     return Run(
         path=path,
         meta=MappingProxyType(meta),
         plan=plan,
-        samples=MappingProxyType(_columns(names, rows)),
+        samples=MappingProxyType(_columns(names, rows, table)),
         events=tuple(
             Event(i, s, k, t, ts, u, MappingProxyType(json.loads(d)))
             for i, s, k, t, ts, u, d in events
@@ -165,21 +168,20 @@ def read_run(conn: sqlite3.Connection, path: Path) -> Run:
     )
 
 
-_INTEGER = ("target", "session", "attempts", "averages", "n", "remeasured")
-
-
-def _columns(names: list[str], rows: list[tuple[Any, ...]]) -> dict[str, np.ndarray]:
+def _columns(
+    names: list[str], rows: list[tuple[Any, ...]], table: Sequence[Column]
+) -> dict[str, np.ndarray]:
+    """The samples as numpy columns, each of its dtype in ``table`` (a column the table
+    does not name reads as float64)."""
+    dtypes = {c.name: c.dtype for c in table}
     out: dict[str, np.ndarray] = {}
     for j, name in enumerate(names):
         cells = [r[j] for r in rows]
-        if name in _INTEGER:
-            out[name] = np.array(cells, dtype=np.int64)
-        elif name == "saturated":
-            out[name] = np.array(cells, dtype=np.bool_)
-        elif name in ("utc", "temperatures_c", "sim_state"):
-            out[name] = np.array(cells, dtype=object)
-        else:  # NULL (a spread the device did not give) reads as NaN
+        dtype = dtypes.get(name, FLOAT64)
+        if dtype == FLOAT64:  # NULL (a spread the device did not give) reads as NaN
             out[name] = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
+        else:
+            out[name] = np.array(cells, dtype=dtype)
     return out
 
 
