@@ -5,9 +5,12 @@ For each target of the stored, ordered plan still to measure: check its pose aga
 the bus's limits (a pose outside them is skipped, never commanded) → move → wait until
 settled → the rig's settle dwell → read the positions back → measure → if saturated,
 measure again at half the exposure (plan option) → journal the raw sample. Between
-targets, when due: a health check (pause while a motor is too hot or its supply out of
-range) and a calibration (the reference standard, and a dark reading). The reference is
-read at the start and at the end of every run.
+targets, when due: a health check (pause while a suspender trips, e.g. a motor too hot or
+its supply out of range: `gonio.acquire.suspenders`) and a calibration (the reference
+standard, and a dark reading; when: `gonio.acquire.schedule.Calibrations`). The
+reference is read at the start and at the end of every run. What the engine carries
+from target to target, and rebuilds from the journal when a run resumes, is its
+`gonio.acquire.state.RunState`.
 
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
 is retried, then the target skipped (journaled) or the run aborted; a `MotorFault` or
@@ -24,7 +27,6 @@ or on hardware the seconds since the run's first start by the wall clock.
 from __future__ import annotations
 
 import contextlib
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -47,13 +49,16 @@ from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target, reading_fields
 from gonio.acquire.progress import Progress, Quiet
 from gonio.acquire.runtime import RunTime, utc_now
-from gonio.acquire.schedule import Every
 from gonio.acquire.signals import RunInterrupted, StopRequests
+from gonio.acquire.state import RunState, initial_state, latest_snapshot
+from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
 from gonio.errors import GonioError
 from gonio.planner.plan import Plan
 from gonio.planner.schema import AcquisitionSpec
+from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run
+from gonio.store.schema import commanded, coordinate, read_back
 
 Outcome = Literal["completed", "interrupted", "fault", "aborted", "paused", "journal"]
 
@@ -76,6 +81,10 @@ class _Stop(Exception):
         self.outcome = outcome
 
 
+#: What ends a session early: each is journaled (`Engine._ending`), the session ended.
+_ENDINGS = (RunInterrupted, DriverError, _Stop, GonioError)
+
+
 @dataclass
 class Engine:
     """Runs ``plan`` on ``devices`` into ``journal`` (see the module docstring).
@@ -96,63 +105,25 @@ class Engine:
     progress: Progress = field(default_factory=Quiet)
     stops: StopRequests = field(default_factory=StopRequests)
     move_timeout_s: float = MOVE_TIMEOUT_S
+    # Set from the plan (and the history) when made:
+    spec: AcquisitionSpec = field(init=False)
+    rig: Rig = field(init=False)
+    axes: tuple[str, ...] = field(init=False)
+    suspenders: tuple[Suspender, ...] = field(init=False)  # consulted at each health check
+    state: RunState = field(init=False)  # carried across targets and sessions
+    _report: Report = field(init=False)  # this session's
+    _busy_until: float = field(init=False, default=0.0)  # run time the step in flight ends
+    _current: int | None = field(init=False, default=None)  # the target in flight
+    _limits: dict[str, tuple[float, float]] | None = field(init=False, default=None)
 
     def __post_init__(self) -> None:
-        spec: AcquisitionSpec = self.plan.spec.acquisition
-        self.spec = spec
+        self.spec = self.plan.spec.acquisition
         self.rig = self.plan.rig
         self.axes = self.rig.axes
-        cal, health = spec.calibration, spec.health
-        self.calibration_due = Every(cal.every_samples, cal.every_minutes)
-        self.health_due = Every(health.every_samples, health.every_minutes)
-        self.count = 0  # targets measured in the run so far (all sessions)
-        self.calibrations = 0  # calibrations journaled so far (all sessions)
-        self.reference_exposure_s: float | None = None
-        self._calibrated_at: int | None = None  # `count` at the last calibration
-        self._busy_until = 0.0
-        self._current: int | None = None  # the target in flight
-        self._limits: dict[str, tuple[float, float]] | None = None
-        self._temperatures: str | None = None  # read by the last health check (JSON)
-        self._unhealthy = False  # the last health check found a problem
-        self._session = Report("completed", 0, 0)
+        self.suspenders = health_suspenders(self.rig.spec.health)
+        self.state = initial_state(self.spec, self.history)
+        self._report = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
-        self._history_state()
-
-    # -- resuming ------------------------------------------------------------------------
-    def _history_state(self) -> None:
-        h = self.history
-        if h is None:
-            return
-        self.count = len(h)
-        calibrations = h.of_kind("calibration")
-        self.calibrations = len(calibrations)
-        if calibrations:
-            last = calibrations[-1]
-            self.calibration_due.done(int(last.data["count"]), last.t_s)
-            self._calibrated_at = int(last.data["count"])
-            self.reference_exposure_s = float(last.data["reference"]["exposure_s"])
-        checks = h.of_kind("health")
-        if checks:
-            last_check = checks[-1].data
-            self.health_due.done(int(last_check["count"]), checks[-1].t_s)
-            self._unhealthy = bool(last_check["problems"] or last_check["flags"])
-            if int(last_check["count"]) == self.count:  # the next sample's temperatures
-                self._temperatures = dumps(dict(last_check["temperatures_c"]))
-
-    def _latest_snapshot(self) -> Any:
-        """The simulated backend's state when the journal's last entry was written."""
-        h = self.history
-        if h is None:
-            return None
-        best: tuple[float, int, Any] | None = None
-        states = h.samples["sim_state"]
-        if len(states) and states[-1] is not None:
-            k = int(np.argmax(h.samples["ended_s"]))
-            best = (float(h.samples["ended_s"][k]), 0, json.loads(states[k]))  # stored as text
-        for e in h.events:
-            if "sim_state" in e.data and (best is None or (e.t_s, 1) >= best[:2]):
-                best = (e.t_s, 1, e.data["sim_state"])
-        return None if best is None else best[2]
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -166,45 +137,17 @@ class Engine:
         A signal that ends the session early raises `RunInterrupted` after the pause
         was journaled and the devices closed."""
         todo = self.todo()
-        report = self._session = Report("completed", 0, 0)
+        report = self._report = Report("completed", 0, 0)
         interrupted: RunInterrupted | None = None
         # The session ends in the journal while the signal handlers are still ours: a
         # late second Ctrl-C must not skip it.
         with self.stops:
             with self.devices:
                 try:
-                    try:
-                        self._measure(todo)
-                    finally:
-                        self.stops.disarm()  # a signal now must not cut the ending short
-                except RunInterrupted as exc:
-                    interrupted = exc
-                    report.outcome, report.message = "interrupted", f"stopped by {exc.args[0]}"
-                    self._hold_all()
-                    # A step abandoned half-way is redone from the state last journaled (a
-                    # snapshot taken now would resume the simulation mid-step).
-                    state = {} if exc.abandoned else self._sim()
-                    data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
-                    self._event("pause", {**data, **state})
-                except (MotorFault, MotionTimeout) as exc:
-                    report.outcome, report.message = "fault", str(exc)
-                    self._hold_all()
-                    self._event(
-                        "fault", {**self._fault_data(exc), **self._sim()}, target=self._current
-                    )
-                except DriverError as exc:  # outside a target's retries: a calibration, the light
-                    report.outcome, report.message = "fault", str(exc)
-                    self._hold_all()
-                    self._event("fault", {**self._fault_data(exc), **self._sim()})
-                except _Stop as exc:
-                    report.outcome, report.message = exc.outcome, str(exc)
-                    self._hold_all()
-                except JournalError as exc:
-                    report.outcome, report.message = "journal", str(exc)
-                    self._hold_all()
-                except GonioError as exc:
-                    report.outcome, report.message = "aborted", str(exc)
-                    self._hold_all()
+                    self._measure(todo)
+                except _ENDINGS as exc:
+                    report.outcome, report.message = self._ending(exc)
+                    interrupted = exc if isinstance(exc, RunInterrupted) else None
                 finally:
                     self.progress.close()
             self._end_session(report.outcome)
@@ -213,43 +156,71 @@ class Engine:
         return report
 
     def _measure(self, todo: np.ndarray) -> None:
-        self._start(resuming=self.history is not None)
-        if self.devices.simulation is not None:
-            self.devices.simulation.expect(self.plan.angles[todo], todo)
-        self.progress.start(self.plan, todo)
-        for done, i in enumerate(todo.tolist()):
-            self._between_targets()
-            self._target(i)
-            self.progress.advance(done + 1)
-            if self.stops.requested:
-                raise RunInterrupted(self.stops.signum or 2, abandoned=False)
-        if todo.size or self._calibrated_at != self.count:
-            self._calibrate("end")  # not again when a run that ended is resumed
+        """The loop: start, then each target (a health check and a calibration before
+        it when due), then the closing calibration."""
+        try:
+            self._start(resuming=self.history is not None)
+            if self.devices.simulation is not None:
+                self.devices.simulation.expect(self.plan.angles[todo], todo)
+            self.progress.start(self.plan, todo)
+            for done, i in enumerate(todo.tolist()):
+                self._between_targets()
+                self._target(i)
+                self.progress.advance(done + 1)
+                self.stops.raise_if_requested()
+            if self.state.calibrations.closing(self.state.count, measuring=bool(todo.size)):
+                self._calibrate("end")
+        finally:
+            self.stops.disarm()  # a signal now must not cut the ending short
 
     def _start(self, *, resuming: bool) -> None:
-        restored = False
-        if resuming and not self.calibrate_on_resume:
-            simulation = self.devices.simulation
-            state = self._latest_snapshot()
-            if simulation is not None and state is not None:
-                simulation.restore(state)
-                restored = True
+        restored = resuming and not self.calibrate_on_resume and self._restore_simulation()
         self._event("resume" if resuming else "start", {"targets_left": int(self.todo().size)})
         if self.devices.light is not None:  # a switchable lamp may be off at power-up
             self.devices.light.on()
         # A restored simulation keeps the uninterrupted run's schedule of health checks,
         # unless it stopped in a pause (then it goes on checking).
-        if not restored or self._unhealthy:
+        if not restored or self.state.unhealthy:
             self._check_health()
-        if self.calibrations == 0 or (resuming and self.calibrate_on_resume):
-            self._calibrate("start" if self.calibrations == 0 else "resume")
+        why = self.state.calibrations.opening(resuming=resuming, on_resume=self.calibrate_on_resume)
+        if why is not None:
+            self._calibrate(why)
+
+    def _restore_simulation(self) -> bool:
+        """Put the simulated backend in its state at the journal's end; whether it was."""
+        simulation = self.devices.simulation
+        state = None if self.history is None else latest_snapshot(self.history)
+        if simulation is None or state is None:
+            return False
+        simulation.restore(state)
+        return True
 
     def _between_targets(self) -> None:
-        t = self.time.now()
-        if self.health_due.due(self.count, t):
+        if self.state.health_due.due(self.state.count, self.time.now()):
             self._check_health()
-        if self.calibration_due.due(self.count, self.time.now()):
+        if self.state.calibrations.due(self.state.count, self.time.now()):
             self._calibrate("scheduled")
+
+    def _ending(self, exc: BaseException) -> tuple[Outcome, str]:
+        """How the session ends on ``exc`` (one of `_ENDINGS`), journaled after every
+        axis was told to hold."""
+        self._hold_all()
+        if isinstance(exc, RunInterrupted):
+            # A step abandoned half-way is redone from the state last journaled (a
+            # snapshot taken now would resume the simulation mid-step).
+            state = {} if exc.abandoned else self._sim()
+            data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
+            self._event("pause", {**data, **state})
+            return "interrupted", f"stopped by {exc.args[0]}"
+        if isinstance(exc, MotorFault | MotionTimeout):
+            self._event("fault", {**self._fault_data(exc), **self._sim()}, target=self._current)
+            return "fault", str(exc)
+        if isinstance(exc, DriverError):  # outside a target's retries: a calibration, the light
+            self._event("fault", {**self._fault_data(exc), **self._sim()})
+            return "fault", str(exc)
+        if isinstance(exc, _Stop):
+            return exc.outcome, str(exc)
+        return ("journal" if isinstance(exc, JournalError) else "aborted"), str(exc)
 
     def _end_session(self, outcome: Outcome) -> None:
         # A full disk: the session's end is all that is not recorded.
@@ -331,7 +302,7 @@ class Engine:
 
     def _skip(self, i: int, reason: str) -> None:
         self._event("skip", {"reason": reason, **self._sim()}, target=i)
-        self._session.skipped += 1
+        self._report.skipped += 1
 
     def _unsaturated(
         self, i: int, reading: Reading, exposure: float, averages: int
@@ -364,16 +335,15 @@ class Engine:
         back = [measured.read_back[a] for a in self.axes]
         wi, wo = self.rig.forward(np.array(back, dtype=np.float64))
         fields = reading_fields(reading, exposure, self.time.offset)
-        commanded = [f"{a}_commanded_rad" for a in self.axes]
-        coords = [f"coord_{c}" for c in plan.coordinate_names]
-        row: dict[str, Any] = {
+        names = plan.coordinate_names
+        row: dict[str, Any] = {  # the columns of `gonio.store.schema.samples_table`
             "target": i,
             "attempts": attempts,
-            **dict(zip(commanded, plan.angles[i].tolist(), strict=True)),
-            **{f"{a}_read_back_rad": v for a, v in zip(self.axes, back, strict=True)},
+            **{commanded(a): v for a, v in zip(self.axes, plan.angles[i].tolist(), strict=True)},
+            **{read_back(a): v for a, v in zip(self.axes, back, strict=True)},
             "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
             "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
-            **dict(zip(coords, plan.coords[i].tolist(), strict=True)),
+            **{coordinate(c): v for c, v in zip(names, plan.coords[i].tolist(), strict=True)},
             "exposure_s": fields["exposure_s"],
             "averages": int(plan.averages[i]),
             "n": reading.n,
@@ -385,72 +355,71 @@ class Engine:
             "started_s": fields["started_s"],
             "ended_s": fields["ended_s"],
             "utc": utc_now(),
-            "temperatures_c": self._temperatures,
+            "temperatures_c": self.state.temperatures,
             "sim_state": None,
         }  # fmt: skip
         state = self._sim()
         if state:
             row["sim_state"] = dumps(state["sim_state"])
-        self._temperatures = None
+        self.state.temperatures = None
         self.journal.sample(row)
-        self.count += 1
-        self._session.measured += 1
+        self.state.count += 1
+        self._report.measured += 1
 
     # -- health --------------------------------------------------------------------------
     def _check_health(self) -> None:
-        """Read every motor's health; pause while beyond the rig's limits."""
-        limits = self.rig.spec.health
+        """Read every motor's health; while a suspender trips, hold the axes and read
+        again every ``poll_s`` until none does (`Suspension`)."""
         spec = self.spec.health
-        started = self.time.now()
-        paused = False
+        suspension = Suspension(self.time.now(), spec.pause_timeout_minutes)
         while True:
-            found = assess(self.devices.bus.health(), limits)
-            problems, flagged = found.problems, found.flags
-            self._event("health", {**found.data(self.count), **self._sim()})
-            self.health_due.done(self.count, self.time.now())
-            self._temperatures = dumps(found.temperatures_c)
-            if flagged:
-                axis, flags = next(iter(flagged.items()))
-                raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
-            if not problems:
-                if paused:
-                    paused_s = self.time.now() - started
-                    self._event("resume", {"reason": "health", "paused_s": paused_s, **self._sim()})
+            step = suspension.consult(self._read_health())
+            if step is Step.GO:
                 return
-            if not paused:
-                paused = True
+            if step is Step.RESUME:
+                paused_s = suspension.paused_s(self.time.now())
+                self._event("resume", {"reason": "health", "paused_s": paused_s, **self._sim()})
+                return
+            if step is Step.PAUSE:
                 self._hold_all()
+                problems = suspension.problems
                 self._event("pause", {"reason": "health", "problems": problems, **self._sim()})
-            if self.time.now() - started >= 60.0 * spec.pause_timeout_minutes:
-                raise _Stop(
-                    "paused",
-                    f"paused {spec.pause_timeout_minutes:g} min for {problems[0]}; "
-                    "it did not clear",
-                )
-            if self.stops.requested:
-                raise RunInterrupted(self.stops.signum or 2, abandoned=False)
+            if suspension.expired(self.time.now()):
+                raise _Stop("paused", suspension.reason())
+            self.stops.raise_if_requested()
             self.devices.clock.sleep(spec.poll_s)
+
+    def _read_health(self) -> list[str]:
+        """Read every motor's health and journal it; what trips the suspenders (`_Stop`
+        if a motor reports a hardware error)."""
+        found = assess(self.devices.bus.health(), self.suspenders)
+        self._event("health", {**found.data(self.state.count), **self._sim()})
+        self.state.health_due.done(self.state.count, self.time.now())
+        self.state.temperatures = dumps(found.temperatures_c)
+        if found.flags:
+            axis, flags = next(iter(found.flags.items()))
+            raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
+        return found.problems
 
     # -- calibration ---------------------------------------------------------------------
     def _calibrate(self, why: str) -> None:
         """Read the reference standard (and a dark reading) and journal them as one
         ``calibration`` event."""
-        spec = self.spec.calibration
-        exposure = self.reference_exposure_s
+        spec, calibrations = self.spec.calibration, self.state.calibrations
+        exposure = calibrations.exposure_s
         if exposure is None:
             shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
         read = read_standard(
-            self.devices, self.stage, self.rig, self.calibrations, exposure, spec.averages,
+            self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
             dark=spec.dark, timeout_s=self.move_timeout_s,
         )  # fmt: skip
-        self.reference_exposure_s = read.exposure_s
         back = [read.reference.read_back[a] for a in self.axes]
         wi, wo = self.rig.forward(np.array(back))
         data: dict[str, Any] = {
             "why": why,
-            "k": self.calibrations,
-            "count": self.count,
+            "k": calibrations.k,
+            "count": self.state.count,
             "albedo": self.rig.spec.reference.albedo,
             "source_kind": self.rig.source_kind,
             "wi": wi.tolist(),
@@ -461,9 +430,7 @@ class Engine:
             **self._sim(),
         }
         self._event("calibration", data)
-        self.calibrations += 1
-        self._calibrated_at = self.count
-        self.calibration_due.done(self.count, self.time.now())
+        calibrations.done(self.state.count, self.time.now(), read.exposure_s)
 
     def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
         fields = reading_fields(reading, exposure, self.time.offset)

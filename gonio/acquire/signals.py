@@ -53,6 +53,12 @@ class StopRequests:
         if self.remaining_s() > self.grace_s:
             raise RunInterrupted(signum, abandoned=True)
 
+    def raise_if_requested(self) -> None:
+        """`RunInterrupted` (nothing abandoned) if a first signal asked the run to stop:
+        what the engine calls where it may stop (between targets, in a pause)."""
+        if self.signum is not None:
+            raise RunInterrupted(self.signum or signal.SIGINT, abandoned=False)
+
     def disarm(self) -> None:
         """From now on signals raise nothing: the run is ending (holding the axes,
         journaling how it ended), which a second Ctrl-C must not cut short."""
