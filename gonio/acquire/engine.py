@@ -44,10 +44,10 @@ from drivers.base import (
     MotorFault,
     Reading,
 )
-from gonio.acquire.calibration import Stage, read_standard
 from gonio.acquire.health import assess
-from gonio.acquire.measure import MOVE_TIMEOUT_S, Measured, measure_target, reading_fields
-from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
+from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.reference import Stage, read_standard
 from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
@@ -102,7 +102,7 @@ class Engine:
     history: Run | None = None
     calibrate_on_resume: bool = True
     retry_skipped: bool = False
-    progress: Progress = field(default_factory=Quiet)
+    progress: Observer = field(default_factory=Unobserved)
     stops: StopRequests = field(default_factory=StopRequests)
     move_timeout_s: float = MOVE_TIMEOUT_S
     # Set from the plan (and the history) when made:
@@ -326,7 +326,7 @@ class Engine:
         self,
         i: int,
         attempts: int,
-        measured: Measured,
+        measured: TargetReading,
         reading: Reading,
         exposure: float,
         remeasured: int,

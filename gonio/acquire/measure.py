@@ -22,7 +22,7 @@ MOVE_TIMEOUT_S = 600.0
 
 
 @dataclass(frozen=True)
-class Measured:
+class TargetReading:
     """What one target gave: the read-back joint angles (rad), the true ones when the
     backend is simulated (else None), the time the exposures could start (s, after the
     settle dwell) and the reading."""
@@ -42,7 +42,7 @@ def measure_target(
     *,
     settle_s: float,
     timeout_s: float = MOVE_TIMEOUT_S,
-) -> Measured:
+) -> TargetReading:
     """Move to ``pose`` (rad per axis), settle, measure sample ``index``."""
     simulation = devices.simulation
     if simulation is not None:
@@ -54,7 +54,7 @@ def measure_target(
     settled = devices.clock.now()
     read_back = bus.positions()
     true = simulation.true_positions() if simulation is not None else None
-    return Measured(read_back, true, settled, devices.detector.measure(exposure_s, averages))
+    return TargetReading(read_back, true, settled, devices.detector.measure(exposure_s, averages))
 
 
 def reading_fields(reading: Reading, asked_s: float, offset_s: float) -> dict[str, Any]:

@@ -1,5 +1,6 @@
-"""How a run shows its progress: a bar on a terminal (tqdm), plain periodic lines when
-the output is not a terminal, nothing when quiet.
+"""What the engine tells whoever watches a session (`Observer`: the targets to do, each
+one finished), and how a session is shown on one of `gonio.progress`'s displays
+(`Shown`): a bar on a terminal, plain periodic lines elsewhere, nothing when quiet.
 
 The time left is the planner's prediction for the targets still to measure (their
 moves, settle and exposures), scaled by the pace measured so far: (wall time spent) /
@@ -15,10 +16,11 @@ from typing import IO, Protocol
 
 import numpy as np
 
-from gonio.planner.plan import Plan, hms
+from gonio import progress
+from gonio.planner.plan import Plan
 
 
-class Progress(Protocol):
+class Observer(Protocol):
     def start(self, plan: Plan, todo: np.ndarray) -> None:
         """The run is about to measure the plan's targets ``todo`` (indices, in order)."""
         ...
@@ -38,10 +40,6 @@ class Pace:
         self.cumulative = np.concatenate([[0.0], np.cumsum(per_target[todo])])
         self.started = time.monotonic()
 
-    @property
-    def total(self) -> int:
-        return len(self.cumulative) - 1
-
     def left_s(self, done: int) -> float:
         """Wall seconds left after ``done`` targets."""
         spent = time.monotonic() - self.started
@@ -51,11 +49,10 @@ class Pace:
             return float(predicted_left)
         return float(predicted_left * spent / predicted_done)
 
-    def elapsed_s(self) -> float:
-        return time.monotonic() - self.started
 
+class Unobserved:
+    """Nobody watches."""
 
-class Quiet:
     def start(self, plan: Plan, todo: np.ndarray) -> None:
         pass
 
@@ -66,81 +63,29 @@ class Quiet:
         pass
 
 
-class Lines:
-    """A line every ``every_s`` seconds of wall time (and at the end)."""
+class Shown:
+    """A session shown on ``display``, its time left by `Pace`."""
 
-    def __init__(self, stream: IO[str] | None = None, every_s: float = 30.0) -> None:
-        self.stream = stream or sys.stderr
-        self.every_s = every_s
-        self.pace: Pace | None = None
-        self._last = 0.0
+    def __init__(self, display: progress.Progress) -> None:
+        self.display = display
         self._done = 0
 
     def start(self, plan: Plan, todo: np.ndarray) -> None:
-        self.pace = Pace(plan, todo)
-        self._last = time.monotonic()
-
-    def _line(self, done: int) -> None:
-        assert self.pace is not None
-        p = self.pace
-        print(
-            f"acquired {done}/{p.total} targets, {hms(p.elapsed_s())} elapsed, "
-            f"about {hms(p.left_s(done))} left",
-            file=self.stream,
-            flush=True,
-        )
+        pace = Pace(plan, todo)
+        self._done = 0
+        self.display.start(len(todo), "acquiring", unit="target", left_s=pace.left_s)
 
     def advance(self, done: int) -> None:
+        self.display.advance(done - self._done)
         self._done = done
-        if time.monotonic() - self._last >= self.every_s:
-            self._last = time.monotonic()
-            self._line(done)
 
     def close(self) -> None:
-        if self.pace is not None and self.pace.total:
-            self._line(self._done)
+        self.display.close()
 
 
-class Bar:
-    """A tqdm bar: targets done, rate, elapsed, and the time left by `Pace`."""
-
-    def __init__(self, stream: IO[str] | None = None) -> None:
-        self.stream = stream or sys.stderr
-        self.pace: Pace | None = None
-        self.bar: object | None = None
-
-    def start(self, plan: Plan, todo: np.ndarray) -> None:
-        from tqdm import tqdm
-
-        self.pace = Pace(plan, todo)
-        self.bar = tqdm(
-            total=len(todo),
-            file=self.stream,
-            unit="target",
-            mininterval=0.2,
-            bar_format="{desc} {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
-            "[{elapsed}, {rate_fmt}, {postfix}]",
-            desc="acquiring",
-        )
-
-    def advance(self, done: int) -> None:
-        from tqdm import tqdm
-
-        bar, pace = self.bar, self.pace
-        assert isinstance(bar, tqdm) and pace is not None
-        bar.update(done - bar.n)
-        bar.set_postfix_str(f"{hms(pace.left_s(done))} left", refresh=False)
-
-    def close(self) -> None:
-        from tqdm import tqdm
-
-        if isinstance(self.bar, tqdm):
-            self.bar.close()
-
-
-def for_stream(quiet: bool, stream: IO[str] | None = None) -> Progress:
-    """`Quiet` if ``quiet``, a `Bar` on a terminal, else `Lines`."""
-    stream = stream or sys.stderr
+def for_stream(quiet: bool, stream: IO[str] | None = None) -> Observer:
+    """Nothing if ``quiet``, else the session shown on ``stream`` (a bar on a terminal,
+    lines elsewhere)."""
     if quiet:
-        return Quiet()
-    return Bar(stream) if stream.isatty() else Lines(stream)
+        return Unobserved()
+    return Shown(progress.for_stream(False, stream or sys.stderr, done_word="acquired"))

@@ -15,6 +15,7 @@ import numpy as np
 
 from gonio import params
 from gonio.analysis.calibrated import calibrate
+from gonio.store import schema
 from gonio.store.read import Run
 
 
@@ -83,17 +84,17 @@ def sample_columns(run: Run) -> list[Column]:
                 f"coord_{name}",
                 coordinate_unit(name),
                 f"the plan's coordinate {name} ({run.plan.spec.parametrization})",
-                s[f"coord_{name}"],
+                s[schema.coordinate(name)],
             )
         )
     for axis in run.axes:
-        for which in ("commanded", "read_back"):
+        for which, stored in (("commanded", schema.commanded), ("read_back", schema.read_back)):
             cols.append(
                 _column(
                     f"{axis}_{which}",
                     "rad",
                     f"axis {axis}: the pose {which.replace('_', ' ')}",
-                    s[f"{axis}_{which}_rad"],
+                    s[stored(axis)],
                 )
             )
     cols += [

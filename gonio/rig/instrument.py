@@ -284,7 +284,7 @@ class ReferenceSpec(Strict):
     the normal, both in the sample's x-z plane (the classic 0°/45°). ``diameter_mm``:
     the standard's diameter; none (the default) means it is the sample's size
     (``constraints.sample_diameter_mm``: the standard sits in the sample holder).
-    `gonio.acquire.calibration.reference_geometry` refuses a geometry at which the
+    `gonio.acquire.reference.reference_geometry` refuses a geometry at which the
     standard would not fill what the calibration assumes."""
 
     albedo: float = Field(0.99, gt=0, le=1)

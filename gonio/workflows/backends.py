@@ -22,7 +22,7 @@ from typing import IO, Literal
 
 from drivers.base import Clock, Devices, StageTarget, SystemClock
 from drivers.dynamixel.bus import DynamixelBus
-from gonio.acquire.calibration import Stage
+from gonio.acquire.reference import Stage
 from gonio.acquire.runtime import RunTime, wall_offset
 from gonio.errors import GonioError
 from gonio.rig.model import Rig

@@ -25,9 +25,9 @@ import numpy as np
 
 from drivers.base import DriverError
 from gonio import __version__
-from gonio.acquire.calibration import geometry_label, reference_pose
 from gonio.acquire.engine import Engine, Report
-from gonio.acquire.progress import Progress, Quiet
+from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.reference import geometry_label, reference_pose
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
@@ -159,7 +159,7 @@ def _run_engine(
     backend: backends.Backend,
     history: Run | None,
     *,
-    progress: Progress,
+    progress: Observer,
     retry_skipped: bool = False,
     argv: list[str],
 ) -> SessionResult:
@@ -212,7 +212,7 @@ def start(
     seed: int | None = None,
     rehearse: bool = False,
     speedup: float = 50.0,
-    progress: Progress | None = None,
+    progress: Observer | None = None,
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     force_simulated: bool = False,
@@ -248,7 +248,7 @@ def start(
         ) as journal:  # fmt: skip
             try:
                 return _run_engine(
-                    journal, plan, backend, None, progress=progress or Quiet(), argv=argv or []
+                    journal, plan, backend, None, progress=progress or Unobserved(), argv=argv or []
                 )
             except DriverError:
                 # The devices could not be opened (port missing, busy, no permission):
@@ -326,7 +326,7 @@ def resume(
     scene_path: Path | None = None,
     force: bool = False,
     retry_skipped: bool = False,
-    progress: Progress | None = None,
+    progress: Observer | None = None,
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     speedup: float | None = None,
@@ -372,7 +372,7 @@ def resume(
             journal.end_session(utc_now(), "forced")
         try:
             return _run_engine(
-                journal, run.plan, backend, run, progress=progress or Quiet(),
+                journal, run.plan, backend, run, progress=progress or Unobserved(),
                 retry_skipped=retry_skipped, argv=argv or [],
             )  # fmt: skip
         finally:

@@ -20,7 +20,7 @@ import numpy as np
 
 from gonio.acquire.engine import Report
 from gonio.acquire.measure import measure_target
-from gonio.acquire.progress import Progress
+from gonio.acquire.progress import Observer
 from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
@@ -92,7 +92,7 @@ def simulate_plan(
     files: session.Files | None = None,
     output: Path | None = None,
     overwrite: bool = False,
-    progress: Progress | None = None,
+    progress: Observer | None = None,
 ) -> Result:
     """Measure ``plan`` in ``scene`` on the simulated backend and recover the BRDF.
     ``files``: the texts the run is made from (default: the plan's and rig's, and the

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gonio import radiometry
-from gonio.acquire.calibration import reference_pose
+from gonio.acquire.reference import reference_pose
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import simulate_plan

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from gonio import radiometry
-from gonio.acquire.calibration import CALIBRATION_INDEX
 from gonio.acquire.measure import measure_target
+from gonio.acquire.reference import CALIBRATION_INDEX
 from gonio.planner import build
 from gonio.planner.plan import Plan, load_plan_source
 from gonio.planner.schema import PlanSpec

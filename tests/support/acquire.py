@@ -129,7 +129,7 @@ def integrity(path: Path) -> str:
 
 
 class PipeProgress:
-    """A `gonio.acquire.progress.Progress` that writes ``t INDEX`` to a pipe for every
+    """A `gonio.acquire.progress.Observer` that writes ``t INDEX`` to a pipe for every
     target finished (called after its sample or skip was committed)."""
 
     def __init__(self, fd: int, pause_s: float = 0.0) -> None:

@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.acquire.progress import Bar, Lines, for_stream
+from gonio.acquire.progress import Shown, for_stream
 from gonio.planner import load_plan_source
+from gonio.progress import Bar, Lines
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file, scene_file
 
@@ -70,7 +71,7 @@ def test_progress_lines_when_not_a_terminal_and_a_bar_on_one() -> None:
     plan = load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
     todo = np.arange(len(plan))
     out = io.StringIO()
-    lines = Lines(out, every_s=0.0)
+    lines = Shown(Lines(out, every_s=0.0, done_word="acquired"))
     lines.start(plan, todo)
     for done in (100, 250, 500):
         lines.advance(done)
@@ -85,10 +86,10 @@ def test_progress_lines_when_not_a_terminal_and_a_bar_on_one() -> None:
         def isatty(self) -> bool:
             return True
 
-    assert isinstance(for_stream(False, Tty()), Bar)
-    assert isinstance(for_stream(False, io.StringIO()), Lines)
+    assert isinstance(for_stream(False, Tty()).display, Bar)
+    assert isinstance(for_stream(False, io.StringIO()).display, Lines)
     bar_out = Tty()
-    bar = Bar(bar_out)
+    bar = Shown(Bar(bar_out))
     bar.start(plan, todo)
     bar.advance(250)
     bar.close()

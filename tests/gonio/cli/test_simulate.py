@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.calibration import reference_pose
+from gonio.acquire.reference import reference_pose
 from gonio.analysis.calibrated import calibrate
 from gonio.analysis.summary import truth_of
 from gonio.cli.simulate import render_result as render

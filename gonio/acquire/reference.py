@@ -21,7 +21,7 @@ import numpy as np
 
 from drivers.base import Devices, Reading, StageTarget
 from gonio import radiometry
-from gonio.acquire.measure import Measured, measure_target
+from gonio.acquire.measure import TargetReading, measure_target
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError
 from gonio.rig.model import Reason, Rig
@@ -125,7 +125,7 @@ class StandardReadings:
     included), the dark reading at the same pose and exposure (None if not taken), and
     that exposure (s, as asked)."""
 
-    reference: Measured
+    reference: TargetReading
     dark: Reading | None
     exposure_s: float
 
@@ -147,7 +147,7 @@ def read_standard(
     pose = dict(zip(rig.axes, reference_pose(rig).tolist(), strict=True))
     shortest = devices.detector.exposure_range_s[0]
 
-    def read(index: int) -> Measured:
+    def read(index: int) -> TargetReading:
         return measure_target(
             devices, index, pose, exposure_s, averages, settle_s=rig.spec.settle_s,
             timeout_s=timeout_s,

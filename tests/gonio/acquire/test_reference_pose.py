@@ -1,4 +1,4 @@
-"""`gonio.acquire.calibration`'s reference geometry: the rig file's, where the reading of
+"""`gonio.acquire.reference`'s reference geometry: the rig file's, where the reading of
 the standard is what the calibration assumes, else the rig refused at the field."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gonio import radiometry
-from gonio.acquire.calibration import geometry_label, reference_geometry, reference_pose
+from gonio.acquire.reference import geometry_label, reference_geometry, reference_pose
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from tests.conftest import ARCH_POINT_FILE
