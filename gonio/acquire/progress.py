@@ -15,7 +15,8 @@ from typing import IO, Protocol
 
 import numpy as np
 
-from gonio.planner.plan import Plan, hms
+from gonio.planner.model import Plan
+from gonio.progress import hms
 
 
 class Progress(Protocol):
