@@ -26,7 +26,7 @@ import numpy as np
 from _machine import describe
 
 from gonio.planner import load_plan_source
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 from gonio.store.journal import Journal
 from gonio.store.schema import samples_table
 from gonio.workflows import session

@@ -4,7 +4,7 @@ faster than generation order, and how long it takes.
 Three tables (moves only: settle and exposure do not depend on the order):
 
 1. ``shipped``: every shipped plan on every shipped rig through the real planner
-   (`gonio.planner.plan.build`, ``bounds=True``, default budgets): the ordered moves
+   (`gonio.planner.build`, ``bounds=True``, default budgets): the ordered moves
    against the Held–Karp bound and the MST (both on the relaxed any-branch time: they
    bound every order with every choice of inverse-kinematics solutions) and against
    LKH-3's tour on the very poses the planner chose (`gonio.planner.lkh`, where `elkai`
@@ -36,11 +36,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import describe
 
-from gonio.planner import lkh
+from gonio.planner import Plan, build, lkh, load_plan
 from gonio.planner.ordering import default_kicks
-from gonio.planner.plan import Plan, build, hms, load_plan
 from gonio.planner.schema import PlanSpec
 from gonio.planner.search import path_time
+from gonio.progress import hms
 from gonio.rig.model import Rig
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -37,8 +37,8 @@ from _machine import describe
 
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
-from gonio.planner.plan import Plan, load_plan_source
-from gonio.planner.stored import plan_bytes
+from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner.model import Plan
 from gonio.store.journal import Journal
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.scene import load_scene

@@ -21,7 +21,7 @@ from _machine import describe
 
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
 from sim.record import SimRun

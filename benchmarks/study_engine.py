@@ -267,7 +267,7 @@ def timing(args: argparse.Namespace) -> None:
     import time
 
     from gonio import progress as planning
-    from gonio.planner.plan import build
+    from gonio.planner.builder import build
     from gonio.planner.schema import PlanSpec
     from gonio.rig.model import Rig
     from gonio.tradeoff.spec import EFFECT_NAMES

@@ -1,6 +1,9 @@
-"""Direction arrays: the one place inputs of shape (..., 3) are checked and converted."""
+"""Direction arrays: the one place inputs of shape (..., 3) are checked and converted,
+and where uniform directions are drawn (`uniform_cap`)."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -72,3 +75,12 @@ def pair_components(wi: ArrayLike, wo: ArrayLike) -> tuple[tuple[int, ...], Comp
             "normalize with w / np.linalg.norm(w, axis=-1, keepdims=True)"
         )
     return lead, (xi, yi, zi), (xo, yo, zo)
+
+
+def uniform_cap(rng: np.random.Generator, n: int, theta_max: float) -> FloatArray:
+    """``n`` unit directions uniform in solid angle over the cap θ ≤ ``theta_max`` (rad;
+    at most the hemisphere)."""
+    z = rng.uniform(max(math.cos(theta_max), 0.0), 1.0, n)
+    phi = rng.uniform(0.0, 2.0 * math.pi, n)
+    s = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)

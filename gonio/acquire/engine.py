@@ -53,7 +53,7 @@ from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
 from gonio.errors import GonioError
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 from gonio.planner.schema import AcquisitionSpec
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps

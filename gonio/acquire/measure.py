@@ -3,7 +3,7 @@ axis limits is refused by the bus before anything is sent: the contract), wait u
 motion stopped, wait the rig's settle dwell, read the positions back, measure.
 
 The settle dwell is waited here, on the devices' clock, exactly once per target: the
-planner's predicted time (`gonio.planner.plan`) counts it the same way (travel + settle
+planner's predicted time (`gonio.planner.builder`) counts it the same way (travel + settle
 + exposure × averages). A simulated backend is told which sample comes next (its random
 streams and injected faults) through `drivers.base.Simulated`, when it offers it.
 """

@@ -17,7 +17,7 @@ from typing import IO, Protocol
 import numpy as np
 
 from gonio import progress
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 
 
 class Observer(Protocol):

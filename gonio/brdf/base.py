@@ -27,6 +27,11 @@ from gonio.types import ArrayLike, FloatArray
 Colour: TypeAlias = float | tuple[float, float, float]
 #: Any stored parameter value.
 ParamValue: TypeAlias = float | tuple[float, float, float] | str
+#: ε (sr⁻¹) of the logarithmic scale of BRDF values, log(f + ε): what a reconstruction
+#: interpolates (`gonio.reconstruct.transforms`, ``log``) and whose interpolation error
+#: the adaptive planner's density follows (`gonio.planner.adaptive`). Below it, values
+#: count linearly, not in log.
+LOG_FLOOR = 1e-2
 
 
 class BRDF(ABC):

@@ -68,7 +68,8 @@ def _resume_command(path: Path | None) -> str:
 
 def cmd_acquire(args: argparse.Namespace) -> int:
     from gonio.cli import run_table
-    from gonio.planner.plan import load_plan_source, render_summary
+    from gonio.cli.render import render_summary
+    from gonio.planner.files import load_plan_source
     from gonio.workflows import session
 
     progress = progress_module.for_stream(args.quiet)

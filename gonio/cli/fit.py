@@ -40,9 +40,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from gonio.analysis.calibrated import calibrate
     from gonio.analysis.measured import Measured
     from gonio.analysis.shared import shared_error
+    from gonio.brdf.family import parse
     from gonio.config import ConfigError
     from gonio.errors import GonioError
-    from gonio.reconstruct.family import parse
     from gonio.reconstruct.fit import fit
     from gonio.store.read import open_run
 

@@ -6,8 +6,9 @@ import argparse
 import contextlib
 from pathlib import Path
 
+from gonio.cli.render import render_summary
 from gonio.output import reserve_output
-from gonio.planner.plan import load_plan_source, render_summary
+from gonio.planner.files import load_plan_source, plan_bytes
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -50,8 +51,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
         plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
         print(render_summary(plan))
         if stored is not None:
-            from gonio.planner.stored import plan_bytes
-
             stored.write_bytes(plan_bytes(plan))
             print(f"wrote {len(plan)} targets to {args.output}")
         if figure is not None:

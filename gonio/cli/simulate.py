@@ -21,7 +21,7 @@ from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.analysis.summary import error_figures
 from gonio.cli.run_table import render
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from gonio.workflows import session
 from gonio.workflows.simulate import Result, simulate_plan
 

@@ -35,8 +35,8 @@ from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.export.columns import coordinate_unit, sample_columns
 from gonio.output import PendingOutput
-from gonio.planner.plan import ARRAYS
-from gonio.planner.stored import plan_bytes
+from gonio.planner.files import plan_bytes
+from gonio.planner.model import ARRAYS
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run

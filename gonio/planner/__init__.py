@@ -1,18 +1,21 @@
 """The sampling planner: plan file → points uniform in a parametrization's coordinates →
 reachable direction pairs → joint angles → an ordered, timed `Plan`, stored and read
-back bit for bit (`Plan.write`, `read_plan`). See docs/planner.md."""
+back bit for bit (`write_plan`, `read_plan`). See docs/planner.md.
 
-from gonio.planner.plan import (
-    Plan,
+Modules: `model` (the `Plan`, its `Summary`, the hashes), `builder` (`build`), `files`
+(plan files and stored plans), `two_pass` (the adaptive strategy's second pass)."""
+
+from gonio.planner.builder import build
+from gonio.planner.files import (
     PlanSource,
-    Summary,
-    build,
-    content_hash,
     load_plan,
     load_plan_source,
-    render_summary,
+    parse_plan,
+    plan_bytes,
+    read_plan,
+    write_plan,
 )
-from gonio.planner.stored import read_plan
+from gonio.planner.model import Plan, Summary, content_hash, sha256
 
 __all__ = [
     "Plan",
@@ -22,6 +25,9 @@ __all__ = [
     "content_hash",
     "load_plan",
     "load_plan_source",
+    "parse_plan",
+    "plan_bytes",
     "read_plan",
-    "render_summary",
+    "sha256",
+    "write_plan",
 ]

@@ -1,9 +1,9 @@
-"""Adaptive placement (issue 16 §2): the remaining budget of a plan placed with a density
-that follows where a piecewise-linear reconstruction errs, estimated from a survey.
+"""Adaptive placement: the remaining budget of a plan placed with a density that follows
+where a piecewise-linear reconstruction errs, estimated from a survey.
 
 The reconstruction interpolates g = log(f + ε) linearly in the parametrization's scaled
-coordinates (the unit box; `gonio.reconstruct.coordinates`), and is scored on
-log(1 + f) over pairs uniform in dωi dωo (`gonio.reconstruct.testset`). Locally the
+coordinates (the unit box; docs/reconstruction.md), ε = `LOG_FLOOR`, and is scored on
+log(1 + f) over pairs uniform in dωi dωo (the test set, docs/evaluation.md). Locally the
 interpolation error of g is about h²‖∇²g‖ for a spacing h, and it reaches the metric
 through d log(1 + f)/dg = f/(1 + f). With w the density of the test measure in the
 unit box and ρ the sample density (h ∝ ρ^(−1/d)), the expected squared error
@@ -28,8 +28,8 @@ from scipy import ndimage
 from scipy.stats import qmc
 
 from gonio import params
-from gonio.reconstruct.testset import uniform_cap
-from gonio.reconstruct.transforms import LOG_FLOOR
+from gonio.brdf.base import LOG_FLOOR
+from gonio.directions import uniform_cap
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 

@@ -15,8 +15,10 @@ from typing import Any, Literal
 from pydantic import Field, model_validator
 
 from gonio import brdf, params
+from gonio.brdf import family
 from gonio.brdf.material import MaterialError, build
 from gonio.config import Strict, excerpt, field_error
+from gonio.errors import GonioError
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
 
@@ -44,11 +46,8 @@ class AdaptiveSpec(Strict):
     @model_validator(mode="after")
     def _known_model(self) -> AdaptiveSpec:
         if self.model != "survey":  # refused when the file is read, not after the survey
-            from gonio.errors import GonioError
-            from gonio.reconstruct.family import parse
-
             try:
-                parse(self.model)
+                family.parse(self.model)
             except GonioError as exc:
                 raise field_error("model", f"{exc} (or survey: no model)") from None
         return self

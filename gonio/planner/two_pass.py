@@ -1,52 +1,42 @@
-"""The adaptive strategy's second pass (docs/adaptive.md): planned from the survey's
-measurements and appended to the survey's plan.
+"""The adaptive strategy's second pass (docs/adaptive.md): planned from an estimate of
+the material made from the survey's measurements, and appended to the survey's plan.
 
 `build` of an adaptive plan gives the first pass, a Sobol survey of ``survey`` kept
-targets. Once it is measured, `extend` fits the ``model`` family to its samples (or,
-for ``survey``, reconstructs them), takes the density of `gonio.planner.adaptive` from
-that estimate, places the rest of the
-target with it (a share ``edge`` moved onto the edge of the rig's cap), orders those
-targets from the survey's last pose, and returns the whole plan: the survey's targets
-unchanged, first, then the new ones. The engine stores that plan in the run in place
-of the survey's, so a resumed run measures the stored second pass and never plans it
-again; the same survey samples give the same second pass, bit for bit.
+targets (`Plan.is_survey`). Once it is measured, the caller estimates the BRDF from its
+samples (`gonio.workflows.adaptive.estimate`: the ``model`` family fitted to them, or
+for ``survey`` their own reconstruction); `extend` takes the density of
+`gonio.planner.adaptive` from that estimate, places the rest of the target with it (a
+share ``edge`` moved onto the edge of the rig's cap), orders those targets from the
+survey's last pose, and returns the whole plan: the survey's targets unchanged, first,
+then the new ones. The engine stores that plan in the run in place of the survey's, so
+a resumed run measures the stored second pass and never plans it again; the same
+survey samples give the same second pass, bit for bit.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gonio import params
 from gonio.planner import adaptive
+from gonio.planner.builder import build
+from gonio.planner.model import Plan
 from gonio.planner.placement import draw_kept
-from gonio.planner.plan import Plan, build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 
-if TYPE_CHECKING:
-    from gonio.analysis.measured import Measured
 
-#: The ``model`` that steers by the survey's own reconstruction instead of a fit.
-SURVEY = "survey"
-
-
-def is_survey(plan: Plan) -> bool:
-    """The plan is the first pass of an adaptive plan, its second still to be planned."""
-    s = plan.spec.sampling
-    return s.strategy == "adaptive" and s.target is not None and len(plan) < s.target
-
-
-def extend(first: Plan, measured: Measured, *, where: str = "plan") -> Plan:
+def extend(first: Plan, estimate: BrdfEval, *, where: str = "plan") -> Plan:
     """The whole adaptive plan: ``first`` (the survey, as built) and the second pass
-    planned from ``measured`` (the survey's samples; see the module)."""
+    planned from ``estimate`` (the BRDF estimated from the survey's samples, sr⁻¹; see
+    the module)."""
     spec, rig = first.spec, first.rig
-    assert spec.sampling.target is not None and is_survey(first)
-    coords = second_pass_points(spec, rig, measured, spec.sampling.target - len(first), where)
+    assert spec.sampling.target is not None and first.is_survey
+    coords = second_pass_points(spec, rig, estimate, spec.sampling.target - len(first), where)
     second = build(
         spec, rig, where=where, text=first.plan_text, placed=coords, start=first.angles[-1]
     )
@@ -54,17 +44,16 @@ def extend(first: Plan, measured: Measured, *, where: str = "plan") -> Plan:
 
 
 def second_pass_points(
-    spec: PlanSpec, rig: Rig, measured: Measured, count: int, where: str = "plan"
+    spec: PlanSpec, rig: Rig, estimate: BrdfEval, count: int, where: str = "plan"
 ) -> FloatArray:
     """The second pass's points in the coordinate box (generation order: every point
-    drawn, ``count`` of them kept): the density (`adaptive.density`) of the estimate
-    from ``measured`` (`estimate`), a share ``edge`` of the points moved onto the edge
-    of the rig's cap."""
+    drawn, ``count`` of them kept): the density (`adaptive.density`) of ``estimate``
+    (the BRDF estimated from the survey, sr⁻¹), a share ``edge`` of the points moved
+    onto the edge of the rig's cap."""
     options = spec.sampling.options()
     density = adaptive.density(
-        estimate(measured, options.model), rig, spec.parametrization, spec.isotropic,
-        floor=options.floor,
-    )  # fmt: skip
+        estimate, rig, spec.parametrization, spec.isotropic, floor=options.floor
+    )
     p = params.get(spec.parametrization)
     bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
 
@@ -80,18 +69,6 @@ def second_pass_points(
         edge = draw_kept(spec, rig, where, lambda n: inside(edged, n, True), on_edge)
         coords = np.concatenate([coords, edge])
     return coords
-
-
-def estimate(measured: Measured, model: str) -> BrdfEval:
-    """The BRDF the density is taken from: the ``model`` family fitted to the survey, or
-    for ``survey`` the survey's own rbf reconstruction (no model at all)."""
-    if model == SURVEY:
-        from gonio.reconstruct.build import reconstruct
-
-        return reconstruct(measured, method="rbf", extrapolate="nearest").eval
-    from gonio.reconstruct.fit import fit
-
-    return fit(measured, model).model.eval
 
 
 def draw_points(

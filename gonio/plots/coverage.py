@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from gonio import params
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 from gonio.plots import require_matplotlib
 from gonio.rig.model import Reason
 from gonio.types import FloatArray

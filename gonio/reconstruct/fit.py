@@ -31,9 +31,9 @@ from gonio.analysis.measured import Measured
 from gonio.analysis.shared import SharedError
 from gonio.brdf import BRDF
 from gonio.brdf.composite import spec_of
+from gonio.brdf.family import Family, parse
 from gonio.errors import GonioError
 from gonio.reconstruct import regions as pair_regions
-from gonio.reconstruct.family import Family, parse
 from gonio.reconstruct.starts import starts as make_starts
 from gonio.types import FloatArray
 

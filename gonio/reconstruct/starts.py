@@ -9,7 +9,7 @@ the mirror direction for Phong. A family's k-th lobe starts 3^k times broader. G
 the shapes, the weights (albedo, ks, f0) are the non-negative least-squares scales of
 each term at weight 1, per channel. Later starts multiply the shape parameters by
 log-normal factors (σ = `JITTER` in log) and solve the weights again. Parameters with
-no estimate start at `gonio.reconstruct.family.TYPICAL`.
+no estimate start at `gonio.brdf.family.TYPICAL`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import numpy as np
 from scipy.optimize import nnls
 
 from gonio.analysis.measured import Measured
+from gonio.brdf.family import Family, Slot
 from gonio.brdf.geometry import pair
-from gonio.reconstruct.family import Family, Slot
 from gonio.types import FloatArray
 
 #: Percentile of f taken as the diffuse level.

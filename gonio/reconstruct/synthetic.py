@@ -20,8 +20,10 @@ from gonio import params
 from gonio.analysis.measured import Measured
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
+from gonio.planner.two_pass import second_pass_points
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
+from gonio.workflows.adaptive import estimate
 
 if TYPE_CHECKING:
     from collections.abc import Mapping
@@ -101,16 +103,16 @@ def synthesize_adaptive(
     """A `Measured` of ``f`` at the pairs of an adaptive plan of ``n`` kept targets
     (``adaptive``: its options, `gonio.planner.schema.AdaptiveSpec`): the Sobol survey
     valued like `synthesize`, then the second pass planned from those values and σs
-    (`gonio.planner.two_pass.second_pass_points`: the σs weight the fit that steers it)
-    and valued too, survey first."""
-    from gonio.planner.two_pass import second_pass_points
-
+    (`gonio.planner.two_pass.second_pass_points`, steered by
+    `gonio.workflows.adaptive.estimate`: the σs weight the fit) and valued too, survey
+    first."""
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
     sigma = {"relative_sigma": relative_sigma, "sigma_floor": sigma_floor}
     survey = measured_at(f, spec, rig, coords, **sigma)
-    rest = second_pass_points(spec, rig, survey, n - len(survey))
+    steer = estimate(survey, spec.sampling.options().model)
+    rest = second_pass_points(spec, rig, steer, n - len(survey))
     return replace(
         survey.joined(measured_at(f, spec, rig, rest, **sigma)),
         source=f"synthetic adaptive {parametrization} "

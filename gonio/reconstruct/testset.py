@@ -10,11 +10,11 @@ footprint, axis limits, collisions: `Rig.reachable`) are dropped and more are dr
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from gonio.directions import uniform_cap
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
@@ -42,15 +42,6 @@ class TestSet:
 
     def __len__(self) -> int:
         return len(self.wi)
-
-
-def uniform_cap(rng: np.random.Generator, n: int, theta_max: float) -> FloatArray:
-    """``n`` unit directions uniform in solid angle over the cap θ ≤ ``theta_max`` (rad;
-    at most the hemisphere)."""
-    z = rng.uniform(max(math.cos(theta_max), 0.0), 1.0, n)
-    phi = rng.uniform(0.0, 2.0 * math.pi, n)
-    s = np.sqrt(np.maximum(1.0 - z * z, 0.0))
-    return np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=-1)
 
 
 def draw(

@@ -19,11 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from gonio.brdf.base import LOG_FLOOR
 from gonio.errors import GonioError, UnknownNameError
 from gonio.types import BrdfEval, FloatArray
 
-#: ε of ``log`` (sr⁻¹): below it, values are interpolated linearly, not in log.
-LOG_FLOOR = 1e-2
 #: ε of ``log_cos`` (sr⁻¹): below it, values are interpolated linearly, not in log.
 LOG_COS_FLOOR = 1e-2
 #: ε of ``ratio`` (sr⁻¹): keeps the ratio finite where the model is 0.

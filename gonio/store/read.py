@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from gonio.planner.plan import Plan
-from gonio.planner.stored import parse_plan
+from gonio.planner.files import parse_plan
+from gonio.planner.model import Plan
 from gonio.store.journal import APPLICATION_ID, SCHEMA_VERSION, JournalError
 from gonio.store.schema import FLOAT64, Column, commanded, read_back, samples_table
 from gonio.types import FloatArray
@@ -107,10 +107,8 @@ class Run:
     def complete(self) -> bool:
         """The last session ended the run (every target measured or skipped; for an
         adaptive plan, its second pass too)."""
-        from gonio.planner.two_pass import is_survey
-
         done = bool(self.sessions) and self.sessions[-1].outcome == "completed"
-        return done and not is_survey(self.plan)
+        return done and not self.plan.is_survey
 
 
 def check_version(conn: sqlite3.Connection, path: Path) -> None:

@@ -1,4 +1,4 @@
-"""One combination of a sweep → one results row: plan it (`gonio.planner.plan.build`),
+"""One combination of a sweep → one results row: plan it (`gonio.planner.build`),
 acquire it on the simulated backend in memory (`gonio.workflows.simulate.simulate_plan`: the engine,
 journal and calibration of `gonio acquire`), reconstruct it
 (`gonio.reconstruct.methods`) and score it against the scene's truth on the sweep's test
@@ -23,7 +23,7 @@ from gonio import progress as planning
 from gonio.analysis.measured import Measured
 from gonio.analysis.summary import figures
 from gonio.errors import GonioError
-from gonio.planner.plan import build
+from gonio.planner.builder import build
 from gonio.reconstruct import testset
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.methods import reconstruction

@@ -33,13 +33,14 @@ from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
-from gonio.planner.plan import Plan, content_hash, sha256
-from gonio.planner.stored import parse_plan, plan_bytes
-from gonio.planner.two_pass import extend, is_survey
+from gonio.planner.files import parse_plan, plan_bytes
+from gonio.planner.model import Plan, content_hash, sha256
+from gonio.planner.two_pass import extend
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, remove_run_file
 from gonio.store.read import Run, read_run
 from gonio.workflows import backends
+from gonio.workflows.adaptive import estimate
 from gonio.workflows.backends import BackendKind
 from sim.scene import Scene, load_scene
 
@@ -184,7 +185,7 @@ def _run_engine(
         report = engine.run()
         measured, skipped = measured + report.measured, skipped + report.skipped
         run = read_run(journal.conn, path)
-        if report.outcome != "completed" or not is_survey(plan):
+        if report.outcome != "completed" or not plan.is_survey:
             report = replace(report, measured=measured, skipped=skipped)
             return SessionResult(report, journal.path, run)
         plan = _second_pass(journal, run)
@@ -193,9 +194,11 @@ def _run_engine(
 
 def _second_pass(journal: Journal, run: Run) -> Plan:
     """The adaptive plan's second pass planned from the survey's samples in the journal
-    (`gonio.planner.two_pass`), stored in the run in place of the survey's plan (one
-    statement: a crash leaves either) and journaled; the whole plan."""
-    whole = extend(run.plan, Measured.from_run(run), where=str(run.path))
+    (`gonio.planner.two_pass`, steered by `gonio.workflows.adaptive.estimate`), stored in
+    the run in place of the survey's plan (one statement: a crash leaves either) and
+    journaled; the whole plan."""
+    model = run.plan.spec.sampling.options().model
+    whole = extend(run.plan, estimate(Measured.from_run(run), model), where=str(run.path))
     journal.replace_plan(plan_bytes(whole))
     t_s = float(np.max(run.samples["ended_s"])) if len(run) else 0.0
     journal.event("second_pass", t_s, utc_now(), {"survey": len(run.plan), "targets": len(whole)})

@@ -24,7 +24,7 @@ from gonio.acquire.progress import Observer
 from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
-from gonio.planner.plan import Plan
+from gonio.planner.model import Plan
 from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session

@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gonio.config import ConfigError
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import load_sweep
 from sim.scene import load_scene

@@ -13,7 +13,7 @@ import yaml
 
 from gonio import config
 from gonio.config import ConfigError, read_yaml
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from tests.conftest import CONFIGS, CliResult
 
 Gonio = Callable[..., CliResult]

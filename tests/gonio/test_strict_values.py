@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from gonio.config import ConfigError
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult

@@ -13,7 +13,8 @@ from gonio import radiometry
 from gonio.acquire.measure import measure_target
 from gonio.acquire.reference import CALIBRATION_INDEX
 from gonio.planner import build
-from gonio.planner.plan import Plan, load_plan_source
+from gonio.planner.files import load_plan_source
+from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import measure_targets

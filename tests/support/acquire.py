@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from gonio.planner.plan import Plan, PlanSource, load_plan_source
+from gonio.planner.files import PlanSource, load_plan_source
+from gonio.planner.model import Plan
 from gonio.store.read import Run
 from gonio.workflows import session
 from sim.scene import Scene

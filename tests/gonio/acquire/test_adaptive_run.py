@@ -12,7 +12,6 @@ import pytest
 import yaml
 
 from gonio.planner import adaptive
-from gonio.planner.two_pass import is_survey
 from gonio.store.read import Run, open_run
 from gonio.workflows import session
 from tests.support.acquire import (
@@ -61,7 +60,7 @@ def test_two_passes_in_one_run(
     adaptive_files: RunFiles, uninterrupted: Callable[[RunFiles], Run]
 ) -> None:
     survey, _, _ = adaptive_files.files()
-    assert is_survey(survey) and len(survey) == SURVEY
+    assert survey.is_survey and len(survey) == SURVEY
     run = uninterrupted(adaptive_files)
     assert run.complete and len(run.plan) == TARGET and len(run) == TARGET
     # The survey's targets keep their places; the second pass follows them.

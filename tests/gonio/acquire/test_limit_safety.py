@@ -20,7 +20,8 @@ from hypothesis import strategies as st
 from drivers.dynamixel.axis import AxisConfig
 from gonio.acquire.engine import Engine, Report
 from gonio.acquire.runtime import RunTime
-from gonio.planner.plan import ARRAYS, Plan, load_plan_source
+from gonio.planner.files import load_plan_source
+from gonio.planner.model import ARRAYS, Plan
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal
 from gonio.workflows.rehearsal import rehearsal_devices

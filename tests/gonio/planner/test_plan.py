@@ -13,10 +13,13 @@ import numpy as np
 import pytest
 
 from gonio import brdf, params
+from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, load_plan, ordering, placement, sampling
-from gonio.planner.plan import Plan, hms, render_summary
+from gonio.planner.files import write_plan
+from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
+from gonio.progress import hms
 from gonio.rig.model import Reason, Rig
 from tests.support.rigs import with_point_source
 
@@ -297,7 +300,7 @@ def test_csv_part_reads_with_any_csv_reader(plans: dict[str, Plan], tmp_path: Pa
     """Past the ``#`` header the stored plan is plain CSV, floats written exactly."""
     plan = plans["arch-aniso"]
     path = tmp_path / "plan.csv"
-    plan.write(path)
+    write_plan(plan, path)
     with path.open(encoding="utf-8") as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert len(rows) == len(plan)

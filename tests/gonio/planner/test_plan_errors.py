@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 from gonio.config import ConfigError
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from tests.conftest import CONFIGS, CliResult
 
 QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())

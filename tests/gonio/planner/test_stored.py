@@ -17,9 +17,9 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.planner import build, content_hash, load_plan, load_plan_source, read_plan
-from gonio.planner.plan import ARRAYS, Plan
+from gonio.planner.files import MAGIC, columns, write_plan
+from gonio.planner.model import ARRAYS, Plan
 from gonio.planner.schema import PlanSpec
-from gonio.planner.stored import MAGIC, columns
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
 from tests.conftest import CONFIGS
@@ -83,7 +83,7 @@ def test_write_then_read_is_the_same_plan_bit_for_bit(
 ) -> None:
     plan = build(s, rigs[rig], bounds=bounds)
     path = tmp_path / "plan.csv"
-    plan.write(path)
+    write_plan(plan, path)
     again = read_plan(path)  # the rig rebuilt from the text the file carries
     assert_identical(again, plan)
     assert again.rig.axes == plan.rig.axes
@@ -91,7 +91,7 @@ def test_write_then_read_is_the_same_plan_bit_for_bit(
     assert again.ordering is None  # the search's diagnostics are not stored
     assert_identical(read_plan(path, rig=plan.rig), plan)
     # Written again, byte for byte the same file.
-    again.write(tmp_path / "again.csv")
+    write_plan(again, tmp_path / "again.csv")
     assert (tmp_path / "again.csv").read_bytes() == path.read_bytes()
 
 
@@ -104,7 +104,7 @@ def test_awkward_floats_survive(rigs: dict[str, Rig], tmp_path: Path) -> None:
     values = np.resize(awkward, n) * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
     values[np.arange(n) % 7 == 3] = 1.0 / 3.0
     odd = dataclasses.replace(plan, arrival_s=values, coords=plan.coords + values[:, None] * 1e-300)
-    odd.write(tmp_path / "odd.csv")
+    write_plan(odd, tmp_path / "odd.csv")
     back = read_plan(tmp_path / "odd.csv", rig=plan.rig)
     assert_identical(back, odd)
     assert np.signbit(back.arrival_s[0]) and back.arrival_s[0] == 0.0
@@ -128,7 +128,7 @@ def test_a_plan_is_frozen_and_owns_its_arrays(rigs: dict[str, Rig], tmp_path: Pa
     made = dataclasses.replace(plan, angles=angles)
     angles[0, 0] = 99.0
     assert made.angles[0, 0] == plan.angles[0, 0]
-    plan.write(tmp_path / "p.csv")
+    write_plan(plan, tmp_path / "p.csv")
     back = read_plan(tmp_path / "p.csv")
     assert not any(getattr(back, name).flags.writeable for name in ARRAYS)
     with pytest.raises(dataclasses.FrozenInstanceError):
@@ -151,7 +151,7 @@ def test_layout_is_the_documented_one(tmp_path: Path) -> None:
     source = load_plan_source(PLANS / "quick.yaml")
     plan = source.build()
     path = tmp_path / "quick.csv"
-    plan.write(path)
+    write_plan(plan, path)
     lines = path.read_text(encoding="utf-8").split("\n")
     assert lines[0] == MAGIC == "# gonio-plan v1"
     keys = [line[2:].partition(":")[0] for line in lines[1:7]]
@@ -211,7 +211,7 @@ def test_load_plan_source_keeps_the_files_bytes(rigs: dict[str, Rig]) -> None:
 def stored(tmp_path_factory: pytest.TempPathFactory) -> tuple[Plan, bytes]:
     plan = load_plan_source(PLANS / "quick.yaml").build()
     path = tmp_path_factory.mktemp("stored") / "quick.csv"
-    plan.write(path)
+    write_plan(plan, path)
     return plan, path.read_bytes()
 
 

@@ -12,17 +12,20 @@ from pydantic import ValidationError
 
 from gonio import brdf
 from gonio.analysis.measured import Measured
+from gonio.cli.render import render_summary
 from gonio.planner import adaptive
-from gonio.planner.plan import ARRAYS, Plan, build, render_summary, same_bits
+from gonio.planner.builder import build
+from gonio.planner.files import parse_plan, plan_bytes
+from gonio.planner.model import ARRAYS, Plan, same_bits
 from gonio.planner.schema import PlanSpec
-from gonio.planner.stored import parse_plan, plan_bytes
-from gonio.planner.two_pass import extend, is_survey, second_pass_points
+from gonio.planner.two_pass import extend, second_pass_points
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
+from gonio.workflows.adaptive import estimate
 
 ARCH = Path(__file__).resolve().parents[3] / "configs" / "rigs" / "arch.yaml"
 GLOSSY = brdf.create("cook_torrance", alpha=0.1, distribution="ggx", f0=0.04, kd=0.2).eval
@@ -56,18 +59,25 @@ def measured(f: BrdfEval, plan_or_rig: Plan | Rig, wi: np.ndarray, wo: np.ndarra
                     "luminance", "test")  # fmt: skip
 
 
+def steering(m: Measured, plan: PlanSpec) -> BrdfEval:
+    """The estimate ``plan``'s second pass is steered by, from the survey's samples."""
+    return estimate(m, plan.sampling.options().model)
+
+
 @pytest.fixture(scope="module")
 def planned(rig: Rig) -> tuple[Plan, Plan]:
     survey = build(spec(90, 40, edge=0.2), rig)
-    return survey, extend(survey, measured(GLOSSY, survey, survey.wi, survey.wo))
+    return survey, extend(
+        survey, steering(measured(GLOSSY, survey, survey.wi, survey.wo), survey.spec)
+    )
 
 
 def test_the_survey_then_the_second_pass(planned: tuple[Plan, Plan]) -> None:
     survey, whole = planned
-    assert is_survey(survey) and len(survey) == 40
+    assert survey.is_survey and len(survey) == 40
     assert "the other 50 targets are planned from its measurements" in render_summary(survey)
     assert "planned from its measurements" not in render_summary(whole)
-    assert not is_survey(whole) and len(whole) == 90 and whole.summary.kept == 90
+    assert not whole.is_survey and len(whole) == 90 and whole.summary.kept == 90
     for name in ("coords", "angles", "arrival_s", "generated"):
         np.testing.assert_array_equal(getattr(whole, name)[:40], getattr(survey, name))
     assert np.all(np.diff(whole.arrival_s) > 0)
@@ -84,10 +94,10 @@ def test_every_target_is_reachable_and_the_plan_stores_bit_for_bit(
 
 def test_the_same_survey_gives_the_same_second_pass(planned: tuple[Plan, Plan], rig: Rig) -> None:
     survey, whole = planned
-    again = extend(survey, measured(GLOSSY, survey, survey.wi, survey.wo))
+    again = extend(survey, steering(measured(GLOSSY, survey, survey.wi, survey.wo), survey.spec))
     assert all(same_bits(getattr(again, n), getattr(whole, n)) for n in ARRAYS)
-    other = extend(survey, measured(lambda wi, wo: 2 * GLOSSY(wi, wo) + 0.1, survey,
-                                    survey.wi, survey.wo))  # fmt: skip
+    other = extend(survey, steering(measured(lambda wi, wo: 2 * GLOSSY(wi, wo) + 0.1, survey,
+                                             survey.wi, survey.wo), survey.spec))  # fmt: skip
     assert not np.array_equal(other.coords, whole.coords)
 
 
@@ -126,8 +136,9 @@ def test_an_unknown_steering_model_is_refused_when_the_plan_is_read() -> None:
 def test_steering_by_the_survey_alone_is_deterministic(rig: Rig) -> None:
     plan = spec(200, 64, model="survey")
     survey = synthesize(GLOSSY, rig, "rusinkiewicz", True, 64, seed=4)
-    a = second_pass_points(plan, rig, survey, 136)
-    b = second_pass_points(plan, rig, survey, 136)
+    a = second_pass_points(plan, rig, steering(survey, plan), 136)
+    b = second_pass_points(plan, rig, steering(survey, plan), 136)
     assert a.tobytes() == b.tobytes()
-    fitted = second_pass_points(spec(200, 64), rig, survey, 136)
+    fit = spec(200, 64)
+    fitted = second_pass_points(fit, rig, steering(survey, fit), 136)
     assert not np.array_equal(a, fitted)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from gonio.brdf.composite import Sum
+from gonio.brdf.family import BOUNDS, FAMILIES, parse
 from gonio.errors import DomainError, UnknownNameError
-from gonio.reconstruct.family import BOUNDS, FAMILIES, parse
 
 
 def test_a_sum_of_terms_with_unique_labels():

@@ -6,7 +6,7 @@ import numpy as np
 
 from gonio import brdf
 from gonio.analysis.measured import Measured
-from gonio.reconstruct.family import parse
+from gonio.brdf.family import parse
 from gonio.reconstruct.starts import starts
 
 

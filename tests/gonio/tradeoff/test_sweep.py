@@ -18,7 +18,7 @@ import pytest
 from matplotlib import image
 
 from gonio.cli import main
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from gonio.tradeoff import runner
 from gonio.tradeoff.front import pareto_front
 from gonio.tradeoff.grid import load_sweep

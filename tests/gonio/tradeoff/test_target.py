@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.planner.plan import load_plan_source
+from gonio.planner.files import load_plan_source
 from gonio.planner.schema import PlanSpec
 from gonio.tradeoff.grid import load_sweep
 from gonio.tradeoff.target import plan_paths, remove_target_plan, write_target_plan

@@ -18,9 +18,9 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from gonio.brdf import BRDF, create
+from gonio.brdf.base import BRDF
 from gonio.brdf.composite import Sum
-from gonio.brdf.registry import model_class
+from gonio.brdf.registry import create, model_class
 from gonio.errors import DomainError, GonioError, UnknownNameError
 
 #: name → (gonio.brdf model, preset parameters).

@@ -1,6 +1,9 @@
-"""The stored plan: one UTF-8 text file that reads back as the same `Plan`, bit for bit.
+"""Plan files: the plan file a user writes (YAML; `load_plan_source` reads it with its
+rig) and the stored plan, one UTF-8 text file that reads back as the same `Plan`, bit
+for bit (`write_plan`, `read_plan`).
 
-A header of ``# KEY: JSON`` lines, then the targets as CSV (docs/planner.md)::
+A stored plan is a header of ``# KEY: JSON`` lines, then the targets as CSV
+(docs/planner.md)::
 
     # gonio-plan v1
     # spec: {...}          the validated PlanSpec, every field (JSON)
@@ -27,16 +30,65 @@ import dataclasses
 import io
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
-from gonio.config import ConfigError, describe
-from gonio.planner.plan import Plan, Summary, content_hash, sha256
+from gonio.config import ConfigError, describe, line_of, load, read_bytes, read_yaml
+from gonio.output import reserve_output
+from gonio.planner.builder import build
+from gonio.planner.model import Plan, Summary, content_hash, sha256
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
+
+
+@dataclass(frozen=True)
+class PlanSource:
+    """A plan file as read: its path and bytes, the validated spec and the rig (which
+    keeps its own bytes, `Rig.text`)."""
+
+    path: Path
+    text: bytes
+    spec: PlanSpec
+    rig: Rig
+
+    def content_hash(self, scene_text: bytes | None = None) -> str:
+        return content_hash(self.text, self.rig.text, scene_text)
+
+    def build(self, *, bounds: bool = False) -> Plan:
+        """`build` with this file's text (so the plan carries its hash)."""
+        return build(self.spec, self.rig, where=str(self.path), bounds=bounds, text=self.text)
+
+
+def load_plan_source(path: str | Path, rig_path: str | Path | None = None) -> PlanSource:
+    """The plan file, its bytes and its rig (``rig_path`` overrides the ``rig`` field).
+    Each file is read once: what is validated is exactly what is hashed."""
+    path = Path(path)
+    text = read_bytes(path)
+    spec = load(path, PlanSpec, raw=text)
+    if rig_path is None:
+        if spec.rig is None:
+            raise ConfigError(f"{path}: rig: no rig file named; give one here or with --rig")
+        rig_path = path.parent / spec.rig
+        try:
+            folder = Path(rig_path).is_dir()
+        except OSError:  # a name too long, say: reading the rig file below says why
+            folder = False
+        if folder:
+            line = line_of(read_yaml(path, text)[1], ("rig",))
+            raise ConfigError(f"{path}:{line}: rig: {rig_path} is a folder; expected a rig file")
+    return PlanSource(path, text, spec, Rig.from_yaml(rig_path))
+
+
+def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[PlanSpec, Rig]:
+    """The plan file and its rig (``rig_path`` overrides the plan's ``rig`` field); see
+    `load_plan_source` to keep the plan file's bytes as well."""
+    source = load_plan_source(path, rig_path)
+    return source.spec, source.rig
+
 
 #: The first line of every stored plan; the version names this layout.
 MAGIC = "# gonio-plan v1"
@@ -111,8 +163,6 @@ def plan_bytes(plan: Plan) -> bytes:
 def write_plan(plan: Plan, path: str | Path) -> None:
     """Write ``plan`` to ``path`` in the stored format (module docstring), atomically: a
     temporary file beside it, flushed to the disk, then renamed (`gonio.output`)."""
-    from gonio.output import reserve_output
-
     with reserve_output(path, "plan file") as out:
         out.write_bytes(plan_bytes(plan))
 
@@ -263,7 +313,7 @@ def _parses(kind: type, cell: str) -> bool:
 
 
 def read_plan(path: str | Path, rig: Rig | str | Path | None = None) -> Plan:
-    """The plan stored at ``path`` (by `Plan.write`), identical to the one written.
+    """The plan stored at ``path`` (by `write_plan`), identical to the one written.
 
     ``rig``: the rig (or its file) to attach; its file's bytes must be those the plan
     was built from (checked by hash). Without it the rig is rebuilt from the text the

@@ -1,0 +1,79 @@
+"""Plan summaries as text: the table `gonio plan` (and `gonio acquire`) prints."""
+
+from __future__ import annotations
+
+from gonio.planner import Plan, Summary
+from gonio.progress import hms
+
+
+def render_summary(plan: Plan) -> str:
+    """The summary table `gonio plan` prints."""
+    s = plan.summary
+    spec = plan.spec
+    kind = "isotropic" if spec.isotropic else "anisotropic"
+    lines = [
+        f"plan {spec.name!r}: {kind} {spec.parametrization}, {spec.sampling.strategy}"
+        + (f" {'×'.join(map(str, s.grid_shape))}" if s.grid_shape else "")
+        + f", rig {plan.rig.spec.name!r}",
+        f"  {'requested':<26}{s.requested:>9}",
+        f"  {'outside the domain':<26}{s.invalid:>9}",
+    ]
+    for label, count in s.refused.items():
+        lines.append(f"  {'refused: ' + label.replace('_', ' '):<26}{count:>9}")
+    lines += [
+        f"  {'kept':<26}{s.kept:>9}"
+        + (
+            f"   (target {s.target}: a grid keeps the cells that fall in the domain)"
+            if s.target is not None and s.grid_shape is not None and s.kept != s.target
+            else ""
+        ),
+    ]
+    if spec.sampling.strategy == "adaptive" and s.target is not None and s.kept < s.target:
+        lines.append(
+            f"  {'':<26}{'':>9}   (the survey: the other {s.target - s.kept} targets are "
+            "planned from its measurements during the run, docs/adaptive.md)"
+        )
+    lines += [
+        "",
+        f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
+        f"settle + exposure {hms(s.dwell_s)})",
+    ]
+    if s.naive_total_s is not None:
+        lines.append(
+            f"  {'in generation order':<26}{hms(s.naive_total_s):>9}   "
+            f"({s.naive_total_s / s.total_s:.2f}× the ordered plan)"
+        )
+    if s.lower_bound_s is not None and s.lower_bound_travel_s is not None:
+        weak = "" if s.lower_bound_exact else "; memory forced a weaker bound"
+        lines.append(
+            f"  {'lower bound (Held–Karp)':<26}{hms(s.lower_bound_s):>9}   "
+            f"(ordered / bound = {s.travel_s / max(s.lower_bound_travel_s, 1e-12):.3f}"
+            f" in moves, any order and solutions{weak})"
+        )
+    if s.mst_travel_s is not None:
+        lines.append(
+            f"  {'lower bound (MST)':<26}{hms(s.mst_travel_s + s.dwell_s):>9}   "
+            f"(ordered / bound = {s.travel_s / max(s.mst_travel_s, 1e-12):.3f} in moves)"
+        )
+    lines += [
+        f"  {'ordering':<26}{ordering_line(s)}",
+        f"  {'ordering took':<26}{s.ordering_s:>8.1f}s",
+    ]
+    return "\n".join(lines)
+
+
+def ordering_line(s: Summary) -> str:
+    """How the ordering ended, for the summary table."""
+    kicks = f"{s.kicks:,} kicks ({s.kicks_kept:,} kept)"
+    if s.stopped == "converged":
+        return (
+            f"converged after {s.moves:,} moves, then {kicks}; budgets {s.max_moves:,} "
+            f"and {s.max_kicks:,}"
+        )
+    if s.stopped == "move budget":
+        return f"stopped at the move budget ({s.max_moves:,} moves): not converged"
+    return (
+        f"stopped at the time cap ({s.time_cap_s:g} s, after {s.moves:,} of {s.max_moves:,} "
+        f"moves, {s.kicks:,} of {s.max_kicks:,} kicks): not converged, and this order "
+        "depends on the machine's speed"
+    )

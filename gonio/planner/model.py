@@ -1,0 +1,180 @@
+"""The plan as data: `Plan` (targets in measuring order, frozen), its `Summary`, and the
+hashes that name the texts a plan was built from (`content_hash`, `sha256`).
+
+A `Plan` is the same for a given plan file, rig and seed on any machine unless the
+ordering's wall-clock safety cap binds (the summary says so). `gonio.planner.builder`
+makes one; `gonio.planner.files` stores it and reads it back bit for bit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from gonio.planner.ordering import Ordering, Stop
+from gonio.planner.schema import PlanSpec
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+
+#: Framing of `content_hash` (the version names the framing, not gonio's).
+_HASH_MAGIC = b"gonio content v1\n"
+
+
+def content_hash(plan_text: bytes, rig_text: bytes, scene_text: bytes | None = None) -> str:
+    """SHA-256 (hex) of a plan file's, a rig file's and optionally a scene file's bytes,
+    for the run journal: what a run measured, named by what it was made from.
+
+    Framing: the bytes ``gonio content v1\\n``, then for each of plan, rig, scene the
+    part's name, a space, its length in bytes in decimal (``-`` for no scene), a newline
+    and the bytes themselves. The lengths make the split unambiguous: ("ab", "c") and
+    ("a", "bc") hash differently, and no scene differs from an empty one.
+    """
+    h = hashlib.sha256(_HASH_MAGIC)
+    for name, text in (("plan", plan_text), ("rig", rig_text), ("scene", scene_text)):
+        h.update(f"{name} {'-' if text is None else len(text)}\n".encode("ascii"))
+        if text is not None:
+            h.update(text)
+    return h.hexdigest()
+
+
+def sha256(text: bytes) -> str:
+    """SHA-256 (hex) of one file's bytes."""
+    return hashlib.sha256(text).hexdigest()
+
+
+@dataclass(frozen=True)
+class Summary:
+    """Counts and times of a plan. Times in seconds; the generation-order and MST
+    figures are None unless the plan was built with ``bounds=True``."""
+
+    requested: int  # points placed in the coordinate box
+    invalid: int  # outside the parametrization's domain
+    refused: Mapping[str, int]  # unreachable, by reason (read-only)
+    kept: int
+    travel_s: float  # ordered, moves only
+    dwell_s: float  # settle + exposure × averages, summed
+    ordering_s: float  # time spent ordering (wall clock)
+    moves: int = 0  # improving moves of the ordering's descents
+    max_moves: int = 0  # the budget of improving moves
+    kicks: int = 0  # kicks of the iterated local search tried
+    kicks_kept: int = 0  # … that shortened the path
+    max_kicks: int = 0  # the budget of kicks
+    stopped: Stop = "converged"  # why the ordering stopped
+    time_cap_s: float = 0.0  # the ordering's wall-clock safety cap
+    grid_shape: tuple[int, ...] | None = None
+    target: int | None = None  # the kept targets asked for, if the plan gave a number
+    naive_travel_s: float | None = None  # in generation order (bounds only)
+    # Lower bounds on the moves of any order with any choice of solutions (bounds only):
+    lower_bound_travel_s: float | None = None  # Held–Karp 1-tree (`gonio.planner.bounds`)
+    mst_travel_s: float | None = None  # the minimum spanning tree (cheaper, looser)
+    lower_bound_exact: bool | None = None  # False: memory forced a weaker MST somewhere
+    bound_wall_s: float | None = None  # time spent on the lower bounds (wall clock)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))
+
+    @property
+    def converged(self) -> bool:
+        """The local search ended with no improving move left."""
+        return self.stopped == "converged"
+
+    @property
+    def total_s(self) -> float:
+        return self.travel_s + self.dwell_s
+
+    @property
+    def naive_total_s(self) -> float | None:
+        return None if self.naive_travel_s is None else self.naive_travel_s + self.dwell_s
+
+    @property
+    def lower_bound_s(self) -> float | None:
+        if self.lower_bound_travel_s is None:
+            return None
+        return self.lower_bound_travel_s + self.dwell_s
+
+
+#: The array fields of a `Plan` and their dtypes.
+ARRAYS: dict[str, type[np.generic]] = {
+    "coords": np.float64,
+    "generated": np.int64,
+    "wi": np.float64,
+    "wo": np.float64,
+    "angles": np.float64,
+    "exposure_s": np.float64,
+    "averages": np.int64,
+    "travel_s": np.float64,
+    "arrival_s": np.float64,
+}
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Equal dtype, shape and every byte (so −0.0 ≠ 0.0: identical, not just equal)."""
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """Targets in measuring order. Angles in radians, times in seconds.
+
+    Frozen: every array is a private read-only copy (change a plan with
+    `dataclasses.replace`, which makes a new one). ``==`` is "the same stored plan":
+    spec, plan and rig texts, coordinate names and summary equal, every array identical
+    bit for bit; ``ordering`` (the search's diagnostics, not stored) is left out.
+    """
+
+    spec: PlanSpec
+    rig: Rig
+    coordinate_names: tuple[str, ...]
+    coords: FloatArray  # (N, d) the planned coordinates
+    generated: np.ndarray  # (N,) int64, each target's position among the points placed
+    wi: FloatArray  # (N, 3) the pair measured (sample frame)
+    wo: FloatArray
+    angles: FloatArray  # (N, A) in rig.axes order
+    exposure_s: FloatArray
+    averages: np.ndarray  # (N,) int64
+    travel_s: FloatArray  # move into each target
+    arrival_s: FloatArray  # predicted time of arrival at each target
+    summary: Summary
+    plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
+    ordering: Ordering | None = None  # the search's figures (constructed length, …)
+
+    def __post_init__(self) -> None:
+        n = len(self.coords)
+        for name, dtype in ARRAYS.items():
+            value = np.array(getattr(self, name), dtype=dtype)  # a copy nobody else holds
+            if value.shape[:1] != (n,):
+                raise ValueError(f"Plan.{name}: expected {n} rows, got shape {value.shape}")
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    def __len__(self) -> int:
+        return len(self.coords)
+
+    @property
+    def is_survey(self) -> bool:
+        """The first pass of an adaptive plan, its second still to be planned
+        (`gonio.planner.two_pass`)."""
+        s = self.spec.sampling
+        return s.strategy == "adaptive" and s.target is not None and len(self) < s.target
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Plan):
+            return NotImplemented
+        return (
+            self.spec == other.spec
+            and self.plan_text == other.plan_text
+            and self.rig.text == other.rig.text
+            and self.coordinate_names == other.coordinate_names
+            and self.summary == other.summary
+            and all(same_bits(getattr(self, n), getattr(other, n)) for n in ARRAYS)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def content_hash(self, scene_text: bytes | None = None) -> str:
+        """`content_hash` of the texts this plan was built from (and a scene's)."""
+        return content_hash(self.plan_text, self.rig.text, scene_text)
