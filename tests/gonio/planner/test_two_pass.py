@@ -20,9 +20,9 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.measured import Measured
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ARCH = Path(__file__).resolve().parents[3] / "configs" / "rigs" / "arch.yaml"
 GLOSSY = brdf.create("cook_torrance", alpha=0.1, distribution="ggx", f0=0.04, kd=0.2).eval

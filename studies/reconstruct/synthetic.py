@@ -6,7 +6,7 @@ material exactly at the pairs its plan reached; `synthesize` gives those measure
 directly: the plan's points placed by the planner in a parametrization's coordinates
 (Sobol, or a grid), kept where valid and reachable, valued by a BRDF function. The
 ordering and the acquisition, which do not change the values, are skipped
-(tests/gonio/reconstruct/test_synthetic.py holds this to a real run).
+(tests/studies/reconstruct/test_synthetic.py holds this to a real run).
 `synthesize_adaptive` does the same for the two passes of an adaptive plan."""
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 from gonio import params
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
+from gonio.planner.two_pass import second_pass_points
 from gonio.reconstruct.measured import Measured
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
@@ -103,8 +104,6 @@ def synthesize_adaptive(
     valued like `synthesize`, then the second pass planned from those values and σs
     (`gonio.planner.two_pass.second_pass_points`: the σs weight the fit that steers it)
     and valued too, survey first."""
-    from gonio.planner.two_pass import second_pass_points
-
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
