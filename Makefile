@@ -33,7 +33,7 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
-	# lint-imports: enabled once the planner no longer imports reconstruction
+	$(BIN)/lint-imports
 
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
@@ -57,4 +57,4 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/tradeoff.py
 
 clean:
-	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis
+	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache

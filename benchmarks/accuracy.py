@@ -1,5 +1,5 @@
 """The reconstruction against the naive reference (issue 14 §4): noise-free samples of
-uniform Sobol plans (`gonio.reconstruct.synthetic`) of GGX α = 0.05, 0.1, 0.3 with F0 = 0.04
+uniform Sobol plans (`studies.reconstruct.synthetic`) of GGX α = 0.05, 0.1, 0.3 with F0 = 0.04
 (Schlick) over a Lambertian base kd = 0.2, on the arch rig (θ ≤ 80°), in each
 parametrization; each method scored by log-RMSE on log(1 + f) over the default test set
 (`gonio.reconstruct.testset`, 20 000 pairs uniform in solid angle over what the rig
@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import itertools
 
 from _machine import describe
@@ -28,8 +29,8 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.naive import NaiveReconstruction
-from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import synthesize
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET = 0.01

@@ -1,6 +1,6 @@
 """Adaptive against uniform sampling (issue 16 §2), noise-free: for each material, the
 best uniform plan (over the four parametrizations and the methods, Sobol placed by the
-planner: `gonio.reconstruct.synthetic`) and the adaptive plan (`sampling: {strategy:
+planner: `studies.reconstruct.synthetic`) and the adaptive plan (`sampling: {strategy:
 adaptive}`: a Sobol survey, a lambert+beckmann fit of it steering the second pass,
 `gonio.planner.two_pass`), each reconstructed without being told the material's family
 and scored by log-RMSE on log(1 + f) over the default test set (20 000 pairs uniform
@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
 from _machine import describe
 from study import fmt_needed, needed
@@ -32,9 +33,9 @@ from gonio.analysis.measured import Measured
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET = 0.01

@@ -44,6 +44,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
 import numpy as np
 from _machine import describe
@@ -61,9 +62,9 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.fit import fit
-from gonio.reconstruct.synthetic import measured_at, placed, synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
+from studies.reconstruct.synthetic import measured_at, placed, synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent
 PARAMETRIZATION = "rusinkiewicz"

@@ -25,15 +25,16 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
 from _machine import describe
 from adaptive import ggx
 from study import score, setting
 
 from gonio.reconstruct.fit import fit
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent
 #: σ model → the absolute part of σ = 1 % × (|f| + floor), in sr⁻¹.

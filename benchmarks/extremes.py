@@ -16,11 +16,13 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 from _machine import describe
 
 from gonio import params
-from gonio.params import cases, exact
-from gonio.params.accuracy import extreme_study, measured_errors
+from gonio.params import cases
+from studies.params import exact
+from studies.params.accuracy import extreme_study, measured_errors
 
 
 def main() -> None:

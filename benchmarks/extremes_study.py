@@ -3,7 +3,7 @@
 For each parametrization and each extreme (gonio.params.cases.EXTREMES), along 16
 one-parameter paths approaching it at distances 1e-1 … 1e-12 rad (two per decade):
 the tangent Jacobian's singular values and condition number (gonio.params.conditioning)
-and the worst float64 round-trip error (gonio.params.accuracy.path_study). Then, for
+and the worst float64 round-trip error (studies.params.accuracy.path_study). Then, for
 the shipped arch and in-plane rigs, the joint errors (one encoder tick through each
 gear, σ = tick/√12, and the brushed_metal scene's repeatability) propagated into each
 parametrization's coordinates and into a GGX BRDF value (gonio.rig.sensitivity).
@@ -23,17 +23,18 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 from _machine import describe
 
 from gonio import brdf, params
 from gonio.output import reserve_output
 from gonio.params import cases
-from gonio.params.accuracy import PATH_DISTANCES, PathRow, measured_errors, path_study
 from gonio.params.conditioning import singular_values, tangent_jacobian
 from gonio.plots import require_matplotlib
 from gonio.rig import sensitivity
 from gonio.rig.model import Reason, Rig
 from sim.scene import load_scene
+from studies.params.accuracy import PATH_DISTANCES, PathRow, measured_errors, path_study
 
 ROOT = Path(__file__).resolve().parent.parent
 IMG = ROOT / "docs" / "img"

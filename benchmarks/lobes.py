@@ -13,15 +13,19 @@ import datetime
 import math
 import os
 import platform
+import sys
 import timeit
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import scipy
 from scipy import integrate, optimize
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 from gonio.brdf import lobe_study as st
 from gonio.brdf import lobes
+from studies.brdf import lobe_grid
 
 N_TABLE = (16.0, 23.4, 32.0, 64.0, 128.0, 256.0, 512.0, 1000.0)
 N_VALUES = 1_000_000
@@ -154,7 +158,7 @@ def absolute() -> None:
     print("\n== max absolute error Δ = |F − F_B| over ψ ∈ [0, π/2] (F_B peak = 1)")
     print(f"{'lobe':<14}{'Δ n=16':>9}{'max Δ':>9}{'at n':>7}{'ψ*/lim(n)':>16}{'F_B(ψ*)':>14}  zone")
     for lb in ls:
-        d, psi = st.max_abs_error(lb, n)
+        d, psi = lobe_grid.max_abs_error(lb, n)
         fb = lobes.power_cosine(np.cos(psi), n)
         ratio = psi / lim
         zone = "attenuation" if np.all(ratio > 1.0) else "epicentre/both"
@@ -175,7 +179,7 @@ def zero_crossing() -> None:
         print(
             f"{n:>7g}{math.degrees(float(st.eq14_psi(n))):>10.4f}"
             + "".join(
-                f"{math.degrees(float(st.zero_crossing_psi(n, x))):>13.4f}"
+                f"{math.degrees(float(lobe_grid.zero_crossing_psi(n, x))):>13.4f}"
                 for x in (29 / 64, st.SEED_XI, 0.5)
             )
         )
@@ -218,7 +222,7 @@ def speed() -> None:
     ls = st.study_lobes()
     d = {lb.name: st.epicentre_peak(lb)[0] for lb in ls}
     ng = np.geomspace(*st.FIG3_N, 129)
-    a = {lb.name: float(st.max_abs_error(lb, ng)[0].max()) for lb in ls}
+    a = {lb.name: float(lobe_grid.max_abs_error(lb, ng)[0].max()) for lb in ls}
     cases: list[tuple[str, str, Callable[[np.ndarray], object]]] = [
         ("F_B n=100", "F_B", lambda c: lobes.power_cosine(c, n)),
         ("F_B n=37.5", "F_B", lambda c: lobes.power_cosine(c, 37.5)),

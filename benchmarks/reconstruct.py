@@ -1,7 +1,7 @@
 """Reconstruction: build time and evaluation throughput of each method, and the study
 that chose the default transform (docs/reconstruction.md).
 
-Samples are synthesized (gonio.reconstruct.synthetic: uniform Sobol coordinates of the
+Samples are synthesized (studies.reconstruct.synthetic: uniform Sobol coordinates of the
 plan's parametrization, or a grid, kept where the arch rig reaches, valued by the
 matte scene's material) — no engine run. Throughput counts pairs through
 `Reconstruction.evaluate` (value, σ and the support mask, the rig's reachability
@@ -22,13 +22,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 from _machine import describe
 
 from gonio.reconstruct import transforms
 from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.synthetic import placed, synthesize
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
+from studies.reconstruct.synthetic import placed, synthesize
 
 ROOT = Path(__file__).resolve().parents[1]
 RIG = ROOT / "configs" / "rigs" / "arch.yaml"

@@ -2,7 +2,7 @@
 
 Uniform Sobol plans of each shipped scene's material (as its detector's band sees it), in
 each parametrization, from 250 to 30 000 samples, synthesized without the engine
-(`gonio.reconstruct.synthetic`: the planner's placement, the rig's reach, exact values),
+(`studies.reconstruct.synthetic`: the planner's placement, the rig's reach, exact values),
 reconstructed by name (`gonio.reconstruct.methods`, as `gonio tradeoff` does) and scored
 by log-RMSE on log(1 + f) over the default test set (20 000 pairs, seed 14). The engine
 sweeps (configs/sweeps/study_*.yaml) give the noisy curves and the instrument time.
@@ -17,7 +17,7 @@ sweeps (configs/sweeps/study_*.yaml) give the noisy curves and the instrument ti
 Run: .venv/bin/python benchmarks/study.py curves -o runs/study [--scenes matte ...]
 [--counts 250 ... 30000] [--methods linear rbf] [--sampling sobol adaptive]
 [--adaptive-model survey]; `where`, `budget`, `lobes` likewise. `--sampling adaptive`:
-the two-pass plans of docs/adaptive.md (`gonio.reconstruct.synthetic.synthesize_adaptive`).
+the two-pass plans of docs/adaptive.md (`studies.reconstruct.synthetic.synthesize_adaptive`).
 `curves` appends to OUT/curves.csv and skips the rows it holds (resumable).
 """
 
@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 from _machine import describe
 
 from gonio import brdf, params
@@ -49,10 +50,10 @@ from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.regions import NAMES as REGIONS
 from gonio.reconstruct.regions import regions
 from gonio.reconstruct.result import Reconstruction
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 from sim.scene import load_scene
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent
 #: scene file stem → (rig file stem, planned isotropically)

@@ -159,63 +159,6 @@ def max_over_n(
     return best, at
 
 
-def grid_max(
-    fun: Callable[[FloatArray, FloatArray], FloatArray],
-    n: ArrayLike,
-    lo: ArrayLike,
-    hi: ArrayLike,
-    points: int = 4097,
-    rounds: int = 3,
-    sub: int = 33,
-    power: float = 1.0,
-) -> tuple[FloatArray, FloatArray]:
-    """Max over ψ ∈ [lo, hi] of ``fun(ψ, n)`` per n, and its ψ: a grid then zoom-ins.
-
-    The grid is lo + (hi − lo) s^power, s uniform (power 2 crowds points near lo);
-    each round regrids the two cells around the best point with ``sub`` points, so
-    the final cell is (hi − lo)/(points − 1) · (2/(sub − 1))^rounds wide (≈ 6e-8 of
-    the span, ψ to that; the max value, second order, to ~1e-15) for a smooth max.
-    """
-    nn = np.asarray(n, dtype=np.float64).reshape(-1, 1)
-    a = np.broadcast_to(np.asarray(lo, dtype=np.float64).reshape(-1, 1), nn.shape)
-    b = np.broadcast_to(np.asarray(hi, dtype=np.float64).reshape(-1, 1), nn.shape)
-    psi = a + (b - a) * np.linspace(0.0, 1.0, points) ** power
-    rows = np.arange(nn.shape[0])
-    for r in range(rounds + 1):
-        v = fun(psi, nn)
-        i = np.argmax(v, axis=1)
-        if r == rounds:
-            break
-        left = psi[rows, np.maximum(i - 1, 0)]
-        right = psi[rows, np.minimum(i + 1, psi.shape[1] - 1)]
-        psi = left[:, None] + (right - left)[:, None] * np.linspace(0.0, 1.0, sub)
-    return v[rows, i], psi[rows, i]
-
-
-def epicentre_grid_relative_error(
-    lobe: Lobe, n: ArrayLike, k: float = K_PRINTED
-) -> tuple[FloatArray, FloatArray]:
-    """Max δ over the epicentre zone by :func:`grid_max` (check of the exact version)."""
-    nn = np.asarray(n, dtype=np.float64)
-    lim = np.arccos(np.exp(-k / nn))
-
-    def delta(psi: FloatArray, m: FloatArray) -> FloatArray:
-        c = np.cos(psi)
-        return np.abs(lobe(c, m) / lobes.power_cosine(c, m) - 1.0)
-
-    return grid_max(delta, nn, 0.0, lim)
-
-
-def max_abs_error(lobe: Lobe, n: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """Max Δ = |F − F_B| over ψ ∈ [0, π/2] per n, and the ψ where it occurs."""
-
-    def delta(psi: FloatArray, m: FloatArray) -> FloatArray:
-        c = np.cos(psi)
-        return np.abs(lobe(c, m) - lobes.power_cosine(c, m))
-
-    return grid_max(delta, n, 0.0, math.pi / 2.0, power=2.0)
-
-
 def epicentre_peak(lobe: Lobe, n_range: tuple[float, float] = FIG3_N) -> tuple[float, float]:
     """Max over n ∈ n_range of the epicentre max δ, and the n where it occurs."""
 
@@ -243,11 +186,6 @@ def improvement_ratios(
         out.append((f"δ {o.name} / δ {vol.name} at n={n0:g}", at(o, n0) / at(vol, n0)))
         out.append((f"max δ {o.name} / seed's 1.9%", peak(o) / SEED_DELTA_VOL))
     return out
-
-
-def zero_crossing_psi(n: ArrayLike, xi: float) -> FloatArray:
-    """ψ where (ξ n (cos ψ − 1) + 1)² first reaches 0: acos(1 − 1/(ξ n))."""
-    return np.asarray(np.arccos(lobes.zero_crossing_cos(n, xi)), dtype=np.float64)
 
 
 def eq14_psi(n: ArrayLike) -> FloatArray:

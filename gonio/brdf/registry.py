@@ -2,7 +2,8 @@
 
 ``create(name, **params)`` checks the parameter names against the model's
 signature, so a typo or a missing required parameter is a `DomainError` with the
-accepted names, never a bare ``TypeError``.
+accepted names, never a bare ``TypeError``. A model made of models (the sum) takes a
+keyword ``factory``: `create` passes itself, the user never does.
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ def model_class(name: str) -> type[BRDF]:
 def create(name: str, **params: object) -> BRDF:
     """The model ``name`` with the given parameters (see each model's docstring)."""
     cls = model_class(name)
-    accepted = [p for p in inspect.signature(cls.__init__).parameters.values() if p.name != "self"]
+    signature = inspect.signature(cls.__init__).parameters
+    accepted = [p for p in signature.values() if p.name not in ("self", "factory")]
     known = {p.name for p in accepted}
     unknown = sorted(set(params) - known)
     missing = [p.name for p in accepted if p.default is p.empty and p.name not in params]
@@ -81,5 +83,7 @@ def create(name: str, **params: object) -> BRDF:
             what.append(f"missing parameter(s) {', '.join(missing)}")
         allowed = ", ".join(p.name for p in accepted) or "none"
         raise DomainError(f"{name}: {'; '.join(what)} (accepted: {allowed})")
-    factory: Callable[..., BRDF] = cls  # subclasses take their own keyword parameters
-    return factory(**params)
+    make: Callable[..., BRDF] = cls  # subclasses take their own keyword parameters
+    if "factory" in signature:
+        return make(**params, factory=create)
+    return make(**params)

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import gonio.brdf as brdf
-from gonio.brdf.examples import EXAMPLES, example_models, label
 from gonio.brdf.registry import model_class
 from gonio.errors import DomainError, GonioError, UnknownNameError
+from studies.brdf.examples import EXAMPLES, example_models, label
 
 REQUIRED = {
     "lambert",

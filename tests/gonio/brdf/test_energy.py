@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import gonio.brdf as brdf
-from gonio.brdf.examples import blinn_overshoot, example_models, label
 from gonio.brdf.models import blinn_normalization
 from gonio.brdf.quadrature import directional_albedo
+from studies.brdf.examples import blinn_overshoot, example_models, label
 
 THETA_I = np.radians([0.0, 20.0, 45.0, 70.0, 85.0, 89.0])
 TOL = 1e-9  # quadrature error bound (test_quadrature.py)

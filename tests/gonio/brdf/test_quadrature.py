@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 import gonio.brdf as brdf
-from gonio.brdf.examples import label
 from gonio.brdf.quadrature import (
     default_n_phi,
     directional_albedo,
     hemisphere_integral,
     radial_rule,
 )
+from studies.brdf.examples import label
 
 
 def test_radial_rule_integrates_polynomials_exactly():

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import gonio.brdf as brdf
-from gonio.brdf.examples import example_models, label
+from studies.brdf.examples import example_models, label
 
 MODELS = example_models()
 RECIPROCAL = [m for m in MODELS if m.reciprocal]

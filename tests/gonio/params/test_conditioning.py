@@ -10,8 +10,9 @@ from hypothesis import strategies as st
 
 from gonio import params
 from gonio.errors import DomainError, UnknownNameError
-from gonio.params import cases, conditioning, exact
-from gonio.params.accuracy import PATH_DISTANCES, path_study
+from gonio.params import cases, conditioning
+from studies.params import exact
+from studies.params.accuracy import PATH_DISTANCES, path_study
 
 NAMES = params.names()
 angle = st.floats(0.1, 1.45)

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import gonio.params as params
-from gonio.params import accuracy, cases, exact
+from gonio.params import cases
+from studies.params import accuracy, exact
 
 NAMES = params.names()
 CASES = [(e, d) for e in cases.EXTREMES for d in cases.DISTANCES]

@@ -9,8 +9,8 @@ import pytest
 
 import gonio.params as params
 from gonio.errors import DomainError
-from gonio.params import exact
 from gonio.params.cases import near_horizon, roundtrip_error
+from studies.params import exact
 
 NAMES = params.names()
 

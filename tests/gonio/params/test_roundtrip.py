@@ -6,8 +6,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import gonio.params as params
-from gonio.params.accuracy import error_envelope
 from gonio.params.cases import away, roundtrip_error
+from studies.params.accuracy import error_envelope
 from tests.gonio.params.strategies import batch, pair
 
 NAMES = params.names()

@@ -22,10 +22,10 @@ from gonio.planner.two_pass import extend, second_pass_points
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 from gonio.workflows.adaptive import estimate
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ARCH = Path(__file__).resolve().parents[3] / "configs" / "rigs" / "arch.yaml"
 GLOSSY = brdf.create("cook_torrance", alpha=0.1, distribution="ggx", f0=0.04, kd=0.2).eval

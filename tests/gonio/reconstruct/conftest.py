@@ -10,8 +10,8 @@ import pytest
 from gonio import brdf
 from gonio.analysis.measured import Measured
 from gonio.brdf.base import BRDF
-from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import synthesize
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 ARCH = Path(__file__).resolve().parents[3] / "configs" / "rigs" / "arch.yaml"

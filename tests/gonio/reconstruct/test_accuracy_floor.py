@@ -11,8 +11,8 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.naive import NaiveReconstruction
-from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import synthesize
 
 #: GGX α = 0.1, F0 = 0.04 over a Lambertian base kd = 0.2 (the issue's material).
 MATERIAL = brdf.create(

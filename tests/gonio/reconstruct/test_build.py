@@ -17,8 +17,8 @@ from gonio.brdf.base import BRDF
 from gonio.errors import GonioError
 from gonio.reconstruct import METHODS, Reconstruction, reconstruct
 from gonio.reconstruct.coordinates import Space
-from gonio.reconstruct.synthetic import placed, synthesize
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import placed, synthesize
 
 
 def _relative(r: Reconstruction, truth: BRDF, wi: np.ndarray, wo: np.ndarray) -> np.ndarray:

@@ -13,8 +13,8 @@ from gonio.errors import GonioError
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.coordinates import Space
 from gonio.reconstruct.grid import detect
-from gonio.reconstruct.synthetic import synthesize
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import synthesize
 
 
 @pytest.fixture(scope="module")

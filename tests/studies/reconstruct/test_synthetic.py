@@ -13,8 +13,8 @@ from gonio import brdf, params
 from gonio.analysis.measured import Measured
 from gonio.brdf.geometry import pair
 from gonio.planner import adaptive
-from gonio.reconstruct.synthetic import synthesize, synthesize_adaptive
 from gonio.rig.model import Rig
+from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 from tests.support.acquire import ARCH
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 

@@ -6,7 +6,7 @@ material exactly at the pairs its plan reached; `synthesize` gives those measure
 directly: the plan's points placed by the planner in a parametrization's coordinates
 (Sobol, or a grid), kept where valid and reachable, valued by a BRDF function. The
 ordering and the acquisition, which do not change the values, are skipped
-(tests/gonio/reconstruct/test_synthetic.py holds this to a real run).
+(tests/studies/reconstruct/test_synthetic.py holds this to a real run).
 `synthesize_adaptive` does the same for the two passes of an adaptive plan."""
 
 from __future__ import annotations

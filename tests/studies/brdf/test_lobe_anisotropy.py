@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gonio.brdf.anisotropy import (
+from studies.brdf.anisotropy import (
     ANGLES_DEG,
     CASES,
     half_max_angle,

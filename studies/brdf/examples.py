@@ -3,7 +3,7 @@
 `EXAMPLES` covers sharp and broad lobes, every Fresnel option, RGB parameters and
 the grazing-heavy cases; the tests run their properties over it. `albedo_table`
 prints the directional-albedo measurements the documentation quotes
-(``python -m gonio.brdf.examples``).
+(``python -m studies.brdf.examples`` from the repository root).
 """
 
 from __future__ import annotations

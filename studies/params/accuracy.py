@@ -7,7 +7,7 @@ the smallest direction z (orthographic) or hz = (ωi·n + ωo·n)/2 (hybrid); sp
 and Rusinkiewicz keep a few ε everywhere.
 
 `extreme_study` measures the float64 round trip near each named extreme and, with
-the mpmath reference (`gonio.params.exact`, test extra), the bound float64
+the mpmath reference (`studies.params.exact`, test extra), the bound float64
 coordinates impose there.
 """
 
@@ -20,6 +20,7 @@ import numpy as np
 from gonio.params import cases, get
 from gonio.params.conditioning import condition_number, singular_values, tangent_jacobian
 from gonio.types import FloatArray
+from studies.params import exact
 
 EPS = float(np.finfo(np.float64).eps)  # 2⁻⁵², one ulp of 1
 #: Multiples of ε in the envelope: a few roundings in the O(1) terms (see the docs);
@@ -82,8 +83,6 @@ def extreme_study(
                 errors = measured_errors(name, wi, wo)
                 bound = pair_ratio = float("nan")
                 if with_bound:
-                    from gonio.params import exact
-
                     bounds = exact.roundtrip_bounds(name, wi, wo)
                     bound = float(bounds.max())
                     pair_ratio = float(np.max(errors / bounds))
@@ -136,8 +135,6 @@ def path_study(
                 s, cond = singular_values(jacobian), condition_number(jacobian)
                 bound = float("nan")
                 if with_bound:
-                    from gonio.params import exact
-
                     bound = float(exact.roundtrip_bounds(name, wi, wo).max())
                 rows.append(
                     PathRow(

@@ -1,0 +1,1 @@
+"""Studies of the parametrizations: the mpmath reference maps and the accuracy study."""

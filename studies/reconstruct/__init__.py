@@ -1,0 +1,1 @@
+"""Measurements synthesized without the acquisition engine, for reconstruction studies."""
