@@ -210,8 +210,6 @@ class Journal:
     def reopen(cls, path: Path, *, durable: bool, max_page_count: int | None = None) -> Journal:
         """An existing run file, to append to (`JournalError` if it is missing, not a
         gonio run, of a newer layout, or being written by another process)."""
-        from gonio.store.read import check_version
-
         if not path.is_file():
             raise JournalError(f"{path}: no such run file")
         lock = _lock(path)
@@ -297,3 +295,16 @@ class Journal:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def check_version(conn: sqlite3.Connection, path: Path) -> None:
+    """`JournalError` unless ``conn`` is a gonio run journal this gonio can read."""
+    app = conn.execute("PRAGMA application_id").fetchone()[0]
+    if app != APPLICATION_ID:
+        raise JournalError(f"{path}: not a gonio run file (application_id {app:#x})")
+    version = conn.execute("PRAGMA user_version").fetchone()[0]
+    if version > SCHEMA_VERSION:
+        raise JournalError(
+            f"{path}: run file schema version {version}; this gonio reads versions up to "
+            f"{SCHEMA_VERSION} (update gonio to read it)"
+        )

@@ -17,7 +17,7 @@ import numpy as np
 
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
-from gonio.store.journal import APPLICATION_ID, SCHEMA_VERSION, JournalError
+from gonio.store.journal import JournalError, check_version
 from gonio.store.schema import FLOAT64, Column, commanded, read_back, samples_table
 from gonio.types import FloatArray
 
@@ -109,19 +109,6 @@ class Run:
         adaptive plan, its second pass too)."""
         done = bool(self.sessions) and self.sessions[-1].outcome == "completed"
         return done and not self.plan.is_survey
-
-
-def check_version(conn: sqlite3.Connection, path: Path) -> None:
-    """`JournalError` unless ``conn`` is a gonio run journal this gonio can read."""
-    app = conn.execute("PRAGMA application_id").fetchone()[0]
-    if app != APPLICATION_ID:
-        raise JournalError(f"{path}: not a gonio run file (application_id {app:#x})")
-    version = conn.execute("PRAGMA user_version").fetchone()[0]
-    if version > SCHEMA_VERSION:
-        raise JournalError(
-            f"{path}: run file schema version {version}; this gonio reads versions up to "
-            f"{SCHEMA_VERSION} (update gonio to read it)"
-        )
 
 
 def read_run(conn: sqlite3.Connection, path: Path) -> Run:
