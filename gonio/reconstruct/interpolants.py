@@ -29,8 +29,10 @@ FLAT_SIMPLEX = 1e-10
 INSIDE = 100 * float(np.finfo(np.float64).eps)
 #: ... and down to −`BROAD` for a query that would leave the hull (scipy's eps_broad).
 BROAD = float(np.sqrt(INSIDE))
-#: Steps of the vectorized walk before the remaining queries are left to scipy.
+#: Steps of the vectorized walk before the remaining queries are searched for.
 MAX_STEPS = 64
+#: Queries × simplices whose coordinates that search holds at once, one axis at a time.
+SEARCH_BLOCK = 1 << 16
 #: Neighbours of each query the ``rbf`` method solves with (scipy's ``neighbors``).
 RBF_NEIGHBORS = 32
 
@@ -49,19 +51,21 @@ class Linear(Interpolant):
     Two costs of scipy's ``find_simplex`` are avoided (docs/reconstruction.md#speed):
     it computes the simplices' barycentric transforms one at a time with a condition
     estimate each (5 s for the 130 000 simplices of 20 000 points in 3-D, 19 s in
-    4-D; here one batched inverse), and its walk starts from the previous query's
+    4-D; here one batched inverse, `barycentric_transforms`, from the triangulation's
+    public ``points`` and ``simplices``), and its walk starts from the previous query's
     simplex and falls back to a search of every simplex when it meets a flat one
     (exact seam copies made cocircular points, hence flat simplices): 4.5 s per
     100 000 queries. Here all queries walk at once, each from a simplex of its nearest
     sample (a step or two), leaving a flat simplex across a face chosen by turns;
-    the rare query not arrived after `MAX_STEPS` is left to scipy.
+    the rare query not arrived after `MAX_STEPS` is searched for in every simplex
+    (`search`).
     """
 
     def __init__(self, points: FloatArray, table: FloatArray) -> None:
         self.table = np.asarray(table, dtype=np.float64)
         self.tri = Delaunay(points)
-        if hasattr(self.tri, "_transform"):
-            self.tri._transform = barycentric_transforms(self.tri.points, self.tri.simplices)
+        #: (S, d + 1, d): the layout of scipy's ``Delaunay.transform``, computed here.
+        self.transform = barycentric_transforms(self.tri.points, self.tri.simplices)
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
         simplex = self.locate(x, nearest)
@@ -74,7 +78,7 @@ class Linear(Interpolant):
 
     def _barycentric(self, x: FloatArray, s: np.ndarray) -> FloatArray:
         d = x.shape[1]
-        t = self.tri.transform[s]
+        t = self.transform[s]
         c = np.empty((len(s), d + 1))
         c[:, :d] = np.einsum("mij,mj->mi", t[:, :d, :], x - t[:, d, :])
         c[:, d] = 1.0
@@ -86,7 +90,8 @@ class Linear(Interpolant):
         """The simplex containing each query (−1 outside the hull), by a visibility walk
         from a simplex of its nearest point: step across the face opposite the most
         negative barycentric coordinate until none is negative (inside) or that face
-        is on the hull (outside: the hull is convex)."""
+        is on the hull (outside: the hull is convex). A query still walking after
+        `MAX_STEPS` is left to `search`."""
         start = self.tri.vertex_to_simplex[nearest]
         s = np.where(start >= 0, start, 0)
         found = np.full(len(x), -1, dtype=np.intp)
@@ -111,13 +116,53 @@ class Linear(Interpolant):
             if len(active) == 0:
                 break
         if len(active):
-            found[active] = self.tri.find_simplex(x[active])
+            found[active] = self.search(x[active])
+        return found
+
+    def search(self, x: FloatArray) -> np.ndarray:
+        """The simplex each query (M, d) is deepest in, among every simplex (−1 outside
+        the hull): the one whose lowest barycentric coordinate is largest, taken if that
+        coordinate is at least −`INSIDE`, or −`BROAD` across a face on the hull or shared
+        with a flat simplex (the walk's tolerances). Flat simplices contain nothing.
+        Costs M × S coordinates: for the few queries the walk leaves."""
+        nsimplex, d = self.transform.shape[0], self.transform.shape[2]
+        flat = np.isnan(self.transform[:, 0, 0])
+        inverse = np.where(flat[:, None, None], 0.0, self.transform[:, :d, :])  # (S, d, d)
+        # c_i = (T⁻¹ (x − r))_i = (T⁻¹ x)_i − (T⁻¹ r)_i: a matrix product per axis and block.
+        shift = np.einsum("sij,sj->si", inverse, np.nan_to_num(self.transform[:, d, :]))
+        lenient = self.tri.neighbors < 0
+        lenient |= np.where(lenient, False, flat[np.maximum(self.tri.neighbors, 0)])
+        every = np.arange(nsimplex)
+        found = np.full(len(x), -1, dtype=np.intp)
+        block = max(1, SEARCH_BLOCK // nsimplex)
+        for start in range(0, len(x), block):
+            q = x[start : start + block]
+            lowest = np.full((len(q), nsimplex), np.inf)
+            k = np.zeros(lowest.shape, dtype=np.intp)
+            last = np.ones(lowest.shape)
+            for axis in range(d + 1):  # a short loop over axes, each (m, S) at once
+                if axis < d:
+                    c = q @ inverse[:, axis, :].T - shift[:, axis]
+                    last -= c
+                else:
+                    c = last
+                lower = c < lowest
+                lowest = np.where(lower, c, lowest)
+                k[lower] = axis
+            lowest[:, flat] = -np.inf
+            tolerance = np.where(lenient[every, k], BROAD, INSIDE)
+            score = np.where(lowest >= -tolerance, lowest, -np.inf)
+            best = np.argmax(score, axis=1)
+            ok = np.isfinite(score[np.arange(len(q)), best])
+            found[start : start + block] = np.where(ok, best, -1)
         return found
 
 
 def barycentric_transforms(points: FloatArray, simplices: np.ndarray) -> FloatArray:
-    """scipy's ``Delaunay.transform`` layout (S, d + 1, d): T⁻¹ in the first d rows and
-    the last vertex r in the last, with T c = x − r; NaN for flat simplices."""
+    """The barycentric transforms of simplices (S, d + 1) of points (P, d), in the layout
+    of scipy's ``Delaunay.transform`` (S, d + 1, d): T⁻¹ in the first d rows and the
+    last vertex r in the last, with T c = x − r (c the first d coordinates, the last is
+    1 − Σ c); NaN for flat simplices (|det T| ≤ `FLAT_SIMPLEX` × Hadamard's bound)."""
     v = points[simplices]  # (S, d + 1, d)
     d = v.shape[2]
     r = v[:, d, :]

@@ -1,6 +1,6 @@
 """Named extremes, exactly and within 1e-12, 1e-9, 1e-6, against the float64 bound.
 
-The bound is computed in arbitrary precision (gonio.params.exact): the error that
+The bound is computed in arbitrary precision (studies.params.exact): the error that
 moving each exact coordinate by the half ulp float64 cannot resolve already causes.
 """
 
