@@ -1,6 +1,7 @@
-"""Suite-wide settings (hypothesis profiles, derandomized under CI) and the fixtures
-shared across packages: the shipped rigs, a virtual clock, emulated Dynamixel buses and
-the in-process `gonio` command (helper functions shared across packages: tests/support)."""
+"""Suite-wide settings (hypothesis profiles, derandomized under CI; how xdist groups the
+tests) and the fixtures shared across packages: the shipped rigs, the quick plan, one
+folder for simulated runs, a virtual clock, emulated Dynamixel buses and the in-process
+`gonio` command (helper functions shared across packages: tests/support)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import pytest
 from dynamixel_sdk import port_handler
 from hypothesis import HealthCheck, settings
 
+from gonio.planner import Plan, load_plan_source
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
@@ -105,6 +107,23 @@ def arch_point() -> Rig:
     return Rig.from_yaml(ARCH_POINT_FILE)
 
 
+@pytest.fixture(scope="session")
+def quick_plan() -> Plan:
+    """configs/plans/quick.yaml on its rig, built once (a `Plan` is frozen, its arrays
+    read-only)."""
+    return load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
+
+
+@pytest.fixture(scope="session")
+def runs_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder for `tests.support.runs.simulated_run`: it names a run by its specs'
+    hash and reuses the file, so the modules that ask for the same run share one
+    acquisition (per xdist worker). Tests read these runs and never write them."""
+    folder = tmp_path_factory.getbasetemp() / "runs"
+    folder.mkdir(exist_ok=True)
+    return folder
+
+
 @pytest.fixture
 def clock() -> ManualClock:
     return ManualClock()
@@ -155,6 +174,27 @@ PTY_TESTS = (
 )
 
 
+#: Modules whose tests share a costly module- or session-scoped fixture (a second or more
+#: on a loaded machine), by the xdist group they form. xdist sends a group to one worker,
+#: which builds the fixture once; spread over the workers, each would build its own.
+SHARED_SETUP = {
+    "tests/gonio/brdf/test_factored.py": "factored-tables",
+    "tests/gonio/brdf/test_lobe_anisotropy.py": "lobe-widths",
+    "tests/gonio/brdf/test_merl.py": "merl-tables",
+    "tests/gonio/cli/test_evaluate.py": "evaluated-run",
+    "tests/gonio/cli/test_fit.py": "fitted-runs",
+    "tests/gonio/cli/test_plot.py": "plotted-run",
+    "tests/gonio/export/test_alta.py": "alta-files",
+    "tests/gonio/export/test_factored.py": "factored-export",
+    "tests/gonio/export/test_merl.py": "merl-export",
+    "tests/gonio/planner/test_plan.py": "small-plans",
+    "tests/gonio/reconstruct/test_fit.py": "long-runs",
+    "tests/gonio/tradeoff/test_executors.py": "reference-sweep",
+    "tests/gonio/tradeoff/test_sweep.py": "reference-sweep",
+    "tests/sim/test_simulate.py": "shipped-plans",
+}
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     root = Path(config.rootpath)
     for item in items:
@@ -162,3 +202,5 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         if where.startswith(PTY_TESTS) or "emulator" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.pty)
             item.add_marker(pytest.mark.xdist_group("pty"))
+        elif where in SHARED_SETUP:
+            item.add_marker(pytest.mark.xdist_group(SHARED_SETUP[where]))

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio.acquire.progress import Shown, for_stream
-from gonio.planner import load_plan_source
+from gonio.planner import Plan
 from gonio.progress import Bar, Lines
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file, scene_file
@@ -67,8 +67,8 @@ def test_without_an_output_the_run_is_refused(run_gonio: Gonio, tmp_path: Path) 
     )
 
 
-def test_progress_lines_when_not_a_terminal_and_a_bar_on_one() -> None:
-    plan = load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
+def test_progress_lines_when_not_a_terminal_and_a_bar_on_one(quick_plan: Plan) -> None:
+    plan = quick_plan
     todo = np.arange(len(plan))
     out = io.StringIO()
     lines = Shown(Lines(out, every_s=0.0, done_word="acquired"))
@@ -96,10 +96,10 @@ def test_progress_lines_when_not_a_terminal_and_a_bar_on_one() -> None:
     assert "250/500" in bar_out.getvalue() and "left" in bar_out.getvalue()
 
 
-def test_the_time_left_follows_the_measured_pace() -> None:
+def test_the_time_left_follows_the_measured_pace(quick_plan: Plan) -> None:
     from gonio.acquire.progress import Pace
 
-    plan = load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
+    plan = quick_plan
     pace = Pace(plan, np.arange(len(plan)))
     assert (
         pace.left_s(0) == plan.summary.total_s

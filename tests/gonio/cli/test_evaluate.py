@@ -18,9 +18,8 @@ Gonio = Callable[..., CliResult]
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("evaluate")
-    return simulated_run(folder, plan_spec(300), scene_spec("matte", noise=False))
+def run(runs_dir: Path) -> Path:
+    return simulated_run(runs_dir, plan_spec(300), scene_spec("matte", noise=False))
 
 
 def test_the_table_has_a_row_per_region(run_gonio: Gonio, run: Path) -> None:

@@ -18,18 +18,17 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+def runs(runs_dir: Path) -> dict[str, Path]:
     """A matte run, and gold seen in the r, g and b bands (150 targets each)."""
-    folder = tmp_path_factory.mktemp("fit-cli")
     plan = plan_spec(150) | {"max_moves": 0, "kicks": 0}
     gold = {"name": "cook_torrance", "alpha": 0.1, "fresnel": "schlick", "f0": [0.95, 0.7, 0.3]}
     out = {}
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        out["matte"] = simulated_run(folder, plan, scene_spec("matte", noise=True, seed=3))
+        out["matte"] = simulated_run(runs_dir, plan, scene_spec("matte", noise=True, seed=3))
         for j, band in enumerate("rgb"):
             scene = scene_spec("glossy_metal", material=gold, effects=["shot_noise"], band=band,
                                seed=30 + j)  # fmt: skip
-            out[band] = simulated_run(folder, plan, scene)
+            out[band] = simulated_run(runs_dir, plan, scene)
     return out
 
 

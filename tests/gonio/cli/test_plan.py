@@ -15,7 +15,7 @@ import pytest
 
 import gonio.cli.plan as plan_command
 from gonio.config import ConfigError
-from gonio.planner import load_plan_source, read_plan
+from gonio.planner import Plan, read_plan
 from tests.conftest import CONFIGS, CliResult
 
 Gonio = Callable[..., CliResult]
@@ -28,7 +28,7 @@ def gonio_plan(run_gonio: Gonio, *args: str) -> tuple[int, str, str]:
     return r.returncode, r.stdout, r.stderr
 
 
-def test_quick_plan_end_to_end(tmp_path: Path, run_gonio: Gonio) -> None:
+def test_quick_plan_end_to_end(tmp_path: Path, run_gonio: Gonio, quick_plan: Plan) -> None:
     out_csv, out_png = tmp_path / "plan.csv", tmp_path / "coverage.png"
     code, out, err = gonio_plan(run_gonio, QUICK, "-o", str(out_csv), "--plot", str(out_png))
     assert code == 0, err
@@ -48,9 +48,7 @@ def test_quick_plan_end_to_end(tmp_path: Path, run_gonio: Gonio) -> None:
     assert f"wrote 500 targets to {out_csv}" in out
     # The stored plan reads back as the plan built here from the same files.
     stored = read_plan(out_csv)
-    assert stored == dataclasses.replace(
-        load_plan_source(CONFIGS / "plans" / "quick.yaml").build(), summary=stored.summary
-    )
+    assert stored == dataclasses.replace(quick_plan, summary=stored.summary)
     assert np.all(np.diff(stored.arrival_s) > 0)
     # A real PNG of the figure's size.
     assert out_png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -24,9 +24,8 @@ Gonio = Callable[..., CliResult]
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("plot")
-    return simulated_run(folder, plan_spec(300), scene_spec("glossy_metal"))
+def run(runs_dir: Path) -> Path:
+    return simulated_run(runs_dir, plan_spec(300), scene_spec("glossy_metal"))
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,5 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 
 @pytest.fixture(scope="session")
-def run_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("export-run")
-    return simulated_run(folder, plan_spec(60), scene_spec("glossy_metal"))
+def run_file(runs_dir: Path) -> Path:
+    return simulated_run(runs_dir, plan_spec(60), scene_spec("glossy_metal"))

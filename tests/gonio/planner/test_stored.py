@@ -208,8 +208,8 @@ def test_load_plan_source_keeps_the_files_bytes(rigs: dict[str, Rig]) -> None:
 
 
 @pytest.fixture(scope="module")
-def stored(tmp_path_factory: pytest.TempPathFactory) -> tuple[Plan, bytes]:
-    plan = load_plan_source(PLANS / "quick.yaml").build()
+def stored(quick_plan: Plan, tmp_path_factory: pytest.TempPathFactory) -> tuple[Plan, bytes]:
+    plan = quick_plan
     path = tmp_path_factory.mktemp("stored") / "quick.csv"
     write_plan(plan, path)
     return plan, path.read_bytes()

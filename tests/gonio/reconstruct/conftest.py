@@ -43,8 +43,7 @@ def matte_iso(arch: Rig, matte: BRDF) -> Measured:
 
 
 @pytest.fixture(scope="session")
-def simulated_matte(tmp_path_factory: pytest.TempPathFactory) -> Measured:
+def simulated_matte(runs_dir: Path) -> Measured:
     """A real simulated run: 300 targets on the matte scene, noise off."""
-    folder = tmp_path_factory.mktemp("runs")
-    path = simulated_run(folder, plan_spec(300), scene_spec("matte", noise=False))
+    path = simulated_run(runs_dir, plan_spec(300), scene_spec("matte", noise=False))
     return Measured.from_run(path)

@@ -38,13 +38,6 @@ NOISE = ["shot_noise", "read_noise"]
 GOLD = scene_spec("glossy_metal")["material"]
 
 
-@pytest.fixture(scope="session")
-def runs_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.getbasetemp() / "fit-runs"
-    folder.mkdir(exist_ok=True)
-    return folder
-
-
 def long_plan(isotropic: bool = True, targets: int = REALIZATIONS * SAMPLES) -> dict[str, Any]:
     """A uniform plan on the arch rig, ordered without improvement (the order does not
     matter here), calibrated every `SAMPLES` targets with 64 exposures per reading."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,12 +17,11 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory):
+def run(runs_dir: Path):
     plan = plan_spec(60) | {"max_moves": 0, "kicks": 0}
     plan["acquisition"]["calibration"]["every_samples"] = 20
-    folder = tmp_path_factory.mktemp("shared")
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        return simulated_run(folder, plan, scene_spec("matte", noise=True, seed=4))
+        return simulated_run(runs_dir, plan, scene_spec("matte", noise=True, seed=4))
 
 
 def test_weights_interpolate_the_readings_in_time(run):

@@ -22,9 +22,8 @@ GLOSSY = "cook_torrance:alpha=0.05,fresnel=conductor,ior=[0.18, 0.42, 1.37],k=[3
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = tmp_path_factory.mktemp("truth")
-    return simulated_run(folder, plan_spec(200), scene_spec("matte", noise=False))
+def run(runs_dir: Path) -> Path:
+    return simulated_run(runs_dir, plan_spec(200), scene_spec("matte", noise=False))
 
 
 @pytest.fixture(scope="module")
