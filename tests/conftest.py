@@ -195,6 +195,8 @@ SHARED_SETUP = {
 }
 
 
+# First: xdist's own hook (registered after this file) reads the groups into the node ids.
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     root = Path(config.rootpath)
     for item in items:
