@@ -9,6 +9,7 @@ traceback."""
 from __future__ import annotations
 
 import copy
+import functools
 import math
 import os
 import resource
@@ -113,10 +114,16 @@ def parent_of(data: Any, path: tuple[Any, ...]) -> Any:
     return data
 
 
+@functools.cache
+def parsed(shipped: Path) -> Any:
+    """A shipped file's YAML, parsed once (`mutants` mutates a deep copy)."""
+    return yaml.safe_load((CONFIGS / shipped).read_text())
+
+
 @st.composite
 def mutants(draw: st.DrawFn, shipped: Path, *, text_level: bool = True) -> bytes:
     """The shipped file's text, mutated once or twice."""
-    data = yaml.safe_load((CONFIGS / shipped).read_text())
+    data = copy.deepcopy(parsed(shipped))
     for _ in range(draw(st.integers(1, 2))):
         where = list(paths(data))
         ops = ["replace", "drop"] + (["document"] if text_level else [])
