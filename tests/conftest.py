@@ -1,7 +1,7 @@
-"""Suite-wide settings (hypothesis profiles, derandomized under CI; how xdist groups the
-tests) and the fixtures shared across packages: the shipped rigs, the quick plan, one
-folder for simulated runs, a virtual clock, emulated Dynamixel buses and the in-process
-`gonio` command (helper functions shared across packages: tests/support)."""
+"""Suite-wide settings (hypothesis profiles, derandomized under CI; the xdist groups) and
+the fixtures shared across packages: the shipped rigs, a virtual clock, emulated
+Dynamixel buses and the in-process `gonio` command (helper functions shared across
+packages: tests/support)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ import pytest
 from dynamixel_sdk import port_handler
 from hypothesis import HealthCheck, settings
 
-from gonio.planner import Plan, load_plan_source
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
@@ -107,23 +106,6 @@ def arch_point() -> Rig:
     return Rig.from_yaml(ARCH_POINT_FILE)
 
 
-@pytest.fixture(scope="session")
-def quick_plan() -> Plan:
-    """configs/plans/quick.yaml on its rig, built once (a `Plan` is frozen, its arrays
-    read-only)."""
-    return load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
-
-
-@pytest.fixture(scope="session")
-def runs_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The folder for `tests.support.runs.simulated_run`: it names a run by its specs'
-    hash and reuses the file, so the modules that ask for the same run share one
-    acquisition (per xdist worker). Tests read these runs and never write them."""
-    folder = tmp_path_factory.getbasetemp() / "runs"
-    folder.mkdir(exist_ok=True)
-    return folder
-
-
 @pytest.fixture
 def clock() -> ManualClock:
     return ManualClock()
@@ -195,7 +177,8 @@ SHARED_SETUP = {
 }
 
 
-# First: xdist's own hook (registered after this file) reads the groups into the node ids.
+# Before xdist's hook, which writes each test's xdist_group into the node id it schedules
+# by (registered after this file, it would otherwise run first and see no group).
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     root = Path(config.rootpath)

@@ -1,4 +1,6 @@
-"""Fixtures of the acquisition and run-journal tests (helpers: tests/support/acquire.py)."""
+"""Fixtures of the gonio tests: the quick plan and one folder for simulated runs, each
+shared across packages; the acquisition and run-journal tests' plan and scene files and
+reference runs (helpers: tests/support/acquire.py)."""
 
 from __future__ import annotations
 
@@ -9,11 +11,30 @@ from typing import Any
 
 import pytest
 
+from gonio.planner import Plan, load_plan_source
 from gonio.rig.model import Rig
 from gonio.store.read import Run
+from tests.conftest import CONFIGS
 from tests.support.acquire import ARCH, BRUSHED, RunFiles, plan_yaml, scene_yaml
 
 _REFERENCES: dict[tuple[str, str], Run] = {}
+
+
+@pytest.fixture(scope="session")
+def quick_plan() -> Plan:
+    """configs/plans/quick.yaml on its rig, built once (a `Plan` is frozen, its arrays
+    read-only)."""
+    return load_plan_source(CONFIGS / "plans" / "quick.yaml").build()
+
+
+@pytest.fixture(scope="session")
+def runs_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The folder for `tests.support.runs.simulated_run`: it names a run by its specs'
+    hash and reuses the file, so the modules that ask for the same run share one
+    acquisition (per xdist worker). Tests read these runs and never write them."""
+    folder = tmp_path_factory.getbasetemp() / "runs"
+    folder.mkdir(exist_ok=True)
+    return folder
 
 
 @pytest.fixture
