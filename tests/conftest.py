@@ -161,7 +161,6 @@ PTY_TESTS = (
 #: which builds the fixture once; spread over the workers, each would build its own.
 SHARED_SETUP = {
     "tests/gonio/brdf/test_factored.py": "factored-tables",
-    "tests/gonio/brdf/test_lobe_anisotropy.py": "lobe-widths",
     "tests/gonio/brdf/test_merl.py": "merl-tables",
     "tests/gonio/cli/test_evaluate.py": "evaluated-run",
     "tests/gonio/cli/test_fit.py": "fitted-runs",
@@ -174,6 +173,7 @@ SHARED_SETUP = {
     "tests/gonio/tradeoff/test_executors.py": "reference-sweep",
     "tests/gonio/tradeoff/test_sweep.py": "reference-sweep",
     "tests/sim/test_simulate.py": "shipped-plans",
+    "tests/studies/brdf/test_lobe_anisotropy.py": "lobe-widths",
 }
 
 
