@@ -34,7 +34,7 @@ _DTYPES = {"b": "boolean", "i": "integer", "f": "number", "U": "string"}
 
 def _event_model() -> Any:
     try:
-        import event_model
+        import event_model  # optional: the bluesky extra
     except ImportError:
         raise GonioError(
             "--format bluesky needs event-model: pip install 'gonio[bluesky]'"

@@ -95,8 +95,8 @@ def _centres(n_theta: int, n_phi: int) -> FloatArray:
 def _nmf(a: FloatArray, rank: int, seed: int, max_iter: int) -> tuple[FloatArray, FloatArray]:
     """W (m, rank), H (rank, n) ≥ 0 with A ≈ W H (Frobenius)."""
     try:
-        from sklearn.decomposition import NMF
-        from sklearn.exceptions import ConvergenceWarning
+        from sklearn.decomposition import NMF  # optional: the factored extra
+        from sklearn.exceptions import ConvergenceWarning  # optional: the factored extra
     except ImportError:
         raise GonioError(
             "the factored export needs scikit-learn: pip install 'gonio[factored]'"

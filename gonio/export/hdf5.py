@@ -57,7 +57,7 @@ CONVENTIONS = (
 
 def _h5py() -> Any:
     try:
-        import h5py
+        import h5py  # optional: the hdf5 extra
     except ImportError:
         raise GonioError("--format hdf5 needs h5py: pip install 'gonio[hdf5]'") from None
     return h5py

@@ -25,15 +25,15 @@ UNIT_S = 1e-6
 def available() -> bool:
     """Whether `elkai` (LKH-3) is installed."""
     try:
-        import elkai  # noqa: F401
+        import elkai  # noqa: F401  # optional: the lkh extra
     except ImportError:
         return False
     return True
 
 
-def _problem(model: TravelModel, targets: FloatArray, start: FloatArray) -> str:
-    """The TSPLIB text: nodes 1..n the targets, n+1 the start S, n+2 the free end E; the
-    full matrix (the only format `elkai` reads), row by row.
+def _weights(model: TravelModel, targets: FloatArray, start: FloatArray) -> np.ndarray:
+    """The full matrix of integer weights (µs): nodes 0..n-1 the targets, n the start S,
+    n+1 the free end E (elkai writes it as TSPLIB's FULL_MATRIX, symmetric: a TSP).
 
     The tour must hold the edge S–E: every other edge at S costs M = the longest move
     + 1 more. A tour has two edges at S, so one without S–E pays 2M; taking S–E saves M
@@ -49,11 +49,7 @@ def _problem(model: TravelModel, targets: FloatArray, start: FloatArray) -> str:
     penalty = int(weights.max()) + 1
     weights[m - 1, : m - 1] += penalty
     weights[: m - 1, m - 1] += penalty
-    rows = "\n".join(" ".join(map(str, row)) for row in weights.tolist())
-    return (
-        f"TYPE : TSP\nDIMENSION : {m + 1}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
-        f"EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n{rows}\nEOF\n"
-    )
+    return weights
 
 
 def lkh_order(
@@ -64,7 +60,7 @@ def lkh_order(
     `ImportError` (with how to install it) without `elkai`.
     """
     try:
-        from elkai import _elkai
+        import elkai  # optional: the lkh extra
     except ImportError as missing:  # pragma: no cover - depends on the environment
         raise ImportError("the lkh ordering needs elkai: pip install 'gonio[lkh]'") from missing
     targets = np.asarray(targets, dtype=np.float64)
@@ -74,8 +70,8 @@ def lkh_order(
         orders = [np.arange(n), np.arange(n)[::-1]]
         times = [path_time(model, start, targets[o]) for o in orders]
         return np.asarray(orders[int(np.argmin(times))], dtype=np.int64)
-    parameters = f"RUNS = {runs}\nPROBLEM_FILE = :stdin:\n"
-    tour = [int(i) - 1 for i in _elkai.solve_problem(parameters, _problem(model, targets, start))]
+    closed = elkai.DistanceMatrix(_weights(model, targets, start).tolist()).solve_tsp(runs=runs)
+    tour = [int(i) for i in closed[:-1]]  # the tour, without its return to the first node
     s, e = n, n + 1
     k = tour.index(s)
     tour = tour[k:] + tour[:k]  # the start first

@@ -20,13 +20,13 @@ def require_matplotlib() -> ModuleType:
     """``matplotlib.pyplot`` on the off-screen Agg backend, or `PlotUnavailable` saying
     how to install it (checked before any long computation starts)."""
     try:
-        import matplotlib
+        import matplotlib  # optional: the plot extra
     except ImportError:
         raise PlotUnavailable(
             "plotting needs matplotlib: pip install 'gonio[plot]' (or pip install matplotlib)"
         ) from None
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # optional: the plot extra
 
     return plt
 
@@ -35,7 +35,7 @@ def check_figure_format(path: Path, option: str) -> None:
     """`PlotUnavailable` unless matplotlib is installed, and `GonioError` unless it can
     write the format ``path``'s suffix names (no suffix: PNG); both before any work."""
     require_matplotlib()
-    from matplotlib.backend_bases import FigureCanvasBase
+    from matplotlib.backend_bases import FigureCanvasBase  # optional: the plot extra
 
     formats = FigureCanvasBase.get_supported_filetypes()
     suffix = path.suffix.lower().removeprefix(".")

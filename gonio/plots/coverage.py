@@ -63,8 +63,8 @@ def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) ->
     """Write the coverage figure of ``plan`` to ``path`` (``format``, default: the one
     matplotlib knows from the suffix, PNG without one)."""
     plt = require_matplotlib()
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
+    from matplotlib.colors import ListedColormap  # optional: the plot extra
+    from matplotlib.patches import Patch  # optional: the plot extra
 
     p = params.get(plan.spec.parametrization)
     bounds = np.asarray(p.iso_bounds, dtype=np.float64)

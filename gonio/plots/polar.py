@@ -180,7 +180,7 @@ def draw(data: Polar, path: str | Path, *, format: str | None = None) -> None:
     ax.set_xlabel("θo (degrees; > 0: the far side of the normal, the mirror at θo = θi)")
     ax.set_ylabel("f (sr⁻¹)")
     handles, _ = ax.get_legend_handles_labels()
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # optional: the plot extra
 
     handles += [
         Line2D([], [], color="k", ls=":", label="no data there (extrapolated)"),

@@ -131,7 +131,7 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
     """Draw ``data`` to ``path``: log10 f shaded on one colour scale for all slices,
     iso-lines every half decade, masked pixels grey (see the module docstring)."""
     plt = require_matplotlib()
-    from matplotlib.colors import ListedColormap
+    from matplotlib.colors import ListedColormap  # optional: the plot extra
 
     shown = [s.f[~s.masked] for row in data.rows for s in row]
     finite = np.concatenate(shown) if shown else np.empty(0)
