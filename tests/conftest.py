@@ -6,6 +6,7 @@ packages: tests/support)."""
 from __future__ import annotations
 
 import os
+import signal
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,12 @@ RIG_FILES = {"arch": CONFIGS / "rigs" / "arch.yaml", "in_plane": CONFIGS / "rigs
 RIG_NAMES = list(RIG_FILES)
 #: The arch rig with a point source instead of its beam (the point-source scene's rig).
 ARCH_POINT_FILE = CONFIGS / "rigs" / "arch_point.yaml"
+
+# A suite started in the background of a non-interactive shell (as a CI runner may start
+# it) inherits SIGINT ignored, and Python then installs no KeyboardInterrupt handler: the
+# Ctrl-C tests need one, and their child processes need the signal not ignored (an
+# ignored signal stays ignored across exec, a handled one does not).
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 settings.register_profile(
     "dev", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow]
