@@ -129,13 +129,21 @@ def integrity(path: Path) -> str:
         conn.close()
 
 
+#: How long a held child waits for its signal (the parent gives up sooner).
+HOLD_S = 120.0
+
+
 class PipeProgress:
     """A `gonio.acquire.progress.Observer` that writes ``t INDEX`` to a pipe for every
-    target finished (called after its sample or skip was committed)."""
+    target finished (called after its sample or skip was committed); with
+    ``hold_after`` it waits, once it reported that many targets (over all sessions),
+    for the signal the parent sends then, so the run cannot finish before it."""
 
-    def __init__(self, fd: int, pause_s: float = 0.0) -> None:
+    def __init__(self, fd: int, pause_s: float = 0.0, hold_after: int | None = None) -> None:
         self.fd = fd
         self.pause_s = pause_s  # wall time per target: a run slow enough to signal
+        self.hold_after = hold_after
+        self.reported = 0
         self.todo: list[int] = []
 
     def start(self, plan: Plan, todo: np.ndarray) -> None:
@@ -143,6 +151,9 @@ class PipeProgress:
 
     def advance(self, done: int) -> None:
         os.write(self.fd, b"t %d\n" % self.todo[done - 1])
+        self.reported += 1
+        if self.hold_after is not None and self.reported >= self.hold_after:
+            time.sleep(HOLD_S)
         if self.pause_s:
             time.sleep(self.pause_s)
 
@@ -167,18 +178,20 @@ def acquire_in_child(
     delay_s: float = 0.0,
     kill_signal: int = signal.SIGKILL,
     timeout_s: float = 60.0,
+    hold: bool = False,
 ) -> ChildResult:
     """Fork a child that runs ``work(progress)`` (a `session.SessionResult` is reported as its
     outcome, anything else as it is); the parent sends ``kill_signal`` once the child
     reported ``kill_after`` targets (None: never; 0: from the fork) and ``delay_s`` more
-    seconds passed, and returns what the child reported."""
+    seconds passed, and returns what the child reported; ``hold``: the child waits after
+    reporting ``kill_after`` targets, so the signal lands right after that target."""
     r, w = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: never returns into the test
         code = 0
         try:
             os.close(r)
-            value = work(PipeProgress(w))
+            value = work(PipeProgress(w, hold_after=kill_after if hold else None))
             if isinstance(value, session.SessionResult):
                 value = value.report.outcome
             os.write(w, f"done {value}\n".encode())

@@ -81,6 +81,7 @@ def test_killed_in_either_pass_resumes_bit_identically(
         child = acquire_in_child(
             lambda progress, p=path: adaptive_files.start(p, progress=progress),
             kill_after=kill_after,
+            hold=True,
         )
         assert child.killed and integrity(path) == "ok"
         assert not open_run(path).complete
