@@ -70,3 +70,18 @@ def test_the_configs_readme_names_only_folders_that_exist() -> None:
     text = (ROOT / "configs" / "README.md").read_text(encoding="utf-8")
     for folder in re.findall(r"`([a-z_]+)/`", text):
         assert (ROOT / "configs" / folder).is_dir(), folder
+
+
+def test_the_readme_is_a_short_front_door_that_speaks_of_the_project() -> None:
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.encode("utf-8")) <= 8 * 1024
+    assert not re.search(r"\bissues?\b|\bseed \d{3}\b", text, re.IGNORECASE)
+
+
+def test_relative_links_in_the_docs_reach_a_file() -> None:
+    broken = []
+    for doc in DOCS:
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", doc.read_text(encoding="utf-8")):
+            if "://" not in target and not (doc.parent / target).exists():
+                broken.append(f"{doc.relative_to(ROOT)}: {target}")
+    assert broken == []
