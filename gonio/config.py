@@ -145,11 +145,14 @@ def excerpt(value: Any) -> str:
     return text if len(text) <= EXCERPT else f"{text[: EXCERPT - 1]}…"
 
 
-def _key_label(key: str) -> str:
-    """A mapping key as a message shows it: as written when it is one printable word,
-    else as an excerpt of its repr (a key of blanks or line breaks stays on one line)."""
-    plain = key.isprintable() and key == key.strip() and key != ""
-    return key[:EXCERPT] if plain else excerpt(key)
+def key_label(key: int | str) -> str:
+    """A mapping key or list index as a message shows it: as written (cut to an excerpt)
+    when it is printable without blanks at its ends, else as an excerpt of its repr (a
+    key of blanks or line breaks keeps the message on one line)."""
+    text = str(key)
+    if not (text.isprintable() and text == text.strip() and text):
+        return excerpt(key)
+    return text if len(text) <= EXCERPT else f"{text[: EXCERPT - 1]}…"
 
 
 def read_yaml(path: Path, raw: bytes | None = None) -> tuple[Any, yaml.Node | None]:
@@ -266,7 +269,7 @@ def _refuse_duplicate_keys(path: Path, node: yaml.Node) -> None:
                 if isinstance(key, yaml.ScalarNode):
                     if key.value in seen:
                         raise ConfigError(
-                            f"{path}:{key.start_mark.line + 1}: {_key_label(key.value)}: this key "
+                            f"{path}:{key.start_mark.line + 1}: {key_label(key.value)}: this key "
                             "is given twice in the same mapping; expected each key once"
                         )
                     seen.add(key.value)
@@ -324,9 +327,8 @@ def describe(error: ErrorDetails) -> str:
 
 
 def dotted(loc: Sequence[int | str]) -> str:
-    """A field path as ``a.b.0.c``, each part cut to a short excerpt (a key can be long)."""
-    parts = (str(p) if len(str(p)) <= EXCERPT else f"{str(p)[: EXCERPT - 1]}…" for p in loc)
-    return ".".join(parts) or "(top level)"
+    """A field path as ``a.b.0.c``, each part as `key_label` shows it."""
+    return ".".join(key_label(p) for p in loc) or "(top level)"
 
 
 def untagged(data: Any, loc: Sequence[int | str]) -> tuple[int | str, ...]:

@@ -116,11 +116,17 @@ class Bar:
     removed when closed unless ``leave``."""
 
     def __init__(
-        self, stream: IO[str] | None = None, *, delay_s: float = 0.0, leave: bool = True
+        self,
+        stream: IO[str] | None = None,
+        *,
+        delay_s: float = 0.0,
+        leave: bool = True,
+        unit_scale: bool = False,
     ) -> None:
         self.stream = stream or sys.stderr
         self.delay_s = delay_s
         self.leave = leave
+        self.unit_scale = unit_scale  # counts shown as 1.2k, 3.4M
         self._bar: tqdm[Any] | None = None
         self._left: TimeLeft | None = None
 
@@ -138,7 +144,7 @@ class Bar:
             total=total,
             desc=label,
             unit=unit,
-            unit_scale=total is None,
+            unit_scale=self.unit_scale,
             file=self.stream,
             delay=self.delay_s,
             disable=None,  # off unless the stream is a terminal
@@ -204,7 +210,9 @@ def stage(description: str, total: int | None, unit: str = "target") -> Iterator
     `shown_on` (default: standard error, after `DELAY_S`)."""
     display = _display.get() or _Display()
     shown: Progress = (
-        Bar(display.stream, delay_s=display.delay_s, leave=False) if display.shown else Quiet()
+        Bar(display.stream, delay_s=display.delay_s, leave=False, unit_scale=True)
+        if display.shown
+        else Quiet()
     )
     shown.start(total, f"planning: {description}", unit=unit)
     try:

@@ -43,12 +43,11 @@ def initial_state(spec: AcquisitionSpec, history: Run | None) -> RunState:
         return state
     state.count = len(history)
     calibrations = history.of_kind("calibration")
-    state.calibrations.k = len(calibrations)
     if calibrations:
         last = calibrations[-1]
-        state.calibrations.every.done(int(last.data["count"]), last.t_s)
-        state.calibrations.at_count = int(last.data["count"])
-        state.calibrations.exposure_s = float(last.data["reference"]["exposure_s"])
+        exposure_s = float(last.data["reference"]["exposure_s"])
+        state.calibrations.done(int(last.data["count"]), last.t_s, exposure_s)
+    state.calibrations.k = len(calibrations)
     checks = history.of_kind("health")
     if checks:
         last_check = checks[-1].data

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from gonio.analysis.calibrated import calibrate
-from gonio.analysis.scene import scene_band, scene_truth
+from gonio.analysis.scene import scene_truth
 from gonio.errors import GonioError
 from gonio.store.read import Run
 from gonio.types import FloatArray
@@ -113,8 +113,6 @@ def truth_of(run: Run, *, at_true_pairs: bool = False) -> FloatArray:
     if text is None:
         raise GonioError(f"{run.path}: the run has no scene: no truth to compare with")
     scene_path = run.meta.get("scene_path")
-    model = scene_truth(
-        str(text), None if scene_path is None else str(scene_path), scene_band(text)
-    )
+    model = scene_truth(str(text), None if scene_path is None else str(scene_path))
     wi, wo = measured_pairs(run) if at_true_pairs else run.directions()
     return np.asarray(model(wi, wo), dtype=np.float64)

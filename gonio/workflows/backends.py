@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
-from contextlib import AbstractContextManager, ExitStack
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from typing import IO, Literal
 
@@ -166,8 +166,3 @@ def build(
         assert scene is not None
         return rehearsal(rig, scene, seed, run_started_unix, speedup)
     return hardware(rig, scene, seed, run_started_unix)
-
-
-def opened(backend: Backend) -> AbstractContextManager[Devices]:
-    """The backend's devices as a context manager (dry runs: open, look, close)."""
-    return backend.devices
