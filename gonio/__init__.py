@@ -2,7 +2,7 @@
 
 Subpackages: :mod:`gonio.params` (BRDF parametrizations), :mod:`gonio.brdf`
 (analytic BRDF models). Conventions (frames, units, angles) are in
-``docs/conventions.md``.
+``docs/explanations/conventions.md``.
 """
 
 __version__ = "0.1.0"

@@ -111,7 +111,7 @@ def lamp_for(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
 def photometer_for(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPhotometer:
     """The simulated photometer the rig's serial interface can talk to, reading each
     exposure's counts from ``physics`` (`ConfigError` if the rig's protocol is not the
-    photometer's: docs/serial_detector.md)."""
+    photometer's: docs/reference/serial_detector.md)."""
     config = rig.serial_detector_config()
     problem = mismatch(config)
     if problem is not None:

@@ -135,7 +135,7 @@ class SourceDriftSpec(Strict):
 class ApertureSpec(Strict):
     """The detector averages the BRDF over its solid angle: a Gauss–Legendre × trapezoid
     quadrature of ``order`` × 2·order nodes over the cap (order 6 keeps a GGX α = 0.02
-    peak to 1e-7 at 1e-3 sr and 1e-13 at 1e-4 sr; docs/simulator.md)."""
+    peak to 1e-7 at 1e-3 sr and 1e-13 at 1e-4 sr; docs/explanations/simulator.md)."""
 
     order: int = Field(6, ge=2, le=64)
 

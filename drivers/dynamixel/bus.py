@@ -63,7 +63,7 @@ _TEMPERATURE = item("present_temperature")
 class DynamixelBus(Resource):
     """A `MotorBus` of ``axes`` on the Dynamixel bus at ``port``.
 
-    ``baud`` is the motors' rate (factory default 57 600; see docs/hardware.md to move
+    ``baud`` is the motors' rate (factory default 57 600; see docs/reference/hardware.md to move
     to 1 Mbps); ``retries`` extra attempts per transaction; ``settle_ticks`` how close
     (in motor ticks) an axis must be to its goal to count as settled; ``configure``
     writes operating mode, drive mode, position limits and profiles on open;

@@ -20,7 +20,7 @@ is known or presumed on (`DriverError`): turn torque off and read it back first.
 
 Latency: the SDK waits 2 × LATENCY_TIMER + 2 ms plus the wire time of the *reply* for a
 status packet. That budget must cover the USB adapter's own latency timer (FTDI
-default 16 ms; 1 ms after the udev rule in docs/hardware.md) and also what the SDK
+default 16 ms; 1 ms after the udev rule in docs/reference/hardware.md) and also what the SDK
 leaves out: the wire time of the instruction itself and of a packet without reply
 still leaving the adapter before it (a SYNC_WRITE of goals just before a SYNC_READ
 poll: 6 ms at 57 600 baud). The link sets its port's latency timer to the adapter's

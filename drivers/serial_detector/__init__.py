@@ -19,7 +19,7 @@ expression that has a named group ``value``. It is written to be left alone at n
 Line endings on input: ``\\r``, ``\\n`` and ``\\r\\n`` all end a line and blank lines
 are ignored; ``line_ending`` is what the driver appends to the commands it sends. The
 protocol, the configuration fields and the failure modes are described in
-``docs/serial_detector.md``.
+``docs/reference/serial_detector.md``.
 
 The port may be a device path (``/dev/ttyACM0``, ``COM3``) or any pyserial URL:
 ``spy:///dev/ttyACM0?file=traffic.txt`` logs every byte, ``socket://host:port`` reaches a

@@ -26,7 +26,7 @@ _SAMPLE_FIELDS: Mapping[str, float | int] = {
 
 @dataclass(frozen=True)
 class SerialDetectorConfig:
-    """How to talk to one line-based detector (see ``docs/serial_detector.md``).
+    """How to talk to one line-based detector (see ``docs/reference/serial_detector.md``).
 
     Command templates (``query``, ``set_exposure``, ``init``) are ``str.format``
     templates; the fields are ``exposure_s`` (float, seconds), ``exposure_ms`` and

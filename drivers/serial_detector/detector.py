@@ -1,5 +1,5 @@
 """The driver: :class:`SerialDetector`, a :class:`drivers.base.Detector` on a line-based
-serial protocol (see the package docstring and ``docs/serial_detector.md``)."""
+serial protocol (see the package docstring and ``docs/reference/serial_detector.md``)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The acquisition engine: one loop for every backend, written against the
-`drivers.base` contract only (docs/acquire.md).
+`drivers.base` contract only (docs/explanations/acquisition.md).
 
 For each target of the stored, ordered plan still to measure: check its pose against
 the bus's limits (a pose outside them is skipped, never commanded) → move → wait until

@@ -1,5 +1,6 @@
 """BRDF values and their uncertainty from a journaled run's raw counts, through its
-calibration events (docs/acquire.md#calibration): each holds a reading of the reference
+calibration events (docs/explanations/acquisition.md#calibration): each
+holds a reading of the reference
 standard and a dark reading; `calibration_series` gathers them and
 `gonio.radiometry.series.CalibrationSeries` inverts the samples (the formula and the
 noise model are there)."""

@@ -5,7 +5,7 @@
 ``reciprocal``, ``isotropic``, ``physically_based``; ``names()`` lists the models.
 Directions are unit vectors (..., 3) in the sample frame (z = normal), pointing
 away from the surface, ``wi`` toward the light and ``wo`` toward the detector.
-See docs/brdf.md for formulas, normalizations and measurements.
+See docs/explanations/brdf.md for formulas, normalizations and measurements.
 """
 
 from __future__ import annotations

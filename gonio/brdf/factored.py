@@ -6,7 +6,7 @@ toward the light, ``wo`` toward the detector (the view), unit vectors (..., 3), 
 
 eval: f(wi, wo) = Σⱼ Fⱼ(θo, φo) Gⱼ(θh, φh) / cos θi' (sr⁻¹), looked up in the bins of
 (wo, ĥ): the files hold f · cos θi, the cosine of the *sampled* direction (see
-docs/formats_factored.md for why not the seed's cos θo), tabulated at the bins'
+docs/reference/formats_factored.md for why not the seed's cos θo), tabulated at the bins'
 centres, and θi' is the θi of those centres. 0 where cos θi = 0 or cos θi' ≤ 0. RGB
 files multiply by Fc(ωo) Gc(ĥ) per channel.
 

@@ -4,7 +4,7 @@ The factor file holds f(ωi, ωo) cos θi ≈ Σⱼ Fⱼ(θo, φo) Gⱼ(θp, φp
 Gⱼ ≈ Σₖ uⱼₖ(θp) vⱼₖ(φp) and the colour factors Fc, Gc; the CDF file the 1D CDFs of each
 of the L = J·K terms over φp and z = 1 − cos θp. (θp, φp) are the polar angles of the
 halfway vector ĥ = (ωi + ωo)/‖ωi + ωo‖ ("halfangle"). The layout, the bin conventions
-and where they depart from seed 002 are in docs/formats_factored.md.
+and where they depart from seed 002 are in docs/reference/formats_factored.md.
 
 Every table is piecewise constant on equal bins: θo, θp on [0, π/2], φo, φp on
 [0, 2π), z on [0, 1]. The CDF of bin b is its value at the bin's upper edge (the last
@@ -133,7 +133,7 @@ def format_factors(t: FactoredTables) -> str:
     """The factor file's text."""
     j, k = t.outer, t.inner
     counts = (j, k, *t.F.shape[1:], t.G.shape[1], t.z_count, t.G.shape[2])
-    out = ["# factored BRDF (Lawrence et al. 2004) by gonio: docs/formats_factored.md\n"]
+    out = ["# factored BRDF (Lawrence et al. 2004) by gonio: docs/reference/formats_factored.md\n"]
     out.append("param: halfangle\n")
     out.extend(f"{label}: {n}\n" for (_, label), n in zip(_HEADER[1:], counts, strict=True))
     out.append("INTENSITY DATA\n")
@@ -150,7 +150,7 @@ def format_factors(t: FactoredTables) -> str:
 
 def format_cdfs(t: FactoredTables) -> str:
     """The CDF file's text."""
-    out = ["# factored BRDF CDFs by gonio, term j*K + k: docs/formats_factored.md\n"]
+    out = ["# factored BRDF CDFs by gonio, term j*K + k: docs/reference/formats_factored.md\n"]
     out.append("CDF DATA\n")
     for i in range(t.cdf_phi.shape[0]):
         out.append(f"P(phi_p|term {i})\n{_rows(t.cdf_phi[i])}P(z|term {i})\n{_rows(t.cdf_z[i])}")

@@ -1,4 +1,4 @@
-"""Model families to fit: the SPEC grammar of ``gonio fit --model`` (docs/fitting.md).
+"""Model families to fit: the SPEC grammar of ``gonio fit --model`` (docs/explanations/fitting.md).
 
     SPEC  := TERM ("+" TERM)*                  e.g. lambert+ggx, lambert+ggx+ggx
     TERM  := NAME [":" KEY "=" VALUE ("," KEY "=" VALUE)*]

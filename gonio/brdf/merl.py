@@ -1,7 +1,7 @@
 """The MERL BRDF table (Matusik, Pfister, Brand & McMillan 2003): its binary layout,
 and a tabulated BRDF read from such a file (``create("merl", path=...)``).
 
-Layout (docs/formats.md#merl, after MERL's ``BRDFRead.cpp``): three int32 (90, 90, 180),
+Layout (docs/reference/formats.md#merl, after MERL's ``BRDFRead.cpp``): three int32 (90, 90, 180),
 then the 1 458 000 red, the 1 458 000 green and the 1 458 000 blue float64 values, each
 channel a C-ordered array over (θh, θd, φd) with φd varying fastest; 34 992 012 bytes,
 little-endian. A channel's BRDF value (sr⁻¹) is the stored value times its scale

@@ -11,7 +11,7 @@ Romanyuk et al.'s modified cosine-quadratic model (seed 003).
 with r = 2 (wi · n) n − wi the mirror direction of wi and θh the angle between
 the normal and the halfway vector. Both lobes are 0 where their cosine is < 0.
 
-Normalizations (derivations in docs/brdf.md). Phong's (n + 2)/(2π) makes the
+Normalizations (derivations in docs/explanations/brdf.md). Phong's (n + 2)/(2π) makes the
 lobe's directional albedo exactly 1 at normal incidence, its maximum over θi.
 Blinn-Phong's
 

@@ -1,5 +1,5 @@
 """`gonio evaluate RUN`: a reconstruction of a run scored against a truth (the simulated
-scene by default) on the fixed test set, overall and by region (docs/evaluation.md)."""
+scene by default) on the fixed test set, overall and by region (docs/explanations/evaluation.md)."""
 
 from __future__ import annotations
 

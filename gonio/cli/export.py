@@ -1,5 +1,5 @@
 """`gonio export RUN.sqlite --format F -o PATH`: a run in another program's format
-(csv, hdf5, alta, bluesky; merl from the run's reconstruction). docs/formats.md."""
+(csv, hdf5, alta, bluesky; merl from the run's reconstruction). docs/reference/formats.md."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Write a run in another program's format: "
         + "; ".join(f"{name}: {what}" for name, (_, what) in FORMATS.items())
         + ". The output is written whole or not at all (an existing file is replaced). "
-        "Layouts, units and what each format loses: docs/formats.md.",
+        "Layouts, units and what each format loses: docs/reference/formats.md.",
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument("--format", required=True, choices=list(FORMATS), help="the output format")

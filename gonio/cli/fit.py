@@ -1,5 +1,5 @@
 """`gonio fit RUN [RUN RUN] --model SPEC [--json] [-o MATERIAL.yaml] [--starts N]
-[--seed S]`: fit a model family to a run's calibrated samples (docs/fitting.md)."""
+[--seed S]`: fit a model family to a run's calibrated samples (docs/explanations/fitting.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """`gonio plot RUN --kind slices|polar|coverage|error -o FILE.png`: a figure of a run, its
-reconstruction and a truth (docs/plots.md). The figure is reserved before any work and
+reconstruction and a truth (docs/reference/plots.md). The figure is reserved before any work and
 replaced whole (`gonio.output`)."""
 
 from __future__ import annotations

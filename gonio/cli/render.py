@@ -31,7 +31,7 @@ def render_summary(plan: Plan) -> str:
     if spec.sampling.strategy == "adaptive" and s.target is not None and s.kept < s.target:
         lines.append(
             f"  {'':<26}{'':>9}   (the survey: the other {s.target - s.kept} targets are "
-            "planned from its measurements during the run, docs/adaptive.md)"
+            "planned from its measurements during the run, docs/explanations/adaptive.md)"
         )
     lines += [
         "",

@@ -1,7 +1,7 @@
 """`gonio tradeoff SWEEP.yaml -o OUTDIR`: every combination of a sweep planned, acquired
 on the simulated backend, reconstructed and scored, on a local process pool or a Dask
 cluster; the results, the Pareto front of error against instrument time, figures and,
-with --target-error, the fastest plan meeting it (docs/tradeoff.md)."""
+with --target-error, the fastest plan meeting it (docs/explanations/tradeoff.md)."""
 
 from __future__ import annotations
 

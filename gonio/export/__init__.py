@@ -1,4 +1,4 @@
-"""Dataset export: a run written in another program's format (docs/formats.md).
+"""Dataset export: a run written in another program's format (docs/reference/formats.md).
 
 ``export(run_path, name, out_path, options)`` reads the run, writes the format ``name``
 to ``out_path`` atomically (`gonio.output`) and returns a one-line summary. Each format

@@ -1,4 +1,4 @@
-"""``--format alta``: ALTA's text data format (docs/formats.md#alta), so that ALTA's
+"""``--format alta``: ALTA's text data format (docs/reference/formats.md#alta), so that ALTA's
 fitters take a run's samples with their uncertainty.
 
 The file (after ALTA's ``data_storage.cpp``, ``args.h`` and ``params.cpp``)::

@@ -1,5 +1,5 @@
 """``--format bluesky``: a run as event-model documents (the bluesky data model), one
-``[name, document]`` JSON array per line (docs/formats.md#bluesky).
+``[name, document]`` JSON array per line (docs/reference/formats.md#bluesky).
 
 Documents, in order: ``start`` (the run's metadata: plan, rig and scene texts, hashes,
 backend, seed, versions, sessions), the ``primary`` stream's ``descriptor`` (one data

@@ -1,5 +1,5 @@
 """A run's samples as named columns with units: what the csv, hdf5 and bluesky exports
-write, one entry per measured target in target order (docs/formats.md#columns).
+write, one entry per measured target in target order (docs/reference/formats.md#columns).
 
 A column's ``key`` carries its unit as a suffix (``_rad``, ``_s``, ``_per_sr``; the
 detector's readings are ``counts`` and ``counts_std``; none for a unitless value or an

@@ -1,5 +1,5 @@
 """``--format csv``: one row per sample, one column per `gonio.export.columns` column,
-the header row naming each with its unit suffix (docs/formats.md#csv).
+the header row naming each with its unit suffix (docs/reference/formats.md#csv).
 
 Floats are written with 17 significant digits (read back bit for bit); a value the
 run does not have (NaN: a spread the device did not give) is an empty cell; booleans

@@ -1,5 +1,5 @@
 """``--format hdf5``: the whole run in one HDF5 file, readable with plain h5py
-(docs/formats.md#hdf5).
+(docs/reference/formats.md#hdf5).
 
 Layout (every unit and convention an attribute beside the data it describes)::
 

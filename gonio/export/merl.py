@@ -1,5 +1,5 @@
 """``--format merl``: a reconstruction tabulated in MERL's binary layout
-(`gonio.brdf.merl`, docs/formats.md#merl).
+(`gonio.brdf.merl`, docs/reference/formats.md#merl).
 
 Each bin holds the reconstruction evaluated at the bin's representative pair: the pair
 with φh = 0 at the bin's centre in index coordinates, θh = ((i + ½)/90)²·π/2,

@@ -4,7 +4,7 @@
 ``forward(wi, wo)``, ``inverse(coords)``, ``valid(coords)`` and the isotropic
 reduction ``forward_iso`` / ``inverse_iso`` / ``valid_iso``; ``names()`` lists them.
 Conventions: z is the normal, unit directions point away from the surface, ``wi``
-toward the light, radians, azimuths in [0, 2π). See docs/parametrizations.md.
+toward the light, radians, azimuths in [0, 2π). See docs/explanations/parametrizations.md.
 """
 
 from __future__ import annotations

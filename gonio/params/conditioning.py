@@ -15,7 +15,7 @@ Two Jacobians of the coordinates c = forward(ωi, ωo), each (..., 4, 4):
 Units: the radii of orthographic and hybrid (‖h̄‖, ‖k̄‖, ‖k‖ ≤ 1) are dimensionless,
 like the angles, and enter the singular values as they are.
 
-The derivatives are those of each coordinate's definition (docs/parametrizations.md)
+The derivatives are those of each coordinate's definition (docs/explanations/parametrizations.md)
 extended off the sphere as the float64 code computes them (polar angles and azimuths
 of h = ωi + ωo, k = ωi − ωo, norms of their parts), chained by hand; none is a finite
 difference. At a configuration where a coordinate is not differentiable (an azimuth or

@@ -27,7 +27,7 @@ one direction grazing and the other not, hz is O(1) and full precision is kept.
 Conventions: φh = 0 when h̄ = 0 (the mirror configuration); φk = 0 when k = 0 (ωi = ωo);
 θk = π/2 when hz = a = 0 (both directions on the horizon).
 
-Domain (derived in docs/parametrizations.md): with z = 1 − ‖h̄‖² − ‖k‖² and
+Domain (derived in docs/explanations/parametrizations.md): with z = 1 − ‖h̄‖² − ‖k‖² and
 c = ‖h̄‖² cos²(φk − φh), valid iff z ≥ 0 and ‖k‖² c ≤ z (z + c).
 
 Isotropic reduction (‖h̄‖, ‖k‖, φk − φh mod π): rotation about n (φh out) and

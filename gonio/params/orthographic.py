@@ -8,7 +8,7 @@ tangent plane; φh, φk are the azimuths of h̄ and k̄. The inverse is
 Precision: a direction at elevation δ above the horizon has ‖ω̄‖² = 1 − δ², so its
 z is recovered from a difference that float64 knows to about ε: the round trip error
 of that direction is about ε/δ for δ ≫ √ε and about √ε below (see
-docs/parametrizations.md). Everywhere else it keeps full precision.
+docs/explanations/parametrizations.md). Everywhere else it keeps full precision.
 
 Conventions: φh = 0 when h̄ = 0 (the mirror configuration), φk = 0 when k̄ = 0
 (ωi = ωo). Domain: ‖h̄ ± k̄‖ ≤ 1, i.e. ‖h̄‖² + ‖k̄‖² + 2‖h̄‖‖k̄‖|cos(φk − φh)| ≤ 1.

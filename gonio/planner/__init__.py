@@ -1,6 +1,6 @@
 """The sampling planner: plan file → points uniform in a parametrization's coordinates →
 reachable direction pairs → joint angles → an ordered, timed `Plan`, stored and read
-back bit for bit (`write_plan`, `read_plan`). See docs/planner.md.
+back bit for bit (`write_plan`, `read_plan`). See docs/reference/planner.md.
 
 Modules: `model` (the `Plan`, its `Summary`, the hashes), `builder` (`build`), `files`
 (plan files and stored plans), `two_pass` (the adaptive strategy's second pass)."""

@@ -2,12 +2,12 @@
 where a piecewise-linear reconstruction errs, estimated from a survey.
 
 The reconstruction interpolates g = log(f + ε) linearly in the parametrization's scaled
-coordinates (the unit box; docs/reconstruction.md), ε = `LOG_FLOOR`, and is scored on
-log(1 + f) over pairs uniform in dωi dωo (the test set, docs/evaluation.md). Locally the
-interpolation error of g is about h²‖∇²g‖ for a spacing h, and it reaches the metric
-through d log(1 + f)/dg = f/(1 + f). With w the density of the test measure in the
-unit box and ρ the sample density (h ∝ ρ^(−1/d)), the expected squared error
-∫ w (f/(1 + f))² ‖∇²g‖² ρ^(−4/d) is least for
+coordinates (the unit box; docs/explanations/reconstruction.md), ε = `LOG_FLOOR`, and is
+scored on log(1 + f) over pairs uniform in dωi dωo (the test set,
+docs/explanations/evaluation.md). Locally the interpolation error of g is about h²‖∇²g‖
+for a spacing h, and it reaches the metric through d log(1 + f)/dg = f/(1 + f). With w
+the density of the test measure in the unit box and ρ the sample density
+(h ∝ ρ^(−1/d)), the expected squared error ∫ w (f/(1 + f))² ‖∇²g‖² ρ^(−4/d) is least for
 
     ρ ∝ (w · (f/(1 + f))² · ‖∇²g‖²)^(d/(d + 4))
 
@@ -194,7 +194,7 @@ def onto_edge(
     A piecewise-linear reconstruction answers only inside the hull of its samples, and
     the test measure reaches θmax: without samples on the edge the pairs near it are
     extrapolated, which is where most of the error of a glossy material sits (the
-    grazing specular peak; docs/adaptive.md). Moving points drawn from the density
+    grazing specular peak; docs/explanations/adaptive.md). Moving points drawn from the density
     puts the edge's samples where the density is high next to it."""
     p = params.get(parametrization)
     valid = p.valid_iso(coords) if isotropic else p.valid(coords)

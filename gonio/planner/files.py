@@ -3,7 +3,7 @@ rig) and the stored plan, one UTF-8 text file that reads back as the same `Plan`
 for bit (`write_plan`, `read_plan`).
 
 A stored plan is a header of ``# KEY: JSON`` lines, then the targets as CSV
-(docs/planner.md)::
+(docs/reference/planner.md)::
 
     # gonio-plan v1
     # spec: {...}          the validated PlanSpec, every field (JSON)

@@ -2,7 +2,7 @@
 
 A plan names the parametrization to sample uniformly (default ``rusinkiewicz``: its
 uniform plans reach a given error with the fewest samples on every shipped scene,
-docs/tradeoff.md "The study"), whether the material is isotropic (three coordinates:
+docs/explanations/tradeoff.md "The study"), whether the material is isotropic (three coordinates:
 the pair's azimuth is rotated out and the reciprocity fold applies) or anisotropic
 (four; the sample rotation stage is used), how to place points, and how long to expose
 each target.
@@ -31,7 +31,7 @@ class Warp(Strict):
 
 
 class AdaptiveSpec(Strict):
-    """The adaptive strategy (docs/adaptive.md): a Sobol survey of ``survey`` kept
+    """The adaptive strategy (docs/explanations/adaptive.md): a Sobol survey of ``survey`` kept
     targets is measured first; a model of family ``model`` (a `gonio fit` spec) fitted
     to it (``survey``: the survey's own reconstruction, no model) estimates where a
     reconstruction errs; the rest of the target is then placed
@@ -173,7 +173,7 @@ class HealthSpec(Strict):
 
 
 class AcquisitionSpec(Strict):
-    """How `gonio acquire` runs the plan (docs/acquire.md)."""
+    """How `gonio acquire` runs the plan (docs/explanations/acquisition.md)."""
 
     calibration: CalibrationSpec = Field(default_factory=CalibrationSpec)
     on_fault: OnFaultSpec = Field(default_factory=OnFaultSpec)

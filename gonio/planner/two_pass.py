@@ -1,4 +1,4 @@
-"""The adaptive strategy's second pass (docs/adaptive.md): planned from an estimate of
+"""The adaptive strategy's second pass (docs/explanations/adaptive.md): planned from an estimate of
 the material made from the survey's measurements, and appended to the survey's plan.
 
 `build` of an adaptive plan gives the first pass, a Sobol survey of ``survey`` kept

@@ -13,7 +13,7 @@ z = normal, pointing away from the surface: wi toward the light, wo toward the d
   `aperture_integral` (angular integration over the aperture), combined in
   `detector_power`.
 
-Formulas, assumptions and measured accuracies: docs/radiometry.md.
+Formulas, assumptions and measured accuracies: docs/explanations/radiometry.md.
 """
 
 from gonio.radiometry.aperture import aperture_integral, cap_half_angle, weight_for

@@ -13,7 +13,7 @@ cos ψ on [cos α, 1] (``order[0]`` nodes) × the periodic trapezoid in the azim
 wo (``order[1]`` nodes); on a ring that dips below the horizon, Gauss-Legendre over its
 visible arc instead. Default (12, 24): 288 BRDF evaluations per pair.
 
-Accuracy of the default rule (measured against (96, 192), docs/radiometry.md): GGX
+Accuracy of the default rule (measured against (96, 192), docs/explanations/radiometry.md): GGX
 α = 0.02 around its peak, ≤ 1e-14 relative at Ω ≤ 1e-3 sr, 3e-10 at 3e-3 sr, 3.4e-6 at
 1e-2 sr; a cap cut by the horizon (grazing wo), weight "one" to rounding, weight "cos"
 to 1e-4 (the cos weight has a √ endpoint singularity in cos ψ there).

@@ -18,7 +18,7 @@ integrand switches between the three conics only where two of them cross (up to 
 angles in [0, π), from 2 × 2 eigen-problems); on each piece the integral of 1/q is a
 sector area in closed form. Accuracy: rounding only; measured within the noise of a
 10⁶-point Monte Carlo (5e-4) and within 1.3e-10 of a 2·10⁵-node midpoint rule (its own
-error); the kick-in angle within 4e-12 rad of the closed form (docs/radiometry.md).
+error); the kick-in angle within 4e-12 rad of the closed form (docs/explanations/radiometry.md).
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@
   the sample), its f replaced by the aperture mean f̄ = A / Ω (weight 1) at every
   surface node when aperture integration is on too (nested quadratures: 768 × 288
   BRDF evaluations per pair at the default orders, ~40 ms a pair; orders (4, 6) × (4, 8)
-  keep ≤ 1e-3 for GGX α = 0.02 at ~1.4 ms, see docs/radiometry.md); point source, no
+  keep ≤ 1e-3 for GGX α = 0.02 at ~1.4 ms, see docs/explanations/radiometry.md); point source, no
   footprint: Φ = K · A (weight 1).
 
 Approximation in the combinations: the seen region (η for the beam, the spatial

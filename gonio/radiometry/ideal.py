@@ -17,7 +17,7 @@ Power into the detector's aperture, ideal geometry (no effects):
   the detector seeing its field of view (diameter F, area πF²/(4 cos θo) on the
   sample): K = I cos θi / r² · πF²/4, c = 1.
 
-The inverse is f = Φ / G. See docs/radiometry.md for the derivation and the limits
+The inverse is f = Φ / G. See docs/explanations/radiometry.md for the derivation and the limits
 of the ideal geometry.
 """
 

@@ -1,6 +1,6 @@
 """The inversion of a run's readings through a series of reference readings over run
-time (docs/acquire.md#calibration): counts → BRDF with the source's drift divided out,
-and its 1σ uncertainty.
+time (docs/explanations/acquisition.md#calibration): counts → BRDF with the source's
+drift divided out, and its 1σ uncertainty.
 
 Every calibration holds a reading of the reference standard (albedo ρ, at the
 rig's calibration geometry) and a dark reading, both at one exposure e_ref with
@@ -19,7 +19,7 @@ the reference's excess variance per count (counting statistics: shot noise grows
 the signal, read and dark noise do not); the reference and dark rates carry the
 variance of their means. These add in quadrature through the formula above. A detector
 that averages on its own and reports no spread gives no noise estimate: its readings
-count as exact there (docs/acquire.md).
+count as exact there (docs/explanations/acquisition.md).
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ Quadrature: polar coordinates about the centre. The region is star-shaped with r
 R(β) = min over the seen ellipse and the disc; its kinks (where they cross) and the
 quadrant boundaries split [0, 2π) into 8 pieces, each with `order[0]` Gauss-Legendre
 nodes in β; along each ray `order[1]` Gauss-Legendre nodes in ρ ∈ [0, R(β)]. Default
-(8, 12): 768 BRDF evaluations per pair. Accuracy: see docs/radiometry.md.
+(8, 12): 768 BRDF evaluations per pair. Accuracy: see docs/explanations/radiometry.md.
 """
 
 from __future__ import annotations

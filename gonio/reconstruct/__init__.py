@@ -1,5 +1,5 @@
-"""Reconstruction of a measured BRDF from a run's samples (docs/reconstruction.md), and
-its evaluation against a truth (docs/evaluation.md).
+"""Reconstruction of a measured BRDF from a run's samples (docs/explanations/reconstruction.md), and
+its evaluation against a truth (docs/explanations/evaluation.md).
 
 ``reconstruct(gonio.analysis.Measured.from_run(path), method=...)`` returns a `Reconstruction` with
 ``eval``, ``uncertainty`` and ``supported`` over direction pairs; `METHODS` lists the

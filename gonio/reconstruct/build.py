@@ -3,7 +3,7 @@
 The samples' pairs go to the scaled coordinates of a parametrization (the isotropic
 reduction for an isotropic run; `gonio.reconstruct.coordinates`), padded across the
 seams; their values through a transform (`gonio.reconstruct.transforms`) into an
-interpolant (`METHODS`). docs/reconstruction.md says how each choice was made.
+interpolant (`METHODS`). docs/explanations/reconstruction.md says how each choice was made.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ from gonio.types import ArrayLike, FloatArray
 METHODS = ("linear", "rbf", "grid", "model+residual")
 #: What an unsupported query may be filled with (None: NaN).
 EXTRAPOLATIONS = (None, "nearest", "model")
-#: The transform interpolated by default (chosen by measurement: docs/reconstruction.md).
+#: The transform interpolated by default (chosen by measurement:
+#: docs/explanations/reconstruction.md).
 DEFAULT_TRANSFORM = "log"
 #: Seam copies are made of the samples within this many typical spacings of a seam
 #: (enough for the triangulation to join the two sides; `domain.spacings`).

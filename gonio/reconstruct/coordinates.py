@@ -7,7 +7,7 @@ Scaling: each coordinate is divided by its extent (the parametrization's bounds,
 spans [0, 1] — radii ‖h̄‖, ‖k‖ stay as they are, polar angles are divided by π/2,
 azimuths by their period. Distances ("no sample within d") are Euclidean in this box.
 
-Seams (docs/reconstruction.md#symmetries):
+Seams (docs/explanations/reconstruction.md#symmetries):
 
 - an azimuth is periodic (2π, or π for a reciprocity-folded one): samples within
   ``margin`` of 0 are copied one period up, samples within ``margin`` of the period one

@@ -1,5 +1,5 @@
 """A reconstruction scored against a truth on the fixed test set, overall and by region
-(docs/evaluation.md): `evaluate` returns an `Evaluation` (JSON, a table).
+(docs/explanations/evaluation.md): `evaluate` returns an `Evaluation` (JSON, a table).
 
 Which pairs count: the test set's pairs where the truth is defined (finite, and inside
 its ``supported`` mask when the truth is itself a reconstruction). Of those, a region

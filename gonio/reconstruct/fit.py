@@ -1,4 +1,5 @@
-"""Weighted least-squares fits of a model family to measured BRDF samples (docs/fitting.md).
+"""Weighted least-squares fits of a model family to measured BRDF samples
+(docs/explanations/fitting.md).
 
 The residual of sample i (channel c in an RGB fit) is r = (f_model − f)/σ, σ the
 sample's 1σ uncertainty. A σ of 0 says no estimate (a detector that averages on its

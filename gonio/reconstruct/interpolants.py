@@ -48,7 +48,7 @@ class Interpolant(ABC):
 class Linear(Interpolant):
     """Piecewise-linear interpolation on the Delaunay triangulation of the points.
 
-    Two costs of scipy's ``find_simplex`` are avoided (docs/reconstruction.md#speed):
+    Two costs of scipy's ``find_simplex`` are avoided (docs/explanations/reconstruction.md#speed):
     it computes the simplices' barycentric transforms one at a time with a condition
     estimate each (5 s for the 130 000 simplices of 20 000 points in 3-D, 19 s in
     4-D; here one batched inverse, `barycentric_transforms`, from the triangulation's

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 #: The method of the naive reference (`gonio.reconstruct.naive`).
 NAIVE = "naive"
 DEFAULT_METHOD = "linear"
-#: The family fitted for ``model+residual`` unless another is named (docs/fitting.md).
+#: The family fitted for ``model+residual`` unless another is named (docs/explanations/fitting.md).
 DEFAULT_MODEL = "lambert+ggx"
 
 

@@ -1,5 +1,5 @@
 """Error metrics of a candidate BRDF against a truth, split by the regions of
-`gonio.reconstruct.regions` (docs/evaluation.md has the formulas).
+`gonio.reconstruct.regions` (docs/explanations/evaluation.md has the formulas).
 
 For values c (candidate) and t (truth) in sr⁻¹ on the same pairs, every channel of an
 RGB value counting as one term (means run over pairs × channels):

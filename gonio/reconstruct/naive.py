@@ -1,5 +1,5 @@
 """The naive reference reconstruction: what a user would write in an afternoon, and the
-floor every real method must beat (docs/evaluation.md).
+floor every real method must beat (docs/explanations/evaluation.md).
 
 1. The samples' coordinates in the run's parametrization (its isotropic reduction, three
    coordinates, for an isotropic run; four otherwise).

@@ -9,7 +9,7 @@ Every pair falls in exactly one region, taken in the order of `NAMES`:
     rest      every other pair
 
 Directions are unit vectors (..., 3) in the sample frame (z = normal), pointing away
-from the surface (docs/conventions.md). The thresholds live here only.
+from the surface (docs/explanations/conventions.md). The thresholds live here only.
 """
 
 from __future__ import annotations

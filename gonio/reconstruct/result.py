@@ -5,7 +5,7 @@ surface, broadcast against each other) and returns f in sr⁻¹ of shape (...), 
 trailing 3 for an RGB measurement; 0 where either direction is below the horizon, NaN
 where the measurement does not support the pair (`supported` is False there) unless
 the reconstruction extrapolates. ``uncertainty`` is the 1σ of ``eval`` (how it is
-propagated: docs/reconstruction.md#uncertainty); NaN where a value is extrapolated.
+propagated: docs/explanations/reconstruction.md#uncertainty); NaN where a value is extrapolated.
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ class Reconstruction:
         return self.evaluate(wi, wo)[1]
 
     def supported(self, wi: ArrayLike, wo: ArrayLike) -> BoolArray:
-        """True where the measurement supports the pair (docs/reconstruction.md)."""
+        """True where the measurement supports the pair (docs/explanations/reconstruction.md)."""
         return self.evaluate(wi, wo)[2]
 
     def evaluate(self, wi: ArrayLike, wo: ArrayLike) -> tuple[FloatArray, FloatArray, BoolArray]:
@@ -130,7 +130,7 @@ class Reconstruction:
     def _blended(
         self, x: FloatArray, nearest: np.ndarray, level: int
     ) -> tuple[FloatArray, BoolArray]:
-        """The interpolant, blended across each periodic seam (docs/reconstruction.md).
+        """The interpolant, blended across each periodic seam (docs/explanations/reconstruction.md).
 
         Within `seam_band` of a seam, a query also has a representation one period
         away, inside the seam copies; the two interpolants there are built from

@@ -1,5 +1,5 @@
 """The fixed, seeded test set of direction pairs a reconstruction is scored on
-(docs/evaluation.md).
+(docs/explanations/evaluation.md).
 
 Each of ωi and ωo is drawn independently and uniformly in solid angle over the cap
 θ ≤ θmax of the rig (cos θ uniform in [cos θmax, 1], φ uniform in [0, 2π)), so the pairs

@@ -1,4 +1,5 @@
-"""The transforms of BRDF values a reconstruction interpolates (docs/reconstruction.md).
+"""The transforms of BRDF values a reconstruction interpolates
+(docs/explanations/reconstruction.md).
 
 A transform maps values f (sr⁻¹, (N, C): one column per channel) at pairs to g,
 interpolated instead of f, and back. Each also gives its derivative both ways, which

@@ -1,4 +1,4 @@
-"""What a reconstruction is compared with, from a one-word SPEC (docs/evaluation.md):
+"""What a reconstruction is compared with, from a one-word SPEC (docs/explanations/evaluation.md):
 
 - ``scene`` (the default, None): the simulated run's scene material, as its band sees it;
 - ``NAME`` or ``NAME:key=value,key=value``: the `gonio.brdf` model NAME with those

@@ -189,7 +189,7 @@ def _driver_default(name: str) -> Any:
 
 class SerialInterfaceSpec(Strict):
     """A line-based serial detector: every field of `SerialDetectorConfig`, with its
-    defaults (docs/serial_detector.md), ``line_ending`` by name (``lf``, ``crlf``,
+    defaults (docs/reference/serial_detector.md), ``line_ending`` by name (``lf``, ``crlf``,
     ``cr``). Templates and regular expressions are checked by the driver's own rules
     when the rig is read, each mistake reported at its field."""
 

@@ -1,5 +1,5 @@
 """The run journal: one SQLite file per run (`journal`: writing; `read`: `open_run`).
-The layout is documented in docs/journal.md."""
+The layout is documented in docs/reference/journal.md."""
 
 from gonio.store.journal import SCHEMA_VERSION, Journal, JournalError
 from gonio.store.read import Event, Run, open_run

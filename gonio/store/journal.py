@@ -1,7 +1,7 @@
 """The run journal, written: one SQLite file per run (WAL mode), committed sample by
 sample, that a crash never corrupts and a resumed run appends to.
 
-The layout (schema version `SCHEMA_VERSION`) is documented in docs/journal.md:
+The layout (schema version `SCHEMA_VERSION`) is documented in docs/reference/journal.md:
 
 - ``meta`` (key → JSON text, or bytes for ``plan_file``): the plan, rig and scene
   texts and their hashes, the stored plan itself (`gonio.planner.files`), the axes and

@@ -1,4 +1,4 @@
-"""The run journal's ``samples`` table, defined once (docs/journal.md).
+"""The run journal's ``samples`` table, defined once (docs/reference/journal.md).
 
 Each column has its name, its SQL type, the numpy dtype `gonio.store.open_run` reads it
 as, and whether it may be NULL. The writer (`gonio.store.journal`: the ``CREATE TABLE``
@@ -68,7 +68,7 @@ def _integer(name: str) -> Column:
 
 def samples_table(axes: Sequence[str], coordinate_names: Sequence[str]) -> tuple[Column, ...]:
     """The ``samples`` table's columns, in order, for a rig's axes and a plan's
-    coordinates (units: docs/journal.md)."""
+    coordinates (units: docs/reference/journal.md)."""
     return (
         Column("target", "INTEGER", INT64, key=True),
         _integer("session"),

@@ -1,5 +1,5 @@
 """The speed-versus-accuracy trade, measured: sweeps of plan → simulated acquisition →
-reconstruction → evaluation over the axes of a sweep file (docs/tradeoff.md).
+reconstruction → evaluation over the axes of a sweep file (docs/explanations/tradeoff.md).
 
 `grid.load_sweep` reads a sweep file into tasks, `runner.run` turns one task into a
 results row, `sweep.run_sweep` runs the missing ones (here, on a local pool or on Dask:

@@ -1,5 +1,5 @@
 """The sweep file (YAML), validated: the scenes, the rig and the axes a trade-off study
-sweeps (docs/tradeoff.md).
+sweeps (docs/explanations/tradeoff.md).
 
 Every combination of the axes' values (their Cartesian product, less the ``exclude``
 patterns) is planned, acquired on the simulated backend, reconstructed and scored. The

@@ -1,5 +1,5 @@
 """The adaptive plan's steering estimate: the BRDF its second pass is placed for, made
-from the survey's samples (docs/adaptive.md).
+from the survey's samples (docs/explanations/adaptive.md).
 
 ``extend(survey_plan, estimate(measured, options.model))`` (`gonio.planner.two_pass`)
 plans the second pass; the planner sees only the estimate, a function of the direction

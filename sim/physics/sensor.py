@@ -3,7 +3,7 @@
 The radiometric chain (``gonio.radiometry``) says how many signal electrons a sample's
 exposure is expected to produce; this module turns them into what the detector reports.
 Each effect is applied only when the scene lists it (`SensorEffects`), in the order the
-charge meets them (docs/sensor.md has the equations):
+charge meets them (docs/explanations/sensor.md has the equations):
 
 1. dark current: ``dark_current_e_s · t`` electrons join the signal;
 2. shot noise: signal and dark electrons are Poisson with those means (streams `SHOT`

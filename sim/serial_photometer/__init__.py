@@ -1,6 +1,6 @@
 """A simulated line-based photometer served on a pseudo-terminal.
 
-It speaks the protocol of ``docs/serial_detector.md`` (the Arduino example) so that
+It speaks the protocol of ``docs/reference/serial_detector.md`` (the Arduino example) so that
 :class:`drivers.serial_detector.detector.SerialDetector` can be exercised, byte for byte, on a
 real tty without hardware, and faults can be injected (malformed lines, silence, a reset
 in the middle of a reading, slow answers, bytes without a line ending).

@@ -40,7 +40,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(device.path, flush=True)
             print(
                 f"serving a simulated photometer on {device.path} (protocol: see "
-                "docs/serial_detector.md); Ctrl-C to stop",
+                "docs/reference/serial_detector.md); Ctrl-C to stop",
                 file=sys.stderr,
                 flush=True,
             )

@@ -228,7 +228,7 @@ def _fmt(x: float) -> str:
 
 
 def aspect_table() -> str:
-    """The lobe-anisotropy table (seed 001) of docs/brdf.md, as markdown."""
+    """The lobe-anisotropy table (seed 001) of docs/explanations/brdf.md, as markdown."""
     theta = np.radians(ANGLES_DEG)
     lines = [
         "| D | α | θi | f·cosθo, Schlick | f·cosθo, F = 1 | f, Schlick | seed cone "

@@ -1,4 +1,4 @@
-"""Representative parameter sets of every model, and the albedo survey of docs/brdf.md.
+"""Representative parameter sets of every model, and the albedo survey of docs/explanations/brdf.md.
 
 `EXAMPLES` covers sharp and broad lobes, every Fresnel option, RGB parameters and
 the grazing-heavy cases; the tests run their properties over it. `albedo_table`

@@ -1,6 +1,6 @@
 """How precisely each parametrization can carry a direction pair, and how precisely it does.
 
-`error_envelope` is the closed-form estimate derived in docs/parametrizations.md: a
+`error_envelope` is the closed-form estimate derived in docs/explanations/parametrizations.md: a
 component recovered as sqrt(t²) from a difference of O(1) float64 quantities is known
 to about c·ε/(t + sqrt(c·ε)) (c·ε/t when t ≫ √(c·ε), √(c·ε) at t = 0), where t is
 the smallest direction z (orthographic) or hz = (ωi·n + ωo·n)/2 (hybrid); spherical

@@ -88,7 +88,7 @@ def test_eval_approximates_the_model_it_was_made_from(glossy):
     wo_b = np.broadcast_to(wo, wi.shape)
     got[lit] = glossy.eval(wi[lit], wo_b[lit]) * wi[lit][:, 2]
     error = np.linalg.norm(got - y) / np.linalg.norm(y)
-    assert 0.0 < error < 0.2  # J = 3 on a coarse grid (docs/formats_factored.md)
+    assert 0.0 < error < 0.2  # J = 3 on a coarse grid (docs/reference/formats_factored.md)
 
 
 def test_eval_of_an_rgb_file_scales_the_intensity_by_the_colour_factors(files):

@@ -4,7 +4,7 @@ The paper is Romanyuk et al.'s modified cosine-quadratic reflectance model (seed
 
 Tolerances: the integrals and the epicentre maxima are exact up to rounding and
 quad's 1e-13 tolerance, so they are checked against independent computations at
-1e-10 or better and against the figures quoted in docs/lobes.md at the last digit
+1e-10 or better and against the figures quoted in docs/explanations/lobes.md at the last digit
 quoted there (half a unit of it).
 """
 

@@ -1,5 +1,5 @@
 """The tabulated MERL BRDF (``create("merl", path=...)``): files written here from the
-layout in docs/formats.md (not by gonio's writer), read back, compared with the
+layout in docs/reference/formats.md (not by gonio's writer), read back, compared with the
 analytic model they tabulate, and used as a simulated scene's material."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 HALF_PI = np.pi / 2
 SCALES = np.array([1.0, 1.15, 1.66]) / 1500.0
-#: The interpolation error docs/formats.md states for this model (θh, θd < 80°, all
+#: The interpolation error docs/reference/formats.md states for this model (θh, θd < 80°, all
 #: eight corners present): 1 %.
 MODEL = brdf.create("cook_torrance", alpha=0.3, kd=(0.5, 0.3, 0.2), f0=0.04)
 STATED = 0.01

@@ -83,7 +83,7 @@ def test_stark_3d_coordinates_values_and_intervals(files, run_file):
 def test_altas_own_inverse_of_stark_3d_gives_the_pair_swapped(files, run_file):
     """ALTA's to_cartesian of STARK_3D (H in the x-z plane, B of elevation
     atan2(−Hz, ‖h̄‖ cos Δφ)) takes the principal quadrant and so rebuilds −B: the pair
-    up to a rotation about the normal, with light and view exchanged (docs/formats.md).
+    up to a rotation about the normal, with light and view exchanged (docs/reference/formats.md).
     Immaterial for the reciprocal BRDFs ALTA fits; the file holds the forward values."""
     measured = Measured.from_run(run_file)
     _, rows = read_alta(files["stark_3d"])

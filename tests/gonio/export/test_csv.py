@@ -1,5 +1,5 @@
 """`gonio export --format csv`, read back with the standard library's csv module from
-the layout docs/formats.md describes (one header row of keys with unit suffixes)."""
+the layout docs/reference/formats.md describes (one header row of keys with unit suffixes)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Export as a factored BRDF: the files as docs/formats_factored.md describes them, the
+"""Export as a factored BRDF: the files as docs/reference/formats_factored.md describes them, the
 normalizations, the CDFs, the colour fit and the error as J·K grows."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """`gonio export --format hdf5`, read back with plain h5py from the layout in
-docs/formats.md; the optional reconstruction grid with an analytic model."""
+docs/reference/formats.md; the optional reconstruction grid with an analytic model."""
 
 from __future__ import annotations
 

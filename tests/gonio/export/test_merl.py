@@ -1,5 +1,5 @@
 """The MERL writer (`gonio.export.merl`), read back with a reader written here from the
-layout in docs/formats.md, and its bin convention checked against both inverse readings
+layout in docs/reference/formats.md, and its bin convention checked against both inverse readings
 of MERL's index (a bin's lower corner, a bin's centre)."""
 
 from __future__ import annotations

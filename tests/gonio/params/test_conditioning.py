@@ -1,5 +1,5 @@
 """The Jacobians of gonio.params.conditioning against mpmath, and their singular values
-at the singular configurations as documented (docs/extremes.md)."""
+at the singular configurations as documented (docs/explanations/extremes.md)."""
 
 from __future__ import annotations
 

@@ -3,7 +3,7 @@
 They are in the paper's section 3 and appendix.
 
 Where an identity does not hold in general the test shows where it fails and checks
-the relation that does hold (derived in docs/parametrizations.md).
+the relation that does hold (derived in docs/explanations/parametrizations.md).
 """
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""The plan file's defaults that a study chose (docs/tradeoff.md "The study")."""
+"""The plan file's defaults that a study chose (docs/explanations/tradeoff.md "The study")."""
 
 from __future__ import annotations
 

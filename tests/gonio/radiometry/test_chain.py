@@ -243,7 +243,7 @@ def test_other_invalid_inputs_raise_one_line():
         assert "\n" not in str(err.value)
 
 
-# -- where the lecture notes (seed 004) are loose or wrong (see docs/radiometry.md) -------
+# -- where the lecture notes are loose or wrong (see docs/explanations/radiometry.md) --------------
 
 
 def _disc_emitter_irradiance(h, a, *, emitter_cosine, n=64):

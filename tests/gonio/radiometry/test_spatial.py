@@ -40,7 +40,7 @@ def _disc_solid_angle(h, radius):
 def test_lambertian_on_axis_is_the_discs_solid_angle(intensity, h, radius, aperture):
     """Φ = Ω (ρ/π) I · 2π(1 − h/√(h² + R²)) with the detector along the normal and a field
     of view covering the whole sample, for h ≥ R/4 (the quadrature's accuracy is
-    ≤ 2e-12 for h ≥ 0.6 R, 2e-7 at h = R/4; see docs/radiometry.md)."""
+    ≤ 2e-12 for h ≥ 0.6 R, 2e-7 at h = R/4; see docs/explanations/radiometry.md)."""
     h = max(h, radius / 4)
     source, optics = PointSource(intensity, h), DetectorOptics(aperture, 2.5 * radius)
     phi = point_source_power(source, optics, 2 * radius, LAMBERT.eval, NORMAL, NORMAL)
