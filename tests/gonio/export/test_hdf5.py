@@ -123,7 +123,7 @@ def test_the_grid_holds_the_runs_reconstruction(run_file, tmp_path):
 
 
 def test_the_plain_h5py_example_of_the_docs_runs(out, run_file):
-    text = (Path(__file__).resolve().parents[3] / "docs" / "formats.md").read_text()
+    text = (Path(__file__).resolve().parents[3] / "docs" / "reference" / "formats.md").read_text()
     section = text[text.index('<a id="hdf5"></a>') : text.index('<a id="alta"></a>')]
     code = section.split("```python\n")[1].split("```")[0].replace('"run.h5"', repr(str(out)))
     scope: dict[str, object] = {}
