@@ -31,7 +31,7 @@ demo: $(VENV)/.installed
 	$(BIN)/gonio acquire configs/plans/quickstart.yaml --scene configs/scenes/glossy_metal.yaml \
 		-o runs/quickstart.sqlite --overwrite
 	$(BIN)/gonio info runs/quickstart.sqlite
-	$(BIN)/gonio evaluate runs/quickstart.sqlite
+	$(BIN)/gonio evaluate runs/quickstart.sqlite --method rbf
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
