@@ -4,7 +4,7 @@ The factor file holds f(ωi, ωo) cos θi ≈ Σⱼ Fⱼ(θo, φo) Gⱼ(θp, φp
 Gⱼ ≈ Σₖ uⱼₖ(θp) vⱼₖ(φp) and the colour factors Fc, Gc; the CDF file the 1D CDFs of each
 of the L = J·K terms over φp and z = 1 − cos θp. (θp, φp) are the polar angles of the
 halfway vector ĥ = (ωi + ωo)/‖ωi + ωo‖ ("halfangle"). The layout, the bin conventions
-and where they depart from seed 002 are in docs/reference/formats_factored.md.
+and where they depart from the file-format notes are in docs/reference/formats_factored.md.
 
 Every table is piecewise constant on equal bins: θo, θp on [0, π/2], φo, φp on
 [0, 2π), z on [0, 1]. The CDF of bin b is its value at the bin's upper edge (the last
