@@ -42,7 +42,7 @@ lint: $(VENV)/.installed-test
 # The documentation site (mkdocs.yml) into site/; --strict makes a broken link, a missing
 # anchor or a page left out of the navigation an error.
 docs: $(VENV)/.installed-docs
-	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
