@@ -7,7 +7,8 @@ not pay for scipy or the simulator. Errors a user can cause (``GonioError``, and
 anything else is a bug and keeps its traceback. Ctrl-C exits with code 130 and one line.
 A usage error is one line too, with where to read the usage (`UsageParser`). A reader
 that closes the pipe early (``gonio plan … | head -1``) ends the command quietly with
-exit code 141, as Unix tools killed by SIGPIPE do.
+exit code 141, as Unix tools killed by SIGPIPE do. `EXIT_CODES` lists them; a command
+whose codes mean more declares its own (``exit_codes=`` of its parser, shown in its help).
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ import contextlib
 import importlib
 import os
 import sys
-from collections.abc import Sequence
-from typing import NoReturn
+from collections.abc import Mapping, Sequence
+from typing import Any, NoReturn
 
 from drivers.base import DriverError
 from gonio import __version__
@@ -71,18 +72,47 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+#: Exit code of bad input: a usage error, or a file, field, option or device refused.
+EXIT_BAD_INPUT = 2
+#: Exit code of a command stopped by Ctrl-C (128 + SIGINT, as Unix tools).
+EXIT_INTERRUPTED = 130
 #: Exit code of a command whose reader closed the pipe (128 + SIGPIPE, as Unix tools).
 EXIT_BROKEN_PIPE = 141
+
+#: Every command's exit codes (a command's own meanings are in its parser's `exit_codes`).
+EXIT_CODES: dict[int, str] = {
+    0: "done (or the help printed)",
+    1: "an unexpected error, that is a bug: Python's traceback is printed "
+    "(a few commands also use 1, for an answer they list)",
+    EXIT_BAD_INPUT: "bad input: a usage error, or a file, field, option or device refused, "
+    "in one line on stderr",
+    EXIT_INTERRUPTED: "interrupted by Ctrl-C, in one line on stderr",
+    EXIT_BROKEN_PIPE: "the reader closed the pipe early (head -1 reading the output, say): "
+    "the command stops quietly",
+}
 
 
 class UsageParser(argparse.ArgumentParser):
     """An `argparse.ArgumentParser` whose usage errors are one line with exit code 2:
     ``gonio: error: plan: the following arguments are required: plan (see gonio plan
     --help)``, instead of argparse's usage block wrapped over several lines. Subcommand
-    parsers are made of the same class (argparse builds them with the parent's type)."""
+    parsers are made of the same class (argparse builds them with the parent's type).
+
+    ``exit_codes`` (code → meaning): what the command's exit codes mean, where it says
+    more than `EXIT_CODES`; kept as `exit_codes` and shown as the help's epilog.
+    """
+
+    def __init__(
+        self, *args: Any, exit_codes: Mapping[int, str] | None = None, **kwargs: Any
+    ) -> None:
+        self.exit_codes = dict(exit_codes or {})
+        if self.exit_codes:
+            text = "exit codes: " + "; ".join(f"{c} {w}" for c, w in self.exit_codes.items())
+            kwargs["epilog"] = "\n\n".join(filter(None, [kwargs.get("epilog"), text]))
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, usage_error(self.prog, message) + "\n")
+        self.exit(EXIT_BAD_INPUT, usage_error(self.prog, message) + "\n")
 
 
 def usage_error(prog: str, message: str) -> str:
@@ -99,11 +129,16 @@ def _command_of(argv: Sequence[str]) -> str | None:
     return None
 
 
-def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The parser; only ``command``'s module is imported (all of them if ``"*"``)."""
-    parser = UsageParser(
+def build_parser(
+    command: str | None = None, *, parser_class: type[UsageParser] = UsageParser
+) -> argparse.ArgumentParser:
+    """The parser; only ``command``'s module is imported (all of them if ``"*"``).
+    ``parser_class``: the class of it and of every subcommand's parser (a subclass of
+    `UsageParser`, e.g. one that records the arguments for the reference page)."""
+    parser = parser_class(
         prog="gonio",
         description="A virtual gonioreflectometer with a hardware driver layer.",
+        exit_codes=EXIT_CODES,
     )
     parser.add_argument("--version", action="version", version=f"gonio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -136,7 +171,8 @@ def _run(argv: list[str]) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:
         parser.exit(
-            2, usage_error(_prog(args), f"unrecognized arguments: {' '.join(extra)}") + "\n"
+            EXIT_BAD_INPUT,
+            usage_error(_prog(args), f"unrecognized arguments: {' '.join(extra)}") + "\n",
         )
     if not hasattr(args, "func"):
         parser.print_help()
@@ -145,17 +181,17 @@ def _run(argv: list[str]) -> int:
         return int(args.func(args))
     except KeyboardInterrupt:
         print("gonio: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     except (GonioError, DriverError) as exc:
         print(f"gonio: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except OSError as exc:
         # A path the kernel refuses where no loader expected it (a name too long, say):
         # still one line about that path.
         if exc.filename is None:
             raise
         print(f"gonio: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
 
 
 def _broken_pipe() -> int:

@@ -1,11 +1,7 @@
 """`gonio acquire PLAN.yaml -o RUN.sqlite`: measure a plan on the rig its file names
 (simulated or hardware; `--rehearse`: the hardware path on emulators), journaling every
-sample; `gonio acquire --resume RUN.sqlite` measures what is missing.
-
-Exit codes: 0 the run completed; 2 refused before anything moved (a bad file or
-option, an output that exists or cannot be written, a port missing or busy); 3 the run
-ended early on a fault, a pause that did not clear or a full disk (resumable); 130
-stopped by Ctrl-C or SIGTERM (resumable).
+sample; `gonio acquire --resume RUN.sqlite` measures what is missing. Its exit codes
+are `EXIT_CODES`.
 """
 
 from __future__ import annotations
@@ -19,10 +15,20 @@ from pathlib import Path
 from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
+from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED
 from gonio.config import ConfigError
 
 #: Exit code of a run that ended early but can be resumed.
 EXIT_RESUMABLE = 3
+#: What the command's exit codes mean (shown in its help and the CLI reference).
+EXIT_CODES = {
+    0: "the run completed (or the dry run found everything ready)",
+    EXIT_BAD_INPUT: "refused before anything moved: a bad file or option, an output that "
+    "exists or cannot be written, a port missing or busy",
+    EXIT_RESUMABLE: "the run ended early on a fault, a pause that did not clear or a full "
+    "disk (resumable with --resume)",
+    EXIT_INTERRUPTED: "stopped by Ctrl-C or SIGTERM (resumable with --resume)",
+}
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -31,8 +37,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help=help_,
         description="Measure a plan target by target on the rig its file names (simulated "
         "or Dynamixel hardware), journaling every raw sample in a SQLite run file; resume "
-        "an interrupted run with --resume RUN. Exit codes: 0 completed, 2 refused before "
-        "anything moved, 3 ended early (resumable), 130 interrupted (resumable).",
+        "an interrupted run with --resume RUN.",
+        exit_codes=EXIT_CODES,
     )
     p.add_argument("plan", type=Path, nargs="?", help="the plan file (YAML)")
     p.add_argument("-o", "--output", type=Path, help="the run file to write (SQLite)")
@@ -56,8 +62,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="run the hardware path on the Dynamixel emulator (no hardware needed)",
     )
     p.add_argument(
-        "--speedup", type=float, default=50.0, help="--rehearse: time runs this much faster"
-    )
+        "--speedup", type=float, default=50.0,
+        help="--rehearse: how many times faster than real time the emulated rig runs "
+        "(default 50)",
+    )  # fmt: skip
     p.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=cmd_acquire)
 
@@ -133,4 +141,4 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 def _interrupted(path: Path | None) -> int:
     print("gonio: interrupted; the axes hold and every measured sample is saved", file=sys.stderr)
     print(f"resume with: {_resume_command(path)}", file=sys.stderr)
-    return 130
+    return EXIT_INTERRUPTED

@@ -29,9 +29,14 @@ from gonio.config import ConfigError
 
 #: How long a bring-up move may take to settle by default (s).
 DEFAULT_TIMEOUT_S = 30.0
+#: The rate `set-id` uses unless told another (baud).
+DEFAULT_BAUD = 57_600
+#: Exit code of `set-id` when its question was not answered yes.
+EXIT_DECLINED = 1
 
 
 def finite_degrees(text: str) -> float:
+    """A finite angle in degrees."""
     try:
         value = float(text)
     except ValueError:
@@ -42,12 +47,14 @@ def finite_degrees(text: str) -> float:
 
 
 def motor_id(text: str) -> int:
+    """A motor ID (0…252)."""
     if not (text.isascii() and text.isdigit()) or not 0 <= int(text) <= 252:
         raise argparse.ArgumentTypeError(f"a motor ID is a whole number in 0…252, got {text!r}")
     return int(text)
 
 
 def positive_seconds(text: str) -> float:
+    """A positive number of seconds."""
     try:
         value = float(text)
     except ValueError:
@@ -106,7 +113,9 @@ def add_parsers(
         "is outside 0…252, or if the motor's torque is on; asks before writing (--yes "
         "skips the question); pings B afterwards. Connect one motor at a time to be sure "
         "which one you change.",
-    )
+        exit_codes={0: "the ID changed", EXIT_DECLINED: "the question was not answered yes: "
+                    "nothing written"},
+    )  # fmt: skip
     set_id.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
     set_id.add_argument(
         "--from", dest="old", type=motor_id, required=True, metavar="A", help="its present ID"
@@ -114,7 +123,9 @@ def add_parsers(
     set_id.add_argument(
         "--to", dest="new", type=motor_id, required=True, metavar="B", help="its new ID, free"
     )
-    set_id.add_argument("--baud", type=baud_type, default=57_600, help="default 57600")
+    set_id.add_argument(
+        "--baud", type=baud_type, default=DEFAULT_BAUD, help=f"baud rate (default {DEFAULT_BAUD})"
+    )
     set_id.add_argument("--yes", action="store_true", help="do not ask for confirmation")
     set_id.set_defaults(func=cmd_set_id)
 
@@ -263,7 +274,7 @@ def cmd_set_id(args: argparse.Namespace) -> int:
             f"on {args.port} to {new}? [y/N]"
         ):
             print("nothing changed")
-            return 1
+            return EXIT_DECLINED
         link.write(old, "id", new)
         found = _answers(link, new)
     if found is None:

@@ -1,6 +1,6 @@
 """`gonio demo`: the core tables — the four parametrizations on named direction pairs
 (coordinates and round-trip error) and the lobe comparison of Romanyuk et al.'s
-modified cosine-quadratic model (seed 003). The main job on the simulated rig is
+modified cosine-quadratic model. The main job on the simulated rig is
 `make demo` (`gonio acquire configs/plans/quickstart.yaml …`, then `gonio info`)."""
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "demo",
         help=help_,
         description="The four parametrizations' coordinates and round-trip errors for named "
-        "direction pairs, and the lobe comparison of Romanyuk et al. (seed 003). The main "
+        "direction pairs, and the lobe comparison of Romanyuk et al. The main "
         "job on the simulated rig is make demo (gonio acquire, then gonio info).",
     )
     demo.set_defaults(func=_cmd_demo)

@@ -7,7 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE
+from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE, names
 from gonio.reconstruct.methods import reconstruction as _reconstruction
 
 
@@ -31,8 +31,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--method",
         default=DEFAULT_METHOD,
-        help=f"the reconstruction: {NAIVE} (the reference grid) or a method of "
-        f"gonio.reconstruct.build (default {DEFAULT_METHOD})",
+        help=f"the reconstruction: {', '.join(names())} ({NAIVE}: the reference grid; "
+        f"default {DEFAULT_METHOD})",
     )
     p.add_argument(
         "--parametrization",

@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from gonio.reconstruct.methods import DEFAULT_METHOD, names
+
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS
@@ -41,13 +43,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "parametrization's isotropic coordinates",
     )
     p.add_argument(
-        "--grid-points", type=int, default=32, help="hdf5: grid points per coordinate (32)"
+        "--grid-points", type=int, default=32, help="hdf5: grid points per coordinate (default 32)"
     )
     p.add_argument(
         "--method",
-        default="linear",
-        help="merl, factored, hdf5 --grid: the reconstruction tabulated (naive, linear, rbf, "
-        "grid, model+residual; default linear)",
+        default=DEFAULT_METHOD,
+        help="merl, factored, hdf5 --grid: the reconstruction tabulated "
+        f"({', '.join(names())}; default {DEFAULT_METHOD})",
     )
     p.add_argument("--outer", type=int, default=2, help="factored: outer terms J (default 2)")
     p.add_argument(

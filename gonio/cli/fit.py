@@ -24,7 +24,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     p.add_argument("runs", type=Path, nargs="+", metavar="RUN", help="the run file (or r g b)")
     p.add_argument(
-        "--model", required=True, metavar="SPEC", help="the family, e.g. lambert+ggx (docs)"
+        "--model",
+        required=True,
+        metavar="SPEC",
+        help="the family, e.g. lambert+ggx (docs/explanations/fitting.md)",
     )
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument(
@@ -32,7 +35,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="write the fitted model as a scene's material",
     )  # fmt: skip
     p.add_argument("--starts", type=int, default=4, help="starting points tried (default 4)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the jittered starts")
+    p.add_argument("--seed", type=int, default=0, help="seed of the jittered starts (default 0)")
     p.set_defaults(func=cmd_fit)
 
 

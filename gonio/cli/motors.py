@@ -21,11 +21,17 @@ from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
 DEFAULT_SCAN_BAUDS = (57_600, 1_000_000)
+#: The rate `status` and `reboot` use when neither a flag nor a rig file gives one.
+DEFAULT_BAUD = 57_600
+#: Exit code of `scan` when no motor answered, and of `status` when one did not.
+EXIT_NO_ANSWER = 1
 
 
 def motor_ids(text: str) -> list[int]:
-    """Parse "1,2,5-7" into [1, 2, 5, 6, 7] (IDs 0…252); a range with an end missing
-    ("1-") or going down ("4-1") is refused, not read as something else."""
+    """Motor IDs (0…252), listed or ranged: "1,2,5-7" is [1, 2, 5, 6, 7].
+
+    A range with an end missing ("1-") or going down ("4-1") is refused, not read as
+    something else."""
     ids: list[int] = []
     for part in text.split(","):
         lo, dash, hi = (w.strip() for w in part.strip().partition("-"))
@@ -47,6 +53,7 @@ def _number(word: str) -> bool:
 
 
 def baud_rate(text: str) -> int:
+    """A baud rate the motors know (bit/s)."""
     value = int(text) if text.isdigit() else -1
     if value not in BAUD_RATES.values():
         choices = ", ".join(str(b) for b in BAUD_RATES.values())
@@ -63,27 +70,53 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     cmds = motors.add_subparsers(dest="motors_command", metavar="ACTION", required=True)
 
-    scan = cmds.add_parser("scan", help="list the motors answering on a port")
+    scan = cmds.add_parser(
+        "scan",
+        help="list the motors answering on a port",
+        description="Send a broadcast ping at each rate and list the motors that answer: "
+        "ID, model and firmware.",
+        exit_codes={0: "a motor answered", EXIT_NO_ANSWER: "no motor answered at any rate"},
+    )
     scan.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
     scan.add_argument(
         "--baud",
         type=baud_rate,
         action="append",
-        help=f"rate to try (repeatable; default {', '.join(map(str, DEFAULT_SCAN_BAUDS))})",
+        help="baud rate to try (repeatable; default "
+        f"{' then '.join(map(str, DEFAULT_SCAN_BAUDS))})",
     )
     scan.set_defaults(func=cmd_scan)
 
-    status = cmds.add_parser("status", help="positions, temperatures, voltages, error flags")
+    status = cmds.add_parser(
+        "status",
+        help="positions, temperatures, voltages, error flags",
+        description="Read each motor's model, position (ticks and degrees), moving and "
+        "torque state, temperature (°C), input voltage (V) and hardware error flags; with "
+        "--rig also its axis and joint angle (degrees), marked if outside the axis's limits.",
+        exit_codes={
+            0: "every motor answered",
+            EXIT_NO_ANSWER: "a motor did not answer or answered with an error",
+        },
+    )
     status.add_argument("--rig", type=Path, help="a rig file: port, rate, IDs and axes")
     status.add_argument("--port", help="serial port (default: the rig file's)")
     status.add_argument("--ids", type=motor_ids, help="e.g. 1,2,3 or 1-4 (default: the rig's)")
-    status.add_argument("--baud", type=baud_rate, help="default: the rig's, else 57600")
+    status.add_argument(
+        "--baud", type=baud_rate, help=f"baud rate (default: the rig's, else {DEFAULT_BAUD})"
+    )
     status.set_defaults(func=cmd_status)
 
-    reboot = cmds.add_parser("reboot", help="reboot motors (clears hardware errors)")
-    reboot.add_argument("--port", required=True)
-    reboot.add_argument("--ids", type=motor_ids, required=True)
-    reboot.add_argument("--baud", type=baud_rate, default=57_600)
+    reboot = cmds.add_parser(
+        "reboot",
+        help="reboot motors (clears hardware errors)",
+        description="Reboot each motor, which clears its hardware error flags; its torque "
+        "is off afterwards.",
+    )
+    reboot.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
+    reboot.add_argument("--ids", type=motor_ids, required=True, help="e.g. 1,2,3 or 1-4")
+    reboot.add_argument(
+        "--baud", type=baud_rate, default=DEFAULT_BAUD, help=f"baud rate (default {DEFAULT_BAUD})"
+    )
     reboot.set_defaults(func=cmd_reboot)
 
     from gonio.cli import bringup
@@ -105,7 +138,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
                 print(f"  {motor_id:>3}  {name:<12} {model:>6}  {firmware}")
     if not found_any:
         print("no motor answered: check power (the LED blinks once at power-up), wiring, and rate")
-        return 1
+        return EXIT_NO_ANSWER
     return 0
 
 
@@ -123,7 +156,7 @@ def _status_target(args: argparse.Namespace) -> tuple[str, int, list[int], dict[
         ids = ids or sorted(axes)
     if port is None or ids is None:
         raise ConfigError("motors status: give --port and --ids, or --rig RIG.yaml")
-    return port, baud or 57_600, ids, axes
+    return port, baud or DEFAULT_BAUD, ids, axes
 
 
 def cmd_status(args: argparse.Namespace) -> int:
@@ -165,7 +198,7 @@ def cmd_status(args: argparse.Namespace) -> int:
                 missing += 1
                 row = f"{motor_id:>3}  {exc}"
             print(row)
-    return 1 if missing else 0
+    return EXIT_NO_ANSWER if missing else 0
 
 
 def cmd_reboot(args: argparse.Namespace) -> int:

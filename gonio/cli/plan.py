@@ -26,7 +26,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "-o", "--output", type=Path,
         help="store the plan: a '# gonio-plan v1' header, then the ordered targets as CSV",
     )  # fmt: skip
-    plan.add_argument("--plot", type=Path, help="draw the plan's coverage (needs matplotlib)")
+    plan.add_argument(
+        "--plot",
+        type=Path,
+        help="draw the plan's coverage in this figure file, its suffix naming the format "
+        "(.png, .svg, .pdf, …; needs matplotlib)",
+    )
     plan.add_argument(
         "--bounds", action="store_true",
         help="also compute the duration in generation order and the MST lower bound",

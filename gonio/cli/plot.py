@@ -10,7 +10,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from gonio.output import reserve_output
-from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE
+from gonio.plots.polar import DEFAULT_THETA_I_DEG
+from gonio.plots.slices import DEFAULT_ANGLES_DEG
+from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE, names
 
 if TYPE_CHECKING:
     from gonio.analysis.measured import Measured
@@ -39,8 +41,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--method",
         default=DEFAULT_METHOD,
-        help=f"the reconstruction: {NAIVE} (the reference grid) or a method of "
-        f"gonio.reconstruct.build (default {DEFAULT_METHOD}); not used by coverage",
+        help=f"the reconstruction: {', '.join(names())} ({NAIVE}: the reference grid; "
+        f"default {DEFAULT_METHOD}); not used by coverage",
     )
     p.add_argument(
         "--parametrization",
@@ -58,17 +60,21 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--phi-k", type=float, nargs="+", metavar="DEG",
         help="slices: the values of φk − φh (hybrid, orthographic) and φd (halfway/"
-        "difference) in degrees, in [0, 180) (default 0 45 90)",
+        f"difference) in degrees, in [0, 180) (default {_degrees(DEFAULT_ANGLES_DEG)})",
     )  # fmt: skip
     p.add_argument(
         "--theta-i", type=float, nargs="+", metavar="DEG",
-        help="polar: the angles of incidence in degrees (default 0 30 60)",
+        help=f"polar: the angles of incidence in degrees (default {_degrees(DEFAULT_THETA_I_DEG)})",
     )  # fmt: skip
     p.add_argument(
         "--colour", choices=("value", "residual"), default="value",
         help="coverage: colour the samples by log10 f or by (f − truth) / σ (default value)",
     )  # fmt: skip
     p.set_defaults(func=cmd_plot)
+
+
+def _degrees(angles: tuple[float, ...]) -> str:
+    return " ".join(f"{a:g}" for a in angles)
 
 
 def cmd_plot(args: argparse.Namespace) -> int:

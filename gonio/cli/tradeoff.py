@@ -14,6 +14,7 @@ from gonio.progress import Bar, hms
 
 
 def _positive(text: str) -> float:
+    """A positive number."""
     try:
         value = float(text)
     except ValueError:
@@ -24,6 +25,7 @@ def _positive(text: str) -> float:
 
 
 def _jobs(text: str) -> int:
+    """A whole number ≥ 1."""
     try:
         value = int(text)
     except ValueError:
@@ -63,7 +65,6 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "-j",
         "--jobs",
         type=_jobs,
-        default=os.cpu_count() or 1,
         help="local worker processes (default: one per CPU; 1: in this process)",
     )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -75,12 +76,14 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     from gonio.tradeoff.sweep import run_sweep
 
     sweep = load_sweep(args.sweep)
+    # One per CPU by default, resolved here: the parser and its help are the same everywhere.
+    jobs = args.jobs or os.cpu_count() or 1
     where = (
         f"the Dask cluster at {args.scheduler}"
         if args.scheduler
         else "this process"
-        if args.jobs == 1
-        else f"{args.jobs} local processes"
+        if jobs == 1
+        else f"{jobs} local processes"
     )
     print(
         f"sweep {sweep.spec.name!r}: {len(sweep.tasks)} combinations over "
@@ -88,7 +91,7 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         flush=True,
     )
     outcome = run_sweep(
-        sweep, args.output, jobs=args.jobs, scheduler=args.scheduler, target=args.target_error,
+        sweep, args.output, jobs=jobs, scheduler=args.scheduler, target=args.target_error,
         progress=None if args.quiet else Bar(leave=False),
     )  # fmt: skip
     pace = f" ({60 * outcome.ran / outcome.wall_s:.1f} per minute)" if outcome.wall_s > 0 else ""
