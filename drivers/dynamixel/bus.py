@@ -47,6 +47,7 @@ from drivers.base import (
 )
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import (
+    FACTORY_BAUD,
     MODELS,
     VOLT_PER_UNIT,
     decode_hardware_error,
@@ -75,7 +76,7 @@ class DynamixelBus(Resource):
         port: str,
         axes: Sequence[AxisConfig],
         *,
-        baud: int = 57_600,
+        baud: int = FACTORY_BAUD,
         retries: int = 3,
         latency_ms: float | None = None,
         settle_ticks: int = 2,

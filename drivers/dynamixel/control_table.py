@@ -157,6 +157,8 @@ BAUD_RATES: dict[int, int] = {
     6: 4_000_000,
     7: 4_500_000,
 }
+#: The X series' factory baud rate (Baud Rate register 1), bits per second.
+FACTORY_BAUD = BAUD_RATES[1]
 
 #: Operating Mode register values.
 OPERATING_MODES: dict[str, int] = {

@@ -47,7 +47,7 @@ import dynamixel_sdk as sdk
 import serial
 
 from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
-from drivers.dynamixel.control_table import Area, Item, decode_hardware_error, item
+from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
 from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
@@ -113,7 +113,7 @@ class DynamixelLink(Resource):
     def __init__(
         self,
         port: str,
-        baud: int = 57_600,
+        baud: int = FACTORY_BAUD,
         *,
         retries: int = 3,
         latency_ms: float | None = None,

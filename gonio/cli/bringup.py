@@ -23,14 +23,13 @@ import dynamixel_sdk as sdk
 from drivers.base import CommError, DriverError
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.dynamixel.control_table import MODELS
+from drivers.dynamixel.control_table import FACTORY_BAUD, MODELS
 from drivers.dynamixel.link import DynamixelLink
 from gonio.config import ConfigError
 
 #: How long a bring-up move may take to settle by default (s).
 DEFAULT_TIMEOUT_S = 30.0
 #: The rate `set-id` uses unless told another (baud).
-DEFAULT_BAUD = 57_600
 #: Exit code of `set-id` when its question was not answered yes.
 EXIT_DECLINED = 1
 
@@ -124,7 +123,7 @@ def add_parsers(
         "--to", dest="new", type=motor_id, required=True, metavar="B", help="its new ID, free"
     )
     set_id.add_argument(
-        "--baud", type=baud_type, default=DEFAULT_BAUD, help=f"baud rate (default {DEFAULT_BAUD})"
+        "--baud", type=baud_type, default=FACTORY_BAUD, help=f"baud rate (default {FACTORY_BAUD})"
     )
     set_id.add_argument("--yes", action="store_true", help="do not ask for confirmation")
     set_id.set_defaults(func=cmd_set_id)

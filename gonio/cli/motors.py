@@ -15,14 +15,13 @@ from pathlib import Path
 
 from drivers.base import CommError, DriverError
 from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.control_table import BAUD_RATES, MODELS, RAD_PER_TICK
+from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, MODELS, RAD_PER_TICK
 from drivers.dynamixel.link import DynamixelLink
 from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
-DEFAULT_SCAN_BAUDS = (57_600, 1_000_000)
+DEFAULT_SCAN_BAUDS = (FACTORY_BAUD, 1_000_000)
 #: The rate `status` and `reboot` use when neither a flag nor a rig file gives one.
-DEFAULT_BAUD = 57_600
 #: Exit code of `scan` when no motor answered, and of `status` when one did not.
 EXIT_NO_ANSWER = 1
 
@@ -102,7 +101,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     status.add_argument("--port", help="serial port (default: the rig file's)")
     status.add_argument("--ids", type=motor_ids, help="e.g. 1,2,3 or 1-4 (default: the rig's)")
     status.add_argument(
-        "--baud", type=baud_rate, help=f"baud rate (default: the rig's, else {DEFAULT_BAUD})"
+        "--baud", type=baud_rate, help=f"baud rate (default: the rig's, else {FACTORY_BAUD})"
     )
     status.set_defaults(func=cmd_status)
 
@@ -115,7 +114,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     reboot.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
     reboot.add_argument("--ids", type=motor_ids, required=True, help="e.g. 1,2,3 or 1-4")
     reboot.add_argument(
-        "--baud", type=baud_rate, default=DEFAULT_BAUD, help=f"baud rate (default {DEFAULT_BAUD})"
+        "--baud", type=baud_rate, default=FACTORY_BAUD, help=f"baud rate (default {FACTORY_BAUD})"
     )
     reboot.set_defaults(func=cmd_reboot)
 
@@ -156,7 +155,7 @@ def _status_target(args: argparse.Namespace) -> tuple[str, int, list[int], dict[
         ids = ids or sorted(axes)
     if port is None or ids is None:
         raise ConfigError("motors status: give --port and --ids, or --rig RIG.yaml")
-    return port, baud or DEFAULT_BAUD, ids, axes
+    return port, baud or FACTORY_BAUD, ids, axes
 
 
 def cmd_status(args: argparse.Namespace) -> int:
