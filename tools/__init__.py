@@ -1,0 +1,1 @@
+"""Generators of committed files (run from the repository's root; not installed)."""
