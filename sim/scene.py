@@ -80,7 +80,9 @@ class DetectorSpec(Strict):
         0.0, ge=0, description="Thermal electrons per second (the dark_current effect)."
     )
     read_noise_e: float = Field(
-        0.0, ge=0, description="The amplifier's noise per reading (electrons rms; read_noise)."
+        0.0,
+        ge=0,
+        description="The amplifier's noise per reading (electrons rms; the read_noise effect).",
     )
     full_well_e: float = Field(
         gt=0, description="Electrons the sensor holds; it maps to the ADC's top code."
@@ -156,7 +158,10 @@ class ApertureSpec(Strict):
     peak to 1e-7 at 1e-3 sr and 1e-13 at 1e-4 sr; docs/explanations/simulator.md)."""
 
     order: int = Field(
-        6, ge=2, le=64, description="Gauss–Legendre nodes in θ over the cap (2·order in φ)."
+        6,
+        ge=2,
+        le=64,
+        description="The quadrature's order: order × 2·order nodes over the detector's cap.",
     )
 
 
@@ -165,8 +170,13 @@ class PositionErrorSpec(Strict):
     half of it behind the direction of the last move) and repeatability (Gaussian, per
     move, 1σ)."""
 
-    ticks: bool = Field(True, description="Quantize each joint to the motor's ticks.")
-    backlash_deg: float = Field(0.0, ge=0, description="The backlash of each joint (°).")
+    ticks: bool = Field(
+        True,
+        description="Quantize each joint to its motor's ticks (4096 a turn, through the gear).",
+    )
+    backlash_deg: float = Field(
+        0.0, ge=0, description="Each joint's backlash (°): it lags half of it behind its last move."
+    )
     repeatability_deg: float = Field(
         0.0, ge=0, description="A joint's error per move (°, Gaussian, 1σ)."
     )

@@ -203,8 +203,7 @@ LOADER_ONLY: tuple[LoaderCheck, ...] = (
     ),
     LoaderCheck(
         "rig", "light.switch.*", "not a valid regular expression",
-        "`light.switch.ack`, `on_reply`, `off_reply`: valid regular expressions (the schema "
-        "marks them `format: regex`, which an editor need not check).",
+        "`light.switch.ack`, `on_reply`, `off_reply`: valid (Python) regular expressions.",
         (_SERIAL, (("light.switch.ack", "("),)),
     ),
     LoaderCheck(
@@ -570,8 +569,6 @@ def _bounds(node: dict[str, Any]) -> list[str]:
         out.append("not empty")
     if node.get("pattern") == r"\S":
         out.append("not blank")
-    if node.get("format") == "regex":
-        out.append("a regular expression")
     if node.get("type") == "array" and "prefixItems" not in node and node.get("minItems"):
         out.append(f"at least {node['minItems']} item{'s' if node['minItems'] > 1 else ''}")
     if node.get("uniqueItems"):

@@ -94,7 +94,8 @@ class SamplingSpec(Strict):
     seed: int = Field(
         0,
         ge=0,
-        description="Seed of the scrambled sequence or the jitter, and of the ordering's kicks.",
+        description="Seed of the point sequence or the stratified jitter, and of the ordering's "
+        "kicks.",
     )
     warps: dict[str, Warp] = Field(
         default_factory=dict,
@@ -153,7 +154,7 @@ class AdaptSpec(Strict):
     max_averages: int = Field(
         1,
         ge=1,
-        description="Averages up to this many where exposure beyond max_s would be wanted.",
+        description="The most averages, which grow as the exposure would beyond max_s.",
     )
 
     @model_validator(mode="after")

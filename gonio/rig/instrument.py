@@ -22,14 +22,11 @@ import re
 from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator, model_validator
-from pydantic.config import JsonDict
 
 from drivers.light import SerialLightConfig
 from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
 from gonio.config import InSchema, Strict, field_error
 
-#: The JSON Schema of a regular expression (its syntax is checked when the rig is read).
-REGEX: JsonDict = {"format": "regex"}
 #: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
 Command = Annotated[str, InSchema(pattern=r"\S")]
 
@@ -97,22 +94,19 @@ class SerialSwitchSpec(Strict):
     off_command: Command = Field(description="The command that switches the light off (one line).")
     ack: str | None = Field(
         None,
-        description="A regex the answer to on_command and off_command must match (none: no "
+        description="A Python regex the answer to on_command and off_command must match (none: no "
         "answer is read).",
-        json_schema_extra=REGEX,
     )
     query_command: Command | None = Field(
         None, description="A command asking the light's state (with on_reply and off_reply)."
     )
     on_reply: str | None = Field(
         None,
-        description="A regex the answer to query_command matches when on.",
-        json_schema_extra=REGEX,
+        description="A Python regex the answer to query_command matches when on.",
     )
     off_reply: str | None = Field(
         None,
-        description="A regex the answer to query_command matches when off.",
-        json_schema_extra=REGEX,
+        description="A Python regex the answer to query_command matches when off.",
     )
     timeout_s: float = Field(1.0, gt=0, description="How long an answer may take (s).")
     warmup_s: float = Field(
@@ -252,9 +246,8 @@ class SerialInterfaceSpec(Strict):
     )
     response: str = Field(
         _driver_default("response"),
-        description="A regex the whole answer line matches: group value (required), optional "
-        "status, saturated and std.",
-        json_schema_extra=REGEX,
+        description="A Python regex the whole answer line matches: group value (required), "
+        "optional status, saturated and std.",
     )
     line_ending: Literal["lf", "crlf", "cr"] = Field(
         _line_ending_name(_driver_default("line_ending")),
@@ -278,8 +271,7 @@ class SerialInterfaceSpec(Strict):
     )
     reset_banner: str | None = Field(
         _driver_default("reset_banner"),
-        description="A regex of the line the device prints after a reset, e.g. ^READY.",
-        json_schema_extra=REGEX,
+        description="A Python regex of the line the device prints after a reset, e.g. ^READY.",
     )
     init: tuple[str, ...] = Field(
         _driver_default("init"),
@@ -293,19 +285,16 @@ class SerialInterfaceSpec(Strict):
     )
     command_ack: str | None = Field(
         _driver_default("command_ack"),
-        description="A regex an answer to every init and set_exposure command must match "
+        description="A Python regex an answer to every init and set_exposure command must match "
         "(none: no answer is read).",
-        json_schema_extra=REGEX,
     )
     error_reply: str | None = Field(
         _driver_default("error_reply"),
-        description="A regex of the line the device sends to refuse a command, e.g. ^ERR.",
-        json_schema_extra=REGEX,
+        description="A Python regex of the line the device sends to refuse a command, e.g. ^ERR.",
     )
     saturated_status: str | None = Field(
         _driver_default("saturated_status"),
-        description="A regex: a response's status group matching it is a saturated reading.",
-        json_schema_extra=REGEX,
+        description="A Python regex: a response's status group matching it is a saturated reading.",
     )
     device_averaging: bool = Field(
         _driver_default("device_averaging"),

@@ -35,7 +35,7 @@ class AxisSpec(Strict):
     motor_id: int = Field(ge=0, le=252, description="The Dynamixel ID of the axis's motor.")
     gear_ratio: float = Field(1.0, gt=0, description="Motor turns per joint turn.")
     direction: Literal[1, -1] = Field(
-        1, description="+1 or −1: the sign of the joint angle for a positive motor turn."
+        1, description="+1 or −1: which way the joint turns when the motor angle grows."
     )
     zero_offset_deg: float = Field(
         0.0, description="The joint angle at the motor's zero position (°)."
