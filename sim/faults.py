@@ -26,12 +26,12 @@ measurement): a retried sample succeeds, as after a transient fault on hardware.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from gonio.config import Strict, field_error
+from gonio.config import InSchema, Strict, field_error
 from sim.physics.streams import FAULT, Streams
 
 FaultKind = Literal[
@@ -48,15 +48,36 @@ MOTOR_FLAGS = frozenset(
 class FaultRule(Strict):
     """One injected fault (see the module docstring)."""
 
-    kind: FaultKind
-    at: tuple[int, ...] | None = None  # sample indices
-    rate: float | None = Field(None, ge=0, le=1)  # probability per sample
-    axis: str | None = None  # motor_fault: the axis that faults (default: the first)
-    flags: tuple[str, ...] = ("overload",)  # motor_fault: its Hardware Error Status
-    temperature_c: float = Field(80.0, gt=-50, lt=200)  # overheat: the temperature shown
-    for_s: float = Field(60.0, gt=0)  # overheat: how long (s of the run's clock)
+    kind: FaultKind = Field(description="What goes wrong (see docs/explanations/simulator.md).")
+    at: tuple[Annotated[int, InSchema(minimum=0)], ...] | None = Field(
+        None, description="The sample indices it strikes at (one or a list; or rate)."
+    )
+    rate: float | None = Field(
+        None, ge=0, le=1, description="The probability it strikes each sample (or at)."
+    )
+    axis: str | None = Field(
+        None,
+        description="motor_fault, overheat: the axis (default: the first); the rig's axis names.",
+    )
+    flags: tuple[Annotated[str, InSchema(enum=sorted(MOTOR_FLAGS))], ...] = Field(
+        ("overload",),
+        description="motor_fault: its Hardware Error Status flags.",
+        json_schema_extra={"minItems": 1},
+    )
+    temperature_c: float = Field(
+        80.0, gt=-50, lt=200, description="overheat: the temperature the axis shows (°C)."
+    )
+    for_s: float = Field(
+        60.0, gt=0, description="overheat: how long, in seconds of the run's clock (s)."
+    )
 
-    @field_validator("at", mode="before")
+    @field_validator(
+        "at",
+        mode="before",
+        json_schema_input_type=Annotated[int, InSchema(minimum=0)]
+        | list[Annotated[int, InSchema(minimum=0)]]
+        | None,
+    )
     @classmethod
     def _one_index(cls, v: Any) -> Any:
         return (v,) if isinstance(v, int) and not isinstance(v, bool) else v

@@ -38,8 +38,14 @@ class SourceSpec(Strict):
     irradiance of a collimated beam (W/m², perpendicular to the beam) or the intensity
     of a point source (W/sr)."""
 
-    irradiance_w_m2: float | None = Field(None, gt=0)
-    intensity_w_sr: float | None = Field(None, gt=0)
+    irradiance_w_m2: float | None = Field(
+        None,
+        gt=0,
+        description="A collimated light's irradiance, perpendicular to the beam (W/m²).",
+    )
+    intensity_w_sr: float | None = Field(
+        None, gt=0, description="A point source's intensity (W/sr)."
+    )
 
     @model_validator(mode="after")
     def _one_power(self) -> SourceSpec:
@@ -67,12 +73,24 @@ class DetectorSpec(Strict):
     """The simulated sensor behind the rig's detector optics: how light becomes counts
     (`sim.physics.sensor`), and which colour band an RGB material is seen in."""
 
-    responsivity_a_w: float = Field(gt=0)
-    dark_current_e_s: float = Field(0.0, ge=0)
-    read_noise_e: float = Field(0.0, ge=0)
-    full_well_e: float = Field(gt=0)
-    adc_bits: int = Field(16, ge=1, le=32)
-    band: Literal["luminance", "r", "g", "b"] = "luminance"  # for RGB materials
+    responsivity_a_w: float = Field(
+        gt=0, description="Photocurrent per radiant power reaching the sensor (A/W)."
+    )
+    dark_current_e_s: float = Field(
+        0.0, ge=0, description="Thermal electrons per second (the dark_current effect)."
+    )
+    read_noise_e: float = Field(
+        0.0,
+        ge=0,
+        description="The amplifier's noise per reading (electrons rms; the read_noise effect).",
+    )
+    full_well_e: float = Field(
+        gt=0, description="Electrons the sensor holds; it maps to the ADC's top code."
+    )
+    adc_bits: int = Field(16, ge=1, le=32, description="The ADC's resolution (bits).")
+    band: Literal["luminance", "r", "g", "b"] = Field(
+        "luminance", description="The colour band an RGB material is seen in."
+    )
 
 
 #: Scene fields that are facts of the instrument: where the rig file holds each.
@@ -126,10 +144,12 @@ class SourceDriftSpec(Strict):
     """Source power × (1 + rate · t/3600 + amplitude · sin(2π t / period + phase)),
     t the run's virtual time (s)."""
 
-    rate_per_hour: float = 0.01
-    amplitude: float = Field(0.0, ge=0, lt=1)
-    period_s: float = Field(600.0, gt=0)
-    phase_deg: float = 0.0
+    rate_per_hour: float = Field(0.01, description="Relative change of the power per hour (1/h).")
+    amplitude: float = Field(
+        0.0, ge=0, lt=1, description="Relative amplitude of the power's oscillation."
+    )
+    period_s: float = Field(600.0, gt=0, description="The oscillation's period (s).")
+    phase_deg: float = Field(0.0, description="The oscillation's phase at t = 0 (°).")
 
 
 class ApertureSpec(Strict):
@@ -137,7 +157,12 @@ class ApertureSpec(Strict):
     quadrature of ``order`` × 2·order nodes over the cap (order 6 keeps a GGX α = 0.02
     peak to 1e-7 at 1e-3 sr and 1e-13 at 1e-4 sr; docs/explanations/simulator.md)."""
 
-    order: int = Field(6, ge=2, le=64)
+    order: int = Field(
+        6,
+        ge=2,
+        le=64,
+        description="The quadrature's order: order × 2·order nodes over the detector's cap.",
+    )
 
 
 class PositionErrorSpec(Strict):
@@ -145,28 +170,72 @@ class PositionErrorSpec(Strict):
     half of it behind the direction of the last move) and repeatability (Gaussian, per
     move, 1σ)."""
 
-    ticks: bool = True
-    backlash_deg: float = Field(0.0, ge=0)
-    repeatability_deg: float = Field(0.0, ge=0)
+    ticks: bool = Field(
+        True,
+        description="Quantize each joint to its motor's ticks (4096 a turn, through the gear).",
+    )
+    backlash_deg: float = Field(
+        0.0, ge=0, description="Each joint's backlash (°): it lags half of it behind its last move."
+    )
+    repeatability_deg: float = Field(
+        0.0, ge=0, description="A joint's error per move (°, Gaussian, 1σ)."
+    )
 
 
 class StrayLightSpec(Strict):
     """A constant floor of radiant power (W) reaching the detector while the source is on."""
 
-    power_w: float = Field(ge=0)
+    power_w: float = Field(ge=0, description="The stray radiant power on the detector (W).")
+
+
+def _given(schema: dict[str, Any]) -> None:
+    """An effect with required parameters: a file gives them (``stray_light:`` with
+    nothing is refused: no null in its schema)."""
+    schema["anyOf"] = [s for s in schema.pop("anyOf") if s.get("type") != "null"]
+    if len(schema["anyOf"]) == 1:
+        schema.update(schema.pop("anyOf")[0])
 
 
 class EffectsSpec(Strict):
-    shot_noise: NoParams | None = None
-    read_noise: NoParams | None = None
-    dark_current: NoParams | None = None
-    quantization: NoParams | None = None
-    saturation: NoParams | None = None
-    source_drift: SourceDriftSpec | None = None
-    aperture_integration: ApertureSpec | None = None
-    footprint: NoParams | None = None
-    position_error: PositionErrorSpec | None = None
-    stray_light: StrayLightSpec | None = None
+    """The effects a simulation models, each computed only when listed (none: every
+    reading the exact analytic value carried through the radiometric chain): a list of
+    names, or a mapping of name to its parameters (nothing: the defaults)."""
+
+    shot_noise: NoParams | None = Field(
+        None, description="Signal and dark electrons are Poisson draws."
+    )
+    read_noise: NoParams | None = Field(
+        None, description="The amplifier adds Gaussian noise (detector.read_noise_e)."
+    )
+    dark_current: NoParams | None = Field(
+        None, description="Thermal electrons join the signal (detector.dark_current_e_s)."
+    )
+    quantization: NoParams | None = Field(
+        None, description="The ADC rounds to whole counts (detector.adc_bits)."
+    )
+    saturation: NoParams | None = Field(
+        None,
+        description="The well holds at most detector.full_well_e; fuller readings are flagged.",
+    )
+    source_drift: SourceDriftSpec | None = Field(
+        None, description="The source's power drifts and oscillates with the run's time."
+    )
+    aperture_integration: ApertureSpec | None = Field(
+        None, description="The detector averages the BRDF over its solid angle."
+    )
+    footprint: NoParams | None = Field(
+        None,
+        description="Only the part of the lit spot on the sample and in the detector's view "
+        "counts.",
+    )
+    position_error: PositionErrorSpec | None = Field(
+        None, description="Motor ticks, backlash and repeatability move the joints."
+    )
+    stray_light: StrayLightSpec | None = Field(
+        None,
+        description="A constant power reaches the detector while the source is on.",
+        json_schema_extra=_given,
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -194,16 +263,45 @@ class EffectsSpec(Strict):
 # -- the scene ---------------------------------------------------------------------------
 
 
-class Scene(Strict):
-    """What a simulation adds to a rig (see the module docstring)."""
+#: The effects a list may name: those with no required parameters.
+EffectName = Literal[
+    "shot_noise",
+    "read_noise",
+    "dark_current",
+    "quantization",
+    "saturation",
+    "source_drift",
+    "aperture_integration",
+    "footprint",
+    "position_error",
+]
 
-    name: str
-    material: MaterialSpec
-    source: SourceSpec
-    detector: DetectorSpec
-    effects: EffectsSpec = Field(default_factory=EffectsSpec)
-    faults: tuple[FaultRule, ...] = ()  # injected faults (`sim.faults`)
-    seed: int = Field(0, ge=0)
+
+class Scene(Strict):
+    """What a simulation adds to the rig it runs on: the material, the source's power,
+    the simulated sensor, the effects to model, injected faults and the seed. A fact of
+    the instrument (the light's kind, sizes, the detector's aperture) belongs in the rig
+    file."""
+
+    name: str = Field(description="The scene's name, shown in summaries and stored in the run.")
+    material: MaterialSpec = Field(
+        description="The material: name (a gonio.brdf model) and its parameters beside it; a "
+        "relative path (a tabulated material) is relative to the scene file."
+    )
+    source: SourceSpec = Field(
+        description="The source's power, of the rig's light.kind: one of irradiance_w_m2 or "
+        "intensity_w_sr."
+    )
+    detector: DetectorSpec = Field(description="The simulated sensor behind the rig's optics.")
+    effects: EffectsSpec = Field(
+        default_factory=EffectsSpec,
+        description="The effects to model: a list of names, or name: parameters (none: exact "
+        "readings).",
+    )
+    faults: tuple[FaultRule, ...] = Field(
+        (), description="Faults injected into the simulated devices."
+    )  # `sim.faults`
+    seed: int = Field(0, ge=0, description="The seed of every random draw of the simulation.")
 
     @model_validator(mode="before")
     @classmethod
@@ -219,12 +317,14 @@ class Scene(Strict):
             )
         return data
 
-    @field_validator("effects", mode="before")
+    @field_validator(
+        "effects", mode="before", json_schema_input_type=list[EffectName] | EffectsSpec | None
+    )
     @classmethod
     def _none_is_empty(cls, v: Any) -> Any:
         return {} if v is None else v
 
-    @field_validator("faults", mode="before")
+    @field_validator("faults", mode="before", json_schema_input_type=list[FaultRule] | None)
     @classmethod
     def _no_faults(cls, v: Any) -> Any:
         return () if v is None else v

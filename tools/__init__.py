@@ -1,1 +1,2 @@
-"""Scripts that write the generated documentation pages (``python -m tools.NAME``)."""
+"""Generators of committed files: the reference pages and the shipped schemas
+(``python -m tools.NAME`` from the repository's root; not installed)."""

@@ -11,16 +11,17 @@ component so, and the sum of their bounds (Lambert: its albedo) against 1."""
 
 from __future__ import annotations
 
+import inspect
 import re
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pydantic import Field, ValidationInfo, model_validator
+from pydantic import ConfigDict, Field, ValidationInfo, model_validator
 
 from gonio.brdf.base import BRDF
 from gonio.brdf.composite import Sum
-from gonio.brdf.registry import create
+from gonio.brdf.registry import create, model_class, names
 from gonio.config import Strict, field_error
 from gonio.errors import DomainError, GonioError
 
@@ -128,8 +129,85 @@ def _show(value: np.ndarray) -> str:
     return ", ".join(f"{v:.4g}" for v in np.ravel(value))
 
 
+def parameters(name: str) -> tuple[list[str], list[str]]:
+    """(every parameter, the required ones) of the model registered as ``name``."""
+    signature = inspect.signature(model_class(name).__init__).parameters
+    accepted = [p for p in signature.values() if p.name not in ("self", "factory")]
+    return [p.name for p in accepted], [p.name for p in accepted if p.default is p.empty]
+
+
+_NAME = {
+    "enum": names(),
+    "description": "The model (docs/explanations/brdf.md); its parameters sit beside the name.",
+}
+
+
+def _params_schema(model: str, depth: int) -> dict[str, Any]:
+    """The JSON Schema of ``model``'s parameters (a sum's components ``depth`` levels
+    deep; deeper only their names): each by name, the required ones, no yes/no."""
+    every, required = parameters(model)
+    value: dict[str, Any] = {"not": {"type": "boolean"}}
+    if model == "sum":
+        value = {"type": "array", "minItems": 1, "items": _flat_schema(depth - 1)}
+    return {
+        "properties": dict.fromkeys(every, value),
+        "required": required,
+        "additionalProperties": False,
+    }
+
+
+def _is(model: str) -> dict[str, Any]:
+    return {"required": ["name"], "properties": {"name": {"const": model}}}
+
+
+def _flat_schema(depth: int) -> dict[str, Any]:
+    """The JSON Schema of ``{name: MODEL, PARAM: value, …}``."""
+    out: dict[str, Any] = {"type": "object", "required": ["name"], "properties": {"name": _NAME}}
+    if depth >= 0:
+        branches = []
+        for model in names():
+            then = _params_schema(model, depth)
+            then["properties"] = {"name": True, **then["properties"]}
+            branches.append({"if": _is(model), "then": then})
+        out["allOf"] = branches
+    return out
+
+
+def material_schema(*, nested: bool) -> dict[str, Any]:
+    """The JSON Schema of a material as a file writes it: ``name`` and the model's
+    parameters beside it (as `build` takes them); ``nested``: or under ``params`` (as
+    `MaterialSpec` reads it too). The values' own checks (reflectances, energy
+    conservation) are `build`'s only."""
+    flat = _flat_schema(depth=0)
+    if not nested:
+        return flat
+    under = {
+        "type": "object",
+        "required": ["name", "params"],
+        "properties": {"name": _NAME, "params": {"type": "object"}},
+        "additionalProperties": False,
+        "allOf": [
+            {"if": _is(model), "then": {"properties": {"params": _params_schema(model, 0)}}}
+            for model in names()
+        ],
+    }
+    return {"if": {"required": ["params"]}, "then": under, "else": flat}
+
+
+def _material_json_schema(schema: dict[str, Any]) -> None:
+    description = schema.get("description")
+    schema.clear()
+    schema.update(material_schema(nested=True))
+    if description is not None:
+        schema["description"] = description
+
+
 class MaterialSpec(Strict):
-    """A `gonio.brdf` model: ``name`` and its parameters (numbers, strings, RGB lists)."""
+    """A `gonio.brdf` model: ``name`` and its parameters beside it (numbers, names, RGB
+    lists), or under ``params``; a relative ``path`` (a tabulated material's file) is
+    relative to the file that names it."""
+
+    model_config = ConfigDict(json_schema_extra=_material_json_schema)
 
     name: str
     params: dict[str, Any] = Field(default_factory=dict)  # checked by gonio.brdf.material

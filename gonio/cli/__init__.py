@@ -69,6 +69,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.motors",
         "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
     ),
+    "schema": (
+        "gonio.cli.schema",
+        "the JSON Schema of a plan, rig, scene or sweep file, for an editor to check it",
+    ),
 }
 
 

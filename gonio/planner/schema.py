@@ -10,14 +10,14 @@ each target.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, model_validator
 
 from gonio import brdf, params
 from gonio.brdf import family
-from gonio.brdf.material import MaterialError, build
-from gonio.config import Strict, excerpt, field_error
+from gonio.brdf.material import MaterialError, build, material_schema
+from gonio.config import InSchema, Strict, excerpt, field_error
 from gonio.errors import GonioError
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
@@ -27,7 +27,9 @@ class Warp(Strict):
     """u ↦ u^power on one coordinate's unit interval before scaling to its bounds:
     power > 1 puts more points near the lower bound (e.g. ‖h̄‖ = 0, the specular peak)."""
 
-    power: float = Field(gt=0)
+    power: float = Field(
+        gt=0, description="The exponent: > 1 denser near the lower bound, 1 uniform, < 1 sparser."
+    )
 
 
 class AdaptiveSpec(Strict):
@@ -38,10 +40,27 @@ class AdaptiveSpec(Strict):
     with the density of `gonio.planner.adaptive`, a share ``floor`` of it uniform and a
     share ``edge`` moved onto the edge of the rig's cap."""
 
-    survey: int = Field(128, ge=16)
-    model: str = "lambert+beckmann"  # or "survey": the survey's rbf reconstruction
-    floor: float = Field(0.2, ge=0.0, le=1.0)
-    edge: float = Field(0.0, ge=0.0, lt=1.0)
+    survey: int = Field(
+        128,
+        ge=16,
+        description="Kept targets of the first pass, a Sobol survey (fewer than sampling.target).",
+    )
+    model: str = Field(
+        "lambert+beckmann",
+        description="The model family fitted to the survey to steer the rest, as `gonio fit "
+        "--model` takes it (e.g. lambert+ggx); or survey: steer by the survey's own rbf "
+        "reconstruction, no model.",
+    )
+    floor: float = Field(
+        0.2, ge=0.0, le=1.0, description="Share of the rest of the target placed uniformly."
+    )
+    edge: float = Field(
+        0.0,
+        ge=0.0,
+        lt=1.0,
+        description="Share of the rest of the target moved onto the edge of the rig's cap "
+        "(constraints.theta_max_deg).",
+    )
 
     @model_validator(mode="after")
     def _known_model(self) -> AdaptiveSpec:
@@ -54,12 +73,38 @@ class AdaptiveSpec(Strict):
 
 
 class SamplingSpec(Strict):
-    strategy: Strategy = "sobol"
-    counts: dict[str, int] | None = None  # per coordinate (grid, stratified)
-    target: int | None = Field(None, gt=0)  # kept targets wanted (all strategies)
-    seed: int = Field(0, ge=0)
-    warps: dict[str, Warp] = Field(default_factory=dict)
-    adaptive: AdaptiveSpec | None = None  # the adaptive strategy's options
+    """Where the targets go: points placed in the parametrization's coordinate box (or its
+    isotropic reduction), kept where the coordinates are valid and the rig reaches them;
+    either ``counts`` per coordinate (a grid) or a ``target`` number of kept targets."""
+
+    strategy: Strategy = Field(
+        "sobol",
+        description="grid (cell centres), stratified (one uniform point per cell), sobol, "
+        "halton (scrambled), random, or adaptive (a Sobol survey first, then the rest of the "
+        "target where a reconstruction errs).",
+    )
+    counts: dict[str, Annotated[int, InSchema(minimum=1)]] | None = Field(
+        None,
+        description="Points per coordinate, a count for every coordinate of the "
+        "parametrization (grid and stratified only; instead of target).",
+    )
+    target: int | None = Field(
+        None, gt=0, description="Kept targets wanted, any strategy (instead of counts)."
+    )
+    seed: int = Field(
+        0,
+        ge=0,
+        description="Seed of the point sequence or the stratified jitter, and of the ordering's "
+        "kicks.",
+    )
+    warps: dict[str, Warp] = Field(
+        default_factory=dict,
+        description="Per coordinate: u ↦ u^power on its unit interval before scaling to its "
+        "bounds (none: uniform; not with the adaptive strategy).",
+    )
+    adaptive: AdaptiveSpec | None = Field(
+        None, description="The adaptive strategy's options (only with strategy: adaptive)."
+    )
 
     @model_validator(mode="after")
     def _counts_or_target(self) -> SamplingSpec:
@@ -98,10 +143,19 @@ class AdaptSpec(Strict):
     `gonio.planner.exposure`); exposure = base × s_ref / s clipped to [min_s, max_s],
     with s_ref the median over the plan's targets."""
 
-    material: dict[str, Any] = Field(min_length=1)  # checked by gonio.brdf.material
-    min_s: float = Field(gt=0)
-    max_s: float = Field(gt=0)
-    max_averages: int = Field(1, ge=1)
+    material: dict[str, Any] = Field(
+        min_length=1,
+        description="The expected material: name (a gonio.brdf model) and its parameters "
+        "beside it, e.g. {name: cook_torrance, alpha: 0.2, kd: 0.3}.",
+        json_schema_extra=material_schema(nested=False),
+    )  # checked by gonio.brdf.material
+    min_s: float = Field(gt=0, description="The shortest exposure (s).")
+    max_s: float = Field(gt=0, description="The longest exposure (s), at least min_s.")
+    max_averages: int = Field(
+        1,
+        ge=1,
+        description="The most averages, which grow as the exposure would beyond max_s.",
+    )
 
     @model_validator(mode="after")
     def _range(self) -> AdaptSpec:
@@ -123,9 +177,16 @@ class AdaptSpec(Strict):
 
 
 class ExposureSpec(Strict):
-    seconds: float = Field(0.1, gt=0, le=3600)
-    averages: int = Field(1, ge=1)
-    adapt: AdaptSpec | None = None
+    """How long each target is exposed, and how many readings are averaged."""
+
+    seconds: float = Field(
+        0.1, gt=0, le=3600, description="Exposure of each reading (s); with adapt, the base."
+    )
+    averages: int = Field(1, ge=1, description="Readings averaged per target.")
+    adapt: AdaptSpec | None = Field(
+        None,
+        description="Scale exposure and averages by 1/expected signal (none: the same for all).",
+    )
 
 
 class CalibrationSpec(Strict):
@@ -135,10 +196,18 @@ class CalibrationSpec(Strict):
     off) with each reference reading. ``averages``: exposures per calibration reading
     (at least 2: their spread is what the uncertainty of every sample is scaled by)."""
 
-    every_samples: int | None = Field(None, ge=1)
-    every_minutes: float | None = Field(None, gt=0)
-    dark: bool = True
-    averages: int = Field(16, ge=2, le=1000)
+    every_samples: int | None = Field(
+        None, ge=1, description="Read the standard again after this many targets (none: never)."
+    )
+    every_minutes: float | None = Field(
+        None,
+        gt=0,
+        description="Read the standard again after this much run time (min; none: never).",
+    )
+    dark: bool = Field(
+        True, description="Take a dark reading (light off) with each reference reading."
+    )
+    averages: int = Field(16, ge=2, le=1000, description="Exposures per calibration reading.")
 
 
 class OnFaultSpec(Strict):
@@ -147,8 +216,12 @@ class OnFaultSpec(Strict):
     ``abort`` the run (resumable). A motor fault or a motion timeout always stops every
     axis and ends the run resumable."""
 
-    retries: int = Field(2, ge=0, le=100)
-    then: Literal["skip", "abort"] = "skip"
+    retries: int = Field(2, ge=0, le=100, description="Attempts after the first.")
+    then: Literal["skip", "abort"] = Field(
+        "skip",
+        description="After the last attempt: skip the target (journaled) or abort the run "
+        "(resumable).",
+    )
 
 
 class SaturationSpec(Strict):
@@ -156,8 +229,10 @@ class SaturationSpec(Strict):
     detector's shortest), up to ``attempts`` more times, when ``remeasure``; a reading
     still saturated is kept and flagged."""
 
-    remeasure: bool = True
-    attempts: int = Field(6, ge=1, le=60)
+    remeasure: bool = Field(
+        True, description="Measure a saturated reading again at half the exposure."
+    )
+    attempts: int = Field(6, ge=1, le=60, description="Halvings at most, per reading.")
 
 
 class HealthSpec(Strict):
@@ -166,44 +241,97 @@ class HealthSpec(Strict):
     with the axes holding, checks again every ``poll_s`` and resumes once the condition
     clears, or ends resumable after ``pause_timeout_minutes``."""
 
-    every_samples: int | None = Field(100, ge=1)
-    every_minutes: float | None = Field(5.0, gt=0)
-    poll_s: float = Field(10.0, gt=0)
-    pause_timeout_minutes: float = Field(30.0, gt=0)
+    every_samples: int | None = Field(
+        100, ge=1, description="Check after this many targets (none: not by count)."
+    )
+    every_minutes: float | None = Field(
+        5.0, gt=0, description="Check after this much run time (min; none: not by time)."
+    )
+    poll_s: float = Field(10.0, gt=0, description="While paused, check again this often (s).")
+    pause_timeout_minutes: float = Field(
+        30.0, gt=0, description="End the run resumable after a pause this long (min)."
+    )
 
 
 class AcquisitionSpec(Strict):
     """How `gonio acquire` runs the plan (docs/explanations/acquisition.md)."""
 
-    calibration: CalibrationSpec = Field(default_factory=CalibrationSpec)
-    on_fault: OnFaultSpec = Field(default_factory=OnFaultSpec)
-    saturation: SaturationSpec = Field(default_factory=SaturationSpec)
-    health: HealthSpec = Field(default_factory=HealthSpec)
+    calibration: CalibrationSpec = Field(
+        default_factory=CalibrationSpec, description="When the reference standard is read."
+    )
+    on_fault: OnFaultSpec = Field(
+        default_factory=OnFaultSpec, description="What a target does after a transient fault."
+    )
+    saturation: SaturationSpec = Field(
+        default_factory=SaturationSpec, description="What a saturated reading does."
+    )
+    health: HealthSpec = Field(
+        default_factory=HealthSpec, description="When the motors' health is checked."
+    )
 
 
 class PlanSpec(Strict):
-    name: str
-    rig: str | None = None  # a rig file, relative to the plan file
-    parametrization: str = "rusinkiewicz"
-    isotropic: bool = True
-    sampling: SamplingSpec
-    exposure: ExposureSpec = Field(default_factory=ExposureSpec)
+    """What to measure: the parametrization and how targets are placed in it, the
+    exposure of each, how they are ordered for the motors, and how `gonio acquire` runs
+    them, on the rig the ``rig`` field names."""
+
+    name: str = Field(description="The plan's name, shown in summaries and stored in the run.")
+    rig: str | None = Field(
+        None,
+        description="The rig file, relative to the plan file (none: give it with --rig).",
+    )
+    parametrization: str = Field(
+        "rusinkiewicz",
+        description="The coordinates targets are placed uniformly in (rusinkiewicz: the "
+        "recommended plan).",
+        json_schema_extra={"enum": [*params.names()]},
+    )
+    isotropic: bool = Field(
+        True,
+        description="true: the three isotropic coordinates, the sample rotation stage home; "
+        "false: all four, the rotation stage in use (an anisotropic material).",
+    )
+    sampling: SamplingSpec = Field(description="Where the targets go.")
+    exposure: ExposureSpec = Field(
+        default_factory=ExposureSpec, description="Exposure and averages of each target."
+    )
     # Improving moves the ordering may apply (both passes together); None: 10 per kept
     # target + 100 (`gonio.planner.ordering.default_moves`). A count, not a time, so the
     # same plan file orders the same on any machine.
-    max_moves: int | None = Field(None, ge=0)
+    max_moves: int | None = Field(
+        None,
+        ge=0,
+        description="Improving moves the ordering may apply, both passes together (none: 10 "
+        "per kept target + 100). A count, so the file orders the same on any machine.",
+    )
     # Kicks of the iterated local search after the descents; None: 3 per 2 kept targets,
     # at most 15 000 (`gonio.planner.ordering.default_kicks`). A count too: the kicks
     # are drawn from `sampling.seed`, so the same file orders the same on any machine.
-    kicks: int | None = Field(None, ge=0)
+    kicks: int | None = Field(
+        None,
+        ge=0,
+        description="Kicks of the iterated local search after the descents (none: 3 per 2 "
+        "kept targets, at most 15 000), drawn from sampling.seed.",
+    )
     # "search": the iterated local search (seconds); "lkh": then LKH-3 on the chosen
     # poses through the optional `elkai` package (minutes, gigabytes past ~10 000
     # targets), kept where it is shorter.
-    ordering: Literal["search", "lkh"] = "search"
+    ordering: Literal["search", "lkh"] = Field(
+        "search",
+        description="search: the iterated local search (seconds); lkh: then LKH-3 on the "
+        "chosen poses, kept where shorter (the optional elkai package; minutes).",
+    )
     # A safety cap on the wall time of improving the order; when it binds the summary
     # says so (the order then depends on the machine).
-    time_budget_s: float = Field(120.0, gt=0)
-    acquisition: AcquisitionSpec = Field(default_factory=AcquisitionSpec)
+    time_budget_s: float = Field(
+        120.0,
+        gt=0,
+        description="A cap on the wall time of improving the order (s); the summary says "
+        "when it binds (the order then depends on the machine).",
+    )
+    acquisition: AcquisitionSpec = Field(
+        default_factory=AcquisitionSpec, description="How `gonio acquire` runs the plan."
+    )
 
     @model_validator(mode="after")
     def _known_names(self) -> PlanSpec:

@@ -25,10 +25,16 @@ from pydantic import Field, field_validator, model_validator
 
 from drivers.light import SerialLightConfig
 from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
-from gonio.config import Strict, field_error
+from gonio.config import InSchema, Strict, field_error
+
+#: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
+Command = Annotated[str, InSchema(pattern=r"\S")]
 
 #: Line endings by name (a YAML file may also give the characters, e.g. ``"\r\n"``).
 LINE_ENDINGS = {"lf": "\n", "crlf": "\r\n", "cr": "\r"}
+#: What a file may write for a line ending: a name or the characters.
+LineEnding = Literal["lf", "crlf", "cr", "\n", "\r\n", "\r"]
+LINE_ENDING = 'What ends a command: lf, crlf or cr (or the characters in double quotes: "\\r\\n").'
 
 
 def _line_ending_name(v: Any) -> Any:
@@ -67,7 +73,7 @@ class NoSwitchSpec(Strict):
     """The light cannot be switched by the program: the dark reading is taken another
     way (a shutter or a cap; the simulator models it as the source giving no light)."""
 
-    kind: Literal["none"]
+    kind: Literal["none"] = Field(description="none: the light cannot be switched.")
 
 
 class SerialSwitchSpec(Strict):
@@ -77,18 +83,37 @@ class SerialSwitchSpec(Strict):
     answer matches ``on_reply`` when on, ``off_reply`` when off. ``warmup_s``: how long
     the source needs after switching on before readings are stable."""
 
-    kind: Literal["serial"]
-    port: str = Field(min_length=1)
-    baud: int = Field(9600, gt=0)
-    line_ending: Literal["lf", "crlf", "cr"] = "lf"
-    on_command: str
-    off_command: str
-    ack: str | None = None
-    query_command: str | None = None
-    on_reply: str | None = None
-    off_reply: str | None = None
-    timeout_s: float = Field(1.0, gt=0)
-    warmup_s: float = Field(0.0, ge=0)
+    kind: Literal["serial"] = Field(description="serial: commands on a serial port.")
+    port: str = Field(min_length=1, description="The serial port, e.g. /dev/ttyUSB1.")
+    baud: int = Field(9600, gt=0, description="The baud rate.")
+    line_ending: Literal["lf", "crlf", "cr"] = Field(
+        "lf",
+        description=LINE_ENDING,
+    )
+    on_command: Command = Field(description="The command that switches the light on (one line).")
+    off_command: Command = Field(description="The command that switches the light off (one line).")
+    ack: str | None = Field(
+        None,
+        description="A Python regex the answer to on_command and off_command must match (none: no "
+        "answer is read).",
+    )
+    query_command: Command | None = Field(
+        None, description="A command asking the light's state (with on_reply and off_reply)."
+    )
+    on_reply: str | None = Field(
+        None,
+        description="A Python regex the answer to query_command matches when on.",
+    )
+    off_reply: str | None = Field(
+        None,
+        description="A Python regex the answer to query_command matches when off.",
+    )
+    timeout_s: float = Field(1.0, gt=0, description="How long an answer may take (s).")
+    warmup_s: float = Field(
+        0.0,
+        ge=0,
+        description="How long the source needs after switching on until readings are stable (s).",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -100,7 +125,7 @@ class SerialSwitchSpec(Strict):
             )
         return data
 
-    @field_validator("line_ending", mode="before")
+    @field_validator("line_ending", mode="before", json_schema_input_type=LineEnding)
     @classmethod
     def _ending(cls, v: Any) -> Any:
         return _line_ending_name(v)
@@ -149,11 +174,24 @@ class LightSpec(Strict):
     is ``constraints.beam_diameter_mm``) or a ``point`` source ``distance_mm`` from the
     sample centre along ωi; and its switch."""
 
-    kind: Literal["collimated", "point"] = "collimated"
-    distance_mm: float | None = Field(None, gt=0)
-    switch: SwitchSpec = NoSwitchSpec(kind="none")
+    kind: Literal["collimated", "point"] = Field(
+        "collimated",
+        description="collimated: a distant beam (its diameter is constraints.beam_diameter_mm); "
+        "point: a lamp distance_mm from the sample centre.",
+    )
+    distance_mm: float | None = Field(
+        None,
+        gt=0,
+        description="The point source's distance from the sample centre (mm); only with kind: "
+        "point, and required then.",
+    )
+    switch: SwitchSpec = Field(
+        NoSwitchSpec(kind="none"),
+        description="none (the light cannot be switched: the dark reading is taken another way) "
+        "or a serial switch (kind: serial).",
+    )
 
-    @field_validator("switch", mode="before")
+    @field_validator("switch", mode="before", json_schema_input_type=Literal["none"] | SwitchSpec)
     @classmethod
     def _bare_kind(cls, v: Any) -> Any:
         return _tagged(v)
@@ -176,7 +214,7 @@ class SimulatedInterfaceSpec(Strict):
     """The simulated detector (`sim.devices.detector.SimDetector`); the scene file
     gives its sensor."""
 
-    kind: Literal["simulated"]
+    kind: Literal["simulated"] = Field(description="simulated: the scene file gives its sensor.")
 
 
 _DRIVER_FIELDS = tuple(f.name for f in dataclasses.fields(SerialDetectorConfig))
@@ -193,26 +231,82 @@ class SerialInterfaceSpec(Strict):
     ``cr``). Templates and regular expressions are checked by the driver's own rules
     when the rig is read, each mistake reported at its field."""
 
-    kind: Literal["serial"]
-    port: str = Field(min_length=1)
-    baud: int = Field(_driver_default("baud"), gt=0)
-    query: str = _driver_default("query")
-    set_exposure: str | None = _driver_default("set_exposure")
-    response: str = _driver_default("response")
-    line_ending: Literal["lf", "crlf", "cr"] = _line_ending_name(_driver_default("line_ending"))
-    timeout_s: float = Field(_driver_default("timeout_s"), gt=0)
-    retries: int = Field(_driver_default("retries"), ge=0)
-    full_scale: float | None = Field(_driver_default("full_scale"), gt=0)
-    reset_banner: str | None = _driver_default("reset_banner")
-    init: tuple[str, ...] = _driver_default("init")
-    settle_s: float = Field(_driver_default("settle_s"), ge=0)
-    command_ack: str | None = _driver_default("command_ack")
-    error_reply: str | None = _driver_default("error_reply")
-    saturated_status: str | None = _driver_default("saturated_status")
-    device_averaging: bool = _driver_default("device_averaging")
-    max_line_bytes: int = Field(_driver_default("max_line_bytes"), ge=16)
+    kind: Literal["serial"] = Field(description="serial: a line-based detector on a serial port.")
+    port: str = Field(min_length=1, description="The serial port, e.g. /dev/ttyACM0.")
+    baud: int = Field(_driver_default("baud"), gt=0, description="The baud rate.")
+    query: str = Field(
+        _driver_default("query"),
+        description="The command that asks for a reading: a template of {exposure_s}, "
+        "{exposure_ms}, {exposure_us} and {averages}.",
+    )
+    set_exposure: str | None = Field(
+        _driver_default("set_exposure"),
+        description="A command that sets the exposure, sent when its text changes (a template "
+        "of {exposure_s}, {exposure_ms}, {exposure_us}; none: the query carries it).",
+    )
+    response: str = Field(
+        _driver_default("response"),
+        description="A Python regex the whole answer line matches: group value (required), "
+        "optional status, saturated and std.",
+    )
+    line_ending: Literal["lf", "crlf", "cr"] = Field(
+        _line_ending_name(_driver_default("line_ending")),
+        description=LINE_ENDING,
+    )
+    timeout_s: float = Field(
+        _driver_default("timeout_s"),
+        gt=0,
+        description="The margin on every deadline (s): a query waits its exposure plus this, a "
+        "command's acknowledgement this.",
+    )
+    retries: int = Field(
+        _driver_default("retries"),
+        ge=0,
+        description="Malformed answers tolerated per reading (the query is sent again).",
+    )
+    full_scale: float | None = Field(
+        _driver_default("full_scale"),
+        gt=0,
+        description="Counts at or above which a reading is saturated (none: no such limit).",
+    )
+    reset_banner: str | None = Field(
+        _driver_default("reset_banner"),
+        description="A Python regex of the line the device prints after a reset, e.g. ^READY.",
+    )
+    init: tuple[str, ...] = Field(
+        _driver_default("init"),
+        description="Commands sent after opening and after a reset (no template fields).",
+    )
+    settle_s: float = Field(
+        _driver_default("settle_s"),
+        ge=0,
+        description="After opening, wait up to this long for reset_banner, or exactly this "
+        "long without one (s).",
+    )
+    command_ack: str | None = Field(
+        _driver_default("command_ack"),
+        description="A Python regex an answer to every init and set_exposure command must match "
+        "(none: no answer is read).",
+    )
+    error_reply: str | None = Field(
+        _driver_default("error_reply"),
+        description="A Python regex of the line the device sends to refuse a command, e.g. ^ERR.",
+    )
+    saturated_status: str | None = Field(
+        _driver_default("saturated_status"),
+        description="A Python regex: a response's status group matching it is a saturated reading.",
+    )
+    device_averaging: bool = Field(
+        _driver_default("device_averaging"),
+        description="Send one query with {averages} and let the device average.",
+    )
+    max_line_bytes: int = Field(
+        _driver_default("max_line_bytes"),
+        ge=16,
+        description="The longest line read (bytes); longer input is discarded to the line's end.",
+    )
 
-    @field_validator("line_ending", mode="before")
+    @field_validator("line_ending", mode="before", json_schema_input_type=LineEnding)
     @classmethod
     def _ending(cls, v: Any) -> Any:
         return _line_ending_name(v)
@@ -254,13 +348,24 @@ class DetectorSpec(Strict):
     the sample), the exposures it accepts, its dead time after each exposure, the most
     averages one reading may ask for (none: no limit) and how it is reached."""
 
-    aperture_sr: float = Field(gt=0, le=2 * math.pi)
-    exposure_range_s: tuple[float, float] = (1e-4, 60.0)
-    readout_s: float = Field(0.0, ge=0)
-    max_averages: int | None = Field(None, ge=1)
-    interface: InterfaceSpec = SimulatedInterfaceSpec(kind="simulated")
+    aperture_sr: float = Field(
+        gt=0, le=2 * math.pi, description="The solid angle collected, seen from the sample (sr)."
+    )
+    exposure_range_s: tuple[Annotated[float, InSchema(exclusiveMinimum=0)], float] = Field(
+        (1e-4, 60.0), description="[shortest, longest] exposure the detector accepts (s)."
+    )
+    readout_s: float = Field(0.0, ge=0, description="The dead time after each exposure (s).")
+    max_averages: int | None = Field(
+        None, ge=1, description="The most averages one reading may ask for (none: no limit)."
+    )
+    interface: InterfaceSpec = Field(
+        SimulatedInterfaceSpec(kind="simulated"),
+        description="How the detector is reached: simulated, or a serial detector (kind: serial).",
+    )
 
-    @field_validator("interface", mode="before")
+    @field_validator(
+        "interface", mode="before", json_schema_input_type=Literal["simulated"] | InterfaceSpec
+    )
     @classmethod
     def _bare_kind(cls, v: Any) -> Any:
         return _tagged(v)
@@ -287,7 +392,16 @@ class ReferenceSpec(Strict):
     `gonio.acquire.reference.reference_geometry` refuses a geometry at which the
     standard would not fill what the calibration assumes."""
 
-    albedo: float = Field(0.99, gt=0, le=1)
-    theta_i_deg: float = Field(0.0, ge=0, lt=90)
-    theta_o_deg: float = Field(45.0, ge=0, lt=90)
-    diameter_mm: float | None = Field(None, gt=0)
+    albedo: float = Field(0.99, gt=0, le=1, description="The standard's reflectance.")
+    theta_i_deg: float = Field(
+        0.0, ge=0, lt=90, description="The light's polar angle, toward +x (°)."
+    )
+    theta_o_deg: float = Field(
+        45.0, ge=0, lt=90, description="The detector's polar angle, toward −x (°)."
+    )
+    diameter_mm: float | None = Field(
+        None,
+        gt=0,
+        description="The standard's diameter (mm; none: constraints.sample_diameter_mm, the "
+        "standard read in the sample holder).",
+    )

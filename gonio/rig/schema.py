@@ -8,14 +8,16 @@ times seconds. Everything is converted to radians once, in `gonio.rig.model`.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from gonio.config import Strict, field_error
+from gonio.config import InSchema, Strict, field_error
 from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
 
 Vector = tuple[float, float, float]
+#: A vector's JSON Schema says what `AxisSpec` checks: not the zero vector.
+NonZero = Annotated[Vector, InSchema(**{"not": {"const": [0, 0, 0]}})]
 
 
 class AxisSpec(Strict):
@@ -25,16 +27,30 @@ class AxisSpec(Strict):
     drives it as joint = zero_offset + direction · motor angle / gear_ratio.
     """
 
-    axis: Vector
-    min_deg: float
-    max_deg: float
-    motor_id: int = Field(ge=0, le=252)
-    gear_ratio: float = Field(1.0, gt=0)
-    direction: Literal[1, -1] = 1
-    zero_offset_deg: float = 0.0
-    mode: Literal["position", "extended_position"] = "position"
-    max_velocity_deg_s: float = Field(gt=0)
-    max_acceleration_deg_s2: float = Field(gt=0)
+    axis: NonZero = Field(
+        description="The rotation axis in the parent frame [x, y, z] (normalized when read)."
+    )
+    min_deg: float = Field(description="The lowest joint angle (°; 0 = the home pose).")
+    max_deg: float = Field(description="The highest joint angle (°), above min_deg.")
+    motor_id: int = Field(ge=0, le=252, description="The Dynamixel ID of the axis's motor.")
+    gear_ratio: float = Field(1.0, gt=0, description="Motor turns per joint turn.")
+    direction: Literal[1, -1] = Field(
+        1, description="+1 or −1: which way the joint turns when the motor angle grows."
+    )
+    zero_offset_deg: float = Field(
+        0.0, description="The joint angle at the motor's zero position (°)."
+    )
+    mode: Literal["position", "extended_position"] = Field(
+        "position",
+        description="The motor's operating mode: position (one turn, 0…4095 ticks) or "
+        "extended_position (multi-turn).",
+    )
+    max_velocity_deg_s: float = Field(
+        gt=0, description="The joint's top speed (°/s) of its trapezoidal moves."
+    )
+    max_acceleration_deg_s2: float = Field(
+        gt=0, description="The joint's acceleration and deceleration (°/s²)."
+    )
 
     @field_validator("axis")
     @classmethod
@@ -57,26 +73,52 @@ class KinematicChainSpec(Strict):
     """A chain of axes from the lab frame outward, and the unit vector that the last
     frame points along (for the light and the detector: toward the source / sensor)."""
 
-    axes: list[str] = Field(min_length=1)
-    pointing: Vector = (0.0, 0.0, 1.0)
+    axes: list[str] = Field(
+        min_length=1, description="The chain's axes (names of axes), from the lab frame outward."
+    )
+    pointing: Vector = Field(
+        (0.0, 0.0, 1.0),
+        description="The unit vector the last frame points along (both rig types: [0, 0, 1]).",
+    )
 
 
 class CollisionSpec(Strict):
     """A keep-out box in joint space: a collision when every listed axis is in its range."""
 
-    name: str
-    ranges_deg: dict[str, tuple[float, float]] = Field(min_length=1)
+    name: str = Field(description="What collides, as messages name it.")
+    ranges_deg: dict[str, tuple[float, float]] = Field(
+        min_length=1, description="Per axis: [low, high] joint angles (°) of the box."
+    )
 
 
 class ConstraintSpec(Strict):
-    theta_max_deg: float = Field(80.0, gt=0, le=90)
-    min_separation_deg: float = Field(8.0, ge=0, lt=180)
-    collisions: tuple[CollisionSpec, ...] = ()
+    """What the rig cannot measure: pairs beyond its polar angle, in the detector's shadow
+    on the beam, with the lit spot off the sample or out of the detector's view, or at a
+    pose in a keep-out box."""
+
+    theta_max_deg: float = Field(
+        80.0, gt=0, le=90, description="The largest polar angle of the light and the detector (°)."
+    )
+    min_separation_deg: float = Field(
+        8.0,
+        ge=0,
+        lt=180,
+        description="The smallest angle between ωi and ωo (°): the detector head shadows the "
+        "beam closer than this.",
+    )
+    collisions: tuple[CollisionSpec, ...] = Field((), description="Keep-out boxes in joint space.")
     #: The collimated beam's diameter (none for a point source, which floods the sample).
-    beam_diameter_mm: float | None = Field(None, gt=0)
-    sample_diameter_mm: float = Field(gt=0)
+    beam_diameter_mm: float | None = Field(
+        None,
+        gt=0,
+        description="The collimated beam's diameter (mm); required for light.kind: collimated, "
+        "none for a point source (it floods the sample).",
+    )
+    sample_diameter_mm: float = Field(gt=0, description="The sample's diameter (mm).")
     #: The diameter of the spot the detector sees, perpendicular to ωo.
-    detector_fov_mm: float = Field(gt=0)
+    detector_fov_mm: float = Field(
+        gt=0, description="The diameter of the spot the detector sees, perpendicular to ωo (mm)."
+    )
 
 
 class LightChainSpec(KinematicChainSpec, LightSpec):
@@ -92,9 +134,12 @@ class BusSpec(Strict):
     ``dynamixel`` (X-series servos on ``port`` at ``baud``: the hardware backend;
     ``gonio acquire --rehearse`` puts the byte-level emulator in their place)."""
 
-    kind: Literal["simulated", "dynamixel"] = "simulated"
-    port: str = "/dev/ttyUSB0"
-    baud: int = 57_600
+    kind: Literal["simulated", "dynamixel"] = Field(
+        "simulated",
+        description="simulated: virtual motors; dynamixel: X-series servos on port.",
+    )
+    port: str = Field("/dev/ttyUSB0", description="The motors' serial port (dynamixel).")
+    baud: int = Field(57_600, description="The motors' baud rate (dynamixel).")
 
 
 class HealthLimitsSpec(Strict):
@@ -102,9 +147,13 @@ class HealthLimitsSpec(Strict):
     beyond it): the highest internal temperature (°C) and the input voltage range (V).
     The defaults are inside the X-series limits (72 °C shutdown, 9.5–16 V at 12 V)."""
 
-    max_temperature_c: float = Field(65.0, gt=0, le=100)
-    min_voltage_v: float = Field(10.0, gt=0)
-    max_voltage_v: float = Field(14.8, gt=0)
+    max_temperature_c: float = Field(
+        65.0, gt=0, le=100, description="The highest internal temperature of a motor (°C)."
+    )
+    min_voltage_v: float = Field(
+        10.0, gt=0, description="The lowest input voltage (V), below max_voltage_v."
+    )
+    max_voltage_v: float = Field(14.8, gt=0, description="The highest input voltage (V).")
 
     @model_validator(mode="after")
     def _range(self) -> HealthLimitsSpec:
@@ -121,17 +170,31 @@ class RigSpec(Strict):
     """A whole rig: its type (which closed-form inverse kinematics applies), its axes and
     the chains of the light, the detector and the sample holder (sample → lab)."""
 
-    name: str
-    type: Literal["arch", "in_plane"]
-    axes: dict[str, AxisSpec] = Field(min_length=1)
-    light: LightChainSpec
-    detector: DetectorChainSpec
-    sample: KinematicChainSpec
-    constraints: ConstraintSpec
-    reference: ReferenceSpec = ReferenceSpec()
-    settle_s: float = Field(0.2, ge=0)
-    bus: BusSpec = BusSpec()
-    health: HealthLimitsSpec = HealthLimitsSpec()
+    name: str = Field(description="The rig's name, shown in summaries and stored in the run.")
+    type: Literal["arch", "in_plane"] = Field(
+        description="Which closed-form inverse kinematics applies: arch (the axes "
+        "light_elevation, detector_azimuth, detector_elevation, sample_rotation) or in_plane "
+        "(light_arm, detector_arm, sample_tilt, sample_rotation).",
+    )
+    axes: dict[str, AxisSpec] = Field(
+        min_length=1, description="The revolute axes by name: the axes of the rig's type."
+    )
+    light: LightChainSpec = Field(description="The light: its chain, kind and switch.")
+    detector: DetectorChainSpec = Field(
+        description="The detector: its chain, limits and interface."
+    )
+    sample: KinematicChainSpec = Field(
+        description="The sample holder's chain (sample frame → lab)."
+    )
+    constraints: ConstraintSpec = Field(description="What the rig cannot measure, and sizes.")
+    reference: ReferenceSpec = Field(
+        ReferenceSpec(), description="The Lambertian standard read for calibration."
+    )
+    settle_s: float = Field(0.2, ge=0, description="The wait after each move, before exposing (s).")
+    bus: BusSpec = Field(BusSpec(), description="The motors.")
+    health: HealthLimitsSpec = Field(
+        HealthLimitsSpec(), description="The motors' safe operating range, checked during a run."
+    )
 
     @model_validator(mode="after")
     def _known_axes(self) -> RigSpec:

@@ -11,12 +11,13 @@ against the detector, the scaled rigs and the size of the grid — so a mistake 
 
 from __future__ import annotations
 
-from typing import Any, Literal, get_args
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import Field, field_validator, model_validator
+from pydantic.config import JsonDict
 
 from gonio import params
-from gonio.config import Strict, excerpt, field_error
+from gonio.config import InSchema, Strict, excerpt, field_error
 from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
@@ -42,13 +43,20 @@ DEFAULT_WARPS: dict[str, dict[str, Warp]] = {
 }
 
 
+#: An effect's name, as the JSON Schema says it (`_check_effects` checks it).
+EffectName = Annotated[str, InSchema(enum=list(EFFECT_NAMES))]
+
+
 class Without(Strict):
     """The scene's effects less these."""
 
-    without: list[str] = Field(min_length=1)
+    without: list[EffectName] = Field(min_length=1, description="The effects left out.")
 
 
-Effects = str | list[str] | Without
+#: ``scene``, ``none``, the effects named, or the scene's less some.
+Effects = Annotated[str, InSchema(enum=[SCENE, NONE])] | list[EffectName] | Without
+#: The JSON Schema of an axis: each value once (`Axes` checks it).
+UNIQUE: JsonDict = {"uniqueItems": True}
 
 
 def effects_label(effects: Effects) -> str:
@@ -61,22 +69,66 @@ def effects_label(effects: Effects) -> str:
     return effects
 
 
+#: The plan file's fields, whose descriptions the sweep's fields of those names share.
+_PLAN = PlanSpec.model_fields
+#: A parametrization's name, in the JSON Schema.
+_PARAMETRIZATION = {"enum": params.names()}
+
+
 class Axes(Strict):
     """The values swept, each a list; a combination takes one value of each."""
 
     # The planner's default unless the sweep names them (one source of truth).
-    parametrization: list[str] = Field(
+    parametrization: list[Annotated[str, InSchema(enum=params.names())]] = Field(
         default_factory=lambda: [PlanSpec.model_fields["parametrization"].default],
         min_length=1,
+        description="Parametrizations the targets are placed in (default: the plan file's).",
+        json_schema_extra=UNIQUE,
     )
-    sampling: list[str] = Field(["sobol"], min_length=1)
-    samples: list[int] = Field(min_length=1)  # kept targets asked for (sampling.target)
-    exposure_s: list[float] = Field([0.05], min_length=1)
-    averages: list[int] = Field([1], min_length=1)
+    sampling: list[Annotated[str, InSchema(enum=list(STRATEGIES))]] = Field(
+        ["sobol"],
+        min_length=1,
+        description="Strategies: the plan file's, or warped (Sobol with the sweep's warps).",
+        json_schema_extra=UNIQUE,
+    )
+    samples: list[Annotated[int, InSchema(minimum=1)]] = Field(
+        min_length=1,
+        description="Kept targets asked for (a plan's sampling.target).",
+        json_schema_extra=UNIQUE,
+    )  # kept targets asked for (sampling.target)
+    exposure_s: list[Annotated[float, InSchema(exclusiveMinimum=0)]] = Field(
+        [0.05],
+        min_length=1,
+        description="Exposures (s), within the rig's detector.exposure_range_s.",
+        json_schema_extra=UNIQUE,
+    )
+    averages: list[Annotated[int, InSchema(minimum=1)]] = Field(
+        [1],
+        min_length=1,
+        description="Readings averaged per target, at most the rig's detector.max_averages.",
+        json_schema_extra=UNIQUE,
+    )
     # Each axis's max velocity × v and max acceleration × v²: every move takes 1/v the time.
-    velocity_scale: list[float] = Field([1.0], min_length=1)
-    method: list[str] = Field([methods.NAIVE], min_length=1)
-    effects: list[Effects] = Field([SCENE], min_length=1)
+    velocity_scale: list[Annotated[float, InSchema(exclusiveMinimum=0)]] = Field(
+        [1.0],
+        min_length=1,
+        description="Factors v on every axis's max velocity (× v) and acceleration (× v²): "
+        "each move takes 1/v the time.",
+        json_schema_extra=UNIQUE,
+    )
+    method: list[Annotated[str, InSchema(enum=list(methods.names()))]] = Field(
+        [methods.NAIVE],
+        min_length=1,
+        description="Reconstruction methods scored.",
+        json_schema_extra=UNIQUE,
+    )
+    effects: list[Effects] = Field(
+        [SCENE],
+        min_length=1,
+        description="Effects modelled: scene (the scene's own), none, a list of names (only "
+        "those), or {without: [names]} (the scene's less those).",
+        json_schema_extra=UNIQUE,
+    )
 
     @field_validator("samples", "averages")
     @classmethod
@@ -152,40 +204,77 @@ def _check_effects(where: str, effects: Effects) -> None:
 class PlanSettings(Strict):
     """What every combination's plan shares (the plan file's fields of those names)."""
 
-    max_moves: int | None = Field(None, ge=0)
-    kicks: int | None = Field(None, ge=0)
-    ordering: Literal["search", "lkh"] = "search"
+    max_moves: int | None = Field(None, ge=0, description=_PLAN["max_moves"].description)
+    kicks: int | None = Field(None, ge=0, description=_PLAN["kicks"].description)
+    ordering: Literal["search", "lkh"] = Field("search", description=_PLAN["ordering"].description)
     # Generous: a cap that binds makes the order depend on the machine's load.
-    time_budget_s: float = Field(600.0, gt=0)
-    acquisition: AcquisitionSpec = Field(default_factory=AcquisitionSpec)
+    time_budget_s: float = Field(600.0, gt=0, description=_PLAN["time_budget_s"].description)
+    acquisition: AcquisitionSpec = Field(
+        default_factory=AcquisitionSpec, description=_PLAN["acquisition"].description
+    )
 
 
 class EvaluationSettings(Strict):
     """The test set every combination is scored on (`gonio.reconstruct.testset`)."""
 
-    pairs: int = Field(DEFAULT_SIZE, ge=1, le=1_000_000)
-    seed: int = Field(DEFAULT_SEED, ge=0)
+    pairs: int = Field(
+        DEFAULT_SIZE, ge=1, le=1_000_000, description="Direction pairs in the test set."
+    )
+    seed: int = Field(DEFAULT_SEED, ge=0, description="The seed the test set is drawn with.")
 
 
 AXIS_NAMES = tuple(Axes.model_fields)
 
 
 class SweepSpec(Strict):
-    name: str = Field(min_length=1)
-    rig: str  # a rig file, relative to the sweep file
-    scenes: list[str] = Field(min_length=1)  # scene files, relative to the sweep file
-    isotropic: bool = True
-    axes: Axes
+    """A trade-off study: every combination of the axes' values (less the ``exclude``
+    patterns), for every scene, is planned, acquired on the simulated rig, reconstructed
+    and scored."""
+
+    name: str = Field(min_length=1, description="The sweep's name, in its plans' names.")
+    rig: str = Field(description="The rig file, relative to the sweep file.")
+    scenes: list[str] = Field(
+        min_length=1, description="The scene files, relative to the sweep file."
+    )
+    isotropic: bool = Field(True, description=_PLAN["isotropic"].description)
+    axes: Axes = Field(description="The values swept; a combination takes one of each.")
     # Leave out every combination that matches all the fields of one pattern (a value,
     # or a list of values).
-    exclude: list[dict[str, Any]] = Field(default_factory=list)
-    warps: dict[str, dict[str, Warp]] = Field(default_factory=dict)  # for ``warped``
-    adaptive: AdaptiveSpec = Field(default_factory=AdaptiveSpec)  # for ``adaptive``
-    replicates: int = Field(1, ge=1, le=1000)  # each combination with other seeds
-    seed: int = Field(0, ge=0)  # mixed into every combination's id (and so its seeds)
-    plan: PlanSettings = Field(default_factory=PlanSettings)
-    evaluation: EvaluationSettings = Field(default_factory=EvaluationSettings)
-    metric: str = "log_rmse"  # the error the report, the front and --target-error use
+    exclude: list[
+        Annotated[
+            dict[str, Any], InSchema(minProperties=1, propertyNames={"enum": list(AXIS_NAMES)})
+        ]
+    ] = Field(
+        default_factory=list,
+        description="Patterns of axis: value (or a list of values); a combination matching "
+        "every field of one is left out.",
+    )
+    warps: Annotated[dict[str, dict[str, Warp]], InSchema(propertyNames=_PARAMETRIZATION)] = Field(
+        default_factory=dict,
+        description="Per parametrization, per coordinate: the warps of warped sampling "
+        "(default: u ↦ u² on the half-vector coordinate).",
+    )
+    adaptive: AdaptiveSpec = Field(
+        default_factory=AdaptiveSpec, description="The options of adaptive sampling."
+    )
+    replicates: int = Field(
+        1, ge=1, le=1000, description="Runs of each combination, each with other seeds."
+    )
+    seed: int = Field(
+        0, ge=0, description="Mixed into every combination's id, and so into its seeds."
+    )
+    plan: PlanSettings = Field(
+        default_factory=PlanSettings, description="What every combination's plan shares."
+    )
+    evaluation: EvaluationSettings = Field(
+        default_factory=EvaluationSettings,
+        description="The test set every combination is scored on.",
+    )
+    metric: str = Field(
+        "log_rmse",
+        description="The error the report, the front and --target-error use.",
+        json_schema_extra={"enum": [*METRICS]},
+    )
 
     @model_validator(mode="after")
     def _consistent(self) -> SweepSpec:

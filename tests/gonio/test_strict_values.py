@@ -132,4 +132,5 @@ def test_yes_inside_a_mapping_of_numbers(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as caught:
         Rig.from_yaml(rig)
     assert ".ranges_deg.light_elevation.0: expected a number, not yes/no" in str(caught.value)
-    assert str(caught.value).startswith(f"{rig}:58: ")
+    line = next(n for n, t in enumerate(text.splitlines(), 1) if "light_elevation: [55" in t)
+    assert str(caught.value).startswith(f"{rig}:{line}: ")

@@ -107,7 +107,8 @@ def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None
     r = run_gonio("simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene))
     assert r.returncode == 2
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
-    assert f"{scene}:6: source.intensity_w_sr: the light of the rig file " in r.stderr
+    line = next(n for n, text in enumerate(scene.read_text().splitlines(), 1) if "source:" in text)
+    assert f"{scene}:{line}: source.intensity_w_sr: the light of the rig file " in r.stderr
     assert "is collimated (light.kind); expected irradiance_w_m2" in r.stderr
     r = run_gonio(
         "simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene),
