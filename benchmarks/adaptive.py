@@ -1,4 +1,4 @@
-"""Adaptive against uniform sampling (issue 16 §2), noise-free: for each material, the
+"""Adaptive against uniform sampling, noise-free: for each material, the
 best uniform plan (over the four parametrizations and the methods, Sobol placed by the
 planner: `studies.reconstruct.synthetic`) and the adaptive plan (`sampling: {strategy:
 adaptive}`: a Sobol survey, a lambert+beckmann fit of it steering the second pass,
@@ -25,6 +25,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
+import _report
 from _machine import describe
 from study import fmt_needed, needed
 
@@ -155,4 +156,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Adaptive against uniform sampling")

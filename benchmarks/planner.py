@@ -31,9 +31,11 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from _machine import describe
 
 from gonio.planner import Plan, build, lkh, load_plan
@@ -222,5 +224,11 @@ def main() -> None:
         memory([int(s) for s in args.memory_sizes.split(",")])
 
 
+def tables(argv: Sequence[str]) -> str | None:
+    """A run of some of the tables has its own page: planner-<tables>.md."""
+    chosen = _report.option(argv, "--tables")
+    return chosen[0].replace(",", "-") if chosen else None
+
+
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Ordering the planner's targets", variant=tables)

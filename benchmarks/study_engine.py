@@ -1,4 +1,4 @@
-"""The shipped study's engine parts (issue 16 §3, docs/tradeoff.md "The study"): tables
+"""The shipped study's engine parts (docs/explanations/tradeoff.md "The study"): tables
 and figures from the results.csv of `gonio tradeoff` runs of configs/sweeps/study_*.yaml,
 with the noise-free curves of benchmarks/study.py placed on the instrument-time axis.
 
@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from study import TARGETS, fmt_needed, needed
 
 COLOURS = {"hybrid": "C0", "rusinkiewicz": "C1", "orthographic": "C2", "spherical": "C3"}
@@ -187,7 +188,7 @@ def plot(
     out = img / f"study-{stem}.png"
     fig.savefig(out)
     plt.close(fig)
-    print(f"\nwrote {out} ({out.stat().st_size / 1024:.0f} KB)")
+    _report.figure(out, f"{scene}: log-RMSE against instrument time")
 
 
 def exposure(args: argparse.Namespace) -> None:
@@ -359,4 +360,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The study on the engine", part=True)
