@@ -12,6 +12,7 @@ of the arguments before the script sees them) prints only.
 
 from __future__ import annotations
 
+import inspect
 import io
 import os
 import re
@@ -54,7 +55,7 @@ def about(doc: str | None) -> str:
     command): a paragraph starting "Run:" is left out up to the next blank line."""
     out: list[str] = []
     skipping = False
-    for line in (doc or "").strip().splitlines():
+    for line in inspect.cleandoc(doc or "").splitlines():
         if line.startswith("Run:"):
             skipping = True
         elif not line.strip():
@@ -164,6 +165,7 @@ class _Tee(io.TextIOBase):
 
 
 _tee: _Tee | None = None
+_folder = RESULTS  # where the page being written goes (figure links are relative to it)
 
 
 def figure(path: Path, alt: str) -> None:
@@ -176,7 +178,7 @@ def figure(path: Path, alt: str) -> None:
         print(said)
         return
     _tee.stream.write(said + "\n")
-    link = os.path.relpath(path, RESULTS)
+    link = os.path.relpath(path, _folder)
     _tee.copy.write(f"\n{_FIGURE}![{alt}]({link})\n\n")
 
 
@@ -206,6 +208,7 @@ def run(
     title: str,
     part: bool = False,
     variant: Callable[[Sequence[str]], str | None] | None = None,
+    folder: Path | None = None,
 ) -> None:
     """Run ``main`` and write its page (unless ``--no-page`` is among the arguments).
 
@@ -221,8 +224,11 @@ def run(
         The first argument names a part (a subcommand): one page per part.
     variant
         Given the arguments, a suffix naming a separate page (e.g. another table), or None.
+    folder
+        Where the page goes (docs/results by default).
     """
-    global _tee
+    global _tee, _folder
+    _folder = RESULTS if folder is None else folder
     argv = sys.argv[1:]
     if NO_PAGE in argv:
         sys.argv = [sys.argv[0], *(a for a in argv if a != NO_PAGE)]
@@ -265,11 +271,12 @@ def run(
         ),
         wall=duration(wall),
     )
-    write_page(name, header, output)
+    write_page(name, header, output, folder)
 
 
-def write_page(name: str, header: Header, output: str, folder: Path = RESULTS) -> Path:
-    """Write ``folder/<name>.md`` and the index; the page's path."""
+def write_page(name: str, header: Header, output: str, folder: Path | None = None) -> Path:
+    """Write ``folder/<name>.md`` (docs/results by default) and the index; the page's path."""
+    folder = RESULTS if folder is None else folder
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}.md"
     text = render_header(header) + "\n## Output\n\n" + render_body(output)
@@ -289,8 +296,9 @@ def read_header(path: Path) -> dict[str, str]:
     return out
 
 
-def index(folder: Path = RESULTS) -> str:
-    """docs/results/index.md: every page present, one line each."""
+def index(folder: Path | None = None) -> str:
+    """docs/results/index.md: every page present in ``folder``, one line each."""
+    folder = RESULTS if folder is None else folder
     lines = [
         "# Results",
         "",
