@@ -58,7 +58,7 @@ test: lint docs pytest
 # on the 2-core machine, of which planner.py takes about an hour.
 bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py --repeat 11
-	$(BIN)/python benchmarks/extremes.py
+	$(BIN)/python benchmarks/extremes.py --near-horizon 4000
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
@@ -91,20 +91,20 @@ bench-studies: $(VENV)/.installed-test
 		$(BIN)/gonio tradeoff configs/sweeps/study_$$s.yaml -o runs/study_$$s -j 1 -q || exit 1; \
 	done
 	$(BIN)/gonio tradeoff configs/sweeps/study_adaptive.yaml -o runs/study_adaptive_engine -j 1 -q
-	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03
-	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
-		--params rusinkiewicz hybrid
-	$(BIN)/python benchmarks/study.py where --scenes seed000_specular glossy_metal matte \
-		--methods linear
-	$(BIN)/python benchmarks/study.py budget --scenes matte glossy_metal seed000_specular
-	$(BIN)/python benchmarks/study.py lobes
-	$(BIN)/python benchmarks/study_engine.py uniform --runs runs/study_uniform \
-		runs/study_seed000 runs/study_brushed --curves runs/study/curves.csv --method rbf \
-		--img docs/img
 	$(BIN)/python benchmarks/study_engine.py exposure --runs runs/study_exposure
 	$(BIN)/python benchmarks/study_engine.py effects --runs runs/study_effects
 	$(BIN)/python benchmarks/study_engine.py adaptive --runs runs/study_adaptive_engine
 	$(BIN)/python benchmarks/study_engine.py timing
+	$(BIN)/python benchmarks/study.py lobes
+	$(BIN)/python benchmarks/study.py budget --scenes matte glossy_metal seed000_specular
+	$(BIN)/python benchmarks/study.py where --scenes seed000_specular glossy_metal matte \
+		--methods linear
+	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03
+	$(BIN)/python benchmarks/study_engine.py uniform --runs runs/study_uniform \
+		runs/study_seed000 runs/study_brushed --curves runs/study/curves.csv --method rbf \
+		--img docs/img
+	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
+		--params rusinkiewicz hybrid
 
 clean:
 	rm -rf $(VENV) site .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache
