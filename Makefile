@@ -99,9 +99,10 @@ bench-studies: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/study.py budget --scenes matte glossy_metal seed000_specular
 	$(BIN)/python benchmarks/study.py where --scenes seed000_specular glossy_metal matte \
 		--methods linear
-	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03
+	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03 0.05 0.1
 	$(BIN)/python benchmarks/study_engine.py uniform --runs runs/study_uniform \
 		runs/study_seed000 runs/study_brushed --curves runs/study/curves.csv --method rbf \
+		--targets 0.001 0.003 0.01 0.03 0.05 0.1 \
 		--img docs/img
 	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
 		--params rusinkiewicz hybrid

@@ -137,6 +137,7 @@ def curves(args: argparse.Namespace) -> None:
                 for r in csv.DictReader(fh)
             }
     new = not out.exists()
+    computed = 0
     with out.open("a", encoding="utf-8", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=COLUMNS)
         if new:
@@ -167,8 +168,10 @@ def curves(args: argparse.Namespace) -> None:
                     row["wall_s"] = round(time.perf_counter() - started, 3)
                     writer.writerow(row)
                     fh.flush()
+                    computed += 1
                     # progress on stderr: the page holds the report
                     print(scene, kind, name, method, n, f"{row['log_rmse']:.4f}", file=sys.stderr)
+    print(f"{computed} rows computed in this run, {len(done)} read from {out} (resumed)")
     report(out, tuple(args.targets))
 
 
