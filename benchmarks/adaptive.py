@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -155,5 +155,12 @@ def main() -> None:
               f"| {fmt_needed(na, counts)} | {sample_ratio} |")  # fmt: skip
 
 
+def variant(argv: Sequence[str]) -> str | None:
+    """A run of some scenes, or steered by another model, has its own page:
+    adaptive-<scenes>[-<model>].md."""
+    parts = [*_report.option(argv, "--scenes"), *_report.option(argv, "--model")]
+    return "-".join(p.replace("+", "-") for p in parts) or None
+
+
 if __name__ == "__main__":
-    _report.run(main, __file__, __doc__, title="Adaptive against uniform sampling")
+    _report.run(main, __file__, __doc__, title="Adaptive against uniform sampling", variant=variant)
