@@ -205,7 +205,7 @@ def run(
     file: str,
     doc: str | None,
     *,
-    title: str,
+    title: str | Callable[[Sequence[str]], str],
     part: bool = False,
     variant: Callable[[Sequence[str]], str | None] | None = None,
     folder: Path | None = None,
@@ -219,7 +219,8 @@ def run(
     file, doc
         The script's ``__file__`` and ``__doc__``.
     title
-        The page's title: what the script measures, in a few words.
+        The page's title: what the script measures, in a few words; or, given the
+        arguments, the title of the page they write.
     part
         The first argument names a part (a subcommand): one page per part.
     variant
@@ -239,8 +240,8 @@ def run(
     suffix = variant(argv) if variant else None
     if suffix:
         name = f"{name}-{suffix}"
-    if part and name != Path(script).stem:
-        title = f"{title}: {argv[0]}"
+    if callable(title):
+        title = title(argv)
     start_load = load_average()
     nice = os.nice(0)
     date = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())

@@ -162,5 +162,12 @@ def variant(argv: Sequence[str]) -> str | None:
     return "-".join(p.replace("+", "-") for p in parts) or None
 
 
+def title(argv: Sequence[str]) -> str:
+    scenes, model = _report.option(argv, "--scenes"), _report.option(argv, "--model")
+    steered = f", steered by {model[0]}" if model else ""
+    where = f": {', '.join(scenes)}{steered}" if scenes or model else ""
+    return "Adaptive against uniform sampling" + where
+
+
 if __name__ == "__main__":
-    _report.run(main, __file__, __doc__, title="Adaptive against uniform sampling", variant=variant)
+    _report.run(main, __file__, __doc__, title=title, variant=variant)

@@ -230,5 +230,10 @@ def tables(argv: Sequence[str]) -> str | None:
     return chosen[0].replace(",", "-") if chosen else None
 
 
+def title(argv: Sequence[str]) -> str:
+    chosen = _report.option(argv, "--tables")
+    return "Ordering the planner's targets" + (f": {chosen[0]}" if chosen else "")
+
+
 if __name__ == "__main__":
-    _report.run(main, __file__, __doc__, title="Ordering the planner's targets", variant=tables)
+    _report.run(main, __file__, __doc__, title=title, variant=tables)

@@ -150,6 +150,10 @@ if __name__ == "__main__":
         main,
         __file__,
         __doc__,
-        title="Reconstruction: build time and evaluation throughput",
+        title=lambda argv: (
+            "Reconstruction: the study that chose the default transform"
+            if transform_page(argv)
+            else "Reconstruction: build time and evaluation throughput"
+        ),
         variant=transform_page,
     )

@@ -421,5 +421,22 @@ def adaptive(argv: Sequence[str]) -> str | None:
     return "adaptive" if "adaptive" in _report.option(argv, "--sampling") else None
 
 
+#: Each part's page title.
+TITLES = {
+    "curves": "Noise-free error against sample count, per parametrization and method",
+    "curves-adaptive": "Noise-free error of adaptive against uniform plans",
+    "report": "Noise-free error against sample count: the report of curves.csv",
+    "where": "Where the error of a uniform plan sits",
+    "budget": "Against the 8 192-sample budget of measured-material databases",
+    "lobes": "Romanyuk et al.'s lobes as stand-ins for Blinn-Phong, in the study's metric",
+}
+
+
+def title(argv: Sequence[str]) -> str:
+    part = argv[0] if argv else ""
+    key = f"{part}-{adaptive(argv)}" if adaptive(argv) else part
+    return TITLES.get(key, "The study, noise-free")
+
+
 if __name__ == "__main__":
-    _report.run(main, __file__, __doc__, title="The study, noise-free", part=True, variant=adaptive)
+    _report.run(main, __file__, __doc__, title=title, part=True, variant=adaptive)

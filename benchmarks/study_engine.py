@@ -30,6 +30,7 @@ import math
 import statistics
 import sys
 from collections import defaultdict
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -359,5 +360,19 @@ def main() -> None:
     parts[args.part](args)
 
 
+#: Each part's page title.
+TITLES = {
+    "uniform": "Uniform plans on the engine: error against samples and instrument time",
+    "exposure": "Exposure against sample count at fixed instrument time",
+    "effects": "What each simulated effect changes in the error, and costs",
+    "timing": "The simulated acquisition's time per sample, effect by effect",
+    "adaptive": "Adaptive against uniform plans on the engine",
+}
+
+
+def title(argv: Sequence[str]) -> str:
+    return TITLES.get(argv[0] if argv else "", "The study on the engine")
+
+
 if __name__ == "__main__":
-    _report.run(main, __file__, __doc__, title="The study on the engine", part=True)
+    _report.run(main, __file__, __doc__, title=title, part=True)
