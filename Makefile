@@ -109,7 +109,7 @@ bench-studies: $(VENV)/.installed-test
 		--targets 0.001 0.003 0.01 0.03 0.05 0.1 \
 		--img docs/img
 	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
-		--params rusinkiewicz hybrid
+		--params rusinkiewicz hybrid --targets 0.001 0.003 0.01 0.03
 
 clean:
 	rm -rf $(VENV) site .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache
