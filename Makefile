@@ -6,7 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint docs pytest bench clean
+.PHONY: demo test lint docs pytest bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -52,18 +52,64 @@ pytest: $(VENV)/.installed-test
 
 test: lint docs pytest
 
+# Every benchmark, one after another, each writing its page docs/results/<script>.md (and
+# docs/results/index.md) with the command, the machine, the date, the load and the wall
+# time, besides printing it (`--no-page`: print only). Fast ones first; about 2 h 30 min
+# on the 2-core machine, of which planner.py takes about an hour.
 bench: $(VENV)/.installed-test
-	$(BIN)/python benchmarks/params.py
-	$(BIN)/python benchmarks/lobes.py
-	$(BIN)/python benchmarks/extremes.py
+	$(BIN)/python benchmarks/params.py --repeat 11
+	$(BIN)/python benchmarks/extremes.py --near-horizon 4000
 	$(BIN)/python benchmarks/extremes_study.py
+	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/handoff.py --load 3
-	$(BIN)/python benchmarks/rehearsal.py
-	$(BIN)/python benchmarks/planner.py
+	$(BIN)/python benchmarks/rehearsal.py --runs 5
 	$(BIN)/python benchmarks/simulator.py
+	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/fit.py
+	$(BIN)/python benchmarks/evaluation.py
+	$(BIN)/python benchmarks/reconstruct.py
+	$(BIN)/python benchmarks/reconstruct.py --transforms
+	$(BIN)/python benchmarks/factored.py
+	$(BIN)/python benchmarks/export.py
+	$(BIN)/python benchmarks/plots.py
 	$(BIN)/python benchmarks/tradeoff.py
+	$(BIN)/python benchmarks/accuracy.py
+	$(BIN)/python benchmarks/adaptive.py --targets 250 500 1000 2000 4000 6000
+	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
+		--adaptive-in rusinkiewicz
+	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
+		--adaptive-in rusinkiewicz --model survey
+	$(BIN)/python benchmarks/adaptive_weights.py
+	$(BIN)/python benchmarks/adaptive_limit.py
+	$(BIN)/python benchmarks/planner.py
+
+# The study (docs/explanations/tradeoff.md "The study"): the `gonio tradeoff` sweeps of
+# configs/sweeps/study_*.yaml into runs/study_* (a rerun resumes them), the noise-free
+# curves into runs/study*/curves.csv (resumable too), then the pages docs/results/study-*.md
+# and study_engine-*.md and the figures docs/img/study-*.png. About 2 h on the 2-core machine.
+STUDY_SWEEPS := uniform seed000 brushed exposure effects
+bench-studies: $(VENV)/.installed-test
+	@mkdir -p runs
+	for s in $(STUDY_SWEEPS); do \
+		$(BIN)/gonio tradeoff configs/sweeps/study_$$s.yaml -o runs/study_$$s -j 1 -q || exit 1; \
+	done
+	$(BIN)/gonio tradeoff configs/sweeps/study_adaptive.yaml -o runs/study_adaptive_engine -j 1 -q
+	$(BIN)/python benchmarks/study_engine.py exposure --runs runs/study_exposure
+	$(BIN)/python benchmarks/study_engine.py effects --runs runs/study_effects
+	$(BIN)/python benchmarks/study_engine.py adaptive --runs runs/study_adaptive_engine
+	$(BIN)/python benchmarks/study_engine.py timing
+	$(BIN)/python benchmarks/study.py lobes
+	$(BIN)/python benchmarks/study.py budget --scenes matte glossy_metal seed000_specular
+	$(BIN)/python benchmarks/study.py where --scenes seed000_specular glossy_metal matte \
+		--methods linear
+	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03 0.05 0.1
+	$(BIN)/python benchmarks/study_engine.py uniform --runs runs/study_uniform \
+		runs/study_seed000 runs/study_brushed --curves runs/study/curves.csv --method rbf \
+		--targets 0.001 0.003 0.01 0.03 0.05 0.1 \
+		--img docs/img
+	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
+		--params rusinkiewicz hybrid --targets 0.001 0.003 0.01 0.03
 
 clean:
 	rm -rf $(VENV) site .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache

@@ -1,4 +1,4 @@
-"""The reconstruction against the naive reference (issue 14 §4): noise-free samples of
+"""The reconstruction against the naive reference: noise-free samples of
 uniform Sobol plans (`studies.reconstruct.synthetic`) of GGX α = 0.05, 0.1, 0.3 with F0 = 0.04
 (Schlick) over a Lambertian base kd = 0.2, on the arch rig (θ ≤ 80°), in each
 parametrization; each method scored by log-RMSE on log(1 + f) over the default test set
@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import itertools
 
+import _report
 from _machine import describe
 
 from gonio import brdf, params
@@ -103,4 +104,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Reconstruction accuracy against the naive grid")

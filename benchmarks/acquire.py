@@ -1,4 +1,4 @@
-"""Acquisition engine costs (issue 12 §5).
+"""Acquisition engine costs.
 
 1. Engine + journal overhead per sample on the simulated backend: `gonio acquire`'s
    loop (limits, measure, saturation check, journal row with FK of the read-back
@@ -22,6 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import _report
 import numpy as np
 from _machine import describe
 
@@ -137,4 +138,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Acquisition engine costs")

@@ -1,4 +1,4 @@
-"""Adaptive against uniform sampling (issue 16 §2), noise-free: for each material, the
+"""Adaptive against uniform sampling, noise-free: for each material, the
 best uniform plan (over the four parametrizations and the methods, Sobol placed by the
 planner: `studies.reconstruct.synthetic`) and the adaptive plan (`sampling: {strategy:
 adaptive}`: a Sobol survey, a lambert+beckmann fit of it steering the second pass,
@@ -19,12 +19,13 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
+import _report
 from _machine import describe
 from study import fmt_needed, needed
 
@@ -154,5 +155,19 @@ def main() -> None:
               f"| {fmt_needed(na, counts)} | {sample_ratio} |")  # fmt: skip
 
 
+def variant(argv: Sequence[str]) -> str | None:
+    """A run of some scenes, or steered by another model, has its own page:
+    adaptive-<scenes>[-<model>].md."""
+    parts = [*_report.option(argv, "--scenes"), *_report.option(argv, "--model")]
+    return "-".join(p.replace("+", "-") for p in parts) or None
+
+
+def title(argv: Sequence[str]) -> str:
+    scenes, model = _report.option(argv, "--scenes"), _report.option(argv, "--model")
+    steered = f", steered by {model[0]}" if model else ""
+    where = f": {', '.join(scenes)}{steered}" if scenes or model else ""
+    return "Adaptive against uniform sampling" + where
+
+
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title=title, variant=variant)

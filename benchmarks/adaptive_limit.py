@@ -1,5 +1,5 @@
-"""How far placing samples by a density can go (issue 16 §2, docs/adaptive.md "The
-limit of density placement"), noise-free, on GGX α 0.1 over kd 0.2 (F0 0.04), arch rig,
+"""How far placing samples by a density can go (docs/explanations/adaptive.md
+"The limit of density placement"), noise-free, on GGX α 0.1 over kd 0.2 (F0 0.04), arch rig,
 Rusinkiewicz coordinates, rbf reconstruction, log-RMSE on log(1 + f) over the default
 test set.
 
@@ -46,6 +46,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
+import _report
 import numpy as np
 from _machine import describe
 from adaptive import ggx
@@ -297,4 +298,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The limit of density placement")

@@ -1,5 +1,5 @@
-"""How the σs of the survey steer an adaptive plan (issue 16 §2, docs/adaptive.md "The
-steering fit's weights"), noise-free: the second pass follows a lambert+beckmann fit of
+"""How the σs of the survey steer an adaptive plan (docs/explanations/adaptive.md
+"The steering fit's weights"), noise-free: the second pass follows a lambert+beckmann fit of
 the survey, weighted by the survey's σs, so the σ model decides what the fit gets right.
 
 For each material, count and Sobol seed: the best uniform plan's error (Rusinkiewicz,
@@ -27,6 +27,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 
+import _report
 from _machine import describe
 from adaptive import ggx
 from study import score, setting
@@ -96,4 +97,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The steering fit's weights")

@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from _machine import describe
 
 from drivers.dynamixel.axis import AxisConfig
@@ -127,4 +128,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The Dynamixel bus: round trips on the emulator")

@@ -1,4 +1,4 @@
-"""The naive reference's scores (issue 14 §4's floor): simulated runs of uniform plans on
+"""The naive reference's scores (the floor of every method): simulated runs of uniform plans on
 the shipped scenes (their noise on), reconstructed by `gonio.reconstruct.naive` and scored
 against their scene by `gonio.reconstruct.evaluate` on the default test set, with the
 time each step takes.
@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import _report
 import yaml
 from _machine import describe
 
@@ -93,4 +94,4 @@ def _arch() -> Any:
 
 
 if __name__ == "__main__":
-    main_()
+    _report.run(main_, __file__, __doc__, title="The naive reference's scores")

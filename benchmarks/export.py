@@ -1,4 +1,4 @@
-"""Export times (issue 15): `gonio export` of a simulated run of 20 000 samples (Sobol,
+"""Export times: `gonio export` of a simulated run of 20 000 samples (Sobol,
 uniform in the hybrid coordinates, the glossy metal scene with its noise) in every
 format, each timed in this process (the run file is read and, for merl, factored and
 hdf5 --grid, reconstructed by `linear`); target: merl < 20 s on the 2-core machine.
@@ -19,6 +19,7 @@ from pathlib import Path
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from _machine import describe
 
 from gonio.cli import main
@@ -81,4 +82,4 @@ def main_() -> None:
 
 
 if __name__ == "__main__":
-    main_()
+    _report.run(main_, __file__, __doc__, title="Export times")

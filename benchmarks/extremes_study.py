@@ -7,7 +7,7 @@ and the worst float64 round-trip error (studies.params.accuracy.path_study). The
 the shipped arch and in-plane rigs, the joint errors (one encoder tick through each
 gear, σ = tick/√12, and the brushed_metal scene's repeatability) propagated into each
 parametrization's coordinates and into a GGX BRDF value (gonio.rig.sensitivity).
-Prints the markdown tables of docs/extremes.md and writes docs/img/extremes_*.png.
+Prints the markdown tables of docs/explanations/extremes.md and writes docs/img/extremes_*.png.
 Run: .venv/bin/python benchmarks/extremes_study.py [--samples N] [--bound] [--no-plots]
 """
 
@@ -24,6 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
+import _report
 from _machine import describe
 
 from gonio import brdf, params
@@ -188,7 +189,7 @@ def save(fig: Any, name: str) -> None:
     fig.savefig(buffer, format="png", dpi=72)
     with reserve_output(IMG / name, "image") as out:
         out.write_bytes(buffer.getvalue())
-    print(f"wrote docs/img/{name} ({len(buffer.getvalue()) // 1024} KB)")
+    _report.figure(IMG / name, name.removesuffix(".png").replace("_", " "))
 
 
 def grid(plt: Any, title: str) -> tuple[Any, np.ndarray]:
@@ -274,4 +275,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Conditioning and position error at the extremes")

@@ -1,4 +1,4 @@
-"""The factored representation of Lawrence et al. 2004 (seed 002): error, time, sampling.
+"""The factored representation of Lawrence et al. 2004: error, time, sampling.
 
 Run: ``.venv/bin/python benchmarks/factored.py`` (about 2 minutes on 2 cores). Prints
 the machine; the relative Frobenius error of the intensity matrix (outer J terms, all
@@ -6,7 +6,7 @@ J·K terms, RGB with the colour factors) and the time of each factorization at t
 default resolution; the export time and file sizes; the sampler's speed; per view
 angle the share of draws below the horizon and the per-sample variance of the albedo
 estimate ∫ f cos θi dωi under cosine sampling, the factored sampler (f cos θi, as
-gonio writes it), the seed's literal f cos θo, and the seed's literal term selection
+gonio writes it), the paper's literal f cos θo, and the paper's literal term selection
 (probability ∝ Fⱼ(ωo) for each of the K inner terms of j, their energies ignored).
 ``--sampling-only`` skips the error table (the slow part).
 """
@@ -18,6 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import _report
 import numpy as np
 from _machine import describe
 
@@ -44,7 +45,7 @@ DRAWS = 400_000
 
 
 class SeedCosine:
-    """The model with the view's cosine: its table is the seed's f cos θo."""
+    """The model with the view's cosine: its table is the paper's f cos θo."""
 
     def __init__(self, model: brdf.BRDF) -> None:
         self.model = model
@@ -86,8 +87,8 @@ def albedo_variances(folder: Path) -> None:
     seed_selection._energy = np.ones_like(seed_selection._energy)  # type: ignore[attr-defined]
     samplers = {
         "f cos θi": brdf.create("factored", path=str(folder / "gold.txt")),
-        "seed f cos θo": brdf.create("factored", path=str(folder / "seed.txt")),
-        "seed selection": seed_selection,
+        "paper f cos θo": brdf.create("factored", path=str(folder / "seed.txt")),
+        "paper selection": seed_selection,
     }
     rng = np.random.default_rng(1)
     wo = np.broadcast_to(direction(0.5, 0.3), (DRAWS, 3))
@@ -97,7 +98,7 @@ def albedo_variances(folder: Path) -> None:
     print(f"sampler: {rate / 1e6:.2f} M draws/s (draw + density, L = 8)")
     print(
         "\n| θo | albedo (quadrature, green) | below horizon (f cos θi) | var cosine "
-        "| var f cos θi | var seed f cos θo | var seed selection | cosine / f cos θi |"
+        "| var f cos θi | var paper f cos θo | var paper selection | cosine / f cos θi |"
     )
     print("|---|---|---|---|---|---|---|---|")
     for deg in VIEWS_DEG:
@@ -127,7 +128,7 @@ def albedo_variances(folder: Path) -> None:
                 below = float(np.mean(wi[:, 2] < 0.0))
         print(
             f"| {deg:.0f}° | {truth:.4f} | {below:.3f} | {var['cosine']:.4f} "
-            f"| {var['f cos θi']:.4f} | {var['seed f cos θo']:.4f} | {var['seed selection']:.4f} "
+            f"| {var['f cos θi']:.4f} | {var['paper f cos θo']:.4f} | {var['paper selection']:.4f} "
             f"| {var['cosine'] / var['f cos θi']:.1f} |"
         )
 
@@ -145,4 +146,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(
+        main, __file__, __doc__, title="The factored representation of Lawrence et al. 2004"
+    )

@@ -1,4 +1,4 @@
-"""Fits of simulated runs over independent seeds (issue 14 §3).
+"""Fits of simulated runs over independent seeds.
 
 For each scene, one run per seed (a separate simulated acquisition: its own noise and
 its own reference readings; RGB: three runs, one per band, each its own seed) of
@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import _report
 import numpy as np
 from _machine import describe
 
@@ -120,4 +121,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Fits of simulated runs over independent seeds")

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 import dynamixel_sdk as sdk
 from _machine import describe
 from dynamixel_sdk import COMM_SUCCESS, GroupSyncRead, port_handler
@@ -88,4 +89,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The SDK and an in-process emulator: GIL hand-offs")

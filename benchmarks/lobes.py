@@ -1,4 +1,4 @@
-"""Romanyuk et al.'s modified cosine-quadratic lobes (seed 003): accuracy next to speed.
+"""Romanyuk et al.'s modified cosine-quadratic lobes: accuracy next to speed.
 
 Accuracy against F_B = cos^n ψ, next to numpy evaluation speed. Run:
 ``.venv/bin/python benchmarks/lobes.py`` (about 10 s). Prints the machine, the
@@ -22,7 +22,10 @@ import numpy as np
 import scipy
 from scipy import integrate, optimize
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
+import _report
+
 from gonio.brdf import lobe_study as st
 from gonio.brdf import lobes
 from studies.brdf import lobe_grid
@@ -86,7 +89,7 @@ def equation_12() -> None:
     print("\n== equation 12: left = ξ² A + ξ B + C, n ∈ [16, 256], ψ ≤ acos(exp(−K/n))")
     print(f"{'source':<24}{'left':>11}{'A (ξ²)':>11}{'B (ξ)':>11}{'C (1)':>11}{'root ξ':>10}")
     rows = [
-        ("seed printed", st.SEED_EQ12),
+        ("paper printed", st.SEED_EQ12),
         ("closed form K=0.511", st.equation_12()),
         ("closed form K=ln(5/3)", st.equation_12(st.K_LN_5_3)),
         ("dblquad K=0.511", st.Eq12(*dblquad_eq12(st.K_PRINTED))),
@@ -101,7 +104,9 @@ def equation_12() -> None:
     seed_with_our_left = st.Eq12(
         ours.left, *[getattr(st.SEED_EQ12, a) for a in ("quadratic", "linear", "constant")]
     )
-    print(f"seed's A,B,C with unrounded left {ours.left:.6f}: ξ = {seed_with_our_left.xi():.6f}")
+    print(
+        f"the paper's A,B,C with unrounded left {ours.left:.6f}: ξ = {seed_with_our_left.xi():.6f}"
+    )
     xi_mm, d_mm = st.minimax_xi()
     print(
         f"29/64 = {29 / 64:.6f} ({100 * (29 / 64 / ours.xi() - 1):+.2f}% off the root); "
@@ -264,4 +269,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Romanyuk et al.'s lobes: accuracy next to speed")

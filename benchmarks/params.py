@@ -1,6 +1,6 @@
 """Throughput of forward and inverse for each parametrization on 10^6 random pairs.
 
-Targets (issue 2, 2-core machine, numpy only): hybrid forward ≥ 10 M pairs/s, hybrid
+Targets (2-core machine, numpy only): hybrid forward ≥ 10 M pairs/s, hybrid
 inverse ≥ 5 M pairs/s, the others within 2× of hybrid. Prints a markdown table.
 Run: .venv/bin/python benchmarks/params.py [--pairs N] [--repeat R]
 """
@@ -13,6 +13,7 @@ import timeit
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from _machine import describe
 
 from gonio import params
@@ -49,4 +50,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="Parametrization throughput")

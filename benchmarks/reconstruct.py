@@ -1,5 +1,5 @@
 """Reconstruction: build time and evaluation throughput of each method, and the study
-that chose the default transform (docs/reconstruction.md).
+that chose the default transform (docs/explanations/reconstruction.md).
 
 Samples are synthesized (studies.reconstruct.synthetic: uniform Sobol coordinates of the
 plan's parametrization, or a grid, kept where the arch rig reaches, valued by the
@@ -17,12 +17,14 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
+import _report
 from _machine import describe
 
 from gonio.reconstruct import transforms
@@ -138,5 +140,20 @@ def main() -> None:
         timing(args)
 
 
+def transform_page(argv: Sequence[str]) -> str | None:
+    """The transform study has its own page: reconstruct-transforms.md."""
+    return "transforms" if "--transforms" in argv else None
+
+
 if __name__ == "__main__":
-    main()
+    _report.run(
+        main,
+        __file__,
+        __doc__,
+        title=lambda argv: (
+            "Reconstruction: the study that chose the default transform"
+            if transform_page(argv)
+            else "Reconstruction: build time and evaluation throughput"
+        ),
+        variant=transform_page,
+    )

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import _report
 import numpy as np
 from _machine import describe
 
@@ -140,6 +141,10 @@ def aperture_orders() -> None:
         print(f"| {aperture:g} sr | " + " | ".join(f"{e:.0e}" for e in errors) + " |")
 
 
-if __name__ == "__main__":
+def both() -> None:
     main()
     aperture_orders()
+
+
+if __name__ == "__main__":
+    _report.run(both, __file__, __doc__, title="Simulated acquisition speed")

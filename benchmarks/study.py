@@ -1,4 +1,4 @@
-"""The shipped study's noise-free parts (issue 16 §3, docs/tradeoff.md "The study").
+"""The shipped study's noise-free parts (docs/explanations/tradeoff.md "The study").
 
 Uniform Sobol plans of each shipped scene's material (as its detector's band sees it), in
 each parametrization, from 250 to 30 000 samples, synthesized without the engine
@@ -12,12 +12,13 @@ sweeps (configs/sweeps/study_*.yaml) give the noisy curves and the instrument ti
              share of samples each region gets against its share of the test set
     budget   the 8 θi × 32 θo × 32 Δφ grid of measured-material databases (8 192
              samples) against Sobol plans of each parametrization
-    lobes    seed 003's lobes as stand-ins for Blinn-Phong cos^n θh: time against error
+    lobes    Romanyuk et al.'s lobes as stand-ins for Blinn-Phong cos^n θh: time against error
 
 Run: .venv/bin/python benchmarks/study.py curves -o runs/study [--scenes matte ...]
 [--counts 250 ... 30000] [--methods linear rbf] [--sampling sobol adaptive]
 [--adaptive-model survey]; `where`, `budget`, `lobes` likewise. `--sampling adaptive`:
-the two-pass plans of docs/adaptive.md (`studies.reconstruct.synthetic.synthesize_adaptive`).
+the two-pass plans of docs/explanations/adaptive.md
+(`studies.reconstruct.synthetic.synthesize_adaptive`).
 `curves` appends to OUT/curves.csv and skips the rows it holds (resumable).
 """
 
@@ -30,6 +31,7 @@ import itertools
 import math
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +39,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
+import _report
 from _machine import describe
 
 from gonio import brdf, params
@@ -134,6 +137,7 @@ def curves(args: argparse.Namespace) -> None:
                 for r in csv.DictReader(fh)
             }
     new = not out.exists()
+    computed = 0
     with out.open("a", encoding="utf-8", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=COLUMNS)
         if new:
@@ -164,7 +168,10 @@ def curves(args: argparse.Namespace) -> None:
                     row["wall_s"] = round(time.perf_counter() - started, 3)
                     writer.writerow(row)
                     fh.flush()
-                    print(scene, kind, name, method, n, f"{row['log_rmse']:.4f}", flush=True)
+                    computed += 1
+                    # progress on stderr: the page holds the report
+                    print(scene, kind, name, method, n, f"{row['log_rmse']:.4f}", file=sys.stderr)
+    print(f"{computed} rows computed in this run, {len(done)} read from {out} (resumed)")
     report(out, tuple(args.targets))
 
 
@@ -333,7 +340,7 @@ def budget(args: argparse.Namespace) -> None:
 
 
 def lobes(args: argparse.Namespace) -> None:
-    """Seed 003's lobes as stand-ins for Blinn-Phong (ks = 0.8, kd = 0.2), next to linear
+    """Romanyuk et al.'s lobes as stand-ins for Blinn-Phong (ks = 0.8, kd = 0.2), next to linear
     reconstructions of Blinn-Phong from uniform hybrid samples, on the arch rig's test
     set (`evaluate`: pairs a reconstruction leaves NaN outside its hull are not scored):
     log-RMSE, the 95th percentile of the relative error, the share answered, ns per pair
@@ -409,5 +416,27 @@ def main() -> None:
     {"curves": curves, "where": where, "budget": budget, "lobes": lobes}[args.part](args)
 
 
+def adaptive(argv: Sequence[str]) -> str | None:
+    """Curves of adaptive plans have their own page: study-curves-adaptive.md."""
+    return "adaptive" if "adaptive" in _report.option(argv, "--sampling") else None
+
+
+#: Each part's page title.
+TITLES = {
+    "curves": "Noise-free error against sample count, per parametrization and method",
+    "curves-adaptive": "Noise-free error of adaptive against uniform plans",
+    "report": "Noise-free error against sample count: the report of curves.csv",
+    "where": "Where the error of a uniform plan sits",
+    "budget": "Against the 8 192-sample budget of measured-material databases",
+    "lobes": "Romanyuk et al.'s lobes as stand-ins for Blinn-Phong, in the study's metric",
+}
+
+
+def title(argv: Sequence[str]) -> str:
+    part = argv[0] if argv else ""
+    key = f"{part}-{adaptive(argv)}" if adaptive(argv) else part
+    return TITLES.get(key, "The study, noise-free")
+
+
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title=title, part=True, variant=adaptive)

@@ -1,4 +1,4 @@
-"""The shipped study's engine parts (issue 16 §3, docs/tradeoff.md "The study"): tables
+"""The shipped study's engine parts (docs/explanations/tradeoff.md "The study"): tables
 and figures from the results.csv of `gonio tradeoff` runs of configs/sweeps/study_*.yaml,
 with the noise-free curves of benchmarks/study.py placed on the instrument-time axis.
 
@@ -30,11 +30,13 @@ import math
 import statistics
 import sys
 from collections import defaultdict
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
 from study import TARGETS, fmt_needed, needed
 
 COLOURS = {"hybrid": "C0", "rusinkiewicz": "C1", "orthographic": "C2", "spherical": "C3"}
@@ -187,7 +189,7 @@ def plot(
     out = img / f"study-{stem}.png"
     fig.savefig(out)
     plt.close(fig)
-    print(f"\nwrote {out} ({out.stat().st_size / 1024:.0f} KB)")
+    _report.figure(out, f"{scene}: log-RMSE against instrument time")
 
 
 def exposure(args: argparse.Namespace) -> None:
@@ -358,5 +360,19 @@ def main() -> None:
     parts[args.part](args)
 
 
+#: Each part's page title.
+TITLES = {
+    "uniform": "Uniform plans on the engine: error against samples and instrument time",
+    "exposure": "Exposure against sample count at fixed instrument time",
+    "effects": "What each simulated effect changes in the error, and costs",
+    "timing": "The simulated acquisition's time per sample, effect by effect",
+    "adaptive": "Adaptive against uniform plans on the engine",
+}
+
+
+def title(argv: Sequence[str]) -> str:
+    return TITLES.get(argv[0] if argv else "", "The study on the engine")
+
+
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title=title, part=True)

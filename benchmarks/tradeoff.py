@@ -16,6 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import _report
 import numpy as np
 from _machine import describe
 
@@ -105,4 +106,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    _report.run(main, __file__, __doc__, title="The speed of gonio tradeoff")

@@ -184,7 +184,7 @@ def improvement_ratios(
     for o in others:
         out.append((f"max δ {o.name} / max δ {vol.name}", peak(o) / peak(vol)))
         out.append((f"δ {o.name} / δ {vol.name} at n={n0:g}", at(o, n0) / at(vol, n0)))
-        out.append((f"max δ {o.name} / seed's 1.9%", peak(o) / SEED_DELTA_VOL))
+        out.append((f"max δ {o.name} / the paper's 1.9%", peak(o) / SEED_DELTA_VOL))
     return out
 
 
