@@ -63,7 +63,7 @@ NEIGHBOURS = 10
 MOVES_PER_TARGET = 10
 MOVES_EXTRA = 100
 #: The default budget of kicks of the iterated local search: 3 per 2 targets, at most
-#: `MAX_KICKS` (a kick and its repair take about 1 ms: docs/results.md, the trade measured).
+#: `MAX_KICKS` (a kick and its repair take about 1 ms: benchmarks/planner.py, the trade measured).
 KICKS_PER_TWO_TARGETS = 3
 MAX_KICKS = 15_000
 #: Rounds of "improve on the chosen poses, choose again" after the relaxed order; the
