@@ -54,8 +54,8 @@ test: lint docs pytest
 
 # Every benchmark, one after another, each writing its page docs/results/<script>.md (and
 # docs/results/index.md) with the command, the machine, the date, the load and the wall
-# time, besides printing it (`--no-page`: print only). Fast ones first; about 2 h 30 min
-# on the 2-core machine, of which planner.py takes about an hour.
+# time, besides printing it (`--no-page`: print only). Fast ones first; about 45 min on
+# the 2-core machine, of which planner.py takes 22 (LKH-3's tours, plans of a million).
 bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py --repeat 11
 	$(BIN)/python benchmarks/extremes.py --near-horizon 4000
@@ -83,11 +83,13 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/adaptive_weights.py
 	$(BIN)/python benchmarks/adaptive_limit.py
 	$(BIN)/python benchmarks/planner.py
+	$(BIN)/python benchmarks/make_test.py
 
 # The study (docs/explanations/tradeoff.md "The study"): the `gonio tradeoff` sweeps of
 # configs/sweeps/study_*.yaml into runs/study_* (a rerun resumes them), the noise-free
 # curves into runs/study*/curves.csv (resumable too), then the pages docs/results/study-*.md
-# and study_engine-*.md and the figures docs/img/study-*.png. About 2 h on the 2-core machine.
+# and study_engine-*.md and the figures docs/img/study-*.png. About 30 min on the 2-core
+# machine (the sweeps 15, the curves 11).
 STUDY_SWEEPS := uniform seed000 brushed exposure effects
 bench-studies: $(VENV)/.installed-test
 	@mkdir -p runs

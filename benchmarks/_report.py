@@ -303,10 +303,11 @@ def index(folder: Path | None = None) -> str:
     lines = [
         "# Results",
         "",
-        "Each page below is written by the benchmark script it names (`make bench` runs them",
-        "all; `make bench-studies` runs the study's sweeps first): the command, the machine,",
-        "the date, the load on the shared machine and the wall time are in its header, and",
-        "the tables and figures are what the script printed. This list is written with them.",
+        "Each page below is written by the benchmark script it names: `make bench` runs them,",
+        "`make bench-studies` the study's (study.py, study_engine.py: the `gonio tradeoff`",
+        "sweeps first). The command, the machine, the date, the load on the shared machine",
+        "and the wall time are in each page's header; the tables and figures are what the",
+        "script printed. This list is written with the pages.",
         "",
     ]
     for path in sorted(folder.glob("*.md")):

@@ -1,0 +1,88 @@
+"""The whole `make test` from a clean clone, as CI runs it: `git clone` of the committed
+tree into a temporary folder, then `CI=true make test` there with no standard input
+(a new virtual environment, the install of the test and docs extras, ruff, mypy, the
+import contracts, the documentation site's strict build and the test suite on three
+workers). Prints the wall time of each stage and the suite's own summary line; the
+budget is 5 minutes on the 2-core machine, install included.
+
+Run: .venv/bin/python benchmarks/make_test.py [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _report
+from _machine import describe
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The stages `make test` runs, by the first line each prints.
+STAGES = (
+    ("install", re.compile(r"pip .* install")),
+    ("lint", re.compile(r"ruff check")),
+    ("docs", re.compile(r"mkdocs build")),
+    ("pytest", re.compile(r"python -m pytest")),
+)
+BUDGET_S = 300.0
+
+
+def one_run() -> tuple[dict[str, float], float, str]:
+    """The seconds each stage took, the total, and pytest's summary line."""
+    with tempfile.TemporaryDirectory(prefix="gonio-make-test-") as tmp:
+        clone = Path(tmp) / "gonio"
+        subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+        env = {**os.environ, "CI": "true"}
+        env.pop("VIRTUAL_ENV", None)
+        start = time.perf_counter()
+        marks: dict[str, float] = {}
+        summary = ""
+        with subprocess.Popen(
+            ["make", "test"], cwd=clone, env=env, stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        ) as proc:  # fmt: skip
+            assert proc.stdout is not None
+            for line in proc.stdout:
+                for name, pattern in STAGES:
+                    if name not in marks and pattern.search(line):
+                        marks[name] = time.perf_counter() - start
+                if re.search(r"\d+ passed", line):
+                    summary = line.strip()
+        total = time.perf_counter() - start
+        if proc.returncode != 0:
+            raise SystemExit(f"make test failed in the clean clone (exit {proc.returncode})")
+    starts = [marks.get(name, 0.0) for name, _ in STAGES] + [total]
+    stages = {name: starts[i + 1] - starts[i] for i, (name, _) in enumerate(STAGES)}
+    return stages, total, summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=1, help="clean clones to time (1)")
+    args = parser.parse_args()
+    print(describe())
+    print()
+    print("| run | install s | lint s | docs s | pytest s | total s | within 5 min |")
+    print("|---:|---:|---:|---:|---:|---:|---|")
+    summaries = []
+    for n in range(1, args.repeat + 1):
+        stages, total, summary = one_run()
+        cells = " | ".join(f"{stages[name]:.0f}" for name, _ in STAGES)
+        ok = "yes" if total <= BUDGET_S else "no"
+        print(f"| {n} | {cells} | {total:.0f} | {ok} |", flush=True)
+        summaries.append(summary)
+    print()
+    for n, summary in enumerate(summaries, 1):
+        print(f"run {n}, pytest: {summary}")
+
+
+if __name__ == "__main__":
+    _report.run(main, __file__, __doc__, title="make test from a clean clone")
