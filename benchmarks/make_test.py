@@ -45,12 +45,14 @@ def one_run() -> tuple[dict[str, float], float, str]:
         start = time.perf_counter()
         marks: dict[str, float] = {}
         summary = ""
+        tail: list[str] = []
         with subprocess.Popen(
             ["make", "test"], cwd=clone, env=env, stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         ) as proc:  # fmt: skip
             assert proc.stdout is not None
             for line in proc.stdout:
+                tail = [*tail[-29:], line]
                 for name, pattern in STAGES:
                     if name not in marks and pattern.search(line):
                         marks[name] = time.perf_counter() - start
@@ -58,6 +60,7 @@ def one_run() -> tuple[dict[str, float], float, str]:
                     summary = line.strip()
         total = time.perf_counter() - start
         if proc.returncode != 0:
+            sys.stderr.writelines(tail)
             raise SystemExit(f"make test failed in the clean clone (exit {proc.returncode})")
     starts = [marks.get(name, 0.0) for name, _ in STAGES] + [total]
     stages = {name: starts[i + 1] - starts[i] for i, (name, _) in enumerate(STAGES)}
