@@ -1,4 +1,4 @@
-"""The test functions of Barla, Belcour & Pacanowski 2015 (seed 000), one BRDF effect each.
+"""The test functions of Barla, Belcour & Pacanowski 2015, one BRDF effect each.
 
 With h = (wi + wo)/2 (not normalized) and h̄ its projection on the tangent plane:
 
@@ -29,7 +29,7 @@ class _TestFunction(BRDF):
 
 
 class FresnelTestFunction(_TestFunction):
-    """F = 1 − cos θd (white in figure 2 of Barla, Belcour & Pacanowski 2015, seed 000)."""
+    """F = 1 − cos θd (white in figure 2 of Barla, Belcour & Pacanowski 2015)."""
 
     name = "fresnel_test_function"
 

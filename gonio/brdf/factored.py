@@ -1,4 +1,4 @@
-"""A factored BRDF read from its files (Lawrence et al. 2004, seed 002): eval and sampling.
+"""A factored BRDF read from its files (Lawrence et al. 2004): eval and sampling.
 
 ``create("factored", path=...)`` reads the factor file ``path`` and its CDF file
 ``path + ".cdf"`` (`gonio.brdf.factored_file`). Conventions as everywhere in gonio: ``wi``

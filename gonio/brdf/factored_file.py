@@ -1,4 +1,4 @@
-"""The two text files of a factored BRDF (Lawrence et al. 2004, seed 002): tables, grid, I/O.
+"""The two text files of a factored BRDF (Lawrence et al. 2004): tables, grid, I/O.
 
 The factor file holds f(ωi, ωo) cos θi ≈ Σⱼ Fⱼ(θo, φo) Gⱼ(θp, φp), the inner split
 Gⱼ ≈ Σₖ uⱼₖ(θp) vⱼₖ(φp) and the colour factors Fc, Gc; the CDF file the 1D CDFs of each

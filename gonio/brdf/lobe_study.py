@@ -1,4 +1,4 @@
-"""Romanyuk et al.'s modified cosine-quadratic model (seed 003) recomputed with gonio's own lobes.
+"""Romanyuk et al.'s modified cosine-quadratic model recomputed with gonio's own lobes.
 
 Conventions: c = cos ψ, n the shininess; the "epicentre zone" is ψ ≤ lim(n) =
 acos(exp(−K/n)) with the paper's printed K = 0.511. The relative error of a lobe F
@@ -189,7 +189,7 @@ def improvement_ratios(
 
 
 def eq14_psi(n: ArrayLike) -> FloatArray:
-    """Eq 14 of Romanyuk et al. (seed 003) as printed: acos((29 n − 64) / (29 n))."""
+    """Eq 14 of Romanyuk et al. as printed: acos((29 n − 64) / (29 n))."""
     nn = np.asarray(n, dtype=np.float64)
     return np.asarray(np.arccos((29.0 * nn - 64.0) / (29.0 * nn)), dtype=np.float64)
 
@@ -225,10 +225,10 @@ def minimax_xi(n_range: tuple[float, float] = FIG3_N) -> tuple[float, float]:
 
 
 def render_summary() -> str:
-    """Compact fixed-width table of the check of Romanyuk et al. (seed 003) (for ``make demo``)."""
+    """Compact fixed-width table of the check of Romanyuk et al. (for ``make demo``)."""
     seed, ours, ln53 = SEED_EQ12, equation_12(), equation_12(K_LN_5_3)
     lines = [
-        "Seed 003 lobes vs F_B = cos^n ψ (K = 0.511; δ relative, epicentre zone)",
+        "Romanyuk et al.'s lobes vs F_B = cos^n ψ (K = 0.511; δ relative, epicentre zone)",
         f"{'eq 12':<14}{'left':>10}{'ξ²':>10}{'ξ':>10}{'1':>10}{'root ξ':>10}",
     ]
     for name, e in (("seed printed", seed), ("ours K=0.511", ours), ("ours K=ln5/3", ln53)):

@@ -1,5 +1,5 @@
 """Specular lobe shapes as plain functions of cos ψ and the shininess n, after
-Romanyuk et al., *Modified cosine-quadratic reflectance model* (seed 003).
+Romanyuk et al., *Modified cosine-quadratic reflectance model*.
 
 ψ is whatever angle the caller's model uses: between the mirror direction and the
 view direction (Phong) or between the normal and the halfway vector (Blinn). Every

@@ -1,5 +1,5 @@
 """Lambert and the cosine-lobe models: Phong, Blinn-Phong and the family of
-Romanyuk et al.'s modified cosine-quadratic model (seed 003).
+Romanyuk et al.'s modified cosine-quadratic model.
 
     lambert             f = ρ / π
     phong               f = ks (n + 2)/(2π) cos^n ψ + kd/π,     cos ψ = r · wo
@@ -128,7 +128,7 @@ class BlinnPhong(_CosineLobe):
 
 
 class CosineQuadratic(BlinnPhong):
-    """Romanyuk et al.'s F_2 (seed 003): `BlinnPhong` with (n (cos θh − 1)/2 + 1)² for cos^n θh.
+    """Romanyuk et al.'s F_2: `BlinnPhong` with (n (cos θh − 1)/2 + 1)² for cos^n θh.
 
     The lobe is cut at 0 beyond its zero crossing.
     """
@@ -141,7 +141,7 @@ class CosineQuadratic(BlinnPhong):
 
 
 class CosineQuadraticModified(BlinnPhong):
-    """Romanyuk et al.'s F_VOL (seed 003): (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
+    """Romanyuk et al.'s F_VOL: (ξ n (cos θh − 1) + 1)², zeroed beyond its zero crossing.
 
     ``xi``: "eq12" (default, ξ ≈ 0.4629 solving Romanyuk et al.'s eq. 12), "29/64", or a
     number in (0, 1].
@@ -168,7 +168,7 @@ class CosineQuadraticModified(BlinnPhong):
 
 
 class SchlickLobe(BlinnPhong):
-    """Romanyuk et al.'s F_S (seed 003, eq. 4): cos θh / (n − n cos θh + cos θh) for cos^n θh."""
+    """Romanyuk et al.'s F_S (eq. 4): cos θh / (n − n cos θh + cos θh) for cos^n θh."""
 
     name = "schlick_lobe"
     physically_based = False

@@ -1,4 +1,4 @@
-"""Export a BRDF as the factored representation of Lawrence et al. 2004 (seed 002).
+"""Export a BRDF as the factored representation of Lawrence et al. 2004.
 
 `factorize` tabulates y = f(ωi, ωo) cos θi on bin centres of (θo, φo) × (θh, φh)
 (ωi = 2 (ωo·ĥ) ĥ − ωo; 0 where ωi is below the horizon), factors the intensity

@@ -1,5 +1,5 @@
 """Hybrid coordinates (‖h̄‖, φh, ‖k‖, φk) (Barla, Belcour &
-Pacanowski 2015, seed 000, eqs 5-6 and appendix, after Stark 2005).
+Pacanowski 2015, eqs 5-6 and appendix, after Stark 2005).
 
 h = (ωi + ωo)/2 and k = (ωi − ωo)/2, unnormalized (‖h‖² + ‖k‖² = 1, h·k = 0); h̄, k̄
 are their projections on the tangent plane, φh, φk the azimuths of h̄ and k̄ (φk is

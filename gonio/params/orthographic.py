@@ -1,5 +1,5 @@
 """Orthographic coordinates (‖h̄‖, φh, ‖k̄‖, φk) (Neumann 1999, Löw 2012;
-Barla, Belcour & Pacanowski 2015, seed 000, eqs 3-4).
+Barla, Belcour & Pacanowski 2015, eqs 3-4).
 
 h = (ωi + ωo)/2 and k = (ωi − ωo)/2, unnormalized; a bar is the projection on the
 tangent plane; φh, φk are the azimuths of h̄ and k̄. The inverse is

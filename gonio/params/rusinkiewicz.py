@@ -1,7 +1,7 @@
 """Rusinkiewicz's halfway/difference coordinates (θh, φh, θd, φd) (Barla, Belcour &
-Pacanowski 2015, seed 000, eqs 1-2).
+Pacanowski 2015, eqs 1-2).
 
-As in Barla, Belcour & Pacanowski 2015 (seed 000), eqs 1-2:
+As in Barla, Belcour & Pacanowski 2015, eqs 1-2:
 ĥ = (ωi + ωo)/‖ωi + ωo‖ has polar angles (θh, φh); d̂ = rot_y(−θh) rot_z(−φh) ωi is
 ωi in the frame where ĥ is the pole, with polar angles (θd, φd). The inverse is
 ωi = rot_z(φh) rot_y(θh) d̂ and ωo = rot_z(φh) rot_y(θh) (−d̂x, −d̂y, d̂z), i.e. the

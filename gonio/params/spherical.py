@@ -8,7 +8,7 @@ everywhere, grazing and normal incidence included.
 Isotropic reduction (θi, θo, φo − φi mod 2π): rotation invariance about n only. The
 reciprocity swap (θi, θo, Δφ) → (θo, θi, −Δφ) is not a fold of one coordinate, and
 bilateral symmetry (which would allow |Δφ| ∈ [0, π], as in the ρ(θi, θo, |φi − φo|) of
-Barla, Belcour & Pacanowski 2015, seed 000) is not assumed.
+Barla, Belcour & Pacanowski 2015) is not assumed.
 """
 
 from __future__ import annotations

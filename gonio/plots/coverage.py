@@ -1,5 +1,5 @@
 """The coverage of a plan, drawn the way the figures of Barla, Belcour &
-Pacanowski 2015 (seed 000) show the hybrid domain.
+Pacanowski 2015 show the hybrid domain.
 
 Top row: slices of the plane of the first two isotropic coordinates (‖h̄‖, ‖k‖ for
 hybrid) at a few values of the third (φk − φh, reciprocity-folded), shaded by what

@@ -1,5 +1,5 @@
 """2D slices of a BRDF in the isotropic coordinates of several parametrizations, side by
-side, drawn the way Barla, Belcour & Pacanowski 2015 (seed 000) compare them: one row per
+side, drawn the way Barla, Belcour & Pacanowski 2015 compare them: one row per
 parametrization (hybrid (‖h̄‖, ‖k‖), orthographic (‖h̄‖, ‖k̄‖), halfway/difference
 (θh, θd)), one column per value of the third coordinate (φk − φh for the first two, φd
 for halfway/difference), ln-shaded values with iso-lines.

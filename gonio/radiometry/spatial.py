@@ -1,9 +1,9 @@
 """Spatial integration for a proximal point source (the proximal point law of
-the lecture notes on reflectance models, seed 004).
+the lecture notes on reflectance models).
 
 The source sits at s = r·wi from the sample centre. A surface point x (sample plane,
 z = 0) receives E(x) = I · cos θ(x) / |s − x|² = I · r cos θi / |s − x|³ (the proximal
-point law of the lecture notes on lighting and reflectance models, seed 004) from the
+point law of the lecture notes on lighting and reflectance models) from the
 direction ωi(x) = (s − x)/|s − x|; the distant detector looks from the fixed wo over
 its seen ellipse (F/(2 cos θo) × F/2). Power into the aperture:
 

@@ -1,6 +1,6 @@
-"""The specular lobe's cross-section flattens as the incidence angle grows (seed 001).
+"""The specular lobe's cross-section flattens as the incidence angle grows (a 2025 derivation).
 
-Seed 001 is a derivation (in Chinese and English) of why a microfacet lobe becomes
+The derivation (in Chinese and English) shows why a microfacet lobe becomes
 anisotropic as the view angle grows; this module measures its claim on full models.
 
 Geometry. wi = (sin θ, 0, cos θ), mirror direction m = (−sin θ, 0, cos θ). Two
@@ -207,7 +207,7 @@ def seed_cone_widths(theta_i: ArrayLike, cone_half_angle: float) -> LobeWidths:
 
 def seed_closed_form_aspect(theta_i: ArrayLike, cone_half_angle: float) -> FloatArray:
     """2a / δ with sin(δ/2) = sin a cos θ: the L_min / L_max semi-axes
-    of the lobe-anisotropy derivation (seed 001)."""
+    of the lobe-anisotropy derivation."""
     theta = np.asarray(theta_i, dtype=np.float64)
     a = cone_half_angle
     return np.asarray(a / np.arcsin(np.sin(a) * np.cos(theta)), dtype=np.float64)
@@ -228,7 +228,7 @@ def _fmt(x: float) -> str:
 
 
 def aspect_table() -> str:
-    """The lobe-anisotropy table (seed 001) of docs/explanations/brdf.md, as markdown."""
+    """The lobe-anisotropy table of docs/explanations/brdf.md, as markdown."""
     theta = np.radians(ANGLES_DEG)
     lines = [
         "| D | α | θi | f·cosθo, Schlick | f·cosθo, F = 1 | f, Schlick | seed cone "

@@ -104,7 +104,7 @@ def albedo_table() -> str:
     return "\n".join(lines)
 
 
-#: Shininess values of the survey of Romanyuk et al.'s lobe family (seed 003).
+#: Shininess values of the survey of Romanyuk et al.'s lobe family.
 FAMILY_N = (0.5, 1.0, 2.0, 4.0, 16.0, 64.0, 256.0, 1000.0)
 FAMILY = ("blinn_phong", "cosine_quadratic", "cosine_quadratic_modified", "schlick_lobe")
 

@@ -1,4 +1,4 @@
-"""Grid checks of the lobe study (`gonio.brdf.lobe_study`, seed 003): maxima over ψ by
+"""Grid checks of the lobe study (`gonio.brdf.lobe_study`): maxima over ψ by
 a grid and zoom-ins, which check the exact epicentre maxima and give the absolute
 errors over the hemisphere, and the angle of the cosine-quadratic lobe's zero.
 

@@ -1,4 +1,4 @@
-"""The test functions F, S, G of Barla, Belcour & Pacanowski 2015 (seed 000).
+"""The test functions F, S, G of Barla, Belcour & Pacanowski 2015.
 
 Also the identities the paper's appendix derives for them.
 """

@@ -1,6 +1,6 @@
 """gonio.brdf.lobe_study: Romanyuk et al.'s equation 12 and error figures, recomputed.
 
-The paper is Romanyuk et al.'s modified cosine-quadratic reflectance model (seed 003).
+The paper is Romanyuk et al.'s modified cosine-quadratic reflectance model.
 
 Tolerances: the integrals and the epicentre maxima are exact up to rounding and
 quad's 1e-13 tolerance, so they are checked against independent computations at

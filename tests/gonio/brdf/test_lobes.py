@@ -62,7 +62,7 @@ def test_cut_zeroes_only_beyond_the_zero() -> None:
     raw = lobes.cosine_quadratic(c, n, xi, cut=False)
     assert np.all(cut[c <= z] == 0.0)
     # The parabola rises again: why Romanyuk et al.'s modified cosine-quadratic model
-    # (seed 003) cuts it at its zero.
+    # cuts it at its zero.
     assert np.all(raw[c < z - 1e-3] > 0.0)
     np.testing.assert_array_equal(cut[c > z], raw[c > z])
 

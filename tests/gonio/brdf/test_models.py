@@ -1,6 +1,6 @@
 """Closed-form values of Lambert, Phong, Blinn-Phong and Romanyuk et al.'s lobe family.
 
-The family is the lobes of Romanyuk et al.'s modified cosine-quadratic model (seed 003).
+The family is the lobes of Romanyuk et al.'s modified cosine-quadratic model.
 """
 
 from __future__ import annotations

@@ -101,7 +101,7 @@ def test_an_unreachable_reference_geometry_is_one_line(rigs: dict[str, Rig]) -> 
 
 def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None:
     """The quick plan's rig has a collimated light; the seed000_specular scene (the
-    specular test function of Barla, Belcour & Pacanowski 2015, seed 000) gives a point
+    specular test function of Barla, Belcour & Pacanowski 2015) gives a point
     source's intensity: refused at the scene's line, before anything is simulated."""
     scene = CONFIGS / "scenes" / "seed000_specular.yaml"
     r = run_gonio("simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene))

@@ -112,7 +112,7 @@ class TestConventionsWhereAnAzimuthIsUndefined:
 
 
 def _appendix_inverse(c: np.ndarray, quadrant: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The appendix of Barla, Belcour & Pacanowski 2015 (seed 000), transcribed
+    """The appendix of Barla, Belcour & Pacanowski 2015, transcribed
     literally (θk by arctan, or by atan2 with the quadrant right),
     hz = sqrt(1 − ‖k‖² − ‖h̄‖²) clipped at 0."""
     hb, ph, k, pk = (c[:, j] for j in range(4))

@@ -1,4 +1,4 @@
-"""The identities of Barla, Belcour & Pacanowski 2015 (seed 000), checked numerically.
+"""The identities of Barla, Belcour & Pacanowski 2015, checked numerically.
 
 They are in the paper's section 3 and appendix.
 

@@ -1,4 +1,4 @@
-"""The lobe's cross-section flattens with the incidence angle (seed 001).
+"""The lobe's cross-section flattens with the incidence angle (a 2025 derivation).
 
 Seed 001, the derivation of why a microfacet lobe becomes anisotropic as the view angle
 grows, reflects a cone of microfacet normals (half-angle a about n) about the
@@ -122,7 +122,7 @@ def test_departure_the_brdf_itself_peaks_at_the_horizon(measured):
 def test_seed_algebra_semi_axes():
     """Reflect the cone of normals about v and measure the reflected curve directly.
 
-    The lobe-anisotropy derivation (seed 001): l·l_o = 2L + 1 with L ∈ [L_min, L_max],
+    The lobe-anisotropy derivation (a 2025 derivation): l·l_o = 2L + 1 with L ∈ [L_min, L_max],
     L_min = −sin²α (in-plane, any θ: the long semi-axis is always 2α) and
     L_max = −sin²α cos²θ (the closest approach δ, sin(δ/2) = sin α cos θ, reached at
     φ = 90°).

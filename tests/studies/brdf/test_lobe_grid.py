@@ -1,5 +1,5 @@
 """studies.brdf.lobe_grid: the lobe study's maxima by grids, against the exact ones and
-dense grids (Romanyuk et al.'s modified cosine-quadratic model, seed 003)."""
+dense grids (Romanyuk et al.'s modified cosine-quadratic model)."""
 
 from __future__ import annotations
 
