@@ -31,7 +31,7 @@ RESULTS = ROOT / "docs" / "results"
 NO_PAGE = "--no-page"
 #: The marker line of a generated page (the index and the tests look for it).
 MARKER = "<!-- Written by benchmarks/{script} through benchmarks/_report.py: run it again, "
-#: Header fields, in order (tests/benchmarks/test_results_pages.py reads them).
+#: Header fields, in order (tests/test_results_pages.py reads them).
 FIELDS = ("Script", "Command", "Machine", "Date", "Load average", "Wall time")
 _FIGURE = "\x00figure\x00"
 

@@ -4,6 +4,7 @@ bench-studies`) runs, with the index listing exactly the pages present."""
 
 from __future__ import annotations
 
+import ast
 import importlib.util
 import re
 import sys
@@ -111,6 +112,11 @@ def test_every_page_names_a_script_that_make_bench_runs(report: ModuleType, page
     assert script in bench_scripts()
     for link in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page.read_text(encoding="utf-8")):
         assert (page.parent / link).is_file(), link
+    # What the page says it measures is the script's docstring as it is now.
+    doc = ast.get_docstring(ast.parse((BENCHMARKS / script).read_text(encoding="utf-8")))
+    assert f"\n\n{report.about(doc)}\n\n" in page.read_text(encoding="utf-8"), (
+        f"{page.name}: the script's docstring changed; run it again"
+    )
 
 
 def test_the_index_lists_every_page_present(report: ModuleType) -> None:

@@ -690,11 +690,17 @@ def outputs() -> dict[Path, str]:
 
 
 def stale(root: Path = ROOT) -> Iterator[Path]:
-    """The generated files whose committed text differs from what is generated now."""
-    for path, text in outputs().items():
+    """The generated files whose committed text differs from what is generated now, and
+    files in their folders that nothing generates any more (a kind renamed or removed)."""
+    expected = outputs()
+    for path, text in expected.items():
         target = root / path
         if not target.is_file() or target.read_text(encoding="utf-8") != text:
             yield path
+    for pattern in ("gonio/schemas/*.schema.json", f"{PAGES.as_posix()}/*.md"):
+        for found in sorted(root.glob(pattern)):
+            if found.relative_to(root) not in expected:
+                yield found.relative_to(root)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -29,7 +29,6 @@ from gonio.config import ConfigError
 
 #: How long a bring-up move may take to settle by default (s).
 DEFAULT_TIMEOUT_S = 30.0
-#: The rate `set-id` uses unless told another (baud).
 #: Exit code of `set-id` when its question was not answered yes.
 EXIT_DECLINED = 1
 

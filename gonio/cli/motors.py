@@ -21,7 +21,6 @@ from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
 DEFAULT_SCAN_BAUDS = (FACTORY_BAUD, 1_000_000)
-#: The rate `status` and `reboot` use when neither a flag nor a rig file gives one.
 #: Exit code of `scan` when no motor answered, and of `status` when one did not.
 EXIT_NO_ANSWER = 1
 

@@ -19,7 +19,7 @@ from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import SweepSpec
 from sim.scene import Scene
 
-#: Each kind of file: (the model that loads it, the schema's title, where such files are).
+#: Each kind of file: (the model that loads it, the schema's title).
 KINDS: dict[str, tuple[type[BaseModel], str]] = {
     "plan": (PlanSpec, "gonio plan file"),
     "rig": (RigSpec, "gonio rig file"),

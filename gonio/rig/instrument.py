@@ -256,8 +256,8 @@ class SerialInterfaceSpec(Strict):
     timeout_s: float = Field(
         _driver_default("timeout_s"),
         gt=0,
-        description="The margin on every deadline (s): a query waits its exposure plus this, a "
-        "command's acknowledgement this.",
+        description="The margin on every deadline (s): a query waits its exposure (times the "
+        "averages when the device averages) plus this, a command's acknowledgement this.",
     )
     retries: int = Field(
         _driver_default("retries"),

@@ -35,6 +35,7 @@ from tools.reference_config import (
     LOADER_ONLY,
     LoaderCheck,
     editor_line,
+    outputs,
     patched,
     stale,
 )
@@ -134,6 +135,18 @@ def test_the_schemas_are_draft_2020_12_and_every_field_is_described(kind: str) -
 
 def test_the_generated_files_are_what_the_models_generate_now() -> None:
     assert list(stale()) == [], "regenerate with: python -m tools.reference_config"
+
+
+def test_a_generated_file_nothing_generates_any_more_is_stale(tmp_path: Path) -> None:
+    """A kind renamed or removed leaves no schema or page behind unnoticed."""
+    for path, text in outputs().items():
+        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / path).write_text(text, encoding="utf-8")
+    assert list(stale(tmp_path)) == []
+    left = [Path("gonio/schemas/old.schema.json"), Path("docs/reference/config/old.md")]
+    for path in left:
+        (tmp_path / path).write_text("{}", encoding="utf-8")
+    assert sorted(stale(tmp_path)) == sorted(left)
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
