@@ -1,4 +1,4 @@
-"""Planning shows its long stages on a terminal and nothing elsewhere (issue 11)."""
+"""Planning shows its long stages on a terminal and nothing elsewhere."""
 
 from __future__ import annotations
 

@@ -65,7 +65,7 @@ def test_drift_is_divided_out_with_the_reference_readings() -> None:
 
 
 def test_the_point_source_footprint_scene_reads_an_unclipped_reference(arch_point: Rig) -> None:
-    """The point-source scene with the footprint effect (issue 12). With a standard of the
+    """The point-source scene with the footprint effect. With a standard of the
     sample's 30 mm, the 25 mm view at 0°/45° spanned 35.4 mm of it: the reference read
     10.3 % low and every recovered BRDF came out 11.5 % high. With the rig's 50.8 mm
     standard the reference reads what the ideal chain says to 0.2 % (the lamp's

@@ -220,7 +220,7 @@ def test_no_shipped_plan_saturates_a_shipped_scene(
 ) -> None:
     """Every shipped scene models saturation and none of the shipped plans (quick,
     quickstart, isotropic_hybrid, anisotropic, rehearsal) puts a reading at the top of
-    its ADC (issue 12: the quick plan put 67 and 74 glossy and brushed-metal readings
+    its ADC (the quick plan put 67 and 74 glossy and brushed-metal readings
     there, up to 48× full well, and 194 point-source readings above full well with
     saturation unmodelled)."""
     scene = load_scene(SCENES / f"{scene_name}.yaml")

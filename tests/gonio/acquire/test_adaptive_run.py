@@ -1,4 +1,4 @@
-"""The adaptive strategy on the engine (issue 16 §2): a survey pass, then a second pass
+"""The adaptive strategy on the engine: a survey pass, then a second pass
 planned from the survey's journal and stored in the run; killed anywhere, the run
 resumes to the same samples, bit for bit, as one measured in one go."""
 

@@ -1,4 +1,4 @@
-"""Fault paths through the simulated backend's injected faults (issue 12, §3): transient
+"""Fault paths through the simulated backend's injected faults: transient
 faults retried, then skipped or aborted per the plan's ``acquisition.on_fault``; a motor
 fault or a motion timeout ends the run resumable with the axes told to hold and the fault
 journaled with its flags; an overheating motor pauses the run (journaled pause and

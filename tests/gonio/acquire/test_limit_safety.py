@@ -1,4 +1,4 @@
-"""Limit safety under fuzzed plans (issue 12 §3): plans whose targets are random joint
+"""Limit safety under fuzzed plans: plans whose targets are random joint
 angles — some beyond an axis's limits, some NaN or infinite — run through the engine on
 the rehearsal backend (the real `DynamixelBus` through the unmodified SDK on the
 byte-level emulator). The emulator's log of every Goal Position written holds none

@@ -1,5 +1,5 @@
-"""The engine's samples against the simulator's own target-by-target run (issue 12, §1:
-the vectorized `sim.simulate.simulate` is the fast reference of the engine's results).
+"""The engine's samples against the simulator's own target-by-target run (the
+vectorized `sim.simulate.simulate` is the fast reference of the engine's results).
 
 What can be compared exactly: the engine always reads the reference standard at the
 start and on its schedule, which moves the motors (backlash direction, repeatability

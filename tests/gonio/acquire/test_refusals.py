@@ -1,4 +1,4 @@
-"""What `gonio acquire` refuses before anything moves (issue 12, §3): an existing or
+"""What `gonio acquire` refuses before anything moves: an existing or
 unwritable output, a missing or busy port, a run file another `gonio acquire` writes.
 Each is one line on stderr and exit code 2, and leaves no run file behind (or the one
 there untouched)."""

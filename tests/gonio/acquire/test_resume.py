@@ -1,4 +1,4 @@
-"""Resume (issue 12, §3): a run stopped any number of times (graceful stops here; kills
+"""Resume: a run stopped any number of times (graceful stops here; kills
 in tests/gonio/store/test_crash.py) and resumed equals the uninterrupted run bit for bit;
 ``--resume`` measures exactly the missing targets; it refuses a plan, rig or scene file
 changed since the run started unless ``--force``."""

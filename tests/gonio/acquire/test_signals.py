@@ -1,4 +1,4 @@
-"""Ctrl-C and SIGTERM (issue 12, §3): a first signal to a running `gonio acquire` (a
+"""Ctrl-C and SIGTERM: a first signal to a running `gonio acquire` (a
 forked child running `gonio.cli.main`) finishes the sample in flight, journals a pause,
 exits 130 printing the resume command; the run file is reusable at once, and the resumed
 run equals the uninterrupted one."""

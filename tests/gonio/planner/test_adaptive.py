@@ -1,4 +1,4 @@
-"""The adaptive density (issue 16 §2): seeded and deterministic, points distributed as
+"""The adaptive density: seeded and deterministic, points distributed as
 the density says, the indicator where the BRDF bends, the test measure's density, and
 points moved onto the edge of the rig's cap."""
 

@@ -1,4 +1,4 @@
-"""The adaptive strategy's two passes planned (issue 16 §2): the survey, then the second
+"""The adaptive strategy's two passes planned: the survey, then the second
 pass from its samples, appended; deterministic, reachable, stored bit for bit; and more
 accurate than a uniform plan of as many samples on a glossy material."""
 

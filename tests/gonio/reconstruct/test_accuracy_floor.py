@@ -1,4 +1,4 @@
-"""The accuracy floor (issue 14 §4): on noise-free samples of a uniform plan, in every
+"""The accuracy floor: on noise-free samples of a uniform plan, in every
 parametrization, the reconstruction is at least as accurate as the naive grid a user
 would write in an afternoon (benchmarks/accuracy.py has the full table)."""
 

@@ -1,4 +1,4 @@
-"""kill -9 of the acquiring process at random moments (issue 12, §3): after every kill
+"""kill -9 of the acquiring process at random moments: after every kill
 the run file passes `PRAGMA integrity_check`, holds every sample the process reported
 committed (at most the sample in flight is lost), and resumes; the completed run equals
 an uninterrupted one bit for bit.

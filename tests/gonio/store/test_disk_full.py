@@ -1,4 +1,4 @@
-"""A disk that fills during a run (issue 12, §3), emulated by SQLite's page limit and by
+"""A disk that fills during a run, emulated by SQLite's page limit and by
 a file-size limit (RLIMIT_FSIZE) on the acquiring process: the run stops cleanly (outcome
 ``journal``, exit 3 through the CLI), every committed sample intact, the file sound, and
 the run resumes to completion, equal to an uninterrupted one."""
