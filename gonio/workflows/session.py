@@ -421,6 +421,7 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
         )
     backend = backends.build(kind, rig, scene, None if scene is None else scene.seed, time.time())
     try:
+        preflight(plan, backend, files.plan_path)  # what a run refuses, its dry run refuses
         with backend.devices as devices:
             positions = devices.bus.positions()
             health = devices.bus.health()

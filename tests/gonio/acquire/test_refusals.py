@@ -14,7 +14,7 @@ import pytest
 
 from gonio.store.journal import Journal
 from gonio.store.read import open_run
-from tests.conftest import CliResult
+from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import ARCH, RunFiles
 
 
@@ -90,6 +90,33 @@ def test_a_missing_port_is_refused_before_the_first_move(
     assert port in line
     assert not path.exists()  # nothing moved, nothing measured: no run file
     assert not list(tmp_path.glob(".run.sqlite*"))
+
+
+def test_a_dry_run_refuses_what_the_run_refuses_before_any_port(
+    tmp_path: Path, run_files: Callable[..., RunFiles], run_gonio: Callable[..., CliResult]
+) -> None:
+    """A dark reading on the serial rig with its light switch taken away (light.switch:
+    none): the run and its dry run both refuse it in one line, before a port is opened
+    (the ports here answer nothing, which a dry run that opened them would report)."""
+    text = (CONFIGS / "rigs" / "arch_serial.yaml").read_text(encoding="utf-8")
+    start = text.index("  switch:                    # a relay board")
+    text = text[:start] + "  switch: none" + text[text.index("\ndetector:", start) :]
+    ptys = [os.openpty() for _ in range(2)]
+    try:
+        for (_, device), old in zip(ptys, ("/dev/ttyUSB0", "/dev/ttyACM0"), strict=True):
+            text = text.replace(f"port: {old}\n", f"port: {os.ttyname(device)}\n")
+        rig = tmp_path / "serial.yaml"
+        rig.write_text(text, encoding="utf-8")
+        files = run_files(5, rig=rig)
+        path = tmp_path / "run.sqlite"
+        for extra in ((), ("--dry-run",)):
+            line = one_line(run_gonio(*files.cli(path), *extra))
+            assert "acquisition.calibration.dark" in line and "no dark reading" in line, extra
+        assert not path.exists()
+    finally:
+        for fds in ptys:
+            for fd in fds:
+                os.close(fd)
 
 
 @pytest.fixture
