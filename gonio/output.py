@@ -22,7 +22,7 @@ import contextlib
 import os
 import stat
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO
 
@@ -148,11 +148,40 @@ class PendingOutput:
             self.partial = None
 
 
+def refuse_inputs(path: Path | str, option: str, inputs: Iterable[Path | str | None]) -> None:
+    """`ConfigError` if the output ``path`` is one of the command's ``inputs`` (the same
+    file, through any link or spelling): a command never writes over what it reads."""
+    out = Path(path)
+    for given in inputs:
+        if given is None:
+            continue
+        source = Path(given)
+        if out.exists() and source.exists():
+            same = os.path.samefile(out, source)
+        else:
+            same = out.resolve() == source.resolve()
+        if same and not _is_device(out):
+            raise ConfigError(
+                f"{option} {out}: is {source}, an input of this command; give another path"
+            )
+
+
+def _is_device(path: Path) -> bool:
+    """Output written in place (``/dev/null``, a pipe), never replaced."""
+    try:
+        return not stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
 @contextlib.contextmanager
-def reserve_output(path: Path | str, option: str) -> Iterator[PendingOutput]:
+def reserve_output(
+    path: Path | str, option: str, *, inputs: Iterable[Path | str | None] = ()
+) -> Iterator[PendingOutput]:
     """The output ``path`` (named ``option`` in messages, e.g. ``-o``), reserved now:
-    `ConfigError` at once if it cannot be created; discarded on leaving the block
-    unless written."""
+    `ConfigError` at once if it cannot be created or is one of ``inputs``; discarded on
+    leaving the block unless written."""
+    refuse_inputs(path, option, inputs)
     pending = PendingOutput(Path(path), option)
     pending._open()
     try:

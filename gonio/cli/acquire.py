@@ -107,7 +107,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
         )
         if args.output is not None:
-            session.check_output(args.output, args.overwrite)
+            session.check_output(args.output, args.overwrite, files)
         with planning.quiet() if args.quiet else contextlib.nullcontext():
             plan = source.build()
         print(render_summary(plan), flush=True)

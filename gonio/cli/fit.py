@@ -61,7 +61,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         if args.output is not None:
             from gonio.output import reserve_output
 
-            pending = outputs.enter_context(reserve_output(args.output, "-o"))
+            pending = outputs.enter_context(reserve_output(args.output, "-o", inputs=args.runs))
         parts, shared = [], []
         for path in args.runs:
             try:

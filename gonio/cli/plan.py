@@ -48,11 +48,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
         # Every output is created (as a temporary file beside it) before any work, and
         # renamed into place when whole: a refused or interrupted write leaves nothing.
         stored = None
+        inputs = [args.plan, args.rig]
         if args.output is not None:
-            stored = outputs.enter_context(reserve_output(args.output, "-o"))
+            stored = outputs.enter_context(reserve_output(args.output, "-o", inputs=inputs))
         figure = None
         if args.plot is not None:
-            figure = outputs.enter_context(reserve_output(args.plot, "--plot"))
+            figure = outputs.enter_context(reserve_output(args.plot, "--plot", inputs=inputs))
         plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
         print(render_summary(plan))
         if stored is not None:

@@ -89,7 +89,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         from gonio import params
 
         params.get(args.parametrization)  # an unknown name fails before any work
-    with reserve_output(args.output, "-o") as figure:
+    with reserve_output(args.output, "-o", inputs=[args.run]) as figure:
         from gonio.analysis.measured import Measured
 
         measured = Measured.from_run(str(args.run))

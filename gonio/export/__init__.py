@@ -68,7 +68,7 @@ def export(
             f"unknown export format {name!r}; expected one of {', '.join(FORMATS)}"
         )
     module = importlib.import_module(FORMATS[name][0])
-    with reserve_output(out_path, "-o") as out:
+    with reserve_output(out_path, "-o", inputs=[run_path]) as out:
         run = open_run(run_path)
         summary: str = module.export_run(run, out, options or Options())
     return summary

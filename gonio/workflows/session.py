@@ -33,6 +33,7 @@ from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
 from gonio.config import ConfigError, read_bytes
 from gonio.errors import GonioError
+from gonio.output import refuse_inputs
 from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, content_hash, sha256
 from gonio.planner.two_pass import extend
@@ -122,11 +123,14 @@ def _no_scene(files: Files, kind: BackendKind) -> ConfigError:
     return ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
 
 
-def check_output(path: Path | None, overwrite: bool) -> None:
+def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None) -> None:
     """`ConfigError` unless a run file can be created at ``path`` (checked by creating
-    and removing a file beside it, not only by permission bits)."""
+    and removing a file beside it, not only by permission bits) and is none of the run's
+    ``inputs``."""
     if path is None:
         return
+    if inputs is not None:
+        refuse_inputs(path, "-o", (inputs.plan_path, inputs.rig_path, inputs.scene_path))
     if path.is_dir():
         raise ConfigError(f"-o {path}: is a folder; expected a run file name")
     if (path.exists() or path.is_symlink()) and not overwrite:
@@ -228,7 +232,7 @@ def start(
         raise _no_scene(files, kind)
     if seed is None and scene is not None:
         seed = int(scene.seed)
-    check_output(output, overwrite)
+    check_output(output, overwrite, files)
     started = time.time()
     backend = backends.build(
         kind, rig, scene, seed, started, speedup=speedup, any_detector=force_simulated
@@ -406,7 +410,7 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
         f"reference standard: read at {geometry_label(rig)} on "
         f"{rig.reference_diameter_mm:g} mm, unclipped"
     )
-    check_output(output, overwrite)
+    check_output(output, overwrite, files)
     if output is not None:
         folder = output.parent if str(output.parent) else Path(".")
         need = 2 * BYTES_PER_SAMPLE * len(plan) + (1 << 20)
