@@ -16,6 +16,7 @@ from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
 from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED
+from gonio.cli.arguments import positive
 from gonio.config import ConfigError
 
 #: Exit code of a run that ended early but can be resumed.
@@ -62,7 +63,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="run the hardware path on the Dynamixel emulator (no hardware needed)",
     )
     p.add_argument(
-        "--speedup", type=float, default=50.0,
+        "--speedup", type=positive, default=50.0,
         help="--rehearse: how many times faster than real time the emulated rig runs "
         "(default 50)",
     )  # fmt: skip

@@ -25,6 +25,7 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import FACTORY_BAUD, MODELS
 from drivers.dynamixel.link import DynamixelLink
+from gonio.cli.arguments import positive_seconds
 from gonio.config import ConfigError
 
 #: How long a bring-up move may take to settle by default (s).
@@ -49,17 +50,6 @@ def motor_id(text: str) -> int:
     if not (text.isascii() and text.isdigit()) or not 0 <= int(text) <= 252:
         raise argparse.ArgumentTypeError(f"a motor ID is a whole number in 0…252, got {text!r}")
     return int(text)
-
-
-def positive_seconds(text: str) -> float:
-    """A positive number of seconds."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
 
 
 def add_parsers(

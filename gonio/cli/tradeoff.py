@@ -6,22 +6,11 @@ with --target-error, the fastest plan meeting it (docs/explanations/tradeoff.md)
 from __future__ import annotations
 
 import argparse
-import math
 import os
 from pathlib import Path
 
+from gonio.cli.arguments import positive
 from gonio.progress import Bar, hms
-
-
-def _positive(text: str) -> float:
-    """A positive number."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
 
 
 def _jobs(text: str) -> int:
@@ -51,7 +40,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
                    help="the output folder (created; a reused one resumes)")  # fmt: skip
     p.add_argument(
         "--target-error",
-        type=_positive,
+        type=positive,
         metavar="E",
         help="also write, for each scene, the fastest plan whose error (the sweep's metric) "
         "is at most E, as OUTDIR/plans/SCENE.yaml for gonio acquire",

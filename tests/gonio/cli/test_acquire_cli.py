@@ -108,3 +108,17 @@ def test_the_time_left_follows_the_measured_pace(quick_plan: Plan) -> None:
     pace.started -= 10.0  # ten wall seconds for the first half of the predicted time
     half = int(np.searchsorted(pace.cumulative, pace.cumulative[-1] / 2))
     assert abs(pace.left_s(half) - 10.0) < 0.5
+
+
+def test_a_speedup_that_is_not_a_positive_number_is_one_line(
+    run_gonio: Gonio, tmp_path: Path
+) -> None:
+    plan = plan_file(tmp_path, target=5)
+    for bad in ("-1", "0", "nan", "inf", "fast"):
+        r = run_gonio(
+            "acquire", str(plan), "--scene", str(scene_file(tmp_path)),
+            "-o", str(tmp_path / "r.sqlite"), "--rehearse", "--speedup", bad,
+        )  # fmt: skip
+        assert r.returncode == 2, (bad, r.stderr)
+        assert r.stderr.count("\n") == 1 and "--speedup" in r.stderr and "Traceback" not in r.stderr
+        assert not (tmp_path / "r.sqlite").exists()
