@@ -112,7 +112,16 @@ class Run:
 
 
 def read_run(conn: sqlite3.Connection, path: Path) -> Run:
-    """The run in an open connection (one read transaction: a consistent snapshot)."""
+    """The run in an open connection (one read transaction: a consistent snapshot);
+    `JournalError` (one line) if the file is not a readable run file (a table missing,
+    the database damaged)."""
+    try:
+        return _read(conn, path)
+    except sqlite3.DatabaseError as exc:
+        raise JournalError(f"{path}: not a readable run file: {exc}") from None
+
+
+def _read(conn: sqlite3.Connection, path: Path) -> Run:
     check_version(conn, path)
     conn.execute("BEGIN")
     try:
@@ -183,7 +192,5 @@ def open_run(path: str | Path) -> Run:
         raise JournalError(f"{path}: cannot open the run file: {exc}") from None
     try:
         return read_run(conn, path)
-    except sqlite3.DatabaseError as exc:
-        raise JournalError(f"{path}: not a readable run file: {exc}") from None
     finally:
         conn.close()

@@ -5,8 +5,10 @@ there untouched)."""
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import os
+import sqlite3
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -162,3 +164,20 @@ def test_a_run_file_being_written_is_refused(
             assert str(path) in line and "another gonio acquire is writing this run" in line
     after = open_run(path)
     assert len(after.sessions) == len(before.sessions) and len(after) == len(before)
+
+
+@pytest.mark.parametrize("table", ["samples", "events", "meta"])
+def test_resuming_a_run_file_with_a_table_gone_is_one_line(
+    tmp_path: Path,
+    run_files: Callable[..., RunFiles],
+    run_gonio: Callable[..., CliResult],
+    table: str,
+) -> None:
+    files = run_files(5)
+    path = tmp_path / "run.sqlite"
+    assert files.start(path).report.outcome == "completed"
+    with contextlib.closing(sqlite3.connect(path)) as conn:
+        conn.execute(f"DROP TABLE {table}")
+        conn.commit()
+    line = one_line(run_gonio("acquire", "--resume", str(path), "-q"))
+    assert str(path) in line and f"no such table: {table}" in line
