@@ -15,7 +15,7 @@ from pathlib import Path
 from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
-from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED
+from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, arguments
 from gonio.cli.arguments import positive
 from gonio.config import ConfigError
 
@@ -45,7 +45,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument("-o", "--output", type=Path, help="the run file to write (SQLite)")
     p.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
     p.add_argument("--scene", type=Path, help="the scene file (where the detector is simulated)")
-    p.add_argument("--seed", type=int, help="the run's seed (default: the scene's)")
+    p.add_argument("--seed", type=arguments.seed, help="the run's seed (default: the scene's)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing run file")
     p.add_argument("--resume", type=Path, metavar="RUN", help="continue the run in RUN")
     p.add_argument(
@@ -107,6 +107,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         files = session.Files(
             source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
         )
+        session.check_scene(files, source.rig, scene, rehearse=args.rehearse)
         if args.output is not None:
             session.check_output(args.output, args.overwrite, files)
         with planning.quiet() if args.quiet else contextlib.nullcontext():

@@ -21,3 +21,14 @@ def positive(text: str, what: str = "a positive number") -> float:
 def positive_seconds(text: str) -> float:
     """A positive number of seconds."""
     return positive(text, "a positive number of seconds")
+
+
+def seed(text: str) -> int:
+    """A whole number ≥ 0 (a random seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 0, got {text!r}")
+    return value

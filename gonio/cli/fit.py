@@ -9,6 +9,8 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gonio.cli import arguments
+
 if TYPE_CHECKING:
     from gonio.reconstruct.fit import FitResult
 
@@ -35,7 +37,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="write the fitted model as a scene's material",
     )  # fmt: skip
     p.add_argument("--starts", type=int, default=4, help="starting points tried (default 4)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the jittered starts (default 0)")
+    p.add_argument(
+        "--seed", type=arguments.seed, default=0, help="seed of the jittered starts (default 0)"
+    )
     p.set_defaults(func=cmd_fit)
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from gonio import progress as planning
 from gonio.acquire import progress as progress_module
 from gonio.analysis.summary import error_figures
+from gonio.cli import arguments
 from gonio.cli.run_table import render
 from gonio.planner.files import load_plan_source
 from gonio.workflows import session
@@ -40,7 +41,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument("plan", type=Path, help="the plan file (YAML)")
     p.add_argument("--scene", type=Path, required=True, help="the scene file (YAML)")
     p.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
-    p.add_argument("--seed", type=int, help="the run's seed (default: the scene's)")
+    p.add_argument("--seed", type=arguments.seed, help="the run's seed (default: the scene's)")
     p.add_argument("--no-effects", action="store_true", help="ignore the scene's effects")
     p.add_argument("-o", "--output", type=Path, help="keep the run file (SQLite) here")
     p.add_argument("--overwrite", action="store_true", help="replace an existing run file")

@@ -123,6 +123,14 @@ def _no_scene(files: Files, kind: BackendKind) -> ConfigError:
     return ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
 
 
+def check_scene(files: Files, rig: Rig, scene: Scene | None, *, rehearse: bool = False) -> None:
+    """`ConfigError` if the backend the rig file chooses needs a scene and none is given
+    (checked before planning, so the refusal is the command's only line)."""
+    kind = backends.kind_of(rig, rehearse)
+    if backends.needs_scene(rig, kind) and scene is None:
+        raise _no_scene(files, kind)
+
+
 def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None) -> None:
     """`ConfigError` unless a run file can be created at ``path`` (checked by creating
     and removing a file beside it, not only by permission bits) and is none of the run's

@@ -122,3 +122,22 @@ def test_a_speedup_that_is_not_a_positive_number_is_one_line(
         assert r.returncode == 2, (bad, r.stderr)
         assert r.stderr.count("\n") == 1 and "--speedup" in r.stderr and "Traceback" not in r.stderr
         assert not (tmp_path / "r.sqlite").exists()
+
+
+def test_a_refusal_that_needs_no_plan_comes_before_planning(
+    run_gonio: Gonio, tmp_path: Path
+) -> None:
+    """No scene for a simulated detector, or a negative seed: the one line is all that is
+    printed (the plan summary used to come first)."""
+    plan = str(plan_file(tmp_path, target=5))
+    out = str(tmp_path / "r.sqlite")
+    for args in (
+        ("acquire", plan, "-o", out),
+        ("acquire", plan, "--scene", str(scene_file(tmp_path)), "-o", out, "--seed", "-3"),
+        ("simulate", plan, "--scene", str(scene_file(tmp_path)), "--seed", "-3"),
+        ("fit", out, "--model", "lambert", "--seed", "-1"),
+    ):
+        r = run_gonio(*args)
+        assert r.returncode == 2, (args, r.stderr)
+        assert r.stdout == "" and r.stderr.count("\n") == 1, (args, r.stdout, r.stderr)
+    assert "give --scene" in run_gonio("acquire", plan, "-o", out).stderr
