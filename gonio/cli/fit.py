@@ -57,8 +57,6 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise ConfigError(f"expected one run, or three (r, g, b bands); got {len(args.runs)}")
     if args.starts < 1:
         raise ConfigError(f"--starts {args.starts}: expected at least 1")
-    if args.seed < 0:
-        raise ConfigError(f"--seed {args.seed}: expected a number ≥ 0")
     family = parse(args.model)
     with contextlib.ExitStack() as outputs:
         pending = None

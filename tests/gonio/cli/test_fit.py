@@ -76,7 +76,7 @@ def test_three_band_runs_make_an_rgb_fit(runs, run_gonio):
         (["--model", "lambert+gx"], "unknown family 'gx'"),
         (["--model", "ggx:alpha"], "expected KEY=VALUE"),
         (["--model", "ggx", "--starts", "0"], "--starts 0: expected at least 1"),
-        (["--model", "ggx", "--seed", "-1"], "--seed -1: expected a number ≥ 0"),
+        (["--model", "ggx", "--seed", "-1"], "--seed: expected a whole number ≥ 0, got '-1'"),
         (["EXTRA", "--model", "ggx"], "expected one run, or three"),
     ],
 )

@@ -148,7 +148,10 @@ def test_a_closed_pipe_in_process_returns_141(
             "(see gonio motors status --help)",
         ),
         (["frobnicate"], "argument COMMAND: invalid choice: 'frobnicate'"),
-        (["simulate", "p.yaml", "--seed", "two"], "simulate: argument --seed: invalid int value"),
+        (
+            ["simulate", "p.yaml", "--seed", "two"],
+            "simulate: argument --seed: expected a whole number ≥ 0, got 'two'",
+        ),
     ],
     ids=["missing", "unknown-option", "missing-action", "bad-type", "bad-command", "bad-int"],
 )
@@ -172,5 +175,9 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
     assert "rrr.yaml: cannot read the file: File name too long" in r.stderr
     assert len(r.stderr) < 600
     quickstart = Path(__file__).resolve().parents[3] / "configs" / "plans" / "quickstart.yaml"
-    r = run_gonio("acquire", str(quickstart), "-o", str(tmp_path / f"{long_name}.sqlite"))
+    scene = quickstart.parents[1] / "scenes" / "matte.yaml"
+    r = run_gonio(
+        "acquire", str(quickstart), "--scene", str(scene),
+        "-o", str(tmp_path / f"{long_name}.sqlite"),
+    )  # fmt: skip
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "File name too long" in r.stderr
