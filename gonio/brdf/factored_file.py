@@ -170,6 +170,8 @@ class _Lines:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
             raise ConfigError(f"{path}: cannot read it: {exc}") from None
+        #: How many numbers the file could hold at most (every value is one word).
+        self.words = len(text.split())
         lines = enumerate(text.splitlines(), 1)
         self._it: Iterator[tuple[int, str]] = (
             (n, s.strip()) for n, s in lines if s.strip() and not s.lstrip().startswith("#")
@@ -199,8 +201,8 @@ class _Lines:
 
     def count(self, label: str) -> int:
         value = self.field(label)
-        if not value.isdigit() or int(value) < 1:
-            raise self.error(f"{label}: expected a positive integer, got {value!r}")
+        if not value.isdigit() or len(value) > 12 or int(value) < 1:
+            raise self.error(f"{label}: expected a positive integer, got {value[:40]!r}")
         return int(value)
 
     def table(self, name: str, rows: int, cols: int, *, cdf: bool = False) -> FloatArray:
@@ -227,6 +229,14 @@ def read(path: Path | str) -> FactoredTables:
     if param != "halfangle":
         raise lines.error(f"param: expected 'halfangle' (the only one supported), got {param!r}")
     j, k, nto, npo, ntp, nz, npp = (lines.count(label) for _, label in _HEADER[1:])
+    # Every size the header states is bounded by what the file holds before anything is
+    # allocated: a header asking for 10⁹ × 10⁹ cells is one line, not an allocation.
+    stated = j * (nto * npo + ntp * npp + k * (ntp + npp)) + 3 * (nto * npo + ntp * npp)
+    if stated > lines.words:
+        raise ConfigError(
+            f"{p}: the header states {stated:,} values; the file holds at most "
+            f"{lines.words:,} numbers (truncated, or a wrong header)"
+        )
     lines.keyword("INTENSITY DATA")
     F, G = np.empty((j, nto, npo)), np.empty((j, ntp, npp))
     u, v = np.empty((j, k, ntp)), np.empty((j, k, npp))
@@ -241,6 +251,11 @@ def read(path: Path | str) -> FactoredTables:
     Gc = lines.table("Gc", ntp, 3 * npp).reshape(ntp, npp, 3)
     lines.keyword("EOF")
     cdf = _Lines(p.with_name(p.name + CDF_SUFFIX))
+    if j * k * (npp + nz) > cdf.words:
+        raise ConfigError(
+            f"{cdf.path}: the header of {p.name} states {j * k * (npp + nz):,} CDF values; "
+            f"the file holds at most {cdf.words:,} numbers"
+        )
     cdf.keyword("CDF DATA")
     cdf_phi, cdf_z = np.empty((j * k, npp)), np.empty((j * k, nz))
     for i in range(j * k):

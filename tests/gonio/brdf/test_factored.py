@@ -227,6 +227,14 @@ def test_a_file_without_energy_samples_uniform_terms_without_warnings(tmp_path):
         (lambda s: s.replace("F_0\n", "F_1\n", 1), "expected 'F_0'"),
         (lambda s: s.replace("\nEOF\n", "\n"), "ends early; expected EOF"),
         (lambda s: s.replace("INTENSITY DATA\n", "INTENSITY DATA\nF_0\n1 2 x\n", 1), "numbers"),
+        # Sizes no file holds: refused before anything is allocated (not 6.94 EiB).
+        (
+            lambda s: s.replace("theta_out_count: 8", "theta_out_count: 1000000000").replace(
+                "phi_out_count: 16", "phi_out_count: 1000000000"
+            ),
+            "the header states .* values; the file holds at most",
+        ),
+        (lambda s: s.replace("theta_out_count: 8", "theta_out_count: " + "9" * 5000), "positive"),
     ],
 )
 def test_a_malformed_factor_file_is_one_line_naming_file_and_line(files, tmp_path, edit, message):
