@@ -48,7 +48,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--scheduler",
         metavar="tcp://HOST:PORT",
-        help="run on this Dask cluster (needs the distributed extra) instead of local processes",
+        help="run on this Dask cluster (needs the distributed extra) instead of local "
+        "processes; it must answer within 30 s",
     )
     p.add_argument(
         "-j",
@@ -61,9 +62,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_tradeoff(args: argparse.Namespace) -> int:
+    from gonio.tradeoff.executors import check_address
     from gonio.tradeoff.grid import load_sweep
     from gonio.tradeoff.sweep import run_sweep
 
+    if args.scheduler is not None:
+        check_address(args.scheduler)  # before anything runs, not after the connect timeout
     sweep = load_sweep(args.sweep)
     # One per CPU by default, resolved here: the parser and its help are the same everywhere.
     jobs = args.jobs or os.cpu_count() or 1

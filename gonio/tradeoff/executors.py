@@ -14,6 +14,7 @@ a task carries its sweep's file bytes, so they need none of its files.
 from __future__ import annotations
 
 import importlib
+import ipaddress
 import multiprocessing
 import re
 from collections.abc import Callable, Sequence
@@ -64,10 +65,29 @@ def run_local(tasks: Sequence[Task], jobs: int, done: Done) -> None:
             raise
 
 
-def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
-    """On the Dask cluster whose scheduler is at ``scheduler`` (``tcp://HOST:PORT``)."""
-    if not ADDRESS.fullmatch(scheduler):
+def check_address(scheduler: str) -> str:
+    """``scheduler`` if it can be a scheduler's address: [PROTOCOL://]HOST:PORT with a port
+    in 1…65535 and, where the host is written as an IP address, a valid one; else
+    `ConfigError` (at once, not after `CONNECT_TIMEOUT_S`)."""
+    match = ADDRESS.fullmatch(scheduler)
+    if match is None:
         raise ConfigError(f"--scheduler {excerpt(scheduler)}: expected an address tcp://HOST:PORT")
+    host, port = match.group(2), int(scheduler.rsplit(":", 1)[1])
+    if not 1 <= port <= 65535:
+        raise ConfigError(f"--scheduler {scheduler}: port {port}: expected 1…65535")
+    written_as_ip = host.startswith("[") or all(part.isdigit() for part in host.split("."))
+    if written_as_ip:
+        try:
+            ipaddress.ip_address(host.strip("[]"))
+        except ValueError:
+            raise ConfigError(f"--scheduler {scheduler}: {host} is not an IP address") from None
+    return scheduler
+
+
+def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
+    """On the Dask cluster whose scheduler is at ``scheduler`` (``tcp://HOST:PORT``),
+    waiting at most `CONNECT_TIMEOUT_S` for it to answer."""
+    check_address(scheduler)
     try:  # (untyped: used through Any)
         distributed: Any = importlib.import_module("distributed")
     except ImportError:

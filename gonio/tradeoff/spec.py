@@ -13,11 +13,12 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, get_args
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 from pydantic.config import JsonDict
 
 from gonio import params
 from gonio.config import InSchema, Strict, excerpt, field_error
+from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
 from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
@@ -91,7 +92,7 @@ class Axes(Strict):
         description="Strategies: the plan file's, or warped (Sobol with the sweep's warps).",
         json_schema_extra=UNIQUE,
     )
-    samples: list[Annotated[int, InSchema(minimum=1)]] = Field(
+    samples: list[Annotated[int, InSchema(minimum=1, maximum=MAX_TARGETS)]] = Field(
         min_length=1,
         description="Kept targets asked for (a plan's sampling.target).",
         json_schema_extra=UNIQUE,
@@ -132,10 +133,15 @@ class Axes(Strict):
 
     @field_validator("samples", "averages")
     @classmethod
-    def _positive_counts(cls, values: list[int]) -> list[int]:
+    def _positive_counts(cls, values: list[int], info: ValidationInfo) -> list[int]:
         for k, value in enumerate(values):
             if value < 1:
                 raise field_error(str(k), f"expected a positive count, got {value}")
+            if info.field_name == "samples" and value > MAX_TARGETS:
+                raise field_error(
+                    str(k), f"expected at most {MAX_TARGETS:,} targets, got {value:,} "
+                    f"({WHY_MAX_TARGETS})",
+                )  # fmt: skip
         return values
 
     @field_validator("exposure_s", "velocity_scale")
