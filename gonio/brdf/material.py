@@ -223,7 +223,10 @@ class MaterialSpec(Strict):
         folder = Path((info.context or {}).get("path", "")).parent
         given = data.get("params") if isinstance(data, dict) else None
         if isinstance(given, dict) and isinstance(given.get("path"), str):
-            data = {**data, "params": {**given, "path": str(folder / given["path"])}}
+            # Absolute once resolved, so the spec written back as text (a journaled scene)
+            # names the same file from any folder.
+            path = (folder / Path(given["path"]).expanduser()).resolve()
+            data = {**data, "params": {**given, "path": str(path)}}
         return data
 
     @model_validator(mode="after")

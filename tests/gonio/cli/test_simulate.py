@@ -9,17 +9,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gonio import brdf
 from gonio.acquire.reference import reference_pose
 from gonio.analysis.calibrated import calibrate
 from gonio.analysis.summary import truth_of
 from gonio.cli.simulate import render_result as render
 from gonio.errors import GonioError
+from gonio.export.factored import Resolution
+from gonio.export.factored import export as export_factored
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.store import open_run
 from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
+from tests.support.acquire import plan_file
 from tests.support.rigs import rig_with
 
 Gonio = Callable[..., CliResult]
@@ -152,3 +156,31 @@ def test_a_footprint_or_view_that_overruns_the_sample_is_warned(
         "detector's field of view reaches past the sample's edge at the angles reached: "
         "their readings miss light that the BRDF assumes"
     ) in lines
+
+
+@pytest.mark.parametrize("effects", [(), ("--no-effects",)])
+def test_a_material_file_relative_to_its_scene_is_found_from_any_folder(
+    run_gonio: Callable[..., CliResult],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    effects: tuple[str, ...],
+) -> None:
+    """The scene names its tabulated material relative to itself; `gonio simulate` run
+    from another folder measures and scores it (with --no-effects the journaled scene is
+    the spec written back, which named the file relative to the folder it ran in)."""
+    folder = tmp_path / "scenes"
+    folder.mkdir()
+    grey = brdf.create("lambert", albedo=0.5)
+    export_factored(grey, folder / "grey.txt", 1, 1, Resolution(8, 8, 8, 8, 16))
+    text = (CONFIGS / "scenes" / "matte.yaml").read_text(encoding="utf-8")
+    start = text.index("\nmaterial:") + 1
+    end = text.index("\n", start)
+    text = text[:start] + "material: {name: factored, path: grey.txt}" + text[end:]
+    (folder / "s.yaml").write_text(text, encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    r = run_gonio(
+        "simulate", str(plan_file(tmp_path, target=20)), "--scene", "scenes/s.yaml",
+        "-o", "run.sqlite", *effects,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "recovered BRDF error" in r.stdout
