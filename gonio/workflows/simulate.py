@@ -24,6 +24,7 @@ from gonio.acquire.progress import Observer
 from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
+from gonio.errors import GonioError
 from gonio.planner.model import Plan
 from gonio.store.read import Run
 from gonio.types import FloatArray
@@ -108,6 +109,14 @@ def simulate_plan(
     )  # fmt: skip
     wall = time.perf_counter() - started
     run = outcome.run
+    try:
+        calibrated = calibrate(run)
+    except GonioError:
+        report = outcome.report
+        if report.outcome != "completed" and report.message:
+            # The run stopped before it could be calibrated: its reason is the cause.
+            raise GonioError(f"the run ended early: {report.message}") from None
+        raise
     wi, wo = run.directions()
     true_wi, true_wo = measured_pairs(run)
     return Result(
@@ -116,7 +125,7 @@ def simulate_plan(
         run=run,
         report=outcome.report,
         wall_s=wall,
-        calibrated=calibrate(run),
+        calibrated=calibrated,
         truth=truth_of(run, at_true_pairs=True),
         wi=wi,
         wo=wo,

@@ -184,3 +184,18 @@ def test_a_material_file_relative_to_its_scene_is_found_from_any_folder(
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     assert "recovered BRDF error" in r.stdout
+
+
+def test_a_run_the_reference_saturates_names_that_cause(
+    run_gonio: Callable[..., CliResult], tmp_path: Path
+) -> None:
+    """A full well so small that the reference standard saturates even at the shortest
+    exposure: gonio simulate names the reference and the fix, as gonio acquire does (it
+    used to say only that the run had no calibration reading)."""
+    text = (CONFIGS / "scenes" / "matte.yaml").read_text(encoding="utf-8")
+    scene = tmp_path / "tiny_well.yaml"
+    scene.write_text(text.replace("full_well_e: 5.0e+7", "full_well_e: 2.0e+3"), encoding="utf-8")
+    r = run_gonio("simulate", str(plan_file(tmp_path, target=20)), "--scene", str(scene))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+    assert "the reference standard saturates the detector" in r.stderr
+    assert "lower the source's power" in r.stderr
