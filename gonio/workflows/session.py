@@ -38,7 +38,7 @@ from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, content_hash, sha256
 from gonio.planner.two_pass import extend
 from gonio.rig.model import Rig
-from gonio.store.journal import Journal, remove_run_file
+from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
 from gonio.workflows import backends
 from gonio.workflows.adaptive import estimate
@@ -313,6 +313,21 @@ def changed_files(run: Run, files: Files) -> list[str]:
     ]
 
 
+def check_stored_texts(run: Run) -> None:
+    """`JournalError` if a plan, rig or scene text the run file stores no longer has the
+    SHA-256 the run recorded when it started: the journal was edited, and what it says was
+    measured from can no longer be trusted."""
+    recorded = run.meta.get("hashes", {})
+    for name in ("plan", "rig", "scene"):
+        text = run.meta.get(f"{name}_text")
+        expected = recorded.get(f"{name}_sha256")
+        if text is not None and expected and sha256(str(text).encode("utf-8")) != expected:
+            raise JournalError(
+                f"{run.path}: the stored {name} text does not match the sha256 the run "
+                "recorded: the run file was edited; it cannot be resumed"
+            )
+
+
 def current_files(run: Run, plan: Path | None, rig: Path | None, scene: Path | None) -> Files:
     """The files a run was made from as they are on disk now (paths from the journal
     unless given); a file that is gone keeps its stored text."""
@@ -350,6 +365,7 @@ def resume(
     journal = Journal.reopen(path, durable=False, max_page_count=max_page_count)
     try:
         run = read_run(journal.conn, path)
+        check_stored_texts(run)
         files = current_files(run, plan_path, rig_path, scene_path)
         changed = changed_files(run, files)
         if changed and not force:

@@ -5,8 +5,11 @@ changed since the run started unless ``--force``."""
 
 from __future__ import annotations
 
+import contextlib
+import json
 import random
 import signal
+import sqlite3
 from collections.abc import Callable
 from pathlib import Path
 
@@ -163,3 +166,33 @@ def test_resume_refuses_a_changed_file(
 
 def test_plan_yaml_is_what_the_tests_use() -> None:
     assert "every_samples: 15" in plan_yaml()
+
+
+@pytest.mark.parametrize("edited", ["plan", "rig", "scene"])
+def test_resume_refuses_a_run_file_whose_stored_text_was_edited(
+    edited: str,
+    tmp_path: Path,
+    run_files: Callable[..., RunFiles],
+    stops: list[StopRequests],
+    run_gonio: Callable[..., CliResult],
+) -> None:
+    """The files on disk are untouched, the journal's copy of one is not: its hash no
+    longer matches the one the run recorded, and the run is refused, even with --force."""
+    files = run_files(30)
+    path = tmp_path / "run.sqlite"
+    with pytest.raises(RunInterrupted):
+        files.start(path, progress=StopAfter(5, stops))
+    with contextlib.closing(sqlite3.connect(path)) as conn:
+        (value,) = conn.execute(
+            "SELECT value FROM meta WHERE key = ?", (f"{edited}_text",)
+        ).fetchone()
+        text = json.loads(value) + "# edited in the journal\n"
+        conn.execute(
+            "UPDATE meta SET value = ? WHERE key = ?", (json.dumps(text), f"{edited}_text")
+        )
+        conn.commit()
+    for force in ((), ("--force",)):
+        refused = run_gonio("acquire", "--resume", str(path), "-q", *force)
+        assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
+        assert f"the stored {edited} text does not match" in refused.stderr
+    assert len(open_run(path)) == 5
