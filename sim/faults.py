@@ -31,7 +31,8 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from gonio.config import InSchema, Strict, field_error
+from gonio.config import Strict, field_error
+from gonio.config_schema import InSchema
 from sim.physics.streams import FAULT, Streams
 
 FaultKind = Literal[

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from gonio.config import json_schema
+from gonio.config_schema import json_schema
 from gonio.planner.schema import PlanSpec
 from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import SweepSpec

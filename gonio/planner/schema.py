@@ -17,7 +17,8 @@ from pydantic import Field, model_validator
 from gonio import brdf, params
 from gonio.brdf import family
 from gonio.brdf.material import MaterialError, build, material_schema
-from gonio.config import InSchema, Strict, excerpt, field_error
+from gonio.config import Strict, excerpt, field_error
+from gonio.config_schema import InSchema
 from gonio.errors import GonioError
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]

@@ -25,7 +25,8 @@ from pydantic import Field, field_validator, model_validator
 
 from drivers.light import SerialLightConfig
 from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
-from gonio.config import InSchema, Strict, field_error
+from gonio.config import Strict, field_error
+from gonio.config_schema import InSchema
 
 #: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
 Command = Annotated[str, InSchema(pattern=r"\S")]

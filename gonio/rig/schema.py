@@ -12,7 +12,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from gonio.config import InSchema, Strict, field_error
+from gonio.config import Strict, field_error
+from gonio.config_schema import InSchema
 from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
 
 Vector = tuple[float, float, float]

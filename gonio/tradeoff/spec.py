@@ -17,7 +17,8 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 from pydantic.config import JsonDict
 
 from gonio import params
-from gonio.config import InSchema, Strict, excerpt, field_error
+from gonio.config import Strict, excerpt, field_error
+from gonio.config_schema import InSchema
 from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
 from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
