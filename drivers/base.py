@@ -360,7 +360,7 @@ class Simulated(Protocol):
 
 
 @dataclass
-class Devices:
+class Devices(Resource):
     """The instrument one run drives: a motor bus, a detector, an optional switchable
     light source, the clock they share and, for a simulated backend, its `Simulated`
     side. A context manager that opens them all and closes them all (in reverse order,
@@ -375,19 +375,15 @@ class Devices:
     simulation: Simulated | None = None
     _stack: ExitStack = field(default_factory=ExitStack, repr=False)
 
-    def __enter__(self) -> Self:
+    def open(self) -> None:
+        """Open the bus, the detector and the light; if one fails, close those opened."""
         with ExitStack() as stack:
             stack.enter_context(self.bus)
             stack.enter_context(self.detector)
             if self.light is not None:
                 stack.enter_context(self.light)
             self._stack = stack.pop_all()
-        return self
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self._stack.__exit__(exc_type, exc, tb)
+    def close(self) -> None:
+        """Close them in reverse order (safe to call twice)."""
+        self._stack.close()
