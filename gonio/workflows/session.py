@@ -116,19 +116,24 @@ def _session_info(kind: BackendKind, argv: list[str]) -> dict[str, Any]:
     return {"backend": kind, "pid": os.getpid(), "host": socket.gethostname(), "argv": argv}
 
 
-def _no_scene(files: Files, kind: BackendKind) -> ConfigError:
-    why = "the detector is simulated"
-    if kind == "rehearsal":
-        why = "--rehearse simulates what the detector sees"
-    return ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
-
-
-def check_scene(files: Files, rig: Rig, scene: Scene | None, *, rehearse: bool = False) -> None:
-    """`ConfigError` if the backend the rig file chooses needs a scene and none is given
-    (checked before planning, so the refusal is the command's only line)."""
-    kind = backends.kind_of(rig, rehearse)
+def check_scene(
+    files: Files,
+    rig: Rig,
+    scene: Scene | None,
+    *,
+    rehearse: bool = False,
+    force_simulated: bool = False,
+) -> BackendKind:
+    """The backend the rig file chooses (``force_simulated``: the simulated one whatever
+    its bus); `ConfigError` if that backend needs a scene and none is given (a command
+    checks it before planning, so the refusal is its only line)."""
+    kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
     if backends.needs_scene(rig, kind) and scene is None:
-        raise _no_scene(files, kind)
+        why = "the detector is simulated"
+        if kind == "rehearsal":
+            why = "--rehearse simulates what the detector sees"
+        raise ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
+    return kind
 
 
 def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None) -> None:
@@ -235,9 +240,7 @@ def start(
     """Acquire ``plan`` into a new run file ``output`` (None: in memory);
     ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
     rig = plan.rig
-    kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
-    if backends.needs_scene(rig, kind) and scene is None:
-        raise _no_scene(files, kind)
+    kind = check_scene(files, rig, scene, rehearse=rehearse, force_simulated=force_simulated)
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite, files)
@@ -417,10 +420,8 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
     """Check what a run needs without moving anything; the lines to print (raises a
     `GonioError` at the first problem)."""
     rig = plan.rig
-    kind = backends.kind_of(rig, rehearse)
+    kind = check_scene(files, rig, scene, rehearse=rehearse)
     lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]
-    if backends.needs_scene(rig, kind) and scene is None:
-        raise _no_scene(files, kind)
     lo, hi = rig.limits[:, 0], rig.limits[:, 1]
     outside = ~np.all((plan.angles >= lo) & (plan.angles <= hi), axis=1)
     if outside.any():
