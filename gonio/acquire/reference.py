@@ -99,7 +99,10 @@ def reference_pose(rig: Rig) -> FloatArray:
     (`reference_geometry`; 0°/45° in the shipped rigs)."""
     wi, wo = reference_geometry(rig)
     solution = rig.solve(wi, wo)
-    if solution.reasons[0] not in (Reason.OK, Reason.BLIND_SPOT, Reason.FOOTPRINT):
+    # Refusals about the sample's size or the arms' shadow do not bind the standard,
+    # which has its own size (`_clipped` checks its footprint or view).
+    geometry_only = (Reason.BLIND_SPOT, Reason.FOOTPRINT, Reason.VIEW_OFF_SAMPLE)
+    if solution.reasons[0] not in (Reason.OK, *geometry_only):
         raise GonioError(
             f"rig {rig.spec.name!r} cannot reach its reference geometry "
             f"({geometry_label(rig)}; {Reason(solution.reasons[0]).label.replace('_', ' ')})"

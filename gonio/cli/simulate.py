@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ from gonio.analysis.summary import error_figures
 from gonio.cli import arguments
 from gonio.cli.run_table import render
 from gonio.planner.files import load_plan_source
+from gonio.rig.constraints import footprint_ok, view_on_sample
 from gonio.workflows import session
 from gonio.workflows.simulate import Result, simulate_plan
 
@@ -62,7 +62,7 @@ def render_result(result: Result) -> str:
     )
     lines = [f"scene {scene.name!r} (effects: {effects}), seed {result.run.meta['seed']}"]
     lines += instrument
-    lines += _saturation_note(result) + _point_source_note(result) + _footprint_note(result)
+    lines += _saturation_note(result) + _footprint_note(result)
     return "\n".join(lines)
 
 
@@ -82,43 +82,24 @@ def _saturation_note(result: Result) -> list[str]:
     ]
 
 
-def _point_source_note(result: Result) -> list[str]:
-    """A point source's ideal chain assumes the detector's spot lies on the sample."""
-    rig = result.plan.rig
-    if rig.source_kind != "point" or result.scene.effects.footprint is not None:
-        return []
-    fov, sample = rig.spec.constraints.detector_fov_mm, rig.spec.constraints.sample_diameter_mm
-    beyond = int(np.count_nonzero(fov > sample * result.true_wo[:, 2]))
-    if not beyond:
-        return []
-    limit = math.degrees(math.acos(min(fov / sample, 1.0)))
-    return [
-        f"  note: {beyond} targets see past the sample's edge (θo > {limit:.1f}°); the "
-        "ideal point-source chain counts that area as lit sample: list the footprint "
-        "effect to model it"
-    ]
-
-
 def _footprint_note(result: Result) -> list[str]:
     """Targets whose spot overruns the sample at the angles reached (the true ones: the
     planner refused overruns at the commanded angles, a position error can still cross
     the edge): a collimated beam's lit ellipse off the sample or out of the detector's
-    view, or, with the footprint effect, a point-source detector's view past the
-    sample's edge (without the effect `_point_source_note` says it)."""
+    view, or, with the footprint effect (which models the holder the view then takes
+    in), a point-source detector's view past the sample's edge."""
     rig, n = result.plan.rig, len(result.true_wi)
     c = rig.spec.constraints
     if not n:
         return []
     if c.beam_diameter_mm is not None:
-        from gonio.rig.constraints import footprint_ok
-
         over = ~footprint_ok(
             result.true_wi, result.true_wo, c.beam_diameter_mm, c.sample_diameter_mm,
             c.detector_fov_mm,
         )  # fmt: skip
         what = "the beam's footprint leaves the sample or the detector's view"
     elif rig.source_kind == "point" and result.scene.effects.footprint is not None:
-        over = c.detector_fov_mm > c.sample_diameter_mm * result.true_wo[:, 2]
+        over = ~view_on_sample(result.true_wo, c.detector_fov_mm, c.sample_diameter_mm)
         what = "the detector's field of view reaches past the sample's edge"
     else:
         return []

@@ -38,6 +38,7 @@ COLOURS = {
     Reason.FOOTPRINT.label: "#74c476",
     Reason.AXIS_LIMIT.label: "#6baed6",
     Reason.COLLISION.label: "#fb6a4a",
+    Reason.VIEW_OFF_SAMPLE.label: "#fdd0a2",
 }
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from gonio.radiometry._checks import cosine, direction, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic, sector
-from gonio.rig.constraints import footprint_ok
+from gonio.rig.constraints import footprint_ok, view_on_sample
 from gonio.types import ArrayLike, BoolArray, FloatArray
 
 #: cos θo floor for the seen ellipse (as in footprint_ok): a strip at exactly grazing
@@ -44,8 +44,7 @@ def seen_fits_sample(fov_diameter_mm: float, sample_diameter_mm: float, wo: Arra
     point-source chain's flooded-sample assumption."""
     f = positive("fov_diameter_mm", fov_diameter_mm)
     s = positive("sample_diameter_mm", sample_diameter_mm)
-    co = cosine(direction("wo", wo))
-    return np.asarray(f <= s * co, dtype=np.bool_)
+    return view_on_sample(direction("wo", wo), f, s)
 
 
 def footprint_fraction(

@@ -8,6 +8,11 @@ lies inside the sample (a disc of diameter S: D / cos θi ≤ S) and inside the 
 ellipse (the detector collects all the reflected light). Containment of two centred
 ellipses with shape matrices Q = A² u uᵀ + B² v vᵀ: E₁ ⊂ E₂ ⟺ λmax(Q₂⁻¹ Q₁) ≤ 1, in
 closed form for 2 × 2.
+
+View (a point source): a lamp lights the whole sample plane from above, whatever its
+distance, so nothing confines the lit area; what the detector sees must then lie on
+the sample, or it measures the holder around it. The seen ellipse's long axis F / cos θo
+is its widest extent: the view is on the sample disc ⟺ F ≤ S cos θo.
 """
 
 from __future__ import annotations
@@ -48,6 +53,12 @@ def footprint_ok(
     det = (a1 * b1) ** 2 / (a2 * b2) ** 2
     lam = 0.5 * (trace + np.sqrt(np.maximum(trace**2 - 4.0 * det, 0.0)))
     return np.asarray((2.0 * a1 <= sample_mm) & (lam <= 1.0 + 1e-12), dtype=np.bool_)
+
+
+def view_on_sample(wo: FloatArray, fov_mm: float, sample_mm: float) -> BoolArray:
+    """True where the detector's seen ellipse (F / cos θo × F, centred) lies on the
+    sample disc of diameter S: F ≤ S cos θo (see module)."""
+    return np.asarray(fov_mm <= sample_mm * wo[..., 2], dtype=np.bool_)
 
 
 def in_box(angles: FloatArray, ranges: dict[int, tuple[float, float]]) -> BoolArray:

@@ -38,8 +38,9 @@ class Reason(IntEnum):
     THETA_MAX = 1  # beyond the usable polar angle of the light or the detector
     BLIND_SPOT = 2  # source and detector closer than the minimum separation
     FOOTPRINT = 3  # the lit area leaves the sample or the detector's view (collimated)
-    AXIS_LIMIT = 4  # no inverse-kinematics solution inside the axes' limits
-    COLLISION = 5  # every solution inside the limits hits a keep-out box
+    VIEW_OFF_SAMPLE = 4  # the detector's view runs past the sample's edge (point source)
+    AXIS_LIMIT = 5  # no inverse-kinematics solution inside the axes' limits
+    COLLISION = 6  # every solution inside the limits hits a keep-out box
 
     @property
     def label(self) -> str:
@@ -289,19 +290,26 @@ class Rig:
         reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
         theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
         c = self.spec.constraints
-        # A point source floods the sample: no lit ellipse to keep on it (the spot the
-        # detector sees leaving the sample is the footprint effect's to model).
+        # A collimated beam's lit ellipse must fit the sample and the view; a point source
+        # floods the sample plane, so the view itself must stay on the sample.
+        no_pair = np.zeros(len(wi), dtype=np.bool_)
         footprint = (
-            np.zeros(len(wi), dtype=np.bool_)
+            no_pair
             if c.beam_diameter_mm is None
             else ~constraints.footprint_ok(
                 wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
             )
         )
+        off_sample = (
+            ~constraints.view_on_sample(wo, c.detector_fov_mm, c.sample_diameter_mm)
+            if self.source_kind == "point"
+            else no_pair
+        )
         checks = [
             (Reason.THETA_MAX, theta_max),
             (Reason.BLIND_SPOT, constraints.separation(wi, wo) < self.min_separation),
             (Reason.FOOTPRINT, footprint),
+            (Reason.VIEW_OFF_SAMPLE, off_sample),
             (Reason.AXIS_LIMIT, ~limits_ok.any(axis=1)),
             (Reason.COLLISION, ~usable.any(axis=1)),
         ]

@@ -67,17 +67,15 @@ def test_bad_scene_is_one_line(run_gonio: Gonio, tmp_path: Path) -> None:
     assert f"{scene}:2: material.name: unknown BRDF model 'velvet'" in r.stderr
 
 
-def test_point_source_note_uses_the_rigs_sizes(arch_point: Rig) -> None:
+def test_a_point_source_plan_keeps_the_view_on_the_sample(arch_point: Rig) -> None:
+    """25 mm seen on a 30 mm sample: the view leaves the sample beyond acos(25/30) =
+    33.6°, so the plan measures no target beyond it; on a 60 mm sample, up to 65.4°."""
     spec, _ = load_plan(CONFIGS / "plans" / "quick.yaml")
-    plan = build(spec, arch_point)
-    scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", arch_point)
-    text = render(simulate_plan(plan, scene))
-    # 25 mm seen on a 30 mm sample: the view leaves the sample beyond acos(25/30).
-    assert "see past the sample's edge (θo > 33.6°)" in text
-    wider = rig_with(arch_point, constraints={"sample_diameter_mm": 60})
-    assert "see past the sample's edge (θo > 65.4°)" in render(
-        simulate_plan(build(spec, wider), scene)
-    )
+    for sample_mm, edge_deg in ((30, 33.557), (60, 65.376)):
+        rig = rig_with(arch_point, constraints={"sample_diameter_mm": sample_mm})
+        plan = build(spec.model_copy(update={"kicks": 0}), rig)
+        theta_o = np.degrees(np.arccos(plan.wo[:, 2]))
+        assert theta_o.max() <= edge_deg and theta_o.max() > edge_deg - 3.0
 
 
 def test_the_reference_standard_is_the_rigs(rigs: dict[str, Rig]) -> None:
@@ -128,7 +126,7 @@ def test_a_footprint_or_view_that_overruns_the_sample_is_warned(
     """A collimated beam's lit ellipse off the sample at the angles reached (here: the
     true angles moved toward grazing, as a position error near the edge would), and a
     point source's view past the sample's edge with the footprint effect on (without it
-    the point-source note says so): a warning with the count and the share."""
+    the ideal chain reads the holder as sample): a warning with the count and the share."""
     import dataclasses
 
     spec, _ = load_plan(CONFIGS / "plans" / "quickstart.yaml")
@@ -145,14 +143,16 @@ def test_a_footprint_or_view_that_overruns_the_sample_is_warned(
     ) in text.splitlines()
 
     point_scene = load_scene(CONFIGS / "scenes" / "seed000_specular.yaml", arch_point)
-    point = simulate_plan(build(spec, arch_point), point_scene.with_effects([]))
-    seen_past = int(np.count_nonzero(30.0 * point.true_wo[:, 2] < 25.0))
-    assert seen_past > 0
-    assert "warning: at" not in render(point)  # the point-source note speaks instead
-    with_effect = dataclasses.replace(point, scene=point_scene.with_effects(["footprint"]))
-    lines = render(with_effect).splitlines()
+    point = simulate_plan(build(spec, arch_point), point_scene.with_effects(["footprint"]))
+    assert "warning: at" not in render(point)  # the planner refused every view off the sample
+    past = point.true_wo.copy()
+    past[:10] = [np.sin(0.7), 0.0, np.cos(0.7)]  # 40°: 25 mm / cos θo > 30 mm
+    assert "warning: at" not in render(
+        dataclasses.replace(point, true_wo=past, scene=point_scene.with_effects([]))
+    )  # the ideal chain reads the holder as sample: nothing is missed
+    lines = render(dataclasses.replace(point, true_wo=past)).splitlines()
     assert (
-        f"  warning: at {seen_past} of 300 targets ({100 * seen_past / 300:.1f} %) the "
+        "  warning: at 10 of 300 targets (3.3 %) the "
         "detector's field of view reaches past the sample's edge at the angles reached: "
         "their readings miss light that the BRDF assumes"
     ) in lines

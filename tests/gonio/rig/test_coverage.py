@@ -4,7 +4,9 @@ What a rig claims, from its file:
 
 * geometry (properties of the pair alone, unchanged by turning it about the normal):
   θi, θo ≤ theta_max; separation ≥ min_separation; the lit ellipse inside the sample
-  and inside the detector's view (footprint);
+  and inside the detector's view (footprint, a collimated light); the detector's view
+  on the sample (a point source, which floods it: the view's chord along ωo's azimuth,
+  F / cos θo, at most the sample's diameter);
 * hardware: the axes' limits and the keep-out boxes (joint space).
 
 The arch's limits never bind inside θ ≤ theta_max (80° < 85°; one of the two detector
@@ -57,9 +59,14 @@ def expected_reasons(rig: Rig, wi: FloatArray, wo: FloatArray) -> np.ndarray:
     c = rig.spec.constraints
     theta_i, theta_o = np.degrees(np.arccos(wi[:, 2])), np.degrees(np.arccos(wo[:, 2]))
     apart = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", wi, wo), -1.0, 1.0)))
-    footprint = (c.beam_diameter_mm / wi[:, 2] <= c.sample_diameter_mm) & lit_inside_view(
-        wi, wo, c.beam_diameter_mm, c.detector_fov_mm
-    )
+    if c.beam_diameter_mm is None:  # a point source: no lit ellipse, the view on the sample
+        footprint = np.ones(len(wi), dtype=bool)
+        on_sample = theta_o <= np.degrees(np.arccos(c.detector_fov_mm / c.sample_diameter_mm))
+    else:
+        footprint = (c.beam_diameter_mm / wi[:, 2] <= c.sample_diameter_mm) & lit_inside_view(
+            wi, wo, c.beam_diameter_mm, c.detector_fov_mm
+        )
+        on_sample = np.ones(len(wi), dtype=bool)
     if rig.spec.type == "arch":
         azimuths = np.degrees(
             np.arctan2(
@@ -82,6 +89,7 @@ def expected_reasons(rig: Rig, wi: FloatArray, wo: FloatArray) -> np.ndarray:
         (Reason.THETA_MAX, np.maximum(theta_i, theta_o) > c.theta_max_deg),
         (Reason.BLIND_SPOT, apart < c.min_separation_deg),
         (Reason.FOOTPRINT, ~footprint),
+        (Reason.VIEW_OFF_SAMPLE, ~on_sample),
         (Reason.AXIS_LIMIT, axis_limit),
         (Reason.COLLISION, collision),
     ]
@@ -96,6 +104,21 @@ def sample(seed: int, n: int = N) -> tuple[FloatArray, FloatArray]:
     rng = np.random.default_rng(seed)
     cap = np.radians(85.0)
     return uniform_directions(rng, n, cap), uniform_directions(rng, n, cap)
+
+
+def test_the_point_source_rig_refuses_a_view_off_the_sample(arch_point: Rig) -> None:
+    """The arch with a lamp (25 mm view, 30 mm sample): every pair whose view runs past
+    the sample's edge (θo > 33.6°) is refused for it, and no pair for its footprint."""
+    wi, wo = sample(12)
+    _, reasons = arch_point.reachable(wi, wo)
+    expected = expected_reasons(arch_point, wi, wo)
+    wrong = reasons != expected
+    assert not wrong.any(), Counter(
+        zip(expected[wrong].tolist(), reasons[wrong].tolist(), strict=True)
+    )
+    counts = Counter(Reason(int(r)) for r in reasons)
+    assert counts[Reason.VIEW_OFF_SAMPLE] > 10_000 and counts[Reason.OK] > 1000
+    assert counts[Reason.FOOTPRINT] == 0
 
 
 @pytest.mark.parametrize("name", RIG_NAMES)

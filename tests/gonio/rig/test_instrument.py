@@ -162,10 +162,15 @@ def test_the_serial_rig_is_the_arch_rig_wired_to_hardware() -> None:
 
 def test_a_point_source_refuses_no_footprint(arch_point: Rig, rigs: dict[str, Rig]) -> None:
     """A grazing light: the collimated beam's ellipse leaves the sample; a point source
-    floods the sample anyway (the view leaving it is the footprint effect's)."""
+    floods the sample anyway. A grazing view runs past the sample's edge: the collimated
+    rig accepts it (the detector sees only unlit holder beyond the lit ellipse), the
+    point source, which lights the holder too, refuses it."""
     wi, wo = direction(79.0, 0.0)[None], direction(10.0, 180.0)[None]
     assert rigs["arch"].solve(wi, wo).reasons[0] == Reason.FOOTPRINT
     assert arch_point.solve(wi, wo).reasons[0] == Reason.OK
+    wi, wo = direction(10.0, 0.0)[None], direction(40.0, 180.0)[None]  # 25/cos 40° > 30 mm
+    assert rigs["arch"].solve(wi, wo).reasons[0] == Reason.OK
+    assert arch_point.solve(wi, wo).reasons[0] == Reason.VIEW_OFF_SAMPLE
 
 
 def test_a_serial_light_switch() -> None:

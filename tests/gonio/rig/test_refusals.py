@@ -1,7 +1,8 @@
 """Each refusal reason triggered by a named pair, on each rig where it can happen, with
 its boundary predicted from the rig file (just inside: OK, just outside: refused), and
 the priority of the checks: the first failing one in the order THETA_MAX, BLIND_SPOT,
-FOOTPRINT, AXIS_LIMIT, COLLISION wins.
+FOOTPRINT (a collimated light), VIEW_OFF_SAMPLE (a point source), AXIS_LIMIT, COLLISION
+wins.
 
 AXIS_LIMIT cannot happen on the arch (θ ≤ theta_max = 80° < 85° of the light arm, and
 of the two detector solutions ±θo one always has its azimuth outside the 179…181° gap;
@@ -42,6 +43,7 @@ def test_reason_order_is_the_documented_priority() -> None:
         "THETA_MAX",
         "BLIND_SPOT",
         "FOOTPRINT",
+        "VIEW_OFF_SAMPLE",
         "AXIS_LIMIT",
         "COLLISION",
     ]
@@ -211,10 +213,12 @@ def failing(rig: Rig, wi: FloatArray, wo: FloatArray) -> set[Reason]:
         out.add(Reason.THETA_MAX)
     if np.degrees(constraints.separation(wi, wo)) < c.min_separation_deg:
         out.add(Reason.BLIND_SPOT)
-    if not constraints.footprint_ok(
+    if c.beam_diameter_mm is not None and not constraints.footprint_ok(
         wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
     ):
         out.add(Reason.FOOTPRINT)
+    if c.beam_diameter_mm is None and c.detector_fov_mm > c.sample_diameter_mm * wo[2]:
+        out.add(Reason.VIEW_OFF_SAMPLE)
     if not in_limits.any():
         out.add(Reason.AXIS_LIMIT)
     if not solution.usable.any():
@@ -229,7 +233,7 @@ def failing(rig: Rig, wi: FloatArray, wo: FloatArray) -> set[Reason]:
             "arch",
             direction(85.0, 0.0),
             direction(87.0, 0.0),
-            set(Reason) - {Reason.OK},  # the detector's 87° is past its 85° too
+            set(Reason) - {Reason.OK, Reason.VIEW_OFF_SAMPLE},  # 87°: past the 85° arm too
             Reason.THETA_MAX,
         ),
         (
@@ -280,6 +284,29 @@ def test_first_failing_check_wins(
     rig = rigs[name]
     assert failing(rig, wi, wo) == fails
     assert reason(rig, wi, wo) == wins
+
+
+def test_a_point_sources_view_leaves_the_sample(arch_point: Rig) -> None:
+    """A lamp floods the sample: the detector's view (F / cos θo along its azimuth) must
+    stay on it, so the detector is refused beyond cos θo = F / S, whatever the light."""
+    c = arch_point.spec.constraints
+    edge = math.degrees(math.acos(c.detector_fov_mm / c.sample_diameter_mm))
+    for wi in (direction(0.0, 0.0), direction(70.0, 90.0)):
+        assert reason(arch_point, wi, direction(edge - STEP, 180.0)) == Reason.OK
+        assert reason(arch_point, wi, direction(edge + STEP, 180.0)) == Reason.VIEW_OFF_SAMPLE
+
+
+def test_the_view_refusal_in_its_place(arch_point: Rig) -> None:
+    """After the blind spot, before the collisions (light and detector both ≥ 55° within
+    25° of azimuth hit the low light arm)."""
+    wi, wo = direction(60.0, 0.0), direction(63.0, 0.0)
+    assert failing(arch_point, wi, wo) == {
+        Reason.BLIND_SPOT, Reason.VIEW_OFF_SAMPLE, Reason.COLLISION
+    }  # fmt: skip
+    assert reason(arch_point, wi, wo) == Reason.BLIND_SPOT
+    wi, wo = direction(60.0, 0.0), direction(70.0, 10.0)
+    assert failing(arch_point, wi, wo) == {Reason.VIEW_OFF_SAMPLE, Reason.COLLISION}
+    assert reason(arch_point, wi, wo) == Reason.VIEW_OFF_SAMPLE
 
 
 def test_axis_limit_over_collision(tmp_path: Path) -> None:
