@@ -1,13 +1,14 @@
-"""UTIA round trips: a gonio model tabulated on the UTIA BRDF database's grid (θ every
-15° to 75°, φ every 7.5°; `gonio.brdf.utia.write`), read back (`create("utia", ...)`,
-quadrilinear in θi, φi, θv, φv) and compared with the model: at the nodes, and between
-them on 200 000 pairs uniform in solid angle with both θ ≤ 75° (and, apart, with both θ
-in (75°, 90°), where the table is constant in θ). Errors are per channel, as a fraction
-of the largest tabulated value (the lobe's peak on the grid) and relative to the model's
-own value. "Estimate" is the linear-interpolation error at a GGX peak the grid implies,
-(h²/8)·Σ|∂²f/∂x²|/f over the four axes, ≈ 0.021/α² for h = 15° in θ and 7.5°·sin 75° in
-φ (α: the lobe's narrowest roughness). Writes docs/img/utia_slices.png: the model and its
-table along the plane of incidence and along φv.
+"""UTIA round trips: a `gonio.brdf` model tabulated on the UTIA BRDF database's grid
+(θ every 15° to 75°, φ every 7.5°; `gonio.brdf.utia.write`), read back
+(`create("utia", ...)`, quadrilinear in θi, φi, θv, φv) and compared with the model: at
+the nodes, and between them on 200 000 pairs uniform in solid angle with both θ ≤ 75°
+(and, apart, with both θ in (75°, 90°), where the table is constant in θ). Errors are per
+channel, as a fraction of the largest tabulated value (the lobe's peak on the grid) and
+relative to the model's own value. "Estimate" is the linear-interpolation error at a GGX
+peak the grid implies, (h²/8)·Σ|∂²f/∂x²|/f over the four axes, ≈ 0.021/α² for h = 15° in
+θ and 7.5°·sin 75° in φ (α: the lobe's narrowest roughness). Writes
+docs/img/utia_slices.png: the model and its table along the plane of incidence and along
+φv.
 
 Run: .venv/bin/python benchmarks/utia.py [--pairs 200000]
 """
