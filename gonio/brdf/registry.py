@@ -29,6 +29,7 @@ from gonio.brdf.models import (
     Phong,
     SchlickLobe,
 )
+from gonio.brdf.rgl import RglTable
 from gonio.errors import DomainError, UnknownNameError
 
 _MODELS: dict[str, type[BRDF]] = {
@@ -46,6 +47,7 @@ _MODELS: dict[str, type[BRDF]] = {
         SpecularTestFunction,
         GrazingTestFunction,
         MerlTable,
+        RglTable,
         Factored,
         Sum,
     )
