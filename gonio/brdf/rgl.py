@@ -11,12 +11,16 @@ and ``sigma`` (2-D), ``vndf`` (Nφ, Nθ, H, W), ``luminance`` (Nφ, Nθ, n, n) a
 (one flag). Angles map to the unit square as u(θ) = √(θ/(π/2)), u(φ) = (φ + π)/(2π).
 The file is isotropic when Nφ ≤ 2 (then φ of the half vector is measured from φi).
 
-f(ωi, ωo) for ωm the half vector (docs/reference/formats.md#rgl): s = V⁻¹(u(θm), u(φm))
-with V the warp (`gonio.brdf.marginal.Marginal2D`) of the table ``vndf`` at (φi, θi);
-the value is the table ``spectra`` (or ``rgb``) at s, (φi, θi) and each wavelength,
-times ndf(u(θm), u(φm)) / (4 sigma(u(θi), u(φi))) when ``jacobian`` is 1. ``ndf``,
-``sigma`` and ``spectra`` are plain bilinear tables (`gonio.brdf.marginal.Table`);
-``luminance`` only guides a renderer's sampling and is not read here.
+f(ωi, ωo)·cos θo for ωm the half vector (docs/reference/formats.md#rgl): s =
+V⁻¹(u(θm), u(φm)) with V the warp (`gonio.brdf.marginal.Marginal2D`) of the table
+``vndf`` at (φi, θi); the value is the table ``spectra`` (or ``rgb``) at s, (φi, θi)
+and each wavelength, times ndf(u(θm), u(φm)) / (4 sigma(u(θi), u(φi))) when
+``jacobian`` is 1. The files hold the BRDF times the cosine of ωo (Mitsuba's BSDF
+``eval`` returns the foreshortened value; its ``measured`` plugin reads the file's
+value as it is, with ωi the direction towards the camera), so this reader divides by
+cos θo (by `MIN_COSINE` at most). ``ndf``, ``sigma`` and ``spectra`` are plain
+bilinear tables (`gonio.brdf.marginal.Table`); ``luminance`` only guides a renderer's
+sampling and is not read here.
 
 Spectra are reduced to RGB through the CIE 1931 colour-matching functions (the fit of
 Wyman, Sloan & Shirley 2013) over 360–830 nm, the spectrum linear between its
@@ -55,6 +59,8 @@ XYZ_TO_RGB = np.array(
 )
 #: Upper wavelengths (nm) of the blue and green boxes of `upsampling` (red beyond).
 BOXES = (490.0, 580.0)
+#: The stored values are f·cos θo; below this cos θo they are divided by it instead.
+MIN_COSINE = 1e-6
 FLOAT_FIELDS = ("theta_i", "phi_i", "ndf", "sigma", "vndf", "luminance")
 
 
@@ -244,7 +250,7 @@ def evaluate(material: Material, wi: FloatArray, wo: FloatArray) -> FloatArray:
     f = material.rgb.eval(s[..., None, :], (phi_i[..., None], theta_i[..., None], channel))
     if material.jacobian:
         f = f * (material.ndf.eval(u_m) / (4.0 * material.sigma.eval(u_wi)))[..., None]
-    return f
+    return np.asarray(f / np.maximum(wo[..., 2], MIN_COSINE)[..., None])
 
 
 class RglTable(BRDF):

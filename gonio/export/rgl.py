@@ -15,14 +15,18 @@ How the fields are computed from the reconstruction f:
    integral in closed form).
 3. ``vndf``: per incident node θi (`THETA_I` nodes from 0 to `THETA_MAX`), the visible
    normals' density max(0, ωi·m)·D(m)/σ(θi) times the Jacobian 2π²·u·sin θm of the
-   (u(θm), u(φm)) square, on `VNDF_SHAPE` nodes (φm measured from φi).
+   (u(θm), u(φm)) square, on `VNDF_SHAPE` nodes (φm measured from φi), normalized
+   to mean 1 and mixed with `UNIFORM` (a constant): the visible normals' density
+   vanishes as u³ at the pole, which would leave the first column of the warped
+   square a band of half vectors several degrees wide.
 4. ``spectra`` / ``rgb``: at the `SAMPLES` × `SAMPLES` nodes s of the warped square,
-   the value f(ωi, ωo)·4σ(θi)/D(ωm) with ωm = V(s) (the reader's own warp, ndf and sigma
+   the value f(ωi, ωo)·cos θo·4σ(θi)/D(ωm) with ωm = V(s) (the reader's own warp, ndf and sigma
    interpolants, so reading back is exact at the nodes), ωo = ωm mirrored about ωi;
    below the horizon, the value at ωo lifted to 0.5° elevation (so interpolation does
-   not pull the last samples above the horizon to 0).
+   not pull the last samples above the horizon to 0). For a microfacet surface this
+   value is F·G2(ωi, ωo)/G1(ωi), bounded by the Fresnel factor: smooth where f peaks.
 5. ``luminance`` (the renderer's sampling guide only): the Rec. 709 luminance of that
-   value times cos θo, raised to `FLOOR` × its slice's maximum.
+   value, raised to `FLOOR` × its slice's maximum.
 
 Colour: an RGB reconstruction is written as ``rgb`` (``color="rgb"``) or as a spectrum
 (``color="spectral"``, the default: the three boxes of `gonio.brdf.rgl.upsampling`,
@@ -216,7 +220,7 @@ def fields(
     uy_m = rgl.phi_to_u(ph)
     u_half = np.stack([rgl.theta_to_u(th), uy_m - np.floor(uy_m)], -1)
     u_wi = np.stack([rgl.theta_to_u(t32), np.full(t32.shape, 0.5)], -1)
-    scale = 4 * sigma_t.eval(u_wi) / np.maximum(ndf_t.eval(u_half), 1e-30)
+    scale = wo[..., 2] * 4 * sigma_t.eval(u_wi) / np.maximum(ndf_t.eval(u_half), 1e-30)
     values = f(wi, wo)
     channels = 3 if values.ndim == 4 else 1
     if channels == 1:
@@ -230,7 +234,7 @@ def fields(
         * scale[..., None]
         @ (matrix @ rgl.reduction(wavelengths) if wavelengths is not None else matrix)
     )
-    lum = np.maximum(rgb @ np.asarray(LUMINANCE), 0.0) * np.maximum(wo[..., 2], 0.0)
+    lum = np.maximum(rgb @ np.asarray(LUMINANCE), 0.0)
     lum = np.maximum(lum, FLOOR * np.max(lum, axis=(1, 2), keepdims=True) + 1e-30)
     out: dict[str, np.ndarray | str] = {
         "description": description,
