@@ -206,14 +206,12 @@ def fields(
     wi = np.broadcast_to(direction(t32, 0.0), wm.shape)
     wo = 2 * np.sum(wi * wm, axis=-1, keepdims=True) * wm - wi
     low = wo[..., 2] < np.sin(LIFT)
-    horizontal = np.linalg.norm(wo[..., :2], axis=-1, keepdims=True)
-    lifted = np.concatenate(
-        [
-            wo[..., :2] / np.maximum(horizontal, 1e-12) * np.cos(LIFT),
-            np.full_like(wo[..., 2:], np.sin(LIFT)),
-        ],
-        -1,
+    # Straight down (no azimuth): lifted away from ωi.
+    flat = np.where(
+        np.hypot(wo[..., :1], wo[..., 1:2]) > 1e-9, wo[..., :2], -wi[..., :2] - [1e-3, 0]
     )
+    flat = flat / np.linalg.norm(flat, axis=-1, keepdims=True)
+    lifted = np.concatenate([flat * np.cos(LIFT), np.full_like(wo[..., 2:], np.sin(LIFT))], -1)
     wo = np.where(low[..., None], lifted, wo)
     half = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
     th, ph = rgl.elevation(half), np.arctan2(half[..., 1], half[..., 0])
