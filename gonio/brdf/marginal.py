@@ -40,9 +40,11 @@ class Table:
         self.strides = [int(s) if n > 1 else 0 for s, n in zip(strides, sizes, strict=True)]
         self.data = values.reshape(-1, self.shape[0] * self.shape[1])
 
-    def corners(self, param: tuple[FloatArray, ...]) -> tuple[np.ndarray, FloatArray]:
-        """Slice indices and weights (N, 2**k) of the parameter values (N,) each."""
-        n = np.broadcast(*param).shape if param else ()
+    def corners(
+        self, param: tuple[FloatArray, ...], n: tuple[int, ...]
+    ) -> tuple[np.ndarray, FloatArray]:
+        """Slice indices and weights (..., 2**k) of the parameter values (each of shape
+        ``n``)."""
         index = np.zeros((*n, 1), dtype=np.int64)
         weight = np.ones((*n, 1))
         for nodes, stride, p in zip(self.params, self.strides, param, strict=True):
@@ -75,7 +77,7 @@ class Table:
         """The bilinear value at points ``u`` (..., 2) of the square (x, y) for
         parameters ``param`` (each broadcast to u's leading shape)."""
         u, param = _broadcast(u, param)
-        slices, weights = self.corners(param)
+        slices, weights = self.corners(param, u.shape[:-1])
         col, row, fx, fy = self._cell(u)
         w = self.shape[1]
         at = row * w + col
@@ -112,7 +114,7 @@ class Marginal2D(Table):
     def invert(self, u: FloatArray, param: tuple[FloatArray, ...] = ()) -> FloatArray:
         """The uniform sample (..., 2) that `sample` maps to ``u`` (..., 2)."""
         u, param = _broadcast(u, param)
-        slices, weights = self.corners(param)
+        slices, weights = self.corners(param, u.shape[:-1])
         h, w = self.shape
         col, row, fx, fy = self._cell(u)
         at = row * w + col
@@ -134,7 +136,7 @@ class Marginal2D(Table):
     def sample(self, s: FloatArray, param: tuple[FloatArray, ...] = ()) -> FloatArray:
         """The point (..., 2) of the square a uniform sample ``s`` (..., 2) maps to."""
         s, param = _broadcast(np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0), param)
-        slices, weights = self.corners(param)
+        slices, weights = self.corners(param, s.shape[:-1])
         h, w = self.shape
         # The marginal at every row node, interpolated in the parameters: (..., H).
         marg = np.einsum("...c,...ch->...h", weights, self.marg[slices])

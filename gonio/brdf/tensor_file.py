@@ -58,7 +58,7 @@ def to_bytes(fields: Mapping[str, np.ndarray | bytes | str]) -> bytes:
             value = value.encode()
         if isinstance(value, bytes):
             value = np.frombuffer(value, dtype=np.uint8)
-        arrays[name] = np.ascontiguousarray(value)
+        arrays[name] = np.asarray(value, order="C")
     # name length, name, rank, type code, offset, shape
     headers = [2 + len(name.encode()) + 2 + 1 + 8 + 8 * a.ndim for name, a in arrays.items()]
     offset = PREAMBLE + sum(headers)
