@@ -206,7 +206,7 @@ def test_every_truncation_is_refused(tmp_path_factory, cut: int) -> None:
     raw = tensor_file.to_bytes(fields())  # type: ignore[arg-type]
     path = tmp_path_factory.mktemp("cut") / "cut.bsdf"
     path.write_bytes(raw[: cut % len(raw)])
-    with pytest.raises(GonioError, match="bad|cut.bsdf"):
+    with pytest.raises(GonioError, match=r"cut\.bsdf"):
         rgl.read_material(path)
 
 
