@@ -72,6 +72,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/reconstruct.py --transforms
 	$(BIN)/python benchmarks/factored.py
 	$(BIN)/python benchmarks/export.py
+	$(BIN)/python benchmarks/rgl.py
 	$(BIN)/python benchmarks/plots.py
 	$(BIN)/python benchmarks/tradeoff.py
 	$(BIN)/python benchmarks/accuracy.py

@@ -259,9 +259,18 @@ def write(
     band: str = "luminance",
     color: str = "spectral",
     description: str = "",
+    theta_nodes: int = THETA_I,
+    samples: int = SAMPLES,
 ) -> str:
-    """Compute the fields and write the file to ``out``; the one-line summary."""
-    table, counter = fields(surface, band=band, color=color, description=description)
+    """Compute the fields (`fields`) and write the file to ``out``; the one-line summary."""
+    table, counter = fields(
+        surface,
+        band=band,
+        color=color,
+        description=description,
+        theta_nodes=theta_nodes,
+        samples=samples,
+    )
     data = tensor_file.to_bytes(table)
     out.write_bytes(data)
     kind = f"{len(WAVELENGTHS)} wavelengths" if "spectra" in table else "RGB"
