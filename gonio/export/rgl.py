@@ -286,6 +286,6 @@ def write(
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     measured = Measured.from_run(run)
     surface = reconstruction(measured, options.method, None, extrapolate="nearest")
-    text = f"gonio export of {run.path.name if hasattr(run, 'path') else 'a run'}: "
-    text += f"{options.method} reconstruction, {measured.band} band"
+    text = f"gonio export of {run.path.name}: {options.method} reconstruction, "
+    text += f"{measured.band} band"
     return write(out, surface, band=measured.band, color=options.rgl_color, description=text)

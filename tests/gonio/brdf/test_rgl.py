@@ -249,3 +249,15 @@ def test_a_bad_file_in_a_scene_exits_2_in_one_line(tmp_path: Path, capsys) -> No
     err = capsys.readouterr().err
     assert code == 2
     assert "bad.bsdf" in err and "tensor_file" in err and "Traceback" not in err
+
+
+def test_leading_axes_broadcast_as_for_any_model(tmp_path: Path) -> None:
+    ndf = np.tile(np.linspace(1.0, 3.0, 5, dtype=np.float32), (2, 1))
+    model = brdf.create(
+        "rgl", path=save(tmp_path / "a.bsdf", jacobian=np.ones(1, np.uint8), ndf=ndf)
+    )
+    wi, wo = pairs(20, 5)
+    grid = model.eval(wi.reshape(4, 5, 3), wo.reshape(4, 5, 3))
+    assert grid.shape == (4, 5, 3)
+    assert np.array_equal(grid.reshape(20, 3), model.eval(wi, wo))
+    assert model.eval(wi.reshape(4, 5, 3), wo[0]).shape == (4, 5, 3)
