@@ -74,6 +74,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/export.py
 	$(BIN)/python benchmarks/point_source.py
 	$(BIN)/python benchmarks/utia.py
+	$(BIN)/python benchmarks/rgl.py
 	$(BIN)/python benchmarks/plots.py
 	$(BIN)/python benchmarks/tradeoff.py
 	$(BIN)/python benchmarks/accuracy.py

@@ -29,6 +29,7 @@ from gonio.brdf.models import (
     Phong,
     SchlickLobe,
 )
+from gonio.brdf.rgl import RglTable
 from gonio.brdf.utia import UtiaTable
 from gonio.errors import DomainError, UnknownNameError
 
@@ -48,6 +49,7 @@ _MODELS: dict[str, type[BRDF]] = {
         GrazingTestFunction,
         MerlTable,
         UtiaTable,
+        RglTable,
         Factored,
         Sum,
     )

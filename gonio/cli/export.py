@@ -1,5 +1,6 @@
 """`gonio export RUN.sqlite --format F -o PATH`: a run in another program's format
-(csv, hdf5, alta, bluesky; merl from the run's reconstruction). docs/reference/formats.md."""
+(csv, hdf5, alta, bluesky; merl, rgl and factored from the run's reconstruction).
+docs/reference/formats.md."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from gonio.reconstruct.methods import DEFAULT_METHOD, names
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS
+    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS, RGL_COLORS
 
     p = sub.add_parser(
         "export",
@@ -37,6 +38,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "the default) or filled by the reconstruction's extrapolation",
     )
     p.add_argument(
+        "--rgl-color",
+        choices=RGL_COLORS,
+        default="spectral",
+        help="rgl: write a spectrum (the default; grey and one-band runs flat over their "
+        "band, RGB upsampled) or RGB",
+    )
+    p.add_argument(
         "--grid",
         metavar="PARAMETRIZATION",
         help="hdf5: also write the reconstruction on a regular grid of this "
@@ -48,7 +56,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--method",
         default=DEFAULT_METHOD,
-        help="merl, factored, hdf5 --grid: the reconstruction tabulated "
+        help="merl, rgl, factored, hdf5 --grid: the reconstruction tabulated "
         f"({', '.join(names())}; default {DEFAULT_METHOD})",
     )
     p.add_argument("--outer", type=int, default=2, help="factored: outer terms J (default 2)")
@@ -77,6 +85,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         grid_points=args.grid_points,
         outer=args.outer,
         inner=args.inner,
+        rgl_color=args.rgl_color,
         method=args.method,
     )
     summary = export(args.run, args.format, args.output, options)

@@ -21,6 +21,11 @@ FORMATS: dict[str, tuple[str, str]] = {
     "csv": ("gonio.export.csv", "one row per sample, units in the column names"),
     "hdf5": ("gonio.export.hdf5", "samples, events, metadata and plan (needs h5py)"),
     "merl": ("gonio.export.merl", "the reconstruction tabulated in MERL's binary layout"),
+    "rgl": (
+        "gonio.export.rgl",
+        "the reconstruction as an RGL material (Dupuy & Jakob 2018; Mitsuba 3's measured "
+        "plugin), spectral or RGB",
+    ),
     "factored": (
         "gonio.export.factored",
         "the reconstruction factored (Lawrence et al. 2004) with its sampling CDFs (needs "
@@ -32,6 +37,8 @@ FORMATS: dict[str, tuple[str, str]] = {
 
 #: ALTA input parametrizations `gonio.export.alta` writes.
 ALTA_PARAMS = ("stark_3d", "rusin_th_td_pd")
+#: The RGL export's colour: a spectrum, or RGB.
+RGL_COLORS = ("spectral", "rgb")
 #: What the MERL export writes in bins outside the measured support.
 MERL_FILLS = ("missing", "extrapolate")
 
@@ -41,8 +48,9 @@ class Options:
     """Format options: ALTA's input parametrization; MERL's bins outside the measured
     support (written missing, or the reconstruction's extrapolation); the HDF5 file's
     reconstruction grid (a parametrization name, and points per coordinate); the
-    factored format's outer and inner terms; the reconstruction method of the formats
-    that tabulate one (`gonio.reconstruct.methods`)."""
+    factored format's outer and inner terms; the RGL file's colour (a spectrum, or RGB);
+    the reconstruction method of the formats that tabulate one
+    (`gonio.reconstruct.methods`)."""
 
     alta_param: str = "stark_3d"
     merl_fill: str = "missing"
@@ -50,6 +58,7 @@ class Options:
     grid_points: int = 32
     outer: int = 2
     inner: int = 2
+    rgl_color: str = "spectral"
     method: str = "linear"
 
 
@@ -74,4 +83,4 @@ def export(
     return summary
 
 
-__all__ = ["ALTA_PARAMS", "FORMATS", "MERL_FILLS", "Options", "export", "names"]
+__all__ = ["ALTA_PARAMS", "FORMATS", "MERL_FILLS", "RGL_COLORS", "Options", "export", "names"]
