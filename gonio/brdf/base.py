@@ -113,12 +113,22 @@ def scalar(
     return v
 
 
-def colour(name: str, value: object, *, low: float = -math.inf, low_open: bool = False) -> Colour:
+def colour(
+    name: str,
+    value: object,
+    *,
+    low: float = -math.inf,
+    low_open: bool = False,
+    high: float = math.inf,
+) -> Colour:
     """A scalar (grey) or a length-3 sequence (RGB), each entry checked as `scalar`."""
     if isinstance(value, str) or not isinstance(value, Sequence | np.ndarray):
-        return scalar(name, value, low=low, low_open=low_open)
+        return scalar(name, value, low=low, low_open=low_open, high=high)
     items = list(np.asarray(value).ravel()) if isinstance(value, np.ndarray) else list(value)
     if len(items) != 3 or (isinstance(value, np.ndarray) and value.ndim != 1):
         raise DomainError(f"colour parameter {name} must be a scalar or 3 values, got {value!r}")
-    r, g, b = (scalar(f"{name}[{j}]", x, low=low, low_open=low_open) for j, x in enumerate(items))
+    r, g, b = (
+        scalar(f"{name}[{j}]", x, low=low, low_open=low_open, high=high)
+        for j, x in enumerate(items)
+    )
     return (r, g, b)

@@ -128,12 +128,17 @@ class Fresnel:
         return np.ones_like(cos_theta_d)
 
 
+#: The largest ``ior`` and ``k`` accepted: no optical material comes near (metals in the
+#: far infrared reach ~100), and it keeps (η + iκ)² and its squares finite in float64.
+MAX_INDEX = 1000.0
+
+
 def make_fresnel(kind: str, f0: object = None, ior: object = None, k: object = None) -> Fresnel:
     """Check a Fresnel option and its parameters.
 
     ``none``: F = 1. ``schlick``: needs nothing else, ``f0`` ∈ [0, 1] (default 0.04).
     ``dielectric``: ``ior`` > 0 (default 1.5). ``conductor``: ``ior`` > 0 and ``k`` ≥ 0,
-    both required. Each may be RGB. A parameter the option does not use is an error.
+    both required. ``ior`` and ``k`` are at most `MAX_INDEX`. Each may be RGB. A parameter the option does not use is an error.
     """
     used = {"none": (), "schlick": ("f0",), "dielectric": ("ior",), "conductor": ("ior", "k")}
     if kind not in used:
@@ -148,13 +153,14 @@ def make_fresnel(kind: str, f0: object = None, ior: object = None, k: object = N
             raise DomainError(f"parameter f0 must lie in [0, 1], got {value}")
         return Fresnel(kind, f0=value)
     if kind == "dielectric":
-        return Fresnel(kind, ior=colour("ior", 1.5 if ior is None else ior, low=0.0, low_open=True))
+        value = 1.5 if ior is None else ior
+        return Fresnel(kind, ior=colour("ior", value, low=0.0, low_open=True, high=MAX_INDEX))
     if kind == "conductor":
         if ior is None or k is None:
             raise DomainError("fresnel='conductor' needs both ior and k")
         return Fresnel(
             kind,
-            ior=colour("ior", ior, low=0.0, low_open=True),
-            k=colour("k", k, low=0.0),
+            ior=colour("ior", ior, low=0.0, low_open=True, high=MAX_INDEX),
+            k=colour("k", k, low=0.0, high=MAX_INDEX),
         )
     return Fresnel(kind)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -119,3 +121,26 @@ def test_make_fresnel_checks_options():
         fr.make_fresnel("conductor", ior=1.5)
     with pytest.raises(DomainError):
         fr.make_fresnel("schlick", ior=1.5)
+
+
+@pytest.mark.parametrize(
+    ("kind", "params", "name"),
+    [
+        ("dielectric", {"ior": 1e308}, "ior"),
+        ("conductor", {"ior": 1e154, "k": 1.0}, "ior"),
+        ("conductor", {"ior": 1.5, "k": 1e308}, "k"),
+        ("conductor", {"ior": [0.2, 0.4, 1e200], "k": [3.0, 2.0, 1.0]}, "ior[2]"),
+    ],
+)
+def test_an_index_no_material_has_is_refused(kind: str, params: dict[str, object], name: str):
+    """An index past `MAX_INDEX` overflowed (η + iκ)² into inf and NaN reflectances (a
+    fuzzed scene with ior: 1e308 found it); it is refused, naming the parameter."""
+    with pytest.raises(DomainError, match=f"parameter {re.escape(name)} must lie in"):
+        fr.make_fresnel(kind, **params)
+
+
+@given(st.floats(1e-3, fr.MAX_INDEX), st.floats(0.0, fr.MAX_INDEX), st.floats(0.0, 1.0))
+def test_conductor_is_finite_up_to_the_largest_index(n: float, k: float, c: float):
+    with np.errstate(over="raise", invalid="raise", divide="raise"):  # numpy's warnings
+        rs, rp = fr.conductor_sp(np.array([c]), n, k)
+    assert np.all((rs >= 0.0) & (rs <= 1.0 + 1e-12) & (rp >= 0.0) & (rp <= 1.0 + 1e-12))
