@@ -138,7 +138,8 @@ def make_fresnel(kind: str, f0: object = None, ior: object = None, k: object = N
 
     ``none``: F = 1. ``schlick``: needs nothing else, ``f0`` ∈ [0, 1] (default 0.04).
     ``dielectric``: ``ior`` > 0 (default 1.5). ``conductor``: ``ior`` > 0 and ``k`` ≥ 0,
-    both required. ``ior`` and ``k`` are at most `MAX_INDEX`. Each may be RGB. A parameter the option does not use is an error.
+    both required; each at most `MAX_INDEX`. Each may be RGB. A parameter the option
+    does not use is an error.
     """
     used = {"none": (), "schlick": ("f0",), "dielectric": ("ior",), "conductor": ("ior", "k")}
     if kind not in used:
