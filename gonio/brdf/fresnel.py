@@ -154,8 +154,8 @@ def make_fresnel(kind: str, f0: object = None, ior: object = None, k: object = N
             raise DomainError(f"parameter f0 must lie in [0, 1], got {value}")
         return Fresnel(kind, f0=value)
     if kind == "dielectric":
-        value = 1.5 if ior is None else ior
-        return Fresnel(kind, ior=colour("ior", value, low=0.0, low_open=True, high=MAX_INDEX))
+        given_ior = 1.5 if ior is None else ior
+        return Fresnel(kind, ior=colour("ior", given_ior, low=0.0, low_open=True, high=MAX_INDEX))
     if kind == "conductor":
         if ior is None or k is None:
             raise DomainError("fresnel='conductor' needs both ior and k")
