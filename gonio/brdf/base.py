@@ -13,14 +13,15 @@ returns a trailing axis of 3; grey parameters then apply to every channel.
 from __future__ import annotations
 
 import math
+import os
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
-from typing import ClassVar, TypeAlias
+from collections.abc import Callable, Sequence
+from typing import ClassVar, TypeAlias, TypeVar
 
 import numpy as np
 
 from gonio.brdf.geometry import Pair, pair
-from gonio.errors import DomainError
+from gonio.errors import DomainError, GonioError
 from gonio.types import ArrayLike, FloatArray
 
 #: A colour parameter as stored in ``params``: a float (grey) or three floats (RGB).
@@ -132,3 +133,19 @@ def colour(
         for j, x in enumerate(items)
     )
     return (r, g, b)
+
+
+T = TypeVar("T")
+
+
+def read_path(path: object, read: Callable[[str], T]) -> tuple[str, T]:
+    """(``path`` as a string, ``read(path)``) for a tabulated model's ``path``
+    parameter: anything but a file name is refused, and the reader's `GonioError` is
+    prefixed "parameter path:" so that a scene file's error points at the parameter."""
+    if not isinstance(path, str | os.PathLike):
+        raise GonioError(f"parameter path must be a file name, got {path!r}")
+    name = os.fspath(path)
+    try:
+        return name, read(name)
+    except GonioError as exc:
+        raise GonioError(f"parameter path: {exc}") from None

@@ -19,14 +19,13 @@ mean of the corners present, and 0 where none is (as MERL's readers give 0, or w
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
 from gonio import params
-from gonio.brdf.base import BRDF
+from gonio.brdf.base import BRDF, read_path
 from gonio.brdf.geometry import Pair
 from gonio.errors import GonioError
 from gonio.types import FloatArray
@@ -130,13 +129,8 @@ class MerlTable(BRDF):
     physically_based = False
 
     def __init__(self, path: object) -> None:
-        if not isinstance(path, str | os.PathLike):
-            raise GonioError(f"parameter path must be a file name, got {path!r}")
-        try:
-            table = read_table(os.fspath(path))
-        except GonioError as exc:  # named, so a scene file's error points at the parameter
-            raise GonioError(f"parameter path: {exc}") from None
-        super().__init__({"path": os.fspath(path)})
+        name, table = read_path(path, read_table)
+        super().__init__({"path": name})
         self.is_rgb = True
         present = ~np.isnan(table[0])
         # One cell of padding: the neighbour across φd = 0 ≡ π, and the edge in θh, θd.

@@ -38,14 +38,13 @@ evaluation that the file's tables define.
 from __future__ import annotations
 
 import functools
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from gonio.brdf import tensor_file
-from gonio.brdf.base import BRDF
+from gonio.brdf.base import BRDF, read_path
 from gonio.brdf.geometry import Pair
 from gonio.brdf.marginal import Marginal2D, Table
 from gonio.errors import GonioError
@@ -261,13 +260,8 @@ class RglTable(BRDF):
     physically_based = False
 
     def __init__(self, path: object) -> None:
-        if not isinstance(path, str | os.PathLike):
-            raise GonioError(f"parameter path must be a file name, got {path!r}")
-        try:
-            self.material = read_material(os.fspath(path))
-        except GonioError as exc:  # named, so a scene file's error points at the parameter
-            raise GonioError(f"parameter path: {exc}") from None
-        super().__init__({"path": os.fspath(path)})
+        name, self.material = read_path(path, read_material)
+        super().__init__({"path": name})
         self.is_rgb = True
 
     def _eval(self, p: Pair) -> FloatArray:

@@ -34,13 +34,12 @@ from __future__ import annotations
 
 import functools
 import math
-import os
 from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
 
-from gonio.brdf.base import BRDF
+from gonio.brdf.base import BRDF, read_path
 from gonio.brdf.geometry import Pair
 from gonio.errors import GonioError
 from gonio.output import reserve_output
@@ -197,17 +196,12 @@ class UtiaTable(BRDF):
     physically_based = False
 
     def __init__(self, path: object, encoding: object = "linear") -> None:
-        if not isinstance(path, str | os.PathLike):
-            raise GonioError(f"parameter path must be a file name, got {path!r}")
         if not isinstance(encoding, str) or encoding not in ENCODINGS:
             raise GonioError(
                 f"parameter encoding must be one of {', '.join(ENCODINGS)}, got {encoding!r}"
             )
-        try:
-            table = read_table(os.fspath(path), encoding)
-        except GonioError as exc:  # named, so a scene file's error points at the parameter
-            raise GonioError(f"parameter path: {exc}") from None
-        super().__init__({"path": os.fspath(path), "encoding": encoding})
+        name, table = read_path(path, lambda name: read_table(name, encoding))
+        super().__init__({"path": name, "encoding": encoding})
         self.is_rgb = True
         # One more node in each azimuth: 360° ≡ 0°, so φ in [352.5°, 360°) interpolates
         # toward the 0° node.

@@ -14,6 +14,7 @@ from gonio import brdf
 from gonio.brdf.rgl import RglTable
 from gonio.cli import main
 from gonio.radiometry.bands import band_eval
+from gonio.types import FloatArray
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 mi = pytest.importorskip("mitsuba", reason="the render extra (pip install gonio[render])")
@@ -121,6 +122,14 @@ def test_mitsuba_renders_the_export_as_the_analytic_model_within_its_error(expor
     assert np.median(np.abs(grey - truth)[inside] / truth[inside]) < 0.02
 
 
+def random_pair(rng: np.random.Generator, theta_max: float) -> tuple[FloatArray, FloatArray]:
+    """Two directions uniform in (θ ≤ ``theta_max`` rad, φ)."""
+    theta = rng.uniform(0.0, theta_max, 2)
+    phi = rng.uniform(-np.pi, np.pi, 2)
+    w = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+    return w[0], w[1]
+
+
 def test_mitsuba_evaluates_the_file_as_gonio_reads_it(exported: Path) -> None:
     mi.set_variant("scalar_spectral")
     bsdf = mi.load_dict({"type": "measured", "filename": str(exported)})
@@ -128,12 +137,7 @@ def test_mitsuba_evaluates_the_file_as_gonio_reads_it(exported: Path) -> None:
     rng = np.random.default_rng(3)
     context = mi.BSDFContext()
     for _ in range(40):
-        theta = rng.uniform(0.0, 1.4, 2)
-        phi = rng.uniform(-np.pi, np.pi, 2)
-        wi, wo = (
-            np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
-            for t, p in zip(theta, phi, strict=True)
-        )
+        wi, wo = random_pair(rng, 1.4)
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(*wi)
         # Mitsuba's eval is the file's value: f·cos θo.
@@ -182,12 +186,7 @@ def test_mitsuba_evaluates_a_random_file_as_gonio_reads_it(tmp_path: Path, phi_n
     read = RglTable(path)
     context = mi.BSDFContext()
     for _ in range(60):
-        theta = rng.uniform(0.0, 1.5, 2)
-        phi = rng.uniform(-np.pi, np.pi, 2)
-        wi, wo = (
-            np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
-            for t, p in zip(theta, phi, strict=True)
-        )
+        wi, wo = random_pair(rng, 1.5)
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(*wi)
         got = np.array(bsdf.eval(context, si, mi.Vector3f(*wo))).ravel()
