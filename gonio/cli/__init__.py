@@ -59,7 +59,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "export": (
         "gonio.cli.export",
-        "write a run as csv, hdf5, alta, bluesky documents or a MERL table",
+        "write a run as csv, hdf5, alta, bluesky documents, a MERL table or an RGL material",
     ),
     "fit": (
         "gonio.cli.fit",
