@@ -16,6 +16,7 @@ import numpy as np
 
 from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.measured import kept
+from gonio.radiometry.series import CalibrationSeries
 from gonio.store.read import Run, open_run
 from gonio.types import FloatArray
 
@@ -48,10 +49,15 @@ def shared_error(run: Run | str, calibrated: Calibrated | None = None) -> Shared
     if not isinstance(run, Run):
         run = open_run(run)
     calibrated = calibrate(run) if calibrated is None else calibrated
-    series = calibrated.series
     keep = kept(calibrated)
     s = run.samples
     t = (0.5 * (s["started_s"] + s["ended_s"]))[keep]
+    return calibration_error(calibrated.series, t)
+
+
+def calibration_error(series: CalibrationSeries, t: FloatArray) -> SharedError:
+    """The shared error of values divided by ``series``' reference rate interpolated at
+    run times ``t`` (s, (N,))."""
     k = len(series.t)
     eye = np.eye(k)
     weights = np.stack([np.interp(t, series.t, eye[j]) for j in range(k)], axis=1)
