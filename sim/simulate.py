@@ -147,16 +147,18 @@ def simulate_standard(
     light_on: bool = True,
     seed: int | None = None,
     target: StageTarget = "reference",
+    optics: SceneOptics | None = None,
 ) -> sensor.Summary:
     """K readings of ``target`` at the true joint angles ``pose`` (rad, (A,)), each of
     ``averages`` exposures of ``exposure_s`` s, the first starting at ``started_s`` (s,
     (K,)), with the random streams of sample indices ``index`` (K,) from their first draw:
     what `sim.devices.detector.SimDetector.measure` reads there (light off: a dark
-    reading), vectorized over K. The mean counts, spread, count and saturation of each."""
+    reading), vectorized over K; ``optics``: the scene's `SceneOptics` on ``rig``, when
+    the caller has it. The mean counts, spread, count and saturation of each."""
     started = np.asarray(started_s, dtype=np.float64).reshape(-1)
     k = len(started)
     wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
-    chain = SceneOptics(scene, rig)
+    chain = SceneOptics(scene, rig) if optics is None else optics
     geometric = np.repeat(chain.geometric_power(wi, wo, target), k)
     period = exposure_s + rig.spec.detector.readout_s
     t_mid = started[:, None] + period * np.arange(averages)[None, :] + 0.5 * exposure_s
@@ -171,14 +173,20 @@ def simulate_standard(
 
 
 def expected_rate(
-    rig: Rig, scene: Scene, pose: FloatArray, t_s: FloatArray, target: StageTarget = "reference"
+    rig: Rig,
+    scene: Scene,
+    pose: FloatArray,
+    t_s: FloatArray,
+    target: StageTarget = "reference",
+    optics: SceneOptics | None = None,
 ) -> FloatArray:
     """The noise-free signal rate (counts/s, dark excluded) of ``target`` at the true
     joint angles ``pose`` (rad, (A,)) at run times ``t_s`` (s): the source's drift at
-    that instant, no rounding (the truth a calibration's rate estimates)."""
+    that instant, no rounding (the truth a calibration's rate estimates); ``optics`` as
+    in `simulate_standard`."""
     t = np.asarray(t_s, dtype=np.float64)
     wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
-    chain = SceneOptics(scene, rig)
+    chain = SceneOptics(scene, rig) if optics is None else optics
     geometric = chain.geometric_power(wi, wo, target)
     power = chain.power(np.repeat(geometric, t.size), t.reshape(-1, 1))
     electrons = chain.electrons(power, np.ones(t.size))[:, 0]
