@@ -67,6 +67,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/fit.py
+	$(BIN)/python benchmarks/calibration.py
 	$(BIN)/python benchmarks/evaluation.py
 	$(BIN)/python benchmarks/reconstruct.py
 	$(BIN)/python benchmarks/reconstruct.py --transforms

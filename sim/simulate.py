@@ -1,4 +1,6 @@
-"""`simulate(plan, scene)`: a whole simulated run computed at once (vectorized).
+"""`simulate(plan, scene)`: a whole simulated run computed at once (vectorized); and
+`simulate_standard`, readings of the reference standard (or dark readings) at a fixed
+pose, as the engine's calibrations take them, with `expected_rate` their noise-free value.
 
 The same run `SimulatedInstrument.run` measures target by target through the driver
 protocols — the same motion (each target's move from the previous goal, trapezoidal
@@ -13,6 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
+from drivers.base import StageTarget
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.devices.detector import sensor_of
@@ -130,3 +133,62 @@ def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
         std=std,
         saturated=saturated,
     )
+
+
+def simulate_standard(
+    rig: Rig,
+    scene: Scene,
+    pose: FloatArray,
+    started_s: FloatArray,
+    exposure_s: float,
+    averages: int,
+    index: np.ndarray,
+    *,
+    light_on: bool = True,
+    seed: int | None = None,
+    target: StageTarget = "reference",
+    optics: SceneOptics | None = None,
+) -> sensor.Summary:
+    """K readings of ``target`` at the true joint angles ``pose`` (rad, (A,)), each of
+    ``averages`` exposures of ``exposure_s`` s, the first starting at ``started_s`` (s,
+    (K,)), with the random streams of sample indices ``index`` (K,) from their first draw:
+    what `sim.devices.detector.SimDetector.measure` reads there (light off: a dark
+    reading), vectorized over K; ``optics``: the scene's `SceneOptics` on ``rig``, when
+    the caller has it. The mean counts, spread, count and saturation of each."""
+    started = np.asarray(started_s, dtype=np.float64).reshape(-1)
+    k = len(started)
+    wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
+    chain = SceneOptics(scene, rig) if optics is None else optics
+    geometric = np.repeat(chain.geometric_power(wi, wo, target), k)
+    period = exposure_s + rig.spec.detector.readout_s
+    t_mid = started[:, None] + period * np.arange(averages)[None, :] + 0.5 * exposure_s
+    power = chain.power(geometric, t_mid, light_on=light_on)
+    signal = chain.electrons(power, np.full(k, exposure_s))
+    spec, effects = sensor_of(scene)
+    streams = Streams(scene.seed if seed is None else int(seed))
+    counts, sat = sensor.read_out(
+        signal, exposure_s, spec, effects, streams, np.asarray(index, dtype=np.int64)
+    )
+    return sensor.summarize(counts, sat)
+
+
+def expected_rate(
+    rig: Rig,
+    scene: Scene,
+    pose: FloatArray,
+    t_s: FloatArray,
+    target: StageTarget = "reference",
+    optics: SceneOptics | None = None,
+) -> FloatArray:
+    """The noise-free signal rate (counts/s, dark excluded) of ``target`` at the true
+    joint angles ``pose`` (rad, (A,)) at run times ``t_s`` (s): the source's drift at
+    that instant, no rounding (the truth a calibration's rate estimates); ``optics`` as
+    in `simulate_standard`."""
+    t = np.asarray(t_s, dtype=np.float64)
+    wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
+    chain = SceneOptics(scene, rig) if optics is None else optics
+    geometric = chain.geometric_power(wi, wo, target)
+    power = chain.power(np.repeat(geometric, t.size), t.reshape(-1, 1))
+    electrons = chain.electrons(power, np.ones(t.size))[:, 0]
+    spec, _ = sensor_of(scene)
+    return np.asarray((electrons / spec.gain_e_per_count).reshape(t.shape), dtype=np.float64)

@@ -7,12 +7,13 @@ noise model are there)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.radiometry.series import CalibrationSeries
+from gonio.radiometry.series import CalibrationSeries, rounding_var
 from gonio.store.read import Event, Run
 from gonio.types import FloatArray
 
@@ -27,10 +28,14 @@ class Calibrated:
 
 
 def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
-    """The series of a run's calibration events (`GonioError` without one)."""
+    """The series of a run's calibration events (`GonioError` without one): the noise
+    model a (the dark readings' variance per exposure) and b (the reference's excess
+    variance per count) pooled over them, each reading's variance from it, and the
+    error the darks' rounding leaves (`gonio.radiometry.series`)."""
     if not events:
         raise GonioError("the run has no calibration reading: no BRDF can be derived")
-    t, dark, dark_var, ref, ref_var, a_s, b_s = [], [], [], [], [], [], []
+    t, dark, ref, a_s, b_s = [], [], [], [], []
+    codes, dark_counts_, dark_spread, exposures, ns, dns = [], [], [], [], [], []
     for e in events:
         r, d = e.data["reference"], e.data["dark"]
         exposure = float(r["exposure_s"])
@@ -41,16 +46,27 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         else:
             dark_counts, dark_std, dn = float(d["value"]), _std(d), max(int(d["n"]), 1)
         dark.append(dark_counts / exposure)
-        dark_var.append(dark_std**2 / dn / exposure**2)
         signal = float(r["value"]) - dark_counts
         ref.append(signal / exposure)
-        ref_var.append((_std(r) ** 2 / n + dark_std**2 / dn) / exposure**2)
         a_s.append(dark_std**2)
         b_s.append(max(_std(r) ** 2 - dark_std**2, 0.0) / max(signal, 1e-300))
+        codes.append(d is not None and _whole_codes(r) and _whole_codes(d))
+        dark_counts_.append(dark_counts)
+        dark_spread.append(dark_std)
+        exposures.append(exposure)
+        ns.append(n)
+        dns.append(dn if d is not None else math.inf)
     first = events[0].data
     rate = np.array(ref)
     if np.any(rate <= 0):
         raise GonioError("a reference reading is not above its dark reading: no calibration")
+    noise_a, noise_b = float(np.mean(a_s)), float(np.mean(b_s))
+    exposure_s = np.array(exposures)
+    dark_var = noise_a / np.array(dns) / exposure_s**2
+    ref_var = (noise_a + noise_b * rate * exposure_s) / np.array(ns) / exposure_s**2 + dark_var
+    rounding = _dark_rounding(
+        np.array(codes), np.array(dark_counts_), np.array(dark_spread), noise_b, exposure_s
+    )
     return CalibrationSeries(
         albedo=float(first["albedo"]),
         source_kind=str(first["source_kind"]),
@@ -58,12 +74,39 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         wo=np.array(first["wo"], dtype=np.float64),
         t=np.array(t),
         dark_rate=np.array(dark),
-        dark_rate_var=np.array(dark_var),
+        dark_rate_var=dark_var,
         rate=rate,
-        rate_var=np.array(ref_var),
-        noise_a=float(np.mean(a_s)),
-        noise_b=float(np.mean(b_s)),
+        rate_var=ref_var,
+        noise_a=noise_a,
+        noise_b=noise_b,
+        dark_rounding=rounding,
     )
+
+
+def _whole_codes(reading: dict[str, object]) -> bool:
+    """Whether a journaled reading is the mean of whole ADC codes (n × mean whole)."""
+    total = float(reading["value"]) * max(int(reading["n"]), 1)  # type: ignore[arg-type,call-overload]
+    return bool(abs(total - round(total)) <= 1e-6 * max(1.0, abs(total)))
+
+
+def _dark_rounding(
+    codes: np.ndarray, dark: FloatArray, spread: FloatArray, noise_b: float, exposure: FloatArray
+) -> FloatArray:
+    """1σ (counts/s) of the error rounding to ADC codes leaves in each dark rate
+    (`gonio.radiometry.series.rounding_var`; 0 where the readings are not whole codes).
+
+    What dithers the rounding is the dark reading's noise per exposure (codes): at
+    least the shot noise of its own counts D, b·D (b the reference's variance per count
+    of signal: the same counting statistics). Its spread s tells more only where it is
+    at least half a code: a steady level between two codes spreads up to ½ by rounding
+    alone, so a smaller spread says nothing of the noise; from ½ on, σ² = s² − 1/12
+    (and the rounding error is negligible). Reading after reading of the same dark level
+    rounds the same way: the error is shared by every calibration."""
+    noise2 = np.where(
+        spread >= 0.5, np.maximum(noise_b * dark, spread**2 - 1.0 / 12.0), noise_b * dark
+    )
+    noise = np.sqrt(np.maximum(noise2, 0.0))
+    return np.asarray(np.where(codes, np.sqrt(rounding_var(noise)) / exposure, 0.0), np.float64)
 
 
 def _std(reading: dict[str, object]) -> float:

@@ -2,22 +2,36 @@
 time (docs/explanations/acquisition.md#calibration): counts → BRDF with the source's
 drift divided out, and its 1σ uncertainty.
 
-Every calibration holds a reading of the reference standard (albedo ρ, at the
-rig's calibration geometry) and a dark reading, both at one exposure e_ref with
-``averages`` exposures each. With d(t) the dark rate (counts/s) and S(t) the
-dark-subtracted reference rate, each interpolated linearly in run time between the
-calibrations (constant beyond the first and the last), a sample of mean counts C over
-exposure e at run time t (the middle of its exposures) and pair (ωi, ωo) gives
+Every calibration holds a reading of the reference standard (albedo ρ, at the rig's
+calibration geometry) and a dark reading, both at one exposure e_ref with ``averages``
+exposures each. With d(t) the dark rate (counts/s) and S(t) the dark-subtracted
+reference rate, interpolated in run time between the calibrations
+(`CalibrationSeries.weights`: S(t) by a not-a-knot cubic spline through three or more
+readings, d(t), and S(t) through two, by a line; each constant beyond the first and the
+last), a sample of mean counts C over exposure e at run time t (the middle of its
+exposures) and pair (ωi, ωo) gives
 
     s = C/e − d(t),    f = (ρ/π) · (s / S(t)) · (g_ref / g(ωi, ωo))
 
 with g the geometric factor of the source kind (`gonio.radiometry.calibration`): the
-source's drift cancels in s/S(t). Uncertainty (1σ): the variance of C is the sample's
-own spread std²/n when it averaged n ≥ 2 exposures, else the calibration's noise model
-var(C) = a + b·max(C − d·e, 0) per exposure, with a the dark reading's variance and b
-the reference's excess variance per count (counting statistics: shot noise grows with
-the signal, read and dark noise do not); the reference and dark rates carry the
-variance of their means. These add in quadrature through the formula above. A detector
+source's drift cancels in s/S(t). The interpolation is linear in the readings (S(t) =
+Σ_k w_k(t) S_k), so its noise follows from the weights. A spline follows a drift that
+bends between calibrations (a lamp's slow oscillation), which a straight line cuts
+through: the line's error, −S''·(t − t_k)(t_k+1 − t)/2, averages −S''Δ²/12 over an
+interval Δ and keeps its sign over half a period of the drift, so it adds up over a run
+instead of averaging out (`benchmarks/calibration.py` measures both).
+
+Uncertainty (1σ): the variance of C is the sample's own spread std²/n when it averaged
+n ≥ 2 exposures, else the calibration's noise model var(C) = a + b·max(C − d·e, 0) per
+exposure, with a the dark readings' variance and b the reference's excess variance per
+count (counting statistics: shot noise grows with the signal, read and dark noise do
+not). The reference and dark rates carry the variance of their means, (a + b·signal)/n
+and a/n, from the same model pooled over the K calibrations (a reading's own spread of
+n exposures is itself uncertain: with n = 4 the scale's z-scores spread 1.22 instead of
+1, 1.18 pooled). These add in quadrature through the formula above. One error is not
+reduced by averaging: a dark reading in ADC codes whose noise is below a code is rounded
+the same way in every exposure and every calibration (`rounding_var`); it enters s and
+S(t) alike, so f carries it as (s − S)/(S s) times the dark rate's error. A detector
 that averages on its own and reports no spread gives no noise estimate: its readings
 count as exact there (docs/explanations/acquisition.md).
 """
@@ -26,11 +40,58 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from gonio.radiometry.calibration import relative_geometry
-from gonio.types import FloatArray
+from gonio.types import ArrayLike, FloatArray
+
+#: The largest variance gain Σ_k w_k(t)² of the reference rate's interpolation the
+#: spline may have (a regular schedule's is at most 1.4, 2.3 with its intervals ±20 %
+#: apart; a calibration a second after another: hundreds); beyond it, the line's (≤ 1).
+NOISE_GAIN = 3.0
+
+#: Terms of `rounding_var`'s series (its truncation error is below 3e-4 relative).
+_ROUNDING_TERMS = 2000
+
+
+def _spline_weights(knots: FloatArray, t: FloatArray) -> FloatArray:
+    """(N, K) weights of the not-a-knot cubic spline through K ≥ 3 increasing ``knots``
+    at ``t`` (inside them): the spline of each unit vector (Lagrange's parabola for 3,
+    which that spline is)."""
+    if len(knots) == 3:
+        x = knots
+        basis = [
+            (t - x[(j + 1) % 3])
+            * (t - x[(j + 2) % 3])
+            / ((x[j] - x[(j + 1) % 3]) * (x[j] - x[(j + 2) % 3]))
+            for j in range(3)
+        ]
+        return np.asarray(np.stack(basis, axis=-1), dtype=np.float64)
+    spline = CubicSpline(knots, np.eye(len(knots)), bc_type="not-a-knot")
+    return np.asarray(spline(t), dtype=np.float64)
+
+
+def rounding_var(noise: ArrayLike) -> FloatArray:
+    """Mean square (codes²) of the error rounding to whole ADC codes leaves in the mean
+    of many readings of one level x whose noise is Gaussian of σ = ``noise`` (codes),
+    over where x lies within its code.
+
+    Averaging removes the rounding error only where the noise dithers it: the mean of
+    round(x + n) tends to E[round(x + n)] = x + β(x), with β the sawtooth
+    round(x) − x = Σ_m (−1)^m sin(2πmx)/(πm) smoothed by the noise (each harmonic
+    times the noise's characteristic function e^(−2π²m²σ²)). Over x uniform in a code,
+    E[β²] = Σ_m≥1 e^(−4π²m²σ²)/(2π²m²): the resolution term 1/12 at σ = 0, 0.015 at
+    σ = 0.175, below 1e-8 from σ = 0.5 on. β is the same for every reading of the same
+    level: an error shared by all of them, not reduced by more exposures or readings."""
+    sigma = np.asarray(noise, dtype=np.float64)
+    m = np.arange(1, _ROUNDING_TERMS + 1, dtype=np.float64)
+    terms = np.exp(-4.0 * math.pi**2 * np.multiply.outer(sigma**2, m**2)) / (
+        2.0 * math.pi**2 * m**2
+    )
+    return np.asarray(terms.sum(axis=-1), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -48,18 +109,53 @@ class CalibrationSeries:
     rate_var: FloatArray  # (K,)
     noise_a: float  # counts² per exposure (dark)
     noise_b: float  # counts² per count of signal
+    #: (K,) counts/s: 1σ of the error the ADC's rounding leaves in each dark rate
+    #: (`rounding_var`), the same error in every reading (fully correlated); 0: none.
+    dark_rounding: FloatArray | None = None
 
-    def _at(self, values: FloatArray, t: FloatArray) -> FloatArray:
-        return np.asarray(np.interp(t, self.t, values), dtype=np.float64)
+    def weights(self, t: ArrayLike, *, spline: bool = True) -> FloatArray:
+        """(N, K): the interpolated rate at run times ``t`` (s, (N,)) as a combination
+        of the K readings (rows sum to 1): a not-a-knot cubic spline through K ≥ 3
+        readings (a parabola for 3), a line through 2 (and where the spline would
+        amplify the readings' noise, `NOISE_GAIN`; and without ``spline``: the dark
+        rate's, which does not follow the source), constant beyond the first and the
+        last reading (see the module)."""
+        t = np.clip(np.asarray(t, dtype=np.float64), self.t[0], self.t[-1])
+        k = len(self.t)
+        if k == 1:
+            return np.ones((*t.shape, 1))
+        if spline and k >= 3 and self._spline_holds:
+            return _spline_weights(self.t, t)
+        eye = np.eye(k)
+        columns = [np.interp(t, self.t, eye[j]) for j in range(k)]
+        return np.asarray(np.stack(columns, axis=-1), dtype=np.float64)
 
-    def _var_at(self, var: FloatArray, t: FloatArray) -> FloatArray:
-        """Variance of the linear interpolation of independent readings."""
-        if len(self.t) == 1:
-            return np.full(np.shape(t), float(var[0]))
-        j = np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2)
-        t0, t1 = self.t[j], self.t[j + 1]
-        w = np.clip((t - t0) / np.where(t1 > t0, t1 - t0, 1.0), 0.0, 1.0)
-        return np.asarray((1 - w) ** 2 * var[j] + w**2 * var[j + 1], dtype=np.float64)
+    def dark_at(self, t: ArrayLike) -> FloatArray:
+        """d(t): the dark rate (counts/s) at run times ``t`` (s), linear between the
+        readings (the dark current does not follow the source's drift; a spline would
+        only pass the readings' noise on)."""
+        return np.asarray(self.weights(t, spline=False) @ self.dark_rate, dtype=np.float64)
+
+    @cached_property
+    def _spline_holds(self) -> bool:
+        """Whether the spline's variance gain Σ_k w_k(t)² stays within `NOISE_GAIN`
+        (the line's is at most 1): not where one calibration follows another within a
+        fraction of the others' spacing."""
+        if np.any(np.diff(self.t) <= 0):
+            return False
+        fractions = np.linspace(0.0, 1.0, 9)[1:-1]
+        probe = (self.t[:-1, None] + np.diff(self.t)[:, None] * fractions).ravel()
+        return bool(np.max(np.sum(_spline_weights(self.t, probe) ** 2, axis=-1)) <= NOISE_GAIN)
+
+    def rate_at(self, t: ArrayLike) -> FloatArray:
+        """S(t): the dark-subtracted reference rate (counts/s) at run times ``t`` (s)."""
+        return np.asarray(self.weights(t) @ self.rate, dtype=np.float64)
+
+    def dark_rounding_at(self, t: ArrayLike) -> FloatArray:
+        """1σ (counts/s) of the dark rate's shared rounding error at run times ``t``."""
+        if self.dark_rounding is None:
+            return np.zeros(np.shape(t))
+        return np.asarray(self.weights(t, spline=False) @ self.dark_rounding, dtype=np.float64)
 
     def brdf(
         self,
@@ -72,9 +168,10 @@ class CalibrationSeries:
         t: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
         """(f, σ_f) of samples (see the module docstring); arrays (N,), pairs (N, 3)."""
-        d = self._at(self.dark_rate, t)
+        w, line = self.weights(t), self.weights(t, spline=False)
+        d = line @ self.dark_rate
         s = counts / exposure_s - d
-        big_s = self._at(self.rate, t)
+        big_s = w @ self.rate
         g_ref = float(relative_geometry(self.source_kind, self.wi, self.wo))  # type: ignore[arg-type]
         g = relative_geometry(self.source_kind, wi, wo)  # type: ignore[arg-type]
         scale = self.albedo / math.pi * g_ref / np.where(g > 0, g, 1.0)
@@ -82,7 +179,9 @@ class CalibrationSeries:
         modelled = self.noise_a + self.noise_b * np.maximum(counts - d * exposure_s, 0.0)
         own = (n >= 2) & np.isfinite(std)
         var_counts = np.where(own, std**2 / np.maximum(n, 1), modelled / np.maximum(n, 1))
-        var_s = var_counts / exposure_s**2 + self._var_at(self.dark_rate_var, t)
-        var_big = self._var_at(self.rate_var, t)
-        sigma = scale * np.sqrt(var_s / big_s**2 + s**2 * var_big / big_s**4)
+        var_s = var_counts / exposure_s**2 + line**2 @ self.dark_rate_var
+        var_big = w**2 @ self.rate_var
+        # the dark's rounding error δ in s and S alike: ∂f/∂δ = scale·(s − S)/S²
+        shared = self.dark_rounding_at(t) * (s - big_s) / big_s**2
+        sigma = scale * np.sqrt(var_s / big_s**2 + s**2 * var_big / big_s**4 + shared**2)
         return np.asarray(f, dtype=np.float64), np.asarray(sigma, dtype=np.float64)

@@ -11,18 +11,18 @@ import pytest
 
 from gonio import radiometry
 from gonio.acquire.measure import measure_target
-from gonio.acquire.reference import CALIBRATION_INDEX
+from gonio.acquire.reference import CALIBRATION_INDEX, reference_pose
 from gonio.planner import build
 from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
-from gonio.workflows.simulate import measure_targets
+from gonio.workflows.simulate import measure_targets, simulate_plan
 from sim.clock import ManualClock
 from sim.devices.instrument import SimulatedInstrument
 from sim.physics.optics import SceneOptics
 from sim.scene import Scene, load_scene
-from sim.simulate import simulate
+from sim.simulate import expected_rate, simulate, simulate_standard
 from tests.conftest import CONFIGS
 from tests.support.rigs import with_point_source
 
@@ -236,3 +236,50 @@ def test_no_shipped_plan_saturates_a_shipped_scene(
         if kind == scene.source.kind:
             run = simulate(plan, scene)
             assert not run.saturated.any(), (name, int(run.saturated.sum()))
+
+
+@pytest.mark.parametrize("scene_name", ["matte", "glossy_metal"])
+def test_standard_readings_equal_the_engines_calibrations(
+    rigs: dict[str, Rig], scene_name: str
+) -> None:
+    """`simulate_standard` reads the reference standard (and the dark) as the engine's
+    calibrations do, bit for bit: the fast path of the calibration tests is the real one."""
+    rig = rigs["arch"]
+    scene = load_scene(SCENES / f"{scene_name}.yaml", rig)
+    scene = scene.with_effects({**scene.effects.model_dump(), "source_drift": {"amplitude": 0.01}})
+    spec = PlanSpec.model_validate(
+        {
+            "name": "t",
+            "parametrization": "hybrid",
+            "isotropic": True,
+            "sampling": {"strategy": "sobol", "target": 6, "seed": 0},
+            "exposure": {"seconds": 0.01, "averages": 1},
+            "time_budget_s": 2,
+            "max_moves": 0,
+            "kicks": 0,
+            "acquisition": {"calibration": {"every_samples": 3, "averages": 5}},
+        }
+    )
+    run = simulate_plan(build(spec, rig), scene, seed=7).run
+    events = run.of_kind("calibration")
+    assert len(events) >= 3
+    pose = reference_pose(rig)
+    for light_on, key, offset in ((True, "reference", 0), (False, "dark", 1)):
+        readings = [e.data[key] for e in events]
+        k = np.array([e.data["k"] for e in events])
+        got = simulate_standard(
+            rig, scene, pose, np.array([r["started_s"] for r in readings]),
+            readings[0]["exposure_s"], readings[0]["n"], CALIBRATION_INDEX + 2 * k + offset,
+            seed=7, light_on=light_on,
+        )  # fmt: skip
+        assert got.value.tolist() == [r["value"] for r in readings]
+        assert got.std.tolist() == [r["std"] for r in readings]
+
+
+def test_expected_rate_is_the_noise_free_reading(rigs: dict[str, Rig]) -> None:
+    rig = rigs["arch"]
+    scene = load_scene(SCENES / "matte.yaml", rig).with_effects(["source_drift"])
+    pose = reference_pose(rig)
+    got = simulate_standard(rig, scene, pose, np.array([0.0, 100.0]), 0.02, 1, np.arange(2))
+    t_mid = np.array([0.01, 100.01])
+    np.testing.assert_allclose(got.value / 0.02, expected_rate(rig, scene, pose, t_mid), rtol=1e-13)

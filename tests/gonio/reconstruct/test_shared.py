@@ -27,15 +27,20 @@ def run(runs_dir: Path):
 def test_weights_interpolate_the_readings_in_time(run):
     error = shared_error(run)
     series = calibrate(open_run(run)).series
-    assert error.weights.shape == (len(Measured.from_run(run)), len(series.t))
-    assert len(series.t) >= 4
-    np.testing.assert_allclose(error.weights.sum(axis=1), 1.0, rtol=0, atol=1e-12)
-    assert np.all(error.weights >= 0.0)
-    # linear interpolation: at most two readings per sample, and each reading is used
-    assert np.all((error.weights > 0).sum(axis=1) <= 2)
-    assert np.all(error.weights.max(axis=0) > 0.0)
-    np.testing.assert_allclose(error.relative, np.sqrt(series.rate_var) / series.rate)
-    assert np.all((error.relative > 0) & (error.relative < 1e-3))
+    k = len(series.t)
+    # K readings, and a last column: the dark readings' rounding (whole ADC codes here)
+    assert error.weights.shape == (len(Measured.from_run(run)), k + 1)
+    assert k >= 4
+    readings = error.weights[:, :k]
+    np.testing.assert_allclose(readings.sum(axis=1), 1.0, rtol=0, atol=1e-12)
+    # the interpolation (a spline) leans on the readings around each sample most
+    nearest = np.abs(readings).argmax(axis=1)
+    assert np.all(np.diff(nearest) >= 0) and set(nearest) == set(range(k))
+    np.testing.assert_allclose(error.relative[:k], np.sqrt(series.rate_var) / series.rate)
+    assert np.all((error.relative[:k] > 0) & (error.relative[:k] < 1e-3))
+    assert error.relative[k] == 1.0
+    rounding = np.abs(error.weights[:, k])
+    assert np.all((rounding > 0) & (rounding < 1e-3))
 
 
 def test_the_interpolated_rate_is_what_the_weights_say(run):
@@ -43,7 +48,7 @@ def test_the_interpolated_rate_is_what_the_weights_say(run):
     series = calibrate(open_run(run)).series
     s = open_run(run).samples
     t = 0.5 * (s["started_s"] + s["ended_s"])
-    np.testing.assert_allclose(error.weights @ series.rate, np.interp(t, series.t, series.rate))
+    np.testing.assert_allclose(error.weights[:, : len(series.t)] @ series.rate, series.rate_at(t))
 
 
 def test_common_and_take():
