@@ -41,6 +41,7 @@ MODELS = (
     ("cook_torrance α=0.3, kd=0.2", {"alpha": 0.3, "kd": 0.2, "f0": 0.04}),
     ("cook_torrance α=0.2", {"alpha": 0.2, "f0": 0.04}),
     ("cook_torrance α=0.1", {"alpha": 0.1, "f0": 0.04}),
+    ("cook_torrance α=0.125, kd=0.5", {"alpha": 0.125, "kd": 0.5, "f0": 0.04}),
     (
         "cook_torrance gold α=0.2 (RGB)",
         {"alpha": 0.2, "fresnel": "conductor", "ior": (0.18, 0.42, 1.37), "k": (3.42, 2.35, 1.77)},

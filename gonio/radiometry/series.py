@@ -53,6 +53,10 @@ from gonio.types import ArrayLike, FloatArray
 #: apart; a calibration a second after another: hundreds); beyond it, the line's (≤ 1).
 NOISE_GAIN = 3.0
 
+#: Matrix entries (samples × calibrations) `CalibrationSeries.brdf` holds at once: a run
+#: of 10⁶ samples and 10³ calibrations is computed in blocks of 4 000 samples, 32 MB each.
+BLOCK_ENTRIES = 1 << 22
+
 #: Terms of `rounding_var`'s series (its truncation error is below 3e-4 relative).
 _ROUNDING_TERMS = 2000
 
@@ -167,7 +171,29 @@ class CalibrationSeries:
         wo: FloatArray,
         t: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
-        """(f, σ_f) of samples (see the module docstring); arrays (N,), pairs (N, 3)."""
+        """(f, σ_f) of samples (see the module docstring); arrays (N,), pairs (N, 3).
+        Computed in blocks of samples (`BLOCK_ENTRIES`): the interpolation's weights are
+        a samples × calibrations matrix."""
+        block = max(1, BLOCK_ENTRIES // len(self.t))
+        parts = [
+            self._brdf(*(a[i : i + block] for a in (counts, std, n, exposure_s, wi, wo, t)))
+            for i in range(0, len(t), block)
+        ]
+        if not parts:
+            return np.zeros(0), np.zeros(0)
+        f, sigma = zip(*parts, strict=True)
+        return np.concatenate(f), np.concatenate(sigma)
+
+    def _brdf(
+        self,
+        counts: FloatArray,
+        std: FloatArray,
+        n: np.ndarray,
+        exposure_s: FloatArray,
+        wi: FloatArray,
+        wo: FloatArray,
+        t: FloatArray,
+    ) -> tuple[FloatArray, FloatArray]:
         w, line = self.weights(t), self.weights(t, spline=False)
         d = line @ self.dark_rate
         s = counts / exposure_s - d
@@ -182,6 +208,7 @@ class CalibrationSeries:
         var_s = var_counts / exposure_s**2 + line**2 @ self.dark_rate_var
         var_big = w**2 @ self.rate_var
         # the dark's rounding error δ in s and S alike: ∂f/∂δ = scale·(s − S)/S²
-        shared = self.dark_rounding_at(t) * (s - big_s) / big_s**2
+        rounding = np.zeros_like(t) if self.dark_rounding is None else line @ self.dark_rounding
+        shared = rounding * (s - big_s) / big_s**2
         sigma = scale * np.sqrt(var_s / big_s**2 + s**2 * var_big / big_s**4 + shared**2)
         return np.asarray(f, dtype=np.float64), np.asarray(sigma, dtype=np.float64)

@@ -27,8 +27,10 @@ from tests.support.runs import plan_spec, scene_spec, simulated_run
 #: The rough material the exported run measures (noise and instrument effects off).
 MATERIAL = {"name": "cook_torrance", "alpha": 0.3, "kd": 0.2, "f0": 0.04}
 #: The documented bound: |f_read − f| ≤ BOUND × max f over θi, θo ≤ 80° (models of
-#: α ≥ 0.1 at the default resolution; docs/results/rgl.md measures it).
+#: α ≥ 0.1 at the default resolution; docs/results/rgl.md measures it), and
+#: `BOUND_DIFFUSE` with a Lambertian part up to kd = 0.5 (9.7 % measured at α = 0.1).
 BOUND = 0.05
+BOUND_DIFFUSE = 0.12
 DTYPES = {1: "u1", 2: "i1", 3: "u2", 4: "i2", 5: "u4", 6: "i4", 7: "u8", 8: "i8", 9: "f2"}
 DTYPES |= {10: "f4", 11: "f8"}
 
@@ -148,7 +150,8 @@ def test_a_microfacet_model_reads_back_within_the_bound(
     wi, wo = hemisphere(4000, 3), hemisphere(4000, 4)
     want = model.eval(wi, wo)
     got = band_eval(read, "luminance")(wi, wo)
-    assert np.max(np.abs(got - want)) <= BOUND * np.max(want)
+    bound = BOUND if kd == 0.0 else BOUND_DIFFUSE
+    assert np.max(np.abs(got - want)) <= bound * np.max(want)
 
 
 def test_rgb_is_written_as_rgb_and_as_a_spectrum_that_reads_back_the_same(tmp_path: Path) -> None:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
+from gonio.radiometry import series as series_module
 from gonio.radiometry.series import NOISE_GAIN, CalibrationSeries, rounding_var
 
 ALBEDO = 0.99
@@ -132,3 +133,28 @@ def test_a_calibration_moments_after_another_keeps_the_line():
     assert np.all(w >= 0) and np.max(np.sum(w**2, axis=1)) <= 1.0 + 1e-12
     regular = series([0.0, 100.0, 200.0, 300.0], np.ones(4)).weights(t)
     assert np.any(regular < 0) and np.max(np.sum(regular**2, axis=1)) <= NOISE_GAIN
+
+
+def test_blocks_of_samples_give_the_whole_runs_values(monkeypatch: pytest.MonkeyPatch):
+    """The samples × calibrations weights are formed a block of samples at a time (a run
+    of 10⁶ samples and 10³ calibrations would need 8 GB at once): blocks of 7 samples
+    give the values and σ of one block (to rounding: the products sum in another order)."""
+    t_cal = np.arange(0.0, 2401.0, 120.0)
+    cal = series(
+        t_cal, drift(t_cal), dark_rounding=np.full(t_cal.size, 3.0),
+        rate_var=np.full(t_cal.size, 4.0),
+    )  # fmt: skip
+    rng = np.random.default_rng(5)
+    t = np.sort(rng.uniform(0.0, 2400.0, 101))
+    args = (
+        rng.uniform(1e3, 1e4, t.size), rng.uniform(1.0, 5.0, t.size),
+        np.full(t.size, 4), np.full(t.size, 0.05),
+        np.tile(ZENITH, (t.size, 1)), np.tile(AT_45, (t.size, 1)), t,
+    )  # fmt: skip
+    whole = cal.brdf(*args)
+    monkeypatch.setattr(series_module, "BLOCK_ENTRIES", 7 * t_cal.size)
+    blocks = cal.brdf(*args)
+    for a, b in zip(whole, blocks, strict=True):
+        np.testing.assert_allclose(b, a, rtol=1e-14)
+    empty = cal.brdf(*(a[:0] for a in args))
+    assert empty[0].shape == empty[1].shape == (0,)
