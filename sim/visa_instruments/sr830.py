@@ -1,0 +1,90 @@
+"""Stanford Research Systems SR830 lock-in amplifier, its RS-232 dialect as PyMeasure's
+``SR830`` sends it: ``OUTP?i`` (1 X, 2 Y, 3 R, 4 θ), ``SENS?``/``SENSi`` (sensitivity
+index, 26 = 1 V), ``OFLT?``/``OFLTi`` (time constant index), ``OFSL?``/``OFSLi``,
+``LIAS?`` (the status byte, cleared when read: bit 0 input, 1 filter, 2 output
+overload), ``*IDN?``, ``*CLS``. Answers end with a carriage return, as the SR830's
+RS-232 answers do.
+
+The output R is the signal's rate over the settle time of the set time constant (10 τ
+at 24 dB/oct); at or above the sensitivity's full scale it overloads (bit 2) and clips
+at 110 % of it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from sim.visa_instruments.base import EmulatedInstrument, Signal
+
+SENSITIVITIES = (
+    2e-9, 5e-9, 10e-9, 20e-9, 50e-9, 100e-9, 200e-9, 500e-9, 1e-6, 2e-6, 5e-6, 10e-6,
+    20e-6, 50e-6, 100e-6, 200e-6, 500e-6, 1e-3, 2e-3, 5e-3, 10e-3, 20e-3, 50e-3, 100e-3,
+    200e-3, 500e-3, 1.0,
+)  # fmt: skip
+TIME_CONSTANTS = (
+    10e-6, 30e-6, 100e-6, 300e-6, 1e-3, 3e-3, 10e-3, 30e-3, 100e-3, 300e-3, 1, 3, 10, 30,
+    100, 300, 1e3, 3e3, 10e3, 30e3,
+)  # fmt: skip
+SETTLE_TAU = {0: 5.0, 1: 7.0, 2: 9.0, 3: 10.0}  # by OFSL index (6 … 24 dB/oct)
+
+
+class SR830(EmulatedInstrument):
+    """An SR830 on a pty (module docstring); ``phase_deg``: the signal's phase."""
+
+    identity = "Stanford_Research_Systems,SR830,s/n00000,ver1.07"
+    terminator = "\r"
+
+    def __init__(
+        self, signal: Signal, *, speedup: float = 1.0, terminator: str | None = None,
+        phase_deg: float = 0.0,
+    ) -> None:  # fmt: skip
+        super().__init__(signal, speedup=speedup, terminator=terminator)
+        self.sensitivity_index = 26
+        self.time_constant_index = 8
+        self.slope_index = 3
+        self.status = 0
+        self.phase_deg = phase_deg
+
+    @property
+    def time_constant_s(self) -> float:
+        return float(TIME_CONSTANTS[self.time_constant_index])
+
+    def _output(self) -> float:
+        settle = SETTLE_TAU[self.slope_index] * self.time_constant_s
+        value = self.read_signal(settle)
+        full_scale = SENSITIVITIES[self.sensitivity_index]
+        if abs(value) >= full_scale:
+            self.status |= 0b100
+            value = 1.1 * full_scale
+        return value
+
+    def answer(self, command: str) -> tuple[str | None, float]:
+        c = command.upper().replace(" ", "")
+        if c == "*IDN?":
+            return self.identity, 0.0
+        if c == "*CLS":
+            self.status = 0
+            return None, 0.0
+        if c == "LIAS?":
+            status, self.status = self.status, 0
+            return str(status), 0.0
+        for name, attr, top in (
+            ("SENS", "sensitivity_index", len(SENSITIVITIES) - 1),
+            ("OFLT", "time_constant_index", len(TIME_CONSTANTS) - 1),
+            ("OFSL", "slope_index", 3),
+        ):
+            if c == f"{name}?":
+                return str(getattr(self, attr)), 0.0
+            if c.startswith(name):
+                index = int(c[len(name) :])
+                if not 0 <= index <= top:
+                    raise ValueError(command)
+                setattr(self, attr, index)
+                return None, 0.0
+        if c.startswith("OUTP?"):
+            which = int(c[5:])
+            r = self._output()
+            theta = math.radians(self.phase_deg)
+            values = {1: r * math.cos(theta), 2: r * math.sin(theta), 3: r, 4: self.phase_deg}
+            return f"{values[which]:.6e}", 0.0
+        raise ValueError(command)
