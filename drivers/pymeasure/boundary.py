@@ -75,6 +75,11 @@ def set_timeout(instrument: Instrument, seconds: float) -> None:
         connection.timeout = max(1, round(seconds * 1000))
 
 
+def flush(instrument: Instrument) -> None:
+    """Discard what the instrument sent and nobody read (a late answer after a timeout)."""
+    instrument.adapter.flush_read_buffer()
+
+
 def close(instrument: Instrument) -> None:
     """Release the instrument's connection (not ``shutdown()``, which may change the
     instrument's state, e.g. switch an electrometer's source)."""

@@ -176,15 +176,36 @@ class PyMeasureDetectorConfig:
             raise PyMeasureConfigError("overload_mask expected > 0 with overload_property")
 
 
-#: A lock-in's settle time in time constants for each filter slope (dB/octave): the
-#: step response of 1–4 cascaded RC stages reaching 99 % of its final value (4.6, 6.6,
-#: 8.4 and 10.0 τ), rounded up.
-SETTLE_TAU = {6: 5.0, 12: 7.0, 18: 9.0, 24: 10.0}
+def settle_tau(slope_db_oct: int, fraction: float = 0.99) -> float:
+    """A lock-in's settle time in time constants: when the step response of its output
+    filter (``slope_db_oct`` / 6 cascaded RC stages, 6 dB/octave each) reaches
+    ``fraction`` of its final value (99 %: 4.6 τ at 6 dB/oct, 6.6 at 12, 8.4 at 18,
+    10.0 at 24)."""
+    stages = slope_db_oct // 6
+    if stages < 1 or slope_db_oct % 6 or not 0 < fraction < 1:
+        raise ValueError(f"expected a slope of 6, 12, 18 or 24 dB/oct, got {slope_db_oct}")
+
+    def step(t: float) -> float:
+        return 1 - math.exp(-t) * sum(t**k / math.factorial(k) for k in range(stages))
+
+    lo, hi = 0.0, 100.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if step(mid) < fraction else (lo, mid)
+    return hi
+
+
+#: The 99 % settle time (τ) of each filter slope (dB/octave), rounded up to 0.1 τ.
+SETTLE_TAU = {slope: math.ceil(settle_tau(slope) * 10) / 10 for slope in (6, 12, 18, 24)}
 
 _LOCKIN: dict[str, Any] = {
     "reading": "magnitude",
     "unit": "V",
-    "exposure": {"kind": "time_constant", "property": "time_constant", "settle_tau": 10.0},
+    "exposure": {
+        "kind": "time_constant",
+        "property": "time_constant",
+        "settle_tau": SETTLE_TAU[24],
+    },
     "settings": (("filter_slope", 24),),
     "range_property": "sensitivity",
     "saturate_at_range": True,
@@ -199,7 +220,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "overload_property": "lia_status",
         "overload_mask": 0b111,  # input, filter and output overload
     },
-    "pymeasure.instruments.srs.SR860": _LOCKIN,
+    # PyMeasure's SR860 takes the filter slope as an index (3: 24 dB/oct), the SR830 in dB.
+    "pymeasure.instruments.srs.SR860": {**_LOCKIN, "settings": (("filter_slope", 3),)},
     "pymeasure.instruments.thorlabs.ThorlabsPM100USB": {
         "reading": "power",
         "unit": "W",

@@ -99,6 +99,7 @@ class PyMeasureDetector(Resource):
         self._applied: object = None
         self._instrument_range: float | None = None
         self._time_constants: tuple[float, ...] = ()
+        self._stale = False  # a failed exchange may leave a late answer to discard
         self.range_changes: list[RangeChange] = []
 
     # -- what the engine may ask -------------------------------------------------------
@@ -196,6 +197,10 @@ class PyMeasureDetector(Resource):
         exposure, n = self._check(exposure_s, averages)
         cfg = self._config
         started = self._clock.now()
+        if self._stale:
+            with self._talking("discarding a late answer"):
+                boundary.flush(self._instrument)
+            self._stale = False
         self._apply_exposure(exposure)
         samples: list[float] = []
         stds: list[float] = []
@@ -322,6 +327,7 @@ class PyMeasureDetector(Resource):
         except PyMeasureDetectorError:
             raise
         except boundary.INSTRUMENT_ERRORS as exc:
+            self._stale = True
             if boundary.is_timeout(exc):
                 raise self._error(f"{what}: no answer (timed out)") from exc
             raise self._error(f"{what}: {_reason(exc)}") from exc

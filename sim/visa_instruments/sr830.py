@@ -5,7 +5,7 @@ index, 26 = 1 V), ``OFLT?``/``OFLTi`` (time constant index), ``OFSL?``/``OFSLi``
 overload), ``*IDN?``, ``*CLS``. Answers end with a carriage return, as the SR830's
 RS-232 answers do.
 
-The output R is the signal's rate over the settle time of the set time constant (10 τ
+The output R is the signal's rate over the settle time of the set time constant (10.1 τ
 at 24 dB/oct); at or above the sensitivity's full scale it overloads (bit 2) and clips
 at 110 % of it.
 """
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+from drivers.pymeasure.config import SETTLE_TAU
 from sim.visa_instruments.base import EmulatedInstrument, Signal
 
 SENSITIVITIES = (
@@ -25,7 +26,6 @@ TIME_CONSTANTS = (
     10e-6, 30e-6, 100e-6, 300e-6, 1e-3, 3e-3, 10e-3, 30e-3, 100e-3, 300e-3, 1, 3, 10, 30,
     100, 300, 1e3, 3e3, 10e3, 30e3,
 )  # fmt: skip
-SETTLE_TAU = {0: 5.0, 1: 7.0, 2: 9.0, 3: 10.0}  # by OFSL index (6 … 24 dB/oct)
 
 
 class SR830(EmulatedInstrument):
@@ -50,7 +50,7 @@ class SR830(EmulatedInstrument):
         return float(TIME_CONSTANTS[self.time_constant_index])
 
     def _output(self) -> float:
-        settle = SETTLE_TAU[self.slope_index] * self.time_constant_s
+        settle = SETTLE_TAU[6 * (self.slope_index + 1)] * self.time_constant_s
         value = self.read_signal(settle)
         full_scale = SENSITIVITIES[self.sensitivity_index]
         if abs(value) >= full_scale:
