@@ -1,4 +1,4 @@
-"""Everything gonio does with PyMeasure and PyVISA themselves, in one place (the
+"""Every call into PyMeasure and PyVISA themselves, in one place (the
 ``instruments`` extra: ``pip install 'gonio[instruments]'``): loading an instrument
 class by name, opening it on a VISA resource, the exceptions that mean the instrument
 failed, and setting the connection's timeout.

@@ -128,6 +128,12 @@ class PyMeasureDetector(Resource):
         return self._config.unit
 
     @property
+    def time_constants(self) -> tuple[float, ...]:
+        """A lock-in's allowed time constants (s, ascending; known once open; empty for
+        other exposure kinds)."""
+        return self._time_constants
+
+    @property
     def is_open(self) -> bool:
         return self._instrument is not None
 
