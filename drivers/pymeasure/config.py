@@ -1,7 +1,7 @@
 """What `PyMeasureDetector` needs to know about an instrument, free of PyMeasure: the
 class, the VISA resource, which property is the reading, how an exposure is realised,
-what counts as saturated and the ranging policy; and the presets of the instruments
-the tested instruments (`PRESETS`)."""
+what counts as saturated and the ranging policy; and the presets of the tested
+instruments (`PRESETS`)."""
 
 from __future__ import annotations
 
