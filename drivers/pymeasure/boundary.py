@@ -75,9 +75,27 @@ def set_timeout(instrument: Instrument, seconds: float) -> None:
         connection.timeout = max(1, round(seconds * 1000))
 
 
-def flush(instrument: Instrument) -> None:
-    """Discard what the instrument sent and nobody read (a late answer after a timeout)."""
-    instrument.adapter.flush_read_buffer()
+def drain(instrument: Instrument, seconds: float, most: int = 100) -> int:
+    """Read and discard what the instrument still sends (a late answer after a timeout)
+    until it has been quiet for ``seconds``; at most ``most`` answers. Returns how many
+    were discarded; the connection's timeout is restored."""
+    connection = getattr(instrument.adapter, "connection", None)
+    before = getattr(connection, "timeout", None)
+    set_timeout(instrument, seconds)
+    discarded = 0
+    try:
+        while discarded < most:
+            try:
+                instrument.read()
+            except pyvisa.errors.VisaIOError as exc:
+                if is_timeout(exc):
+                    break
+                raise
+            discarded += 1
+    finally:
+        if connection is not None and before is not None:
+            connection.timeout = before
+    return discarded
 
 
 def close(instrument: Instrument) -> None:

@@ -205,7 +205,9 @@ class PyMeasureDetector(Resource):
         started = self._clock.now()
         if self._stale:
             with self._talking("discarding a late answer"):
-                boundary.flush(self._instrument)
+                late = boundary.drain(self._instrument, self._config.timeout_s)
+            if late:
+                log.warning("%s: discarded %d late answer(s)", self.resource, late)
             self._stale = False
         self._apply_exposure(exposure)
         samples: list[float] = []

@@ -233,6 +233,18 @@ def test_a_silent_instrument_times_out_naming_the_resource(
         assert time.monotonic() - t0 < 2.0
 
 
+def test_a_late_answer_after_a_timeout_is_not_taken_for_the_next_one(
+    sr830: tuple[EmulatedInstrument, PyMeasureDetector],
+) -> None:
+    device, det = sr830
+    with det:
+        device.slow(0.5)  # beyond the 0.3 s timeout: the status's answer comes late
+        with pytest.raises(DetectorError, match=r"timed out"):
+            det.measure(0.05)
+        device.clear()
+        assert det.measure(0.05).value == pytest.approx(0.01)
+
+
 def test_garbage_is_a_detector_error_and_the_next_reading_works(
     sr830: tuple[EmulatedInstrument, PyMeasureDetector],
 ) -> None:
