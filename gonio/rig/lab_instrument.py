@@ -8,9 +8,10 @@ loaded when the detector is opened.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+import re
+from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from drivers.pymeasure import (
     PRESETS,
@@ -19,8 +20,10 @@ from drivers.pymeasure import (
     PyMeasureDetectorConfig,
 )
 from gonio.config import Strict, field_error
+from gonio.config_schema import InSchema
 
 Setting = float | int | str | bool
+_DOTTED = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)+")
 
 
 class PyMeasureExposureSpec(Strict):
@@ -64,8 +67,7 @@ class PyMeasureInterfaceSpec(Strict):
     (`drivers.pymeasure.PRESETS`) need only ``instrument`` and ``resource``."""
 
     kind: Literal["pymeasure"] = Field(description="pymeasure: a PyMeasure instrument class.")
-    instrument: str = Field(
-        min_length=1,
+    instrument: Annotated[str, InSchema(pattern=f"^{_DOTTED.pattern}$")] = Field(
         description="The PyMeasure class's dotted name, e.g. pymeasure.instruments.srs.SR830.",
     )
     resource: str = Field(
@@ -132,6 +134,15 @@ class PyMeasureInterfaceSpec(Strict):
         "none: the preset's).",
     )
 
+    @field_validator("instrument")
+    @classmethod
+    def _dotted(cls, v: str) -> str:
+        if _DOTTED.fullmatch(v) is None:
+            raise ValueError(
+                f"{v!r} is not a dotted class name; expected e.g. pymeasure.instruments.srs.SR830"
+            )
+        return v
+
     @model_validator(mode="after")
     def _driver_accepts(self) -> PyMeasureInterfaceSpec:
         self.config()
@@ -150,7 +161,7 @@ class PyMeasureInterfaceSpec(Strict):
                 known = ", ".join(sorted(PRESETS))
                 raise field_error(
                     name,
-                    f"Field required for an instrument gonio has no preset for (presets: {known})",
+                    f"Field required for an instrument with no preset (presets: {known})",
                 )
         values["exposure"] = _exposure(values["exposure"])
         try:
