@@ -77,12 +77,12 @@ def test_fields_override_the_preset() -> None:
             },
             "range_property",
             "expected with ranging: auto",
-        ),  # fmt: skip
+        ),
         (
             {"overload_mask": 4, "instrument": "a.B", "reading": "v", "exposure": {"kind": "wait"}},
             "overload_property",
             "expected with overload_mask",
-        ),  # fmt: skip
+        ),
         ({"instrument": "mylab.Photometer"}, "reading", "no preset"),
         ({"reading": "not a name"}, "reading", "not a property name"),
         ({"timeout_s": 0}, "timeout_s", "greater than 0"),
