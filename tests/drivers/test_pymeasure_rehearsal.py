@@ -107,7 +107,8 @@ def test_an_instrument_with_no_preset_needs_its_reading(
 
 def test_reading_and_planning_a_pymeasure_rig_imports_neither_pymeasure_nor_pyvisa() -> None:
     code = (
-        "import sys\nfrom gonio.rig.model import Rig\nfrom gonio.workflows import hardware\n"
+        "import sys\nfrom gonio.rig.model import Rig\n"
+        "from gonio.workflows import backends, hardware, rehearsal\n"
         f"Rig.from_yaml({str(LOCKIN)!r})\n"
         "print(','.join(m for m in ('pymeasure', 'pyvisa') if m in sys.modules))"
     )
