@@ -117,7 +117,8 @@ class PyMeasureDetectorConfig:
     ``read_termination`` / ``write_termination`` / ``baud_rate``: the connection's
     (None: PyVISA's defaults); ``timeout_s``: how long an answer may take beyond the
     instrument's own integration (s). ``reading``: the property read per sample, in
-    ``unit``; ``settings``: properties set on opening, in order; ``commands``: commands
+    ``unit``; ``query``: instead of that property, a command whose answer's first
+    number is the reading; ``settings``: properties set on opening, in order; ``commands``: commands
     written on opening, after them. Saturated: an ``|value|`` at or above
     ``full_scale``, at or above the range (``range_property``, with
     ``saturate_at_range``) or `OVERFLOW`, or a status (``overload_property``, read
@@ -130,6 +131,7 @@ class PyMeasureDetectorConfig:
     resource: str
     reading: str
     unit: str = ""
+    query: str | None = None
     exposure: ExposureConfig = field(default_factory=ExposureConfig)
     visa_library: str = ""
     read_termination: str | None = None
@@ -153,6 +155,8 @@ class PyMeasureDetectorConfig:
                 f"instrument {self.instrument!r} is not a dotted class name, e.g. "
                 "pymeasure.instruments.srs.SR830"
             )
+        if self.query is not None and not self.query.strip():
+            raise PyMeasureConfigError("query expected a command, got an empty string")
         if not self.resource.strip():
             raise PyMeasureConfigError("resource expected a VISA resource, got an empty string")
         for name in ("reading", "range_property", "overload_property", "std_property"):
@@ -227,8 +231,13 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "unit": "W",
         "exposure": {"kind": "averaging", "command": "SENS:AVER:COUN {count:d}"},
     },
+    # PyMeasure's `current` asks `:MEAS?`, which in SCPI is CONFigure + READ?, and
+    # Keithley describes CONFigure as returning the function's settings to their reset
+    # values: the NPLC set per exposure might not hold (not checked on an instrument).
+    # `:READ?` measures with the settings as they are.
     "pymeasure.instruments.keithley.Keithley6517B": {
         "reading": "current",
+        "query": ":READ?",
         "unit": "A",
         "exposure": {"kind": "nplc", "property": "current_nplc"},
         "commands": (":SENS:FUNC 'CURR'", ":SENS:CURR:RANG:AUTO 1"),

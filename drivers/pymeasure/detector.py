@@ -16,6 +16,7 @@ import contextlib
 import logging
 import math
 import numbers
+import re
 import statistics
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -286,7 +287,10 @@ class PyMeasureDetector(Resource):
         with self._talking(f"reading {cfg.reading}"):
             if cfg.overload_property is not None:
                 getattr(inst, cfg.overload_property)  # clears the latched status bits
-            value = self._number(cfg.reading, getattr(inst, cfg.reading))
+            if cfg.query is not None:
+                value = self._number(cfg.reading, _first_number(inst.values(cfg.query)))
+            else:
+                value = self._number(cfg.reading, getattr(inst, cfg.reading))
             overloaded = False
             if cfg.overload_property is not None:
                 status = getattr(inst, cfg.overload_property)
@@ -342,6 +346,23 @@ class PyMeasureDetector(Resource):
 
     def _error(self, message: str) -> PyMeasureDetectorError:
         return PyMeasureDetectorError(f"{self.resource}: {message}", resource=self.resource)
+
+
+#: A number at the start of an answer's field, e.g. ``+1.234E-09`` of ``+1.234E-09NADC``.
+_LEADING_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+
+
+def _first_number(values: list[Any]) -> object:
+    """The first field of an answer as a number: PyMeasure's float, or the number a
+    field starts with (a Keithley's ``+1.234E-09NADC``); else the field as it is."""
+    if not values:
+        return values
+    first = values[0]
+    if isinstance(first, str):
+        match = _LEADING_NUMBER.match(first.strip())
+        if match is not None:
+            return float(match.group(0))
+    return first
 
 
 def _reason(exc: BaseException) -> str:

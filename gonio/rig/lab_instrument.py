@@ -94,6 +94,11 @@ class PyMeasureInterfaceSpec(Strict):
         None, description="The property read per sample, e.g. magnitude (none: the preset's)."
     )
     unit: str | None = Field(None, description="The reading's unit, e.g. V (none: the preset's).")
+    query: str | None = Field(
+        None,
+        description="Instead of the reading property: a command whose answer's first number is "
+        "the reading, e.g. ':READ?' (none: the preset's).",
+    )
     exposure: PyMeasureExposureSpec | None = Field(
         None, description="How an exposure is realised (none: the preset's)."
     )

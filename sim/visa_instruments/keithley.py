@@ -3,8 +3,9 @@ PyMeasure's ``Keithley6517B`` and ``Keithley2000`` send them. Answers end with a
 feed.
 
 - 6517B: ``:SENS:FUNC 'CURR'``, ``:SENS:CURR:NPLC n`` / ``?``, ``:SENS:CURR:RANG r`` /
-  ``?``, ``:SENS:CURR:RANG:AUTO 0|1``, ``:MEAS?`` (``+1.234567E-09NADC,+0000012.345secs,
-  +00000rdng#``, after n / 50 s), ``SYST:ERR?``, ``*IDN?``, ``*CLS``;
+  ``?``, ``:SENS:CURR:RANG:AUTO 0|1``, ``:READ?`` and ``:MEAS?`` (``+1.234567E-09NADC,
+  +0000012.345secs,+00000rdng#``, after n / 50 s; ``:MEAS?`` keeps the settings, which
+  a real one resets), ``SYST:ERR?``, ``*IDN?``, ``*CLS``;
 - 2000: ``:CONF:VOLT:DC`` / ``:CONF?``, ``:SENS:VOLT:NPLC n`` / ``?``,
   ``:SENS:VOLT:RANG r`` / ``?``, ``:SENS:VOLT:RANG:AUTO 0|1``, ``:READ?`` (the volts,
   after n / 50 s), ``*IDN?``, ``*CLS``.
@@ -91,7 +92,7 @@ class Keithley6517B(_Meter):
             return None, 0.0
         if c in ("SYST:ERR?", ":SYST:ERR?"):
             return '0,"No error"', 0.0
-        if c == ":MEAS?":
+        if c in (":MEAS?", ":READ?"):
             value, integration = self._read()
             self.readings += 1
             return (

@@ -127,15 +127,16 @@ def test_pm100usb_sets_the_averaging_count_for_the_exposure() -> None:
 
 
 def test_keithley6517b_reads_current_in_nplc_and_logs_range_changes() -> None:
+    # `:READ?`, not the class's `current` (`:MEAS?`, which resets the NPLC: config.py).
     pairs = [
         (":SENS:FUNC 'CURR'", None), (":SENS:CURR:RANG:AUTO 1", None),
         (":SENS:CURR:RANG?", "2.000000E-09"),
         (":SENS:CURR:NPLC 1", None),  # 20 ms at 50 Hz
-        (":MEAS?", "+1.500000E-09NADC,+0000000.100secs,+00001rdng#"),
+        (":READ?", "+1.500000E-09NADC,+0000000.100secs,+00001rdng#"),
         (":SENS:CURR:RANG?", "2.000000E-09"),
-        (":MEAS?", "+2.500000E-09NADC,+0000000.200secs,+00002rdng#"),
+        (":READ?", "+2.500000E-09NADC,+0000000.200secs,+00002rdng#"),
         (":SENS:CURR:RANG?", "2.000000E-08"),  # auto-ranged up
-        (":MEAS?", "+9.900000E+37NADC,+0000000.300secs,+00003rdng#"),  # over-range
+        (":READ?", "+9.900000E+37NADC,+0000000.300secs,+00003rdng#"),  # over-range
         (":SENS:CURR:RANG?", "2.000000E-08"),
     ]  # fmt: skip
     with detector(Keithley6517B, pairs) as (det, _):
