@@ -25,6 +25,11 @@ SCENE = CONFIGS / "scenes" / "matte.yaml"
 #: The interface section of each instrument's rig (the rest is arch_lockin.yaml's).
 INTERFACES = {
     "sr830": None,  # arch_lockin.yaml as shipped
+    "sr860": (
+        "    kind: pymeasure\n"
+        "    instrument: pymeasure.instruments.srs.SR860\n"
+        "    resource: USB0::0xB506::0x2000::003000::INSTR\n"
+    ),
     "pm100usb": (
         "    kind: pymeasure\n"
         "    instrument: pymeasure.instruments.thorlabs.ThorlabsPM100USB\n"

@@ -2,8 +2,8 @@
 unopened device and looks at the device's own state (not through the driver under
 test): `SimMotorBus` and `DynamixelBus` on the byte-level emulator over a pty;
 `SimDetector` and `SerialDetector` on the simulated photometer over a pty;
-`PyMeasureDetector` driving PyMeasure's SR830, ThorlabsPM100USB, Keithley6517B and
-Keithley2000 classes over pyvisa-py on their emulated instruments' ptys;
+`PyMeasureDetector` driving PyMeasure's SR830, SR860, ThorlabsPM100USB, Keithley6517B
+and Keithley2000 classes over pyvisa-py on their emulated instruments' ptys;
 `SimLightSource` and `SerialLightSwitch` on the simulated lamp over a pty."""
 
 from __future__ import annotations
@@ -186,6 +186,7 @@ def _serial_detector() -> Iterator[DetectorHarness]:
 #: The PyMeasure classes the contract runs on, by a short name.
 INSTRUMENTS = {
     "sr830": "pymeasure.instruments.srs.SR830",
+    "sr860": "pymeasure.instruments.srs.SR860",
     "pm100usb": "pymeasure.instruments.thorlabs.ThorlabsPM100USB",
     "keithley6517b": "pymeasure.instruments.keithley.Keithley6517B",
     "keithley2000": "pymeasure.instruments.keithley.Keithley2000",
