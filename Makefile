@@ -17,7 +17,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(PIP) install -e '.[test,docs]'
+	$(PIP) install -e '.[test,docs,instruments]'
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
@@ -64,6 +64,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5
+	$(BIN)/python benchmarks/instruments.py
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/fit.py

@@ -9,6 +9,10 @@ pseudo-terminal, for the real driver built from the rig file exactly as for hard
   `SerialDetector`, its counts those of the scene through `SimDetector`'s radiometric
   chain and sensor at the pose the emulated motors are at; a ``simulated`` detector:
   `SimDetector` reading the bus's positions;
+- a ``pymeasure`` detector: the emulated instrument of its PyMeasure class
+  (`sim.visa_instruments`), opened by PyVISA's pure-Python backend on its pty and driven
+  by the unmodified class through `PyMeasureDetector`, its readings the scene's rate
+  through the same chain;
 - a ``serial`` light switch: the simulated lamp relay (`sim.serial_light`) driven by
   `SerialLightSwitch`, whose state the detector sees; else a `SimLightSource`.
 
@@ -28,6 +32,7 @@ from drivers.base import StageTarget
 from drivers.dynamixel.axis import AxisConfig
 from gonio.config import ConfigError
 from gonio.rig.instrument import SerialSwitchSpec
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from sim.clock import ScaledClock, TimeSource
 from sim.devices.detector import SimDetector
@@ -35,6 +40,7 @@ from sim.dynamixel.emulator import DxlEmulator
 from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
 from sim.serial_photometer.protocol import mismatch
+from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
 
 Pose = Callable[[], dict[str, float]]
 
@@ -57,6 +63,7 @@ class Peers:
     emulator: DxlEmulator
     photometer: SerialPhotometer | None  # a serial detector's
     lamp: SerialLamp | None  # a serial light switch's
+    instrument: EmulatedInstrument | None = None  # a pymeasure detector's
 
 
 class RehearsalSide:
@@ -128,6 +135,42 @@ def photometer_for(rig: Rig, physics: SimDetector, clock: ScaledClock) -> Serial
         reset_on_open=config.reset_banner is not None and config.settle_s > 0,
         speedup=clock.speedup,
     )
+
+
+#: The integration (s) at which the sensor's full scale is the instrument's full range.
+REFERENCE_INTEGRATION_S = 0.01
+
+
+def instrument_for(
+    rig: Rig, interface: PyMeasureInterfaceSpec, physics: SimDetector, clock: ScaledClock
+) -> EmulatedInstrument:
+    """The emulated instrument of the rig's PyMeasure class, its reading the scene's
+    rate through ``physics`` (an integration of t s: the counts of t s over t, scaled
+    so that the sensor's full scale at `REFERENCE_INTEGRATION_S` is the instrument's
+    full range); `ConfigError` for a class with no emulator or a terminator it does
+    not use."""
+    config = interface.config()
+    emulator = EMULATORS.get(config.instrument)
+    if emulator is None:
+        known = ", ".join(sorted(EMULATORS))
+        raise ConfigError(
+            f"{_where(rig)}: detector.interface.instrument: --rehearse: no emulated "
+            f"{config.instrument} (emulated: {known})"
+        )
+    terminator = emulator.terminator
+    if (config.read_termination or "\n") != terminator:
+        raise ConfigError(
+            f"{_where(rig)}: detector.interface.read_termination: --rehearse: the emulated "
+            f"instrument ends its answers with {terminator!r}; expected "
+            f"read_termination: {terminator!r}"
+        )
+    per_rate = FULL_SCALE[config.instrument] * REFERENCE_INTEGRATION_S / physics.sensor.max_count
+
+    def signal(integration_s: float) -> float:
+        counts, _ = physics.expose(integration_s, 1, clock.now())
+        return float(counts[0, 0]) / integration_s * per_rate
+
+    return emulator(signal, speedup=clock.speedup)
 
 
 def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:

@@ -7,8 +7,9 @@ standard are, beside where their chains put them (`gonio.rig.schema`).
   taken another way, e.g. with the beam blocked) or ``serial`` (commands on a serial
   port, `SerialSwitchSpec`).
 - ``detector``: its collecting solid angle, exposure range, readout dead time, averaging
-  limit and ``interface``: ``simulated`` or ``serial`` (every field of
-  `drivers.serial_detector.SerialDetectorConfig`, `SerialInterfaceSpec`).
+  limit and ``interface``: ``simulated``, ``serial`` (every field of
+  `drivers.serial_detector.SerialDetectorConfig`, `SerialInterfaceSpec`) or
+  ``pymeasure`` (a PyMeasure instrument class, `gonio.rig.lab_instrument`).
 - ``reference``: the Lambertian standard read for calibration, and where.
 
 A value here is never repeated in a scene file (`sim.scene` refuses it).
@@ -27,6 +28,7 @@ from drivers.light import SerialLightConfig
 from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 
 #: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
 Command = Annotated[str, InSchema(pattern=r"\S")]
@@ -341,7 +343,10 @@ class SerialInterfaceSpec(Strict):
         return field, message.removeprefix(f"{field} ")
 
 
-InterfaceSpec = Annotated[SimulatedInterfaceSpec | SerialInterfaceSpec, Field(discriminator="kind")]
+InterfaceSpec = Annotated[
+    SimulatedInterfaceSpec | SerialInterfaceSpec | PyMeasureInterfaceSpec,
+    Field(discriminator="kind"),
+]
 
 
 class DetectorSpec(Strict):
@@ -361,7 +366,8 @@ class DetectorSpec(Strict):
     )
     interface: InterfaceSpec = Field(
         SimulatedInterfaceSpec(kind="simulated"),
-        description="How the detector is reached: simulated, or a serial detector (kind: serial).",
+        description="How the detector is reached: simulated, a serial detector (kind: serial) or "
+        "a PyMeasure instrument (kind: pymeasure).",
     )
 
     @field_validator(

@@ -1,5 +1,6 @@
-"""The hardware backend of a rig file: its Dynamixel bus, its serial detector and its
-light switch (if it has one), built from the rig's sections as `Devices` on the real
+"""The hardware backend of a rig file: its Dynamixel bus, its detector (a serial one, or
+an instrument driven by its PyMeasure class) and its light switch (if it has one),
+built from the rig's sections as `Devices` on the real
 clock. Nothing here talks to a device until the `Devices` are opened.
 
 A rig whose detector is ``simulated`` has no hardware detector: `ConfigError` names the
@@ -11,13 +12,19 @@ pseudo-terminals: `sim.rehearsal`).
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
-from drivers.base import Clock, Devices, SystemClock
+from drivers.base import Clock, Detector, Devices, SystemClock
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
+from gonio.config import ConfigError
 from gonio.rig.instrument import SerialSwitchSpec
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
+
+if TYPE_CHECKING:
+    from drivers.pymeasure.detector import PyMeasureDetector
 
 
 def dynamixel_bus(rig: Rig, *, port: str | None = None) -> DynamixelBus:
@@ -35,6 +42,45 @@ def serial_detector(rig: Rig, clock: Clock, *, port: str | None = None) -> Seria
     return SerialDetector(config, clock=clock, exposure_range_s=rig.spec.detector.exposure_range_s)
 
 
+def pymeasure_detector(
+    rig: Rig, clock: Clock, *, resource: str | None = None, visa_library: str | None = None
+) -> PyMeasureDetector:
+    """The rig's ``detector.interface`` (``kind: pymeasure``; else `ConfigError`): the
+    instrument driven by its PyMeasure class, its readings stamped by ``clock``, on
+    ``resource`` through ``visa_library`` if given (a rehearsal's pty and pyvisa-py).
+    PyMeasure and PyVISA are imported here, only for such a rig."""
+    interface = rig.spec.detector.interface
+    if not isinstance(interface, PyMeasureInterfaceSpec):
+        where = rig.source or "rig"
+        raise ConfigError(
+            f"{where}: detector.interface: is {interface.kind!r}; expected 'pymeasure'"
+        )
+    # The `instruments` extra (pymeasure, pyvisa): loaded only for a pymeasure detector.
+    try:
+        from drivers.pymeasure.detector import PyMeasureDetector
+    except ImportError as exc:
+        where = rig.source or "rig"
+        raise ConfigError(
+            f"{where}: detector.interface: kind pymeasure needs PyMeasure and PyVISA "
+            f"({exc.name} is missing): pip install 'gonio[instruments]'"
+        ) from None
+    config = interface.config()
+    if resource is not None:
+        config = dataclasses.replace(config, resource=resource)
+    if visa_library is not None:
+        config = dataclasses.replace(config, visa_library=visa_library)
+    return PyMeasureDetector(
+        config, clock=clock, exposure_range_s=rig.spec.detector.exposure_range_s
+    )
+
+
+def detector(rig: Rig, clock: Clock) -> Detector:
+    """The rig's hardware detector (``serial`` or ``pymeasure``; else `ConfigError`)."""
+    if isinstance(rig.spec.detector.interface, PyMeasureInterfaceSpec):
+        return pymeasure_detector(rig, clock)
+    return serial_detector(rig, clock)
+
+
 def light_switch(rig: Rig, clock: Clock, *, port: str | None = None) -> SerialLightSwitch | None:
     """The rig's ``light.switch`` (``kind: serial``), on ``port`` if given; None when the
     light cannot be switched."""
@@ -50,5 +96,5 @@ def light_switch(rig: Rig, clock: Clock, *, port: str | None = None) -> SerialLi
 def hardware_devices(rig: Rig, *, clock: Clock | None = None) -> Devices:
     """The rig's motors, detector and light as `Devices` (unopened)."""
     clock = clock or SystemClock()
-    detector = serial_detector(rig, clock)  # ConfigError unless the interface is serial
-    return Devices(dynamixel_bus(rig), detector, clock, light_switch(rig, clock))
+    # ConfigError unless the interface is serial or pymeasure
+    return Devices(dynamixel_bus(rig), detector(rig, clock), clock, light_switch(rig, clock))

@@ -14,8 +14,14 @@ from contextlib import ExitStack, contextmanager
 
 from drivers.base import Detector, Devices, LightSource
 from gonio.rig.instrument import SerialSwitchSpec
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
-from gonio.workflows.hardware import dynamixel_bus, light_switch, serial_detector
+from gonio.workflows.hardware import (
+    dynamixel_bus,
+    light_switch,
+    pymeasure_detector,
+    serial_detector,
+)
 from sim.clock import ScaledClock
 from sim.devices.detector import LightState, SimDetector, SimLightSource
 from sim.physics.streams import Streams
@@ -24,6 +30,7 @@ from sim.rehearsal import (
     RehearsalSide,
     emulated_bus,
     emulated_pose,
+    instrument_for,
     lamp_for,
     photometer_for,
 )
@@ -46,7 +53,7 @@ def rehearsal_devices(
         switch = rig.spec.light.switch
         light: LightSource
         state: LightState
-        lamp = photometer = None
+        lamp = photometer = instrument = None
         if isinstance(switch, SerialSwitchSpec):
             lamp = stack.enter_context(lamp_for(rig, switch))
             driver = light_switch(rig, clock, port=lamp.path)
@@ -55,15 +62,21 @@ def rehearsal_devices(
         else:
             light = state = SimLightSource()
         truth = emulated_pose(emulator, axes)
-        serial = rig.spec.detector.interface.kind == "serial"
+        interface = rig.spec.detector.interface
+        serial = interface.kind == "serial"
         physics = SimDetector(
-            scene, rig, truth if serial else bus.positions, clock=clock, streams=streams,
-            light=state,
+            scene, rig, truth if interface.kind != "simulated" else bus.positions, clock=clock,
+            streams=streams, light=state,
         )  # fmt: skip
-        if serial:
+        if isinstance(interface, PyMeasureInterfaceSpec):
+            instrument = stack.enter_context(instrument_for(rig, interface, physics, clock))
+            detector: Detector = pymeasure_detector(
+                rig, clock, resource=f"ASRL{instrument.path}::INSTR", visa_library="@py"
+            )
+        elif serial:
             photometer = stack.enter_context(photometer_for(rig, physics, clock))
-            detector: Detector = serial_detector(rig, clock, port=photometer.path)
+            detector = serial_detector(rig, clock, port=photometer.path)
         else:
             detector = physics
-        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp))
+        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp, instrument))
         yield Devices(bus, detector, clock, light, side), clock

@@ -2,6 +2,8 @@
 unopened device and looks at the device's own state (not through the driver under
 test): `SimMotorBus` and `DynamixelBus` on the byte-level emulator over a pty;
 `SimDetector` and `SerialDetector` on the simulated photometer over a pty;
+`PyMeasureDetector` driving PyMeasure's SR830, SR860, ThorlabsPM100USB, Keithley6517B
+and Keithley2000 classes over pyvisa-py on their emulated instruments' ptys;
 `SimLightSource` and `SerialLightSwitch` on the simulated lamp over a pty."""
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.model import Rig
-from sim.clock import ManualClock
+from sim.clock import ManualClock, ScaledClock
 from sim.devices.detector import SimDetector, SimLightSource
 from sim.devices.motors import SimMotorBus
 from sim.dynamixel.emulator import DxlEmulator
@@ -30,6 +32,7 @@ from sim.physics.streams import Streams
 from sim.scene import load_scene
 from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
+from sim.visa_instruments import EMULATORS, FULL_SCALE
 from tests.conftest import CONFIGS
 
 #: The motor faults every bus must survive the same way.
@@ -180,14 +183,61 @@ def _serial_detector() -> Iterator[DetectorHarness]:
         assert device.error is None
 
 
-@pytest.fixture(params=["sim", "serial"])
+#: The PyMeasure classes the contract runs on, by a short name.
+INSTRUMENTS = {
+    "sr830": "pymeasure.instruments.srs.SR830",
+    "sr860": "pymeasure.instruments.srs.SR860",
+    "pm100usb": "pymeasure.instruments.thorlabs.ThorlabsPM100USB",
+    "keithley6517b": "pymeasure.instruments.keithley.Keithley6517B",
+    "keithley2000": "pymeasure.instruments.keithley.Keithley2000",
+}
+
+
+def _pymeasure_detector(name: str) -> Iterator[DetectorHarness]:
+    # The optional extra: skipped, not failed, where it is not installed.
+    pytest.importorskip("pymeasure")
+    from drivers.pymeasure.detector import PyMeasureDetector
+    from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
+
+    speedup = 100.0
+    clock = ScaledClock(speedup)
+    cls = INSTRUMENTS[name]
+    emulator, top = EMULATORS[cls], FULL_SCALE[cls]
+    devices = []
+
+    def make(saturating: bool) -> Detector:
+        # A saturating signal is far beyond the largest range; else a tenth of the default.
+        value = 1e6 * top if saturating else 0.1 * top
+        device = emulator(lambda t: value, speedup=speedup)
+        device.start()
+        devices.append(device)
+        spec = PyMeasureInterfaceSpec.model_validate({
+            "kind": "pymeasure", "instrument": cls, "resource": f"ASRL{device.path}::INSTR",
+            "visa_library": "@py", "read_termination": emulator.terminator, "timeout_s": 0.5,
+            # the power meter clips at its sensor's range: that is its full scale
+            **({"full_scale": top} if name == "pm100usb" else {}),
+        })  # fmt: skip
+        return PyMeasureDetector(spec.config(), clock=clock, exposure_range_s=(1e-3, 10.0))
+
+    def activity() -> object:
+        return [len(d.commands) for d in devices]
+
+    yield DetectorHarness(name, make, activity, clock.now)
+    for device in devices:
+        device.stop()
+        assert device.error is None
+
+
+@pytest.fixture(params=["sim", "serial", *INSTRUMENTS])
 def detectors(
     request: pytest.FixtureRequest, rigs: dict[str, Rig], clock: ManualClock
 ) -> Iterator[DetectorHarness]:
     if request.param == "sim":
         yield _sim_detector(rigs["arch"], clock)
-    else:
+    elif request.param == "serial":
         yield from _serial_detector()
+    else:
+        yield from _pymeasure_detector(request.param)
 
 
 # -- light sources -----------------------------------------------------------------------

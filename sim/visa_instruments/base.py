@@ -1,0 +1,115 @@
+"""The transport every emulated instrument shares: a pseudo-terminal served by the
+simulated photometer's thread (`sim.serial_photometer.server`), ``;``-separated
+commands, queries answered after the instrument's integration time, and the faults a
+test injects (silence, garbage, slow answers)."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from sim.serial_photometer.server import _PtyServer
+
+#: The reading of one integration of t seconds, in the instrument's unit.
+Signal = Callable[[float], float]
+
+
+@dataclass
+class _Faults:
+    silent: bool = False
+    garbage: int = 0
+    slow_s: float = 0.0
+
+
+class EmulatedInstrument(_PtyServer):
+    """An instrument's command set on a pseudo-terminal (subclasses: the dialects).
+
+    ``signal(t)`` is the reading of an integration of ``t`` s; ``speedup``: an
+    integration of t s takes t / ``speedup`` real seconds (a rehearsal's scaled time);
+    ``terminator``: what ends each answer. Subclasses implement `answer`.
+    """
+
+    identity = "gonio-sim instrument"
+    #: What ends its answers by default.
+    terminator = "\n"
+
+    def __init__(
+        self, signal: Signal, *, speedup: float = 1.0, terminator: str | None = None
+    ) -> None:
+        if not speedup > 0:
+            raise ValueError(f"speedup must be > 0, got {speedup!r}")
+        self._signal = signal
+        self._speedup = float(speedup)
+        self._terminator = terminator or self.terminator
+        self._reset_on_open = False
+        self._faults = _Faults()
+        self._busy_until = 0.0
+        self._commands: list[str] = []
+        self._init_pty_state()
+        self._lock = threading.Lock()
+
+    # -- inspection and faults ------------------------------------------------------------
+
+    @property
+    def commands(self) -> list[str]:
+        """Every command received so far (split at ``;``), in order."""
+        with self._lock:
+            return list(self._commands)
+
+    def silent(self) -> None:
+        """Answer nothing until `clear`."""
+        with self._lock:
+            self._faults.silent = True
+
+    def garbage(self, count: int = 1) -> None:
+        """Answer the next ``count`` queries with text that is not a number."""
+        with self._lock:
+            self._faults.garbage += count
+
+    def slow(self, seconds: float) -> None:
+        """Delay every answer by ``seconds`` more, until `clear`."""
+        with self._lock:
+            self._faults.slow_s = seconds
+
+    def clear(self) -> None:
+        with self._lock:
+            self._faults = _Faults()
+
+    # -- the dialect ------------------------------------------------------------------------
+
+    def answer(self, command: str) -> tuple[str | None, float]:
+        """(the answer or None for a command, the integration it takes in s)."""
+        raise NotImplementedError
+
+    def read_signal(self, integration_s: float) -> float:
+        return float(self._signal(integration_s))
+
+    # -- the transport ------------------------------------------------------------------------
+
+    def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
+        self._events.clear()
+
+    def _handle(self, line: str, now: float) -> None:
+        with self._lock:
+            faults = self._faults
+            parts = [p.strip() for p in line.split(";") if p.strip()]
+            self._commands.extend(parts)
+            if faults.silent:
+                return
+            start = max(now, self._busy_until)
+            for part in parts:
+                try:
+                    reply, integration_s = self.answer(part)
+                except Exception as exc:  # a bad argument: a real one beeps and goes on
+                    reply, integration_s = None, 0.0
+                    self._error = None if isinstance(exc, ValueError | KeyError) else exc
+                if reply is None:
+                    continue
+                done = start + integration_s / self._speedup + faults.slow_s
+                if faults.garbage:
+                    faults.garbage -= 1
+                    reply = "#?garbage?#"
+                self._busy_until = start = done
+                self._schedule_locked(done, (reply + self._terminator).encode("ascii"))
+        self._wakeup()
