@@ -33,6 +33,8 @@ def render_summary(plan: Plan) -> str:
             f"  {'':<26}{'':>9}   (the survey: the other {s.target - s.kept} targets are "
             "planned from its measurements during the run, docs/explanations/adaptive.md)"
         )
+    if s.second_pass is not None:
+        lines.append(f"  {'second pass':<26}{'':>9}   {s.second_pass}")
     lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "

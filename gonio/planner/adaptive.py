@@ -157,6 +157,40 @@ def error_indicator(
     return np.asarray((np.sqrt(square) * grid / (1.0 + grid)).ravel(), dtype=np.float64)
 
 
+@dataclass(frozen=True)
+class ErrorMap:
+    """What the density is made of, per cell of a grid of ``shape`` (C order): the test
+    measure's share ``w`` and the error indicator ``e`` of the estimate (`error_indicator`)."""
+
+    shape: tuple[int, ...]
+    w: FloatArray
+    e: FloatArray
+
+    @property
+    def uniform(self) -> FloatArray:
+        """The uniform density over the cells the test measure reaches (cells,)."""
+        reached = (self.w > 0).astype(np.float64)
+        return np.asarray(reached / reached.sum(), dtype=np.float64)
+
+    def density(self, floor: float) -> Density:
+        """The optimal density of the module docstring, a share ``floor`` of it uniform."""
+        dims = len(self.shape)
+        optimal = np.power(self.w * self.e**2, dims / (dims + 4.0))
+        total = optimal.sum()
+        shaped = optimal / total if total > 0 else self.uniform
+        p = (1.0 - floor) * shaped + floor * self.uniform
+        return Density(self.shape, np.asarray(p, dtype=np.float64))
+
+
+def error_map(f: BrdfEval, rig: Rig, parametrization: str, isotropic: bool) -> ErrorMap:
+    """The test measure and the error indicator of the estimate ``f`` on the density grid
+    (`CELLS`)."""
+    dims = 3 if isotropic else 4
+    shape = (CELLS[dims],) * dims
+    w = measure_density(rig, parametrization, isotropic, shape)
+    return ErrorMap(shape, w, error_indicator(f, parametrization, isotropic, shape))
+
+
 def density(
     f: BrdfEval,
     rig: Rig,
@@ -167,16 +201,7 @@ def density(
 ) -> Density:
     """The sample density of the module docstring for the estimate ``f``, a share
     ``floor`` of it uniform over the cells the test measure reaches."""
-    dims = 3 if isotropic else 4
-    shape = (CELLS[dims],) * dims
-    w = measure_density(rig, parametrization, isotropic, shape)
-    e = error_indicator(f, parametrization, isotropic, shape)
-    optimal = np.power(w * e**2, dims / (dims + 4.0))
-    reached = (w > 0).astype(np.float64)
-    total = optimal.sum()
-    shaped = optimal / total if total > 0 else reached / reached.sum()
-    p = (1.0 - floor) * shaped + floor * reached / reached.sum()
-    return Density(shape, np.asarray(p, dtype=np.float64))
+    return error_map(f, rig, parametrization, isotropic).density(floor)
 
 
 #: How far inside the rig's cap (radians) a point moved onto its edge is put.

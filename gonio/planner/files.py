@@ -251,6 +251,8 @@ def _rig(path: Path, given: Rig | str | Path | None, text: bytes, line: int) -> 
 
 def _summary(path: Path, data: Any, line: int) -> Summary:
     fields = {f.name for f in dataclasses.fields(Summary)}
+    if isinstance(data, dict) and "second_pass" not in data:
+        data = {**data, "second_pass": None}  # stored before the field existed
     if not isinstance(data, dict) or set(data) != fields:
         got = set(data) if isinstance(data, dict) else set()
         detail = ", ".join(sorted(fields ^ got)) or type(data).__name__

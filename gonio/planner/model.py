@@ -73,6 +73,8 @@ class Summary:
     mst_travel_s: float | None = None  # the minimum spanning tree (cheaper, looser)
     lower_bound_exact: bool | None = None  # False: memory forced a weaker MST somewhere
     bound_wall_s: float | None = None  # time spent on the lower bounds (wall clock)
+    # An adaptive plan's second pass: how it was placed and why (`gonio.planner.choice`).
+    second_pass: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))

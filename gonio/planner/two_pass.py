@@ -5,9 +5,12 @@ the material made from the survey's measurements, and appended to the survey's p
 targets (`Plan.is_survey`). Once it is measured, the caller estimates the BRDF from its
 samples (`gonio.workflows.adaptive.estimate`: the ``model`` family fitted to them, or
 for ``survey`` their own reconstruction); `extend` takes the density of
-`gonio.planner.adaptive` from that estimate, places the rest of the target with it (a
-share ``edge`` moved onto the edge of the rig's cap), orders those targets from the
-survey's last pose, and returns the whole plan: the survey's targets unchanged, first,
+`gonio.planner.adaptive` from that estimate and decides from the survey whether it pays
+(`gonio.planner.choice`): if so it places the rest of the target with it (a share
+``edge`` moved onto the edge of the rig's cap), if not it continues the survey's Sobol
+sequence, so that the whole plan is the uniform one; the summary's ``second_pass`` says
+which and why. It orders those targets from the survey's last pose, and returns the
+whole plan: the survey's targets unchanged, first,
 then the new ones. The engine stores that plan in the run in place of the survey's, so
 a resumed run measures the stored second pass and never plans it again; the same
 survey samples give the same second pass, bit for bit.
@@ -16,46 +19,74 @@ survey samples give the same second pass, bit for bit.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from gonio import params
-from gonio.planner import adaptive
+from gonio.planner import adaptive, choice
 from gonio.planner.builder import build
 from gonio.planner.model import Plan
 from gonio.planner.placement import draw_kept
+from gonio.planner.sampling import Sequence, to_box
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 
 
-def extend(first: Plan, estimate: BrdfEval, *, where: str = "plan") -> Plan:
+@dataclass(frozen=True)
+class Survey:
+    """What the survey measured: ``drawn`` points placed (`Plan.summary.requested`, the
+    invalid and unreachable ones too), the pairs ``wi``, ``wo`` (N, 3) and the BRDF
+    values ``f`` (N,) or (N, C) in sr⁻¹ measured there."""
+
+    drawn: int
+    wi: FloatArray
+    wo: FloatArray
+    f: FloatArray
+
+
+def extend(first: Plan, estimate: BrdfEval, survey: Survey, *, where: str = "plan") -> Plan:
     """The whole adaptive plan: ``first`` (the survey, as built) and the second pass
-    planned from ``estimate`` (the BRDF estimated from the survey's samples, sr⁻¹; see
-    the module)."""
+    planned from ``estimate`` (the BRDF estimated from the survey's samples, sr⁻¹) and
+    the ``survey``'s measurements (see the module); the summary's ``second_pass`` says
+    how it was placed and why."""
     spec, rig = first.spec, first.rig
     assert spec.sampling.target is not None and first.is_survey
-    coords = second_pass_points(spec, rig, estimate, spec.sampling.target - len(first), where)
+    count = spec.sampling.target - len(first)
+    coords, chosen = second_pass(spec, rig, estimate, survey, count, where)
     second = build(
         spec, rig, where=where, text=first.plan_text, placed=coords, start=first.angles[-1]
     )
-    return joined(first, second)
+    whole = joined(first, second)
+    return replace(whole, summary=replace(whole.summary, second_pass=chosen.reason))
 
 
-def second_pass_points(
-    spec: PlanSpec, rig: Rig, estimate: BrdfEval, count: int, where: str = "plan"
-) -> FloatArray:
+def second_pass(
+    spec: PlanSpec,
+    rig: Rig,
+    estimate: BrdfEval,
+    survey: Survey,
+    count: int,
+    where: str = "plan",
+) -> tuple[FloatArray, choice.Choice]:
     """The second pass's points in the coordinate box (generation order: every point
-    drawn, ``count`` of them kept): the density (`adaptive.density`) of ``estimate``
-    (the BRDF estimated from the survey, sr⁻¹), a share ``edge`` of the points moved
-    onto the edge of the rig's cap."""
+    drawn, ``count`` of them kept) and the choice that placed them
+    (`gonio.planner.choice`): the density (`adaptive.density`) of ``estimate`` (the BRDF
+    estimated from the ``survey``, sr⁻¹), a share ``edge`` of the points moved onto the
+    edge of the rig's cap; or, where that density is not predicted to pay, the survey's
+    Sobol sequence continued (the uniform plan's points after the survey's)."""
     options = spec.sampling.options()
-    density = adaptive.density(
-        estimate, rig, spec.parametrization, spec.isotropic, floor=options.floor
-    )
+    errors = adaptive.error_map(estimate, rig, spec.parametrization, spec.isotropic)
+    q = choice.survey_misfit(np.asarray(estimate(survey.wi, survey.wo)), survey.f)
+    assert spec.sampling.target is not None
+    total = spec.sampling.target
+    chosen = choice.choose(errors, q, total - count, total, options.floor)
     p = params.get(spec.parametrization)
     bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
+    if chosen.kind == "uniform":
+        return uniform_rest(spec, rig, bounds, survey.drawn, total, where), chosen
+    density = errors.density(options.floor)
 
     def inside(stream: adaptive.Stream, n: int, edge: bool) -> FloatArray:
         return draw_points(stream, n, bounds, rig, spec.parametrization, spec.isotropic, edge)
@@ -68,7 +99,18 @@ def second_pass_points(
         edged = adaptive.Stream(density, seed + 2)
         edge = draw_kept(spec, rig, where, lambda n: inside(edged, n, True), on_edge)
         coords = np.concatenate([coords, edge])
-    return coords
+    return coords, chosen
+
+
+def uniform_rest(
+    spec: PlanSpec, rig: Rig, bounds: FloatArray, drawn: int, total: int, where: str
+) -> FloatArray:
+    """The points of the uniform Sobol plan of ``total`` kept targets (the survey's
+    sequence, seeded alike) after its first ``drawn``: the survey's own points."""
+    stream = Sequence("sobol", len(bounds), spec.sampling.seed)
+    ones = np.ones(len(bounds))
+    points = draw_kept(spec, rig, where, lambda n: to_box(stream.draw(n), bounds, ones), total)
+    return points[drawn:]
 
 
 def draw_points(

@@ -36,7 +36,7 @@ from gonio.errors import GonioError
 from gonio.output import refuse_inputs
 from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, content_hash, sha256
-from gonio.planner.two_pass import extend
+from gonio.planner.two_pass import Survey, extend
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
@@ -215,10 +215,13 @@ def _second_pass(journal: Journal, run: Run) -> Plan:
     the run in place of the survey's plan (one statement: a crash leaves either) and
     journaled; the whole plan."""
     model = run.plan.spec.sampling.options().model
-    whole = extend(run.plan, estimate(Measured.from_run(run), model), where=str(run.path))
+    measured = Measured.from_run(run)
+    survey = Survey(run.plan.summary.requested, measured.wi, measured.wo, measured.f)
+    whole = extend(run.plan, estimate(measured, model), survey, where=str(run.path))
     journal.replace_plan(plan_bytes(whole))
     t_s = float(np.max(run.samples["ended_s"])) if len(run) else 0.0
-    journal.event("second_pass", t_s, utc_now(), {"survey": len(run.plan), "targets": len(whole)})
+    detail = {"survey": len(run.plan), "targets": len(whole), "placed": whole.summary.second_pass}
+    journal.event("second_pass", t_s, utc_now(), detail)
     return whole
 
 

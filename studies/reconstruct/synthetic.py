@@ -20,7 +20,7 @@ from gonio import params
 from gonio.analysis.measured import Measured
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
-from gonio.planner.two_pass import second_pass_points
+from gonio.planner.two_pass import Survey, second_pass
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval, FloatArray
 from gonio.workflows.adaptive import estimate
@@ -103,8 +103,9 @@ def synthesize_adaptive(
     """A `Measured` of ``f`` at the pairs of an adaptive plan of ``n`` kept targets
     (``adaptive``: its options, `gonio.planner.schema.AdaptiveSpec`): the Sobol survey
     valued like `synthesize`, then the second pass planned from those values and σs
-    (`gonio.planner.two_pass.second_pass_points`, steered by
-    `gonio.workflows.adaptive.estimate`: the σs weight the fit) and valued too, survey
+    (`gonio.planner.two_pass.second_pass`, steered by
+    `gonio.workflows.adaptive.estimate`: the σs weight the fit; its ``source`` ends with
+    the choice the second pass made, `gonio.planner.choice`) and valued too, survey
     first."""
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
@@ -112,11 +113,12 @@ def synthesize_adaptive(
     sigma = {"relative_sigma": relative_sigma, "sigma_floor": sigma_floor}
     survey = measured_at(f, spec, rig, coords, **sigma)
     steer = estimate(survey, spec.sampling.options().model)
-    rest = second_pass_points(spec, rig, steer, n - len(survey))
+    measured = Survey(len(coords), survey.wi, survey.wo, survey.f)
+    rest, chosen = second_pass(spec, rig, steer, measured, n - len(survey))
     return replace(
         survey.joined(measured_at(f, spec, rig, rest, **sigma)),
         source=f"synthetic adaptive {parametrization} "
-        f"{'isotropic' if isotropic else 'anisotropic'}",
+        f"{'isotropic' if isotropic else 'anisotropic'}; second pass {chosen.reason}",
     )
 
 

@@ -18,7 +18,7 @@ from gonio.planner.builder import build
 from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import ARRAYS, Plan, same_bits
 from gonio.planner.schema import PlanSpec
-from gonio.planner.two_pass import extend, second_pass_points
+from gonio.planner.two_pass import Survey, extend, second_pass
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
@@ -64,12 +64,16 @@ def steering(m: Measured, plan: PlanSpec) -> BrdfEval:
     return estimate(m, plan.sampling.options().model)
 
 
+def extended(survey: Plan, f: BrdfEval) -> Plan:
+    """``survey`` and its second pass, its samples of ``f`` measured at the planned pairs."""
+    m = measured(f, survey, survey.wi, survey.wo)
+    return extend(survey, steering(m, survey.spec), Survey(survey.summary.requested, m.wi, m.wo, m.f))
+
+
 @pytest.fixture(scope="module")
 def planned(rig: Rig) -> tuple[Plan, Plan]:
     survey = build(spec(90, 40, edge=0.2), rig)
-    return survey, extend(
-        survey, steering(measured(GLOSSY, survey, survey.wi, survey.wo), survey.spec)
-    )
+    return survey, extended(survey, GLOSSY)
 
 
 def test_the_survey_then_the_second_pass(planned: tuple[Plan, Plan]) -> None:
@@ -94,10 +98,9 @@ def test_every_target_is_reachable_and_the_plan_stores_bit_for_bit(
 
 def test_the_same_survey_gives_the_same_second_pass(planned: tuple[Plan, Plan], rig: Rig) -> None:
     survey, whole = planned
-    again = extend(survey, steering(measured(GLOSSY, survey, survey.wi, survey.wo), survey.spec))
+    again = extended(survey, GLOSSY)
     assert all(same_bits(getattr(again, n), getattr(whole, n)) for n in ARRAYS)
-    other = extend(survey, steering(measured(lambda wi, wo: 2 * GLOSSY(wi, wo) + 0.1, survey,
-                                             survey.wi, survey.wo), survey.spec))  # fmt: skip
+    other = extended(survey, lambda wi, wo: 2 * GLOSSY(wi, wo) + 0.1)
     assert not np.array_equal(other.coords, whole.coords)
 
 
@@ -113,7 +116,7 @@ def test_adaptive_options_are_checked() -> None:
 def test_adaptive_beats_uniform_at_equal_count(rig: Rig) -> None:
     n = 500
     pairs = testset.draw(rig, isotropic=True, size=4000)
-    # The second pass as `extend` plans it (`second_pass_points`), without the engine.
+    # The second pass as `extend` plans it (`second_pass`), without the engine.
     both = synthesize_adaptive(GLOSSY, rig, "rusinkiewicz", True, n, seed=4,
                                adaptive={"survey": 128})  # fmt: skip
     uniform = synthesize(GLOSSY, rig, "rusinkiewicz", True, n, seed=4)
@@ -136,9 +139,10 @@ def test_an_unknown_steering_model_is_refused_when_the_plan_is_read() -> None:
 def test_steering_by_the_survey_alone_is_deterministic(rig: Rig) -> None:
     plan = spec(200, 64, model="survey")
     survey = synthesize(GLOSSY, rig, "rusinkiewicz", True, 64, seed=4)
-    a = second_pass_points(plan, rig, steering(survey, plan), 136)
-    b = second_pass_points(plan, rig, steering(survey, plan), 136)
-    assert a.tobytes() == b.tobytes()
+    values = Survey(64, survey.wi, survey.wo, survey.f)
+    a, chosen = second_pass(plan, rig, steering(survey, plan), values, 136)
+    b, _ = second_pass(plan, rig, steering(survey, plan), values, 136)
+    assert a.tobytes() == b.tobytes() and chosen.kind == "adaptive"
     fit = spec(200, 64)
-    fitted = second_pass_points(fit, rig, steering(survey, fit), 136)
+    fitted, _ = second_pass(fit, rig, steering(survey, fit), values, 136)
     assert not np.array_equal(a, fitted)

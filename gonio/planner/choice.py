@@ -1,0 +1,118 @@
+"""Whether an adaptive plan's second pass adapts: decided from its survey, by the error
+model that places it (docs/explanations/adaptive.md, "When the plan adapts").
+
+Of a plan of n kept targets, the survey's n_s are uniform (density u over the cells the
+rig reaches) and the second pass's n − n_s follow a density p (`gonio.planner.adaptive`,
+a share ``floor`` of it uniform), so the plan's density is ρ = s·u + (1 − s)·p,
+s = n_s/n. The error model that shapes p says the squared error in a cell of test
+measure w and indicator e goes as w·e²·ρ^(−4/d); against a uniform plan of as many
+samples (ρ = u) the estimate ``f`` predicts the ratio of squared errors
+
+    A(ρ) = Σ w e² (ρ/u)^(−k) / Σ w e²,   k = 4/d.
+
+That ratio is only as good as the estimate. With r the RMS difference between
+log(1 + f̂) and log(1 + f) at the survey's pairs (the metric's scale) and σ the survey's
+standard deviation of log(1 + f), q = min(1, r²/σ²) is the share of the survey's
+variation the estimate does not explain. Its error could be anywhere as far as the plan knows, so it is charged where the plan
+samples least: with a flat indicator the same law gives at worst
+
+    P(ρ) = max over reached cells of (ρ/u)^(−k) ≥ 1
+
+(the survey's share and the ``floor`` bound it). The predicted ratio of squared errors
+is R(ρ) = (1 − q)·A(ρ) + q·P(ρ), and the predicted gain in log-RMSE over a uniform plan
+G = R^(−1/2). The second pass follows the density if G ≥ `MARGIN`; otherwise it is
+uniform outright: the survey's own Sobol sequence continued, so the whole plan is the
+uniform Sobol plan of its seed (`gonio.planner.two_pass`).
+
+`MARGIN` > 1 because the model overrates what the plans gain (on GGX α = 0.1 and the
+glossy gold scene it predicts more than benchmarks/adaptive.py measures), and a wrong
+guess toward adapting costs more than one toward uniform: uniform is the plan the user
+would otherwise have measured. A raised floor (a mix toward uniform) was tried as a
+third choice and left out: the model ranks floors by less than its own error, and in
+one-off runs a raised floor was never better than both the plan's floor and uniform.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from gonio.planner.adaptive import ErrorMap
+from gonio.types import FloatArray
+
+#: The least predicted gain in log-RMSE over uniform for which the plan adapts.
+MARGIN = 1.25
+
+Kind = Literal["adaptive", "uniform"]
+
+
+@dataclass(frozen=True)
+class Choice:
+    """How the second pass is placed: ``kind``, the ``floor`` of its density (1 for
+    uniform), the predicted ``gain`` G in log-RMSE of the adaptive density over a
+    uniform plan, the estimate's predicted gain ``gain_estimate`` (A alone, q = 0) and
+    ``unexplained`` (q) of the module docstring."""
+
+    kind: Kind
+    floor: float
+    gain: float
+    gain_estimate: float
+    unexplained: float
+
+    @property
+    def reason(self) -> str:
+        """Which placement and why, one line (the plan's summary shows it)."""
+        why = (
+            f"predicted {self.gain:.2f}× lower log-RMSE than uniform "
+            f"({self.gain_estimate:.2f}× by the steering estimate, which leaves "
+            f"{self.unexplained:.0%} of the survey's variation in log(1 + f) unexplained)"
+        )
+        if self.kind == "uniform":
+            return f"uniform: the adaptive density is {why}, below {MARGIN}×"
+        return f"adaptive (floor {self.floor:g}): {why}"
+
+
+def survey_misfit(estimate: FloatArray, measured: FloatArray) -> float:
+    """q of the module docstring: the share of the variance of log(1 + f) over the
+    survey's samples ``measured`` (N,) or (N, C) that the estimate's values there
+    ``estimate`` (same shape, sr⁻¹) leave unexplained, in [0, 1]."""
+    g = np.log1p(np.maximum(_grey(measured), 0.0))
+    h = np.log1p(np.maximum(_grey(estimate), 0.0))
+    residual = float(np.mean((h - g) ** 2))
+    spread = float(np.var(g))
+    if spread <= 0.0:
+        return 0.0 if residual <= 0.0 else 1.0
+    return min(1.0, residual / spread)
+
+
+def _grey(values: FloatArray) -> FloatArray:
+    v = np.asarray(values, dtype=np.float64)
+    return np.asarray(v.mean(axis=1) if v.ndim == 2 else v, dtype=np.float64)
+
+
+def predicted_ratios(errors: ErrorMap, p: FloatArray, survey_share: float) -> tuple[float, float]:
+    """(A, P) of the module docstring for a second-pass density ``p`` (cells,) after a
+    survey holding ``survey_share`` of the plan's samples."""
+    u = errors.uniform
+    reached = u > 0
+    rho = survey_share * u + (1.0 - survey_share) * p
+    k = 4.0 / len(errors.shape)
+    scale = np.power(np.where(reached, rho, 1.0) / np.where(reached, u, 1.0), -k)
+    w = np.where(reached, errors.w, 0.0)
+    weight = w * errors.e**2
+    a = float(np.sum(weight * scale) / weight.sum()) if weight.sum() > 0 else 1.0
+    worst = float(np.max(scale[w > 0]))
+    return a, worst
+
+
+def choose(errors: ErrorMap, unexplained: float, survey: int, total: int, floor: float) -> Choice:
+    """The placement of the second pass (module docstring): ``errors`` of the steering
+    estimate, ``unexplained`` = q (`survey_misfit`), ``survey`` of ``total`` kept targets
+    measured, the plan's ``floor``."""
+    a, worst = predicted_ratios(errors, errors.density(floor).p, survey / total)
+    gain = 1.0 / math.sqrt((1.0 - unexplained) * a + unexplained * worst)
+    kind: Kind = "adaptive" if gain >= MARGIN else "uniform"
+    return Choice(kind, floor if kind == "adaptive" else 1.0, gain, 1.0 / math.sqrt(a), unexplained)
