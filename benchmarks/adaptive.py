@@ -2,16 +2,24 @@
 best uniform plan (over the four parametrizations and the methods, Sobol placed by the
 planner: `studies.reconstruct.synthetic`) and the adaptive plan (`sampling: {strategy:
 adaptive}`: a Sobol survey, a lambert+beckmann fit of it steering the second pass,
-`gonio.planner.two_pass`), each reconstructed without being told the material's family
+`gonio.planner.two_pass`, which decides from the survey whether to adapt at all:
+`gonio.planner.choice`), each reconstructed without being told the material's family
 and scored by log-RMSE on log(1 + f) over the default test set (20 000 pairs uniform
-in dωi dωo over what the rig measures, θ ≤ 80°; `extrapolate="nearest"`). Then the
-samples each needs for log-RMSE 0.01 (log-log between the counts measured) and the
-ratios: adaptive error / best uniform error at equal counts, adaptive samples / best
-uniform samples for 0.01. No material below is a Beckmann one: the steering model's
-family never contains the scene's (``--model survey`` steers with no model at all).
+in dωi dωo over what the rig measures, θ ≤ 80°; `extrapolate="nearest"`). The samples'
+σ, which weighs the steering fit, is 1 % of (|f| + `--sigma-floor`) (1: near the
+detector's σ on the engine; 0: relative). Then the samples each needs for log-RMSE 0.01
+(log-log between the counts measured) and the ratios: best uniform error / best adaptive
+error at equal counts, adaptive samples / best uniform samples for 0.01; and the choice
+each adaptive plan made (A: adapted, U: uniform outright, for Rusinkiewicz / hybrid).
+No material below is a Beckmann one: the steering model's family never contains the
+scene's (``--model survey`` steers with no model at all). The shipped scenes, GGX
+lobes, a rough conductor, and ``--random`` materials drawn from the model families
+(`studies.brdf.random_materials`, seeds 0 … N − 1: GGX α 0.03–0.5, dielectric or
+conductor, with or without a Lambertian part).
 
 Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 500 1000 2000 4000]
 [--methods linear rbf] [--survey 128] [--floor 0.2] [--edge 0.0] [--model survey]
+[--random 8] [--sigma-floor 1.0]
 """
 
 from __future__ import annotations
@@ -36,7 +44,8 @@ from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
-from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
+from studies.brdf import random_materials
+from studies.reconstruct.synthetic import adaptive_choice, synthesize
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET = 0.01
@@ -46,6 +55,13 @@ SEED = 3
 def ggx(alpha: float) -> BrdfEval:
     return brdf.create(
         "cook_torrance", alpha=alpha, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.2
+    ).eval
+
+
+def conductor(alpha: float) -> BrdfEval:
+    """A rough GGX conductor with no diffuse part (the complex index of gold at 550 nm)."""
+    return brdf.create(
+        "cook_torrance", alpha=alpha, distribution="ggx", fresnel="conductor", ior=0.42, k=2.35
     ).eval
 
 
@@ -63,7 +79,11 @@ SCENES: dict[str, tuple[Callable[[], BrdfEval], str, bool, str]] = {
     "ggx0.1": (lambda: ggx(0.1), "arch", True, "GGX α 0.1, F0 0.04, kd 0.2"),
     "ggx0.05": (lambda: ggx(0.05), "arch", True, "GGX α 0.05, F0 0.04, kd 0.2"),
     "ggx0.3": (lambda: ggx(0.3), "arch", True, "GGX α 0.3, F0 0.04, kd 0.2"),
+    "glossy": (lambda: scene_material("glossy_metal"), "arch", True,
+               "glossy_metal scene (gold, GGX α 0.05, no diffuse part)"),
     "matte": (lambda: scene_material("matte"), "arch", True, "matte scene (GGX α 0.5, kd 0.6)"),
+    "conductor0.2": (lambda: conductor(0.2), "arch", True,
+                     "GGX α 0.2 conductor (n 0.42, k 2.35), no diffuse part"),
     "brushed": (lambda: scene_material("brushed_metal"), "arch", False,
                 "brushed_metal scene (anisotropic GGX 0.05 × 0.25, conductor)"),
     "seed000": (lambda: scene_material("seed000_specular"), "arch_point", True,
@@ -94,6 +114,8 @@ def main() -> None:
         default="lambert+beckmann",
         help="the family steering the second pass, or 'survey' (no model)",
     )
+    parser.add_argument("--random", type=int, default=8, help="materials drawn at random")
+    parser.add_argument("--sigma-floor", type=float, default=1.0)
     args = parser.parse_args()
     options = {"survey": args.survey, "model": args.model, "floor": args.floor,
                "edge": args.edge}  # fmt: skip
@@ -101,10 +123,14 @@ def main() -> None:
     print(describe())
     steer = "its own rbf reconstruction" if args.model == "survey" else f"a {args.model} fit"
     print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
-          f"floor {args.floor}, edge {args.edge}")  # fmt: skip
+          f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor}); "
+          f"{args.random} random materials (seeds 0 … {args.random - 1})")  # fmt: skip
     summary = []
-    for name in args.scenes:
-        make, rig_name, isotropic, what = SCENES[name]
+    materials = [(name, *SCENES[name]) for name in args.scenes]
+    for seed in range(args.random):
+        what, f = random_materials.draw(seed)
+        materials.append((f"random{seed}", lambda f=f: f, "arch", True, what))
+    for name, make, rig_name, isotropic, what in materials:
         truth = make()
         rig = Rig.from_yaml(ROOT / "configs/rigs" / f"{rig_name}.yaml")
         pairs = testset.draw(rig, isotropic=isotropic)
@@ -115,15 +141,23 @@ def main() -> None:
         print(f"| plan | parametrization | method | {head} | for {TARGET} |")
         print("|---|---|---|" + "---:|" * (len(counts) + 1))
         rows: dict[tuple[str, str, str], list[float]] = {}
+        chosen: dict[int, list[str]] = {n: [] for n in counts}
+        reasons: dict[str, str] = {}
+        sigma = {"sigma_floor": args.sigma_floor}
         for kind, names in (("uniform", params.names()), ("adaptive", args.adaptive_in)):
             for parametrization in names:
                 for n in counts:
                     if kind == "uniform":
-                        samples = synthesize(truth, rig, parametrization, isotropic, n, seed=SEED)
-                    else:
-                        samples = synthesize_adaptive(
-                            truth, rig, parametrization, isotropic, n, seed=SEED, adaptive=options
+                        samples = synthesize(
+                            truth, rig, parametrization, isotropic, n, seed=SEED, **sigma
                         )
+                    else:
+                        samples, choice = adaptive_choice(
+                            truth, rig, parametrization, isotropic, n, seed=SEED,
+                            adaptive=options, **sigma,
+                        )  # fmt: skip
+                        chosen[n].append(choice.kind[0].upper())
+                        reasons[parametrization] = f"{n:,} samples: {choice.reason}"
                     for method in args.methods:
                         key = (kind, parametrization, method)
                         rows.setdefault(key, []).append(
@@ -139,20 +173,26 @@ def main() -> None:
             kind: [min(e[i] for k, e in rows.items() if k[0] == kind) for i in range(len(counts))]
             for kind in ("uniform", "adaptive")
         }
+        print()
+        for parametrization, reason in reasons.items():
+            print(f"- adaptive {parametrization}, {reason}")
         ratios = [u / a for u, a in zip(best["uniform"], best["adaptive"], strict=True)]
+        choices = ", ".join("/".join(chosen[n]) for n in counts)
         nu, na = (needed(counts, best[k], TARGET) for k in ("uniform", "adaptive"))
         sample_ratio = "n/a" if math.isinf(nu) or math.isinf(na) else f"{na / nu:.2f}"
         print(f"\nbest uniform / best adaptive error at equal counts: "
               f"{', '.join(f'{r:.2f}×' for r in ratios)}; samples for {TARGET}: uniform "
               f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)} "
-              f"(ratio {sample_ratio})")  # fmt: skip
-        summary.append((name, ratios, nu, na, sample_ratio))
-    print(f"\n| scene | error ratio at {', '.join(f'{n:,}' for n in counts)} | samples for "
-          f"{TARGET}: uniform | adaptive | adaptive / uniform |")  # fmt: skip
-    print("|---|---|---:|---:|---:|")
-    for name, ratios, nu, na, sample_ratio in summary:
-        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {fmt_needed(nu, counts)} "
-              f"| {fmt_needed(na, counts)} | {sample_ratio} |")  # fmt: skip
+              f"(ratio {sample_ratio}); choices (Rusinkiewicz/hybrid): {choices}")  # fmt: skip
+        summary.append((name, ratios, nu, na, sample_ratio, choices))
+    print(f"\n| material | error ratio at {', '.join(f'{n:,}' for n in counts)} | choices "
+          f"| worst adaptive / best uniform | samples for {TARGET}: uniform | adaptive "
+          "| adaptive / uniform |")  # fmt: skip
+    print("|---|---|---|---:|---:|---:|---:|")
+    for name, ratios, nu, na, sample_ratio, choices in summary:
+        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {choices} "
+              f"| {1 / min(ratios):.3f} | {fmt_needed(nu, counts)} | {fmt_needed(na, counts)} "
+              f"| {sample_ratio} |")  # fmt: skip
 
 
 def variant(argv: Sequence[str]) -> str | None:

@@ -13,8 +13,9 @@ samples (ρ = u) the estimate ``f`` predicts the ratio of squared errors
 That ratio is only as good as the estimate. With r the RMS difference between
 log(1 + f̂) and log(1 + f) at the survey's pairs (the metric's scale) and σ the survey's
 standard deviation of log(1 + f), q = min(1, r²/σ²) is the share of the survey's
-variation the estimate does not explain. Its error could be anywhere as far as the plan knows, so it is charged where the plan
-samples least: with a flat indicator the same law gives at worst
+variation the estimate does not explain. Its error could be anywhere as far as the
+plan knows, so it is charged where the plan samples least: with a flat indicator the
+same law gives at worst
 
     P(ρ) = max over reached cells of (ρ/u)^(−k) ≥ 1
 
@@ -66,12 +67,12 @@ class Choice:
     def reason(self) -> str:
         """Which placement and why, one line (the plan's summary shows it)."""
         why = (
-            f"predicted {self.gain:.2f}× lower log-RMSE than uniform "
+            f"predicted gain over uniform {self.gain:.2f}× in log-RMSE "
             f"({self.gain_estimate:.2f}× by the steering estimate, which leaves "
             f"{self.unexplained:.0%} of the survey's variation in log(1 + f) unexplained)"
         )
         if self.kind == "uniform":
-            return f"uniform: the adaptive density is {why}, below {MARGIN}×"
+            return f"uniform: the adaptive density's {why} is below {MARGIN}×"
         return f"adaptive (floor {self.floor:g}): {why}"
 
 

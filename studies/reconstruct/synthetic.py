@@ -18,6 +18,7 @@ import numpy as np
 
 from gonio import params
 from gonio.analysis.measured import Measured
+from gonio.planner.choice import Choice
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
 from gonio.planner.two_pass import Survey, second_pass
@@ -104,9 +105,28 @@ def synthesize_adaptive(
     (``adaptive``: its options, `gonio.planner.schema.AdaptiveSpec`): the Sobol survey
     valued like `synthesize`, then the second pass planned from those values and σs
     (`gonio.planner.two_pass.second_pass`, steered by
-    `gonio.workflows.adaptive.estimate`: the σs weight the fit; its ``source`` ends with
-    the choice the second pass made, `gonio.planner.choice`) and valued too, survey
+    `gonio.workflows.adaptive.estimate`: the σs weight the fit) and valued too, survey
     first."""
+    return adaptive_choice(
+        f, rig, parametrization, isotropic, n, seed=seed, adaptive=adaptive,
+        relative_sigma=relative_sigma, sigma_floor=sigma_floor,
+    )[0]  # fmt: skip
+
+
+def adaptive_choice(
+    f: BrdfEval,
+    rig: Rig,
+    parametrization: str,
+    isotropic: bool,
+    n: int,
+    *,
+    seed: int = 0,
+    adaptive: Mapping[str, object] | None = None,
+    relative_sigma: float = 0.01,
+    sigma_floor: float = 0.0,
+) -> tuple[Measured, Choice]:
+    """`synthesize_adaptive` and the choice its second pass made
+    (`gonio.planner.choice`: adaptive, or uniform outright)."""
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
@@ -115,11 +135,12 @@ def synthesize_adaptive(
     steer = estimate(survey, spec.sampling.options().model)
     measured = Survey(len(coords), survey.wi, survey.wo, survey.f)
     rest, chosen = second_pass(spec, rig, steer, measured, n - len(survey))
-    return replace(
+    both = replace(
         survey.joined(measured_at(f, spec, rig, rest, **sigma)),
         source=f"synthetic adaptive {parametrization} "
-        f"{'isotropic' if isotropic else 'anisotropic'}; second pass {chosen.reason}",
+        f"{'isotropic' if isotropic else 'anisotropic'}",
     )
+    return both, chosen
 
 
 def measured_at(

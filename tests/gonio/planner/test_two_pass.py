@@ -67,7 +67,9 @@ def steering(m: Measured, plan: PlanSpec) -> BrdfEval:
 def extended(survey: Plan, f: BrdfEval) -> Plan:
     """``survey`` and its second pass, its samples of ``f`` measured at the planned pairs."""
     m = measured(f, survey, survey.wi, survey.wo)
-    return extend(survey, steering(m, survey.spec), Survey(survey.summary.requested, m.wi, m.wo, m.f))
+    return extend(
+        survey, steering(m, survey.spec), Survey(survey.summary.requested, m.wi, m.wo, m.f)
+    )
 
 
 @pytest.fixture(scope="module")
