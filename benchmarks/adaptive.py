@@ -25,7 +25,6 @@ Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 50
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -56,6 +55,10 @@ def ggx(alpha: float) -> BrdfEval:
     return brdf.create(
         "cook_torrance", alpha=alpha, distribution="ggx", fresnel="schlick", f0=0.04, kd=0.2
     ).eval
+
+
+def constant(f: BrdfEval) -> Callable[[], BrdfEval]:
+    return lambda: f
 
 
 def conductor(alpha: float) -> BrdfEval:
@@ -125,74 +128,103 @@ def main() -> None:
     print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
           f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor}); "
           f"{args.random} random materials (seeds 0 … {args.random - 1})")  # fmt: skip
-    summary = []
+    summary: list[tuple[str, list[float], list[float], str, str, float, float]] = []
     materials = [(name, *SCENES[name]) for name in args.scenes]
     for seed in range(args.random):
         what, f = random_materials.draw(seed)
-        materials.append((f"random{seed}", lambda f=f: f, "arch", True, what))
+        materials.append((f"random{seed}", constant(f), "arch", True, what))
     for name, make, rig_name, isotropic, what in materials:
-        truth = make()
         rig = Rig.from_yaml(ROOT / "configs/rigs" / f"{rig_name}.yaml")
-        pairs = testset.draw(rig, isotropic=isotropic)
         print(
             f"\n### {name}: {what}, rig {rig_name}, {'isotropic' if isotropic else 'anisotropic'}\n"
         )
-        head = " | ".join(f"{n:,}" for n in counts)
-        print(f"| plan | parametrization | method | {head} | for {TARGET} |")
-        print("|---|---|---|" + "---:|" * (len(counts) + 1))
-        rows: dict[tuple[str, str, str], list[float]] = {}
-        chosen: dict[int, list[str]] = {n: [] for n in counts}
-        reasons: dict[str, str] = {}
-        sigma = {"sigma_floor": args.sigma_floor}
-        for kind, names in (("uniform", params.names()), ("adaptive", args.adaptive_in)):
-            for parametrization in names:
-                for n in counts:
-                    if kind == "uniform":
-                        samples = synthesize(
-                            truth, rig, parametrization, isotropic, n, seed=SEED, **sigma
-                        )
-                    else:
-                        samples, choice = adaptive_choice(
-                            truth, rig, parametrization, isotropic, n, seed=SEED,
-                            adaptive=options, **sigma,
-                        )  # fmt: skip
-                        chosen[n].append(choice.kind[0].upper())
-                        reasons[parametrization] = f"{n:,} samples: {choice.reason}"
-                    for method in args.methods:
-                        key = (kind, parametrization, method)
-                        rows.setdefault(key, []).append(
-                            score(samples, method, truth, rig, pairs, isotropic)
-                        )
-                for method in args.methods:
-                    errors = rows[(kind, parametrization, method)]
-                    cells = " | ".join(f"{e:.4f}" for e in errors)
-                    reach = fmt_needed(needed(counts, errors, TARGET), counts)
-                    print(f"| {kind} | {parametrization} | {method} | {cells} | {reach} |",
-                          flush=True)  # fmt: skip
-        best = {
-            kind: [min(e[i] for k, e in rows.items() if k[0] == kind) for i in range(len(counts))]
-            for kind in ("uniform", "adaptive")
-        }
-        print()
-        for parametrization, reason in reasons.items():
-            print(f"- adaptive {parametrization}, {reason}")
-        ratios = [u / a for u, a in zip(best["uniform"], best["adaptive"], strict=True)]
-        choices = ", ".join("/".join(chosen[n]) for n in counts)
-        nu, na = (needed(counts, best[k], TARGET) for k in ("uniform", "adaptive"))
-        sample_ratio = "n/a" if math.isinf(nu) or math.isinf(na) else f"{na / nu:.2f}"
-        print(f"\nbest uniform / best adaptive error at equal counts: "
-              f"{', '.join(f'{r:.2f}×' for r in ratios)}; samples for {TARGET}: uniform "
-              f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)} "
-              f"(ratio {sample_ratio}); choices (Rusinkiewicz/hybrid): {choices}")  # fmt: skip
-        summary.append((name, ratios, nu, na, sample_ratio, choices))
-    print(f"\n| material | error ratio at {', '.join(f'{n:,}' for n in counts)} | choices "
-          f"| worst adaptive / best uniform | samples for {TARGET}: uniform | adaptive "
-          "| adaptive / uniform |")  # fmt: skip
-    print("|---|---|---|---:|---:|---:|---:|")
-    for name, ratios, nu, na, sample_ratio, choices in summary:
-        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {choices} "
-              f"| {1 / min(ratios):.3f} | {fmt_needed(nu, counts)} | {fmt_needed(na, counts)} "
-              f"| {sample_ratio} |")  # fmt: skip
+        summary.append((name, *compare(make(), rig, isotropic, args, options)))
+    print(f"\nBy material: best uniform / best adaptive error at {', '.join(map(str, counts))} "
+          "samples; the choices (A: adapted, U: uniform outright; Rusinkiewicz/hybrid); the "
+          "predicted gain G of adapting in Rusinkiewicz's coordinates at the first and last "
+          "count; best uniform / best adaptive error had the plans been forced to adapt; the "
+          "worst adaptive / best uniform error ratio over the counts; samples for "
+          f"{TARGET}.\n")  # fmt: skip
+    print("| material | error ratio | choices | G | forced to adapt | worst adaptive / "
+          f"best uniform | samples for {TARGET}: uniform | adaptive |")  # fmt: skip
+    print("|---|---|---|---|---|---:|---:|---:|")
+    for name, ratios, forced, gains, choices, nu, na in summary:
+        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {choices} | {gains} "
+              f"| {', '.join(f'{r:.2f}×' for r in forced)} | {1 / min(ratios):.3f} "
+              f"| {fmt_needed(nu, counts)} | {fmt_needed(na, counts)} |")  # fmt: skip
+
+
+def compare(
+    truth: BrdfEval, rig: Rig, isotropic: bool, args: argparse.Namespace, options: dict[str, object]
+) -> tuple[list[float], list[float], str, str, float, float]:
+    """One material's table (every plan's error per count), the adaptive plans' choices
+    and reasons; (best uniform / best adaptive error per count, the same for the
+    adaptive plans forced to adapt, the predicted gains in Rusinkiewicz's coordinates,
+    the choices, the samples each needs for `TARGET`)."""
+    counts = args.targets
+    pairs = testset.draw(rig, isotropic=isotropic)
+    head = " | ".join(f"{n:,}" for n in counts)
+    print(f"| plan | parametrization | method | {head} | for {TARGET} |")
+    print("|---|---|---|" + "---:|" * (len(counts) + 1))
+    rows: dict[tuple[str, str, str], list[float]] = {}
+    chosen: dict[int, list[str]] = {n: [] for n in counts}
+    reasons: dict[str, list[str]] = {}
+    sigma = {"sigma_floor": args.sigma_floor}
+
+    def scored(kind: str, parametrization: str, samples: Measured) -> None:
+        for method in args.methods:
+            rows.setdefault((kind, parametrization, method), []).append(
+                score(samples, method, truth, rig, pairs, isotropic)
+            )
+
+    plans = [("uniform", p) for p in params.names()]
+    for kind, parametrization in plans + [("adaptive", p) for p in args.adaptive_in]:
+        for n in counts:
+            if kind == "uniform":
+                scored(
+                    kind,
+                    parametrization,
+                    synthesize(truth, rig, parametrization, isotropic, n, seed=SEED, **sigma),
+                )
+                continue
+            plan = {"adaptive": options, "seed": SEED, **sigma}
+            samples, choice = adaptive_choice(truth, rig, parametrization, isotropic, n, **plan)
+            scored(kind, parametrization, samples)
+            chosen[n].append(choice.kind[0].upper())
+            reasons.setdefault(parametrization, []).append(f"{choice.gain:.2f}")
+            if choice.kind == "uniform":  # what adapting would have given
+                samples, _ = adaptive_choice(
+                    truth, rig, parametrization, isotropic, n, margin=0.0, **plan
+                )
+            scored("forced", parametrization, samples)
+        for method in args.methods:
+            errors = rows[(kind, parametrization, method)]
+            cells = " | ".join(f"{e:.4f}" for e in errors)
+            reach = fmt_needed(needed(counts, errors, TARGET), counts)
+            print(f"| {kind} | {parametrization} | {method} | {cells} | {reach} |", flush=True)
+    for kind, parametrization in [("forced", p) for p in args.adaptive_in]:
+        for method in args.methods:
+            cells = " | ".join(f"{e:.4f}" for e in rows[(kind, parametrization, method)])
+            print(f"| adaptive, forced to adapt | {parametrization} | {method} | {cells} | |")
+    best = {
+        kind: [min(e[i] for k, e in rows.items() if k[0] == kind) for i in range(len(counts))]
+        for kind in ("uniform", "adaptive", "forced")
+    }
+    print()
+    for parametrization, gains in reasons.items():
+        print(f"- predicted gain G of adapting in {parametrization} at "
+              f"{', '.join(f'{n:,}' for n in counts)}: {', '.join(gains)}")  # fmt: skip
+    ratios = [u / a for u, a in zip(best["uniform"], best["adaptive"], strict=True)]
+    forced = [u / a for u, a in zip(best["uniform"], best["forced"], strict=True)]
+    choices = ", ".join("/".join(chosen[n]) for n in counts)
+    nu, na = (needed(counts, best[k], TARGET) for k in ("uniform", "adaptive"))
+    print(f"\nbest uniform / best adaptive error at equal counts: "
+          f"{', '.join(f'{r:.2f}×' for r in ratios)}; forced to adapt: "
+          f"{', '.join(f'{r:.2f}×' for r in forced)}; samples for {TARGET}: uniform "
+          f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)}; choices "
+          f"(Rusinkiewicz/hybrid): {choices}")  # fmt: skip
+    rus = reasons.get("rusinkiewicz", ["–"])
+    return ratios, forced, f"{rus[0]}–{rus[-1]}", choices, nu, na
 
 
 def variant(argv: Sequence[str]) -> str | None:

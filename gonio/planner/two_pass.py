@@ -69,19 +69,22 @@ def second_pass(
     survey: Survey,
     count: int,
     where: str = "plan",
+    *,
+    margin: float = choice.MARGIN,
 ) -> tuple[FloatArray, choice.Choice]:
     """The second pass's points in the coordinate box (generation order: every point
     drawn, ``count`` of them kept) and the choice that placed them
     (`gonio.planner.choice`): the density (`adaptive.density`) of ``estimate`` (the BRDF
     estimated from the ``survey``, sr⁻¹), a share ``edge`` of the points moved onto the
     edge of the rig's cap; or, where that density is not predicted to pay, the survey's
-    Sobol sequence continued (the uniform plan's points after the survey's)."""
+    Sobol sequence continued (the uniform plan's points after the survey's).
+    ``margin``: `choice.choose`'s."""
     options = spec.sampling.options()
     errors = adaptive.error_map(estimate, rig, spec.parametrization, spec.isotropic)
     q = choice.survey_misfit(np.asarray(estimate(survey.wi, survey.wo)), survey.f)
     assert spec.sampling.target is not None
     total = spec.sampling.target
-    chosen = choice.choose(errors, q, total - count, total, options.floor)
+    chosen = choice.choose(errors, q, total - count, total, options.floor, margin=margin)
     p = params.get(spec.parametrization)
     bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
     if chosen.kind == "uniform":

@@ -18,7 +18,7 @@ import numpy as np
 
 from gonio import params
 from gonio.analysis.measured import Measured
-from gonio.planner.choice import Choice
+from gonio.planner.choice import MARGIN, Choice
 from gonio.planner.placement import directions, place
 from gonio.planner.schema import PlanSpec
 from gonio.planner.two_pass import Survey, second_pass
@@ -124,9 +124,11 @@ def adaptive_choice(
     adaptive: Mapping[str, object] | None = None,
     relative_sigma: float = 0.01,
     sigma_floor: float = 0.0,
+    margin: float = MARGIN,
 ) -> tuple[Measured, Choice]:
     """`synthesize_adaptive` and the choice its second pass made
-    (`gonio.planner.choice`: adaptive, or uniform outright)."""
+    (`gonio.planner.choice`: adaptive, or uniform outright; ``margin`` 0: adaptive
+    always)."""
     sampling = {"strategy": "adaptive", "target": n, "seed": seed, "adaptive": adaptive or {}}
     spec = _spec(parametrization, isotropic, sampling)
     coords, _ = place(spec, rig, "synthetic")
@@ -134,7 +136,7 @@ def adaptive_choice(
     survey = measured_at(f, spec, rig, coords, **sigma)
     steer = estimate(survey, spec.sampling.options().model)
     measured = Survey(len(coords), survey.wi, survey.wo, survey.f)
-    rest, chosen = second_pass(spec, rig, steer, measured, n - len(survey))
+    rest, chosen = second_pass(spec, rig, steer, measured, n - len(survey), margin=margin)
     both = replace(
         survey.joined(measured_at(f, spec, rig, rest, **sigma)),
         source=f"synthetic adaptive {parametrization} "
