@@ -29,6 +29,8 @@ def render(run: Run, errors: dict[str, float | int] | None = None, *, title: boo
         f"({f['remeasured']} measured again at a shorter exposure)",
         f"  {'faults':<24}{len(f['faults']):>10}   ({f['retries']} retries)",
     ]
+    if run.plan.summary.second_pass is not None:  # an adaptive plan's: how and why
+        lines.append(f"  {'second pass':<24}{'':>10}   {run.plan.summary.second_pass}")
     for fault in f["faults"][-3:]:
         lines.append(f"    target {fault.get('target')}: {fault['message']}")
     for reason, count in f["skip_reasons"].items():

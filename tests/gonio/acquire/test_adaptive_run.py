@@ -65,7 +65,9 @@ def test_two_passes_in_one_run(
     assert run.complete and len(run.plan) == TARGET and len(run) == TARGET
     # The survey's targets keep their places; the second pass follows them.
     np.testing.assert_array_equal(run.plan.coords[:SURVEY], survey.coords, strict=True)
-    assert len(run.of_kind("second_pass")) == 1
+    (event,) = run.of_kind("second_pass")
+    assert event.data["placed"] == run.plan.summary.second_pass  # adaptive or uniform, and why
+    assert run.plan.summary.second_pass.startswith(("adaptive (floor", "uniform: "))
     assert [s.outcome for s in run.sessions] == ["completed", "completed"]
 
 
