@@ -7,19 +7,22 @@ adaptive}`: a Sobol survey, a lambert+beckmann fit of it steering the second pas
 and scored by log-RMSE on log(1 + f) over the default test set (20 000 pairs uniform
 in dωi dωo over what the rig measures, θ ≤ 80°; `extrapolate="nearest"`). The samples'
 σ, which weighs the steering fit, is 1 % of (|f| + `--sigma-floor`) (1: near the
-detector's σ on the engine; 0: relative). Then the samples each needs for log-RMSE 0.01
-(log-log between the counts measured) and the ratios: best uniform error / best adaptive
-error at equal counts, adaptive samples / best uniform samples for 0.01; and the choice
-each adaptive plan made (A: adapted, U: uniform outright, for Rusinkiewicz / hybrid).
+detector's σ on the engine; 0: relative). Per material: every plan's error per count;
+the same adaptive plans forced to adapt (`margin=0`) where they chose uniform; the
+predicted gain G each adaptive plan's choice was taken on (it adapts from
+`gonio.planner.choice.MARGIN` on); the error ratio best uniform / best adaptive at equal
+counts, and the samples each needs for log-RMSE 0.01 (log-log between the counts
+measured). The last table sums up: the choices (A: adapted, U: uniform outright, for
+Rusinkiewicz / hybrid), and the worst ratio adaptive / best uniform over the counts.
 No material below is a Beckmann one: the steering model's family never contains the
-scene's (``--model survey`` steers with no model at all). The shipped scenes, GGX
-lobes, a rough conductor, and ``--random`` materials drawn from the model families
-(`studies.brdf.random_materials`, seeds 0 … N − 1: GGX α 0.03–0.5, dielectric or
-conductor, with or without a Lambertian part).
+scene's (``--model survey`` steers with no model at all). The materials: GGX lobes,
+the shipped scenes, a rough conductor with no diffuse part, and ``--random`` materials
+drawn from the model families (`studies.brdf.random_materials`, seeds 0 … N − 1: GGX
+α 0.03–0.5, dielectric or conductor, with or without a Lambertian part).
 
 Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 500 1000 2000 4000]
 [--methods linear rbf] [--survey 128] [--floor 0.2] [--edge 0.0] [--model survey]
-[--random 8] [--sigma-floor 1.0]
+[--random 10] [--sigma-floor 1.0]
 """
 
 from __future__ import annotations
@@ -117,7 +120,7 @@ def main() -> None:
         default="lambert+beckmann",
         help="the family steering the second pass, or 'survey' (no model)",
     )
-    parser.add_argument("--random", type=int, default=8, help="materials drawn at random")
+    parser.add_argument("--random", type=int, default=10, help="materials drawn at random")
     parser.add_argument("--sigma-floor", type=float, default=1.0)
     args = parser.parse_args()
     options = {"survey": args.survey, "model": args.model, "floor": args.floor,
@@ -126,8 +129,9 @@ def main() -> None:
     print(describe())
     steer = "its own rbf reconstruction" if args.model == "survey" else f"a {args.model} fit"
     print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
-          f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor}); "
-          f"{args.random} random materials (seeds 0 … {args.random - 1})")  # fmt: skip
+          f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor})"
+          + (f"; {args.random} random materials (seeds 0 … {args.random - 1})"
+             if args.random else ""))  # fmt: skip
     summary: list[tuple[str, list[float], list[float], str, str, float, float]] = []
     materials = [(name, *SCENES[name]) for name in args.scenes]
     for seed in range(args.random):
