@@ -3,7 +3,8 @@ reachable direction pairs → joint angles → an ordered, timed `Plan`, stored 
 back bit for bit (`write_plan`, `read_plan`). See docs/reference/planner.md.
 
 Modules: `model` (the `Plan`, its `Summary`, the hashes), `builder` (`build`), `files`
-(plan files and stored plans), `two_pass` (the adaptive strategy's second pass)."""
+(plan files and stored plans), `two_pass` (the adaptive strategy's second pass), `choice`
+(whether that pass adapts, decided from the survey)."""
 
 from gonio.planner.builder import build
 from gonio.planner.files import (

@@ -15,7 +15,8 @@ the density of the test measure in the unit box and ρ the sample density
 a model fitted to the survey (from a family the caller chooses) or any callable. The
 density is piecewise constant on a grid of cells, mixed with a uniform ``floor`` over
 the cells the rig reaches so that every region keeps some samples, and sampled by
-inverse CDF driven by a scrambled Sobol sequence (seeded, deterministic).
+inverse CDF driven by a scrambled Sobol sequence (seeded, deterministic). Whether a
+plan follows the density at all is decided from its survey (`gonio.planner.choice`).
 """
 
 from __future__ import annotations

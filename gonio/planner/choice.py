@@ -26,10 +26,11 @@ uniform Sobol plan of its seed (`gonio.planner.two_pass`).
 
 `MARGIN` is well above 1 because the model overrates what a plan reconstructed by rbf
 gains, the more so the rougher the lobe: benchmarks/adaptive.py prints G beside the
-measured gain. Where the rbf's error does not follow the linear law's (rough
-conductors with no diffuse part: uniform Rusinkiewicz is already close to the best
-density) a predicted 1.5–1.8× came out between 0.4× and 1.4×, while from about 2× on
-the measured gain held. A wrong guess toward adapting costs more than one toward
+measured gain and beside what a plan forced to adapt gives (docs/results/adaptive.md).
+On rough conductors with no diffuse part, where uniform Rusinkiewicz is already close
+to the best density and the rbf's error does not follow the curvature law, a predicted
+1.3–1.8× came out between 0.41× and 1.31×; every plan there that adapted at G ≥ 1.9
+gained (1.08–3.82×). A wrong guess toward adapting costs more than one toward
 uniform: uniform is the plan the user would otherwise have measured. Two variants were
 measured and left out: charging the unexplained part as a flat error (which any
 non-uniform density makes worse, by Jensen's inequality, the more so the smaller the
