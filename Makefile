@@ -80,7 +80,9 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/plots.py
 	$(BIN)/python benchmarks/tradeoff.py
 	$(BIN)/python benchmarks/accuracy.py
-	$(BIN)/python benchmarks/adaptive.py --targets 250 500 1000 2000 4000 6000
+	$(BIN)/python benchmarks/adaptive.py --targets 250 500 1000 2000 4000 --random 10
+	$(BIN)/python benchmarks/adaptive.py --scenes glossy --targets 250 500 1000 2000 4000 \
+		--random 10 --random-first 12
 	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
 		--adaptive-in rusinkiewicz
 	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
