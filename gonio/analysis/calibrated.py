@@ -8,7 +8,9 @@ noise model are there)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +40,7 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     codes, dark_counts_, dark_spread, exposures, ns, dns = [], [], [], [], [], []
     for e in events:
         r, d = e.data["reference"], e.data["dark"]
-        exposure = float(r["exposure_s"])
+        exposure = 1.0 if is_level(e.data) else float(r["exposure_s"])
         n = max(int(r["n"]), 1)
         t.append(0.5 * (float(r["started_s"]) + float(r["ended_s"])))
         if d is None:
@@ -83,6 +85,24 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     )
 
 
+def is_level(calibration: Mapping[str, Any]) -> bool:
+    """Whether a calibration event's readings are levels (a lock-in's V, a power meter's
+    W, an electrometer's A: any unit but counts), not integrals over the exposure: a
+    level is its own rate, so it is divided by no exposure (a lock-in read at half the
+    exposure after an overload reads the same volts, not half)."""
+    return bool(calibration.get("unit", "counts") != "counts")
+
+
+def integration_s(run: Run) -> FloatArray:
+    """What each sample's reading is divided by to make it a rate (s, (N,)): its
+    exposure, or 1 where the run's readings are levels (`is_level`)."""
+    calibrations = run.of_kind("calibration")
+    exposure = run.samples["exposure_s"]
+    if calibrations and is_level(calibrations[0].data):
+        return np.ones_like(exposure)
+    return np.asarray(exposure, dtype=np.float64)
+
+
 def _whole_codes(reading: dict[str, object]) -> bool:
     """Whether a journaled reading is the mean of whole ADC codes (n × mean whole)."""
     total = float(reading["value"]) * max(int(reading["n"]), 1)  # type: ignore[arg-type,call-overload]
@@ -121,5 +141,5 @@ def calibrate(run: Run) -> Calibrated:
     s = run.samples
     wi, wo = run.directions()
     t = 0.5 * (s["started_s"] + s["ended_s"])
-    f, sigma = series.brdf(s["counts"], s["counts_std"], s["n"], s["exposure_s"], wi, wo, t)
+    f, sigma = series.brdf(s["counts"], s["counts_std"], s["n"], integration_s(run), wi, wo, t)
     return Calibrated(f, sigma, series)
