@@ -41,6 +41,7 @@ from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
 from sim.serial_photometer.protocol import mismatch
 from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
+from sim.visa_instruments.sr830 import SR830
 
 Pose = Callable[[], dict[str, float]]
 
@@ -168,8 +169,14 @@ def instrument_for(
 
     def signal(integration_s: float) -> float:
         counts, _ = physics.expose(integration_s, 1, clock.now())
+        if physics.lockin:  # the scene's lock-in reads volts already
+            return float(counts[0, 0])
         return float(counts[0, 0]) / integration_s * per_rate
 
+    if physics.lockin and issubclass(emulator, SR830):  # its phase: the simulated lock-in's
+        return emulator(
+            signal, speedup=clock.speedup, phase=lambda: physics.last_phase_deg or 0.0
+        )
     return emulator(signal, speedup=clock.speedup)
 
 

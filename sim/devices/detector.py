@@ -230,11 +230,16 @@ class SimDetector(Resource):
             saturated = np.ones_like(saturated)
         self._clock.sleep((self.reading_s(exposure_s) + self.readout_s) * averages)
         reading = sensor.readings(counts, saturated, started, self._clock.now())[0]
+        phase = self.last_phase_deg
+        return reading if phase is None else dataclasses.replace(reading, phase_deg=phase)
+
+    @property
+    def last_phase_deg(self) -> float | None:
+        """A lock-in's last reading's phase (°, the mean over its averages), else None."""
         if self._phase is None:
-            return reading
+            return None
         rad = np.radians(self._phase[0])
-        mean = float(np.degrees(np.arctan2(np.sin(rad).sum(), np.cos(rad).sum())))
-        return dataclasses.replace(reading, phase_deg=mean)
+        return float(np.degrees(np.arctan2(np.sin(rad).sum(), np.cos(rad).sum())))
 
     def reading_s(self, exposure_s: float) -> float:
         """How long one reading of ``exposure_s`` s takes before the readout (s): the
