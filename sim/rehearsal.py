@@ -174,9 +174,7 @@ def instrument_for(
         return float(counts[0, 0]) / integration_s * per_rate
 
     if physics.lockin and issubclass(emulator, SR830):  # its phase: the simulated lock-in's
-        return emulator(
-            signal, speedup=clock.speedup, phase=lambda: physics.last_phase_deg or 0.0
-        )
+        return emulator(signal, speedup=clock.speedup, phase=lambda: physics.last_phase_deg or 0.0)
     return emulator(signal, speedup=clock.speedup)
 
 
