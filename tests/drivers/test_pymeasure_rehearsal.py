@@ -159,3 +159,15 @@ def test_a_lockin_rig_needs_no_lamp_switch_and_its_phase_drift_is_journaled(
     info = run_gonio("info", str(out))
     assert "no dark reading: the detector subtracts it (lock-in)" in info.stdout
     assert f"phase drifts{len(drifts):>22}" in info.stdout
+
+
+def test_a_lockin_scene_on_a_meter_is_one_line(
+    run_gonio: Callable[..., CliResult], tmp_path: Path
+) -> None:
+    plan = rig_with(tmp_path, INTERFACES["keithley2000"])
+    scene = CONFIGS / "scenes" / "matte_lockin.yaml"
+    result = run_gonio("acquire", str(plan), "--scene", str(scene), "--rehearse", "-o",
+                       str(tmp_path / "run.sqlite"), "-q")  # fmt: skip
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "detector.interface" in lines[0] and "lock-in" in lines[0]
