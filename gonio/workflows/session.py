@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import DriverError, dark_subtracted
+from drivers.base import DriverError, dark_subtracted, reading_unit
 from gonio import __version__
 from gonio.acquire.engine import Engine, Report
 from gonio.acquire.progress import Observer, Unobserved
@@ -461,7 +461,8 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
             f"motors: {len(positions)} axes answer, "
             f"{max(h.temperature_c for h in health.values()):g} °C at most"
         )
-        lines.append(f"detector: answers ({reading.value:g} counts at its shortest exposure)")
+        unit = reading_unit(devices.detector)
+        lines.append(f"detector: answers ({reading.value:g} {unit} at its shortest exposure)")
     finally:
         backend.close()
     return lines

@@ -143,6 +143,8 @@ def test_a_lockin_rig_needs_no_lamp_switch_and_its_phase_drift_is_journaled(
     text = (CONFIGS / "scenes" / "matte_lockin.yaml").read_text()
     scene.write_text(text.replace("  duty: 0.5", "  duty: 0.5\n  phase_drift_deg_per_hour: 900"))
     out = tmp_path / "run.sqlite"
+    dry = run_gonio("acquire", str(plan), "--scene", str(scene), "--rehearse", "--dry-run")
+    assert dry.returncode == 0 and " V at its shortest exposure" in dry.stdout, dry.stderr
     result = run_gonio(
         "acquire", str(plan), "--scene", str(scene), "--rehearse", "--speedup", "1000",
         "-o", str(out), "-q",
