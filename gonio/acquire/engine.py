@@ -314,12 +314,15 @@ class Engine:
     def _unsaturated(
         self, i: int, reading: Reading, exposure: float, averages: int
     ) -> tuple[Reading, float, int]:
-        """Measure again at half the exposure while saturated (plan option)."""
+        """Measure again at half the exposure while saturated (plan option; not for a
+        level reading, which a shorter exposure leaves the same: `reading_unit`)."""
         spec = self.spec.saturation
         shortest = self.devices.detector.exposure_range_s[0]
+        level = reading_unit(self.devices.detector) != "counts"
         remeasured = 0
         while (
             reading.saturated
+            and not level
             and spec.remeasure
             and remeasured < spec.attempts
             and exposure > shortest

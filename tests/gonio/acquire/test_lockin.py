@@ -13,6 +13,7 @@ import pytest
 from drivers.base import RangeChange, Reading
 from gonio.acquire.watch import ReadingWatch, phase_drift
 from gonio.analysis.summary import error_figures
+from gonio.errors import GonioError
 from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
@@ -118,3 +119,18 @@ def test_a_resumed_run_compares_with_the_last_reference_phase_journaled(
     assert (
         watch.reference_deg == last != run.of_kind("calibration")[0].data["reference"]["phase_deg"]
     )
+
+
+def test_an_overload_is_not_measured_again_at_a_shorter_exposure(rigs: dict[str, Rig]) -> None:
+    """A lock-in's overload does not depend on the exposure: a saturated sample is kept
+    as it is (not halved in vain) and a saturated reference is one line saying what to
+    change."""
+    rig = rigs["arch"]
+    plan = build(plan_spec(), rig)
+    # The glossy metal: full scale 10 mV between the reference (1.4 mV) and its peak.
+    glossy = load_scene(CONFIGS / "scenes" / "glossy_metal.yaml", rig).material
+    scene = lockin(rig).model_copy(update={"material": glossy})
+    s = simulate_plan(plan, scene, seed=3).run.samples
+    assert s["saturated"].any() and not s["remeasured"].any()
+    with pytest.raises(GonioError, match="raise its range or sensitivity"):
+        simulate_plan(plan, lockin(rig, sensitivity_v=1e-4), seed=3)
