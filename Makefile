@@ -65,6 +65,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5
 	$(BIN)/python benchmarks/instruments.py
+	$(BIN)/python benchmarks/lockin.py
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/fit.py

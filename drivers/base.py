@@ -48,6 +48,18 @@ Measuring (`Detector`)
     `DetectorError` before anything is exposed. A saturated reading is returned, not
     raised: ``Reading.saturated`` says so.
 
+What a detector may also say (optional; read through the functions named, which give
+the default when a detector does not say it)
+    * ``dark_subtracted`` (`dark_subtracted`; default False): its readings carry no dark
+      or ambient signal (a lock-in amplifier behind a chopped source), so a calibration
+      takes no dark reading. Readable when closed; constant for the device's life.
+    * ``unit`` (`reading_unit`; default ``"counts"``): the unit of ``Reading.value``.
+    * ``phase_tolerance_deg`` (`phase_tolerance_deg`; default None): a lock-in's
+      readings carry ``Reading.phase_deg``, and a drift of it from the reference
+      reading's phase beyond this tolerance (°) is worth an event.
+    * ``range_changes`` (`range_changes`; default none): the `RangeChange` list of an
+      auto-ranging instrument, appended to while measuring, in time order.
+
 Light (`LightSource`)
     ``on()`` / ``off()`` switch the source and return once it is switched; ``is_on``
     is the state last commanded and acknowledged.
@@ -165,7 +177,8 @@ class Reading:
     any sample hit the full scale, ``started_s`` / ``ended_s`` the clock's time (s) when
     the first exposure began and the last one ended (readout included), ``raw`` the
     individual samples, ``exposure_s`` the exposure actually integrated (s) when the
-    device's step made it differ from the one asked (e.g. whole milliseconds), else None.
+    device's step made it differ from the one asked (e.g. whole milliseconds), else None,
+    ``phase_deg`` a lock-in's mean phase (°) over the samples, else None.
     """
 
     value: float
@@ -176,11 +189,22 @@ class Reading:
     ended_s: float
     raw: tuple[float, ...] = field(default_factory=tuple)
     exposure_s: float | None = None
+    phase_deg: float | None = None
 
     @property
     def middle_s(self) -> float:
         """The middle of the measurement (s): where a drifting source is sampled."""
         return 0.5 * (self.started_s + self.ended_s)
+
+
+@dataclass(frozen=True)
+class RangeChange:
+    """The instrument's range changed (auto-ranging): when (the clock's s), from, to
+    (in the reading's unit)."""
+
+    at_s: float
+    old: float | None
+    new: float
 
 
 # -- time -------------------------------------------------------------------------------
@@ -311,6 +335,31 @@ class Detector(Device, Protocol):
     def measure(self, exposure_s: float, averages: int = 1) -> Reading:
         """Expose for ``exposure_s`` seconds, ``averages`` times, and return the mean."""
         ...
+
+
+def dark_subtracted(detector: Detector) -> bool:
+    """Whether ``detector``'s readings carry no dark or ambient signal (its optional
+    ``dark_subtracted`` property; False when it has none): a calibration then takes no
+    dark reading and needs no switchable light."""
+    return getattr(detector, "dark_subtracted", False) is True
+
+
+def reading_unit(detector: Detector) -> str:
+    """The unit of ``detector``'s readings (its optional ``unit``; ``"counts"``)."""
+    unit = getattr(detector, "unit", None)
+    return unit if isinstance(unit, str) and unit else "counts"
+
+
+def phase_tolerance_deg(detector: Detector) -> float | None:
+    """How far (°) a lock-in's phase may drift from the reference reading's before it
+    is worth an event (its optional ``phase_tolerance_deg``; None: no phase check)."""
+    value = getattr(detector, "phase_tolerance_deg", None)
+    return None if value is None else float(value)
+
+
+def range_changes(detector: Detector) -> tuple[RangeChange, ...]:
+    """The range changes ``detector`` saw so far (its optional ``range_changes``; none)."""
+    return tuple(getattr(detector, "range_changes", ()))
 
 
 class LightSource(Device, Protocol):

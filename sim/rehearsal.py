@@ -41,6 +41,7 @@ from sim.serial_light import SerialLamp
 from sim.serial_photometer import SerialPhotometer
 from sim.serial_photometer.protocol import mismatch
 from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
+from sim.visa_instruments.sr830 import SR830
 
 Pose = Callable[[], dict[str, float]]
 
@@ -115,10 +116,21 @@ def lamp_for(rig: Rig, switch: SerialSwitchSpec) -> SerialLamp:
     return SerialLamp(commands=(switch.on_command, switch.off_command, query))
 
 
+def _no_lockin(rig: Rig, physics: SimDetector, instrument: str) -> None:
+    """`ConfigError` when the scene's detector is a lock-in and the rig's is not one."""
+    if physics.lockin:
+        raise ConfigError(
+            f"{_where(rig)}: detector.interface: --rehearse: the scene's detector is a "
+            f"lock-in (detector.kind: lockin) and the rig reads {instrument}; expected a "
+            "lock-in (pymeasure.instruments.srs.SR830 or SR860), or a scene with kind: adc"
+        )
+
+
 def photometer_for(rig: Rig, physics: SimDetector, clock: ScaledClock) -> SerialPhotometer:
     """The simulated photometer the rig's serial interface can talk to, reading each
     exposure's counts from ``physics`` (`ConfigError` if the rig's protocol is not the
     photometer's: docs/reference/serial_detector.md)."""
+    _no_lockin(rig, physics, "a serial photometer")
     config = rig.serial_detector_config()
     problem = mismatch(config)
     if problem is not None:
@@ -157,6 +169,8 @@ def instrument_for(
             f"{_where(rig)}: detector.interface.instrument: --rehearse: no emulated "
             f"{config.instrument} (emulated: {known})"
         )
+    if not issubclass(emulator, SR830):
+        _no_lockin(rig, physics, config.instrument)
     terminator = emulator.terminator
     if (config.read_termination or "\n") != terminator:
         raise ConfigError(
@@ -168,8 +182,12 @@ def instrument_for(
 
     def signal(integration_s: float) -> float:
         counts, _ = physics.expose(integration_s, 1, clock.now())
+        if physics.lockin:  # the scene's lock-in reads volts already
+            return float(counts[0, 0])
         return float(counts[0, 0]) / integration_s * per_rate
 
+    if physics.lockin and issubclass(emulator, SR830):  # its phase: the simulated lock-in's
+        return emulator(signal, speedup=clock.speedup, phase=lambda: physics.last_phase_deg or 0.0)
     return emulator(signal, speedup=clock.speedup)
 
 

@@ -70,27 +70,71 @@ class SourceSpec(Strict):
 
 
 class DetectorSpec(Strict):
-    """The simulated sensor behind the rig's detector optics: how light becomes counts
-    (`sim.physics.sensor`), and which colour band an RGB material is seen in."""
+    """The simulated sensor behind the rig's detector optics: how light becomes a
+    reading, and which colour band an RGB material is seen in. ``kind: adc`` (the
+    default): a photodiode's charge read by an ADC in counts (`sim.physics.sensor`);
+    ``kind: lockin``: its current read by a lock-in amplifier behind a chopped source,
+    in volts (`sim.physics.lockin`): the dark current is rejected, a reading waits the
+    output filter's settle time, it overloads at ``sensitivity_v``."""
 
+    kind: Literal["adc", "lockin"] = Field(
+        "adc", description="adc: counts from an ADC; lockin: volts from a lock-in amplifier."
+    )
     responsivity_a_w: float = Field(
         gt=0, description="Photocurrent per radiant power reaching the sensor (A/W)."
     )
     dark_current_e_s: float = Field(
-        0.0, ge=0, description="Thermal electrons per second (the dark_current effect)."
+        0.0,
+        ge=0,
+        description="Thermal electrons per second (the dark_current effect; a lock-in rejects "
+        "it, its shot noise stays).",
     )
     read_noise_e: float = Field(
         0.0,
         ge=0,
         description="The amplifier's noise per reading (electrons rms; the read_noise effect).",
     )
-    full_well_e: float = Field(
-        gt=0, description="Electrons the sensor holds; it maps to the ADC's top code."
+    full_well_e: float | None = Field(
+        None,
+        gt=0,
+        description="adc: electrons the sensor holds; it maps to the ADC's top code.",
     )
-    adc_bits: int = Field(16, ge=1, le=32, description="The ADC's resolution (bits).")
+    adc_bits: int = Field(16, ge=1, le=32, description="adc: the ADC's resolution (bits).")
     band: Literal["luminance", "r", "g", "b"] = Field(
         "luminance", description="The colour band an RGB material is seen in."
     )
+    time_constant_s: float | None = Field(
+        None,
+        gt=0,
+        description="lockin: the output filter's time constant (s; none: the longest whose "
+        "settle time fits the exposure, as the PyMeasure driver sets it).",
+    )
+    slope_db_oct: Literal[6, 12, 18, 24] = Field(
+        24, description="lockin: the output filter's slope (dB/octave)."
+    )
+    sensitivity_v: float | None = Field(
+        None, gt=0, description="lockin: the full scale (V); a reading at or above overloads."
+    )
+    transimpedance_v_a: float = Field(
+        1e6, gt=0, description="lockin: the current amplifier's gain before the lock-in (V/A)."
+    )
+    duty: float = Field(0.5, gt=0, lt=1, description="lockin: the chopper's open fraction.")
+    phase_drift_deg_per_hour: float = Field(
+        0.0, description="lockin: how fast the reading's phase drifts (°/h)."
+    )
+
+    @model_validator(mode="after")
+    def _of_its_kind(self) -> DetectorSpec:
+        if self.kind == "adc" and self.full_well_e is None:
+            raise field_error("full_well_e", "Field required for kind: adc")
+        if self.kind == "lockin" and self.sensitivity_v is None:
+            raise field_error("sensitivity_v", "Field required for kind: lockin")
+        lockin_only = ("time_constant_s", "sensitivity_v")
+        for name in lockin_only if self.kind == "adc" else ("full_well_e",):
+            if getattr(self, name) is not None:
+                other = "lockin" if self.kind == "adc" else "adc"
+                raise field_error(name, f"only for kind: {other} (this detector is {self.kind})")
+        return self
 
 
 #: Scene fields that are facts of the instrument: where the rig file holds each.

@@ -20,7 +20,7 @@ from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.devices.detector import sensor_of
 from sim.devices.motors import PositionModel
-from sim.physics import sensor
+from sim.physics import lockin, sensor
 from sim.physics.optics import SceneOptics
 from sim.physics.streams import Streams
 from sim.record import SimRun
@@ -91,7 +91,8 @@ def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
     # up in the order the instrument's clock adds them (so the times agree bit for bit).
     travel = rig.travel_time(previous, goal)
     readout = rig.spec.detector.readout_s
-    period = plan.exposure_s + readout
+    reading = _reading_s(scene, plan.exposure_s)
+    period = reading + readout
     busy = period * plan.averages
     settle = np.full(n, rig.spec.settle_s)
     clock = np.cumsum(np.stack([travel, settle, busy], axis=1).ravel()).reshape(n, 3)
@@ -109,13 +110,13 @@ def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
         t_mid = (
             settled[rows, None]
             + period[rows, None] * np.arange(a)[None, :]
-            + 0.5 * plan.exposure_s[rows, None]
+            + 0.5 * reading[rows, None]
         )
         power = chain.power(geometric[rows], t_mid)
-        signal = chain.electrons(power, plan.exposure_s[rows])
-        counts, sat = sensor.read_out(
-            signal, plan.exposure_s[rows], sensor_spec, sensor_effects, streams, index[rows]
-        )
+        counts, sat = _read(
+            scene, chain, power, plan.exposure_s[rows], t_mid, streams, index[rows],
+            sensor_spec, sensor_effects,
+        )  # fmt: skip
         v, s, _, flag = sensor.summarize(counts, sat)
         value[rows], std[rows], saturated[rows] = v, s, flag
     return SimRun(
@@ -133,6 +134,38 @@ def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
         std=std,
         saturated=saturated,
     )
+
+
+def _reading_s(scene: Scene, exposure_s: FloatArray) -> FloatArray:
+    """How long each reading takes before the readout (s): the exposure, or a lock-in's
+    settle time when longer (`sim.physics.lockin.reading_s`)."""
+    exposure = np.asarray(exposure_s, dtype=np.float64)
+    if scene.detector.kind == "lockin":
+        return lockin.reading_s(scene.detector, exposure)
+    return exposure
+
+
+def _read(
+    scene: Scene,
+    chain: SceneOptics,
+    power: FloatArray,
+    exposure_s: FloatArray,
+    t_mid: FloatArray,
+    streams: Streams,
+    index: np.ndarray,
+    spec: sensor.SensorSpec,
+    effects: sensor.SensorEffects,
+) -> tuple[FloatArray, np.ndarray]:
+    """Readings (N, A) and their saturation of powers (W, (N, A)): the sensor's counts,
+    or a lock-in's volts (`SimDetector.expose` reads the same)."""
+    if scene.detector.kind == "lockin":
+        signal = chain.electrons(power, np.ones(len(power)))
+        value, overloaded, _ = lockin.read_out(
+            signal, exposure_s, t_mid, scene.detector, scene.effects.names(), streams, index
+        )
+        return value, overloaded
+    signal = chain.electrons(power, exposure_s)
+    return sensor.read_out(signal, exposure_s, spec, effects, streams, index)
 
 
 def simulate_standard(
@@ -160,15 +193,16 @@ def simulate_standard(
     wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
     chain = SceneOptics(scene, rig) if optics is None else optics
     geometric = np.repeat(chain.geometric_power(wi, wo, target), k)
-    period = exposure_s + rig.spec.detector.readout_s
-    t_mid = started[:, None] + period * np.arange(averages)[None, :] + 0.5 * exposure_s
+    reading = float(_reading_s(scene, np.array([exposure_s]))[0])
+    period = reading + rig.spec.detector.readout_s
+    t_mid = started[:, None] + period * np.arange(averages)[None, :] + 0.5 * reading
     power = chain.power(geometric, t_mid, light_on=light_on)
-    signal = chain.electrons(power, np.full(k, exposure_s))
     spec, effects = sensor_of(scene)
     streams = Streams(scene.seed if seed is None else int(seed))
-    counts, sat = sensor.read_out(
-        signal, exposure_s, spec, effects, streams, np.asarray(index, dtype=np.int64)
-    )
+    counts, sat = _read(
+        scene, chain, power, np.full(k, exposure_s), t_mid, streams,
+        np.asarray(index, dtype=np.int64), spec, effects,
+    )  # fmt: skip
     return sensor.summarize(counts, sat)
 
 
@@ -180,7 +214,8 @@ def expected_rate(
     target: StageTarget = "reference",
     optics: SceneOptics | None = None,
 ) -> FloatArray:
-    """The noise-free signal rate (counts/s, dark excluded) of ``target`` at the true
+    """The noise-free signal rate (counts/s, dark excluded; a lock-in's level, V) of
+    ``target`` at the true
     joint angles ``pose`` (rad, (A,)) at run times ``t_s`` (s): the source's drift at
     that instant, no rounding (the truth a calibration's rate estimates); ``optics`` as
     in `simulate_standard`."""
@@ -190,5 +225,7 @@ def expected_rate(
     geometric = chain.geometric_power(wi, wo, target)
     power = chain.power(np.repeat(geometric, t.size), t.reshape(-1, 1))
     electrons = chain.electrons(power, np.ones(t.size))[:, 0]
+    if scene.detector.kind == "lockin":
+        return np.asarray(lockin.expected_v(scene.detector, electrons).reshape(t.shape))
     spec, _ = sensor_of(scene)
     return np.asarray((electrons / spec.gain_e_per_count).reshape(t.shape), dtype=np.float64)

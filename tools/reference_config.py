@@ -255,6 +255,18 @@ LOADER_ONLY: tuple[LoaderCheck, ...] = (
         (_MATTE, (("material.alpha", -1),)),
     ),
     LoaderCheck(
+        "scene", "detector.full_well_e|detector.sensitivity_v", "Field required for kind",
+        "`detector`: `full_well_e` for `kind: adc`, `sensitivity_v` for `kind: lockin`.",
+        (_MATTE, (("detector.full_well_e", DELETE),)),
+    ),
+    LoaderCheck(
+        "scene", "detector.full_well_e|detector.time_constant_s|detector.sensitivity_v",
+        "only for kind",
+        "`detector`: `time_constant_s` and `sensitivity_v` only for `kind: lockin`, "
+        "`full_well_e` only for `kind: adc`.",
+        (_MATTE, (("detector.time_constant_s", 0.01),)),
+    ),
+    LoaderCheck(
         "scene", "faults.*.at", "exactly one of at",
         "`faults[]`: exactly one of `at` and `rate`.",
         (_MATTE, (("faults", [{"kind": "comm_error"}]),)),

@@ -125,6 +125,8 @@ class PyMeasureDetectorConfig:
     after the exposure) with a bit of ``overload_mask`` set. ``std_property``: the
     instrument's own standard deviation, when it reports one. ``dark_subtracted``: the
     reading carries no dark or ambient signal (a lock-in behind a chopped source).
+    ``phase_property``: a lock-in's phase (°), read after each sample; a drift of it
+    from the reference reading's beyond ``phase_tolerance_deg`` is journaled.
     """
 
     instrument: str
@@ -148,6 +150,8 @@ class PyMeasureDetectorConfig:
     ranging: Ranging = "fixed"
     std_property: str | None = None
     dark_subtracted: bool = False
+    phase_property: str | None = None
+    phase_tolerance_deg: float = 5.0
 
     def __post_init__(self) -> None:
         if _DOTTED.fullmatch(self.instrument) is None:
@@ -159,7 +163,8 @@ class PyMeasureDetectorConfig:
             raise PyMeasureConfigError("query expected a command, got an empty string")
         if not self.resource.strip():
             raise PyMeasureConfigError("resource expected a VISA resource, got an empty string")
-        for name in ("reading", "range_property", "overload_property", "std_property"):
+        names = ("reading", "range_property", "overload_property", "std_property", "phase_property")
+        for name in names:
             value = getattr(self, name)
             if value is not None and _NAME.fullmatch(value) is None:
                 raise PyMeasureConfigError(f"{name} {value!r} is not a property name")
@@ -178,6 +183,11 @@ class PyMeasureDetectorConfig:
             raise PyMeasureConfigError("overload_property expected with overload_mask")
         if self.overload_property is not None and self.overload_mask <= 0:
             raise PyMeasureConfigError("overload_mask expected > 0 with overload_property")
+        tolerance = self.phase_tolerance_deg
+        if not (math.isfinite(tolerance) and 0 < tolerance <= 180):
+            raise PyMeasureConfigError(
+                f"phase_tolerance_deg must be in (0, 180] degrees, got {tolerance!r}"
+            )
 
 
 def settle_tau(slope_db_oct: int, fraction: float = 0.99) -> float:
@@ -214,6 +224,7 @@ _LOCKIN: dict[str, Any] = {
     "range_property": "sensitivity",
     "saturate_at_range": True,
     "dark_subtracted": True,
+    "phase_property": "theta",
 }
 
 #: What gonio sets for the instruments it is tested with, by class name: the rig file's

@@ -19,10 +19,17 @@ import numbers
 import re
 import statistics
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource, SystemClock
+from drivers.base import (
+    Clock,
+    DetectorError,
+    DeviceClosed,
+    RangeChange,
+    Reading,
+    Resource,
+    SystemClock,
+)
 from drivers.pymeasure import boundary
 from drivers.pymeasure.config import OVERFLOW, PyMeasureDetectorConfig
 
@@ -42,16 +49,6 @@ class PyMeasureDetectorError(DetectorError):
 
 class PyMeasureDetectorClosed(PyMeasureDetectorError, DeviceClosed):
     """The detector is not open; nothing was sent."""
-
-
-@dataclass(frozen=True)
-class RangeChange:
-    """The instrument's range changed (auto-ranging): when (the clock's s), from, to
-    (in the reading's unit)."""
-
-    at_s: float
-    old: float | None
-    new: float
 
 
 def connect(config: PyMeasureDetectorConfig) -> Any:
@@ -122,6 +119,12 @@ class PyMeasureDetector(Resource):
         """Whether a reading carries no dark or ambient signal (a lock-in amplifier
         behind a chopped source): the calibration needs no dark reading."""
         return self._config.dark_subtracted
+
+    @property
+    def phase_tolerance_deg(self) -> float | None:
+        """How far (°) the phase may drift from the reference reading's (None: the
+        phase is not read)."""
+        return None if self._config.phase_property is None else self._config.phase_tolerance_deg
 
     @property
     def unit(self) -> str:
@@ -213,12 +216,17 @@ class PyMeasureDetector(Resource):
         self._apply_exposure(exposure)
         samples: list[float] = []
         stds: list[float] = []
+        phases: list[float] = []
         saturated = False
         for _ in range(n):
             value, std, flagged = self._sample(exposure)
             samples.append(value)
             if std is not None:
                 stds.append(std)
+            if cfg.phase_property is not None:
+                with self._talking(f"reading {cfg.phase_property}"):
+                    phase = getattr(self._instrument, cfg.phase_property)
+                phases.append(self._number(cfg.phase_property, phase))
             saturated = saturated or flagged
         own = stds[0] if stds else 0.0
         std_value = statistics.stdev(samples) if n > 1 else own
@@ -232,6 +240,7 @@ class PyMeasureDetector(Resource):
             ended_s=self._clock.now(),
             raw=tuple(samples),
             exposure_s=None if math.isclose(realised, exposure, rel_tol=1e-9) else realised,
+            phase_deg=_circular_mean(phases) if phases else None,
         )
 
     def _check(self, exposure_s: object, averages: object) -> tuple[float, int]:
@@ -363,6 +372,12 @@ def _first_number(values: list[Any]) -> object:
         if match is not None:
             return float(match.group(0))
     return first
+
+
+def _circular_mean(degrees: list[float]) -> float:
+    """The mean of angles (°) on the circle, in (−180, 180]."""
+    rad = [math.radians(d) for d in degrees]
+    return math.degrees(math.atan2(sum(map(math.sin, rad)), sum(map(math.cos, rad))))
 
 
 def _reason(exc: BaseException) -> str:

@@ -43,6 +43,8 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Reading,
+    dark_subtracted,
+    reading_unit,
 )
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
@@ -52,6 +54,7 @@ from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
+from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
 from gonio.planner.schema import AcquisitionSpec
@@ -115,6 +118,7 @@ class Engine:
     _busy_until: float = field(init=False, default=0.0)  # run time the step in flight ends
     _current: int | None = field(init=False, default=None)  # the target in flight
     _limits: dict[str, tuple[float, float]] | None = field(init=False, default=None)
+    _watch: ReadingWatch = field(init=False)  # range changes and phase drift to journal
 
     def __post_init__(self) -> None:
         self.spec = self.plan.spec.acquisition
@@ -124,6 +128,7 @@ class Engine:
         self.state = initial_state(self.spec, self.history)
         self._report = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
+        self._watch = ReadingWatch.of(self.devices.detector, self.time.offset, self.history)
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -299,6 +304,8 @@ class Engine:
                 raise _Stop("aborted", f"target {i}: {exc}") from None
         reading, exposure, remeasured = self._unsaturated(i, measured.reading, exposure, averages)
         self._journal_sample(i, attempt + 1, measured, reading, exposure, remeasured)
+        for kind, data in self._watch.events(reading):
+            self._event(kind, data, target=i)
 
     def _skip(self, i: int, reason: str) -> None:
         self._event("skip", {"reason": reason, **self._sim()}, target=i)
@@ -307,12 +314,15 @@ class Engine:
     def _unsaturated(
         self, i: int, reading: Reading, exposure: float, averages: int
     ) -> tuple[Reading, float, int]:
-        """Measure again at half the exposure while saturated (plan option)."""
+        """Measure again at half the exposure while saturated (plan option; not for a
+        level reading, which a shorter exposure leaves the same: `reading_unit`)."""
         spec = self.spec.saturation
         shortest = self.devices.detector.exposure_range_s[0]
+        level = reading_unit(self.devices.detector) != "counts"
         remeasured = 0
         while (
             reading.saturated
+            and not level
             and spec.remeasure
             and remeasured < spec.attempts
             and exposure > shortest
@@ -403,18 +413,22 @@ class Engine:
 
     # -- calibration ---------------------------------------------------------------------
     def _calibrate(self, why: str) -> None:
-        """Read the reference standard (and a dark reading) and journal them as one
+        """Read the reference standard (and a dark reading, unless the plan says not to
+        or the detector's readings are dark-subtracted) and journal them as one
         ``calibration`` event."""
         spec, calibrations = self.spec.calibration, self.state.calibrations
+        detector = self.devices.detector
+        subtracted = dark_subtracted(detector)
         exposure = calibrations.exposure_s
         if exposure is None:
             shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
         read = read_standard(
             self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
-            dark=spec.dark, timeout_s=self.move_timeout_s,
+            dark=spec.dark and not subtracted, timeout_s=self.move_timeout_s,
         )  # fmt: skip
         back = [read.reference.read_back[a] for a in self.axes]
+        reference = self._reading_data(read.reference.reading, read.exposure_s)
         wi, wo = self.rig.forward(np.array(back))
         data: dict[str, Any] = {
             "why": why,
@@ -425,13 +439,21 @@ class Engine:
             "wi": wi.tolist(),
             "wo": wo.tolist(),
             "pose_rad": back,
-            "reference": self._reading_data(read.reference.reading, read.exposure_s),
+            "unit": reading_unit(detector),
+            "reference": {**reference, **self._watch.reference(read.reference.reading)},
             "dark": None if read.dark is None else self._reading_data(read.dark, read.exposure_s),
             **self._sim(),
         }
+        if read.dark is None:
+            data["dark_reason"] = "detector" if subtracted else "plan"
         self._event("calibration", data)
+        for kind, event in self._watch.events(None):
+            self._event(kind, event)
         calibrations.done(self.state.count, self.time.now(), read.exposure_s)
 
     def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
         fields = reading_fields(reading, exposure, self.time.offset)
-        return {"value": reading.value, "n": reading.n, "saturated": reading.saturated, **fields}
+        data = {"value": reading.value, "n": reading.n, "saturated": reading.saturated, **fields}
+        if reading.phase_deg is not None:
+            data["phase_deg"] = reading.phase_deg
+        return data

@@ -19,7 +19,7 @@ from typing import Protocol
 
 import numpy as np
 
-from drivers.base import Devices, Reading, StageTarget
+from drivers.base import Devices, Reading, StageTarget, reading_unit
 from gonio import radiometry
 from gonio.acquire.measure import TargetReading, measure_target
 from gonio.config import ConfigError, line_of, read_yaml
@@ -156,9 +156,16 @@ def read_standard(
             timeout_s=timeout_s,
         )  # fmt: skip
 
+    level = reading_unit(devices.detector) != "counts"
     stage.show("reference")
     try:
         reference = read(CALIBRATION_INDEX + 2 * k)
+        if reference.reading.saturated and level:
+            raise GonioError(
+                "the reference standard saturates the detector, whose reading is a level "
+                f"({reading_unit(devices.detector)}: a shorter exposure reads the same): "
+                "raise its range or sensitivity, or lower the source's power"
+            )
         while reference.reading.saturated and exposure_s > shortest:
             exposure_s = max(exposure_s / 2.0, shortest)
             reference = read(CALIBRATION_INDEX + 2 * k)

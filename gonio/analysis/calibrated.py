@@ -8,7 +8,9 @@ noise model are there)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,6 +41,8 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     for e in events:
         r, d = e.data["reference"], e.data["dark"]
         exposure = float(r["exposure_s"])
+        if is_level(e.data):  # as integrals over the exposure (`is_level`)
+            r, d = _integral(r, exposure), None if d is None else _integral(d, exposure)
         n = max(int(r["n"]), 1)
         t.append(0.5 * (float(r["started_s"]) + float(r["ended_s"])))
         if d is None:
@@ -50,7 +54,7 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         ref.append(signal / exposure)
         a_s.append(dark_std**2)
         b_s.append(max(_std(r) ** 2 - dark_std**2, 0.0) / max(signal, 1e-300))
-        codes.append(d is not None and _whole_codes(r) and _whole_codes(d))
+        codes.append(d is not None and not is_level(e.data) and _whole_codes(r) and _whole_codes(d))
         dark_counts_.append(dark_counts)
         dark_spread.append(dark_std)
         exposures.append(exposure)
@@ -81,6 +85,38 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         noise_b=noise_b,
         dark_rounding=rounding,
     )
+
+
+def is_level(calibration: Mapping[str, Any]) -> bool:
+    """Whether a calibration event's readings are levels (a lock-in's V, a power meter's
+    W, an electrometer's A: any unit but counts), not integrals over the exposure. A
+    level times its exposure is taken as the integral (V·s, …) a count would be: the
+    BRDF's ratios are those of the levels whatever the exposures (a lock-in read at half
+    the exposure after an overload reads the same volts, not half), and a lock-in's
+    noise, its filter's bandwidth ∝ 1/exposure, then grows with the exposure as
+    counting statistics do."""
+    return bool(calibration.get("unit", "counts") != "counts")
+
+
+def readings(run: Run) -> tuple[FloatArray, FloatArray]:
+    """The samples' readings and spreads as integrals over their exposures (counts,
+    or a level × its exposure: `is_level`), (N,) each."""
+    calibrations = run.of_kind("calibration")
+    s = run.samples
+    counts, std = np.asarray(s["counts"], np.float64), np.asarray(s["counts_std"], np.float64)
+    if calibrations and is_level(calibrations[0].data):
+        return counts * s["exposure_s"], std * s["exposure_s"]
+    return counts, std
+
+
+def _integral(reading: Mapping[str, Any], exposure_s: float) -> dict[str, Any]:
+    """A journaled level reading as its integral over ``exposure_s`` (`is_level`)."""
+    std = reading.get("std")
+    return {
+        **reading,
+        "value": float(reading["value"]) * exposure_s,
+        "std": None if std is None else float(std) * exposure_s,
+    }
 
 
 def _whole_codes(reading: dict[str, object]) -> bool:
@@ -121,5 +157,6 @@ def calibrate(run: Run) -> Calibrated:
     s = run.samples
     wi, wo = run.directions()
     t = 0.5 * (s["started_s"] + s["ended_s"])
-    f, sigma = series.brdf(s["counts"], s["counts_std"], s["n"], s["exposure_s"], wi, wo, t)
+    counts, std = readings(run)
+    f, sigma = series.brdf(counts, std, s["n"], s["exposure_s"], wi, wo, t)
     return Calibrated(f, sigma, series)

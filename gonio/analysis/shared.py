@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.analysis.calibrated import Calibrated, calibrate
+from gonio.analysis.calibrated import Calibrated, calibrate, readings
 from gonio.analysis.measured import kept
 from gonio.radiometry.series import CalibrationSeries
 from gonio.store.read import Run, open_run
@@ -63,7 +63,7 @@ def shared_error(run: Run | str, calibrated: Calibrated | None = None) -> Shared
     s = run.samples
     t = (0.5 * (s["started_s"] + s["ended_s"]))[keep]
     series = calibrated.series
-    rate = s["counts"][keep] / s["exposure_s"][keep] - series.dark_at(t)
+    rate = readings(run)[0][keep] / s["exposure_s"][keep] - series.dark_at(t)
     return calibration_error(series, t, rate)
 
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from gonio.analysis.calibrated import calibrate
+from gonio.analysis.calibrated import calibrate, is_level
 from gonio.analysis.scene import scene_truth
 from gonio.errors import GonioError
 from gonio.store.read import Run
@@ -48,6 +48,9 @@ def figures(run: Run) -> dict[str, Any]:
         "skip_reasons": dict(Counter(_reason(e.data.get("reason", "")) for e in skips)),
         "pauses": [dict(e.data, t_s=e.t_s) for e in pauses],
         "calibrations": len(calibrations),
+        "unit": str(calibrations[0].data.get("unit", "counts")) if calibrations else "counts",
+        "phase_drifts": len(run.of_kind("phase")),
+        "range_changes": len(run.of_kind("range")),
     }
     if calibrations:
         first, last = calibrations[0].data, calibrations[-1].data
@@ -59,8 +62,12 @@ def figures(run: Run) -> dict[str, Any]:
         out["reference_exposure_s"] = float(first["reference"]["exposure_s"])
         dark = first["dark"]
         out["dark_counts_per_s"] = (
-            None if dark is None else float(dark["value"]) / float(dark["exposure_s"])
+            None
+            if dark is None
+            else float(dark["value"]) / (1.0 if is_level(first) else float(dark["exposure_s"]))
         )
+        out["dark_reason"] = first.get("dark_reason") if dark is None else None
+        out["reference_phase_deg"] = first["reference"].get("phase_deg")
         out["drift"] = _rate(last) / _rate(first) - 1.0
     return out
 
@@ -68,7 +75,7 @@ def figures(run: Run) -> dict[str, Any]:
 def _rate(data: Any) -> float:
     ref, dark = data["reference"], data["dark"]
     counts = float(ref["value"]) - (0.0 if dark is None else float(dark["value"]))
-    return counts / float(ref["exposure_s"])
+    return counts / (1.0 if is_level(data) else float(ref["exposure_s"]))
 
 
 def _reason(reason: str) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from gonio.planner import Plan, Summary
 from gonio.progress import hms
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 
 
 def render_summary(plan: Plan) -> str:
@@ -57,11 +58,22 @@ def render_summary(plan: Plan) -> str:
             f"  {'lower bound (MST)':<26}{hms(s.mst_travel_s + s.dwell_s):>9}   "
             f"(ordered / bound = {s.travel_s / max(s.mst_travel_s, 1e-12):.3f} in moves)"
         )
+    if _dark_subtracted(plan) and spec.acquisition.calibration.dark:
+        lines.append(
+            f"  {'dark readings':<26}{'none':>9}   (the detector subtracts the dark and "
+            "ambient signal: a lock-in behind a chopper)"
+        )
     lines += [
         f"  {'ordering':<26}{ordering_line(s)}",
         f"  {'ordering took':<26}{s.ordering_s:>8.1f}s",
     ]
     return "\n".join(lines)
+
+
+def _dark_subtracted(plan: Plan) -> bool:
+    """Whether the rig's detector reads dark-subtracted values (a PyMeasure lock-in)."""
+    interface = plan.rig.spec.detector.interface
+    return isinstance(interface, PyMeasureInterfaceSpec) and interface.config().dark_subtracted
 
 
 def ordering_line(s: Summary) -> str:

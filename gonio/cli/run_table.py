@@ -44,12 +44,32 @@ def render(run: Run, errors: dict[str, float | int] | None = None, *, title: boo
     if f["calibrations"]:
         dark = f["dark_counts_per_s"]
         ti, to = f["reference_geometry_deg"]
+        unit = f["unit"]
+        value = f["reference_counts"]
+        shown = f"{value:.1f} counts" if unit == "counts" else f"{value:.4g} {unit}"
+        if dark is not None:
+            level = f"{dark:.1f} counts/s" if unit == "counts" else f"{dark:.4g} {unit}"
+            dark_text = f"dark {level}"
+        elif f["dark_reason"] == "detector":
+            dark_text = "no dark reading: the detector subtracts it (lock-in)"
+        else:
+            dark_text = "dark not read"
         lines.append(
             f"  {'calibrations':<24}{f['calibrations']:>10}   reference standard (albedo "
-            f"{f['reference_albedo']:g}, {ti:.0f}°/{to:.0f}°) {f['reference_counts']:.1f} "
-            f"counts at {f['reference_exposure_s']:g} s; "
-            f"dark {'not read' if dark is None else f'{dark:.1f} counts/s'}; "
+            f"{f['reference_albedo']:g}, {ti:.0f}°/{to:.0f}°) {shown} "
+            f"at {f['reference_exposure_s']:g} s; "
+            f"{dark_text}; "
             f"drift {100 * f['drift']:+.3f} % by the last, divided out"
+        )
+    if f["phase_drifts"]:
+        lines.append(
+            f"  {'phase drifts':<24}{f['phase_drifts']:>10}   samples whose lock-in phase "
+            "drifted from the reference reading's beyond the tolerance (phase events)"
+        )
+    if f["range_changes"]:
+        lines.append(
+            f"  {'range changes':<24}{f['range_changes']:>10}   the instrument auto-ranged "
+            "(range events)"
         )
     if not title:
         lines.pop(0)

@@ -138,6 +138,18 @@ class PyMeasureInterfaceSpec(Strict):
         description="The reading carries no dark or ambient signal (a lock-in behind a chopper; "
         "none: the preset's).",
     )
+    phase_property: str | None = Field(
+        None,
+        description="A lock-in's phase property (°), read after each sample and compared with "
+        "the reference reading's, e.g. theta (none: the preset's).",
+    )
+    phase_tolerance_deg: float | None = Field(
+        None,
+        gt=0,
+        le=180,
+        description="How far the phase may drift from the reference reading's before an event "
+        "is journaled (°; none: the preset's, 5).",
+    )
 
     @field_validator("instrument")
     @classmethod

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import DriverError
+from drivers.base import DriverError, dark_subtracted, reading_unit
 from gonio import __version__
 from gonio.acquire.engine import Engine, Report
 from gonio.acquire.progress import Observer, Unobserved
@@ -294,7 +294,9 @@ def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> 
     """Refuse, before anything is created or moved, a run the backend cannot finish."""
     reference_pose(plan.rig)  # a reference reading the calibration could not trust
     spec = plan.spec.acquisition.calibration
-    if spec.dark and backend.devices.light is None:
+    # A detector whose readings are dark-subtracted (a lock-in) takes no dark reading.
+    subtracted = dark_subtracted(backend.devices.detector)
+    if spec.dark and backend.devices.light is None and not subtracted:
         raise ConfigError(
             f"{plan_path or 'plan'}: acquisition.calibration.dark: the rig's light cannot be "
             "switched (light.switch: none), so no dark reading can be taken; give the rig a "
@@ -462,7 +464,8 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
             f"motors: {len(positions)} axes answer, "
             f"{max(h.temperature_c for h in health.values()):g} °C at most"
         )
-        lines.append(f"detector: answers ({reading.value:g} counts at its shortest exposure)")
+        unit = reading_unit(devices.detector)
+        lines.append(f"detector: answers ({reading.value:g} {unit} at its shortest exposure)")
     finally:
         backend.close()
     return lines

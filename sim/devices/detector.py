@@ -16,15 +16,18 @@ the first measurement of their samples.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Protocol
 
 import numpy as np
 
 from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource, StageTarget
+from drivers.pymeasure.config import PyMeasureDetectorConfig
+from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from sim.faults import FaultInjector
-from sim.physics import sensor
+from sim.physics import lockin, sensor
 from sim.physics.optics import SceneOptics
 from sim.physics.streams import Streams
 from sim.scene import Scene
@@ -76,10 +79,11 @@ class SimLightSource(Resource):
 
 
 def sensor_of(scene: Scene) -> tuple[sensor.SensorSpec, sensor.SensorEffects]:
-    """The scene's sensor and the sensor effects it lists."""
+    """The scene's sensor and the sensor effects it lists (a lock-in's: a placeholder
+    well of one electron, never read out)."""
     d, e = scene.detector, scene.effects
     spec = sensor.SensorSpec(
-        full_well_e=d.full_well_e,
+        full_well_e=1.0 if d.full_well_e is None else d.full_well_e,
         adc_bits=d.adc_bits,
         read_noise_e=d.read_noise_e,
         dark_current_e_s=d.dark_current_e_s,
@@ -118,6 +122,9 @@ class SimDetector(Resource):
         self._prepared: dict[tuple[float, ...], float] = {}
         #: Measurements that found their pose prepared.
         self.prepared_hits = 0
+        #: A lock-in's readings (``detector.kind: lockin``): volts, no dark signal, a phase.
+        self.lockin = scene.detector.kind == "lockin"
+        self._phase: np.ndarray | None = None  # the last lock-in readings' phases (°)
 
     # -- Resource / Detector -------------------------------------------------------
     @property
@@ -127,6 +134,26 @@ class SimDetector(Resource):
     @property
     def exposure_range_s(self) -> tuple[float, float]:
         return self.rig.spec.detector.exposure_range_s
+
+    @property
+    def dark_subtracted(self) -> bool:
+        """A lock-in's readings carry no dark signal (`drivers.base.dark_subtracted`)."""
+        return self.lockin
+
+    @property
+    def unit(self) -> str:
+        """V for a lock-in, else counts."""
+        return "V" if self.lockin else "counts"
+
+    @property
+    def phase_tolerance_deg(self) -> float | None:
+        """A lock-in's: the rig's PyMeasure section's (when it names one), else 5°."""
+        if not self.lockin:
+            return None
+        interface = self.rig.spec.detector.interface
+        if isinstance(interface, PyMeasureInterfaceSpec):
+            return interface.config().phase_tolerance_deg
+        return PyMeasureDetectorConfig.phase_tolerance_deg
 
     def open(self) -> None:
         self._open = True
@@ -197,11 +224,29 @@ class SimDetector(Resource):
             raise DetectorError(f"the detector did not answer (injected at sample {self._sample})")
         started = self._clock.now()
         counts, saturated = self.expose(exposure_s, averages, started)
-        if fault is not None:  # saturated: the sensor's top code, flagged
-            counts = np.full_like(counts, float(self.sensor.max_count))
+        if fault is not None:  # saturated: the sensor's top code (a lock-in's overload), flagged
+            top = self.scene.detector.sensitivity_v if self.lockin else None
+            counts = np.full_like(counts, 1.1 * top if top else float(self.sensor.max_count))
             saturated = np.ones_like(saturated)
-        self._clock.sleep((exposure_s + self.readout_s) * averages)
-        return sensor.readings(counts, saturated, started, self._clock.now())[0]
+        self._clock.sleep((self.reading_s(exposure_s) + self.readout_s) * averages)
+        reading = sensor.readings(counts, saturated, started, self._clock.now())[0]
+        phase = self.last_phase_deg
+        return reading if phase is None else dataclasses.replace(reading, phase_deg=phase)
+
+    @property
+    def last_phase_deg(self) -> float | None:
+        """A lock-in's last reading's phase (°, the mean over its averages), else None."""
+        if self._phase is None:
+            return None
+        rad = np.radians(self._phase[0])
+        return float(np.degrees(np.arctan2(np.sin(rad).sum(), np.cos(rad).sum())))
+
+    def reading_s(self, exposure_s: float) -> float:
+        """How long one reading of ``exposure_s`` s takes before the readout (s): the
+        exposure, or a lock-in's settle time when longer (`sim.physics.lockin`)."""
+        if not self.lockin:
+            return exposure_s
+        return float(lockin.reading_s(self.scene.detector, np.array([exposure_s]))[0])
 
     def expose(
         self, exposure_s: float, averages: int, started_s: float
@@ -212,16 +257,24 @@ class SimDetector(Resource):
         ``pose()`` gives now, continuing the present sample's random streams. A
         rehearsal's serial photometer reads its signal here."""
         geometric = self._geometric_power()
-        period = exposure_s + self.readout_s
+        busy = self.reading_s(exposure_s)
+        period = busy + self.readout_s
         t_mid = np.asarray(
-            started_s + period * np.arange(averages)[None, :] + 0.5 * exposure_s,
+            started_s + period * np.arange(averages)[None, :] + 0.5 * busy,
             dtype=np.float64,
         )
         power = self.chain.power(geometric, t_mid, light_on=self.light.is_on)
-        signal = self.chain.electrons(power, np.array([exposure_s]))
         index = np.array([self._sample], dtype=np.int64)
         start = self._draws.get(self._sample, 0)
         self._draws[self._sample] = start + averages
+        if self.lockin:  # the open chopper's signal rate (e/s), read by the lock-in
+            signal = self.chain.electrons(power, np.ones(1))
+            value, overloaded, self._phase = lockin.read_out(
+                signal, np.array([exposure_s]), t_mid, self.scene.detector,
+                self.scene.effects.names(), self.streams, index, start=start,
+            )  # fmt: skip
+            return value, overloaded
+        signal = self.chain.electrons(power, np.array([exposure_s]))
         return sensor.read_out(
             signal, np.array([exposure_s]), self.sensor, self.sensor_effects, self.streams,
             index, start=start,

@@ -17,6 +17,16 @@ dB/oct), which is what a reading costs.
 
 Signals are in electrons per second; ``gain`` turns them into the instrument's unit
 (V per e/s: the transimpedance times the elementary charge).
+
+`read_out` is the same model vectorized over samples and their readings, for a scene
+whose detector is a lock-in (``detector.kind: lockin``): the time constant the scene
+gives, or the one the PyMeasure driver sets for the exposure (the longest whose settle
+time, `drivers.pymeasure.SETTLE_TAU` τ, fits in it; continuous here, where the
+instrument has a list); each reading then takes `reading_s` (the exposure, or the
+settle time if longer). The scene's effects: ``shot_noise`` (the noise above, X and Y
+from the streams' ``LOCKIN_X`` and ``LOCKIN_Y`` channels), ``dark_current`` (the
+background B), ``saturation`` (the overload); ``read_noise`` and ``quantization`` are
+an ADC's and do not apply. The reading's phase is atan2(Y, X) plus the scene's drift.
 """
 
 from __future__ import annotations
@@ -26,7 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.pymeasure.config import settle_tau
+from drivers.pymeasure.config import SETTLE_TAU, settle_tau
+from gonio.radiometry import ELEMENTARY_CHARGE
+from gonio.types import FloatArray
+from sim.physics.streams import LOCKIN_X, LOCKIN_Y, Streams
+from sim.scene import DetectorSpec
 
 #: The equivalent noise bandwidth × τ of 1–4 cascaded RC stages.
 ENBW_TAU = {6: 1 / 4, 12: 1 / 8, 18: 3 / 32, 24: 5 / 64}
@@ -98,3 +112,69 @@ class LockIn:
         """The signal-to-noise ratio of one reading (expected R over σ)."""
         sigma = self.sigma(signal_e_s, background_e_s)
         return math.inf if sigma == 0 else self.expected(signal_e_s) / sigma
+
+
+def time_constant_s(spec: DetectorSpec, exposure_s: FloatArray) -> FloatArray:
+    """τ (s) of readings of ``exposure_s`` (s): the scene's, or the longest whose settle
+    time fits the exposure."""
+    exposure = np.asarray(exposure_s, dtype=np.float64)
+    if spec.time_constant_s is not None:
+        return np.full_like(exposure, spec.time_constant_s)
+    return exposure / SETTLE_TAU[spec.slope_db_oct]
+
+
+def reading_s(spec: DetectorSpec, exposure_s: FloatArray) -> FloatArray:
+    """How long one reading of ``exposure_s`` (s) takes (s): the exposure, or the output
+    filter's settle time (`drivers.pymeasure.SETTLE_TAU` τ) when that is longer."""
+    exposure = np.asarray(exposure_s, dtype=np.float64)
+    settle = SETTLE_TAU[spec.slope_db_oct] * time_constant_s(spec, exposure)
+    return np.maximum(exposure, settle)
+
+
+def gain_v(spec: DetectorSpec) -> float:
+    """Volts per e/s: the transimpedance times the elementary charge."""
+    return spec.transimpedance_v_a * ELEMENTARY_CHARGE
+
+
+def expected_v(spec: DetectorSpec, signal_e_s: FloatArray) -> FloatArray:
+    """The noise-free R (V) of an open-chopper signal (e/s)."""
+    fundamental = math.sqrt(2.0) * math.sin(math.pi * spec.duty) / math.pi
+    return np.asarray(gain_v(spec) * fundamental * np.asarray(signal_e_s), dtype=np.float64)
+
+
+def read_out(
+    signal_e_s: FloatArray,
+    exposure_s: FloatArray,
+    t_mid_s: FloatArray,
+    spec: DetectorSpec,
+    effects: tuple[str, ...],
+    streams: Streams,
+    index: np.ndarray,
+    *,
+    start: int = 0,
+) -> tuple[FloatArray, np.ndarray, FloatArray]:
+    """A readings of each of N samples (module docstring): R (V), overloaded, and the
+    phase (°), each (N, A), of open-chopper signals ``signal_e_s`` (e/s, (N, A)) read with
+    exposures ``exposure_s`` (s, (N,)) at run times ``t_mid_s`` (s, (N, A)); ``index``
+    (N,) the samples' random streams, from draw ``start``."""
+    signal = np.asarray(signal_e_s, dtype=np.float64)
+    n, a = signal.shape
+    x = expected_v(spec, signal)
+    y = np.zeros_like(x)
+    if "shot_noise" in effects:
+        background = spec.dark_current_e_s if "dark_current" in effects else 0.0
+        enbw = ENBW_TAU[spec.slope_db_oct] / time_constant_s(spec, exposure_s)
+        current = np.maximum(spec.duty * signal + background, 0.0)
+        sigma = gain_v(spec) * np.sqrt(2.0 * current * np.asarray(enbw).reshape(-1, 1))
+        idx = np.asarray(index, dtype=np.int64)
+        x = x + sigma * streams.normal(idx, LOCKIN_X, a, start=start)
+        y = sigma * streams.normal(idx, LOCKIN_Y, a, start=start)
+    r = np.hypot(x, y)
+    drift = spec.phase_drift_deg_per_hour * np.asarray(t_mid_s, dtype=np.float64) / 3600.0
+    phase = (np.degrees(np.arctan2(y, x)) + drift + 180.0) % 360.0 - 180.0
+    overloaded = np.zeros((n, a), dtype=np.bool_)
+    if "saturation" in effects:
+        assert spec.sensitivity_v is not None  # required for a lock-in by the scene
+        overloaded = r >= spec.sensitivity_v
+        r = np.where(overloaded, 1.1 * spec.sensitivity_v, r)
+    return r, overloaded, phase

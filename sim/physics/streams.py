@@ -69,6 +69,8 @@ __all__ = [
     "DARK",
     "DRIFT",
     "FOOTPRINT",
+    "LOCKIN_X",
+    "LOCKIN_Y",
     "MAX_CHANNEL",
     "MAX_INDEX",
     "POSITION",
@@ -88,6 +90,9 @@ SHOT: Final = 0
 DARK: Final = 1
 #: Read noise of the output amplifier.
 READ: Final = 2
+#: A lock-in's in-phase (X) and quadrature (Y) noise (`sim.physics.lockin`).
+LOCKIN_X: Final = 3
+LOCKIN_Y: Final = 4
 #: Motor position errors (repeatability, backlash).
 POSITION: Final = 16
 #: Slow source drift.
@@ -106,6 +111,8 @@ CHANNELS: Final[dict[str, int]] = {
     "SHOT": SHOT,
     "DARK": DARK,
     "READ": READ,
+    "LOCKIN_X": LOCKIN_X,
+    "LOCKIN_Y": LOCKIN_Y,
     "POSITION": POSITION,
     "DRIFT": DRIFT,
     "APERTURE": APERTURE,

@@ -14,6 +14,7 @@ at 110 % of it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from drivers.pymeasure.config import SETTLE_TAU
 from sim.visa_instruments.base import EmulatedInstrument, Signal
@@ -30,7 +31,8 @@ TIME_CONSTANTS = (
 
 
 class SR830(EmulatedInstrument):
-    """An SR830 on a pty (module docstring); ``phase_deg``: the signal's phase."""
+    """An SR830 on a pty (module docstring); ``phase_deg``: the signal's phase (°), or
+    ``phase``: where to read it when asked (a simulated lock-in's last reading's)."""
 
     identity = "Stanford_Research_Systems,SR830,s/n00000,ver1.07"
     terminator = "\r"
@@ -43,7 +45,7 @@ class SR830(EmulatedInstrument):
 
     def __init__(
         self, signal: Signal, *, speedup: float = 1.0, terminator: str | None = None,
-        phase_deg: float = 0.0,
+        phase_deg: float = 0.0, phase: Callable[[], float] | None = None,
     ) -> None:  # fmt: skip
         super().__init__(signal, speedup=speedup, terminator=terminator)
         self.sensitivity_index = self.sensitivities.index(1.0)
@@ -51,6 +53,7 @@ class SR830(EmulatedInstrument):
         self.slope_index = 3
         self.status = 0
         self.phase_deg = phase_deg
+        self._phase = phase
 
     @property
     def time_constant_s(self) -> float:
@@ -91,6 +94,8 @@ class SR830(EmulatedInstrument):
         if c.startswith("OUTP?"):
             which = int(c[5:]) - self.first_output
             r = self._output()
+            if self._phase is not None:
+                self.phase_deg = self._phase()
             theta = math.radians(self.phase_deg)
             values = (r * math.cos(theta), r * math.sin(theta), r, self.phase_deg)
             return f"{values[which]:.6e}", 0.0

@@ -77,14 +77,15 @@ def test_sr830_sets_the_time_constant_waits_the_exposure_and_checks_overload() -
         ("OFSL3", None),  # settings: 24 dB/oct
         ("SENS?", "26"),  # the sensitivity: 1 V full scale
         ("OFLT5", None),  # 0.1 s exposure / 10.1 τ → τ = 3 ms (index 5)
-        ("LIAS?", "0"), ("OUTP?3", "0.0125"), ("LIAS?", "0"),
-        ("LIAS?", "0"), ("OUTP?3", "0.0135"), ("LIAS?", "4"),  # output overload
-        ("LIAS?", "0"), ("OUTP?3", "1.05"), ("LIAS?", "0"),  # beyond the sensitivity
+        ("LIAS?", "0"), ("OUTP?3", "0.0125"), ("LIAS?", "0"), ("OUTP?4", "1.5"),  # θ (°)
+        ("LIAS?", "0"), ("OUTP?3", "0.0135"), ("LIAS?", "4"), ("OUTP?4", "1.5"),  # overload
+        ("LIAS?", "0"), ("OUTP?3", "1.05"), ("LIAS?", "0"), ("OUTP?4", "1.5"),  # > full scale
     ]  # fmt: skip
     with detector(SR830, pairs) as (det, _):
-        assert det.dark_subtracted and det.unit == "V"
+        assert det.dark_subtracted and det.unit == "V" and det.phase_tolerance_deg == 5.0
         a = det.measure(0.1)
         assert (a.value, a.saturated, a.ended_s - a.started_s) == (0.0125, False, 0.1)
+        assert a.phase_deg == pytest.approx(1.5)
         assert det.measure(0.1).saturated  # the status byte's overload bit
         assert det.measure(0.1).saturated  # at or above the sensitivity's full scale
 
@@ -92,9 +93,9 @@ def test_sr830_sets_the_time_constant_waits_the_exposure_and_checks_overload() -
 def test_sr830_keeps_the_time_constant_while_the_exposure_does_not_change() -> None:
     pairs = [
         ("OFSL3", None), ("SENS?", "26"), ("OFLT5", None),  # 50 ms → τ = 3 ms
-        ("LIAS?", "0"), ("OUTP?3", "0.01"), ("LIAS?", "0"),
-        ("LIAS?", "0"), ("OUTP?3", "0.03"), ("LIAS?", "0"),
-        ("LIAS?", "0"), ("OUTP?3", "0.02"), ("LIAS?", "0"),
+        ("LIAS?", "0"), ("OUTP?3", "0.01"), ("LIAS?", "0"), ("OUTP?4", "0"),
+        ("LIAS?", "0"), ("OUTP?3", "0.03"), ("LIAS?", "0"), ("OUTP?4", "179"),
+        ("LIAS?", "0"), ("OUTP?3", "0.02"), ("LIAS?", "0"), ("OUTP?4", "-179"),
     ]  # fmt: skip
     with detector(SR830, pairs) as (det, _):
         det.measure(0.05)
@@ -102,13 +103,15 @@ def test_sr830_keeps_the_time_constant_while_the_exposure_does_not_change() -> N
     assert (
         r.n == 2 and r.value == pytest.approx(0.025) and r.std == pytest.approx(0.01 / math.sqrt(2))
     )
+    # The phases' mean is taken on the circle: 179° and −179° average to 180°, not 0°.
+    assert r.phase_deg is not None and abs(r.phase_deg) == pytest.approx(180.0)
 
 
 def test_sr860_shares_the_lockin_preset() -> None:
     pairs = [
         ("OFSL 3", None), ("SCAL?", "0"),  # 1 V
         ("OFLT 9", None),  # 1 s / 10.1 → τ = 30 ms (the SR860 lists from 1 µs)
-        ("OUTP? 2", "0.25"),
+        ("OUTP? 2", "0.25"), ("OUTP? 3", "-2.0"),
     ]  # fmt: skip
     with detector(SR860, pairs) as (det, _):
         assert det.measure(1.0).value == 0.25

@@ -60,6 +60,7 @@ def varied(plan: Plan) -> Plan:
         ("glossy_metal", "in_plane", True),
         ("brushed_metal", "in_plane", False),
         ("seed000_specular", "arch_point", False),
+        ("matte_lockin", "arch", True),
     ],
 )
 def test_vectorized_equals_target_by_target(
@@ -80,6 +81,28 @@ def test_vectorized_equals_target_by_target(
         np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
     np.testing.assert_array_equal(fast.saturated, slow.saturated)
     assert fast.instrument_time_s == slow.instrument_time_s
+
+
+def test_a_lockin_reading_waits_its_filter_and_reads_its_level(rigs: dict[str, Rig]) -> None:
+    """A lock-in's reading of τ fixed by the scene waits its settle time (10.1 τ at 24
+    dB/oct) when that is longer than the exposure; its value is a level (V), the same
+    whatever the exposure, its noise that of the filter's bandwidth."""
+    rig = rigs["arch"]
+    scene = load_scene(SCENES / "matte_lockin.yaml", rig)
+    fixed = scene.model_copy(
+        update={"detector": scene.detector.model_copy(update={"time_constant_s": 0.003})}
+    )
+    plan = small_plan(rig, n=40)  # exposures of 10 ms
+    following, slow = simulate(plan, scene), simulate(plan, fixed)
+    assert following.instrument_time_s == pytest.approx(plan.summary.total_s, rel=1e-9)
+    waited = (slow.end_s - slow.settled_s) / plan.averages
+    np.testing.assert_allclose(waited, 10.1 * 0.003, rtol=1e-12)
+    # τ 3 ms instead of 10 ms / 10.1: a narrower bandwidth, a smaller spread; the same level.
+    ratio = np.abs(slow.value / following.value - 1.0)
+    assert np.median(ratio) < 0.05 and np.median(following.value) > 1e-4
+    exact = simulate(plan, scene.with_effects([]))
+    noise = lambda run: np.std(run.value / exact.value - 1.0)  # noqa: E731
+    assert noise(slow) < noise(following)
 
 
 def test_instrument_time_matches_the_plan_prediction(rigs: dict[str, Rig]) -> None:

@@ -6,7 +6,15 @@ import math
 
 import pytest
 
-from drivers.base import DetectorError, DeviceClosed
+from drivers.base import (
+    DetectorError,
+    DeviceClosed,
+    RangeChange,
+    dark_subtracted,
+    phase_tolerance_deg,
+    range_changes,
+    reading_unit,
+)
 from tests.drivers.contract.conftest import DetectorHarness
 
 
@@ -64,3 +72,21 @@ def test_a_saturated_reading_is_returned_flagged_not_raised(detectors: DetectorH
         reading = det.measure(1.0)
     assert reading.saturated
     assert math.isfinite(reading.value) and reading.value > 0
+
+
+def test_what_a_detector_may_also_say_is_readable_closed_and_holds_while_open(
+    detectors: DetectorHarness,
+) -> None:
+    det = detectors.make(False)
+    closed = (dark_subtracted(det), reading_unit(det), phase_tolerance_deg(det))
+    assert isinstance(closed[0], bool) and isinstance(closed[1], str) and closed[1]
+    lockin = detectors.name in ("sr830", "sr860")
+    assert closed[0] is lockin  # a lock-in's readings carry no dark or ambient signal
+    with det:
+        reading = det.measure(0.01, 2)
+        assert (dark_subtracted(det), reading_unit(det), phase_tolerance_deg(det)) == closed
+        changes = range_changes(det)
+    assert all(isinstance(c, RangeChange) for c in changes)
+    assert [c.at_s for c in changes] == sorted(c.at_s for c in changes)
+    # A detector with a phase tolerance reads the phase with every reading.
+    assert (reading.phase_deg is not None) is (closed[2] is not None) is lockin

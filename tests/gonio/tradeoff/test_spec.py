@@ -12,6 +12,7 @@ import yaml
 from gonio.config import ConfigError
 from gonio.planner.schema import PlanSpec
 from gonio.tradeoff.grid import load_sweep
+from sim.scene import load_scene
 from tests.gonio.tradeoff.conftest import SMALL, write_sweep
 
 AXES: dict[str, Any] = SMALL["axes"]
@@ -103,3 +104,9 @@ def test_the_parametrization_axis_defaults_to_the_planners(tmp_path: Path) -> No
     sweep = load_sweep(write_sweep(tmp_path, axes=axes))
     default = PlanSpec.model_fields["parametrization"].default
     assert {t.inputs["parametrization"] for t in sweep.tasks} == {default} == {"rusinkiewicz"}
+
+
+def test_the_lockin_sweep_compares_a_lockin_with_a_dc_photodiode_at_equal_plans() -> None:
+    sweep = load_sweep(Path(__file__).resolve().parents[3] / "configs" / "sweeps" / "lockin.yaml")
+    kinds = [load_scene(scene.path).detector.kind for scene in sweep.scenes]
+    assert kinds == ["adc", "lockin"] and len(sweep.tasks) == 16
