@@ -60,7 +60,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--rehearse",
         action="store_true",
-        help="run the hardware path on the Dynamixel emulator (no hardware needed)",
+        help="run the hardware path against emulated devices on pseudo-terminals: the "
+        "Dynamixel bus, and the rig's serial photometer or PyMeasure instrument (no "
+        "hardware needed)",
     )
     p.add_argument(
         "--speedup", type=positive, default=50.0,
