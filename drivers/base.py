@@ -59,6 +59,20 @@ the default when a detector does not say it)
       reading's phase beyond this tolerance (°) is worth an event.
     * ``range_changes`` (`range_changes`; default none): the `RangeChange` list of an
       auto-ranging instrument, appended to while measuring, in time order.
+    * ``can_stream`` (`can_stream`; default False): it offers the `StreamingDetector`
+      methods. `streaming` returns such a detector or raises `StreamNotSupported`.
+
+Streaming (`StreamingDetector`, optional)
+    ``start_stream(rate_hz, integration_s)`` starts readings of ``integration_s`` every
+    ``1 / rate_hz`` s (``integration_s`` ≤ the period: windows never overlap);
+    ``read_stream(timeout_s)`` returns the `StreamReading` values received since the
+    last call (waiting at most ``timeout_s`` for a first one); ``stop_stream()`` stops,
+    returns the last readings, leaves the instrument idle and usable for ``measure``,
+    and is idempotent. Each reading's window (``started_s``, ``ended_s``) is on the
+    host's clock, its stamps increase, windows do not overlap and ``ended_s −
+    started_s`` is the integration. A stream that falls silent for longer than its
+    backend's stall time is a `DetectorError`, never a hang. ``measure`` while
+    streaming raises `DetectorError`.
 
 Light (`LightSource`)
     ``on()`` / ``off()`` switch the source and return once it is switched; ``is_on``
@@ -145,6 +159,10 @@ class DetectorError(DriverError):
     """The detector did not answer, answered nonsense, or was reset mid-read."""
 
 
+class StreamNotSupported(DetectorError):
+    """The detector cannot stream readings (no streaming mode, or none configured)."""
+
+
 class LightError(DriverError):
     """The light source did not acknowledge a switch, or cannot be switched."""
 
@@ -194,6 +212,33 @@ class Reading:
     @property
     def middle_s(self) -> float:
         """The middle of the measurement (s): where a drifting source is sampled."""
+        return 0.5 * (self.started_s + self.ended_s)
+
+
+@dataclass(frozen=True)
+class StreamReading:
+    """One reading of a stream (`StreamingDetector`).
+
+    ``value`` is the signal integrated over the window in the detector's units, ``std``
+    the device's standard deviation of it when it sends one (else NaN: unknown),
+    ``started_s`` / ``ended_s`` the integration window on the host's clock (s),
+    ``saturated`` whether the window hit the full scale, ``device_t_s`` the device's
+    own timestamp of the window's end (s on the device's clock) when it sends one, else
+    None, and ``received_s`` when the host received the reading (s on the host's clock;
+    ``received_s − ended_s`` is the latency the stamps assume).
+    """
+
+    value: float
+    std: float
+    started_s: float
+    ended_s: float
+    saturated: bool = False
+    device_t_s: float | None = None
+    received_s: float | None = None
+
+    @property
+    def middle_s(self) -> float:
+        """The middle of the integration window (s): where the pose is interpolated."""
         return 0.5 * (self.started_s + self.ended_s)
 
 
@@ -360,6 +405,48 @@ def phase_tolerance_deg(detector: Detector) -> float | None:
 def range_changes(detector: Detector) -> tuple[RangeChange, ...]:
     """The range changes ``detector`` saw so far (its optional ``range_changes``; none)."""
     return tuple(getattr(detector, "range_changes", ()))
+
+
+class StreamingDetector(Detector, Protocol):
+    """A detector with a streaming mode (rules: the module docstring)."""
+
+    @property
+    def can_stream(self) -> bool:
+        """True: the streaming methods work (read through `can_stream`)."""
+        ...
+
+    def start_stream(self, rate_hz: float, integration_s: float | None = None) -> None:
+        """Start readings of ``integration_s`` s (default: the whole period) every
+        ``1 / rate_hz`` s. `DetectorError` for a rate or integration the detector cannot
+        do (nothing is started), `StreamNotSupported` when it cannot stream."""
+        ...
+
+    def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
+        """The readings received since the last call, in time order; with none yet,
+        wait up to ``timeout_s`` (s) for the first. A stalled stream raises
+        `DetectorError` (the stream is then stopped)."""
+        ...
+
+    def stop_stream(self) -> list[StreamReading]:
+        """Stop (idempotent): the readings that arrived until the stream went quiet;
+        the detector is idle and ``measure`` works again."""
+        ...
+
+
+def can_stream(detector: Detector) -> bool:
+    """Whether ``detector`` offers a streaming mode (its optional ``can_stream``; False)."""
+    return getattr(detector, "can_stream", False) is True
+
+
+def streaming(detector: Detector) -> StreamingDetector:
+    """``detector`` as a `StreamingDetector`; `StreamNotSupported` (one line naming it)
+    when it cannot stream."""
+    if not can_stream(detector):
+        raise StreamNotSupported(
+            f"{detector!r} cannot stream readings (no streaming mode, or none configured); "
+            "use stop-and-go acquisition"
+        )
+    return detector  # type: ignore[return-value]
 
 
 class LightSource(Device, Protocol):

@@ -37,7 +37,8 @@ file is checked without opening anything); the driver is
 
 from drivers.serial_detector.config import EXPOSURE_FIELDS as EXPOSURE_FIELDS
 from drivers.serial_detector.config import QUERY_FIELDS as QUERY_FIELDS
-from drivers.serial_detector.config import SerialDetectorConfig
+from drivers.serial_detector.config import STREAM_FIELDS as STREAM_FIELDS
+from drivers.serial_detector.config import SerialDetectorConfig, SerialStreamConfig
 from drivers.serial_detector.errors import (
     ErrorKind,
     SerialDetectorError,
@@ -49,4 +50,5 @@ __all__ = [
     "SerialDetectorConfig",
     "SerialDetectorError",
     "SerialDetectorValueError",
+    "SerialStreamConfig",
 ]

@@ -15,6 +15,10 @@ from drivers.serial_detector.errors import SerialDetectorValueError
 #: The fields a command template may use. Exposures are rounded to the nearest unit.
 EXPOSURE_FIELDS = frozenset({"exposure_s", "exposure_ms", "exposure_us"})
 QUERY_FIELDS = EXPOSURE_FIELDS | {"averages"}
+#: The fields a stream's ``start`` template may use (rates in Hz, times rounded).
+STREAM_FIELDS = frozenset(
+    {"rate_hz", "period_ms", "period_us", "integration_s", "integration_ms", "integration_us"}
+)
 _LINE_ENDINGS = ("\n", "\r\n", "\r")
 _SAMPLE_FIELDS: Mapping[str, float | int] = {
     "exposure_s": 0.125,
@@ -22,6 +26,61 @@ _SAMPLE_FIELDS: Mapping[str, float | int] = {
     "exposure_us": 125_000,
     "averages": 4,
 }
+_STREAM_SAMPLE: Mapping[str, float | int] = {
+    "rate_hz": 100.0,
+    "period_ms": 10,
+    "period_us": 10_000,
+    "integration_s": 0.008,
+    "integration_ms": 8,
+    "integration_us": 8_000,
+}
+
+
+@dataclass(frozen=True)
+class SerialStreamConfig:
+    """A detector's streaming mode (see ``docs/reference/serial_detector.md``,
+    "Streaming"): ``start`` (a template of `STREAM_FIELDS`) makes it send one ``line``
+    per integration window until ``stop``.
+
+    ``line`` must match a whole data line: named groups ``value`` (required), optional
+    ``device_t`` (the device's timestamp of the window's end, in units of
+    ``device_time_s`` seconds), ``std``, ``status`` (saturated when it matches the
+    detector's ``saturated_status``) and ``saturated``. ``latency_s`` is the delay from
+    a window's end to its line's arrival that the host subtracts when the device sends
+    no timestamp. ``max_rate_hz`` is the highest rate the instrument streams at;
+    ``rate_hz`` the rate used when none is asked.
+    """
+
+    start: str = "STREAM {rate_hz:g} {integration_ms:d}"
+    stop: str = "STOP"
+    line: str = r"DAT (?P<device_t>\S+) (?P<value>\S+)"
+    rate_hz: float = 100.0
+    max_rate_hz: float = 1000.0
+    device_time_s: float = 1e-3
+    latency_s: float = 0.0
+
+    def check(self, bad: Callable[[str], Exception]) -> None:
+        """Raise ``bad(message)`` (a message starting ``stream.<field>``) for a bad field."""
+        _template_fields(self.start, STREAM_FIELDS, "stream.start", bad, _STREAM_SAMPLE)
+        _template_fields(self.stop, frozenset(), "stream.stop", bad)
+        line = _compile(self.line, "stream.line", bad)
+        if line is None or "value" not in line.groupindex:
+            raise bad(f"stream.line {self.line!r} needs a named group (?P<value>...)")
+        rate, top = _as_real(self.rate_hz), _as_real(self.max_rate_hz)
+        if top is None or not 0 < top < math.inf:
+            raise bad(f"stream.max_rate_hz must be a positive number, got {self.max_rate_hz!r}")
+        if rate is None or not 0 < rate <= top:
+            raise bad(
+                f"stream.rate_hz must be a number in (0, max_rate_hz={top:g}], got {self.rate_hz!r}"
+            )
+        unit, latency = _as_real(self.device_time_s), _as_real(self.latency_s)
+        if unit is None or not 0 < unit < math.inf:
+            raise bad(
+                f"stream.device_time_s must be a positive number of seconds, "
+                f"got {self.device_time_s!r}"
+            )
+        if latency is None or not 0 <= latency < math.inf:
+            raise bad(f"stream.latency_s must be ≥ 0 seconds, got {self.latency_s!r}")
 
 
 @dataclass(frozen=True)
@@ -74,6 +133,8 @@ class SerialDetectorConfig:
     device_averaging: bool = False
     #: Longest line accepted; longer input is discarded up to the next line ending.
     max_line_bytes: int = 1024
+    #: The streaming mode, if the device has one (`SerialStreamConfig`).
+    stream: SerialStreamConfig | None = None
 
     def __post_init__(self) -> None:
         port = self.port if isinstance(self.port, str) else repr(self.port)
@@ -127,6 +188,10 @@ class SerialDetectorConfig:
             _compile(getattr(self, name), name, bad)
         if self.saturated_status is not None and "status" not in response.groupindex:
             raise bad("saturated_status needs a named group (?P<status>...) in response")
+        if self.stream is not None:
+            if not isinstance(self.stream, SerialStreamConfig):
+                raise bad(f"stream must be a SerialStreamConfig or None, got {self.stream!r}")
+            self.stream.check(bad)
 
     @property
     def template_fields(self) -> frozenset[str]:
@@ -161,7 +226,11 @@ def _unreachable(message: str) -> Exception:  # pragma: no cover - validated bef
 
 
 def _template_fields(
-    template: object, allowed: frozenset[str], what: str, bad: _BadConfig
+    template: object,
+    allowed: frozenset[str],
+    what: str,
+    bad: _BadConfig,
+    sample_fields: Mapping[str, float | int] = _SAMPLE_FIELDS,
 ) -> frozenset[str]:
     """The field names of a command template, checked; ``bad(message)`` builds the error."""
     if not isinstance(template, str):
@@ -175,7 +244,7 @@ def _template_fields(
         fields = ", ".join("{" + name + "}" for name in sorted(allowed)) or "none"
         raise bad(f"{what} {template!r} uses {sorted(unknown)}; allowed fields: {fields}")
     try:
-        sample = template.format(**_SAMPLE_FIELDS)
+        sample = template.format(**sample_fields)
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise bad(f"{what} {template!r} cannot be formatted: {exc}") from exc
     if "\r" in sample or "\n" in sample:

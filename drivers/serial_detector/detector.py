@@ -23,6 +23,7 @@ from drivers.serial_detector.errors import (
     _open_reason,
 )
 from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote
+from drivers.serial_detector.stream import _Streaming
 
 log = logging.getLogger("drivers.serial_detector")  # one logger for the package
 
@@ -31,12 +32,14 @@ _FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
 _ANSWERED = frozenset({"reset", "device", "value", "invalid"})
 
 
-class SerialDetector(_LineIO, Resource):
+class SerialDetector(_Streaming, _LineIO, Resource):
     """A :class:`drivers.base.Detector` on a line-based serial protocol.
 
     Use it as a context manager (``with SerialDetector(config) as det: det.measure(0.1)``)
     or call :meth:`open` and :meth:`close`. Reading lines from the port, raw I/O and the
-    error messages come from :class:`~drivers.serial_detector.lines._LineIO`.
+    error messages come from :class:`~drivers.serial_detector.lines._LineIO`; with a
+    ``stream`` section it also streams (`drivers.base.StreamingDetector`, from
+    :class:`~drivers.serial_detector.stream._Streaming`).
 
     ``clock`` stamps every reading (real time by default); ``exposure_range_s`` is the
     range the instrument allows (the rig file's), checked before anything is sent.
@@ -75,6 +78,7 @@ class SerialDetector(_LineIO, Resource):
         self._reopen = False  # closed by the driver after an I/O error: reopen on next call
         self._exposure_command: str | None = None  # the last set_exposure sent
         self._resets = 0
+        self._init_stream_state()
 
     # -- properties ---------------------------------------------------------------
 
@@ -134,8 +138,11 @@ class SerialDetector(_LineIO, Resource):
             raise
 
     def close(self) -> None:
-        """Release the port (idempotent). Unsent bytes are dropped, not waited for."""
+        """Release the port (idempotent). Unsent bytes are dropped, not waited for; a
+        running stream is told to stop first (without waiting for quiet)."""
         self._reopen = False
+        if self._stream is not None:
+            self._abort_stream()
         self._release()
 
     def _release(self) -> None:
@@ -143,6 +150,7 @@ class SerialDetector(_LineIO, Resource):
         self._needs_init = False
         self._needs_resync = False
         self._exposure_command = None
+        self._stream = None
         self._clear_input_state()
         if port is None:
             return
@@ -172,6 +180,8 @@ class SerialDetector(_LineIO, Resource):
                 kind="closed",
             )
         exposure_s, averages = self._check_arguments(exposure_s, averages)
+        if self._stream is not None:
+            raise self._error("measure() during a stream (stop_stream first)", "streaming")
         if self._serial is None:
             log.info("%s: reopening the port after an I/O error", self.port)
             self.open()

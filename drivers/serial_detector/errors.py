@@ -29,6 +29,7 @@ ErrorKind = Literal[
     "device",  # the device answered with an error line
     "value",  # a well-formed answer carrying NaN, inf or a negative std
     "io",  # the operating system reported an error on the port (unplugged?)
+    "streaming",  # measure() during a stream, a second start, a read with none running
 ]
 
 

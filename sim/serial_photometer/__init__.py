@@ -15,8 +15,15 @@ like an Arduino's ``println``):
 ``MEAS <ms>``       one exposure of ``<ms>`` → ``VAL <counts> <OK|SAT>``
 ``MEAS <ms> <n>``   the mean of ``n`` exposures → ``VAL <mean> <OK|SAT> <std>``
 ``ID?``             → ``gonio-sim photometer 1.0``
-anything else       → ``ERR <reason>``
+``STREAM <hz> <ms>``  stream: ``OK``, then every 1/hz s a line
+                    ``DAT <t_ms> <counts> <OK|SAT>`` (an integration of ``<ms>``
+                    ending at ``t_ms``, the device's clock in ms since it started)
+``STOP``            stop streaming → ``OK`` (also when idle)
+anything else       → ``ERR <reason>`` (while streaming: ``ERR streaming: ...``)
 ==================  ============================================================
+
+A stream's counts come from ``signal`` like a ``MEAS``'s, evaluated when each window
+ends: a callable signal reads the simulation's pose and time of that moment.
 
 After a reset the device prints ``READY gonio-sim photometer 1.0`` and forgets its
 exposure and gain. Commands are processed one after the other, each taking its

@@ -3,6 +3,7 @@ answers each command (see the package docstring for the protocol)."""
 
 from __future__ import annotations
 
+import heapq
 import math
 import random
 import statistics
@@ -23,9 +24,11 @@ from sim.serial_photometer.protocol import (
     _line,
     default_config,
 )
-from sim.serial_photometer.server import _PtyServer
+from sim.serial_photometer.server import _Event, _PtyServer
 
 Signal = float | Callable[[float], float]
+#: The highest rate (Hz) the simulated photometer streams at.
+MAX_STREAM_RATE_HZ = 2000.0
 
 
 @dataclass
@@ -99,6 +102,9 @@ class SerialPhotometer(_PtyServer):
         self._busy_until = 0.0
         self._commands: list[str] = []
         self._resets = 0
+        self._stream: tuple[float, float] | None = None  # (period real s, integration s)
+        self._stream_gen = 0  # a tick of an older generation is a stopped stream's
+        self._t0 = time.monotonic()  # the device's clock starts at zero here
         self._init_pty_state()
 
     # -- configuration -------------------------------------------------------------
@@ -131,6 +137,16 @@ class SerialPhotometer(_PtyServer):
         with self._lock:
             return self._resets
 
+    @property
+    def streaming(self) -> bool:
+        """Whether the device is streaming."""
+        with self._lock:
+            return self._stream is not None
+
+    def device_time_s(self, monotonic_s: float) -> float:
+        """The device's clock (s, scaled by ``speedup``) at a `time.monotonic` time."""
+        return (monotonic_s - self._t0) * self._speedup
+
     def clear_commands(self) -> None:
         with self._lock:
             self._commands.clear()
@@ -148,7 +164,7 @@ class SerialPhotometer(_PtyServer):
             self._faults.inject.extend(lines)
 
     def silent(self) -> None:
-        """Ignore every command until :meth:`clear`."""
+        """Ignore every command until :meth:`clear`; a stream stops at its next window."""
         with self._lock:
             self._faults.silent = True
 
@@ -187,6 +203,7 @@ class SerialPhotometer(_PtyServer):
     def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
         """Reboot: pending answers are lost, settings return to their defaults."""
         self._events.clear()
+        self._stream, self._stream_gen = None, self._stream_gen + 1
         self._exposure_ms = self._default_exposure_ms
         self._gain = 1
         self._busy_until = now + (0.0 if banner_now else self._boot_s)
@@ -205,10 +222,17 @@ class SerialPhotometer(_PtyServer):
             delay = self._reply_delay_s + faults.slow_s
             words = line.split()
             name, args = words[0].upper(), words[1:]
-            if name == "MEAS":
+            if name == "STOP" and not args:  # idle already: acknowledged all the same
+                self._stream, self._stream_gen = None, self._stream_gen + 1
+                answer = "OK"
+            elif name == "STREAM":
+                answer = self._start_stream_locked(args, start + delay)
+            elif self._stream is not None:
+                answer = f"ERR streaming: {line}"
+            elif name == "MEAS":
                 self._measure_locked(args, start, delay)
                 return
-            if name == "EXP" and len(args) == 1 and _int_in(args[0], 1, 60_000):
+            elif name == "EXP" and len(args) == 1 and _int_in(args[0], 1, 60_000):
                 self._exposure_ms = int(args[0])
                 answer = "OK"
             elif name == "GAIN" and len(args) == 1 and _int_in(args[0], 1, 64):
@@ -222,6 +246,60 @@ class SerialPhotometer(_PtyServer):
                 answer = f"ERR unknown command: {line}"
             self._busy_until = start + delay
             self._schedule_locked(self._busy_until, _line(answer))
+
+    def _start_stream_locked(self, args: list[str], at: float) -> str:
+        """``STREAM <rate_hz> <integration_ms>``: windows end every period from ``at``."""
+        try:
+            rate, integration_ms = float(args[0]), int(args[1])
+        except (ValueError, IndexError):
+            return f"ERR bad arguments: STREAM {' '.join(args)}"
+        if len(args) != 2 or not 0 < rate <= MAX_STREAM_RATE_HZ or integration_ms < 1:
+            return f"ERR bad arguments: STREAM {' '.join(args)}"
+        if integration_ms / 1000 > 1 / rate + 1e-9:
+            return f"ERR integration {integration_ms} ms longer than the period"
+        period = 1 / rate / self._speedup
+        self._stream, self._stream_gen = (period, integration_ms / 1000), self._stream_gen + 1
+        heapq.heappush(self._events, _Event(at + period, next(self._seq), tick=self._stream_gen))
+        return "OK"
+
+    def _tick_locked(self, event: _Event) -> None:
+        """A stream window ended at ``event.due``: send its line, schedule the next."""
+        if self._stream is None or event.tick != self._stream_gen:
+            return
+        period, integration = self._stream
+        faults = self._faults
+        if faults.silent:  # the stream stops, as a crashed sketch's would
+            self._stream = None
+            return
+        if faults.garbage:
+            data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
+            faults.garbage = 0
+        elif faults.inject:
+            data = _line(faults.inject.popleft())
+        elif faults.malformed:
+            faults.malformed -= 1
+            data = _line(MALFORMED_LINE)
+        else:
+            try:
+                counts, saturated = self._counts_locked(integration)
+            except Exception as exc:  # a test's signal ran out of values, say
+                data = _line(f"ERR signal failed: {type(exc).__name__}")
+            else:
+                t_ms = self.device_time_s(event.due) * 1000
+                data = _line(f"DAT {t_ms:.3f} {counts!r} {'SAT' if saturated else 'OK'}")
+        self._output_locked(data)
+        heapq.heappush(self._events, _Event(event.due + period, next(self._seq), tick=event.tick))
+
+    def _counts_locked(self, exposure_s: float) -> tuple[float, bool]:
+        """One exposure's counts (signal, noise, dark, gain) and whether it saturated."""
+        signal = self._signal
+        counts = float(signal(exposure_s)) if callable(signal) else signal * exposure_s
+        if self._noise_std:
+            counts += self._rng.gauss(0.0, self._noise_std)
+        counts = (counts + self._dark) * self._gain
+        if self._full_scale is not None and counts >= self._full_scale:
+            return self._full_scale, True
+        return counts, False
 
     def _measure_locked(self, args: list[str], start: float, delay: float) -> None:
         if len(args) > 2 or not all(_int_in(a, 1, 60_000) for a in args[:1]):
@@ -257,16 +335,11 @@ class SerialPhotometer(_PtyServer):
         values: list[float] = []
         saturated = False
         for _ in range(count):
-            signal = self._signal
             try:
-                counts = float(signal(exposure_s)) if callable(signal) else signal * exposure_s
+                counts, sat = self._counts_locked(exposure_s)
             except Exception as exc:  # a test's signal ran out of values, say
                 return f"ERR signal failed: {type(exc).__name__}"
-            if self._noise_std:
-                counts += self._rng.gauss(0.0, self._noise_std)
-            counts = (counts + self._dark) * self._gain
-            if self._full_scale is not None and counts >= self._full_scale:
-                counts, saturated = self._full_scale, True
+            saturated = saturated or sat
             values.append(counts)
         status = "SAT" if saturated else "OK"
         if count == 1:

@@ -6,12 +6,14 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from drivers.serial_detector import SerialDetectorConfig
+from drivers.serial_detector import SerialDetectorConfig, SerialStreamConfig
 
 BANNER = "READY gonio-sim photometer 1.0"
 IDENTITY = "gonio-sim photometer 1.0"
 #: The regular expression for the answer to ``MEAS`` (see :func:`default_config`).
 RESPONSE = r"VAL (?P<value>\S+) (?P<status>OK|SAT)(?: (?P<std>\S+))?"
+#: The regular expression of a stream's data line (see :func:`default_config`).
+STREAM_LINE = r"DAT (?P<device_t>\S+) (?P<value>\S+) (?P<status>OK|SAT)"
 #: What the device sends instead of an answer under :meth:`SerialPhotometer.malformed`.
 MALFORMED_LINE = "V#L 12?4 OK"
 
@@ -37,13 +39,21 @@ def default_config(port: str, **overrides: Any) -> SerialDetectorConfig:
         "command_ack": "^OK$",
         "error_reply": "^ERR",
         "saturated_status": "^SAT$",
+        "stream": SerialStreamConfig(
+            start="STREAM {rate_hz:g} {integration_ms:d}",
+            stop="STOP",
+            line=STREAM_LINE,
+            rate_hz=100.0,
+            max_rate_hz=2000.0,
+            device_time_s=1e-3,
+        ),
     }
     fields.update(overrides)
     return SerialDetectorConfig(**fields)
 
 
 #: The first word of every command the device knows.
-COMMANDS = ("MEAS", "EXP", "GAIN", "ID?")
+COMMANDS = ("MEAS", "EXP", "GAIN", "ID?", "STREAM", "STOP")
 
 
 def mismatch(config: SerialDetectorConfig) -> tuple[str, str] | None:
@@ -56,6 +66,11 @@ def mismatch(config: SerialDetectorConfig) -> tuple[str, str] | None:
     if config.set_exposure is not None:
         commands["set_exposure"] = config.set_exposure.format(**values)
     commands.update({f"init.{i}": command for i, command in enumerate(config.init)})
+    if config.stream is not None:
+        sample = {"rate_hz": 100.0, "period_ms": 10, "period_us": 10_000}
+        sample |= {"integration_s": 0.008, "integration_ms": 8, "integration_us": 8_000}
+        commands["stream.start"] = config.stream.start.format(**sample)
+        commands["stream.stop"] = config.stream.stop
     for field, command in commands.items():
         word = (command.split() or [""])[0].upper()
         if word not in COMMANDS:
@@ -64,6 +79,8 @@ def mismatch(config: SerialDetectorConfig) -> tuple[str, str] | None:
     answer = "VAL 1234.0 OK" + (" 5.0" if config.device_averaging else "")
     if re.fullmatch(config.response, answer) is None:
         return "response", f"does not match the simulated photometer's answer {answer!r}"
+    if config.stream is not None and re.fullmatch(config.stream.line, "DAT 12.5 1234.0 OK") is None:
+        return "stream.line", "does not match the simulated photometer's 'DAT 12.5 1234.0 OK'"
     if config.command_ack is not None and re.search(config.command_ack, "OK") is None:
         return "command_ack", "does not match the simulated photometer's acknowledgement 'OK'"
     return None

@@ -33,6 +33,7 @@ class _Event:
     seq: int
     data: bytes = field(compare=False, default=b"")
     reset: bool = field(compare=False, default=False)
+    tick: int = field(compare=False, default=-1)  # ≥ 0: a stream's window ends (its generation)
 
 
 class _PtyServer:
@@ -62,6 +63,8 @@ class _PtyServer:
         def _handle(self, line: str, now: float) -> None: ...
 
         def _reset_locked(self, now: float, *, banner_now: bool = False) -> None: ...
+
+        def _tick_locked(self, event: _Event) -> None: ...
 
     def _init_pty_state(self) -> None:
         """The transport's state, before `start` (called by the device's ``__init__``)."""
@@ -218,6 +221,8 @@ class _PtyServer:
                 event = heapq.heappop(self._events)
                 if event.reset:
                     self._reset_locked(now, banner_now=True)
+                elif event.tick >= 0:
+                    self._tick_locked(event)
                 else:
                     self._output_locked(event.data)
 
