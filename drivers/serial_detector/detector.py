@@ -132,6 +132,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         log.debug("%s: opened at %d baud", cfg.port, cfg.baud)
         try:
             self._settle()
+            self._quiet_stream()  # a stream left running (a killed run) is stopped
             self._initialize()
         except BaseException:
             self._release()
@@ -139,10 +140,11 @@ class SerialDetector(_Streaming, _LineIO, Resource):
 
     def close(self) -> None:
         """Release the port (idempotent). Unsent bytes are dropped, not waited for; a
-        running stream is told to stop first (without waiting for quiet)."""
+        running stream is stopped first (`stop_stream`)."""
         self._reopen = False
         if self._stream is not None:
-            self._abort_stream()
+            with contextlib.suppress(Exception):  # bounded: 3 × timeout_s at most
+                self.stop_stream()
         self._release()
 
     def _release(self) -> None:

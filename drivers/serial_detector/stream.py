@@ -383,6 +383,21 @@ class _Streaming:
             self._clear_input_state()
         return readings
 
+    def _quiet_stream(self) -> None:
+        """After opening, with a stream section: send ``stop`` (a device still
+        streaming for a killed run stops; an idle one answers or refuses it) and discard
+        what arrives until 50 ms of quiet (at most ``3 × timeout_s``)."""
+        cfg = self._config.stream
+        if cfg is None:
+            return
+        self._send(cfg.stop)
+        start = time.monotonic()
+        quiet_until, give_up = start + _QUIET_MIN_S, start + 3 * self._config.timeout_s
+        while time.monotonic() < min(quiet_until, give_up):
+            if self._receive():
+                quiet_until = time.monotonic() + _QUIET_MIN_S
+        self._clear_input_state()
+
     def _abort_stream(self) -> None:
         """After a failure mid-stream: ask the device to stop, listen it out next time."""
         cfg = self._config.stream

@@ -25,7 +25,11 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, field_validator, model_validator
 
 from drivers.light import SerialLightConfig
-from drivers.serial_detector import SerialDetectorConfig, SerialDetectorValueError
+from drivers.serial_detector import (
+    SerialDetectorConfig,
+    SerialDetectorValueError,
+    SerialStreamConfig,
+)
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
@@ -228,6 +232,49 @@ def _driver_default(name: str) -> Any:
     return field.default
 
 
+def _stream_default(name: str) -> Any:
+    field = next(f for f in dataclasses.fields(SerialStreamConfig) if f.name == name)
+    return field.default
+
+
+class SerialStreamSpec(Strict):
+    """A serial detector's streaming mode: every field of `SerialStreamConfig`
+    (docs/reference/serial_detector.md, "Streaming"), checked by the driver's rules."""
+
+    start: str = Field(
+        _stream_default("start"),
+        description="The command that starts the stream: a template of {rate_hz}, "
+        "{period_ms}, {period_us}, {integration_s}, {integration_ms} and {integration_us}.",
+    )
+    stop: str = Field(_stream_default("stop"), description="The command that stops it.")
+    line: str = Field(
+        _stream_default("line"),
+        description="A Python regex a whole data line matches: group value (required), "
+        "optional device_t (the device's time of the window's end), std, status, saturated.",
+    )
+    rate_hz: float = Field(
+        _stream_default("rate_hz"), gt=0, description="The rate used when none is asked (Hz)."
+    )
+    max_rate_hz: float = Field(
+        _stream_default("max_rate_hz"), gt=0, description="The highest rate it streams at (Hz)."
+    )
+    device_time_s: float = Field(
+        _stream_default("device_time_s"),
+        gt=0,
+        description="Seconds per unit of the device_t group (1e-3: milliseconds).",
+    )
+    latency_s: float = Field(
+        _stream_default("latency_s"),
+        ge=0,
+        description="The shortest delay from a window's end to its line's arrival (s), "
+        "subtracted from the host's stamps.",
+    )
+
+    def config(self) -> SerialStreamConfig:
+        """The driver's `SerialStreamConfig`."""
+        return SerialStreamConfig(**self.model_dump())
+
+
 class SerialInterfaceSpec(Strict):
     """A line-based serial detector: every field of `SerialDetectorConfig`, with its
     defaults (docs/reference/serial_detector.md), ``line_ending`` by name (``lf``, ``crlf``,
@@ -308,6 +355,10 @@ class SerialInterfaceSpec(Strict):
         ge=16,
         description="The longest line read (bytes); longer input is discarded to the line's end.",
     )
+    stream: SerialStreamSpec | None = Field(
+        None,
+        description="Its streaming mode, for measuring while moving (none: it does not stream).",
+    )
 
     @field_validator("line_ending", mode="before", json_schema_input_type=LineEnding)
     @classmethod
@@ -323,6 +374,7 @@ class SerialInterfaceSpec(Strict):
         """The driver's configuration; a `field_error` at the field the driver refuses."""
         values = {name: getattr(self, name) for name in _DRIVER_FIELDS}
         values["line_ending"] = LINE_ENDINGS[self.line_ending]
+        values["stream"] = None if self.stream is None else self.stream.config()
         try:
             return SerialDetectorConfig(**values)
         except SerialDetectorValueError as exc:
@@ -336,6 +388,9 @@ class SerialInterfaceSpec(Strict):
             i = next((i for i, c in enumerate(self.init) if repr(c) in message), None)
             rest = message.removeprefix("init command ")
             return ("init" if i is None else f"init.{i}"), rest
+        if message.startswith("stream."):
+            name, _, rest = message.partition(" ")
+            return name, rest
         named = [n for n in _DRIVER_FIELDS if message.startswith(f"{n} ")]
         if not named:
             return "kind", message

@@ -12,6 +12,14 @@ continues its streams), so any sample can be recomputed alone. Time passes on th
 ``clock`` (`drivers.base.Clock`): virtual in a simulation, scaled real time in a
 rehearsal. Injected ``detector_error`` and ``saturated`` faults (`sim.faults`) apply to
 the first measurement of their samples.
+
+Streaming (`drivers.base.StreamingDetector`): windows of the integration end every
+period from ``start_stream``'s time on the clock; ``read_stream`` returns those ended by
+now (letting virtual time pass up to its timeout for the next one). Each window is read
+out as one exposure at the pose ``pose_at(t)`` gives for the window's middle time ``t``
+(the instrument's callable; without one, the pose of the moment of reading): the
+integration along the path travelled during the window is not modelled yet. A lock-in
+does not stream.
 """
 
 from __future__ import annotations
@@ -22,7 +30,16 @@ from typing import Protocol
 
 import numpy as np
 
-from drivers.base import Clock, DetectorError, DeviceClosed, Reading, Resource, StageTarget
+from drivers.base import (
+    Clock,
+    DetectorError,
+    DeviceClosed,
+    Reading,
+    Resource,
+    StageTarget,
+    StreamNotSupported,
+    StreamReading,
+)
 from drivers.pymeasure.config import PyMeasureDetectorConfig
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
@@ -104,6 +121,7 @@ class SimDetector(Resource):
         streams: Streams,
         light: LightState | None = None,
         faults: FaultInjector | None = None,
+        pose_at: Callable[[float], Mapping[str, float]] | None = None,
     ) -> None:
         self.scene = scene
         self.rig = rig
@@ -125,6 +143,10 @@ class SimDetector(Resource):
         #: A lock-in's readings (``detector.kind: lockin``): volts, no dark signal, a phase.
         self.lockin = scene.detector.kind == "lockin"
         self._phase: np.ndarray | None = None  # the last lock-in readings' phases (°)
+        #: The pose (joint angles) at a time on the clock, for a stream's windows.
+        self.pose_at = pose_at
+        self._stream: tuple[float, float, float] | None = None  # (t0, period, integration)
+        self._windows = 0  # windows of the running stream read so far
 
     # -- Resource / Detector -------------------------------------------------------
     @property
@@ -155,11 +177,113 @@ class SimDetector(Resource):
             return interface.config().phase_tolerance_deg
         return PyMeasureDetectorConfig.phase_tolerance_deg
 
+    @property
+    def can_stream(self) -> bool:
+        """Whether it streams (`drivers.base.can_stream`): yes, unless a lock-in."""
+        return not self.lockin
+
     def open(self) -> None:
         self._open = True
 
     def close(self) -> None:
         self._open = False
+        self._stream = None
+
+    # -- streaming -------------------------------------------------------------------
+    def start_stream(self, rate_hz: float, integration_s: float | None = None) -> None:
+        """Windows of ``integration_s`` (default: the period less the readout dead
+        time) ending every ``1 / rate_hz`` s from now on the clock."""
+        if not self._open:
+            raise DeviceClosed("the simulated detector is not open (use it as a context manager)")
+        if not self.can_stream:
+            raise StreamNotSupported("the simulated lock-in cannot stream readings")
+        if self._stream is not None:
+            raise DetectorError("a stream is already running (stop_stream first)")
+        if not (isinstance(rate_hz, int | float) and 0 < rate_hz < np.inf):
+            raise DetectorError(f"stream rate_hz must be a positive number, got {rate_hz!r}")
+        period = 1.0 / float(rate_hz)
+        room = period - self.readout_s
+        integration = room if integration_s is None else integration_s
+        if not (isinstance(integration, int | float) and 0 < integration <= room * (1 + 1e-9)):
+            raise DetectorError(
+                f"stream integration_s must be in (0, {room:.6g}] s (the period at {rate_hz:g} "
+                f"Hz less the readout {self.readout_s:g} s), got {integration_s!r}"
+            )
+        lo, hi = self.exposure_range_s
+        if not lo <= integration <= hi:
+            raise DetectorError(
+                f"stream integration {integration!r} s is outside the detector's range "
+                f"[{lo:g}, {hi:g}] s"
+            )
+        self._stream = (self._clock.now(), period, float(integration))
+        self._windows = 0
+
+    def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
+        """The windows ended since the last call; with none, let up to ``timeout_s``
+        pass on the clock for the next."""
+        if self._stream is None:
+            raise DetectorError("no stream is running (start_stream first)")
+        t0, period, _ = self._stream
+        readings = self._ended_windows()
+        if not readings and timeout_s > 0:
+            wait = t0 + (self._windows + 1) * period - self._clock.now()
+            self._clock.sleep(min(max(wait, 0.0), timeout_s))
+            readings = self._ended_windows()
+        return readings
+
+    def stop_stream(self) -> list[StreamReading]:
+        """Stop (idempotent): the windows ended by now."""
+        if self._stream is None or not self._open:
+            self._stream = None
+            return []
+        readings = self._ended_windows()
+        self._stream = None
+        return readings
+
+    def _ended_windows(self) -> list[StreamReading]:
+        assert self._stream is not None
+        t0, period, integration = self._stream
+        done = int(np.floor((self._clock.now() - t0) / period + 1e-9))
+        k = np.arange(self._windows, max(done, self._windows))
+        if not len(k):
+            return []
+        self._windows = done
+        ended = t0 + (k + 1) * period
+        started = ended - integration
+        middle = 0.5 * (started + ended)
+        counts, saturated = self._stream_counts(middle, integration)
+        return [
+            StreamReading(value=c, std=np.nan, started_s=a, ended_s=b, saturated=sat)
+            for c, sat, a, b in zip(
+                counts.tolist(), saturated.tolist(), started.tolist(), ended.tolist(), strict=True
+            )
+        ]
+
+    def _stream_counts(
+        self, middle: np.ndarray, integration: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Counts and saturated flags (N,) of one exposure per window, at the pose of each
+        window's middle time, continuing the present sample's random streams."""
+        axes = self.rig.axes
+        poses = []
+        for t in middle.tolist():
+            pose = self.pose_at(t) if self.pose_at is not None else self._pose()
+            try:
+                poses.append([float(pose[name]) for name in axes])
+            except KeyError as exc:
+                raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
+        wi, wo = self.rig.forward(np.array(poses, dtype=np.float64))
+        geometric = self.chain.geometric_power(wi, wo, self._target)
+        power = self.chain.power(geometric, middle[:, None], light_on=self.light.is_on).T
+        index = np.array([self._sample], dtype=np.int64)
+        start = self._draws.get(self._sample, 0)
+        self._draws[self._sample] = start + len(middle)
+        signal = self.chain.electrons(power, np.array([integration]))
+        counts, saturated = sensor.read_out(
+            signal, np.array([integration]), self.sensor, self.sensor_effects, self.streams,
+            index, start=start,
+        )  # fmt: skip
+        return counts[0], saturated[0]
 
     # -- what only a simulation has ------------------------------------------------
     def begin_sample(self, index: int) -> None:
@@ -216,6 +340,8 @@ class SimDetector(Resource):
             )
         if int(averages) != averages or averages < 1:
             raise DetectorError(f"averages must be a positive integer, got {averages!r}")
+        if self._stream is not None:
+            raise DetectorError("measure() during a stream (stop_stream first)")
         averages = int(averages)
         start = self._draws.get(self._sample, 0)
         fault = self._faults.fired(self._sample, start, DETECTOR_KINDS) if self._faults else None

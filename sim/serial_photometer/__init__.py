@@ -44,6 +44,7 @@ from sim.serial_photometer.protocol import (
     BANNER,
     MALFORMED_LINE,
     RESPONSE,
+    STREAM_CONFIG,
     default_config,
 )
 from sim.serial_photometer.protocol import IDENTITY as IDENTITY
@@ -52,6 +53,7 @@ __all__ = [
     "BANNER",
     "MALFORMED_LINE",
     "RESPONSE",
+    "STREAM_CONFIG",
     "SerialPhotometer",
     "default_config",
     "main",

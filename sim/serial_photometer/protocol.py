@@ -14,6 +14,16 @@ IDENTITY = "gonio-sim photometer 1.0"
 RESPONSE = r"VAL (?P<value>\S+) (?P<status>OK|SAT)(?: (?P<std>\S+))?"
 #: The regular expression of a stream's data line (see :func:`default_config`).
 STREAM_LINE = r"DAT (?P<device_t>\S+) (?P<value>\S+) (?P<status>OK|SAT)"
+#: The streaming mode of this device's protocol (``default_config(path,
+#: stream=STREAM_CONFIG)``): ``STREAM <hz> <ms>`` … ``STOP``, device times in ms.
+STREAM_CONFIG = SerialStreamConfig(
+    start="STREAM {rate_hz:g} {integration_ms:d}",
+    stop="STOP",
+    line=STREAM_LINE,
+    rate_hz=100.0,
+    max_rate_hz=2000.0,
+    device_time_s=1e-3,
+)
 #: What the device sends instead of an answer under :meth:`SerialPhotometer.malformed`.
 MALFORMED_LINE = "V#L 12?4 OK"
 
@@ -23,7 +33,8 @@ def default_config(port: str, **overrides: Any) -> SerialDetectorConfig:
 
     Host averaging with ``EXP`` sent on change; ``overrides`` replace any field. For
     device averaging pass ``query="MEAS {exposure_ms:d} {averages:d}"``,
-    ``device_averaging=True`` and ``set_exposure=None``.
+    ``device_averaging=True`` and ``set_exposure=None``; for streaming
+    ``stream=STREAM_CONFIG``.
     """
     fields: dict[str, Any] = {
         "port": port,
@@ -39,14 +50,6 @@ def default_config(port: str, **overrides: Any) -> SerialDetectorConfig:
         "command_ack": "^OK$",
         "error_reply": "^ERR",
         "saturated_status": "^SAT$",
-        "stream": SerialStreamConfig(
-            start="STREAM {rate_hz:g} {integration_ms:d}",
-            stop="STOP",
-            line=STREAM_LINE,
-            rate_hz=100.0,
-            max_rate_hz=2000.0,
-            device_time_s=1e-3,
-        ),
     }
     fields.update(overrides)
     return SerialDetectorConfig(**fields)

@@ -122,7 +122,7 @@ def test_an_arduino_that_resets_on_open_prints_its_banner(tmp_path: Path, scene:
         (
             {"detector.interface": {"query": "READ?"}},
             "detector.interface.query: --rehearse: 'READ?' is not a command of the simulated "
-            "photometer (MEAS, EXP, GAIN, ID?)",
+            "photometer (MEAS, EXP, GAIN, ID?, STREAM, STOP)",
         ),
         (
             {"detector.interface": {"response": r"READING (?P<value>\S+) (?P<status>\w+)"}},

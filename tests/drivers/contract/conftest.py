@@ -31,7 +31,7 @@ from sim.faults import FaultInjector, FaultRule
 from sim.physics.streams import Streams
 from sim.scene import load_scene
 from sim.serial_light import SerialLamp
-from sim.serial_photometer import SerialPhotometer
+from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
 from sim.visa_instruments import EMULATORS, FULL_SCALE
 from tests.conftest import CONFIGS
 
@@ -142,13 +142,16 @@ def motors(
 @dataclass
 class DetectorHarness:
     """``make(saturating)`` builds an unopened detector whose signal saturates a 1 s
-    exposure or not; ``activity()`` changes whenever the detector exposes or talks."""
+    exposure or not; ``activity()`` changes whenever the detector exposes or talks;
+    ``silence()`` (None: the backend cannot be silenced) makes the last one made stop
+    streaming without a word."""
 
     name: str
     make: Callable[[bool], Detector]
     activity: Callable[[], object]
     clock_now: Callable[[], float]
     closers: list[Callable[[], None]] = field(default_factory=list)
+    silence: Callable[[], None] | None = None
 
 
 def _sim_detector(rig: Rig, clock: ManualClock) -> DetectorHarness:
@@ -172,12 +175,15 @@ def _serial_detector() -> Iterator[DetectorHarness]:
         device = SerialPhotometer(2e6 if saturating else 2e4, full_scale=65535.0)
         device.start()
         devices.append(device)
-        return SerialDetector(device.config(), exposure_range_s=(1e-3, 10.0))
+        config = device.config(stream=STREAM_CONFIG)
+        return SerialDetector(config, exposure_range_s=(1e-3, 10.0))
 
     def activity() -> object:
         return [len(d.commands) for d in devices]
 
-    yield DetectorHarness("serial", make, activity, time.monotonic)
+    yield DetectorHarness(
+        "serial", make, activity, time.monotonic, silence=lambda: devices[-1].silent()
+    )
     for device in devices:
         device.stop()
         assert device.error is None

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 import yaml
 
-from drivers.serial_detector import SerialDetectorConfig
+from drivers.serial_detector import SerialDetectorConfig, SerialStreamConfig
 from drivers.serial_detector.detector import SerialDetector
 from gonio.config import ConfigError
 from gonio.rig.instrument import NoSwitchSpec, SerialInterfaceSpec, SerialSwitchSpec
 from gonio.rig.model import Reason, Rig
-from sim.serial_photometer import RESPONSE, SerialPhotometer, default_config
+from sim.serial_photometer import RESPONSE, STREAM_CONFIG, SerialPhotometer, default_config
 from tests.conftest import ARCH_POINT_FILE, RIG_FILES
 from tests.support.rigs import direction
 
@@ -89,11 +89,18 @@ def test_every_driver_field_can_be_set_from_yaml() -> None:
         "saturated_status": "^SAT$",
         "device_averaging": True,
         "max_line_bytes": 256,
-    }
+        "stream": SerialStreamConfig(
+            start="GO {period_us:d}", stop="HALT", line=r"(?P<value>\S+) (?P<device_t>\d+)",
+            rate_hz=50.0, max_rate_hz=500.0, device_time_s=1e-6, latency_s=0.002,
+        ),
+    }  # fmt: skip
     assert set(given) == driver_fields
     for f in dataclasses.fields(SerialDetectorConfig):  # none is the default: each is carried
         assert given[f.name] != f.default, f.name
-    spec = SerialInterfaceSpec.model_validate({"kind": "serial", **given})
+    for f in dataclasses.fields(SerialStreamConfig):
+        assert getattr(given["stream"], f.name) != f.default, f.name
+    stream = dataclasses.asdict(given["stream"])
+    spec = SerialInterfaceSpec.model_validate({"kind": "serial", **given, "stream": stream})
     assert spec.line_ending == "crlf"
     assert spec.config() == SerialDetectorConfig(**given)
 
@@ -147,7 +154,10 @@ def test_the_serial_rig_is_the_arch_rig_wired_to_hardware() -> None:
     serial = Rig.from_yaml(ARCH_SERIAL_FILE)
     spec = serial.spec
     assert spec.bus.kind == "dynamixel" and isinstance(spec.light.switch, SerialSwitchSpec)
-    assert serial.serial_detector_config() == default_config("/dev/ttyACM0", timeout_s=0.5)
+    stream = dataclasses.replace(STREAM_CONFIG, max_rate_hz=400.0)
+    assert serial.serial_detector_config() == default_config(
+        "/dev/ttyACM0", timeout_s=0.5, stream=stream
+    )
     assert spec.detector.exposure_range_s == (1e-3, 60.0)
     data = yaml.safe_load(ARCH_SERIAL_FILE.read_text())
     arch = dict(ARCH_DATA)
