@@ -72,7 +72,8 @@ Streaming (`StreamingDetector`, optional)
     host's clock, its stamps increase, windows do not overlap and ``ended_s −
     started_s`` is the integration. A stream that falls silent for longer than its
     backend's stall time is a `DetectorError`, never a hang. ``measure`` while
-    streaming raises `DetectorError`.
+    streaming raises `DetectorError`. After a stream, `restamped` stamps its readings
+    again with the stream's final clock offset when the device sent timestamps.
 
 Light (`LightSource`)
     ``on()`` / ``off()`` switch the source and return once it is switched; ``is_on``
@@ -94,9 +95,9 @@ Simulation only (`Simulated`)
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from contextlib import ExitStack
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import TracebackType
 from typing import Any, Literal, Protocol, Self
 
@@ -240,6 +241,27 @@ class StreamReading:
     def middle_s(self) -> float:
         """The middle of the integration window (s): where the pose is interpolated."""
         return 0.5 * (self.started_s + self.ended_s)
+
+
+def restamped(readings: Sequence[StreamReading], latency_s: float = 0.0) -> list[StreamReading]:
+    """``readings`` of one stream with their windows stamped again from the device's
+    timestamps and the stream's final clock offset: ``ended_s = device_t_s + min(received_s
+    − device_t_s) − latency_s`` (s), each window keeping its length. A stream's live
+    stamps use the offset known when each line arrived, which a host reading late
+    overestimates at first; after the stream this removes that. Readings without a
+    device timestamp (or an arrival time) are returned as they are."""
+    timed = [r for r in readings if r.device_t_s is not None and r.received_s is not None]
+    if not timed:
+        return list(readings)
+    offset = min(r.received_s - r.device_t_s for r in timed) - latency_s  # type: ignore[operator]
+    out = []
+    for r in readings:
+        if r.device_t_s is None or r.received_s is None:
+            out.append(r)
+            continue
+        ended = r.device_t_s + offset
+        out.append(replace(r, started_s=ended - (r.ended_s - r.started_s), ended_s=ended))
+    return out
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,8 @@ class _Stream:
     prev_ended: float = -math.inf
     offset_s: float = math.inf  # min(received − device_t) so far
     malformed: list[_Line] = field(default_factory=list)
-    pending: deque[tuple[_Line, float, int, int]] = field(default_factory=deque)
+    pending: deque[tuple[_Line, float]] = field(default_factory=deque)
+    lines: int = 0  # data lines received: the clock of a device that sends no time
 
     @property
     def period_s(self) -> float:
@@ -248,8 +249,7 @@ class _Streaming:
         self._lines.clear()
         if new:
             stream.last_line = time.monotonic()
-        for i, line in enumerate(new):
-            stream.pending.append((line, received, i, len(new)))
+        stream.pending.extend((line, received) for line in new)
 
     def _check_stall(self, stream: _Stream) -> None:
         quiet = time.monotonic() - stream.last_line
@@ -264,9 +264,9 @@ class _Streaming:
         """Readings from the stamped lines received (data lines only)."""
         cfg = self._stream_config()
         assert self._stream_line is not None
-        parsed: list[tuple[float, float, bool, float | None, float, int, int]] = []
+        parsed: list[tuple[float, float, bool, float | None, float, float]] = []
         while stream.pending:
-            line, received, index, count = stream.pending.popleft()
+            line, received = stream.pending.popleft()
             self._check_unsolicited(line, stream.start)
             match = None if line.overflow else self._stream_line.fullmatch(line.text)
             if match is None:
@@ -291,16 +291,15 @@ class _Streaming:
             device_t = None
             if groups.get("device_t") is not None:
                 device_t = self._finite(match, "device_t", line) * cfg.device_time_s
-                stream.offset_s = min(stream.offset_s, received - device_t)
-            parsed.append(
-                (value, std, self._saturated(value, match), device_t, received, index, count)
-            )
+                clock = device_t
+            else:  # the device's clock is its line count: it streams at a steady rate
+                clock = stream.lines * stream.period_s
+            stream.lines += 1
+            stream.offset_s = min(stream.offset_s, received - clock)
+            parsed.append((value, std, self._saturated(value, match), device_t, received, clock))
         readings = []
-        for value, std, saturated, device_t, received, index, count in parsed:
-            if device_t is not None:
-                end = device_t + stream.offset_s - cfg.latency_s
-            else:
-                end = received - cfg.latency_s - (count - 1 - index) * stream.period_s
+        for value, std, saturated, device_t, received, clock in parsed:
+            end = clock + stream.offset_s - cfg.latency_s
             end = max(end, stream.prev_ended + stream.integration_s)
             stream.prev_ended = end
             readings.append(

@@ -104,6 +104,7 @@ class SerialPhotometer(_PtyServer):
         self._resets = 0
         self._stream: tuple[float, float] | None = None  # (period real s, integration s)
         self._stream_gen = 0  # a tick of an older generation is a stopped stream's
+        self._stream_ends: list[float] = []  # time.monotonic() of each DAT line's window end
         self._t0 = time.monotonic()  # the device's clock starts at zero here
         self._init_pty_state()
 
@@ -142,6 +143,13 @@ class SerialPhotometer(_PtyServer):
         """Whether the device is streaming."""
         with self._lock:
             return self._stream is not None
+
+    @property
+    def stream_ends(self) -> list[float]:
+        """The `time.monotonic` time each streamed line's window ended (the truth a
+        latency measurement compares the host's stamps with), in order."""
+        with self._lock:
+            return list(self._stream_ends)
 
     def device_time_s(self, monotonic_s: float) -> float:
         """The device's clock (s, scaled by ``speedup``) at a `time.monotonic` time."""
@@ -286,6 +294,7 @@ class SerialPhotometer(_PtyServer):
                 data = _line(f"ERR signal failed: {type(exc).__name__}")
             else:
                 t_ms = self.device_time_s(event.due) * 1000
+                self._stream_ends.append(event.due)
                 data = _line(f"DAT {t_ms:.3f} {counts!r} {'SAT' if saturated else 'OK'}")
         self._output_locked(data)
         heapq.heappush(self._events, _Event(event.due + period, next(self._seq), tick=event.tick))

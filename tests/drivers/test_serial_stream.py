@@ -1,0 +1,159 @@
+"""The serial detector's streaming mode on the simulated photometer over a pty: the
+commands on the wire, the stamps, and every way a stream can fail without hanging."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from drivers.base import StreamNotSupported, StreamReading, can_stream, restamped
+from drivers.serial_detector import SerialDetectorError
+from drivers.serial_detector.detector import SerialDetector
+from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
+
+TIMEOUT_S = 0.3
+
+
+@pytest.fixture
+def device() -> Iterator[SerialPhotometer]:
+    with SerialPhotometer(20_000.0) as dev:
+        yield dev
+
+
+def streaming_detector(dev: SerialPhotometer, **stream: Any) -> SerialDetector:
+    config = dev.config(timeout_s=TIMEOUT_S, stream=dataclasses.replace(STREAM_CONFIG, **stream))
+    return SerialDetector(config, exposure_range_s=(1e-3, 10.0))
+
+
+def collect(det: SerialDetector, seconds: float) -> list[StreamReading]:
+    readings: list[StreamReading] = []
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        readings += det.read_stream(0.02)
+    return readings
+
+
+def test_the_commands_on_the_wire_and_the_values(device: SerialPhotometer) -> None:
+    with streaming_detector(device) as det:
+        assert device.commands == ["STOP", "GAIN 1"]  # a stream left running is stopped
+        det.start_stream(250, 0.002)
+        readings = collect(det, 0.2) + det.stop_stream()
+        assert not device.streaming
+        det.measure(0.01)
+    assert device.commands[2:] == ["STREAM 250 2", "STOP", "EXP 10", "MEAS"]
+    assert len(readings) == len(device.stream_ends)
+    assert all(r.value == pytest.approx(20_000 * 0.002) for r in readings)
+    # the device's timestamps, in its milliseconds, end windows one period apart
+    device_t = [r.device_t_s for r in readings]
+    assert all(b - a == pytest.approx(0.004, abs=2e-6) for a, b in itertools.pairwise(device_t))
+    truth = device.stream_ends
+    again = restamped(readings)
+    assert max(abs(r.ended_s - t) for r, t in zip(again, truth, strict=True)) < 0.02
+    assert [r.ended_s - r.started_s for r in again] == pytest.approx([0.002] * len(again))
+
+
+def test_without_device_timestamps_the_arrival_stamps_the_window(
+    device: SerialPhotometer,
+) -> None:
+    with streaming_detector(device, line=r"DAT \S+ (?P<value>\S+) (?P<status>OK|SAT)") as det:
+        det.start_stream(100, 0.005)
+        readings = collect(det, 0.15) + det.stop_stream()
+    assert readings and all(r.device_t_s is None for r in readings)
+    assert all(r.received_s is not None and r.ended_s <= r.received_s for r in readings)
+
+
+def test_the_integration_is_rounded_as_the_template_sends_it(device: SerialPhotometer) -> None:
+    with streaming_detector(device) as det:
+        det.start_stream(600)  # the period 1.667 ms: 1 ms, never rounded past the period
+        readings = collect(det, 0.05) + det.stop_stream()
+    assert "STREAM 600 1" in device.commands
+    assert readings[0].ended_s - readings[0].started_s == pytest.approx(0.001)
+
+
+def test_refused_before_anything_is_sent(device: SerialPhotometer) -> None:
+    with streaming_detector(device, max_rate_hz=500.0) as det:
+        sent = len(device.commands)
+        for rate, integration in ((501.0, None), (100.0, 0.02), (100.0, 1e-4)):
+            with pytest.raises(SerialDetectorError, match=device.path) as err:
+                det.start_stream(rate, integration)
+            assert err.value.kind == "invalid"
+        assert len(device.commands) == sent
+
+
+def test_without_a_stream_section_it_cannot_stream(device: SerialPhotometer) -> None:
+    with SerialDetector(device.config()) as det:
+        assert not can_stream(det)
+        with pytest.raises(StreamNotSupported, match=f"serial detector {device.path}"):
+            det.start_stream(100)
+
+
+@pytest.mark.parametrize(
+    ("fault", "kind"),
+    [("silent", "timeout"), ("malformed", "malformed"), ("garbage", "malformed")],
+)
+def test_a_failing_stream_is_one_error_naming_the_port_then_the_device_measures(
+    device: SerialPhotometer, fault: str, kind: str
+) -> None:
+    with streaming_detector(device) as det:
+        det.start_stream(200, 0.002)
+        assert det.read_stream(1.0)
+        if fault == "silent":
+            device.silent()
+        elif fault == "malformed":
+            device.malformed(5)
+        else:
+            device.garbage_without_newline(2000)  # an overlong line, then more garbage
+            device.malformed(5)
+        start = time.monotonic()
+        with pytest.raises(SerialDetectorError, match=device.path) as err:
+            collect(det, 3.0)
+        assert time.monotonic() - start < TIMEOUT_S + 0.5
+        assert err.value.kind in (kind, "overflow")
+        assert det.stop_stream() == []
+        device.clear()
+        assert det.measure(0.01).value == pytest.approx(200.0)
+        assert not device.streaming
+
+
+def test_a_few_stray_lines_are_tolerated(device: SerialPhotometer) -> None:
+    with streaming_detector(device) as det:
+        det.start_stream(200, 0.002)
+        device.malformed(2)  # retries = 2: two in a row are tolerated
+        readings = collect(det, 0.1) + det.stop_stream()
+    assert len(readings) >= 10
+
+
+def test_a_reset_mid_stream_is_a_reset_error(device: SerialPhotometer) -> None:
+    with streaming_detector(device) as det:
+        det.start_stream(200, 0.002)
+        det.read_stream(1.0)
+        device.reboot()
+        with pytest.raises(SerialDetectorError, match="reset") as err:
+            collect(det, 2.0)
+        assert err.value.kind == "reset"
+        assert det.measure(0.01).value == pytest.approx(200.0)  # re-initialized
+
+
+def test_measure_during_a_stream_is_refused(device: SerialPhotometer) -> None:
+    with streaming_detector(device) as det:
+        det.start_stream(100)
+        with pytest.raises(SerialDetectorError, match="stop_stream first") as err:
+            det.measure(0.01)
+        assert err.value.kind == "streaming"
+
+
+def test_a_stream_left_running_is_stopped_when_the_port_opens(device: SerialPhotometer) -> None:
+    det = streaming_detector(device)
+    det.open()
+    det.start_stream(200, 0.002)
+    assert det.read_stream(1.0)
+    det._release()  # a killed run: the port goes, the device keeps streaming
+    assert device.streaming
+    with streaming_detector(device) as again:
+        assert not device.streaming
+        assert again.measure(0.01).value == pytest.approx(200.0)
