@@ -30,7 +30,8 @@ file is checked without opening anything); the driver is
 `drivers.serial_detector.detector.SerialDetector`. The package:
 :mod:`~drivers.serial_detector.errors` (the failures),
 :mod:`~drivers.serial_detector.config` (the configuration and its validation),
-:mod:`~drivers.serial_detector.lines` (reading lines from the port) and
+:mod:`~drivers.serial_detector.lines` (reading lines from the port),
+:mod:`~drivers.serial_detector.stream` (the streaming mode) and
 :mod:`~drivers.serial_detector.detector` (the driver). Its logger is
 ``drivers.serial_detector``.
 """
