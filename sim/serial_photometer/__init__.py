@@ -22,8 +22,9 @@ like an Arduino's ``println``):
 anything else       → ``ERR <reason>`` (while streaming: ``ERR streaming: ...``)
 ==================  ============================================================
 
-A stream's counts come from ``signal`` like a ``MEAS``'s, evaluated when each window
-ends: a callable signal reads the simulation's pose and time of that moment.
+A stream's counts come from ``signal`` like a ``MEAS``'s, evaluated at the middle of
+each window: a callable signal reads the simulation's pose and time of that moment (a
+rehearsal's reads the emulated motors' true positions).
 
 After a reset the device prints ``READY gonio-sim photometer 1.0`` and forgets its
 exposure and gain. Commands are processed one after the other, each taking its

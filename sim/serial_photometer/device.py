@@ -104,6 +104,7 @@ class SerialPhotometer(_PtyServer):
         self._resets = 0
         self._stream: tuple[float, float] | None = None  # (period real s, integration s)
         self._stream_gen = 0  # a tick of an older generation is a stopped stream's
+        self._window: tuple[float, bool] | Exception | None = None  # read at its middle
         self._stream_ends: list[float] = []  # time.monotonic() of each DAT line's window end
         self._t0 = time.monotonic()  # the device's clock starts at zero here
         self._init_pty_state()
@@ -265,20 +266,34 @@ class SerialPhotometer(_PtyServer):
             return f"ERR bad arguments: STREAM {' '.join(args)}"
         if integration_ms / 1000 > 1 / rate + 1e-9:
             return f"ERR integration {integration_ms} ms longer than the period"
-        period = 1 / rate / self._speedup
-        self._stream, self._stream_gen = (period, integration_ms / 1000), self._stream_gen + 1
-        heapq.heappush(self._events, _Event(at + period, next(self._seq), tick=self._stream_gen))
+        period, integration = 1 / rate / self._speedup, integration_ms / 1000
+        self._stream, self._stream_gen = (period, integration), self._stream_gen + 1
+        self._window = None
+        middle = at + period - integration / self._speedup / 2
+        heapq.heappush(
+            self._events, _Event(middle, next(self._seq), tick=self._stream_gen, middle=True)
+        )
         return "OK"
 
     def _tick_locked(self, event: _Event) -> None:
-        """A stream window ended at ``event.due``: send its line, schedule the next."""
+        """A stream window's middle (``event.middle``: read the signal, as the pose is
+        then) or end (send its line; schedule the next window's middle)."""
         if self._stream is None or event.tick != self._stream_gen:
             return
         period, integration = self._stream
+        half = integration / self._speedup / 2
+        if event.middle:
+            try:
+                self._window = self._counts_locked(integration)
+            except Exception as exc:  # a test's signal ran out of values, say
+                self._window = exc
+            heapq.heappush(self._events, _Event(event.due + half, next(self._seq), tick=event.tick))
+            return
         faults = self._faults
         if faults.silent:  # the stream stops, as a crashed sketch's would
             self._stream = None
             return
+        window, self._window = self._window, None
         if faults.garbage:
             data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
             faults.garbage = 0
@@ -287,17 +302,16 @@ class SerialPhotometer(_PtyServer):
         elif faults.malformed:
             faults.malformed -= 1
             data = _line(MALFORMED_LINE)
+        elif isinstance(window, tuple):
+            counts, saturated = window
+            t_ms = self.device_time_s(event.due) * 1000
+            self._stream_ends.append(event.due)
+            data = _line(f"DAT {t_ms:.3f} {counts!r} {'SAT' if saturated else 'OK'}")
         else:
-            try:
-                counts, saturated = self._counts_locked(integration)
-            except Exception as exc:  # a test's signal ran out of values, say
-                data = _line(f"ERR signal failed: {type(exc).__name__}")
-            else:
-                t_ms = self.device_time_s(event.due) * 1000
-                self._stream_ends.append(event.due)
-                data = _line(f"DAT {t_ms:.3f} {counts!r} {'SAT' if saturated else 'OK'}")
+            data = _line(f"ERR signal failed: {type(window).__name__}")
         self._output_locked(data)
-        heapq.heappush(self._events, _Event(event.due + period, next(self._seq), tick=event.tick))
+        middle = event.due + period - half
+        heapq.heappush(self._events, _Event(middle, next(self._seq), tick=event.tick, middle=True))
 
     def _counts_locked(self, exposure_s: float) -> tuple[float, bool]:
         """One exposure's counts (signal, noise, dark, gain) and whether it saturated."""

@@ -33,7 +33,8 @@ class _Event:
     seq: int
     data: bytes = field(compare=False, default=b"")
     reset: bool = field(compare=False, default=False)
-    tick: int = field(compare=False, default=-1)  # ≥ 0: a stream's window ends (its generation)
+    tick: int = field(compare=False, default=-1)  # ≥ 0: a stream's window (its generation)
+    middle: bool = field(compare=False, default=False)  # the window's middle, not its end
 
 
 class _PtyServer:

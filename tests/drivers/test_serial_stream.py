@@ -49,7 +49,8 @@ def test_the_commands_on_the_wire_and_the_values(device: SerialPhotometer) -> No
     assert len(readings) == len(device.stream_ends)
     assert all(r.value == pytest.approx(20_000 * 0.002) for r in readings)
     # the device's timestamps, in its milliseconds, end windows one period apart
-    device_t = [r.device_t_s for r in readings]
+    device_t = [r.device_t_s for r in readings if r.device_t_s is not None]
+    assert len(device_t) == len(readings)
     assert all(b - a == pytest.approx(0.004, abs=2e-6) for a, b in itertools.pairwise(device_t))
     truth = device.stream_ends
     again = restamped(readings)
@@ -157,3 +158,20 @@ def test_a_stream_left_running_is_stopped_when_the_port_opens(device: SerialPhot
     with streaming_detector(device) as again:
         assert not device.streaming
         assert again.measure(0.01).value == pytest.approx(200.0)
+
+
+def test_the_simulated_photometer_reads_its_signal_at_each_window_middle() -> None:
+    calls: list[float] = []
+
+    def signal(exposure_s: float) -> float:
+        calls.append(time.monotonic())
+        return 100.0
+
+    with SerialPhotometer(signal) as dev, streaming_detector(dev) as det:
+        det.start_stream(50, 0.01)
+        readings = collect(det, 0.2) + det.stop_stream()
+        ends = dev.stream_ends
+    assert readings and len(calls) >= len(ends)
+    late = sorted(c - (e - 0.005) for c, e in zip(calls, ends, strict=False))
+    assert all(c < e for c, e in zip(calls, ends, strict=False))  # read before the line is sent
+    assert abs(late[len(late) // 2]) < 0.002
