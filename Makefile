@@ -62,6 +62,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5
 	$(BIN)/python benchmarks/instruments.py
