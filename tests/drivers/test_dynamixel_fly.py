@@ -12,7 +12,7 @@ from collections.abc import Callable
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, sync_read_bytes
-from sim.dynamixel.emulator import DxlEmulator
+from sim.dynamixel.emulator import DxlEmulator, Fault
 
 AXES = [
     AxisConfig(
@@ -64,3 +64,44 @@ def test_polls_in_real_time_follow_the_emulated_trajectory(
         path = [p.positions[axis] for p in polls]
         between = [v for v in path if abs(v - start[axis]) > TICK and abs(v - goal) > TICK]
         assert len(between) >= 10, f"{axis}: {len(between)} intermediate positions"
+
+
+def test_a_sweep_writes_its_profile_and_the_next_move_restores_the_configured_one(
+    emulator: Callable[..., DxlEmulator], latency_timer: int
+) -> None:
+    emu = emulator(ids=(1, 2, 3))
+    with DynamixelBus(emu.path, AXES, latency_ms=latency_timer) as bus:
+        configured = {a.motor_id: a.profile_registers() for a in AXES}
+        bus.health()  # a read: opening's writes have been served
+        emu.reset_stats()
+        speeds = bus.sweep({"axis1": 0.5, "axis2": -0.5}, {"axis1": 1.0, "axis2": 0.5})
+        bus.health()  # a read: everything sent before has been served
+        assert emu.stats.instructions["SYNC_WRITE"] == 3  # acceleration, velocity, goals
+        for name, motor_id in (("axis1", 1), ("axis2", 2)):
+            register = emu.motors[motor_id].get("profile_velocity")
+            assert register == round(speeds[name] / (0.229 * 2 * math.pi / 60))
+            assert register != configured[motor_id][0]
+        assert emu.motors[3].get("profile_velocity") == configured[3][0]  # not swept
+        bus.move_to({"axis1": 0.0})
+        bus.health()
+        for motor_id, (velocity, acceleration) in configured.items():
+            assert emu.motors[motor_id].get("profile_velocity") == velocity
+            assert emu.motors[motor_id].get("profile_acceleration") == acceleration
+        emu.reset_stats()
+        bus.move_to({"axis1": 0.1})  # restored once: a plain move is one SYNC_WRITE again
+        bus.health()
+        assert emu.stats.instructions["SYNC_WRITE"] == 1
+
+
+def test_a_retried_poll_is_stamped_by_the_attempt_that_answered(
+    emulator: Callable[..., DxlEmulator], latency_timer: int
+) -> None:
+    emu = emulator(ids=(1, 2, 3), clock=time.monotonic)
+    with DynamixelBus(emu.path, AXES, latency_ms=latency_timer, retries=1) as bus:
+        emu.inject(Fault.NO_REPLY, motor_id=2, count=1)
+        before = time.monotonic()
+        poll = bus.poll_positions()
+        # the first attempt waited out its timeout (2 × latency timer + 2 ms) first
+        assert poll.request_s - before >= 2 * latency_timer / 1000
+        assert poll.window_s < latency_timer / 1000
+        assert emu.stats.instructions["SYNC_READ"] >= 2
