@@ -1,7 +1,8 @@
 """Sweeps on the rehearsal path in real time: `DynamixelBus` polls the byte-level emulator
-over a pty while its motors really move (wire time and return delays on, the host's
-monotonic clock on both sides), and every polled position is within one encoder tick
-plus v · (reply − request) of the emulator's own trajectory."""
+over a pty while its motors really move (wire time and return delays on), and every
+polled position is within one encoder tick plus v · (reply − request) of the emulator's
+own trajectory; a sweep's profile lasts for its move; a retried poll is stamped by the
+attempt that answered; a rehearsal's bus stamps its polls on the run's (sped-up) clock."""
 
 from __future__ import annotations
 
@@ -12,7 +13,12 @@ from collections.abc import Callable
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, sync_read_bytes
+from gonio.rig.model import Rig
+from gonio.workflows.rehearsal import rehearsal_devices
 from sim.dynamixel.emulator import DxlEmulator, Fault
+from sim.rehearsal import RehearsalSide
+from sim.scene import load_scene
+from tests.conftest import CONFIGS
 
 AXES = [
     AxisConfig(
@@ -105,3 +111,36 @@ def test_a_retried_poll_is_stamped_by_the_attempt_that_answered(
         assert poll.request_s - before >= 2 * latency_timer / 1000
         assert poll.window_s < latency_timer / 1000
         assert emu.stats.instructions["SYNC_READ"] >= 2
+
+
+def test_a_rehearsal_stamps_its_polls_on_the_runs_clock() -> None:
+    """`gonio acquire --rehearse`'s devices: the real bus polls the emulator, whose motion
+    runs on the rehearsal's sped-up clock, and stamps each poll on that same clock."""
+    rig = Rig.from_yaml(CONFIGS / "rigs" / "arch_serial.yaml")
+    scene = load_scene(CONFIGS / "scenes" / "matte.yaml")
+    with rehearsal_devices(rig, scene, None, 10.0, wire_time=True) as (devices, clock):
+        side = devices.simulation
+        assert isinstance(side, RehearsalSide) and side.peers is not None
+        motors = side.peers.emulator.motors
+        axes = {a.name: a for a in rig.bus_axes()}
+        with devices:
+            bus = devices.bus
+            start = bus.positions()
+            axis = rig.axes[0]
+            goal = start[axis] + 0.3
+            speeds = bus.sweep({axis: goal}, {axis: 0.2 * bus.velocity_limits()[axis]})
+            polls = [bus.poll_positions()]
+            truth = []
+            while True:
+                poll = polls[-1]
+                a = axes[axis]
+                truth.append(a.to_rad(round(motors[a.motor_id].position_at(poll.middle_s))))
+                if poll.arrived:
+                    break
+                polls.append(bus.poll_positions())
+            assert abs(polls[-1].reply_s - clock.now()) < 1.0  # the run's clock, not the host's
+    between = [p for p in polls if start[axis] + 0.01 < p.positions[axis] < goal - 0.01]
+    assert len(between) >= 5
+    for poll, true in zip(polls, truth, strict=True):
+        bound = axes[axis].resolution_rad + speeds[axis] * poll.window_s + 1e-9
+        assert abs(poll.positions[axis] - true) <= bound
