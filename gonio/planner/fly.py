@@ -127,8 +127,10 @@ def lay_line(rig: Rig, fly: FlySpec, anchor: FloatArray, laid: _Laid, line: int)
     bad = np.concatenate([[0], np.cumsum(~commandable)])
     rate = _rate(rig, poses, commandable)
     v = min(math.radians(fly.blur) / (rate * t_int), float(rig.velocity[j]))
-    a = float(rig.acceleration[j])
-    ramp_d, ramp_t = v * v / (2.0 * a), v / a
+    velocity = np.zeros_like(anchor)
+    velocity[j] = v
+    ramp_t, ramp = rig.travel.ramp(velocity)  # trapezoidal: v / a, then v² / 2a
+    ramp_d = float(ramp[j])
     ds, half = v * period, 0.5 * v * t_int
     count = math.floor((hi - lo - 2.0 * half) / ds) + 1
     mids_x = lo + half + ds * np.arange(max(count, 0))
@@ -166,13 +168,11 @@ def lay_line(rig: Rig, fly: FlySpec, anchor: FloatArray, laid: _Laid, line: int)
             pose = anchor.copy()
             pose[j] = x
             row.append(pose)
-        velocity = np.zeros_like(anchor)
-        velocity[j] = v
         laid.start.append(row[0])
         laid.entry.append(row[1])
         laid.exit.append(row[2])
         laid.stop.append(row[3])
-        laid.velocity.append(velocity)
+        laid.velocity.append(velocity.copy())
         laid.ramp_s.append(ramp_t)
         laid.smear.append(rate * v * t_int)
         laid.mids.append(mids[a1 : b1 + 1])

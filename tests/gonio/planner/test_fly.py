@@ -237,3 +237,15 @@ def test_fly_options_belong_to_the_fly_strategy() -> None:
         PlanSpec.model_validate(
             {"name": "x", "sampling": {"strategy": "sobol", "target": 10, "fly": {}}}
         )
+
+
+def test_a_ramp_is_half_of_a_trapezoidal_move_that_just_reaches_the_velocity(
+    rigs: dict[str, Rig],
+) -> None:
+    travel = rigs["arch"].travel
+    v = np.array([0.0, 0.0, 0.5, 0.0])
+    t, d = travel.ramp(v)
+    a = travel.acceleration[2]
+    assert t == pytest.approx(0.5 / a) and d[2] == pytest.approx(0.5**2 / (2 * a))
+    # a move over twice the ramp's distance peaks at v exactly: twice the ramp's time
+    assert travel.time(np.zeros(4), 2 * d) == pytest.approx(2 * t)
