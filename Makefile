@@ -92,6 +92,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/adaptive_weights.py
 	$(BIN)/python benchmarks/adaptive_limit.py
 	$(BIN)/python benchmarks/planner.py
+	$(BIN)/python benchmarks/fly_plan.py
 	$(BIN)/python benchmarks/make_test.py
 
 # The study (docs/explanations/tradeoff.md "The study"): the `gonio tradeoff` sweeps of
