@@ -62,6 +62,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/stream.py
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5
@@ -92,6 +93,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/adaptive_weights.py
 	$(BIN)/python benchmarks/adaptive_limit.py
 	$(BIN)/python benchmarks/planner.py
+	$(BIN)/python benchmarks/fly_plan.py
 	$(BIN)/python benchmarks/make_test.py
 
 # The study (docs/explanations/tradeoff.md "The study"): the `gonio tradeoff` sweeps of

@@ -41,6 +41,27 @@ Motion (`MotorBus`)
       never raises `MotorFault`.
     * ``positions()`` are read back from the devices (encoders), never the goals.
 
+Sweeps (`MotorBus`, for measuring while moving)
+    * ``sweep(targets, velocities, accelerations)`` is ``move_to`` with a velocity
+      profile chosen for this move: each named axis runs a trapezoidal profile at its
+      given velocity (rad/s) and acceleration (rad/s²; default its configured one) to
+      its target, and returns at once with the velocities actually commanded (the
+      device's register step). The checks of ``move_to`` come first and send nothing
+      (a target outside the limits, an unknown axis, torque off); so does a velocity
+      or acceleration that is not finite, not positive, or above the axis's configured
+      one (``velocity_limits()``), as `LimitError`. The profile lasts for that move
+      only: the next ``move_to`` runs the configured profile again.
+    * ``poll_positions()`` reads every axis's position once (one transaction on a
+      bus: a SYNC_READ) and returns `StampedPositions`: the positions (rad) and the
+      clock's time just before the request left (``request_s``) and just after the
+      reply arrived (``reply_s``), ``request_s`` ≤ ``reply_s`` ≤ the next poll's
+      ``request_s``. The positions were sampled somewhere in that window, so an axis
+      moving at v rad/s is known to v · (``reply_s`` − ``request_s``) plus one encoder
+      tick. Polling never commands anything; it may be called while axes move, and a
+      fault it meets holds every answering axis before it propagates (as ``positions``).
+    * Polled positions are monotone along a sweep's path, and a sweep ends, like any
+      move, with ``wait_settled``.
+
 Measuring (`Detector`)
     ``measure(exposure_s, averages)`` exposes ``averages`` times and returns one
     `Reading` stamped with the clock's time at the start and the end of the exposures.
@@ -94,6 +115,7 @@ Simulation only (`Simulated`)
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping, Sequence
 from contextlib import ExitStack
@@ -274,6 +296,30 @@ class RangeChange:
     new: float
 
 
+@dataclass(frozen=True)
+class StampedPositions:
+    """One poll of the axes while they may move: ``positions`` (rad, per axis) read in
+    one transaction, ``request_s`` the clock's time (s) just before the request was sent
+    and ``reply_s`` just after the last reply arrived; the positions were sampled in
+    between. ``arrived`` is True when every axis is within its position tolerance of its
+    last goal (the sweep's motion is over; ``wait_settled`` confirms it)."""
+
+    positions: dict[str, float]
+    request_s: float
+    reply_s: float
+    arrived: bool = False
+
+    @property
+    def middle_s(self) -> float:
+        """The middle of the poll's window (s): the best single time for its positions."""
+        return 0.5 * (self.request_s + self.reply_s)
+
+    @property
+    def window_s(self) -> float:
+        """How long the poll took (s): its timing uncertainty is at most this."""
+        return self.reply_s - self.request_s
+
+
 # -- time -------------------------------------------------------------------------------
 
 
@@ -378,6 +424,27 @@ class MotorBus(Device, Protocol):
         """Positions read back from the devices (rad)."""
         ...
 
+    def velocity_limits(self) -> dict[str, float]:
+        """Each axis's configured profile velocity (rad/s): the fastest a sweep may ask."""
+        ...
+
+    def sweep(
+        self,
+        targets: Mapping[str, float],
+        velocities: Mapping[str, float],
+        accelerations: Mapping[str, float] | None = None,
+    ) -> dict[str, float]:
+        """Start a move of the named axes to ``targets`` (rad) at ``velocities`` (rad/s)
+        with ``accelerations`` (rad/s²; default the configured ones), for this move only;
+        returns at once with the velocities commanded (rad/s). `LimitError`, `TorqueOff`
+        or `DriverError` before anything is sent (the module docstring)."""
+        ...
+
+    def poll_positions(self) -> StampedPositions:
+        """Positions (rad) in one transaction, stamped at request and reply (s); safe
+        while moving. A fault holds every answering axis before it propagates."""
+        ...
+
     def stop(self) -> None:
         """Hold every answering axis where it is now (`CommError` names any not held)."""
         ...
@@ -469,6 +536,41 @@ def streaming(detector: Detector) -> StreamingDetector:
             "use stop-and-go acquisition"
         )
     return detector  # type: ignore[return-value]
+
+
+def sweep_profile(
+    targets: Mapping[str, float],
+    velocities: Mapping[str, float],
+    accelerations: Mapping[str, float] | None,
+    top_velocity: Mapping[str, float],
+    top_acceleration: Mapping[str, float],
+) -> dict[str, tuple[float, float]]:
+    """A sweep's (velocity rad/s, acceleration rad/s²) per target axis, checked against
+    the configured ``top_velocity`` / ``top_acceleration`` (the rules of ``sweep``):
+    `DriverError` for an axis without a target or unknown, `LimitError` for a rate that
+    is missing, not finite, not positive or above the configured one. Sends nothing."""
+    accelerations = accelerations or {}
+    for name in (*velocities, *accelerations):
+        if name not in targets:
+            raise DriverError(f"sweep: axis {name!r} has a velocity but no target")
+    out = {}
+    for name in targets:
+        if name not in top_velocity:
+            raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(top_velocity)}")
+        if name not in velocities:
+            raise LimitError(f"sweep: axis {name!r} has no velocity; nothing was sent")
+        rates = (float(velocities[name]), float(accelerations.get(name, top_acceleration[name])))
+        tops = (top_velocity[name], top_acceleration[name])
+        for what, rate, top, unit in zip(
+            ("velocity", "acceleration"), rates, tops, ("rad/s", "rad/s²"), strict=True
+        ):
+            if not (math.isfinite(rate) and 0 < rate <= top * (1 + 1e-9)):
+                raise LimitError(
+                    f"axis {name!r}: sweep {what} {rate!r} {unit} is not in (0, {top:.6g}] "
+                    f"{unit} (its configured {what}); nothing was sent"
+                )
+        out[name] = rates
+    return out
 
 
 class LightSource(Device, Protocol):

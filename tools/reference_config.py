@@ -127,6 +127,35 @@ LOADER_ONLY: tuple[LoaderCheck, ...] = (
                        ("sampling.adaptive", {"model": "lambert+nosuch"}))),
     ),
     LoaderCheck(
+        "plan", "sampling.fly", "options of the fly strategy",
+        "`sampling.fly`: only with `strategy: fly`.",
+        (_QUICKSTART, (("sampling.fly", {}),)),
+    ),
+    LoaderCheck(
+        "plan", "sampling.warps", "lays out uniform sweeps",
+        "`sampling.warps`: not with the fly strategy.",
+        (_QUICKSTART, (("sampling.strategy", "fly"),
+                       ("sampling.warps", {"theta_h": {"power": 2}}))),
+    ),
+    LoaderCheck(
+        "plan", "sampling.fly.integration_s", "expected at most 1 / rate_hz",
+        "`sampling.fly.integration_s`: at most 1 / `rate_hz`.",
+        (_QUICKSTART, (("sampling.strategy", "fly"),
+                       ("sampling.fly", {"rate_hz": 100, "integration_s": 0.5}))),
+    ),
+    LoaderCheck(
+        "plan", "sampling.fly.blur_deg", "not both",
+        "`sampling.fly.blur_deg`: not with `lobe_width_deg`.",
+        (_QUICKSTART, (("sampling.strategy", "fly"),
+                       ("sampling.fly", {"blur_deg": 1, "lobe_width_deg": 4}))),
+    ),
+    LoaderCheck(
+        "plan", "exposure.adapt", "reads at a fixed rate",
+        "`exposure.adapt`: not with the fly strategy.",
+        (_QUICKSTART, (("sampling.strategy", "fly"),
+                       ("exposure.adapt", {"material": _LAMBERT, "min_s": 0.01, "max_s": 1}))),
+    ),
+    LoaderCheck(
         "plan", "exposure.adapt.min_s", "at most max_s",
         "`exposure.adapt.min_s`: at most `max_s`.",
         (_QUICKSTART, (("exposure.adapt", {"material": _LAMBERT, "min_s": 2, "max_s": 1}),)),

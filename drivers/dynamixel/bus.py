@@ -20,6 +20,13 @@ back in one SYNC_READ, whose status packets also carry each motor's alert bit. S
   raises `DeviceClosed` (the contract in `drivers.base`);
 - `reboot` clears faulted motors and brings them back holding, configured.
 
+Sweeps (measuring while moving): `sweep` writes the axes' Profile Acceleration and
+Profile Velocity for that move, then the goals (three SYNC_WRITEs; the limits and the
+rates are checked before the first byte); the next `move_to` writes the configured
+profiles back first. `poll_positions` is one SYNC_READ of Present Position (4 bytes per
+motor), stamped on the bus's clock just before the instruction leaves and just after
+the last status arrives.
+
 EEPROM items (operating mode, drive mode, position limits) are read first and written
 only when they differ; only the motors that need such a write have their torque turned
 off (and read back off) before it, so opening a configured bus never drops an arm.
@@ -35,6 +42,7 @@ from types import TracebackType
 
 from drivers.base import (
     MOTION_FAULTS,
+    Clock,
     CommError,
     DeviceClosed,
     DriverError,
@@ -43,12 +51,17 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Resource,
+    StampedPositions,
+    SystemClock,
     TorqueOff,
+    sweep_profile,
 )
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import (
     FACTORY_BAUD,
     MODELS,
+    RAD_S2_PER_ACCELERATION_UNIT,
+    RAD_S_PER_VELOCITY_UNIT,
     VOLT_PER_UNIT,
     decode_hardware_error,
     item,
@@ -68,7 +81,9 @@ class DynamixelBus(Resource):
     to 1 Mbps); ``retries`` extra attempts per transaction; ``settle_ticks`` how close
     (in motor ticks) an axis must be to its goal to count as settled; ``configure``
     writes operating mode, drive mode, position limits and profiles on open;
-    ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again.
+    ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again;
+    ``clock`` stamps `poll_positions` (default the host's monotonic clock; a rehearsal
+    passes its run's clock).
     """
 
     def __init__(
@@ -83,6 +98,7 @@ class DynamixelBus(Resource):
         poll_interval_s: float = 0.002,
         configure: bool = True,
         reboot_timeout_s: float = 2.0,
+        clock: Clock | None = None,
     ) -> None:
         if not axes:
             raise ValueError("a bus needs at least one axis")
@@ -102,9 +118,12 @@ class DynamixelBus(Resource):
         self.poll_interval_s = poll_interval_s
         self.configure = configure
         self.reboot_timeout_s = reboot_timeout_s
+        self.clock: Clock = clock if clock is not None else SystemClock()
         self.models: dict[str, str] = {}
         self._goals: dict[str, int] = {}
         self._torque_on = False
+        #: Motors running a sweep's profile: the next `move_to` restores the configured one.
+        self._swept: set[int] = set()
 
     # -- lifecycle ---------------------------------------------------------------------
     @property
@@ -135,6 +154,7 @@ class DynamixelBus(Resource):
         if self._link.is_open:
             return
         self._link.open()
+        self._swept.clear()
         try:
             for axis in self._axes.values():
                 model = self._link.ping(axis.motor_id)
@@ -242,8 +262,26 @@ class DynamixelBus(Resource):
 
     def move_to(self, targets: Mapping[str, float]) -> None:
         """Command axis angles (rad) in one SYNC_WRITE; returns at once. `LimitError`
-        (a target outside its limits or not finite) and `TorqueOff` send nothing."""
+        (a target outside its limits or not finite) and `TorqueOff` send nothing. After
+        a sweep, the configured profiles are written back first."""
         self._check_open()
+        goals = self._goal_ticks(targets)
+        if not self._torque_on:
+            raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
+        with self._holding_on_fault():
+            if self._swept:
+                self._write_profiles(sorted(self._swept))
+                self._swept.clear()
+            self._send_goals(goals)
+
+    def _send_goals(self, goals: Mapping[str, int]) -> None:
+        self._link.sync_write(
+            "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
+        )
+        self._goals.update(goals)
+
+    def _goal_ticks(self, targets: Mapping[str, float]) -> dict[str, int]:
+        """Goal registers of ``targets`` (rad); `LimitError` / `DriverError` first."""
         goals: dict[str, int] = {}
         for name, angle in targets.items():
             axis = self._axis(name)
@@ -254,13 +292,61 @@ class DynamixelBus(Resource):
                     "nothing was sent"
                 )
             goals[name] = _within(axis, axis.to_ticks(float(angle)))
+        return goals
+
+    def velocity_limits(self) -> dict[str, float]:
+        """Each axis's configured profile velocity (rad/s): the fastest a sweep may ask."""
+        return {n: a.profile_velocity_rad_s for n, a in self._axes.items()}
+
+    def sweep(
+        self,
+        targets: Mapping[str, float],
+        velocities: Mapping[str, float],
+        accelerations: Mapping[str, float] | None = None,
+    ) -> dict[str, float]:
+        """Move the named axes to ``targets`` (rad) at ``velocities`` (rad/s) with
+        ``accelerations`` (rad/s²; default the configured ones), for this move only.
+
+        Writes Profile Acceleration, Profile Velocity, then Goal Position (one
+        SYNC_WRITE each) and returns at once with the velocities the registers hold
+        (rad/s; one step is 0.229 rev/min of the motor). `LimitError` (a target outside
+        its limits, a rate not in (0, configured] or below one register step),
+        `DriverError` (an unknown axis) and `TorqueOff` send nothing.
+        """
+        self._check_open()
+        goals = self._goal_ticks(targets)
+        rates = sweep_profile(
+            targets,
+            velocities,
+            accelerations,
+            self.velocity_limits(),
+            {n: a.profile_acceleration_rad_s2 for n, a in self._axes.items()},
+        )
+        registers: dict[int, tuple[int, int]] = {}
+        commanded: dict[str, float] = {}
+        for name, (velocity, acceleration) in rates.items():
+            axis = self._axes[name]
+            v = round(velocity * axis.gear_ratio / RAD_S_PER_VELOCITY_UNIT)
+            a = round(acceleration * axis.gear_ratio / RAD_S2_PER_ACCELERATION_UNIT)
+            if v < 1 or a < 1:
+                raise LimitError(
+                    f"axis {name!r}: sweep velocity {velocity:.6g} rad/s or acceleration "
+                    f"{acceleration:.6g} rad/s² is below one register step of the motor "
+                    f"({RAD_S_PER_VELOCITY_UNIT / axis.gear_ratio:.6g} rad/s, "
+                    f"{RAD_S2_PER_ACCELERATION_UNIT / axis.gear_ratio:.6g} rad/s²); "
+                    "nothing was sent"
+                )
+            registers[axis.motor_id] = (v, a)
+            commanded[name] = v * RAD_S_PER_VELOCITY_UNIT / axis.gear_ratio
         if not self._torque_on:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
         with self._holding_on_fault():
-            self._link.sync_write(
-                "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
-            )
-        self._goals.update(goals)
+            self._swept.update(registers)
+            link = self._link
+            link.sync_write("profile_acceleration", {m: r[1] for m, r in registers.items()})
+            link.sync_write("profile_velocity", {m: r[0] for m, r in registers.items()})
+            self._send_goals(goals)
+        return commanded
 
     def _state(self) -> dict[str, tuple[bool, int]]:
         """{axis: (moving, present ticks)} from one SYNC_READ of Moving … Present Position."""
@@ -282,6 +368,28 @@ class DynamixelBus(Resource):
         with self._holding_on_fault():
             state = self._state()
         return {name: self._axes[name].to_rad(ticks) for name, (_, ticks) in state.items()}
+
+    def poll_positions(self) -> StampedPositions:
+        """Axis angles (rad) from one SYNC_READ of Present Position, stamped on the bus's
+        clock just before the instruction is sent and just after the last status arrives
+        (the successful attempt's, after a retry). Safe while moving; `MotorFault` and
+        `CommError` hold every answering axis before they propagate."""
+        self._check_open()
+        ids = [a.motor_id for a in self._axes.values()]
+        with self._holding_on_fault():
+            raw, request_s, reply_s = self._link.sync_read_stamped(
+                ids, _PRESENT.name, _PRESENT.name, self.clock.now
+            )
+        ticks = {name: _PRESENT.decode(raw[axis.motor_id]) for name, axis in self._axes.items()}
+        arrived = all(
+            abs(t - self._goals.get(name, t)) <= self.settle_ticks for name, t in ticks.items()
+        )
+        return StampedPositions(
+            {name: self._axes[name].to_rad(t) for name, t in ticks.items()},
+            request_s,
+            reply_s,
+            arrived,
+        )
 
     def wait_settled(self, timeout_s: float) -> None:
         """Return once no axis is moving and each is within ``settle_ticks`` of its goal
@@ -408,6 +516,7 @@ class DynamixelBus(Resource):
             if link.hardware_error(motor_id):
                 raise link.fault(motor_id)
         self._write_profiles(motor_ids)
+        self._swept.difference_update(motor_ids)
         self._hold(names)
         link.sync_write("torque_enable", dict.fromkeys(motor_ids, 1))
         for motor_id in motor_ids:  # read back: the motor holds, or we say so

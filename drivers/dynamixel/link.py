@@ -433,14 +433,37 @@ class DynamixelLink(Resource):
         Returns {motor id: raw bytes}; with ``alerts``, a reply with the alert bit raises
         `MotorFault` (other error bits always raise).
         """
+        data, _, _ = self.sync_read_stamped(ids, first, last, time.monotonic, alerts=alerts)
+        return data
+
+    def sync_read_stamped(
+        self,
+        ids: Iterable[int],
+        first: str,
+        last: str,
+        now: Callable[[], float],
+        *,
+        alerts: bool = True,
+    ) -> tuple[dict[int, bytes], float, float]:
+        """As `sync_read`, with the times (s, on ``now``) just before the successful
+        attempt's instruction was sent and just after its last status arrived: the
+        motors sampled the data in between. ({motor id: raw bytes}, request_s, reply_s)."""
         start, end = item(first), item(last)
         length = end.address + end.size - start.address
         ids = list(ids)
         group = _AlertAwareSyncRead(self._handler(), self._packets, start.address, length)
         for motor_id in ids:
             group.addParam(motor_id)
+        stamps = [0.0, 0.0]
+
+        def call() -> tuple[None, int]:
+            stamps[0] = now()
+            result = group.read()
+            stamps[1] = now()
+            return None, result
+
         try:
-            self._attempt(f"sync-reading {first}…{last}", None, lambda: (None, group.read()))
+            self._attempt(f"sync-reading {first}…{last}", None, call)
         except CommError as exc:
             if group.failed is None:
                 raise
@@ -454,7 +477,8 @@ class DynamixelLink(Resource):
         for motor_id in ids:
             error = group.errors[motor_id] if alerts else group.errors[motor_id] & ~ALERT
             self._check_status(motor_id, error, f"sync-reading {first}…{last}")
-        return {motor_id: bytes(group.data_dict[motor_id]) for motor_id in ids}
+        data = {motor_id: bytes(group.data_dict[motor_id]) for motor_id in ids}
+        return data, stamps[0], stamps[1]
 
     def reboot(self, motor_id: int) -> None:
         """Reboot a motor (clears its hardware error; torque comes back off). The status

@@ -36,6 +36,8 @@ def render_summary(plan: Plan) -> str:
         )
     if s.second_pass is not None:
         lines.append(f"  {'second pass':<26}{'':>9}   {s.second_pass}")
+    if s.fly is not None:
+        return "\n".join([*lines, "", *fly_lines(s), f"  {'ordering':<26}{ordering_line(s)}"])
     lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
@@ -68,6 +70,35 @@ def render_summary(plan: Plan) -> str:
         f"  {'ordering took':<26}{s.ordering_s:>8.1f}s",
     ]
     return "\n".join(lines)
+
+
+def fly_lines(s: Summary) -> list[str]:
+    """A fly plan's lines of the summary: its sweeps, their velocities, the predicted
+    readings and duration against stop-and-go, and the coverage figure."""
+    f = s.fly
+    assert f is not None
+    per_hour = 3600.0 * s.kept / max(s.total_s, 1e-12)
+    sg_per_hour = 3600.0 * s.kept / max(f.stop_and_go_s, 1e-12)
+    speeds = (
+        f"{f.velocity_min_deg_s:.3g}°/s"
+        if abs(f.velocity_max_deg_s - f.velocity_min_deg_s) < 1e-9
+        else f"{f.velocity_min_deg_s:.3g}–{f.velocity_max_deg_s:.3g}°/s"
+    )
+    return [
+        f"  {'sweeps':<26}{f.segments:>9}   (on {f.lines} lines)",
+        f"  {'sweep velocity':<26}{speeds:>9}   (smear ≤ {f.smear_max_deg:.3g}° per reading, "
+        f"budget {f.blur_deg:g}°)",
+        f"  {'readings':<26}{s.kept:>9}   ({1 / f.period_s:g} Hz, {1e3 * f.integration_s:g} ms "
+        "each)",
+        f"  {'predicted duration':<26}{hms(s.total_s):>9}   (constant velocity "
+        f"{hms(f.cruise_s)}, ramps {hms(f.ramps_s)}, moves + settle {hms(f.moves_s)})",
+        f"  {'readings per hour':<26}{per_hour:>9,.0f}   (stop-and-go: {sg_per_hour:,.0f}, "
+        f"{hms(f.stop_and_go_s)} for as many; {f.stop_and_go_s / max(s.total_s, 1e-12):.1f}× "
+        "faster)",
+        f"  {'coverage (TV distance)':<26}{f.coverage_tv:>9.3f}   (to uniform over the reach, "
+        f"{f.coverage_bins} bins a coordinate; a uniform stop-and-go plan of as many: "
+        f"{f.coverage_tv_uniform:.3f})",
+    ]
 
 
 def _dark_subtracted(plan: Plan) -> bool:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from gonio.config import ConfigError, spec_text
-from gonio.planner import lkh, placement, poses, sampling
+from gonio.planner import fly, lkh, placement, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.model import Plan, Summary
@@ -194,7 +194,11 @@ def build(
     hash (`gonio.planner.files.load_plan_source` gives them; default: the spec as YAML,
     `spec_text`). ``placed``: points already placed (generation order; the adaptive
     strategy's second pass, `gonio.planner.two_pass`) instead of the spec's; ``start``:
-    the pose the motors leave from (default the rig's home)."""
+    the pose the motors leave from (default the rig's home). A fly plan
+    (``sampling.strategy: fly``) is laid out by `gonio.planner.fly.build_fly` (no
+    lower bounds)."""
+    if spec.sampling.strategy == "fly" and placed is None:
+        return fly.build_fly(spec, rig, where=where, text=text, start=start)
     check_detector(spec, rig, where, text)
     coords, shape = place(spec, rig, where) if placed is None else (placed, None)
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)

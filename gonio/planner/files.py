@@ -11,6 +11,7 @@ A stored plan is a header of ``# KEY: JSON`` lines, then the targets as CSV
     # rig: "arch-4axis"    the rig's name
     # rig_text: "..."      the rig file's text (a JSON string)
     # summary: {...}       the `Summary` (JSON)
+    # sweeps: {...}        a fly plan's segments (`Sweeps`, JSON; only in a fly plan)
     # hashes: {"plan_sha256": …, "rig_sha256": …, "content": …, "file_sha256": …}
     index,generated,hbar,k,…
     0,1234,0.51…,…
@@ -40,7 +41,7 @@ from pydantic import TypeAdapter, ValidationError
 from gonio.config import ConfigError, describe, line_of, load, read_bytes, read_yaml
 from gonio.output import reserve_output
 from gonio.planner.builder import build
-from gonio.planner.model import Plan, Summary, content_hash, sha256
+from gonio.planner.model import SWEEP_ARRAYS, Plan, Summary, Sweeps, content_hash, sha256
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 
@@ -93,7 +94,9 @@ def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[Pla
 #: The first line of every stored plan; the version names this layout.
 MAGIC = "# gonio-plan v1"
 #: The header's keys, in the order they are written.
-KEYS = ("spec", "plan_text", "rig", "rig_text", "summary", "hashes")
+KEYS = ("spec", "plan_text", "rig", "rig_text", "summary", "sweeps", "hashes")
+#: Header keys a stored plan may leave out (a stop-and-go plan has no sweeps).
+OPTIONAL = frozenset({"sweeps"})
 HASHES = ("plan_sha256", "rig_sha256", "content", "file_sha256")
 #: Integer columns (every other column is a float64 written with repr).
 INTEGER = frozenset({"index", "generated", "averages"})
@@ -142,6 +145,10 @@ def plan_bytes(plan: Plan) -> bytes:
         "refused": dict(s.refused),
         "grid_shape": None if s.grid_shape is None else list(s.grid_shape),
     }
+    if s.fly is None:
+        del summary["fly"]  # a stop-and-go plan's bytes as before fly plans existed
+    else:
+        summary["fly"] = dataclasses.asdict(s.fly)
     header = {
         "spec": plan.spec.model_dump(mode="json"),
         "plan_text": plan.plan_text.decode("utf-8"),
@@ -149,7 +156,14 @@ def plan_bytes(plan: Plan) -> bytes:
         "rig_text": plan.rig.text.decode("utf-8"),
         "summary": summary,
     }
-    lines = [MAGIC, *(f"# {key}: {_json(header[key])}" for key in KEYS[:-1])]
+    if plan.sweeps is not None:
+        w = plan.sweeps
+        header["sweeps"] = {
+            **{name: getattr(w, name).tolist() for name in SWEEP_ARRAYS},
+            "period_s": w.period_s,
+            "integration_s": w.integration_s,
+        }
+    lines = [MAGIC, *(f"# {key}: {_json(header[key])}" for key in KEYS[:-1] if key in header)]
     before = ("\n".join(lines) + "\n").encode("utf-8")
     hashes = {
         "plan_sha256": sha256(plan.plan_text),
@@ -207,7 +221,7 @@ def _header(path: Path, raw: bytes) -> tuple[dict[str, Any], dict[str, int], int
         except ValueError as exc:
             raise ConfigError(f"{path}:{number}: {key}: not valid JSON: {exc}") from None
         lines[key] = number
-    missing = [k for k in KEYS if k not in values]
+    missing = [k for k in KEYS if k not in values and k not in OPTIONAL]
     if missing:
         raise ConfigError(f"{path}: header: expected a '# {missing[0]}: …' line before the CSV")
     return values, lines, offset, hashed
@@ -253,6 +267,8 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
     fields = {f.name for f in dataclasses.fields(Summary)}
     if isinstance(data, dict) and "second_pass" not in data:
         data = {**data, "second_pass": None}  # stored before the field existed
+    if isinstance(data, dict) and "fly" not in data:
+        data = {**data, "fly": None}  # a stop-and-go plan
     if not isinstance(data, dict) or set(data) != fields:
         got = set(data) if isinstance(data, dict) else set()
         detail = ", ".join(sorted(fields ^ got)) or type(data).__name__
@@ -264,6 +280,46 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
             f"{path}:{line}: summary.{describe(exc.errors(include_url=False)[0])}"
         ) from None
     return summary
+
+
+def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps:
+    """A fly plan's segments from the header's JSON, every field checked."""
+    fields = [*SWEEP_ARRAYS, "period_s", "integration_s"]
+    if not isinstance(data, dict) or sorted(data) != sorted(fields):
+        raise ConfigError(f"{path}:{line}: sweeps: expected exactly {', '.join(fields)}")
+    arrays = {}
+    for name, dtype in SWEEP_ARRAYS.items():
+        try:
+            value = np.array(data[name], dtype=dtype)
+        except (TypeError, ValueError, OverflowError):
+            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected numbers") from None
+        shape = (len(data["first"]),) if name in ("first", "count", "cruise_at_s") else None
+        wanted = shape or (len(data["first"]), axes)
+        if value.shape != wanted or (
+            dtype is np.int64
+            and not all(isinstance(x, int) and not isinstance(x, bool) for x in data[name])
+        ):
+            raise ConfigError(
+                f"{path}:{line}: sweeps.{name}: expected {'×'.join(map(str, wanted))} "
+                f"{'integers' if dtype is np.int64 else 'numbers'}"
+            )
+        if dtype is np.float64 and not np.all(np.isfinite(value)):
+            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected finite numbers")
+        arrays[name] = value
+    for name in ("period_s", "integration_s"):
+        x = data[name]
+        if not isinstance(x, float | int) or isinstance(x, bool) or not 0 < x < math.inf:
+            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected a positive number")
+    count, first = arrays["count"], arrays["first"]
+    expected = np.concatenate([[0], np.cumsum(count)[:-1]])
+    if np.any(count < 1) or not np.array_equal(first, expected) or count.sum() != targets:
+        raise ConfigError(
+            f"{path}:{line}: sweeps: first and count must split the {targets} targets into "
+            "consecutive segments"
+        )
+    return Sweeps(
+        **arrays, period_s=float(data["period_s"]), integration_s=float(data["integration_s"])
+    )
 
 
 def _rows(path: Path, text: str, names: list[str], first_line: int) -> list[np.ndarray]:
@@ -368,6 +424,11 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
     generated = next(cols)
     coords, wi, wo, angles = take(len(names)), take(3), take(3), take(len(plan_rig.axes))
     exposure_s, averages, travel_s, arrival_s = cols
+    sweeps = None
+    if "sweeps" in header:
+        sweeps = _sweeps(path, header["sweeps"], line["sweeps"], len(plan_rig.axes), n)
+    if (sweeps is None) != (spec.sampling.strategy != "fly"):
+        raise ConfigError(f"{path}: sweeps: a fly plan stores its sweeps, a stop-and-go plan none")
     return Plan(
         spec=spec,
         rig=plan_rig,
@@ -383,4 +444,5 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
         arrival_s=arrival_s,
         summary=summary,
         plan_text=plan_text,
+        sweeps=sweeps,
     )

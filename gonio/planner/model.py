@@ -47,6 +47,34 @@ def sha256(text: bytes) -> str:
 
 
 @dataclass(frozen=True)
+class FlyFigures:
+    """A fly plan's figures (`gonio.planner.fly`). Times in seconds, angles in degrees.
+
+    ``stop_and_go_s``: the same readings measured stop-and-go at the same poses in the
+    same order (trapezoidal moves, settle and one integration each). ``coverage_tv``:
+    the total-variation distance between the readings' histogram in the plan's
+    coordinates and the uniform density over what the rig reaches (``coverage_bins``
+    bins a coordinate); ``coverage_tv_uniform``: the same figure of a uniform (Sobol)
+    stop-and-go plan of as many targets, its sampling noise."""
+
+    lines: int  # sweep lines laid out through the anchors
+    segments: int  # constant-velocity segments (a line's reachable runs)
+    integration_s: float
+    period_s: float
+    blur_deg: float  # the budget
+    smear_max_deg: float  # the largest smear of a reading (≤ blur_deg)
+    velocity_min_deg_s: float  # sweep velocities of the swept axis
+    velocity_max_deg_s: float
+    cruise_s: float  # time at constant velocity, summed
+    ramps_s: float  # accelerating and decelerating, summed
+    moves_s: float  # moves between sweeps (settles included)
+    stop_and_go_s: float
+    coverage_tv: float
+    coverage_tv_uniform: float
+    coverage_bins: int
+
+
+@dataclass(frozen=True)
 class Summary:
     """Counts and times of a plan. Times in seconds; the generation-order and MST
     figures are None unless the plan was built with ``bounds=True``."""
@@ -75,6 +103,7 @@ class Summary:
     bound_wall_s: float | None = None  # time spent on the lower bounds (wall clock)
     # An adaptive plan's second pass: how it was placed and why (`gonio.planner.choice`).
     second_pass: str | None = None
+    fly: FlyFigures | None = None  # a fly plan's figures
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))
@@ -118,6 +147,65 @@ def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
     return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
+#: The array fields of `Sweeps` and their dtypes (one row per segment, measuring order).
+SWEEP_ARRAYS: dict[str, type[np.generic]] = {
+    "start": np.float64,
+    "entry": np.float64,
+    "exit": np.float64,
+    "stop": np.float64,
+    "velocity": np.float64,
+    "first": np.int64,
+    "count": np.int64,
+    "cruise_at_s": np.float64,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Sweeps:
+    """The segments of a fly plan in measuring order. Angles in radians (rows in
+    ``rig.axes`` order), velocities in rad/s, times in seconds from the run's start.
+
+    Each segment is commanded as one move from ``start`` (at rest) to ``stop`` (at rest)
+    with the axes' velocity ``velocity`` between ``entry`` (reached at ``cruise_at_s``)
+    and ``exit``: readings only there, ``count`` of them, the plan's targets
+    ``first`` … ``first + count − 1``, the k-th integrating from ``cruise_at_s + k ·
+    period_s`` for ``integration_s``."""
+
+    start: FloatArray  # (S, A) the run-up pose (at rest)
+    entry: FloatArray  # (S, A) where the constant velocity begins
+    exit: FloatArray  # (S, A) where it ends
+    stop: FloatArray  # (S, A) the overrun pose (at rest)
+    velocity: FloatArray  # (S, A) rad/s during the constant-velocity part
+    first: np.ndarray  # (S,) int64
+    count: np.ndarray  # (S,) int64
+    cruise_at_s: FloatArray  # (S,)
+    period_s: float
+    integration_s: float
+
+    def __post_init__(self) -> None:
+        n = len(self.first)
+        for name, dtype in SWEEP_ARRAYS.items():
+            value = np.array(getattr(self, name), dtype=dtype)
+            if value.shape[:1] != (n,):
+                raise ValueError(f"Sweeps.{name}: expected {n} rows, got shape {value.shape}")
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    def __len__(self) -> int:
+        return len(self.first)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Sweeps):
+            return NotImplemented
+        return (
+            self.period_s == other.period_s
+            and self.integration_s == other.integration_s
+            and all(same_bits(getattr(self, n), getattr(other, n)) for n in SWEEP_ARRAYS)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
 @dataclass(frozen=True, eq=False)
 class Plan:
     """Targets in measuring order. Angles in radians, times in seconds.
@@ -143,6 +231,7 @@ class Plan:
     summary: Summary
     plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
     ordering: Ordering | None = None  # the search's figures (constructed length, …)
+    sweeps: Sweeps | None = None  # a fly plan's segments (None: stop-and-go)
 
     def __post_init__(self) -> None:
         n = len(self.coords)
@@ -155,6 +244,11 @@ class Plan:
 
     def __len__(self) -> int:
         return len(self.coords)
+
+    @property
+    def is_fly(self) -> bool:
+        """Readings taken while the axes move (`sweeps`), not stop-and-go."""
+        return self.sweeps is not None
 
     @property
     def is_survey(self) -> bool:
@@ -173,6 +267,7 @@ class Plan:
             and self.coordinate_names == other.coordinate_names
             and self.summary == other.summary
             and all(same_bits(getattr(self, n), getattr(other, n)) for n in ARRAYS)
+            and self.sweeps == other.sweeps
         )
 
     __hash__ = None  # type: ignore[assignment]

@@ -22,6 +22,8 @@ from gonio.config_schema import InSchema
 from gonio.errors import GonioError
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
+#: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
+PlanStrategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive", "fly"]
 
 
 class Warp(Strict):
@@ -73,16 +75,90 @@ class AdaptiveSpec(Strict):
         return self
 
 
+class FlySpec(Strict):
+    """The fly strategy (docs/reference/planner.md, "Fly plans"): readings taken while one
+    axis sweeps at constant velocity, ``rate_hz`` readings a second, each integrating
+    ``integration_s``. The sweep's velocity keeps the angular smear of a reading (the
+    path its directions cover while it integrates) within ``blur_deg``, or within
+    ``lobe_fraction`` of ``lobe_width_deg`` (the material's expected lobe width), and
+    within the axis's max velocity. Sweeps run through anchor points drawn (Sobol) in
+    the parametrization until about ``sampling.target`` readings are laid out."""
+
+    segment: Literal["detector_arc", "light_arc"] = Field(
+        "detector_arc",
+        description="What sweeps: detector_arc (the detector's last axis, the light and the "
+        "sample still) or light_arc (the light's last axis, the detector and sample still).",
+    )
+    rate_hz: float = Field(
+        100.0, gt=0, le=10_000, description="Readings per second the detector streams."
+    )
+    integration_s: float | None = Field(
+        None,
+        gt=0,
+        description="Integration time of each reading (s), at most 1 / rate_hz (none: "
+        "1 / rate_hz, no dead time).",
+    )
+    blur_deg: float | None = Field(
+        None,
+        gt=0,
+        le=30,
+        description="The most angular smear of one reading (degrees; none: lobe_fraction of "
+        "lobe_width_deg if given, else 0.5).",
+    )
+    lobe_width_deg: float | None = Field(
+        None,
+        gt=0,
+        le=180,
+        description="The material's expected lobe width (degrees, full width); the blur "
+        "budget is then lobe_fraction of it (not with blur_deg).",
+    )
+    lobe_fraction: float = Field(
+        0.25, gt=0, le=1, description="The share of lobe_width_deg one reading may smear."
+    )
+
+    @model_validator(mode="after")
+    def _consistent(self) -> FlySpec:
+        if self.integration_s is not None and self.integration_s > 1.0 / self.rate_hz * (1 + 1e-12):
+            raise field_error(
+                "integration_s",
+                f"expected at most 1 / rate_hz = {1.0 / self.rate_hz:g} s, got "
+                f"{self.integration_s:g}",
+            )
+        if self.blur_deg is not None and self.lobe_width_deg is not None:
+            raise field_error("blur_deg", "give blur_deg or lobe_width_deg, not both")
+        return self
+
+    @property
+    def period_s(self) -> float:
+        """Time between the starts of two readings (s)."""
+        return 1.0 / self.rate_hz
+
+    @property
+    def integration(self) -> float:
+        """The integration time of a reading (s)."""
+        return self.period_s if self.integration_s is None else self.integration_s
+
+    @property
+    def blur(self) -> float:
+        """The blur budget (degrees)."""
+        if self.blur_deg is not None:
+            return self.blur_deg
+        if self.lobe_width_deg is not None:
+            return self.lobe_fraction * self.lobe_width_deg
+        return 0.5
+
+
 class SamplingSpec(Strict):
     """Where the targets go: points placed in the parametrization's coordinate box (or its
     isotropic reduction), kept where the coordinates are valid and the rig reaches them;
     either ``counts`` per coordinate (a grid) or a ``target`` number of kept targets."""
 
-    strategy: Strategy = Field(
+    strategy: PlanStrategy = Field(
         "sobol",
         description="grid (cell centres), stratified (one uniform point per cell), sobol, "
-        "halton (scrambled), random, or adaptive (a Sobol survey first, then the rest of the "
-        "target where a reconstruction errs).",
+        "halton (scrambled), random, adaptive (a Sobol survey first, then the rest of the "
+        "target where a reconstruction errs), or fly (readings while an axis sweeps; "
+        "stop-and-go otherwise).",
     )
     counts: dict[str, Annotated[int, InSchema(minimum=1)]] | None = Field(
         None,
@@ -106,6 +182,9 @@ class SamplingSpec(Strict):
     adaptive: AdaptiveSpec | None = Field(
         None, description="The adaptive strategy's options (only with strategy: adaptive)."
     )
+    fly: FlySpec | None = Field(
+        None, description="The fly strategy's options (only with strategy: fly)."
+    )
 
     @model_validator(mode="after")
     def _counts_or_target(self) -> SamplingSpec:
@@ -113,6 +192,10 @@ class SamplingSpec(Strict):
             raise ValueError("give exactly one of counts (per coordinate) or target (a total)")
         if self.adaptive is not None and self.strategy != "adaptive":
             raise field_error("adaptive", f"options of the adaptive strategy, not {self.strategy}")
+        if self.fly is not None and self.strategy != "fly":
+            raise field_error("fly", f"options of the fly strategy, not {self.strategy}")
+        if self.strategy == "fly" and self.warps:
+            raise field_error("warps", "the fly strategy lays out uniform sweeps (no warps)")
         if self.strategy == "adaptive":
             if self.warps:
                 raise field_error("warps", "the adaptive strategy places its own density")
@@ -136,6 +219,10 @@ class SamplingSpec(Strict):
     def options(self) -> AdaptiveSpec:
         """The adaptive strategy's options (the defaults unless given)."""
         return self.adaptive or AdaptiveSpec()
+
+    def fly_options(self) -> FlySpec:
+        """The fly strategy's options (the defaults unless given)."""
+        return self.fly or FlySpec()
 
 
 class AdaptSpec(Strict):
@@ -354,6 +441,10 @@ class PlanSpec(Strict):
                     f"{'isotropic ' if self.isotropic else ''}{self.parametrization} are "
                     f"{', '.join(coords)}",
                 )
+        if self.sampling.strategy == "fly" and self.exposure.adapt is not None:
+            raise field_error(
+                "exposure.adapt", "a fly plan reads at a fixed rate (sampling.fly.integration_s)"
+            )
         if self.sampling.counts is not None and set(self.sampling.counts) != set(coords):
             missing = ", ".join(c for c in coords if c not in self.sampling.counts)
             raise field_error("sampling.counts", f"expected a count for {missing} as well")

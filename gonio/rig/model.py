@@ -282,6 +282,18 @@ class Rig:
         reasons = self._reasons(wi, wo, limits_ok, limits_ok & ~self._collides(cand))
         return reasons == Reason.OK, reasons
 
+    def pose_reasons(self, angles: FloatArray) -> tuple[np.ndarray, BoolArray]:
+        """(reasons (N,), commandable (N,)) of given joint angles (N, A): why the pair
+        these poses measure is refused at these very poses (`Reason`; OK where it is
+        not), and whether each pose may be commanded at all (inside the axes' limits,
+        outside every keep-out box)."""
+        angles = np.asarray(angles, dtype=np.float64).reshape(-1, len(self.axes))
+        wi, wo = self.forward(angles)
+        limits_ok = self._within_limits(angles)
+        commandable = limits_ok & ~self._collides(angles)
+        reasons = self._reasons(wi, wo, limits_ok[:, None], commandable[:, None])
+        return reasons, commandable
+
     def _reasons(
         self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
     ) -> np.ndarray:

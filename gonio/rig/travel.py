@@ -53,6 +53,15 @@ class TravelModel:
             np.where(t < 2.0 * v / a, a * t * t / 4.0, v * (t - v / a)), dtype=np.float64
         )
 
+    def ramp(self, velocity: ArrayLike) -> tuple[float, FloatArray]:
+        """(time s, per-axis distance rad (A,)) to reach the per-axis constant
+        ``velocity`` (A,) (rad/s) from rest along a straight line in joint space, every
+        axis accelerating together: t = max_j |v_j| / a_j, d_j = |v_j| t / 2 (the same to
+        stop from it)."""
+        v = np.abs(np.asarray(velocity, dtype=np.float64))
+        t = float(np.max(v / self.acceleration))
+        return t, np.asarray(0.5 * v * t, dtype=np.float64)
+
     def scalar(self) -> Callable[[Sequence[float], Sequence[float]], float]:
         """`time` for two single poses as plain Python floats: the local search calls it
         millions of times, where a numpy call's overhead would dominate."""

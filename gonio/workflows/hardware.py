@@ -27,10 +27,11 @@ if TYPE_CHECKING:
     from drivers.pymeasure.detector import PyMeasureDetector
 
 
-def dynamixel_bus(rig: Rig, *, port: str | None = None) -> DynamixelBus:
-    """The rig's motors (``bus`` and ``axes``), on ``port`` if given."""
+def dynamixel_bus(rig: Rig, *, port: str | None = None, clock: Clock | None = None) -> DynamixelBus:
+    """The rig's motors (``bus`` and ``axes``), on ``port`` if given, their polls stamped
+    by ``clock`` (default the host's monotonic clock)."""
     bus = rig.spec.bus
-    return DynamixelBus(port or bus.port, rig.bus_axes(), baud=bus.baud)
+    return DynamixelBus(port or bus.port, rig.bus_axes(), baud=bus.baud, clock=clock)
 
 
 def serial_detector(rig: Rig, clock: Clock, *, port: str | None = None) -> SerialDetector:
@@ -97,4 +98,5 @@ def hardware_devices(rig: Rig, *, clock: Clock | None = None) -> Devices:
     """The rig's motors, detector and light as `Devices` (unopened)."""
     clock = clock or SystemClock()
     # ConfigError unless the interface is serial or pymeasure
-    return Devices(dynamixel_bus(rig), detector(rig, clock), clock, light_switch(rig, clock))
+    bus = dynamixel_bus(rig, clock=clock)
+    return Devices(bus, detector(rig, clock), clock, light_switch(rig, clock))

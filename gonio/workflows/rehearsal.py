@@ -49,7 +49,7 @@ def rehearsal_devices(
     axes = rig.bus_axes()
     with ExitStack() as stack:
         emulator = stack.enter_context(emulated_bus(rig, clock, wire_time=wire_time))
-        bus = dynamixel_bus(rig, port=emulator.path)
+        bus = dynamixel_bus(rig, port=emulator.path, clock=clock)
         switch = rig.spec.light.switch
         light: LightSource
         state: LightState

@@ -225,6 +225,16 @@ def _second_pass(journal: Journal, run: Run) -> Plan:
     return whole
 
 
+def refuse_fly(plan: Plan) -> None:
+    """`ConfigError` for a fly plan: planned, not yet acquired."""
+    if plan.is_fly:
+        raise ConfigError(
+            f"plan {plan.spec.name!r}: fly plans are planned but not yet acquired; "
+            "`gonio plan` predicts one, acquire a stop-and-go plan (sampling.strategy other "
+            "than fly)"
+        )
+
+
 def start(
     plan: Plan,
     files: Files,
@@ -242,6 +252,7 @@ def start(
 ) -> SessionResult:
     """Acquire ``plan`` into a new run file ``output`` (None: in memory);
     ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
+    refuse_fly(plan)
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse, force_simulated=force_simulated)
     if seed is None and scene is not None:
@@ -424,6 +435,7 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
             rehearse: bool = False) -> list[str]:  # fmt: skip
     """Check what a run needs without moving anything; the lines to print (raises a
     `GonioError` at the first problem)."""
+    refuse_fly(plan)
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse)
     lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]

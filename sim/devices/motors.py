@@ -16,6 +16,12 @@ the detector really see) is off by half the backlash against the direction of th
 move plus a Gaussian repeatability error drawn once per move from the sample's random
 stream (`sim.physics.streams`, channel POSITION), so a resumed run moves exactly as an
 uninterrupted one.
+
+Sweeps: `sweep` runs the same trapezoidal profiles at the velocities and accelerations
+it is given, for that move only. `poll_positions` takes the time of one poll on the
+virtual clock (``poll_s``; default the SYNC_READ of Present Position on the rig's bus
+at its baud, return delays included: `drivers.dynamixel.wire`) and reads the encoder
+at the middle of it, so a loop of polls walks along the profile as a real bus does.
 """
 
 from __future__ import annotations
@@ -35,8 +41,11 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Resource,
+    StampedPositions,
     TorqueOff,
+    sweep_profile,
 )
+from drivers.dynamixel.wire import poll_seconds
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.clock import ManualClock
@@ -62,6 +71,15 @@ def profile_position(
     braking = d - 0.5 * a * (total - t) ** 2
     s = np.where(t < t_acc, accelerating, np.where(t < t_acc + cruise, cruising, braking))
     return np.asarray(np.where(t >= total, goal, start + sign * s), dtype=np.float64)
+
+
+def profile_duration(start: FloatArray, goal: FloatArray, v: FloatArray, a: FloatArray) -> float:
+    """Seconds until every trapezoidal profile (rest to rest) of `profile_position` ends."""
+    d = np.abs(goal - start)
+    t_acc = np.minimum(v / a, np.sqrt(d / a))
+    v_peak = a * t_acc
+    cruise = np.where(v_peak > 0, d / np.where(v_peak > 0, v_peak, 1.0) - t_acc, 0.0)
+    return float(np.max(2.0 * t_acc + cruise, initial=0.0))
 
 
 class PositionModel:
@@ -123,6 +141,7 @@ class SimMotorBus(Resource):
         position_error: PositionErrorSpec | None = None,
         streams: streams_module.Streams | None = None,
         faults: FaultInjector | None = None,
+        poll_s: float | None = None,
     ) -> None:
         self.rig = rig
         self.clock = clock
@@ -133,6 +152,11 @@ class SimMotorBus(Resource):
         self._index = {n: i for i, n in enumerate(self._names)}
         self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
         self._v, self._a = rig.velocity, rig.acceleration
+        self._move_v, self._move_a = self._v, self._a  # the present move's profile
+        if poll_s is None:
+            poll_s = poll_seconds(len(self._names), rig.spec.bus.baud)
+        #: Virtual seconds one `poll_positions` takes.
+        self.poll_s = float(poll_s)
         self._travel = rig.travel.scalar()  # one move's time with Python floats: no numpy overhead
         self._model = (
             PositionModel(rig, position_error, streams) if position_error is not None else None
@@ -185,6 +209,9 @@ class SimMotorBus(Resource):
         """Start moving the named axes (rad); `LimitError` before anything moves if a
         target is outside its axis's limits or not finite, `TorqueOff` with torque off,
         `MotorFault` while an axis's fault is latched (until `reboot`)."""
+        self._start_move(self._checked_goal(targets))
+
+    def _checked_goal(self, targets: Mapping[str, float]) -> FloatArray:
         self._check_open()
         goal = self._present_encoder()
         for name, angle in targets.items():
@@ -202,9 +229,37 @@ class SimMotorBus(Resource):
             raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
         if self._latched:
             raise self._fault_error(*next(iter(self._latched.items())))
-        self._start_move(goal)
+        return goal
 
-    def _start_move(self, goal: FloatArray) -> None:
+    def velocity_limits(self) -> dict[str, float]:
+        """Each axis's maximum velocity in the rig file (rad/s)."""
+        return {n: float(self._v[i]) for n, i in self._index.items()}
+
+    def sweep(
+        self,
+        targets: Mapping[str, float],
+        velocities: Mapping[str, float],
+        accelerations: Mapping[str, float] | None = None,
+    ) -> dict[str, float]:
+        """`move_to` at ``velocities`` (rad/s) and ``accelerations`` (rad/s²; default the
+        rig's) for this move only; returns the velocities commanded (those given).
+        `LimitError` / `DriverError` / `TorqueOff` before anything moves."""
+        self._check_open()
+        for name in targets:
+            if name not in self._index:
+                raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(self._names)}")
+        top_a = {n: float(self._a[i]) for n, i in self._index.items()}
+        rates = sweep_profile(targets, velocities, accelerations, self.velocity_limits(), top_a)
+        goal = self._checked_goal(targets)
+        v, a = self._v.copy(), self._a.copy()
+        for name, (velocity, acceleration) in rates.items():
+            v[self._index[name]], a[self._index[name]] = velocity, acceleration
+        self._start_move(goal, v, a)
+        return {name: velocity for name, (velocity, _) in rates.items()}
+
+    def _start_move(
+        self, goal: FloatArray, v: FloatArray | None = None, a: FloatArray | None = None
+    ) -> None:
         here = self._present_encoder()
         if self._model is not None:
             goal = np.clip(self._model.quantize(goal), self._lo, self._hi)
@@ -212,7 +267,12 @@ class SimMotorBus(Resource):
         moved = step != 0
         self._direction = np.where(moved, step, self._direction)
         self._start, self._goal, self._t0 = here, goal, self.clock.now()
-        self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
+        if v is None or a is None:
+            self._move_v, self._move_a = self._v, self._a
+            self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
+        else:
+            self._move_v, self._move_a = v, a
+            self._end = self._t0 + profile_duration(here, goal, v, a)
         k = self._moves.get(self._sample, 0)
         self._moves[self._sample] = k + 1
         self._pending = self._faults.fired(self._sample, k, MOTOR_KINDS) if self._faults else None
@@ -229,7 +289,7 @@ class SimMotorBus(Resource):
         now = self.clock.now()
         if now >= self._end:  # at rest (the common case: read after settling)
             return self._goal.copy()
-        return profile_position(self._start, self._goal, self._v, self._a, now - self._t0)
+        return profile_position(self._start, self._goal, self._move_v, self._move_a, now - self._t0)
 
     def wait_settled(self, timeout_s: float) -> None:
         """Advance the clock to the end of the motion (at once if that has passed); if
@@ -264,6 +324,10 @@ class SimMotorBus(Resource):
         if self._end > now:
             self.clock.advance_to(now + 0.5 * (self._end - now))
         self._hold()
+        self._raise_fault(rule)
+
+    def _raise_fault(self, rule: FaultRule) -> None:
+        """Raise the injected motor fault ``rule`` (the axes already held)."""
         if rule.kind == "comm_error":
             raise CommError(
                 f"no status from the bus during the move into sample {self._sample} "
@@ -287,6 +351,32 @@ class SimMotorBus(Resource):
         """The encoder's reading of each axis (rad)."""
         self._check_open()
         return dict(zip(self._names, self._present_encoder().tolist(), strict=True))
+
+    def poll_positions(self) -> StampedPositions:
+        """The encoder's reading of each axis (rad; its tick with the position_error
+        effect) at the middle of a poll that takes ``poll_s`` on the clock, stamped at
+        its start and end. An injected fault whose move has reached half-way strikes
+        here as in `wait_settled`: every axis held, then the fault raised."""
+        self._check_open()
+        request_s = self.clock.now()
+        self.clock.advance(0.5 * self.poll_s)
+        rule = self._pending
+        halfway = self.clock.now() >= 0.5 * (self._t0 + self._end)
+        if rule is not None and rule.kind != "motion_timeout" and halfway:
+            self._pending = None
+            self.clock.advance(0.5 * self.poll_s)
+            self._hold()
+            self._raise_fault(rule)
+        here = self._present_encoder()
+        if self._model is not None:
+            here = self._model.quantize(here)
+        reply_s = self.clock.advance(0.5 * self.poll_s)
+        return StampedPositions(
+            dict(zip(self._names, here.tolist(), strict=True)),
+            request_s,
+            reply_s,
+            arrived=reply_s >= self._end,
+        )
 
     def true_positions(self) -> dict[str, float]:
         """Where the joints really are (rad): the encoder reading plus backlash and

@@ -182,6 +182,13 @@ class EmulatedMotor:
             position, _ = self._traj.at(self._clock() - self._t0)
             return self._to_shaft(position)
 
+    def position_at(self, t: float) -> float:
+        """Present Position (ticks, before rounding to the register) at time ``t`` on the
+        motor's clock, along its present trajectory (valid from the last goal, torque
+        change or stop on): the truth a test compares polled positions with."""
+        with self._lock:
+            return self._position(t)
+
     # -- host-facing access ---------------------------------------------------------------
 
     def read(self, address: int, length: int) -> bytes:

@@ -102,7 +102,7 @@ def _dynamixel_motors(emulator: Callable[..., DxlEmulator], latency_ms: int) -> 
         # A lost reply must surface as the injected fault; other cases keep the driver's
         # retries, so that a reply late on a loaded machine does not fail their set-up.
         retries = 0 if fault == "comm_error" else 3
-        bus = DynamixelBus(emu.path, config, latency_ms=latency_ms, retries=retries)
+        bus = DynamixelBus(emu.path, config, latency_ms=latency_ms, retries=retries, clock=clock)
         state["bus"] = bus
         return bus
 

@@ -127,7 +127,7 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
         lambda d: d["sampling"].update(strategy="latin"),
         "sampling.strategy",
         ("sampling", "strategy"),
-        "Input should be 'grid', 'stratified', 'sobol', 'halton', 'random' or 'adaptive' "
+        "Input should be 'grid', 'stratified', 'sobol', 'halton', 'random', 'adaptive' or 'fly' "
         "(got 'latin')",
     ),
     (

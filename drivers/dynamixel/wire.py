@@ -1,0 +1,42 @@
+"""What a Dynamixel Protocol 2.0 transaction costs on the wire (bytes and seconds).
+
+Each byte is 10 bits on the line (start, 8 data, stop). A motor answers after its
+Return Delay Time (factory default 250 × 2 µs = 500 µs). Counts are unstuffed: a poll's
+bytes cannot form FF FF FD except in rare position values, which add one byte each.
+"""
+
+from __future__ import annotations
+
+#: Bits on the line per byte: start, 8 data, stop.
+BITS_PER_BYTE = 10
+#: The motors' factory Return Delay Time (250 × 2 µs), in seconds.
+DEFAULT_RETURN_DELAY_S = 250 * 2e-6
+#: Data bytes of Present Position (one poll of one motor during a sweep).
+PRESENT_POSITION_BYTES = 4
+
+
+def sync_read_bytes(motors: int) -> int:
+    """A SYNC_READ instruction: header 4, ID, LEN 2, INST, address 2, length 2, one byte
+    per motor ID, CRC 2."""
+    return 4 + 1 + 2 + 1 + 2 + 2 + motors + 2
+
+
+def status_bytes(data: int) -> int:
+    """A status packet: header 4, ID, LEN 2, INST 0x55, ERR, ``data`` bytes, CRC 2."""
+    return 4 + 1 + 2 + 1 + 1 + data + 2
+
+
+def poll_bytes(motors: int, data: int = PRESENT_POSITION_BYTES) -> int:
+    """Bytes on the line for one SYNC_READ of ``data`` bytes from each of ``motors``."""
+    return sync_read_bytes(motors) + motors * status_bytes(data)
+
+
+def poll_seconds(
+    motors: int,
+    baud: int,
+    data: int = PRESENT_POSITION_BYTES,
+    return_delay_s: float = DEFAULT_RETURN_DELAY_S,
+) -> float:
+    """The shortest time (s) one such SYNC_READ can take at ``baud``: its bytes on the
+    line plus each motor's return delay (no host or adapter latency)."""
+    return poll_bytes(motors, data) * BITS_PER_BYTE / baud + motors * return_delay_s
