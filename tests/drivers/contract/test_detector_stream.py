@@ -1,5 +1,6 @@
 """The streaming rules of the `drivers.base.Detector` contract (`StreamingDetector`), on
-every detector backend: those that stream follow them, the others refuse to start."""
+every detector backend: those that stream (`STREAMERS`) follow them, the others refuse
+to start; a silent stream is tried where the backend can be silenced."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from drivers.base import (
     can_stream,
     streaming,
 )
-from tests.drivers.contract.conftest import DetectorHarness
+from tests.drivers.contract.conftest import INSTRUMENTS, DetectorHarness
 
 RATE_HZ = 200.0
 INTEGRATION_S = 0.004
@@ -25,10 +26,17 @@ INTEGRATION_S = 0.004
 WINDOW_TOLERANCE_S = 1e-9
 
 
+#: The detector backends that stream; every other one refuses.
+STREAMERS = ["sim", "serial"]
+#: The backends whose stream a test can silence (the simulated photometer on its pty).
+SILENCEABLE = ["serial"]
+
+streamers = pytest.mark.parametrize("detectors", STREAMERS, indirect=True)
+
+
 def _streamer(detectors: DetectorHarness) -> StreamingDetector:
     det = detectors.make(False)
-    if not can_stream(det):
-        pytest.skip(f"{detectors.name} does not stream (see test_non_streamers_refuse)")
+    assert can_stream(det), f"{detectors.name} should stream"
     return streaming(det)
 
 
@@ -42,6 +50,7 @@ def _collect(
     return readings
 
 
+@streamers
 def test_a_stream_is_stamped_windows_of_the_integration_at_the_rate(
     detectors: DetectorHarness,
 ) -> None:
@@ -68,6 +77,7 @@ def test_a_stream_is_stamped_windows_of_the_integration_at_the_rate(
     assert stamped == sorted(stamped)
 
 
+@streamers
 def test_a_stream_refuses_what_it_cannot_do_before_starting(detectors: DetectorHarness) -> None:
     det = _streamer(detectors)
     with pytest.raises(DeviceClosed):
@@ -92,9 +102,9 @@ def test_a_stream_refuses_what_it_cannot_do_before_starting(detectors: DetectorH
         det.measure(0.01)
 
 
+@pytest.mark.parametrize("detectors", SILENCEABLE, indirect=True)
 def test_a_silent_stream_is_a_detector_error_not_a_hang(detectors: DetectorHarness) -> None:
-    if detectors.silence is None:
-        pytest.skip(f"{detectors.name} cannot be silenced")
+    assert detectors.silence is not None
     det = _streamer(detectors)
     with det:
         det.start_stream(RATE_HZ, INTEGRATION_S)
@@ -107,6 +117,7 @@ def test_a_silent_stream_is_a_detector_error_not_a_hang(detectors: DetectorHarne
     assert not det.is_open
 
 
+@streamers
 def test_closing_a_streaming_detector_releases_it(detectors: DetectorHarness) -> None:
     det = _streamer(detectors)
     with det:
@@ -117,10 +128,10 @@ def test_closing_a_streaming_detector_releases_it(detectors: DetectorHarness) ->
         assert det.measure(0.01).value > 0
 
 
+@pytest.mark.parametrize("detectors", list(INSTRUMENTS), indirect=True)
 def test_non_streamers_refuse_to_start(detectors: DetectorHarness) -> None:
     det = detectors.make(False)
-    if can_stream(det):
-        pytest.skip(f"{detectors.name} streams")
+    assert not can_stream(det)
     with pytest.raises(StreamNotSupported, match="cannot stream"):
         streaming(det)
     if hasattr(det, "start_stream"):
