@@ -232,6 +232,41 @@ class StrayLightSpec(Strict):
     power_w: float = Field(ge=0, description="The stray radiant power on the detector (W).")
 
 
+class MotionBlurSpec(Strict):
+    """A stream's window integrates the optics along the path the joints travel during
+    it: the mean over Gauss–Legendre nodes in time of the power at the pose of each
+    node, as many nodes as the window's smear (the largest joint's travel in it) over
+    ``max_step_deg``, at most ``max_nodes``. Without it a window is read at the pose of
+    its middle."""
+
+    max_step_deg: float = Field(
+        0.05,
+        gt=0,
+        le=10,
+        description="The largest joint travel between two time nodes of a window (°).",
+    )
+    max_nodes: int = Field(
+        64, ge=1, le=1024, description="The most time nodes a window's quadrature takes."
+    )
+
+
+class TimestampJitterSpec(Strict):
+    """The stamps a streaming detector reports are its true window shifted by a constant
+    latency and a Gaussian jitter (one draw per window, both ends alike), drawn from the
+    sample's own random stream, so they are reproducible per sample index."""
+
+    sigma_s: float = Field(
+        1e-4, ge=0, le=1, description="The jitter of a window's stamps (s, Gaussian, 1σ)."
+    )
+    latency_s: float = Field(
+        0.0,
+        ge=-1,
+        le=1,
+        description="The constant offset of the reported stamps from the true window (s; "
+        "positive: reported late).",
+    )
+
+
 def _given(schema: dict[str, Any]) -> None:
     """An effect with required parameters: a file gives them (``stray_light:`` with
     nothing is refused: no null in its schema)."""
@@ -280,6 +315,15 @@ class EffectsSpec(Strict):
         description="A constant power reaches the detector while the source is on.",
         json_schema_extra=_given,
     )
+    motion_blur: MotionBlurSpec | None = Field(
+        None,
+        description="A stream's window integrates the optics along the path travelled during "
+        "it (time quadrature).",
+    )
+    timestamp_jitter: TimestampJitterSpec | None = Field(
+        None,
+        description="A stream's reported stamps are late by a latency and jittered.",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -318,6 +362,8 @@ EffectName = Literal[
     "aperture_integration",
     "footprint",
     "position_error",
+    "motion_blur",
+    "timestamp_jitter",
 ]
 
 

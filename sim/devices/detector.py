@@ -17,9 +17,12 @@ Streaming (`drivers.base.StreamingDetector`): windows of the integration end eve
 period from ``start_stream``'s time on the clock; ``read_stream`` returns those ended by
 now (letting virtual time pass up to its timeout for the next one). Each window is read
 out as one exposure at the pose ``pose_at(t)`` gives for the window's middle time ``t``
-(the instrument's callable; without one, the pose of the moment of reading): the
-integration along the path travelled during the window is not modelled yet. A lock-in
-does not stream.
+(the instrument's callable; without one, the pose of the moment of reading). With the
+scene's ``motion_blur`` effect a window is instead the mean over Gauss–Legendre nodes in
+time of the power at the poses ``pose_at(t_k)`` (`blur_nodes`: as many as its smear
+needs); with ``timestamp_jitter`` the stamps it reports are the true window shifted by
+a latency and a Gaussian jitter from the sample's ``TIMING`` stream (the true windows
+kept in ``stream_truth``). A lock-in does not stream.
 """
 
 from __future__ import annotations
@@ -46,10 +49,27 @@ from gonio.rig.model import Rig
 from sim.faults import FaultInjector
 from sim.physics import lockin, sensor
 from sim.physics.optics import SceneOptics
-from sim.physics.streams import Streams
+from sim.physics.streams import TIMING, Streams
 from sim.scene import Scene
 
 DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
+
+
+def blur_nodes(smear_deg: np.ndarray, max_step_deg: float, max_nodes: int) -> np.ndarray:
+    """Time nodes per window (N,) for windows whose joints travel ``smear_deg`` (N,) °:
+    ⌈smear / max_step⌉, at least 1 (a still window: its middle alone), at most
+    ``max_nodes``."""
+    n = np.ceil(np.asarray(smear_deg, dtype=np.float64) / max_step_deg - 1e-9)
+    return np.clip(n, 1, max_nodes).astype(np.int64)
+
+
+def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes in [0, 1] and weights summing to 1 of the n-point Gauss–Legendre rule (one
+    node: the middle, weight 1 exactly)."""
+    if n == 1:
+        return np.array([0.5]), np.array([1.0])
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (x + 1.0), 0.5 * w
 
 
 class LightState(Protocol):
@@ -147,6 +167,11 @@ class SimDetector(Resource):
         self.pose_at = pose_at
         self._stream: tuple[float, float, float] | None = None  # (t0, period, integration)
         self._windows = 0  # windows of the running stream read so far
+        #: The true windows (started, ended) on the clock of the running (or last)
+        #: stream's readings, before ``timestamp_jitter`` offsets their stamps.
+        self.stream_truth: list[tuple[float, float]] = []
+        #: Time nodes of each window read so far of the running (or last) stream.
+        self.stream_nodes: list[int] = []
 
     # -- Resource / Detector -------------------------------------------------------
     @property
@@ -217,6 +242,7 @@ class SimDetector(Resource):
             )
         self._stream = (self._clock.now(), period, float(integration))
         self._windows = 0
+        self.stream_truth, self.stream_nodes = [], []
 
     def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
         """The windows ended since the last call; with none, let up to ``timeout_s``
@@ -250,31 +276,77 @@ class SimDetector(Resource):
         self._windows = done
         ended = t0 + (k + 1) * period
         started = ended - integration
-        middle = 0.5 * (started + ended)
-        counts, saturated = self._stream_counts(middle, integration)
+        start = self._draws.get(self._sample, 0)
+        counts, saturated = self._stream_counts(started, ended, integration)
+        self.stream_truth += list(zip(started.tolist(), ended.tolist(), strict=True))
+        shift = self._stamp_shift(len(k), start)
         return [
             StreamReading(value=c, std=np.nan, started_s=a, ended_s=b, saturated=sat)
             for c, sat, a, b in zip(
-                counts.tolist(), saturated.tolist(), started.tolist(), ended.tolist(), strict=True
+                counts.tolist(),
+                saturated.tolist(),
+                (started + shift).tolist(),
+                (ended + shift).tolist(),
+                strict=True,
             )
         ]
 
-    def _stream_counts(
-        self, middle: np.ndarray, integration: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Counts and saturated flags (N,) of one exposure per window, at the pose of each
-        window's middle time, continuing the present sample's random streams."""
+    def _stamp_shift(self, n: int, start: int) -> np.ndarray | float:
+        """What ``timestamp_jitter`` adds to the stamps of ``n`` windows whose first is
+        draw ``start`` of the sample (s): latency + σ·z, z from the ``TIMING`` stream."""
+        spec = self.scene.effects.timestamp_jitter
+        if spec is None:
+            return 0.0
+        index = np.array([self._sample], dtype=np.int64)
+        z = self.streams.normal(index, TIMING, n, start=start)[0]
+        return np.asarray(spec.latency_s + spec.sigma_s * z, dtype=np.float64)
+
+    def _poses(self, times: np.ndarray) -> np.ndarray:
+        """Joint angles (len(times), A) at clock times (rad), from ``pose_at`` (else the
+        pose of now)."""
         axes = self.rig.axes
         poses = []
-        for t in middle.tolist():
+        for t in times.tolist():
             pose = self.pose_at(t) if self.pose_at is not None else self._pose()
             try:
                 poses.append([float(pose[name]) for name in axes])
             except KeyError as exc:
                 raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
-        wi, wo = self.rig.forward(np.array(poses, dtype=np.float64))
+        return np.array(poses, dtype=np.float64).reshape(len(times), len(axes))
+
+    def _stream_counts(
+        self, started: np.ndarray, ended: np.ndarray, integration: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Counts and saturated flags (N,) of one exposure per window, continuing the
+        present sample's random streams: at the pose of each window's middle time, or
+        with ``motion_blur`` the mean power over the window's time nodes."""
+        middle = 0.5 * (started + ended)
+        blur = self.scene.effects.motion_blur
+        if blur is None or self.pose_at is None:
+            times, weights, owner = middle, np.ones(len(middle)), np.arange(len(middle))
+            nodes = np.ones(len(middle), dtype=np.int64)
+        else:
+            ends = self._poses(np.concatenate([started, middle, ended])).reshape(3, len(middle), -1)
+            travel = np.abs(ends[1] - ends[0]) + np.abs(ends[2] - ends[1])
+            nodes = blur_nodes(np.degrees(travel.max(axis=1)), blur.max_step_deg, blur.max_nodes)
+            rules = {n: gauss_legendre(n) for n in set(nodes.tolist())}
+            times = np.concatenate(
+                [
+                    [m] if n == 1 else a + (b - a) * rules[n][0]  # one node: the middle
+                    for a, m, b, n in zip(started, middle, ended, nodes.tolist(), strict=True)
+                ]
+            )
+            weights = np.concatenate([rules[n][1] for n in nodes.tolist()])
+            owner = np.repeat(np.arange(len(middle)), nodes)
+        self.stream_nodes += nodes.tolist()
+        wi, wo = self.rig.forward(self._poses(times))
         geometric = self.chain.geometric_power(wi, wo, self._target)
-        power = self.chain.power(geometric, middle[:, None], light_on=self.light.is_on).T
+        at_nodes = self.chain.power(geometric, times[:, None], light_on=self.light.is_on)[:, 0]
+        if len(times) == len(middle):
+            power = at_nodes[None, :]
+        else:  # the weighted mean over each window's nodes
+            mean = np.bincount(owner, weights * at_nodes, minlength=len(middle))
+            power = np.asarray(mean, dtype=np.float64)[None, :]
         index = np.array([self._sample], dtype=np.int64)
         start = self._draws.get(self._sample, 0)
         self._draws[self._sample] = start + len(middle)

@@ -77,6 +77,7 @@ __all__ = [
     "READ",
     "SHOT",
     "STRAY_LIGHT",
+    "TIMING",
     "Streams",
     "poisson_ppf",
 ]
@@ -95,6 +96,8 @@ LOCKIN_X: Final = 3
 LOCKIN_Y: Final = 4
 #: Motor position errors (repeatability, backlash).
 POSITION: Final = 16
+#: A stream's timestamp jitter (`sim.devices.detector`).
+TIMING: Final = 17
 #: Slow source drift.
 DRIFT: Final = 32
 #: Aperture integration (points over the detector's solid angle).
@@ -114,6 +117,7 @@ CHANNELS: Final[dict[str, int]] = {
     "LOCKIN_X": LOCKIN_X,
     "LOCKIN_Y": LOCKIN_Y,
     "POSITION": POSITION,
+    "TIMING": TIMING,
     "DRIFT": DRIFT,
     "APERTURE": APERTURE,
     "FOOTPRINT": FOOTPRINT,
