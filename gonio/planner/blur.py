@@ -1,0 +1,46 @@
+"""The blur budget of a fly plan: the largest smear a reading may integrate over for the
+bias of mid-time attribution to stay within a tolerance, from the lobe's GGX width.
+
+A reading taken while moving averages the BRDF over the arc its directions travel
+during the integration (the smear, ° = angular velocity × integration) and is attributed
+to the pose at the window's middle. Over a GGX lobe of width α that bias grows as
+(smear / α)²; benchmarks/fly_blur.py measures it on the simulator's optics (a detector arc
+in the plane of incidence, α from 0.02 to 0.5, windows anywhere on the lobe, peak and
+flanks) and fits the largest smear for a bias within ``tolerance`` as
+
+    smear_max = K · α · √tolerance,
+
+K the smallest ratio over every α and tolerance measured (docs/results/fly_blur.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+from gonio.errors import DomainError
+
+#: K of smear_max = K · α · √tolerance (°), fitted by benchmarks/fly_blur.py.
+BLUR_K_DEG = 233.0
+
+
+def blur_budget_deg(alpha: float, tolerance: float = 0.005) -> float:
+    """The largest smear (°) a reading may integrate over on a GGX lobe of width ``alpha``
+    for the bias of mid-time attribution to stay within ``tolerance``.
+
+    Parameters
+    ----------
+    alpha : float
+        The lobe's GGX (Trowbridge–Reitz) width, > 0 (a material's expected roughness).
+    tolerance : float
+        The relative bias allowed, in (0, 0.05] (0.005: 0.5 %).
+
+    Returns
+    -------
+    float
+        The smear budget in degrees: K · α · √tolerance.
+    """
+    if not (isinstance(alpha, int | float) and 0 < alpha < math.inf):
+        raise DomainError(f"alpha must be a positive number (a GGX width), got {alpha!r}")
+    if not (isinstance(tolerance, int | float) and 0 < tolerance <= 0.05):
+        raise DomainError(f"tolerance must be in (0, 0.05] (a relative bias), got {tolerance!r}")
+    return BLUR_K_DEG * float(alpha) * math.sqrt(float(tolerance))
