@@ -63,6 +63,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/fly_bus.py
+	$(BIN)/python benchmarks/fly_blur.py
 	$(BIN)/python benchmarks/stream.py
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5

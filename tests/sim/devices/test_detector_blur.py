@@ -6,10 +6,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
+from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, blur_nodes, gauss_legendre
@@ -145,3 +148,25 @@ def test_jittered_stamps_are_reproducible_per_seed_and_sample(rigs: dict[str, Ri
     # the values are those of the true windows: as without jitter
     _, plain = stream(narrow({}), rig, pose_at, seconds=2.0, sample=7)
     assert [r.value for r in a] == [r.value for r in plain]
+
+
+@pytest.mark.parametrize(
+    ("effect", "field"),
+    [
+        ({"motion_blur": {"max_step_deg": 0}}, "effects.motion_blur.max_step_deg"),
+        ({"motion_blur": {"max_nodes": 0.5}}, "effects.motion_blur.max_nodes"),
+        ({"timestamp_jitter": {"sigma_s": -1e-3}}, "effects.timestamp_jitter.sigma_s"),
+        ({"timestamp_jitter": {"lag": 1}}, "effects.timestamp_jitter.lag"),
+    ],
+)
+def test_bad_effect_parameters_are_one_line(
+    tmp_path: Path, effect: dict[str, object], field: str
+) -> None:
+    path = tmp_path / "scene.yaml"
+    data = GLOSSY.model_dump()
+    data["material"] = {"name": "cook_torrance", **data["material"]["params"]}
+    path.write_text(yaml.safe_dump({**data, "effects": effect}))
+    with pytest.raises(ConfigError) as err:
+        load_scene(path)
+    message = str(err.value)
+    assert "\n" not in message and field in message and str(path) in message
