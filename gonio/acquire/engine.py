@@ -232,7 +232,9 @@ class Engine:
             if simulation is not None:
                 simulation.begin_sample(first)
             began = self.time.now()
-            self._busy_until = began + 60.0
+            # About the sweep's length (its readings; a move, settle and ramps besides):
+            # a first Ctrl-C lets a short sweep finish, abandons a long one.
+            self._busy_until = began + count * sweeps.period_s + 2.0
             try:
                 raw = run_sweep(
                     self.devices, self.axes, sweeps, k,

@@ -1,7 +1,8 @@
 """Fly plans acquired on the simulated backend: sweep after sweep, each committed with its
 raw streams in one transaction; the journaled streams merged again give the samples;
 `kill -9` mid-sweep loses at most that sweep and the resumed run equals an uninterrupted
-one bit for bit; a fault mid-sweep journals the sweep as abandoned."""
+one bit for bit; a fault during a sweep journals it as abandoned (retried, or redone on
+resume after a motor fault)."""
 
 from __future__ import annotations
 
@@ -187,3 +188,24 @@ def test_a_fault_mid_sweep_abandons_the_sweep_and_redoes_it(tmp_path: Path, run:
     assert (2, "abandoned") in outcomes and (2, "measured") in outcomes
     assert len(faulted) + len(faulted.skipped) == len(faulted.plan)
     assert not math.isnan(float(faulted.samples["smear_rad"][0]))
+
+
+def test_a_motor_fault_ends_the_run_resumable_and_the_resume_redoes_the_sweep(
+    tmp_path: Path, run: Run
+) -> None:
+    sweeps = run.plan.sweeps
+    assert sweeps is not None
+    first = int(sweeps.first[1])
+    files = fly_files(tmp_path, faults=[{"kind": "motor_fault", "at": [first]}])
+    path = tmp_path / "run.sqlite"
+    result = files.start(path)
+    assert result.report.outcome == "fault", result.report.message
+    faulted = open_run(path)
+    assert [(s.sweep, s.outcome) for s in faulted.sweeps] == [(0, "measured"), (1, "abandoned")]
+    assert faulted.sweeps[1].data["error"] == "MotorFault"
+    assert len(faulted) + len(faulted.skipped) == int(sweeps.count[0])
+    resumed = session.resume(path)
+    assert resumed.report.outcome == "completed", resumed.report.message
+    done = open_run(path)
+    assert [s.outcome for s in done.sweeps].count("measured") == len(sweeps)
+    assert len(done) + len(done.skipped) == len(done.plan)
