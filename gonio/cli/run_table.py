@@ -92,12 +92,11 @@ def render_details(run: Run) -> str:
             f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
             f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
         )
-    if run.plan.is_fly:
-        measured = sum(1 for s in run.sweeps if s.outcome == "measured")
-        abandoned = sum(1 for s in run.sweeps if s.outcome == "abandoned")
+    sweeps = figures(run).get("sweeps")
+    if sweeps is not None:  # a fly run
         lines.append(
-            f"  {'fly':<24}sweeps measured: {measured} of {len(run.plan.sweeps or ())}, "
-            f"readings: {len(run)}, abandoned: {abandoned}"
+            f"  {'fly':<24}sweeps measured: {sweeps['measured']} of {sweeps['planned']}, "
+            f"readings: {len(run)}, abandoned: {sweeps['abandoned']}"
         )
     if len(run) and run.of_kind("calibration"):
         cal = calibrate(run)

@@ -6,6 +6,7 @@ resume after a motor fault)."""
 
 from __future__ import annotations
 
+import json
 import math
 import random
 import time
@@ -115,11 +116,22 @@ def test_the_journaled_streams_merge_again_into_the_samples(run: Run) -> None:
     np.testing.assert_array_equal(run.samples["counts"][rows], readings["value"][merged.index])
 
 
-def test_info_counts_the_sweeps(run: Run, run_gonio: object) -> None:
-    result = run_gonio("info", str(run.path))  # type: ignore[operator]
+def test_info_counts_the_sweeps_and_export_reads_the_run(
+    run: Run, run_gonio: Any, tmp_path: Path
+) -> None:
+    result = run_gonio("info", str(run.path))
     assert result.returncode == 0, result.stderr
-    assert f"sweeps measured: {len(run.sweeps)}" in result.stdout
+    sweeps = len(run.sweeps)
+    assert f"sweeps measured: {sweeps} of {sweeps}" in result.stdout
     assert f"readings: {len(run)}" in result.stdout and "abandoned: 0" in result.stdout
+    result = run_gonio("info", str(run.path), "--json")
+    assert json.loads(result.stdout)["sweeps"] == {
+        "planned": sweeps, "measured": sweeps, "abandoned": 0
+    }  # fmt: skip
+    out = tmp_path / "run.csv"
+    result = run_gonio("export", str(run.path), "--format", "csv", "-o", str(out), "-q")
+    assert result.returncode == 0, result.stderr
+    assert len(out.read_text().splitlines()) > len(run)
 
 
 def slowed(devices: Devices, *args: Any, **kwargs: Any) -> Any:
