@@ -43,6 +43,7 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Reading,
+    StreamReading,
     dark_subtracted,
     reading_unit,
 )
@@ -54,6 +55,7 @@ from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
+from gonio.acquire.sweep import RawSweep, angular_sigma, merge, poll_arrays, run_sweep
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
@@ -62,6 +64,7 @@ from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run
 from gonio.store.schema import commanded, coordinate, read_back
+from gonio.types import FloatArray
 
 Outcome = Literal["completed", "interrupted", "fault", "aborted", "paused", "journal"]
 
@@ -165,6 +168,9 @@ class Engine:
         it when due), then the closing calibration."""
         try:
             self._start(resuming=self.history is not None)
+            if self.plan.sweeps is not None:
+                self._fly(todo)
+                return
             if self.devices.simulation is not None:
                 self.devices.simulation.expect(self.plan.angles[todo], todo)
             self.progress.start(self.plan, todo)
@@ -177,6 +183,172 @@ class Engine:
                 self._calibrate("end")
         finally:
             self.stops.disarm()  # a signal now must not cut the ending short
+
+    def _closing(self, measuring: bool) -> None:
+        if self.state.calibrations.closing(self.state.count, measuring=measuring):
+            self._calibrate("end")
+
+    # -- a fly plan: sweep after sweep ----------------------------------------------------
+    def _fly(self, todo: np.ndarray) -> None:
+        """Each sweep with a target still to measure, whole (`gonio.acquire.sweep`);
+        a health check and a calibration before it when due."""
+        sweeps = self.plan.sweeps
+        assert sweeps is not None
+        left = np.zeros(len(self.plan), dtype=np.bool_)
+        left[todo] = True
+        ks = [
+            k for k in range(len(sweeps))
+            if left[int(sweeps.first[k]) : int(sweeps.first[k] + sweeps.count[k])].any()
+        ]  # fmt: skip
+        self.progress.start(self.plan, todo)
+        done = 0
+        for k in ks:
+            self._between_targets()
+            done += self._sweep(k)
+            self.progress.advance(min(done, len(todo)))
+            self.stops.raise_if_requested()
+        self._closing(bool(ks))
+
+    def _sweep(self, k: int) -> int:
+        """Measure sweep ``k`` and commit it in one transaction; the targets it
+        finished (measured or skipped). Faults follow the plan's ``on_fault``: the
+        sweep is journaled as abandoned (its raw streams with it), then retried,
+        skipped or the run ended (a motor fault: resumable, the sweep redone)."""
+        sweeps = self.plan.sweeps
+        assert sweeps is not None
+        first, count = int(sweeps.first[k]), int(sweeps.count[k])
+        targets = range(first, first + count)
+        self._current = first
+        for name in ("start", "stop"):
+            refused = self._within_limits(getattr(sweeps, name)[k])
+            if refused is not None:
+                with self.journal.transaction():
+                    for i in targets:
+                        self._skip(i, f"sweep {k}: {refused}")
+                return count
+        on_fault = self.spec.on_fault
+        simulation = self.devices.simulation
+        for attempt in range(on_fault.retries + 1):
+            if simulation is not None:
+                simulation.begin_sample(first)
+            began = self.time.now()
+            # About the sweep's length (its readings; a move, settle and ramps besides):
+            # a first Ctrl-C lets a short sweep finish, abandons a long one.
+            self._busy_until = began + count * sweeps.period_s + 2.0
+            try:
+                raw = run_sweep(
+                    self.devices, self.axes, sweeps, k,
+                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                )  # fmt: skip
+                break
+            except DriverError as exc:
+                self._hold_all()
+                data = {**self._fault_data(exc), "attempt": attempt + 1}
+                with self.journal.transaction():
+                    self.journal.sweep(k, "abandoned", began, self.time.now(), data, [], [])
+                if isinstance(exc, MotorFault | MotionTimeout) or not isinstance(
+                    exc, CommError | DetectorError
+                ):
+                    raise
+                if attempt < on_fault.retries:
+                    self._event("retry", {**data, **self._sim()}, target=first)
+                    continue
+                if on_fault.then == "skip":
+                    with self.journal.transaction():
+                        for i in targets:
+                            self._skip(i, f"sweep {k}: {type(exc).__name__}: {exc}")
+                    return count
+                self._event("fault", data, target=first)
+                raise _Stop("aborted", f"sweep {k}: {exc}") from None
+        self._commit_sweep(k, attempt + 1, raw)
+        return count
+
+    def _commit_sweep(self, k: int, attempts: int, raw: RawSweep) -> None:
+        """Merge the sweep's streams and journal it, its raw streams, its samples and
+        the targets it did not read (skipped), in one transaction."""
+        sweeps = self.plan.sweeps
+        assert sweeps is not None
+        offset = self.time.offset
+        request, reply, positions = poll_arrays(raw.polls, self.axes)
+        started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
+        ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
+        merged = merge(request, reply, positions, started, ended, sweeps, k)
+        counts = np.array([raw.readings[r].value for r in merged.index.tolist()])
+        extra = angular_sigma(counts, merged.angles, merged.smear, merged.timing)
+        first, count = int(sweeps.first[k]), int(sweeps.count[k])
+        state = self._sim()
+        last = int(np.argmax(ended[merged.index])) if len(merged.index) else -1
+        data = {
+            "first": first, "count": count, "readings": len(raw.readings),
+            "kept": len(merged.index), "polls": len(raw.polls), "attempts": attempts,
+        }  # fmt: skip
+        polls = [
+            (a + offset, b + offset, p)
+            for a, b, p in zip(request.tolist(), reply.tolist(), positions.tolist(), strict=True)
+        ]
+        stream = [
+            (
+                r.started_s + offset, r.ended_s + offset, r.value,
+                r.std if math.isfinite(r.std) else None, int(r.saturated),
+                r.device_t_s, None if r.received_s is None else r.received_s + offset,
+            )
+            for r in raw.readings
+        ]  # fmt: skip
+        read = set(merged.target.tolist())
+        with self.journal.transaction():
+            self.journal.sweep(
+                k, "measured", raw.started_s + offset, raw.ended_s + offset, data, polls, stream
+            )
+            for n, r in enumerate(merged.index.tolist()):
+                reading = raw.readings[r]
+                i = int(merged.target[n])
+                self._fly_sample(
+                    i, attempts, raw.started_s, merged.angles[n], reading,
+                    float(merged.smear[n]), float(merged.timing[n]), float(extra[n]),
+                    state if n == last else {},
+                )  # fmt: skip
+            for i in range(first, first + count):
+                if i not in read:
+                    self._skip(i, f"sweep {k}: no reading in the constant-velocity part")
+
+    def _fly_sample(
+        self, i: int, attempts: int, settled_s: float, angles: FloatArray,
+        reading: StreamReading, smear: float, timing: float, extra: float,
+        state: Mapping[str, Any],
+    ) -> None:  # fmt: skip
+        plan = self.plan
+        wi, wo = self.rig.forward(angles)
+        std = reading.std if math.isfinite(reading.std) else 0.0
+        offset = self.time.offset
+        row: dict[str, Any] = {  # the columns of `gonio.store.schema.samples_table`
+            "target": i,
+            "attempts": attempts,
+            **{commanded(a): v for a, v in zip(self.axes, plan.angles[i].tolist(), strict=True)},
+            **{read_back(a): v for a, v in zip(self.axes, angles.tolist(), strict=True)},
+            "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
+            "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
+            **{coordinate(c): v for c, v in zip(plan.coordinate_names, plan.coords[i].tolist(),
+                                                 strict=True)},
+            "exposure_s": reading.ended_s - reading.started_s,
+            "averages": 1,
+            "n": 1,
+            "counts": reading.value,
+            "counts_std": math.hypot(std, extra),
+            "saturated": int(reading.saturated),
+            "remeasured": 0,
+            "settled_s": settled_s + offset,
+            "started_s": reading.started_s + offset,
+            "ended_s": reading.ended_s + offset,
+            "utc": utc_now(),
+            "temperatures_c": self.state.temperatures,
+            "sim_state": dumps(state["sim_state"]) if state else None,
+            "smear_rad": smear,
+            "timing_rad": timing,
+        }  # fmt: skip
+        self.state.temperatures = None
+        self.journal.sample(row)
+        self.state.count += 1
+        self._report.measured += 1
 
     def _start(self, *, resuming: bool) -> None:
         restored = resuming and not self.calibrate_on_resume and self._restore_simulation()
@@ -367,6 +539,8 @@ class Engine:
             "utc": utc_now(),
             "temperatures_c": self.state.temperatures,
             "sim_state": None,
+            "smear_rad": None,
+            "timing_rad": None,
         }  # fmt: skip
         state = self._sim()
         if state:

@@ -52,6 +52,13 @@ def figures(run: Run) -> dict[str, Any]:
         "phase_drifts": len(run.of_kind("phase")),
         "range_changes": len(run.of_kind("range")),
     }
+    if plan.sweeps is not None:  # a fly plan's sweeps
+        outcomes = Counter(s.outcome for s in run.sweeps)
+        out["sweeps"] = {
+            "planned": len(plan.sweeps),
+            "measured": outcomes["measured"],
+            "abandoned": outcomes["abandoned"],
+        }
     if calibrations:
         first, last = calibrations[0].data, calibrations[-1].data
         out["reference_albedo"] = float(first["albedo"])

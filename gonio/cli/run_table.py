@@ -92,6 +92,12 @@ def render_details(run: Run) -> str:
             f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
             f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
         )
+    sweeps = figures(run).get("sweeps")
+    if sweeps is not None:  # a fly run
+        lines.append(
+            f"  {'fly':<24}sweeps measured: {sweeps['measured']} of {sweeps['planned']}, "
+            f"readings: {len(run)}, abandoned: {sweeps['abandoned']}"
+        )
     if len(run) and run.of_kind("calibration"):
         cal = calibrate(run)
         ok = np.isfinite(cal.brdf) & (cal.brdf > 0)

@@ -9,6 +9,9 @@ The layout (schema version `SCHEMA_VERSION`) is documented in docs/reference/jou
 - ``sessions``: one row per process that wrote to the run (start, end, how it ended);
 - ``samples``: one row per measured target (``target`` = its index in the plan), its
   columns defined in `gonio.store.schema`;
+- ``sweeps`` (version 2): one row per sweep of a fly plan measured or abandoned, and
+  beside it its raw streams, ``polls`` (stamped positions) and ``stream`` (stamped
+  readings), so a run can be merged again with another timing model;
 - ``events``: calibrations, darks, faults, retries, skips, pauses, resumes, health
   readings, the simulated backend's state snapshots.
 
@@ -28,15 +31,15 @@ import fcntl
 import json
 import os
 import sqlite3
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from gonio.errors import GonioError
-from gonio.store.schema import samples_ddl, samples_table
+from gonio.store.schema import ADDED_IN_2, samples_ddl, samples_table
 
 #: The layout version this gonio writes (and the newest it reads).
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 #: ``PRAGMA application_id`` of a gonio run journal ("goni").
 APPLICATION_ID = 0x676F6E69
 
@@ -54,6 +57,35 @@ _EVENTS_SQL = """CREATE TABLE events (
     utc TEXT NOT NULL,
     data TEXT NOT NULL
 )"""
+_SWEEPS_SQL = (
+    """CREATE TABLE sweeps (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    session INTEGER NOT NULL,
+    sweep INTEGER NOT NULL,
+    outcome TEXT NOT NULL,
+    started_s REAL NOT NULL,
+    ended_s REAL NOT NULL,
+    data TEXT NOT NULL
+)""",
+    """CREATE TABLE polls (
+    sweep_id INTEGER NOT NULL REFERENCES sweeps (id),
+    request_s REAL NOT NULL,
+    reply_s REAL NOT NULL,
+    positions TEXT NOT NULL
+)""",
+    """CREATE TABLE stream (
+    sweep_id INTEGER NOT NULL REFERENCES sweeps (id),
+    started_s REAL NOT NULL,
+    ended_s REAL NOT NULL,
+    value REAL NOT NULL,
+    std REAL,
+    saturated INTEGER NOT NULL,
+    device_t_s REAL,
+    received_s REAL
+)""",
+    "CREATE INDEX polls_sweep ON polls (sweep_id)",
+    "CREATE INDEX stream_sweep ON stream (sweep_id)",
+)
 _SESSIONS_SQL = """CREATE TABLE sessions (
     id INTEGER PRIMARY KEY,
     started_utc TEXT NOT NULL,
@@ -201,6 +233,8 @@ class Journal:
         conn.execute(samples_ddl(table))
         conn.execute(_EVENTS_SQL)
         conn.execute("CREATE INDEX events_kind ON events (kind)")
+        for sql in _SWEEPS_SQL:
+            conn.execute(sql)
         rows: list[tuple[str, str | bytes]] = [(k, dumps(v)) for k, v in meta.items()]
         rows += [("schema_version", dumps(SCHEMA_VERSION)), ("plan_file", plan)]
         conn.executemany("INSERT INTO meta VALUES (?, ?)", rows)
@@ -216,6 +250,7 @@ class Journal:
         try:
             conn = cls._connect(str(path), durable, max_page_count)
             check_version(conn, path)
+            _upgrade(conn)
             return cls(conn, path, lock)
         except (sqlite3.Error, GonioError) as exc:
             os.close(lock)
@@ -280,6 +315,53 @@ class Journal:
             (self.session, kind, target, float(t_s), utc, dumps(dict(data or {}))),
         )
 
+    @contextlib.contextmanager
+    def transaction(self) -> Iterator[None]:
+        """Everything written inside commits at once at the end (rolled back if it
+        raises): a crash leaves all of it or none."""
+        self._write("BEGIN IMMEDIATE", ())
+        try:
+            yield
+        except BaseException:
+            with contextlib.suppress(sqlite3.Error):
+                self.conn.execute("ROLLBACK")
+            raise
+        self._write("COMMIT", ())
+
+    def sweep(
+        self,
+        sweep: int,
+        outcome: str,
+        started_s: float,
+        ended_s: float,
+        data: Mapping[str, Any],
+        polls: Sequence[tuple[float, float, Sequence[float]]],
+        stream: Sequence[tuple[float, float, float, float | None, int, float | None, float | None]],
+    ) -> None:
+        """Journal one sweep of a fly plan (``outcome`` ``measured`` or ``abandoned``)
+        and its raw streams: ``polls`` (request s, reply s, positions rad in the axes'
+        order) and ``stream`` (started s, ended s, value, std, saturated, device_t_s,
+        received_s); times in run time."""
+        self._write(
+            "INSERT INTO sweeps (session, sweep, outcome, started_s, ended_s, data) "
+            "VALUES (?, ?, ?, ?, ?, ?)",
+            (self.session, sweep, outcome, started_s, ended_s, dumps(dict(data))),
+        )
+        row = self.conn.execute("SELECT last_insert_rowid()").fetchone()[0]
+        try:
+            self.conn.executemany(
+                "INSERT INTO polls VALUES (?, ?, ?, ?)",
+                [(row, a, b, dumps(list(p))) for a, b, p in polls],
+            )
+            self.conn.executemany(
+                "INSERT INTO stream VALUES (?, ?, ?, ?, ?, ?, ?, ?)", [(row, *r) for r in stream]
+            )
+        except sqlite3.Error as exc:
+            raise JournalError(
+                f"{self.path or 'journal'}: cannot write the journal ({exc}); every sweep "
+                "committed so far is kept and the run can be resumed"
+            ) from None
+
     # -- closing ---------------------------------------------------------------------------
     def close(self) -> None:
         """Close the database and release the lock (idempotent)."""
@@ -308,3 +390,18 @@ def check_version(conn: sqlite3.Connection, path: Path) -> None:
             f"{path}: run file schema version {version}; this gonio reads versions up to "
             f"{SCHEMA_VERSION} (update gonio to read it)"
         )
+
+
+def _upgrade(conn: sqlite3.Connection) -> None:
+    """Bring a version-1 run file being resumed to version 2 in one transaction: the
+    samples' fly columns (NULL for what was measured) and the sweep tables."""
+    if conn.execute("PRAGMA user_version").fetchone()[0] >= SCHEMA_VERSION:
+        return
+    conn.execute("BEGIN IMMEDIATE")
+    for name in ADDED_IN_2:
+        conn.execute(f'ALTER TABLE samples ADD COLUMN "{name}" REAL')
+    for sql in _SWEEPS_SQL:
+        conn.execute(sql)
+    conn.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", (dumps(2),))
+    conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+    conn.execute("COMMIT")

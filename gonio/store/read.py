@@ -18,7 +18,7 @@ import numpy as np
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
 from gonio.store.journal import JournalError, check_version
-from gonio.store.schema import FLOAT64, Column, commanded, read_back, samples_table
+from gonio.store.schema import ADDED_IN_2, FLOAT64, Column, commanded, read_back, samples_table
 from gonio.types import FloatArray
 
 
@@ -46,6 +46,21 @@ class Session:
 
 
 @dataclass(frozen=True)
+class SweepRecord:
+    """One journaled sweep of a fly plan (version 2): its index in the plan's sweeps,
+    ``measured`` or ``abandoned``, its run times (s) and data (JSON values); its raw
+    streams are read by `raw_streams`."""
+
+    id: int
+    session: int
+    sweep: int
+    outcome: str
+    started_s: float
+    ended_s: float
+    data: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
 class Run:
     """A run as stored. ``samples`` maps each column of the samples table to a numpy
     array (one entry per measured target, by target index); angles rad, times s,
@@ -57,6 +72,7 @@ class Run:
     samples: Mapping[str, np.ndarray]
     events: tuple[Event, ...]
     sessions: tuple[Session, ...]
+    sweeps: tuple[SweepRecord, ...] = ()
     _by_kind: dict[str, tuple[Event, ...]] = field(default_factory=dict, repr=False)
 
     @property
@@ -135,6 +151,14 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
         sessions = conn.execute(
             "SELECT id, started_utc, info, ended_utc, outcome FROM sessions ORDER BY id"
         ).fetchall()
+        sweeps = (
+            conn.execute(
+                "SELECT id, session, sweep, outcome, started_s, ended_s, data FROM sweeps "
+                "ORDER BY id"
+            ).fetchall()
+            if _has_table(conn, "sweeps")
+            else []
+        )
     finally:
         conn.execute("COMMIT")
     meta: dict[str, Any] = {}
@@ -159,7 +183,41 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
             Session(i, st, MappingProxyType(json.loads(info)), en, out)
             for i, st, info, en, out in sessions
         ),
+        sweeps=tuple(
+            SweepRecord(i, s, k, o, a, b, MappingProxyType(json.loads(d)))
+            for i, s, k, o, a, b, d in sweeps
+        ),
     )
+
+
+def _has_table(conn: sqlite3.Connection, name: str) -> bool:
+    found = conn.execute("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?", (name,))
+    return found.fetchone() is not None
+
+
+def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
+    """A journaled sweep's raw streams: the polls as (P, 2) request and reply times (s)
+    and (P, A) positions (rad), and the stream's readings as a structured array
+    (started_s, ended_s, value, std, saturated, device_t_s, received_s; NULL as NaN)."""
+    conn = sqlite3.connect(f"{run.path.resolve().as_uri()}?mode=ro", uri=True)
+    try:
+        polls = conn.execute(
+            "SELECT request_s, reply_s, positions FROM polls WHERE sweep_id = ? ORDER BY rowid",
+            (sweep_id,),
+        ).fetchall()
+        stream = conn.execute(
+            "SELECT started_s, ended_s, value, std, saturated, device_t_s, received_s FROM "
+            "stream WHERE sweep_id = ? ORDER BY rowid",
+            (sweep_id,),
+        ).fetchall()
+    finally:
+        conn.close()
+    times = np.array([(a, b) for a, b, _ in polls], dtype=np.float64).reshape(-1, 2)
+    positions = np.array([json.loads(p) for _, _, p in polls], dtype=np.float64)
+    names = ("started_s", "ended_s", "value", "std", "saturated", "device_t_s", "received_s")
+    dtype = np.dtype([(n, np.float64) for n in names])
+    readings = np.array([tuple(np.nan if c is None else c for c in r) for r in stream], dtype=dtype)
+    return times, positions.reshape(len(polls), -1), readings
 
 
 def _columns(
@@ -176,6 +234,8 @@ def _columns(
             out[name] = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
         else:
             out[name] = np.array(cells, dtype=dtype)
+    for name in ADDED_IN_2:  # a version-1 run: no fly columns
+        out.setdefault(name, np.full(len(rows), np.nan))
     return out
 
 

@@ -90,7 +90,14 @@ def samples_table(axes: Sequence[str], coordinate_names: Sequence[str]) -> tuple
         Column("utc", "TEXT", OBJECT),
         Column("temperatures_c", "TEXT", OBJECT, nullable=True),  # JSON
         Column("sim_state", "TEXT", OBJECT, nullable=True),  # JSON
+        # Version 2: a fly reading's smear and timing uncertainty (rad; NULL stop-and-go)
+        Column("smear_rad", "REAL", FLOAT64, nullable=True),
+        Column("timing_rad", "REAL", FLOAT64, nullable=True),
     )
+
+
+#: Columns a version-1 run file lacks (read as NaN).
+ADDED_IN_2 = ("smear_rad", "timing_rad")
 
 
 def samples_ddl(table: Sequence[Column]) -> str:

@@ -225,13 +225,13 @@ def _second_pass(journal: Journal, run: Run) -> Plan:
     return whole
 
 
-def refuse_fly(plan: Plan) -> None:
-    """`ConfigError` for a fly plan: planned, not yet acquired."""
-    if plan.is_fly:
+def refuse_fly(plan: Plan, kind: str) -> None:
+    """`ConfigError` for a fly plan on a backend that does not acquire them yet (only
+    the simulated one does)."""
+    if plan.is_fly and kind != "simulated":
         raise ConfigError(
-            f"plan {plan.spec.name!r}: fly plans are planned but not yet acquired; "
-            "`gonio plan` predicts one, acquire a stop-and-go plan (sampling.strategy other "
-            "than fly)"
+            f"plan {plan.spec.name!r}: fly plans are acquired on the simulated backend only "
+            f"(this run's is {kind}); use `gonio simulate`, or a stop-and-go plan"
         )
 
 
@@ -252,9 +252,9 @@ def start(
 ) -> SessionResult:
     """Acquire ``plan`` into a new run file ``output`` (None: in memory);
     ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
-    refuse_fly(plan)
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse, force_simulated=force_simulated)
+    refuse_fly(plan, kind)
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite, files)
@@ -435,9 +435,9 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
             rehearse: bool = False) -> list[str]:  # fmt: skip
     """Check what a run needs without moving anything; the lines to print (raises a
     `GonioError` at the first problem)."""
-    refuse_fly(plan)
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse)
+    refuse_fly(plan, kind)
     lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]
     lo, hi = rig.limits[:, 0], rig.limits[:, 1]
     outside = ~np.all((plan.angles >= lo) & (plan.angles <= hi), axis=1)

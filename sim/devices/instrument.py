@@ -61,6 +61,7 @@ class SimulatedInstrument(Resource):
             streams=self.streams,
             light=self.light,
             faults=injector,
+            pose_at=self.bus.true_position_at,
         )
         self._devices = Devices(self.bus, self.detector, self.clock, self.light, self)
 

@@ -385,6 +385,16 @@ class SimMotorBus(Resource):
         true = self._present_encoder() + self._error
         return dict(zip(self._names, true.tolist(), strict=True))
 
+    def true_position_at(self, t: float) -> dict[str, float]:
+        """Where the joints really are (rad) at clock time ``t`` (s) of the present move
+        (at its start before it, at its goal after it): a stream window's pose."""
+        if t >= self._end:
+            here = self._goal
+        else:
+            dt = max(t - self._t0, 0.0)
+            here = profile_position(self._start, self._goal, self._move_v, self._move_a, dt)
+        return dict(zip(self._names, (here + self._error).tolist(), strict=True))
+
     def snapshot(self) -> MotorState:
         """The motors' state (at rest: call after `wait_settled`)."""
         return MotorState(

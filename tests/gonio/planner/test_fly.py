@@ -1,6 +1,7 @@
 """Fly plans: sweeps within the rig's limits, velocities within the blur budget and the
 axes' max velocity, readings and duration as an independent computation predicts, the
-summary's lines, the stored plan read back bit for bit, and acquisition refused."""
+summary's lines, the stored plan read back bit for bit, and acquisition refused on the
+backends that do not sweep yet."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
 from gonio.rig.model import Reason, Rig
+from gonio.workflows.session import refuse_fly
 from tests.conftest import CONFIGS, RIG_FILES
 
 FLY = CONFIGS / "plans" / "fly.yaml"
@@ -189,24 +191,20 @@ def test_a_stop_and_go_plan_stores_no_sweeps(quick_plan: Plan) -> None:
     assert quick_plan.sweeps is None and not quick_plan.is_fly
 
 
-def test_the_shipped_fly_plan_plans_and_acquire_refuses_it(run_gonio: Any, tmp_path: Path) -> None:
+def test_the_shipped_fly_plan_plans_and_only_the_simulated_backend_acquires_it(
+    run_gonio: Any, tmp_path: Path, plans: dict[str, Plan]
+) -> None:
     out = tmp_path / "fly.csv"
     result = run_gonio("plan", str(FLY), "-o", str(out))
     code, stdout, err = result.returncode, result.stdout, result.stderr
     assert code == 0, err
     assert "readings per hour" in stdout and f"to {out}" in stdout
     assert read_plan(out).sweeps is not None
-    scene = str(CONFIGS / "scenes" / "matte.yaml")
-    for args in (
-        ("acquire", str(FLY), "--scene", scene, "-o", str(tmp_path / "run.sqlite")),
-        ("acquire", str(FLY), "--scene", scene, "--dry-run"),
-        ("simulate", str(FLY), "--scene", scene),
-    ):
-        result = run_gonio(*args)
-        code, err = result.returncode, result.stderr
-        assert code == 2, (args, err)
-        assert err.count("\n") == 1 and "fly plans are planned but not yet acquired" in err
-    assert not (tmp_path / "run.sqlite").exists()
+    refuse_fly(plans["arch"], "simulated")
+    for kind in ("rehearsal", "hardware"):
+        with pytest.raises(ConfigError, match="simulated backend only") as info:
+            refuse_fly(plans["arch"], kind)
+        assert "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,7 @@
 """The samples table, defined once (`gonio.store.schema`): the DDL the writer makes from
-it is schema v1's, and the reader's dtypes are the table's."""
+it is schema v2's (v1's and the fly columns), the reader's dtypes are the table's, and a
+version-1 run file (made here with SQL from a written one: the sweep tables and the fly
+columns dropped) is read and resumed."""
 
 from __future__ import annotations
 
@@ -27,6 +29,8 @@ V1_SAMPLES_SQL = (
     '"settled_s" REAL NOT NULL, "started_s" REAL NOT NULL, "ended_s" REAL NOT NULL, '
     '"utc" TEXT NOT NULL, "temperatures_c" TEXT, "sim_state" TEXT)'
 )
+#: Version 2 adds a fly reading's smear and timing uncertainty.
+V2_SAMPLES_SQL = V1_SAMPLES_SQL[:-1] + ', "smear_rad" REAL, "timing_rad" REAL)'
 
 
 def _samples_sql(conn: sqlite3.Connection) -> str:
@@ -34,12 +38,41 @@ def _samples_sql(conn: sqlite3.Connection) -> str:
     return str(row[0])
 
 
-def test_the_ddl_made_from_the_table_is_schema_v1() -> None:
+def test_the_ddl_made_from_the_table_is_schema_v2() -> None:
     axes, coords = ["theta_l", "phi_d"], ["theta_h", "phi_h"]
-    assert samples_ddl(samples_table(axes, coords)) == V1_SAMPLES_SQL
+    assert samples_ddl(samples_table(axes, coords)) == V2_SAMPLES_SQL
     meta = {"axes": axes, "coordinate_names": coords}
     with Journal.create(None, meta, b"", durable=False) as journal:
-        assert _samples_sql(journal.conn) == V1_SAMPLES_SQL
+        assert _samples_sql(journal.conn) == V2_SAMPLES_SQL
+
+
+def _as_version_1(path: Path) -> None:
+    """Turn a written run file into version 1's layout."""
+    with sqlite3.connect(path) as conn:
+        for table in ("stream", "polls", "sweeps"):
+            conn.execute(f"DROP TABLE {table}")
+        for column in ("smear_rad", "timing_rad"):
+            conn.execute(f"ALTER TABLE samples DROP COLUMN {column}")
+        conn.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
+        conn.execute("PRAGMA user_version=1")
+
+
+def test_a_version_1_run_is_read_and_resumed(tmp_path: Path) -> None:
+    out = tmp_path / "v1.sqlite"
+    acquire(plan_file(tmp_path, target=5), scene_file(tmp_path), out)
+    expected = open_run(out)
+    _as_version_1(out)
+    with sqlite3.connect(out) as conn:
+        assert "smear_rad" not in _samples_sql(conn)
+        conn.execute("DELETE FROM samples WHERE target >= 3")
+    run = open_run(out)
+    assert len(run) == 3 and run.sweeps == ()
+    assert np.isnan(run.samples["smear_rad"]).all() and np.isnan(run.samples["timing_rad"]).all()
+    np.testing.assert_array_equal(run.samples["counts"], expected.samples["counts"][:3])
+    with Journal.reopen(out, durable=False) as journal:  # resuming brings it to version 2
+        assert journal.conn.execute("PRAGMA user_version").fetchone()[0] == 2
+    run = open_run(out)
+    assert run.meta["schema_version"] == 2 and len(run) == 3
 
 
 @pytest.fixture(scope="module")

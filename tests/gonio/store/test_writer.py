@@ -33,7 +33,7 @@ def test_a_newer_layout_is_refused_in_one_line(run_path: Path) -> None:
     with pytest.raises(JournalError) as info:
         open_run(run_path)
     assert str(info.value) == (
-        f"{run_path}: run file schema version 99; this gonio reads versions up to 1 "
+        f"{run_path}: run file schema version 99; this gonio reads versions up to 2 "
         "(update gonio to read it)"
     )
     with pytest.raises(JournalError, match="schema version 99"):

@@ -1,0 +1,165 @@
+"""One sweep of a fly plan, measured and merged (docs/explanations/acquisition.md).
+
+`run_sweep`: move to the sweep's start (at rest) and settle, start the detector's stream,
+command the sweep (the swept axes at the plan's velocity, to the stop pose), then poll
+the positions and read the stream in turn until the motion is over (on the simulated
+backend both advance the one virtual clock), stop the stream. What comes back is raw:
+the stamped polls and the stamped readings.
+
+`merge`: each reading's joint angles are the polled positions interpolated (linearly,
+per axis, on each poll's mid-time) at the middle of its integration window; its smear is
+the joint-space path covered during the window (rad); its timing uncertainty is the
+stamps' jitter (a poll's request-to-reply span / √12, the positions being sampled
+somewhere in it) × the angular speed there (rad). Only readings whose whole window lies
+inside the constant-velocity part (the swept axis between the entry and exit poses) are
+kept; each is matched to the plan's reading (target) whose planned mid-pose is nearest
+along the swept axis, one reading per target.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from drivers.base import Devices, StampedPositions, StreamReading, streaming
+from gonio.planner.model import Sweeps
+from gonio.types import FloatArray
+
+
+@dataclass(frozen=True)
+class RawSweep:
+    """A sweep's raw streams: the polls and the stream's readings (host clock, s)."""
+
+    polls: list[StampedPositions]
+    readings: list[StreamReading]
+    started_s: float
+    ended_s: float
+
+
+@dataclass(frozen=True)
+class Merged:
+    """The kept readings of a sweep: ``index`` into the raw readings, ``target`` the
+    plan's target each stands for, ``angles`` (K, A) rad at mid-window, ``smear`` and
+    ``timing`` (K,) rad."""
+
+    index: np.ndarray
+    target: np.ndarray
+    angles: FloatArray
+    smear: FloatArray
+    timing: FloatArray
+
+
+def run_sweep(
+    devices: Devices,
+    axes: tuple[str, ...],
+    sweeps: Sweeps,
+    k: int,
+    *,
+    settle_s: float,
+    timeout_s: float,
+) -> RawSweep:
+    """Measure sweep ``k`` of ``sweeps`` (see the module docstring). A driver error
+    propagates with the stream stopped (the bus already held the axes)."""
+    bus, clock = devices.bus, devices.clock
+    detector = streaming(devices.detector)
+    start = dict(zip(axes, sweeps.start[k].tolist(), strict=True))
+    stop = dict(zip(axes, sweeps.stop[k].tolist(), strict=True))
+    moving = {a: abs(v) for a, v in zip(axes, sweeps.velocity[k].tolist(), strict=True) if v}
+    bus.move_to(start)
+    bus.wait_settled(timeout_s)
+    clock.sleep(settle_s)
+    started = clock.now()
+    polls: list[StampedPositions] = []
+    readings: list[StreamReading] = []
+    detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
+    try:
+        bus.sweep({a: stop[a] for a in moving}, moving)
+        deadline = started + timeout_s
+        while True:
+            poll = bus.poll_positions()
+            polls.append(poll)
+            readings += detector.read_stream(0.0)
+            if poll.arrived or poll.reply_s > deadline:
+                break
+    finally:
+        readings += detector.stop_stream()
+    bus.wait_settled(timeout_s)
+    return RawSweep(polls, readings, started, clock.now())
+
+
+def poll_arrays(polls: list[StampedPositions], axes: tuple[str, ...]) -> tuple[FloatArray, ...]:
+    """(P,) request and reply times (s) and (P, A) positions (rad) of ``polls``."""
+    request = np.array([p.request_s for p in polls], dtype=np.float64)
+    reply = np.array([p.reply_s for p in polls], dtype=np.float64)
+    positions = np.array([[p.positions[a] for a in axes] for p in polls], dtype=np.float64)
+    return request, reply, positions.reshape(len(polls), len(axes))
+
+
+def merge(
+    request: FloatArray,
+    reply: FloatArray,
+    positions: FloatArray,
+    started: FloatArray,
+    ended: FloatArray,
+    sweeps: Sweeps,
+    k: int,
+) -> Merged:
+    """Merge a sweep's polls (request, reply (P,) s; positions (P, A) rad) with its
+    readings' windows (started, ended (R,) s) (see the module docstring)."""
+    t = 0.5 * (request + reply)
+    order = np.argsort(t, kind="stable")
+    t, positions = t[order], positions[order]
+    middle = 0.5 * (started + ended)
+
+    def at(times: FloatArray) -> FloatArray:
+        cols = [np.interp(times, t, positions[:, j]) for j in range(positions.shape[1])]
+        return np.stack(cols, axis=1).reshape(len(times), positions.shape[1])
+
+    angles, first, last = at(middle), at(started), at(ended)
+    smear = np.linalg.norm(last - first, axis=1)
+    span = ended - started
+    speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
+    jitter = float(np.median(reply - request)) / math.sqrt(12.0) if len(t) else 0.0
+    timing = jitter * speed
+    j = int(np.argmax(np.abs(sweeps.velocity[k])))
+    lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
+    inside = (np.minimum(first[:, j], last[:, j]) >= lo - 1e-12) & (
+        np.maximum(first[:, j], last[:, j]) <= hi + 1e-12
+    )
+    v = abs(float(sweeps.velocity[k, j]))
+    along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
+    slot = np.rint((along - 0.5 * sweeps.integration_s) / sweeps.period_s).astype(np.int64)
+    count = int(sweeps.count[k])
+    inside &= (slot >= 0) & (slot < count)
+    error = np.abs(along - 0.5 * sweeps.integration_s - slot * sweeps.period_s)
+    index = []
+    best: dict[int, int] = {}
+    for r in np.flatnonzero(inside).tolist():
+        s = int(slot[r])
+        if s not in best or error[r] < error[best[s]]:
+            best[s] = r
+    index = sorted(best.values())
+    kept = np.array(index, dtype=np.int64)
+    return Merged(
+        kept,
+        int(sweeps.first[k]) + slot[kept],
+        angles[kept],
+        smear[kept],
+        timing[kept],
+    )
+
+
+def angular_sigma(counts: FloatArray, angles: FloatArray, smear: FloatArray, timing: FloatArray
+                  ) -> FloatArray:  # fmt: skip
+    """The counts' standard deviation (K,) that the angular uncertainty of each kept
+    reading adds: |d counts / d path| (finite differences along the sweep) × the angular
+    σ, sqrt(timing² + smear² / 12) (a uniform smear over the window)."""
+    if len(counts) < 2:
+        return np.zeros(len(counts))
+    path = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(angles, axis=0), axis=1))])
+    if not np.all(np.diff(path) > 0):
+        return np.zeros(len(counts))
+    slope = np.abs(np.gradient(counts, path))
+    return np.asarray(slope * np.sqrt(timing**2 + smear**2 / 12.0))
