@@ -23,8 +23,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
-from drivers.base import restamped
 from drivers.serial_detector.detector import SerialDetector
+from drivers.stream import restamped
 from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
 
 RATES_HZ = (100.0, 500.0, 1000.0)
@@ -98,7 +98,7 @@ def main() -> None:
         "\nLatency: the host's arrival stamp (`StreamReading.received_s`) less the true end "
         "of the line's window. End stamp error: |`ended_s` − the true end|. With the "
         "device's time the driver maps it to the host clock by the smallest arrival − "
-        "device time seen so far (restamped: over the whole stream, `drivers.base.restamped`); "
+        "device time seen so far (restamped: over the whole stream, `drivers.stream.restamped`); "
         "without it, the same with the line count × the period as the device's clock."
     )
 

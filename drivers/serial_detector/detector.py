@@ -38,7 +38,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
     Use it as a context manager (``with SerialDetector(config) as det: det.measure(0.1)``)
     or call :meth:`open` and :meth:`close`. Reading lines from the port, raw I/O and the
     error messages come from :class:`~drivers.serial_detector.lines._LineIO`; with a
-    ``stream`` section it also streams (`drivers.base.StreamingDetector`, from
+    ``stream`` section it also streams (`drivers.stream.StreamingDetector`, from
     :class:`~drivers.serial_detector.stream._Streaming`).
 
     ``clock`` stamps every reading (real time by default); ``exposure_range_s`` is the

@@ -1,5 +1,5 @@
 """The streaming half of :class:`~drivers.serial_detector.detector.SerialDetector`:
-``start_stream`` / ``read_stream`` / ``stop_stream`` (`drivers.base.StreamingDetector`)
+``start_stream`` / ``read_stream`` / ``stop_stream`` (`drivers.stream.StreamingDetector`)
 for a device configured with a `SerialStreamConfig` (``docs/reference/serial_detector.md``,
 "Streaming").
 
@@ -28,7 +28,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from drivers.base import Clock, StreamNotSupported, StreamReading
+from drivers.base import Clock, StreamNotSupported
 from drivers.serial_detector.config import SerialDetectorConfig, SerialStreamConfig, _as_real
 from drivers.serial_detector.errors import (
     SerialDetectorClosed,
@@ -36,6 +36,7 @@ from drivers.serial_detector.errors import (
     SerialDetectorValueError,
 )
 from drivers.serial_detector.lines import _Line, _number, _quote
+from drivers.stream import StreamReading
 
 _FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
 #: The shortest quiet (s) after ``stop`` that means the device has stopped.
@@ -111,7 +112,7 @@ class _Streaming:
 
     @property
     def can_stream(self) -> bool:
-        """Whether the configuration has a streaming mode (`drivers.base.can_stream`)."""
+        """Whether the configuration has a streaming mode (`drivers.stream.can_stream`)."""
         return self._config.stream is not None
 
     @property

@@ -43,10 +43,10 @@ from drivers.base import (
     MotionTimeout,
     MotorFault,
     Reading,
-    StreamReading,
     dark_subtracted,
     reading_unit,
 )
+from drivers.stream import StreamReading
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved

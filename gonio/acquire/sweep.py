@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.base import Devices, StampedPositions, StreamReading, streaming
+from drivers.base import Devices, StampedPositions
+from drivers.stream import StreamReading, streaming
 from gonio.planner.model import Sweeps
 from gonio.types import FloatArray
 

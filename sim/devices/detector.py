@@ -13,7 +13,7 @@ continues its streams), so any sample can be recomputed alone. Time passes on th
 rehearsal. Injected ``detector_error`` and ``saturated`` faults (`sim.faults`) apply to
 the first measurement of their samples.
 
-Streaming (`drivers.base.StreamingDetector`): windows of the integration end every
+Streaming (`drivers.stream.StreamingDetector`): windows of the integration end every
 period from ``start_stream``'s time on the clock; ``read_stream`` returns those ended by
 now (letting virtual time pass up to its timeout for the next one). Each window is read
 out as one exposure at the pose ``pose_at(t)`` gives for the window's middle time ``t``
@@ -41,9 +41,9 @@ from drivers.base import (
     Resource,
     StageTarget,
     StreamNotSupported,
-    StreamReading,
 )
 from drivers.pymeasure.config import PyMeasureDetectorConfig
+from drivers.stream import StreamReading
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from sim.faults import FaultInjector
@@ -204,7 +204,7 @@ class SimDetector(Resource):
 
     @property
     def can_stream(self) -> bool:
-        """Whether it streams (`drivers.base.can_stream`): yes, unless a lock-in."""
+        """Whether it streams (`drivers.stream.can_stream`): yes, unless a lock-in."""
         return not self.lockin
 
     def open(self) -> None:

@@ -11,9 +11,10 @@ from typing import Any
 
 import pytest
 
-from drivers.base import StreamNotSupported, StreamReading, can_stream, restamped
+from drivers.base import StreamNotSupported
 from drivers.serial_detector import SerialDetectorError
 from drivers.serial_detector.detector import SerialDetector
+from drivers.stream import StreamReading, can_stream, restamped
 from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
 
 TIMEOUT_S = 0.3

@@ -9,15 +9,8 @@ import math
 
 import pytest
 
-from drivers.base import (
-    DetectorError,
-    DeviceClosed,
-    StreamingDetector,
-    StreamNotSupported,
-    StreamReading,
-    can_stream,
-    streaming,
-)
+from drivers.base import DetectorError, DeviceClosed, StreamNotSupported
+from drivers.stream import StreamingDetector, StreamReading, can_stream, streaming
 from tests.drivers.contract.conftest import INSTRUMENTS, DetectorHarness
 
 RATE_HZ = 200.0

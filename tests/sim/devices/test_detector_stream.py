@@ -8,7 +8,8 @@ import math
 
 import pytest
 
-from drivers.base import DetectorError, StreamNotSupported, can_stream
+from drivers.base import DetectorError, StreamNotSupported
+from drivers.stream import can_stream
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, SimLightSource
