@@ -316,39 +316,16 @@ class Engine:
         reading: StreamReading, smear: float, timing: float, extra: float,
         state: Mapping[str, Any],
     ) -> None:  # fmt: skip
-        plan = self.plan
-        wi, wo = self.rig.forward(angles)
         std = reading.std if math.isfinite(reading.std) else 0.0
         offset = self.time.offset
-        row: dict[str, Any] = {  # the columns of `gonio.store.schema.samples_table`
-            "target": i,
-            "attempts": attempts,
-            **{commanded(a): v for a, v in zip(self.axes, plan.angles[i].tolist(), strict=True)},
-            **{read_back(a): v for a, v in zip(self.axes, angles.tolist(), strict=True)},
-            "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
-            "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
-            **{coordinate(c): v for c, v in zip(plan.coordinate_names, plan.coords[i].tolist(),
-                                                 strict=True)},
-            "exposure_s": reading.ended_s - reading.started_s,
-            "averages": 1,
-            "n": 1,
-            "counts": reading.value,
-            "counts_std": math.hypot(std, extra),
-            "saturated": int(reading.saturated),
-            "remeasured": 0,
-            "settled_s": settled_s + offset,
-            "started_s": reading.started_s + offset,
-            "ended_s": reading.ended_s + offset,
-            "utc": utc_now(),
-            "temperatures_c": self.state.temperatures,
-            "sim_state": dumps(state["sim_state"]) if state else None,
-            "smear_rad": smear,
-            "timing_rad": timing,
-        }  # fmt: skip
-        self.state.temperatures = None
-        self.journal.sample(row)
-        self.state.count += 1
-        self._report.measured += 1
+        self._write_sample(
+            i, attempts, angles.tolist(), settled_s + offset, state,
+            exposure_s=reading.ended_s - reading.started_s, averages=1, n=1,
+            counts=reading.value, counts_std=math.hypot(std, extra),
+            saturated=int(reading.saturated), remeasured=0,
+            started_s=reading.started_s + offset, ended_s=reading.ended_s + offset,
+            smear_rad=smear, timing_rad=timing,
+        )  # fmt: skip
 
     def _start(self, *, resuming: bool) -> None:
         restored = resuming and not self.calibrate_on_resume and self._restore_simulation()
@@ -513,38 +490,47 @@ class Engine:
         exposure: float,
         remeasured: int,
     ) -> None:
-        plan = self.plan
-        back = [measured.read_back[a] for a in self.axes]
-        wi, wo = self.rig.forward(np.array(back, dtype=np.float64))
         fields = reading_fields(reading, exposure, self.time.offset)
+        self._write_sample(
+            i, attempts, [measured.read_back[a] for a in self.axes],
+            measured.settled_s + self.time.offset, self._sim(),
+            exposure_s=fields["exposure_s"], averages=int(self.plan.averages[i]),
+            n=reading.n, counts=reading.value, counts_std=fields["std"],
+            saturated=int(reading.saturated), remeasured=remeasured,
+            started_s=fields["started_s"], ended_s=fields["ended_s"],
+            smear_rad=None, timing_rad=None,
+        )  # fmt: skip
+
+    def _write_sample(
+        self,
+        i: int,
+        attempts: int,
+        angles: list[float],
+        settled_s: float,
+        state: Mapping[str, Any],
+        **measured: Any,
+    ) -> None:
+        """Journal target ``i``'s sample: the columns every sample has (the pose read back
+        at ``angles`` and its pair, the plan's coordinates, the run time ``settled_s``),
+        the ``measured`` ones (the reading, its window and uncertainty) and the
+        simulation's ``state`` when it has one."""
+        plan = self.plan
+        wi, wo = self.rig.forward(np.array(angles, dtype=np.float64))
         names = plan.coordinate_names
         row: dict[str, Any] = {  # the columns of `gonio.store.schema.samples_table`
             "target": i,
             "attempts": attempts,
             **{commanded(a): v for a, v in zip(self.axes, plan.angles[i].tolist(), strict=True)},
-            **{read_back(a): v for a, v in zip(self.axes, back, strict=True)},
+            **{read_back(a): v for a, v in zip(self.axes, angles, strict=True)},
             "wi_x": float(wi[0]), "wi_y": float(wi[1]), "wi_z": float(wi[2]),
             "wo_x": float(wo[0]), "wo_y": float(wo[1]), "wo_z": float(wo[2]),
             **{coordinate(c): v for c, v in zip(names, plan.coords[i].tolist(), strict=True)},
-            "exposure_s": fields["exposure_s"],
-            "averages": int(plan.averages[i]),
-            "n": reading.n,
-            "counts": reading.value,
-            "counts_std": fields["std"],
-            "saturated": int(reading.saturated),
-            "remeasured": remeasured,
-            "settled_s": measured.settled_s + self.time.offset,
-            "started_s": fields["started_s"],
-            "ended_s": fields["ended_s"],
+            **measured,
+            "settled_s": settled_s,
             "utc": utc_now(),
             "temperatures_c": self.state.temperatures,
-            "sim_state": None,
-            "smear_rad": None,
-            "timing_rad": None,
+            "sim_state": dumps(state["sim_state"]) if state else None,
         }  # fmt: skip
-        state = self._sim()
-        if state:
-            row["sim_state"] = dumps(state["sim_state"])
         self.state.temperatures = None
         self.journal.sample(row)
         self.state.count += 1
