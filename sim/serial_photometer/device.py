@@ -294,14 +294,9 @@ class SerialPhotometer(_PtyServer):
             self._stream = None
             return
         window, self._window = self._window, None
-        if faults.garbage:
-            data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
-            faults.garbage = 0
-        elif faults.inject:
-            data = _line(faults.inject.popleft())
-        elif faults.malformed:
-            faults.malformed -= 1
-            data = _line(MALFORMED_LINE)
+        faulty = self._fault_line_locked()
+        if faulty is not None:
+            data = faulty
         elif isinstance(window, tuple):
             counts, saturated = window
             t_ms = self.device_time_s(event.due) * 1000
@@ -342,17 +337,26 @@ class SerialPhotometer(_PtyServer):
             return
         done = start + duration + delay
         self._busy_until = done
+        faulty = self._fault_line_locked()
+        data = (
+            faulty if faulty is not None else _line(self._answer_locked(exposure_ms / 1000, count))
+        )
+        self._schedule_locked(done, data)
+
+    def _fault_line_locked(self) -> bytes | None:
+        """The line an injected fault sends instead of the next answer or stream line
+        (garbage, an injected line, a malformed one; each used once), or None."""
+        faults = self._faults
         if faults.garbage:
             data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
             faults.garbage = 0
-        elif faults.inject:
-            data = _line(faults.inject.popleft())
-        elif faults.malformed:
+            return data
+        if faults.inject:
+            return _line(faults.inject.popleft())
+        if faults.malformed:
             faults.malformed -= 1
-            data = _line(MALFORMED_LINE)
-        else:
-            data = _line(self._answer_locked(exposure_ms / 1000, count))
-        self._schedule_locked(done, data)
+            return _line(MALFORMED_LINE)
+        return None
 
     def _answer_locked(self, exposure_s: float, count: int) -> str:
         values: list[float] = []
