@@ -22,12 +22,11 @@ from drivers.serial_detector.errors import (
     SerialDetectorError,
     _open_reason,
 )
-from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote
+from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote, is_saturated
 from drivers.serial_detector.stream import _Streaming
 
 log = logging.getLogger("drivers.serial_detector")  # one logger for the package
 
-_FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
 #: Failures after which nothing more is owed by the device: no resync needed.
 _ANSWERED = frozenset({"reset", "device", "value", "invalid"})
 
@@ -297,19 +296,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         )
 
     def _is_saturated(self, value: float, match: re.Match[str]) -> bool:
-        full_scale = self._config.full_scale
-        if full_scale is not None and value >= full_scale:
-            return True
-        groups = match.groupdict()
-        flag = groups.get("saturated")
-        if flag is not None and flag.strip().lower() not in _FALSE_WORDS:
-            return True
-        status = groups.get("status")
-        return (
-            status is not None
-            and self._saturated_status is not None
-            and self._saturated_status.search(status) is not None
-        )
+        return is_saturated(value, match, self._config.full_scale, self._saturated_status)
 
     # -- the conversation -----------------------------------------------------------
 

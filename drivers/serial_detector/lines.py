@@ -293,3 +293,30 @@ class _LineIO:
             kind,
             last.text,
         )
+
+
+#: A ``saturated`` group's words that mean "not saturated" (case-insensitive).
+_FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
+
+
+def is_saturated(
+    value: float,
+    match: re.Match[str],
+    full_scale: float | None,
+    saturated_status: re.Pattern[str] | None,
+) -> bool:
+    """Whether a parsed line says its reading saturated: the value at or above the
+    configured ``full_scale``, a ``saturated`` group that is not a false word, or a
+    ``status`` group that ``saturated_status`` matches."""
+    if full_scale is not None and value >= full_scale:
+        return True
+    groups = match.groupdict()
+    flag = groups.get("saturated")
+    if flag is not None and flag.strip().lower() not in _FALSE_WORDS:
+        return True
+    status = groups.get("status")
+    return (
+        status is not None
+        and saturated_status is not None
+        and (saturated_status.search(status) is not None)
+    )

@@ -35,10 +35,9 @@ from drivers.serial_detector.errors import (
     SerialDetectorError,
     SerialDetectorValueError,
 )
-from drivers.serial_detector.lines import _Line, _number, _quote
+from drivers.serial_detector.lines import _Line, _number, _quote, is_saturated
 from drivers.stream import StreamReading
 
-_FALSE_WORDS = frozenset({"", "0", "false", "no", "n", "off"})
 #: The shortest quiet (s) after ``stop`` that means the device has stopped.
 _QUIET_MIN_S = 0.05
 
@@ -328,19 +327,7 @@ class _Streaming:
         return number
 
     def _saturated(self, value: float, match: re.Match[str]) -> bool:
-        full_scale = self._config.full_scale
-        if full_scale is not None and value >= full_scale:
-            return True
-        groups = match.groupdict()
-        flag = groups.get("saturated")
-        if flag is not None and flag.strip().lower() not in _FALSE_WORDS:
-            return True
-        status = groups.get("status")
-        return (
-            status is not None
-            and self._saturated_status is not None
-            and self._saturated_status.search(status) is not None
-        )
+        return is_saturated(value, match, self._config.full_scale, self._saturated_status)
 
     # -- stop -------------------------------------------------------------------------
 
