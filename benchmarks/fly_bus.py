@@ -28,25 +28,13 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
+from bus import AXES  # the four axes benchmarks/bus.py times
 
 from drivers.base import StampedPositions
-from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, poll_seconds
 from sim.dynamixel.emulator import DxlEmulator
 
-AXES = [
-    AxisConfig(
-        f"axis{i}",
-        i,
-        -1.0,
-        1.0,
-        zero_offset_rad=-math.pi,
-        profile_velocity_rad_s=4.0,
-        profile_acceleration_rad_s2=40.0,
-    )
-    for i in range(1, 5)
-]
 SPEED = 1.0  # rad/s
 STROKE = 0.6  # rad
 TICK = 2 * math.pi / 4096
