@@ -188,11 +188,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
             self.open()
         started = self._clock.now()
         try:
-            if self._needs_resync:
-                self._resync()
-            self._drain()
-            if self._needs_init:
-                self._initialize()
+            self._ready()
             self._apply_exposure(exposure_s)
             if self._config.device_averaging:
                 reading = self._device_averaged(exposure_s, averages, started)
@@ -391,6 +387,15 @@ class SerialDetector(_Streaming, _LineIO, Resource):
             raise self._error(
                 f"the device refused {command!r}: {_quote(line.text)}", "device", line.text
             )
+
+    def _ready(self) -> None:
+        """Bring the instrument to a known state before a command: resynchronised after
+        a lost exchange, unread input dropped, initialised again after a reset."""
+        if self._needs_resync:
+            self._resync()
+        self._drain()
+        if self._needs_init:
+            self._initialize()
 
     def _initialize(self) -> None:
         self._needs_init = True

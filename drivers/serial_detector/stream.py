@@ -90,11 +90,7 @@ class _Streaming:
 
         def _in_waiting(self) -> int: ...
 
-        def _resync(self) -> None: ...
-
-        def _drain(self) -> None: ...
-
-        def _initialize(self) -> None: ...
+        def _ready(self) -> None: ...
 
         def _clear_input_state(self) -> None: ...
 
@@ -153,11 +149,7 @@ class _Streaming:
         if self._serial is None:
             self.open()
         try:
-            if self._needs_resync:
-                self._resync()
-            self._drain()
-            if self._needs_init:
-                self._initialize()
+            self._ready()
             self._send(command)
         except BaseException:
             self._needs_resync = self._serial is not None
