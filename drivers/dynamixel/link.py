@@ -18,17 +18,8 @@ with a status, read, or just rebooted = exact; sent by SYNC_WRITE = 1 presumed o
 unknown) and refuses, before sending, to write an EEPROM item to a motor whose torque
 is known or presumed on (`DriverError`): turn torque off and read it back first.
 
-Latency: the SDK waits 2 × LATENCY_TIMER + 2 ms plus the wire time of the *reply* for a
-status packet. That budget must cover the USB adapter's own latency timer (FTDI
-default 16 ms; 1 ms after the udev rule in docs/reference/hardware.md) and also what the SDK
-leaves out: the wire time of the instruction itself and of a packet without reply
-still leaving the adapter before it (a SYNC_WRITE of goals just before a SYNC_READ
-poll: 6 ms at 57 600 baud). The link sets its port's latency timer to the adapter's
-latency (read from sysfs when it can, else the SDK's conservative 16 ms) plus half the
-wire time of `OUTBOUND_MARGIN_BYTES` at the bus rate. The SDK keeps LATENCY_TIMER as a
-process-wide global of ``dynamixel_sdk.port_handler``; the link neither reads nor
-writes it (each port has its own), so two buses with different rates or adapters
-never change each other's timeouts.
+Latency: the port's latency timer covers what the SDK's reply timeouts leave out
+(`drivers.dynamixel.latency`).
 """
 
 from __future__ import annotations
@@ -37,10 +28,8 @@ import contextlib
 import errno
 import fcntl
 import os
-import re
 import time
 from collections.abc import Callable, Iterable, Mapping
-from pathlib import Path
 from typing import Any, TypeVar
 
 import dynamixel_sdk as sdk
@@ -48,6 +37,7 @@ import serial
 
 from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
 from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
+from drivers.dynamixel.latency import DEFAULT_LATENCY_MS, adapter_latency_ms, sdk_latency_timer
 from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
@@ -65,39 +55,11 @@ STATUS_ERRORS = {
     6: "data limit error (value outside the motor's configured limit)",
     7: "access error (read-only item, or an EEPROM item written with torque on)",
 }
-DEFAULT_LATENCY_MS = 16.0  # the SDK's own default, safe for an unconfigured FTDI adapter
-#: Outbound bytes the SDK's reply timeout does not count: the instruction and a
-#: preceding packet without reply (a 4-axis SYNC_READ is 18 bytes, a 4-axis SYNC_WRITE
-#: of goals 34), with room for larger buses.
-OUTBOUND_MARGIN_BYTES = 96
-
-
 #: Bytes' worth of line time a late reply may still need after a timeout (`_drain`).
 DRAIN_BYTES = 192
 
 
-def sdk_latency_timer(adapter_ms: float, baud: int) -> float:
-    """The latency timer (ms) for the SDK's reply timeouts: the adapter's latency plus
-    half the wire time of `OUTBOUND_MARGIN_BYTES` (the SDK doubles it), at least 1 ms."""
-    return max(1.0, adapter_ms + 0.5 * 1000.0 * 10 * OUTBOUND_MARGIN_BYTES / baud)
-
-
 T = TypeVar("T")
-
-
-def adapter_latency_ms(port: str) -> float | None:
-    """The USB-serial adapter's latency timer in ms, from sysfs (Linux), or None."""
-    try:
-        name = Path(os.path.realpath(port)).name
-    except OSError:
-        return None
-    if not re.fullmatch(r"tty(USB|ACM)\d+", name):
-        return None
-    sysfs = Path("/sys/bus/usb-serial/devices") / name / "latency_timer"
-    try:
-        return float(sysfs.read_text().strip())
-    except (OSError, ValueError):
-        return None
 
 
 class DynamixelLink(Resource):

@@ -21,7 +21,8 @@ from drivers.base import CommError, DriverError, LimitError, MotionTimeout, Moto
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK
-from drivers.dynamixel.link import DynamixelLink, sdk_latency_timer
+from drivers.dynamixel.latency import sdk_latency_timer
+from drivers.dynamixel.link import DynamixelLink
 from sim.dynamixel.emulator import DxlEmulator
 from sim.dynamixel.faults import Fault
 from tests.support.dynamixel import axes
