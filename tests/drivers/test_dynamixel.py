@@ -424,7 +424,7 @@ def test_reply_timeout_covers_a_goal_write_still_on_the_wire(
         for _ in range(5):
             bus.move_to(here)
             bus.positions()
-    monkeypatch.setattr("drivers.dynamixel.link.OUTBOUND_MARGIN_BYTES", 0)
+    monkeypatch.setattr("drivers.dynamixel.latency.OUTBOUND_MARGIN_BYTES", 0)
     ids = [axis.motor_id for axis in config]
     attempts, failed = 20, 0
     with DynamixelLink(emulator_process, 57_600, latency_ms=0.0, retries=0) as link:
