@@ -11,6 +11,12 @@ flanks) and fits the largest smear for a bias within ``tolerance`` as
     smear_max = K · α · √tolerance,
 
 K the smallest ratio over every α and tolerance measured (docs/results/fly_blur.md).
+
+A plan names its material's lobe by its full width at half maximum in degrees (the angle
+the reflected direction spans where the GGX distribution is above half its peak): for a
+small α that width is 2 · 2 · α · √(√2 − 1) rad = `WIDTH_PER_ALPHA_DEG` · α, so a plan's
+default budget is ``blur_budget_deg(width / WIDTH_PER_ALPHA_DEG, tolerance)`` — about
+0.11 of the width at 0.5 % (`blur_budget_of_width`).
 """
 
 from __future__ import annotations
@@ -21,9 +27,15 @@ from gonio.errors import DomainError
 
 #: K of smear_max = K · α · √tolerance (°), fitted by benchmarks/fly_blur.py.
 BLUR_K_DEG = 233.0
+#: The full width at half maximum (°, of the reflected direction) of a GGX lobe per unit
+#: α, for a small α: the half vector's half width α · √(√2 − 1), doubled on reflection,
+#: on both sides.
+WIDTH_PER_ALPHA_DEG = math.degrees(4.0 * math.sqrt(math.sqrt(2.0) - 1.0))
+#: The relative bias a plan's default blur budget allows (0.5 %).
+DEFAULT_TOLERANCE = 0.005
 
 
-def blur_budget_deg(alpha: float, tolerance: float = 0.005) -> float:
+def blur_budget_deg(alpha: float, tolerance: float = DEFAULT_TOLERANCE) -> float:
     """The largest smear (°) a reading may integrate over on a GGX lobe of width ``alpha``
     for the bias of mid-time attribution to stay within ``tolerance``.
 
@@ -44,3 +56,24 @@ def blur_budget_deg(alpha: float, tolerance: float = 0.005) -> float:
     if not (isinstance(tolerance, int | float) and 0 < tolerance <= 0.05):
         raise DomainError(f"tolerance must be in (0, 0.05] (a relative bias), got {tolerance!r}")
     return BLUR_K_DEG * float(alpha) * math.sqrt(float(tolerance))
+
+
+def blur_budget_of_width(width_deg: float, tolerance: float = DEFAULT_TOLERANCE) -> float:
+    """The blur budget (°) of a lobe named by its full width at half maximum.
+
+    Parameters
+    ----------
+    width_deg : float
+        The lobe's full width at half maximum (°, of the reflected direction), > 0.
+    tolerance : float
+        The relative bias allowed, in (0, 0.05].
+
+    Returns
+    -------
+    float
+        `blur_budget_deg` of α = width / `WIDTH_PER_ALPHA_DEG` (about 0.11 × width at
+        0.5 %).
+    """
+    if not (isinstance(width_deg, int | float) and 0 < width_deg < math.inf):
+        raise DomainError(f"width_deg must be a positive number (degrees), got {width_deg!r}")
+    return blur_budget_deg(float(width_deg) / WIDTH_PER_ALPHA_DEG, tolerance)

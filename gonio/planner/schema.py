@@ -20,6 +20,7 @@ from gonio.brdf.material import MaterialError, build, material_schema
 from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.errors import GonioError
+from gonio.planner.blur import DEFAULT_TOLERANCE, blur_budget_of_width
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
 #: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
@@ -79,10 +80,12 @@ class FlySpec(Strict):
     """The fly strategy (docs/reference/planner.md, "Fly plans"): readings taken while one
     axis sweeps at constant velocity, ``rate_hz`` readings a second, each integrating
     ``integration_s``. The sweep's velocity keeps the angular smear of a reading (the
-    path its directions cover while it integrates) within ``blur_deg``, or within
-    ``lobe_fraction`` of ``lobe_width_deg`` (the material's expected lobe width), and
-    within the axis's max velocity. Sweeps run through anchor points drawn (Sobol) in
-    the parametrization until about ``sampling.target`` readings are laid out."""
+    path its directions cover while it integrates) within ``blur_deg``, or within the
+    blur budget of ``lobe_width_deg`` (the material's expected lobe width: the smear
+    whose bias stays within ``blur_tolerance``, `gonio.planner.blur`; or
+    ``lobe_fraction`` of the width when given), and within the axis's max velocity.
+    Sweeps run through anchor points drawn (Sobol) in the parametrization until about
+    ``sampling.target`` readings are laid out."""
 
     segment: Literal["detector_arc", "light_arc"] = Field(
         "detector_arc",
@@ -102,18 +105,30 @@ class FlySpec(Strict):
         None,
         gt=0,
         le=30,
-        description="The most angular smear of one reading (degrees; none: lobe_fraction of "
-        "lobe_width_deg if given, else 0.5).",
+        description="The most angular smear of one reading (degrees; none: the blur budget "
+        "of lobe_width_deg if given, else 0.5).",
     )
     lobe_width_deg: float | None = Field(
         None,
         gt=0,
         le=180,
         description="The material's expected lobe width (degrees, full width); the blur "
-        "budget is then lobe_fraction of it (not with blur_deg).",
+        "budget is then the smear whose bias stays within blur_tolerance on such a lobe, "
+        "or lobe_fraction of it (not with blur_deg).",
     )
-    lobe_fraction: float = Field(
-        0.25, gt=0, le=1, description="The share of lobe_width_deg one reading may smear."
+    lobe_fraction: float | None = Field(
+        None,
+        gt=0,
+        le=1,
+        description="The share of lobe_width_deg one reading may smear (none: the blur "
+        "budget of the lobe, gonio.planner.blur: about 0.11 of the width at a 0.5 % bias).",
+    )
+    blur_tolerance: float = Field(
+        DEFAULT_TOLERANCE,
+        gt=0,
+        le=0.05,
+        description="The relative bias motion blur may leave on the lobe when the budget "
+        "comes from lobe_width_deg without lobe_fraction (0.005: 0.5 %).",
     )
 
     @model_validator(mode="after")
@@ -144,6 +159,8 @@ class FlySpec(Strict):
         if self.blur_deg is not None:
             return self.blur_deg
         if self.lobe_width_deg is not None:
+            if self.lobe_fraction is None:
+                return blur_budget_of_width(self.lobe_width_deg, self.blur_tolerance)
             return self.lobe_fraction * self.lobe_width_deg
         return 0.5
 

@@ -32,8 +32,12 @@ from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import (
     AXIS_NAMES,
+    FLY,
+    FLY_AXES,
     NONE,
     SCENE,
+    STOP,
+    STOP_AXES,
     WARPED,
     Effects,
     SweepSpec,
@@ -46,6 +50,8 @@ from sim.scene import EffectsSpec, load_scene
 MAX_COMBINATIONS = 100_000
 #: Framing of a combination's id (the version names the framing, not gonio's).
 _ID_MAGIC = "gonio tradeoff combination v1"
+#: The first guess of the target under a time budget (stop-and-go, fly readings).
+STOP_PILOT, FLY_PILOT = 500, 5000
 #: The input columns of a results row, in order (the figures follow: `runner`).
 INPUT_COLUMNS = ("id", "scene", *AXIS_NAMES, "replicate", "plan_seed", "run_seed")
 
@@ -78,6 +84,7 @@ class Task:
     method: str
     test_pairs: int
     test_seed: int
+    budget_s: float | None = None  # instrument time the plan's target is fitted to (s)
 
     def plan_spec(self) -> PlanSpec:
         return PlanSpec.model_validate(self.plan)
@@ -132,10 +139,13 @@ def load_sweep(path: str | Path) -> Sweep:
         )
     tasks = []
     for scene in scenes:
+        seen: set[str] = set()
         for values in itertools.product(*(getattr(spec.axes, n) for n in AXIS_NAMES)):
-            combination = dict(zip(AXIS_NAMES, values, strict=True))
-            if spec.excluded(combination):
+            combination = applicable(dict(zip(AXIS_NAMES, values, strict=True)))
+            key = json.dumps({n: _label(v) for n, v in combination.items()})
+            if key in seen or spec.excluded(combination):
                 continue
+            seen.add(key)
             if combination["sampling"] == WARPED and not spec.warps_of(
                 combination["parametrization"]
             ):
@@ -145,11 +155,34 @@ def load_sweep(path: str | Path) -> Sweep:
                     "is no default for it); give one, or exclude {parametrization: "
                     f"{combination['parametrization']}, sampling: {WARPED}}}",
                 )
+            if combination["minutes"] is not None and combination["sampling"] == "adaptive":
+                raise refuse(
+                    ("axes", "minutes"),
+                    "adaptive sampling plans its second pass after the survey, so its target "
+                    "cannot be fitted to a time budget; exclude {sampling: adaptive, minutes: "
+                    f"{combination['minutes']:g}}} or give minutes: [null]",
+                )
             for replicate in range(spec.replicates):
                 tasks.append(_task(spec, scene, rigs, rig_path, combination, replicate))
     if not tasks:
         raise refuse(("exclude",), "every combination is excluded; expected some to run")
     return Sweep(path, spec, rig, scenes, tuple(tasks))
+
+
+def applicable(combination: dict[str, Any]) -> dict[str, Any]:
+    """``combination`` with None for the axes that do not apply to it: the fly axes of
+    a stop-and-go one, the stop-and-go axes of a fly one, ``samples`` under a time
+    budget (``minutes``). Combinations that differ only there are one."""
+    out = dict(combination)
+    unused = list(STOP_AXES if out["motion"] == FLY else FLY_AXES)
+    if out["minutes"] is not None:
+        unused.append("samples")
+    out.update(dict.fromkeys(unused))
+    return out
+
+
+def _label(value: Any) -> str:
+    return effects_label(value) if isinstance(value, list | Without) else str(value)
 
 
 def _named_file(sweep: Path, name: str, loc: tuple[str | int, ...], refuse: Any) -> Path:
@@ -187,6 +220,8 @@ def scaled_rig(rig: Rig, scale: float) -> bytes:
 def _check_detector(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
     detector = rig.spec.detector
     lo, hi = detector.exposure_range_s
+    if STOP not in spec.axes.motion:
+        return  # no stop-and-go combination: exposures and averages do not apply
     for k, seconds in enumerate(spec.axes.exposure_s):
         if not lo <= seconds <= hi:
             raise refuse(
@@ -263,13 +298,21 @@ def _task(
     options = spec.adaptive.model_dump(mode="json")
     adaptive = {"adaptive": options} if strategy == "adaptive" else {}
     rig_text = rigs[combination["velocity_scale"]]
+    # The axes a sweep of stop-and-go plans without a time budget leaves at their
+    # defaults are left out of the id: such a combination keeps its id of before they
+    # existed.
+    new_axes = {"motion": STOP, "minutes": None, **dict.fromkeys(FLY_AXES)}
     identity = {
         "magic": _ID_MAGIC,
         "seed": spec.seed,
         "scene_sha256": hashlib.sha256(scene.text).hexdigest(),
         "rig_sha256": hashlib.sha256(rig_text).hexdigest(),
         "isotropic": spec.isotropic,
-        **{n: v for n, v in combination.items() if n != "effects"},
+        **{
+            n: v
+            for n, v in combination.items()
+            if n != "effects" and not (n in new_axes and v == new_axes[n])
+        },
         "effects": effects,
         "effects_label": effects_label(combination["effects"]),
         "warps": {c: w.power for c, w in warps.items()},
@@ -281,20 +324,44 @@ def _task(
     digest = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
     id_ = digest[:16]
     plan_seed, run_seed = int(digest[16:24], 16), int(digest[24:32], 16)
-    plan = {
-        "name": f"{spec.name}-{id_}",
-        "parametrization": parametrization,
-        "isotropic": spec.isotropic,
-        "sampling": {
-            "strategy": "sobol" if strategy == WARPED else strategy,
-            "target": combination["samples"],
-            "seed": plan_seed,
-            "warps": {c: {"power": w.power} for c, w in warps.items()},
-            **adaptive,
-        },
-        "exposure": {"seconds": combination["exposure_s"], "averages": combination["averages"]},
-        **spec.plan.model_dump(mode="json"),
-    }
+    # Under a time budget the runner fits the target (`gonio.tradeoff.runner`); the
+    # plan carries its first guess.
+    target = combination["samples"] or (FLY_PILOT if combination["motion"] == FLY else STOP_PILOT)
+    if combination["motion"] == FLY:
+        plan = {
+            "name": f"{spec.name}-{id_}",
+            "parametrization": parametrization,
+            "isotropic": spec.isotropic,
+            "sampling": {
+                "strategy": FLY,
+                "target": target,
+                "seed": plan_seed,
+                "fly": {
+                    "segment": combination["segment"],
+                    "rate_hz": combination["rate_hz"],
+                    "blur_deg": combination["blur_deg"],
+                },
+            },
+            **spec.plan.model_dump(mode="json"),
+        }
+    else:
+        plan = {
+            "name": f"{spec.name}-{id_}",
+            "parametrization": parametrization,
+            "isotropic": spec.isotropic,
+            "sampling": {
+                "strategy": "sobol" if strategy == WARPED else strategy,
+                "target": target,
+                "seed": plan_seed,
+                "warps": {c: {"power": w.power} for c, w in warps.items()},
+                **adaptive,
+            },
+            "exposure": {
+                "seconds": combination["exposure_s"],
+                "averages": combination["averages"],
+            },
+            **spec.plan.model_dump(mode="json"),
+        }
     inputs = {
         "id": id_,
         "scene": scene.name,
@@ -318,4 +385,5 @@ def _task(
         method=combination["method"],
         test_pairs=spec.evaluation.pairs,
         test_seed=spec.evaluation.seed,
+        budget_s=None if combination["minutes"] is None else 60.0 * combination["minutes"],
     )

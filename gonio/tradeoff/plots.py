@@ -1,8 +1,9 @@
 """A sweep's figures, one pair per scene (PNG, matplotlib's Agg backend, written
 atomically): the error against the simulated instrument time, a colour per
-parametrization with its own front as a step line and the scene's front over every
-parametrization ringed in black; and the error against the samples measured, each
-parametrization's median over the other axes joined by a line."""
+parametrization (and motion, when a sweep has fly combinations) with its own front as a
+step line and the scene's front over every one ringed in black; and the error against
+the samples measured, each one's median over the other axes (per sample count, or per
+time budget) joined by a line."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import numpy as np
 from gonio.output import reserve_output
 from gonio.plots import require_matplotlib
 from gonio.tradeoff.front import TIME, pareto_front
+from gonio.tradeoff.spec import FLY
 
 #: One colour per parametrization (in the order they first appear).
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
@@ -29,6 +31,11 @@ def slug(name: str) -> str:
 def figure_names(scene: str) -> tuple[str, str]:
     """The file names of a scene's two figures."""
     return f"{slug(scene)}-error-vs-time.png", f"{slug(scene)}-error-vs-samples.png"
+
+
+def series(row: dict[str, Any]) -> str:
+    """The series a row is drawn in: its parametrization, and ``fly`` for a fly one."""
+    return str(row["parametrization"]) + (" fly" if row.get("motion") == FLY else "")
 
 
 def _scored(rows: Sequence[dict[str, Any]], metric: str, x: str) -> list[dict[str, Any]]:
@@ -46,13 +53,13 @@ def plot_scene(
     """Write ``scene``'s two figures into ``folder``; their paths."""
     plt = require_matplotlib()
     paths = tuple(folder / name for name in figure_names(scene))
-    names = list(dict.fromkeys(r["parametrization"] for r in rows))
+    names = list(dict.fromkeys(series(r) for r in rows))
     colours = {n: COLOURS[k % len(COLOURS)] for k, n in enumerate(names)}
 
     fig, ax = plt.subplots(figsize=(7.0, 4.8), constrained_layout=True)
     timed = _scored(rows, metric, TIME)
     for name in names:
-        mine = [r for r in timed if r["parametrization"] == name]
+        mine = [r for r in timed if series(r) == name]
         if not mine:
             continue
         ax.scatter([r[TIME] for r in mine], [r[metric] for r in mine], s=14, alpha=0.6,
@@ -72,15 +79,26 @@ def plot_scene(
     fig, ax = plt.subplots(figsize=(7.0, 4.8), constrained_layout=True)
     counted = _scored(rows, metric, "measured")
     for name in names:
-        mine = [r for r in counted if r["parametrization"] == name]
+        mine = [r for r in counted if series(r) == name]
         if not mine:
             continue
         ax.scatter([r["measured"] for r in mine], [r[metric] for r in mine], s=14, alpha=0.5,
                    color=colours[name], label=name)  # fmt: skip
-        asked = sorted({r["samples"] for r in mine})
-        x = [np.median([r["measured"] for r in mine if r["samples"] == a]) for a in asked]
-        y = [np.median([r[metric] for r in mine if r["samples"] == a]) for a in asked]
-        ax.plot(x, y, color=colours[name], lw=1.2)
+        groups = list(dict.fromkeys((r["samples"], r.get("minutes")) for r in mine))
+        points = sorted(
+            (
+                float(
+                    np.median(
+                        [r["measured"] for r in mine if (r["samples"], r.get("minutes")) == g]
+                    )
+                ),
+                float(
+                    np.median([r[metric] for r in mine if (r["samples"], r.get("minutes")) == g])
+                ),
+            )
+            for g in groups
+        )
+        ax.plot([x for x, _ in points], [y for _, y in points], color=colours[name], lw=1.2)
     _finish(ax, bool(counted), "samples measured", metric,
             f"{scene}: {metric} against samples (medians)")  # fmt: skip
     _save(fig, paths[1])

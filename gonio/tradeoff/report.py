@@ -12,8 +12,8 @@ from typing import Any
 from gonio.output import reserve_output
 from gonio.tradeoff.front import TIME, best, fastest_meeting, pareto_front
 from gonio.tradeoff.grid import Sweep
-from gonio.tradeoff.plots import figure_names
-from gonio.tradeoff.spec import AXIS_NAMES
+from gonio.tradeoff.plots import figure_names, series
+from gonio.tradeoff.spec import AXIS_NAMES, FLY
 
 REPORT = "report.md"
 
@@ -34,7 +34,7 @@ def _table(heads: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
 
 def _varied(rows: Sequence[dict[str, Any]]) -> list[str]:
     """The axes that take more than one value among ``rows`` (the others are constant)."""
-    return [n for n in AXIS_NAMES if len({str(r[n]) for r in rows}) > 1]
+    return [n for n in AXIS_NAMES if len({str(r.get(n)) for r in rows}) > 1]
 
 
 def _row_cells(row: dict[str, Any], metric: str, axes: Sequence[str]) -> list[str]:
@@ -69,7 +69,8 @@ def render(
         "instrument time in seconds (predicted: the planner's estimate). Every row is in "
         "results.csv.",
     ]
-    constant = [n for n in AXIS_NAMES if n not in _varied(rows)]
+    varied = _varied(rows)
+    constant = [n for n in AXIS_NAMES if n not in varied and rows and rows[0].get(n) is not None]
     if rows and constant:
         fixed = ", ".join(f"{n} {_number(rows[0][n])}" for n in constant)
         lines += ["", f"Constant over the sweep: {fixed}."]
@@ -88,10 +89,11 @@ def render(
         front = [mine[i] for i in pareto_front(mine, metric)]
         lines += ["", f"Pareto front ({len(front)} of {len(mine)} combinations):", ""]
         lines += _table(heads, [_row_cells(r, metric, axes) for r in front])
-        lines += ["", "Best of each parametrization:", ""]
+        fly = any(r.get("motion") == FLY for r in mine)
+        lines += ["", f"Best of each parametrization{' and motion' if fly else ''}:", ""]
         per = []
-        for name in dict.fromkeys(r["parametrization"] for r in mine):
-            top = best([r for r in mine if r["parametrization"] == name], metric)
+        for name in dict.fromkeys(series(r) for r in mine):
+            top = best([r for r in mine if series(r) == name], metric)
             if top is not None:
                 per.append(_row_cells(top, metric, axes))
         lines += _table(heads, per)
@@ -115,7 +117,9 @@ def _target_lines(
     where = f" Plan: {plan.parent.name}/{plan.name}." if plan is not None else ""
     return [
         f"Fastest meeting {metric} ≤ {target:g}: `{row['id']}`, {row[metric]:.4g} in "
-        f"{row[TIME]:.1f} s ({row['parametrization']}, {row['sampling']}, {row['samples']} "
+        f"{row[TIME]:.1f} s ({row['parametrization']}, "
+        f"{'fly' if row.get('motion') == FLY else row['sampling']}, "
+        f"{row.get('asked') or row['samples']} "
         f"samples, {row['method']}).{where}"
     ]
 

@@ -31,6 +31,14 @@ from sim.scene import EffectsSpec
 WARPED = "warped"
 STRATEGIES: tuple[str, ...] = (*get_args(Strategy), WARPED)
 
+#: ``motion`` values: stop-and-go, or readings streamed while an axis sweeps.
+STOP: Literal["stop"] = "stop"
+FLY: Literal["fly"] = "fly"
+#: The axes that apply to stop-and-go combinations only, and to fly ones only (a
+#: combination of the other motion takes None for them, and is run once).
+STOP_AXES = ("sampling", "exposure_s", "averages")
+FLY_AXES = ("blur_deg", "rate_hz", "segment")
+
 #: The effects of a scene that a sweep may toggle: those `sim.scene.EffectsSpec` models.
 EFFECT_NAMES: tuple[str, ...] = tuple(EffectsSpec.model_fields)
 #: ``effects`` values: the scene's own effects, or none at all.
@@ -132,6 +140,44 @@ class Axes(Strict):
         json_schema_extra=UNIQUE,
     )
 
+    motion: list[Literal["stop", "fly"]] = Field(
+        [STOP],
+        min_length=1,
+        description="How the rig measures: stop (move, settle, then read each target) or fly "
+        "(readings streamed while one axis sweeps at constant velocity; sampling, "
+        "exposure_s and averages then do not apply, the fly axes do).",
+        json_schema_extra=UNIQUE,
+    )
+    minutes: list[Annotated[float, InSchema(exclusiveMinimum=0)] | None] = Field(
+        [None],
+        min_length=1,
+        description="Instrument-time budgets (minutes): the plan's target is fitted so its "
+        "predicted duration fits the budget (samples then does not apply); none: the "
+        "samples axis sets the target.",
+        json_schema_extra=UNIQUE,
+    )
+    blur_deg: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=30)]] = Field(
+        [0.5],
+        min_length=1,
+        description="Fly only: the most angular smear of one reading (degrees), which sets "
+        "the sweep's velocity (a fly plan's sampling.fly.blur_deg).",
+        json_schema_extra=UNIQUE,
+    )
+    rate_hz: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=10_000)]] = Field(
+        [100.0],
+        min_length=1,
+        description="Fly only: readings per second the detector streams, each integrating "
+        "1 / rate_hz (a fly plan's sampling.fly.rate_hz).",
+        json_schema_extra=UNIQUE,
+    )
+    segment: list[Literal["detector_arc", "light_arc"]] = Field(
+        ["detector_arc"],
+        min_length=1,
+        description="Fly only: what sweeps, detector_arc or light_arc (a fly plan's "
+        "sampling.fly.segment).",
+        json_schema_extra=UNIQUE,
+    )
+
     @field_validator("samples", "averages")
     @classmethod
     def _positive_counts(cls, values: list[int], info: ValidationInfo) -> list[int]:
@@ -145,12 +191,19 @@ class Axes(Strict):
                 )  # fmt: skip
         return values
 
-    @field_validator("exposure_s", "velocity_scale")
+    @field_validator("exposure_s", "velocity_scale", "minutes", "blur_deg", "rate_hz")
     @classmethod
-    def _positive_numbers(cls, values: list[float]) -> list[float]:
+    def _positive_numbers(
+        cls, values: list[float | None], info: ValidationInfo
+    ) -> list[float | None]:
+        most = {"blur_deg": 30.0, "rate_hz": 10_000.0}.get(str(info.field_name))
         for k, value in enumerate(values):
-            if not value > 0:
+            if value is None and info.field_name == "minutes":
+                continue
+            if value is None or not value > 0:
                 raise field_error(str(k), f"expected a positive number, got {value}")
+            if most is not None and value > most:
+                raise field_error(str(k), f"expected at most {most:g}, got {value:g}")
         return values
 
     @model_validator(mode="after")

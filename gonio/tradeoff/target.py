@@ -41,6 +41,8 @@ def write_target_plan(
             f"acceleration × {scale:g}² (gonio tradeoff, velocity_scale)\n"
         ).encode() + rig_text
     data = {**task.plan, "name": f"{sweep.spec.name}-{slug(row['scene'])}", "rig": rig_path.name}
+    if task.budget_s is not None:  # the target the runner fitted to the time budget
+        data["sampling"] = {**data["sampling"], "target": row["asked"]}
     spec = PlanSpec.model_validate(data)
     scene_file = next(s.path for s in sweep.scenes if s.name == row["scene"])
     header = (

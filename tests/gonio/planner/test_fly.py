@@ -97,6 +97,7 @@ def test_velocities_respect_the_blur_budget_and_the_axes_max_velocity(plan: Plan
     assert smear.max() <= fly.blur * (1 + 1e-6)
     assert smear.max() <= plan.summary.fly.smear_max_deg * (1 + 1e-6)
     if fly.lobe_width_deg is not None:
+        assert fly.lobe_fraction is not None
         assert fly.blur == pytest.approx(fly.lobe_fraction * fly.lobe_width_deg)
 
 
