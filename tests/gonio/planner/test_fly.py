@@ -17,6 +17,7 @@ import yaml
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
+from gonio.planner.blur import blur_budget_of_width
 from gonio.planner.files import parse_plan
 from gonio.planner.fly import sweep_axis
 from gonio.planner.model import Plan
@@ -97,8 +98,9 @@ def test_velocities_respect_the_blur_budget_and_the_axes_max_velocity(plan: Plan
     assert smear.max() <= fly.blur * (1 + 1e-6)
     assert smear.max() <= plan.summary.fly.smear_max_deg * (1 + 1e-6)
     if fly.lobe_width_deg is not None:
-        assert fly.lobe_fraction is not None
-        assert fly.blur == pytest.approx(fly.lobe_fraction * fly.lobe_width_deg)
+        share = fly.lobe_fraction  # none: the blur budget of the width (gonio.planner.blur)
+        budget = blur_budget_of_width(fly.lobe_width_deg, fly.blur_tolerance)
+        assert fly.blur == pytest.approx(budget if share is None else share * fly.lobe_width_deg)
 
 
 def test_readings_and_duration_as_an_independent_computation_predicts(plan: Plan) -> None:

@@ -1,0 +1,378 @@
+"""Fly scans against stop-and-go, measured end to end: samples per instrument hour, the
+error at equal instrument time, why the error gains less than the sample count, and the
+bias motion blur leaves in the recovered BRDF.
+
+Every figure comes from `gonio tradeoff` sweeps (plan → simulated acquisition →
+reconstruction by linear interpolation → log-RMSE on the sweep's 20 000 test pairs), each
+plan's target fitted to a budget of predicted instrument time (`minutes`), on the glossy
+gold and the matte scene with motion blur and timestamp jitter modelled
+(configs/scenes/glossy_metal_fly.yaml, matte_fly.yaml):
+
+- configs/sweeps/fly_trade.yaml (arch rig): stop-and-go Sobol or warped targets in
+  Rusinkiewicz's or the hybrid parametrization at 10 or 50 ms, against fly detector arcs
+  (100 readings a second, 10 ms each) at blur budgets of 0.25, 0.5 and 1°; 5, 15 and 45
+  minutes (at 45 minutes the 0.5° fly plan only);
+- configs/sweeps/fly_trade_in_plane.yaml: the same at 5 minutes on the in-plane rig
+  (matte scene), for the samples per hour;
+- configs/sweeps/fly_trade_why.yaml: uniform stop-and-go plans of 4 000 and 16 000
+  targets with no time budget, and the 5-minute fly plan with no effect modelled.
+
+"Best" is the lowest log-RMSE over the axes swept for that motion. Samples per hour are
+the samples measured over the simulated instrument time (the engine's clock: moves,
+settling, calibration, integration).
+
+The blur study holds the plan fixed and changes only the blur: a fly plan of --blur-readings
+readings (arch rig with its velocity limits ×10, so the blur budget alone sets the sweep's
+velocity: smear = velocity × 10 ms) is acquired twice with the same seed, with motion
+blur modelled and without, no other effect (no noise), on the glossy gold material at
+GGX widths α from 0.02 to 0.5; the bias is log(f blurred / f sharp), on the samples and
+on the linear reconstructions of the two runs over the test pairs (RMS over every pair,
+and over the mirror region, pairs within the lobe). The planner's default velocity rule,
+`gonio.planner.blur.blur_budget_of_width` (a plan naming its lobe's width), is the smear
+K · α · √tolerance with K = 233° from benchmarks/fly_blur.py; the table shows the
+largest smear measured within 0.5 % on the samples, and its K.
+
+Run: .venv/bin/python benchmarks/fly_trade.py [--runs runs/fly_trade] [--jobs 1]
+     [--blur-readings 3000] [--img docs/img]
+(a sweep's finished combinations, and the blur study's, are kept in --runs and not run
+again)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
+from _machine import describe
+
+from gonio import progress as planning
+from gonio.analysis.measured import Measured
+from gonio.planner.blur import BLUR_K_DEG, blur_budget_deg
+from gonio.planner.builder import build
+from gonio.planner.schema import PlanSpec
+from gonio.reconstruct import testset
+from gonio.reconstruct.methods import reconstruction
+from gonio.reconstruct.metrics import region_masks
+from gonio.rig.model import Rig
+from gonio.tradeoff.grid import load_sweep, scaled_rig
+from gonio.tradeoff.sweep import run_sweep
+from gonio.workflows.simulate import simulate_plan
+from sim.scene import Scene, load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+SWEEPS = ROOT / "configs" / "sweeps"
+TRADE, IN_PLANE, WHY = "fly_trade", "fly_trade_in_plane", "fly_trade_why"
+#: The targets of the error at equal time: fly's log-RMSE lower by these factors.
+TARGETS = {"glossy-metal-fly": 3.0, "matte-fly": 2.0}
+#: The blur study: GGX widths, smear budgets (°), the rig's velocity factor.
+ALPHAS = (0.02, 0.05, 0.1, 0.2, 0.5)
+SMEARS_DEG = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
+FAST = 10.0
+TOLERANCE = 0.005
+
+
+def rows_of(name: str, runs: Path, jobs: int) -> list[dict[str, Any]]:
+    """The rows of sweep ``name``, running what ``runs/name`` does not hold yet."""
+    sweep = load_sweep(SWEEPS / f"{name}.yaml")
+    folder = runs / name
+    started = time.perf_counter()
+    result = run_sweep(sweep, folder, jobs=jobs)
+    print(
+        f"sweep {name}: {len(result.rows)} combinations ({result.ran} run now in "
+        f"{time.perf_counter() - started:.0f} s, {result.reused} reused from {folder})"
+    )
+    bad = [r for r in result.rows if r["error"]]
+    for row in bad:
+        print(f"  failed: {row['id']} {row['error']}")
+    return [r for r in result.rows if not r["error"]]
+
+
+def per_hour(row: dict[str, Any]) -> float:
+    return 3600.0 * row["measured"] / row["instrument_s"]
+
+
+def describe_row(row: dict[str, Any]) -> str:
+    if row["motion"] == "fly":
+        return f"fly {row['blur_deg']:g}° {row['rate_hz']:g} Hz"
+    return f"{row['parametrization']} {row['sampling']} {1000 * row['exposure_s']:g} ms"
+
+
+def best(rows: Sequence[dict[str, Any]], metric: str = "log_rmse") -> dict[str, Any] | None:
+    scored = [r for r in rows if isinstance(r.get(metric), float)]
+    return min(scored, key=lambda r: r[metric]) if scored else None
+
+
+def samples_per_hour(trade: list[dict[str, Any]], in_plane: list[dict[str, Any]]) -> None:
+    print("\n## Samples per instrument hour\n")
+    print(
+        "Samples measured per hour of simulated instrument time: every stop-and-go row at "
+        "10 ms and every fly row (100 readings a second, 10 ms each), at each budget; the "
+        "median over the rows (scenes, parametrizations, strategies, blur budgets).\n"
+    )
+    print("| rig | budget (min) | stop-and-go /h | rows | fly /h | rows | × |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for rig, rows in (("arch", trade), ("in-plane", in_plane)):
+        for minutes in sorted({r["minutes"] for r in rows}):
+            mine = [r for r in rows if r["minutes"] == minutes]
+            stop = [per_hour(r) for r in mine if r["motion"] == "stop" and r["exposure_s"] == 0.01]
+            fly = [per_hour(r) for r in mine if r["motion"] == "fly"]
+            if not stop or not fly:
+                continue
+            s, f = statistics.median(stop), statistics.median(fly)
+            print(
+                f"| {rig} | {minutes:g} | {s:,.0f} | {len(stop)} | {f:,.0f} | {len(fly)} | "
+                f"{f / s:.1f} |"
+            )
+
+
+def lines_of(row: dict[str, Any], rig: Rig) -> int | None:
+    """A fly row's lines (planned again at the target it asked if the row lacks them)."""
+    if row.get("lines") is not None:
+        return int(row["lines"])
+    sweep = load_sweep(SWEEPS / f"{TRADE}.yaml")
+    spec = sweep.task(row["id"]).plan_spec()
+    sampling = spec.sampling.model_copy(update={"target": row["asked"]})
+    with planning.quiet():
+        plan = build(spec.model_copy(update={"sampling": sampling}), rig)
+    return None if plan.summary.fly is None else plan.summary.fly.lines
+
+
+def equal_time(trade: list[dict[str, Any]], rig: Rig) -> None:
+    print("\n## Error at equal instrument time\n")
+    print(
+        "Per scene and budget, the best stop-and-go row and the best fly row (lowest "
+        "log-RMSE over the axes swept), their samples, simulated instrument time and "
+        "log-RMSE over every test pair and in the mirror region; × is stop-and-go's error "
+        "over fly's (the target: ≥ 3 on the glossy gold, ≥ 2 on the matte).\n"
+    )
+    print(
+        "| scene | budget (min) | best stop-and-go | samples | time (s) | log-RMSE | mirror | "
+        "best fly | lines | samples | time (s) | log-RMSE | mirror | × | target |"
+    )
+    print("|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|")
+    for scene in dict.fromkeys(r["scene"] for r in trade):
+        for minutes in sorted({r["minutes"] for r in trade}):
+            mine = [r for r in trade if r["scene"] == scene and r["minutes"] == minutes]
+            stop = best([r for r in mine if r["motion"] == "stop"])
+            fly = best([r for r in mine if r["motion"] == "fly"])
+            if stop is None or fly is None:
+                continue
+            ratio = stop["log_rmse"] / fly["log_rmse"]
+            target = TARGETS.get(scene, 2.0)
+            print(
+                f"| {scene} | {minutes:g} | {describe_row(stop)} | {stop['measured']:,} | "
+                f"{stop['instrument_s']:.0f} | {stop['log_rmse']:.4f} | "
+                f"{stop['mirror_log_rmse']:.3f} | {describe_row(fly)} | "
+                f"{lines_of(fly, rig)} | {fly['measured']:,} | {fly['instrument_s']:.0f} | "
+                f"{fly['log_rmse']:.4f} | {fly['mirror_log_rmse']:.3f} | {ratio:.2f} | "
+                f"{'met' if ratio >= target else f'not met (≥ {target:g})'} |"
+            )
+    print("\nEvery row (log-RMSE; fly rows by blur budget):\n")
+    print("| scene | budget (min) | plan | samples | log-RMSE | mirror |")
+    print("|---|---:|---|---:|---:|---:|")
+    for r in sorted(trade, key=lambda r: (r["scene"], r["minutes"], r["motion"], r["log_rmse"])):
+        print(
+            f"| {r['scene']} | {r['minutes']:g} | {describe_row(r)} | {r['measured']:,} | "
+            f"{r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} |"
+        )
+
+
+def why(trade: list[dict[str, Any]], extra: list[dict[str, Any]]) -> None:
+    print("\n## Why fly gains less than its sample count\n")
+    print(
+        "The 5-minute fly plan (0.5°) against uniform Sobol stop-and-go plans of 4 000 and "
+        "16 000 targets with no time budget (what as many samples give when spread "
+        "uniformly: the interpolation's error at that count), and the same fly plan with "
+        "no effect modelled (no noise, blur or jitter: what its lines' layout alone "
+        "allows).\n"
+    )
+    print("| scene | plan | samples | lines | instrument time (s) | log-RMSE | mirror |")
+    print("|---|---|---:|---:|---:|---:|---:|")
+    for scene in dict.fromkeys(r["scene"] for r in trade):
+        fly = [r for r in trade if r["scene"] == scene and r["motion"] == "fly"]
+        fly = [r for r in fly if r["minutes"] == 5 and r["blur_deg"] == 0.5]
+        rows = [*fly, *(r for r in extra if r["scene"] == scene)]
+        for r in sorted(rows, key=lambda r: (r["motion"], r["measured"])):
+            label = describe_row(r) + (", no effect" if r["effects"] == "none" else "")
+            if r["minutes"] is not None:
+                label += f", {r['minutes']:g} min"
+            lines = "—" if r.get("lines") is None else f"{r['lines']}"
+            print(
+                f"| {scene} | {label} | {r['measured']:,} | {lines} | "
+                f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} |"
+            )
+
+
+def blur_scene(alpha: float, blurred: bool) -> Scene:
+    base = load_scene(ROOT / "configs" / "scenes" / "glossy_metal_fly.yaml")
+    data = base.model_dump()
+    material = {"name": "cook_torrance", **data["material"]["params"], "alpha": alpha}
+    effects = {"motion_blur": {"max_step_deg": 0.05}} if blurred else {}
+    return Scene.model_validate({**data, "material": material, "effects": effects})
+
+
+def blur_study(readings: int, img: Path, runs: Path) -> None:
+    """The blur study (module docstring); each (α, smear) kept in ``runs/blur.json``."""
+    print("\n## The bias motion blur leaves\n")
+    base = Rig.from_yaml(ROOT / "configs" / "rigs" / "arch.yaml")
+    rig = Rig.from_yaml(base.source, raw=scaled_rig(base, FAST))
+    tests = testset.draw(rig, isotropic=True, size=20_000, seed=14)
+    print(
+        f"{readings:,} readings per plan, the arch rig ×{FAST:g} faster, no noise; bias = "
+        "log(blurred / sharp): RMS and largest |·| on the samples, RMS over every test "
+        "pair and over the mirror region of the linear reconstructions.\n"
+    )
+    print(
+        "| α | smear budget (°) | smear max (°) | velocity (°/s) | samples RMS % | samples max % "
+        "| recovered RMS % | recovered mirror RMS % |"
+    )
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    table: dict[float, list[tuple[float, float, float, float, float]]] = {}
+    cache_path = runs / "blur.json"
+    cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
+    for alpha in ALPHAS:
+        sharp_scene, blur_scene_ = blur_scene(alpha, False), blur_scene(alpha, True)
+        for smear in SMEARS_DEG:
+            key = f"{alpha:g} {smear:g} {readings}"
+            if key in cache:
+                fly_smear, fly_speed, *kept = cache[key]
+                table.setdefault(alpha, []).append((fly_smear, *kept))
+                print(
+                    f"| {alpha:g} | {smear:g} | {fly_smear:.3g} | {fly_speed:.3g} | "
+                    f"{kept[0]:.3g} | {kept[1]:.3g} | {kept[2]:.3g} | {kept[3]:.3g} |"
+                )
+                continue
+            spec = PlanSpec.model_validate(
+                {
+                    "name": "blur",
+                    "parametrization": "rusinkiewicz",
+                    "sampling": {"strategy": "fly", "target": readings, "seed": 1,
+                                 "fly": {"rate_hz": 100, "blur_deg": smear}},
+                }
+            )  # fmt: skip
+            with planning.quiet():
+                plan = build(spec, rig)
+            fly = plan.summary.fly
+            assert fly is not None
+            runs = [simulate_plan(plan, s, 7).run for s in (sharp_scene, blur_scene_)]
+            sharp, blurred = (Measured.from_run(r) for r in runs)
+            assert len(sharp.f) == len(blurred.f)
+            ok = (sharp.f > 0) & (blurred.f > 0)
+            on_samples = np.log(blurred.f[ok] / sharp.f[ok])
+            surfaces = [reconstruction(m, "linear", None) for m in (sharp, blurred)]
+            fs, fb = (np.asarray(s.eval(tests.wi, tests.wo)) for s in surfaces)
+            good = np.isfinite(fs) & np.isfinite(fb) & (fs > 0) & (fb > 0)
+            recovered = np.log(fb[good] / fs[good])
+            mirror = region_masks(tests.wi, tests.wo)["mirror"][good]
+            row = (
+                100 * float(np.sqrt(np.mean(on_samples**2))),
+                100 * float(np.abs(on_samples).max()),
+                100 * float(np.sqrt(np.mean(recovered**2))),
+                100 * float(np.sqrt(np.mean(recovered[mirror] ** 2))) if mirror.any() else math.nan,
+            )
+            table.setdefault(alpha, []).append((fly.smear_max_deg, *row))
+            cache[key] = [fly.smear_max_deg, fly.velocity_max_deg_s, *row]
+            cache_path.write_text(json.dumps(cache, indent=1))
+            print(
+                f"| {alpha:g} | {smear:g} | {fly.smear_max_deg:.3g} | "
+                f"{fly.velocity_max_deg_s:.3g} | {row[0]:.3g} | {row[1]:.3g} | {row[2]:.3g} | "
+                f"{row[3]:.3g} |",
+                flush=True,
+            )
+    print(
+        f"\nThe largest smear with every sample within {100 * TOLERANCE:g} % (interpolated "
+        "log-log between the smears measured), its K = smear / (α √tolerance), and the "
+        "planner's budget blur_budget_deg(α):\n"
+    )
+    print("| α | largest smear within 0.5 % (°) | K (°) | planner's budget (°) |")
+    print("|---:|---:|---:|---:|")
+    for alpha, rows in table.items():
+        smears = np.array([r[0] for r in rows])
+        worst = np.array([r[2] for r in rows]) / 100
+        limit = _crossing(smears, worst, TOLERANCE)
+        k = "—" if limit is None else f"{limit / (alpha * math.sqrt(TOLERANCE)):.0f}"
+        shown = "beyond the smears measured" if limit is None else f"{limit:.3g}"
+        print(f"| {alpha:g} | {shown} | {k} | {blur_budget_deg(alpha, TOLERANCE):.3g} |")
+    print(f"\n(the planner's K = {BLUR_K_DEG:g}°)")
+    plot_blur(table, img / "fly_trade_blur.png")
+
+
+def _crossing(x: np.ndarray, y: np.ndarray, level: float) -> float | None:
+    """The smallest x where y (increasing with x, log-log interpolated) reaches level."""
+    above = np.flatnonzero(y >= level)
+    if not above.size:
+        return None
+    k = int(above[0])
+    if k == 0:
+        return float(x[0]) if y[0] == level else None
+    lx, ly = np.log(x[k - 1 : k + 1]), np.log(np.maximum(y[k - 1 : k + 1], 1e-300))
+    t = (math.log(level) - ly[0]) / (ly[1] - ly[0])
+    return float(np.exp(lx[0] + t * (lx[1] - lx[0])))
+
+
+def plot_blur(
+    table: dict[float, list[tuple[float, float, float, float, float]]], out: Path
+) -> None:
+    import matplotlib  # the docs extra
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.8), constrained_layout=True)
+    for k, (alpha, rows) in enumerate(table.items()):
+        colour = f"C{k}"
+        smear = [r[0] for r in rows]
+        axes[0].loglog(smear, [r[2] for r in rows], "o-", color=colour, label=f"α = {alpha:g}")
+        axes[1].loglog(smear, [r[4] for r in rows], "o-", color=colour, label=f"α = {alpha:g}")
+        budget = blur_budget_deg(alpha, TOLERANCE)
+        for ax in axes:
+            ax.axvline(budget, color=colour, lw=0.8, ls=":")
+    axes[0].axhline(100 * TOLERANCE, color="0.5", lw=0.8, ls="--")
+    axes[0].set_title("largest bias on the samples", fontsize=9)
+    axes[1].set_title("RMS bias of the recovered BRDF, mirror region", fontsize=9)
+    for ax in axes:
+        ax.set_xlabel("smear during one reading (°)")
+        ax.set_ylabel("|log(blurred / sharp)| (%)")
+        ax.tick_params(labelsize=7)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("motion blur bias (dotted: the planner's budget at 0.5 %)", fontsize=9)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    _report.figure(out, "Motion blur bias against smear and lobe width")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--runs", type=Path, default=ROOT / "runs" / "fly_trade")
+    parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--blur-readings", type=int, default=3000)
+    parser.add_argument("--img", type=Path, default=ROOT / "docs" / "img")
+    parser.add_argument("--skip-blur", action="store_true")
+    args = parser.parse_args()
+    print(describe())
+    args.runs.mkdir(parents=True, exist_ok=True)
+    trade = rows_of(TRADE, args.runs, args.jobs)
+    in_plane = rows_of(IN_PLANE, args.runs, args.jobs)
+    extra = rows_of(WHY, args.runs, args.jobs)
+    rig = Rig.from_yaml(ROOT / "configs" / "rigs" / "arch.yaml")
+    samples_per_hour(trade, in_plane)
+    equal_time(trade, rig)
+    why(trade, extra)
+    if not args.skip_blur:
+        blur_study(args.blur_readings, args.img, args.runs)
+
+
+if __name__ == "__main__":
+    _report.run(main, __file__, __doc__, title="Fly scans against stop-and-go, measured")
