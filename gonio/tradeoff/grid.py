@@ -85,6 +85,7 @@ class Task:
     test_pairs: int
     test_seed: int
     budget_s: float | None = None  # instrument time the plan's target is fitted to (s)
+    extrapolate: str | None = None  # how the reconstruction fills unsupported pairs
 
     def plan_spec(self) -> PlanSpec:
         return PlanSpec.model_validate(self.plan)
@@ -318,7 +319,11 @@ def _task(
         "warps": {c: w.power for c, w in warps.items()},
         **adaptive,
         "plan": spec.plan.model_dump(mode="json"),
-        "evaluation": spec.evaluation.model_dump(mode="json"),
+        "evaluation": {
+            k: v
+            for k, v in spec.evaluation.model_dump(mode="json").items()
+            if not (k == "extrapolate" and v is None)  # the ids of before it existed
+        },
         "replicate": replicate,
     }
     digest = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
@@ -386,4 +391,5 @@ def _task(
         test_pairs=spec.evaluation.pairs,
         test_seed=spec.evaluation.seed,
         budget_s=None if combination["minutes"] is None else 60.0 * combination["minutes"],
+        extrapolate=spec.evaluation.extrapolate,
     )

@@ -103,7 +103,7 @@ def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
     walls["acquire_wall_s"] = result.wall_s
     started = time.perf_counter()
     measured = Measured.from_run(result.run)
-    candidate = reconstruction(measured, task.method, None)
+    candidate = reconstruction(measured, task.method, None, extrapolate=task.extrapolate)
     scored = evaluate(
         candidate,
         measured.scene_truth(),

@@ -281,6 +281,13 @@ class EvaluationSettings(Strict):
         DEFAULT_SIZE, ge=1, le=1_000_000, description="Direction pairs in the test set."
     )
     seed: int = Field(DEFAULT_SEED, ge=0, description="The seed the test set is drawn with.")
+    extrapolate: Literal["nearest"] | None = Field(
+        None,
+        description="How a reconstruction answers a test pair outside its samples' support: "
+        "none (it declines, and the pair is not scored) or nearest (the nearest sample's "
+        "value, so every pair is scored: plans of different layouts compare on the same "
+        "pairs).",
+    )
 
 
 AXIS_NAMES = tuple(Axes.model_fields)

@@ -55,6 +55,14 @@ def test_a_stop_and_go_sweep_keeps_its_ids(tmp_path: Path) -> None:
     assert [t.id for t in before] == [t.id for t in after]
 
 
+def test_extrapolating_to_every_pair_is_a_setting_of_the_evaluation(tmp_path: Path) -> None:
+    plain = load_sweep(write_sweep(tmp_path, "a")).tasks
+    filled = load_sweep(write_sweep(tmp_path, "b", evaluation={"extrapolate": "nearest"})).tasks
+    assert {t.extrapolate for t in plain} == {None}
+    assert {t.extrapolate for t in filled} == {"nearest"}
+    assert not {t.id for t in plain} & {t.id for t in filled}
+
+
 @pytest.mark.parametrize(
     ("axes", "message"),
     [
@@ -85,13 +93,15 @@ def test_the_target_is_the_largest_that_fits_the_budget() -> None:
 
 def test_stop_and_go_and_fly_rows_at_equal_instrument_time(tmp_path: Path) -> None:
     axes = {**MOTION, "exposure_s": [0.01], "blur_deg": [2.0]}
-    sweep = load_sweep(write_sweep(tmp_path, axes=axes, evaluation={"pairs": 500}))
+    evaluation = {"pairs": 500, "extrapolate": "nearest"}
+    sweep = load_sweep(write_sweep(tmp_path, axes=axes, evaluation=evaluation))
     rows = {t.inputs["motion"]: run(t) for t in sweep.tasks}
     for row in rows.values():
         assert tuple(row) == COLUMNS and row["error"] == ""
         # within the budget, to a sweep (a fly plan's grain: one line of ~8 s here)
         assert 0.5 * 30.0 <= row["predicted_s"] <= 30.0
         assert row["instrument_s"] > 0 and row["log_rmse"] > 0
+        assert row["coverage"] <= 1.0
         assert row["measured"] == row["targets"] == row["asked"] or row["motion"] == "fly"
     # streamed while moving: many times the readings of stop-and-go in the same time
     assert rows["fly"]["measured"] > 10 * rows["stop"]["measured"]
