@@ -124,6 +124,7 @@ bench-studies: $(VENV)/.installed-test
 		--img docs/img
 	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
 		--params rusinkiewicz hybrid --targets 0.001 0.003 0.01 0.03
+	$(BIN)/python benchmarks/fly_trade.py --runs runs/fly_trade
 
 clean:
 	rm -rf $(VENV) site .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache

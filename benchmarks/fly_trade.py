@@ -25,7 +25,8 @@ The blur study holds the plan fixed and changes only the blur: a fly plan of --b
 readings (arch rig with its velocity limits ×10, so the blur budget alone sets the sweep's
 velocity: smear = velocity × 10 ms) is acquired twice with the same seed, with motion
 blur modelled and without, no other effect (no noise), on the glossy gold material at
-GGX widths α from 0.02 to 0.5; the bias is log(f blurred / f sharp), on the samples and
+GGX widths α from 0.02 to 0.5 (time nodes at most 0.05°, or an eighth of
+the smear, apart); the bias is log(f blurred / f sharp), on the samples and
 on the linear reconstructions of the two runs over the test pairs (RMS over every pair,
 and over the mirror region, pairs within the lobe). The planner's default velocity rule,
 `gonio.planner.blur.blur_budget_of_width` (a plan naming its lobe's width), is the smear
@@ -33,7 +34,7 @@ K · α · √tolerance with K = 233° from benchmarks/fly_blur.py; the table sh
 largest smear measured within 0.5 % on the samples, and its K.
 
 Run: .venv/bin/python benchmarks/fly_trade.py [--runs runs/fly_trade] [--jobs 1]
-     [--blur-readings 3000] [--img docs/img]
+     [--blur-readings 3000] [--img docs/img] [--stored-only]
 (a sweep's finished combinations, and the blur study's, are kept in --runs and not run
 again)
 """
@@ -66,6 +67,7 @@ from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import region_masks
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import load_sweep, scaled_rig
+from gonio.tradeoff.store import open_store
 from gonio.tradeoff.sweep import run_sweep
 from gonio.workflows.simulate import simulate_plan
 from sim.scene import Scene, load_scene
@@ -76,30 +78,42 @@ TRADE, IN_PLANE, WHY = "fly_trade", "fly_trade_in_plane", "fly_trade_why"
 #: The targets of the error at equal time: fly's log-RMSE lower by these factors.
 TARGETS = {"glossy-metal-fly": 3.0, "matte-fly": 2.0}
 #: The blur study: GGX widths, smear budgets (°), the rig's velocity factor.
-ALPHAS = (0.02, 0.05, 0.1, 0.2, 0.5)
+ALPHAS = (0.02, 0.05, 0.2, 0.5)
 SMEARS_DEG = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0)
 FAST = 10.0
 TOLERANCE = 0.005
 
 
-def rows_of(name: str, runs: Path, jobs: int) -> list[dict[str, Any]]:
-    """The rows of sweep ``name``, running what ``runs/name`` does not hold yet."""
+def rows_of(name: str, runs: Path, jobs: int, stored_only: bool) -> list[dict[str, Any]]:
+    """The rows of sweep ``name``, running what ``runs/name`` does not hold yet (with
+    ``stored_only``, the rows it holds, the others counted as not run)."""
     sweep = load_sweep(SWEEPS / f"{name}.yaml")
     folder = runs / name
     started = time.perf_counter()
-    result = run_sweep(sweep, folder, jobs=jobs)
-    print(
-        f"sweep {name}: {len(result.rows)} combinations ({result.ran} run now in "
-        f"{time.perf_counter() - started:.0f} s, {result.reused} reused from {folder})"
-    )
-    bad = [r for r in result.rows if r["error"]]
-    for row in bad:
-        print(f"  failed: {row['id']} {row['error']}")
-    return [r for r in result.rows if not r["error"]]
+    if stored_only:
+        with open_store(folder) as store:
+            rows = [store.rows[t.id] for t in sweep.tasks if t.id in store.rows]
+        missing = [t for t in sweep.tasks if t.id not in {r["id"] for r in rows}]
+        print(f"sweep {name}: {len(rows)} of {len(sweep.tasks)} combinations in {folder}")
+        for task in missing:
+            i = task.inputs
+            what = describe_row(i) if i["motion"] == "fly" or i["exposure_s"] else i["motion"]
+            print(f"  not run: {i['scene']}, {i['minutes']} min, {what}")
+    else:
+        result = run_sweep(sweep, folder, jobs=jobs)
+        rows = result.rows
+        print(
+            f"sweep {name}: {len(rows)} combinations ({result.ran} run now in "
+            f"{time.perf_counter() - started:.0f} s, {result.reused} reused from {folder})"
+        )
+    for row in rows:
+        if row["error"]:
+            print(f"  failed: {row['id']} {row['error']}")
+    return [r for r in rows if not r["error"]]
 
 
 def per_hour(row: dict[str, Any]) -> float:
-    return 3600.0 * row["measured"] / row["instrument_s"]
+    return float(3600.0 * row["measured"] / row["instrument_s"])
 
 
 def describe_row(row: dict[str, Any]) -> str:
@@ -136,29 +150,19 @@ def samples_per_hour(trade: list[dict[str, Any]], in_plane: list[dict[str, Any]]
             )
 
 
-def lines_of(row: dict[str, Any], rig: Rig) -> int | None:
-    """A fly row's lines (planned again at the target it asked if the row lacks them)."""
-    if row.get("lines") is not None:
-        return int(row["lines"])
-    sweep = load_sweep(SWEEPS / f"{TRADE}.yaml")
-    spec = sweep.task(row["id"]).plan_spec()
-    sampling = spec.sampling.model_copy(update={"target": row["asked"]})
-    with planning.quiet():
-        plan = build(spec.model_copy(update={"sampling": sampling}), rig)
-    return None if plan.summary.fly is None else plan.summary.fly.lines
-
-
-def equal_time(trade: list[dict[str, Any]], rig: Rig) -> None:
+def equal_time(trade: list[dict[str, Any]]) -> None:
     print("\n## Error at equal instrument time\n")
     print(
         "Per scene and budget, the best stop-and-go row and the best fly row (lowest "
-        "log-RMSE over the axes swept), their samples, simulated instrument time and "
-        "log-RMSE over every test pair and in the mirror region; × is stop-and-go's error "
-        "over fly's (the target: ≥ 3 on the glossy gold, ≥ 2 on the matte).\n"
+        "log-RMSE over the axes swept), their samples, simulated instrument time, "
+        "log-RMSE over every test pair (a pair outside the samples' support takes the "
+        "nearest sample's value) and in the mirror region, and coverage (the share of "
+        "test pairs inside the reconstruction's support); × is stop-and-go's error over "
+        "fly's (the target: ≥ 3 on the glossy gold, ≥ 2 on the matte).\n"
     )
     print(
-        "| scene | budget (min) | best stop-and-go | samples | time (s) | log-RMSE | mirror | "
-        "best fly | lines | samples | time (s) | log-RMSE | mirror | × | target |"
+        "| scene | budget (min) | best stop-and-go | samples | log-RMSE | mirror | coverage "
+        "| best fly | lines | samples | log-RMSE | mirror | coverage | × | target |"
     )
     print("|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|")
     for scene in dict.fromkeys(r["scene"] for r in trade):
@@ -166,67 +170,82 @@ def equal_time(trade: list[dict[str, Any]], rig: Rig) -> None:
             mine = [r for r in trade if r["scene"] == scene and r["minutes"] == minutes]
             stop = best([r for r in mine if r["motion"] == "stop"])
             fly = best([r for r in mine if r["motion"] == "fly"])
-            if stop is None or fly is None:
+            if stop is None:
+                continue
+            left = (
+                f"| {scene} | {minutes:g} | {describe_row(stop)} | {stop['measured']:,} | "
+                f"{stop['log_rmse']:.4f} | {stop['mirror_log_rmse']:.3f} | "
+                f"{stop['coverage']:.2f} |"
+            )
+            if fly is None:
+                print(left + " not run | | | | | | | |")
                 continue
             ratio = stop["log_rmse"] / fly["log_rmse"]
             target = TARGETS.get(scene, 2.0)
             print(
-                f"| {scene} | {minutes:g} | {describe_row(stop)} | {stop['measured']:,} | "
-                f"{stop['instrument_s']:.0f} | {stop['log_rmse']:.4f} | "
-                f"{stop['mirror_log_rmse']:.3f} | {describe_row(fly)} | "
-                f"{lines_of(fly, rig)} | {fly['measured']:,} | {fly['instrument_s']:.0f} | "
-                f"{fly['log_rmse']:.4f} | {fly['mirror_log_rmse']:.3f} | {ratio:.2f} | "
+                left + f" {describe_row(fly)} | {fly.get('lines')} | {fly['measured']:,} | "
+                f"{fly['log_rmse']:.4f} | {fly['mirror_log_rmse']:.3f} | "
+                f"{fly['coverage']:.2f} | {ratio:.2f} | "
                 f"{'met' if ratio >= target else f'not met (≥ {target:g})'} |"
             )
-    print("\nEvery row (log-RMSE; fly rows by blur budget):\n")
-    print("| scene | budget (min) | plan | samples | log-RMSE | mirror |")
-    print("|---|---:|---|---:|---:|---:|")
+    print("\nEvery row:\n")
+    print(
+        "| scene | budget (min) | plan | samples | instrument time (s) | log-RMSE | mirror "
+        "| grazing | coverage |"
+    )
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|")
     for r in sorted(trade, key=lambda r: (r["scene"], r["minutes"], r["motion"], r["log_rmse"])):
         print(
             f"| {r['scene']} | {r['minutes']:g} | {describe_row(r)} | {r['measured']:,} | "
-            f"{r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} |"
+            f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} | "
+            f"{r['grazing_log_rmse']:.3f} | {r['coverage']:.2f} |"
         )
 
 
 def why(trade: list[dict[str, Any]], extra: list[dict[str, Any]]) -> None:
     print("\n## Why fly gains less than its sample count\n")
     print(
-        "The 5-minute fly plan (0.5°) against uniform Sobol stop-and-go plans of 4 000 and "
-        "16 000 targets with no time budget (what as many samples give when spread "
-        "uniformly: the interpolation's error at that count), and the same fly plan with "
-        "no effect modelled (no noise, blur or jitter: what its lines' layout alone "
-        "allows).\n"
+        "The 5-minute fly plans against uniform Sobol stop-and-go plans of 4 000 and 16 000 "
+        "targets with no time budget (what as many samples give when spread uniformly), "
+        "and the 0.5° fly plan with no effect modelled (no noise, blur or jitter: what "
+        "its lines' layout alone allows). Lines: the anchors the plan sweeps through; "
+        "coverage: the share of test pairs inside the reconstruction's support.\n"
     )
-    print("| scene | plan | samples | lines | instrument time (s) | log-RMSE | mirror |")
-    print("|---|---|---:|---:|---:|---:|---:|")
+    print(
+        "| scene | plan | samples | lines | instrument time (s) | log-RMSE | mirror | grazing "
+        "| coverage |"
+    )
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for scene in dict.fromkeys(r["scene"] for r in trade):
         fly = [r for r in trade if r["scene"] == scene and r["motion"] == "fly"]
-        fly = [r for r in fly if r["minutes"] == 5 and r["blur_deg"] == 0.5]
-        rows = [*fly, *(r for r in extra if r["scene"] == scene)]
+        rows = [*(r for r in fly if r["minutes"] == 5), *(r for r in extra if r["scene"] == scene)]
         for r in sorted(rows, key=lambda r: (r["motion"], r["measured"])):
             label = describe_row(r) + (", no effect" if r["effects"] == "none" else "")
-            if r["minutes"] is not None:
-                label += f", {r['minutes']:g} min"
+            label += "" if r["minutes"] is None else f", {r['minutes']:g} min"
             lines = "—" if r.get("lines") is None else f"{r['lines']}"
             print(
                 f"| {scene} | {label} | {r['measured']:,} | {lines} | "
-                f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} |"
+                f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} | "
+                f"{r['grazing_log_rmse']:.3f} | {r['coverage']:.2f} |"
             )
 
 
-def blur_scene(alpha: float, blurred: bool) -> Scene:
+def blur_scene(alpha: float, smear: float | None) -> Scene:
+    """The glossy gold with GGX width ``alpha``, no effect but motion blur when a smear
+    is given (time nodes at most 0.05° or an eighth of the smear apart)."""
     base = load_scene(ROOT / "configs" / "scenes" / "glossy_metal_fly.yaml")
     data = base.model_dump()
     material = {"name": "cook_torrance", **data["material"]["params"], "alpha": alpha}
-    effects = {"motion_blur": {"max_step_deg": 0.05}} if blurred else {}
+    step = max(0.05, smear / 8) if smear is not None else None
+    effects = {"motion_blur": {"max_step_deg": step}} if step is not None else {}
     return Scene.model_validate({**data, "material": material, "effects": effects})
 
 
 def blur_study(readings: int, img: Path, runs: Path) -> None:
     """The blur study (module docstring); each (α, smear) kept in ``runs/blur.json``."""
     print("\n## The bias motion blur leaves\n")
-    base = Rig.from_yaml(ROOT / "configs" / "rigs" / "arch.yaml")
-    rig = Rig.from_yaml(base.source, raw=scaled_rig(base, FAST))
+    arch = ROOT / "configs" / "rigs" / "arch.yaml"
+    rig = Rig.from_yaml(arch, raw=scaled_rig(Rig.from_yaml(arch), FAST))
     tests = testset.draw(rig, isotropic=True, size=20_000, seed=14)
     print(
         f"{readings:,} readings per plan, the arch rig ×{FAST:g} faster, no noise; bias = "
@@ -242,7 +261,7 @@ def blur_study(readings: int, img: Path, runs: Path) -> None:
     cache_path = runs / "blur.json"
     cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
     for alpha in ALPHAS:
-        sharp_scene, blur_scene_ = blur_scene(alpha, False), blur_scene(alpha, True)
+        sharp_scene = blur_scene(alpha, None)
         for smear in SMEARS_DEG:
             key = f"{alpha:g} {smear:g} {readings}"
             if key in cache:
@@ -265,8 +284,9 @@ def blur_study(readings: int, img: Path, runs: Path) -> None:
                 plan = build(spec, rig)
             fly = plan.summary.fly
             assert fly is not None
-            runs = [simulate_plan(plan, s, 7).run for s in (sharp_scene, blur_scene_)]
-            sharp, blurred = (Measured.from_run(r) for r in runs)
+            scenes = (sharp_scene, blur_scene(alpha, smear))
+            acquired = [simulate_plan(plan, s, 7).run for s in scenes]
+            sharp, blurred = (Measured.from_run(r) for r in acquired)
             assert len(sharp.f) == len(blurred.f)
             ok = (sharp.f > 0) & (blurred.f > 0)
             on_samples = np.log(blurred.f[ok] / sharp.f[ok])
@@ -360,15 +380,17 @@ def main() -> None:
     parser.add_argument("--blur-readings", type=int, default=3000)
     parser.add_argument("--img", type=Path, default=ROOT / "docs" / "img")
     parser.add_argument("--skip-blur", action="store_true")
+    parser.add_argument(
+        "--stored-only", action="store_true", help="report the rows --runs holds; run none"
+    )
     args = parser.parse_args()
     print(describe())
     args.runs.mkdir(parents=True, exist_ok=True)
-    trade = rows_of(TRADE, args.runs, args.jobs)
-    in_plane = rows_of(IN_PLANE, args.runs, args.jobs)
-    extra = rows_of(WHY, args.runs, args.jobs)
-    rig = Rig.from_yaml(ROOT / "configs" / "rigs" / "arch.yaml")
+    trade = rows_of(TRADE, args.runs, args.jobs, args.stored_only)
+    in_plane = rows_of(IN_PLANE, args.runs, args.jobs, args.stored_only)
+    extra = rows_of(WHY, args.runs, args.jobs, args.stored_only)
     samples_per_hour(trade, in_plane)
-    equal_time(trade, rig)
+    equal_time(trade)
     why(trade, extra)
     if not args.skip_blur:
         blur_study(args.blur_readings, args.img, args.runs)
