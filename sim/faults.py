@@ -8,7 +8,10 @@ streams, so a resumed run sees exactly the faults an uninterrupted one does):
 - ``motor_fault``: a motor reports a hardware error half-way through the move into the
   sample: that axis stops where it is and keeps reporting ``flags`` (its latched
   Hardware Error Status) until the bus is rebooted; `MotorFault` is raised by
-  ``wait_settled`` after every axis was told to hold;
+  ``wait_settled`` after every axis was told to hold. With the ``overheating`` flag the
+  axis also shows ``temperature_c`` for ``for_s`` seconds (a reboot before it cooled
+  latches the error again); ``shift_deg`` makes its encoder reading jump when its motor
+  is rebooted (what the recovery's position check must catch);
 - ``comm_error``: a status poll fails half-way through the move: every axis is held
   and ``wait_settled`` raises `CommError`;
 - ``motion_timeout``: an axis is blocked: after the caller's timeout every axis is held
@@ -66,10 +69,22 @@ class FaultRule(Strict):
         json_schema_extra={"minItems": 1},
     )
     temperature_c: float = Field(
-        80.0, gt=-50, lt=200, description="overheat: the temperature the axis shows (°C)."
+        80.0,
+        gt=-50,
+        lt=200,
+        description="overheat, and a motor_fault with the overheating flag: the temperature "
+        "the axis shows (°C).",
     )
     for_s: float = Field(
-        60.0, gt=0, description="overheat: how long, in seconds of the run's clock (s)."
+        60.0,
+        gt=0,
+        description="overheat, and a motor_fault with the overheating flag: how long the axis "
+        "stays hot, in seconds of the run's clock (s).",
+    )
+    shift_deg: float = Field(
+        0.0,
+        description="motor_fault: how far the axis's encoder reading jumps when its motor is "
+        "rebooted (°; a multi-turn motor that lost its turn count), 0: not at all.",
     )
 
     @field_validator(
@@ -94,6 +109,8 @@ class FaultRule(Strict):
             raise field_error(
                 "flags", f"expected some of {', '.join(sorted(MOTOR_FLAGS))}, got {bad or '[]'}"
             )
+        if self.kind != "motor_fault" and self.shift_deg:
+            raise field_error("shift_deg", f"only a motor_fault shifts, not a {self.kind}")
         if self.kind not in ("motor_fault", "overheat") and self.axis is not None:
             raise field_error(
                 "axis", f"only a motor_fault or an overheat names an axis, not a {self.kind}"

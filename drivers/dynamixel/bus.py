@@ -18,7 +18,9 @@ back in one SYNC_READ, whose status packets also carry each motor's alert bit. S
   propagates, so code that catches it inside the ``with`` block leaves no arm running;
 - with torque off `move_to` raises `TorqueOff`; on a closed bus every call but `close`
   raises `DeviceClosed` (the contract in `drivers.base`);
-- `reboot` clears faulted motors and brings them back holding, configured.
+- `reboot` clears faulted motors and brings them back holding, configured as `open`
+  configured them; `recover` does so for one axis while the others hold, and says
+  where it was held before and where it reads after.
 
 Sweeps (measuring while moving): `sweep` writes the axes' Profile Acceleration and
 Profile Velocity for that move, then the goals (three SYNC_WRITEs; the limits and the
@@ -212,11 +214,15 @@ class DynamixelBus(Condition, Resource):
                 exc.add_note(f"and holding the axes: {problem}")
             raise
 
-    def _configure(self) -> None:
+    def _configure(self, motor_ids: Sequence[int] | None = None) -> None:
         """EEPROM first (read; torque off, read back off and write only where it differs),
-        then the RAM profiles."""
+        then the RAM profiles, of every motor (or those of ``motor_ids``: a reboot's)."""
         link = self._link
-        ids = {a.motor_id: a for a in self._axes.values()}
+        ids = {
+            a.motor_id: a
+            for a in self._axes.values()
+            if motor_ids is None or a.motor_id in motor_ids
+        }
         changes: dict[int, dict[str, int]] = {}
         for motor_id, axis in ids.items():
             wanted = {"operating_mode": axis.operating_mode, "drive_mode": 0}

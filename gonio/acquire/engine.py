@@ -15,8 +15,10 @@ from target to target, and rebuilds from the journal when a run resumes, is its
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
 is retried, then the target skipped (journaled) or the run aborted; a `MotorFault` or
 `MotionTimeout` stops every axis, is journaled with the motor's flags, and ends the run
-resumable. A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at
-once (`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
+resumable, unless the plan's ``on_fault.motor`` recovers the motor
+(`gonio.acquire.recovery`: the target or calibration in flight is then done again).
+A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at once
+(`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
 resumable: `gonio acquire --resume` measures exactly the targets still missing.
 
 Times: each journaled time is *run time* (`RunTime`): the simulated backend's virtual
@@ -50,6 +52,7 @@ from drivers.stream import StreamReading
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.reference import Stage, read_standard
 from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
@@ -122,6 +125,7 @@ class Engine:
     _current: int | None = field(init=False, default=None)  # the target in flight
     _limits: dict[str, tuple[float, float]] | None = field(init=False, default=None)
     _watch: ReadingWatch = field(init=False)  # range changes and phase drift to journal
+    _recovery: MotorRecovery = field(init=False)  # the plan's on_fault.motor
 
     def __post_init__(self) -> None:
         self.spec = self.plan.spec.acquisition
@@ -132,6 +136,10 @@ class Engine:
         self._report = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
         self._watch = ReadingWatch.of(self.devices.detector, self.time.offset, self.history)
+        self._recovery = MotorRecovery.of(
+            self.spec.on_fault.motor, self.devices, self.rig, self.spec.health.poll_s,
+            self._event, self.history, self.stops.raise_if_requested,
+        )  # fmt: skip
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -432,9 +440,12 @@ class Engine:
         for attempt in range(on_fault.retries + 1):
             self._busy_until = self.time.now() + float(plan.travel_s[i]) + exposure * averages
             try:
-                measured = measure_target(
-                    self.devices, i, goal, exposure, averages,
-                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                measured = self._recovery.attempt(
+                    lambda: measure_target(
+                        self.devices, i, goal, exposure, averages,
+                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                    ),
+                    target=i,
                 )  # fmt: skip
                 break
             except LimitError as exc:
@@ -583,9 +594,11 @@ class Engine:
         if exposure is None:
             shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
-        read = read_standard(
-            self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
-            dark=spec.dark and not subtracted, timeout_s=self.move_timeout_s,
+        read = self._recovery.attempt(
+            lambda: read_standard(
+                self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
+                dark=spec.dark and not subtracted, timeout_s=self.move_timeout_s,
+            )
         )  # fmt: skip
         back = [read.reference.read_back[a] for a in self.axes]
         reference = self._reading_data(read.reference.reading, read.exposure_s)

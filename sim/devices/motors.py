@@ -40,6 +40,7 @@ from drivers.base import (
     LimitError,
     MotionTimeout,
     MotorFault,
+    Recovered,
     Resource,
     StampedPositions,
     TorqueOff,
@@ -175,6 +176,7 @@ class SimMotorBus(Resource):
         self._pending: FaultRule | None = None  # a fault that strikes during this move
         self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
         self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
+        self._shift: dict[str, float] = {}  # how far an axis's encoder jumps at its reboot
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -336,6 +338,10 @@ class SimMotorBus(Resource):
             )
         axis = rule.axis or self._names[0]
         self._latched[axis] = rule.flags
+        if rule.shift_deg:
+            self._shift[axis] = math.radians(rule.shift_deg)
+        if "overheating" in rule.flags:  # hot from now on, for the rule's time
+            self._hot = (axis, rule.temperature_c, self.clock.now() + rule.for_s)
         raise self._fault_error(axis, rule.flags)
 
     def _fault_error(self, axis: str, flags: tuple[str, ...]) -> MotorFault:
@@ -452,9 +458,15 @@ class SimMotorBus(Resource):
             self._hold()
         self._torque = bool(on)
 
+    def _hot_now(self) -> tuple[str, float, float] | None:
+        """The injected overheat still in force now, or None."""
+        return self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
+
     def health(self) -> dict[str, Health]:
+        """Temperatures (an injected overheat's axis: its temperature until it has cooled,
+        else 35 °C), 12 V, the latched flags; the load is not modelled (None)."""
         self._check_open()
-        hot = self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
+        hot = self._hot_now()
         return {
             n: Health(
                 temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
@@ -475,3 +487,27 @@ class SimMotorBus(Resource):
             self._latched.pop(name, None)
         self._hold()
         return names
+
+    def recover(self, axis: str) -> Recovered:
+        """Hold every axis, then reboot ``axis``'s motor: its latched fault clears, unless
+        it is an overheating one and the axis is still hot (`MotorFault` again, as a
+        real motor re-latches it). An injected ``shift_deg`` moves its encoder reading
+        (not the joint) at the reboot. Where it was held and where it reads now (rad)."""
+        self._check_open()
+        if axis not in self._index:
+            raise DriverError(f"unknown axis {axis!r}; the axes are {', '.join(self._names)}")
+        self._hold()
+        i = self._index[axis]
+        held = float(self._goal[i])
+        flags = self._latched.get(axis, ())
+        hot = self._hot_now()
+        if "overheating" in flags and hot is not None and hot[0] == axis:
+            raise self._fault_error(axis, flags)
+        self._latched.pop(axis, None)
+        shift = self._shift.pop(axis, 0.0)
+        if shift:  # the encoder jumps, the joint stays: true = encoder + error
+            self._goal = self._goal.copy()
+            self._goal[i] += shift
+            self._start = self._goal.copy()
+            self._error[i] -= shift
+        return Recovered(axis, held, float(self._present_encoder()[i]))
