@@ -14,6 +14,7 @@ in position mode, when the mode changes to position mode, and on reboot.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections import deque
@@ -24,6 +25,7 @@ from drivers.dynamixel.control_table import (
     BY_NAME,
     DRIVE_MODE_REVERSE,
     EEPROM_END,
+    HARDWARE_ERROR_BITS,
     ITEMS,
     OPERATING_MODES,
     TABLE_SIZE,
@@ -61,6 +63,7 @@ _GOAL = BY_NAME["goal_position"]
 #: Present Input Voltage (0.1 V) and Present Temperature (°C) of a healthy motor.
 NOMINAL_VOLTAGE = 120
 NOMINAL_TEMPERATURE = 30
+_OVERHEATING = next(bit for bit, name in HARDWARE_ERROR_BITS.items() if name == "overheating")
 
 
 def _defaults() -> bytearray:
@@ -116,6 +119,7 @@ class EmulatedMotor:
         self._kind = ProfileType.STEP
         self._registered: tuple[int, bytes] | None = None
         self._goals: deque[int] = deque(maxlen=GOAL_LOG_SIZE)
+        self._heat: tuple[float, float, float] | None = None  # since (s), °C then, τ (s)
         self._put("model_number", model)
         self._put("firmware_version", firmware)
         self._put("id", motor_id)
@@ -279,6 +283,7 @@ class EmulatedMotor:
             self._boot = now
             self._registered = None
             self._reset_ram(self._one_turn(position))
+            self._cool(now)  # still above its Temperature Limit: Overheating again
 
     def factory_reset(self, option: int) -> StatusError:
         """FACTORY_RESET: 0xFF everything, 0x01 all but ID, 0x02 all but ID and baud rate;
@@ -310,6 +315,18 @@ class EmulatedMotor:
             position, _ = self._traj.at(now - self._t0)
             self._hold(self._one_turn(position), now)
             return StatusError.NONE
+
+    def heat(self, celsius: float, time_constant_s: float) -> None:
+        """The motor is at ``celsius`` (°C) now and cools toward its nominal 30 °C with
+        ``time_constant_s`` (s) on its clock (Present Temperature follows). Above its
+        Temperature Limit it latches Overheating, now and on a REBOOT while still
+        above, as a real motor does."""
+        if not time_constant_s > 0:
+            raise ValueError(f"the time constant must be > 0 s, got {time_constant_s}")
+        with self._lock:
+            now = self._clock()
+            self._heat = (now, float(celsius), float(time_constant_s))
+            self._cool(now)
 
     def raise_alert(self, bit: int) -> None:
         """Latch hardware error ``bit``; if it is in the Shutdown mask, torque goes off."""
@@ -437,8 +454,19 @@ class EmulatedMotor:
         homing = self._homing()
         return homing + (position - homing) % TICKS_PER_REV
 
+    def _cool(self, now: float) -> None:
+        """Present Temperature on the way down from `heat`; Overheating above the limit."""
+        if self._heat is None:
+            return
+        since, celsius, tau = self._heat
+        excess = (celsius - NOMINAL_TEMPERATURE) * math.exp(-(now - since) / tau)
+        self._put("present_temperature", min(max(round(NOMINAL_TEMPERATURE + excess), 0), 255))
+        if self._raw("present_temperature") > self._raw("temperature_limit"):
+            self.raise_alert(_OVERHEATING)
+
     def _refresh(self) -> None:
         now = self._clock()
+        self._cool(now)
         elapsed = now - self._t0
         traj = self._traj
         position, velocity = traj.at(elapsed)
