@@ -244,9 +244,12 @@ class Engine:
             # a first Ctrl-C lets a short sweep finish, abandons a long one.
             self._busy_until = began + count * sweeps.period_s + 2.0
             try:
-                raw = run_sweep(
-                    self.devices, self.axes, sweeps, k,
-                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                raw = self._recovery.attempt(
+                    lambda: run_sweep(
+                        self.devices, self.axes, sweeps, k,
+                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                    ),
+                    target=first,
                 )  # fmt: skip
                 break
             except DriverError as exc:
@@ -577,7 +580,7 @@ class Engine:
         self._event("health", {**found.data(self.state.count), **self._sim()})
         self.state.health_due.done(self.state.count, self.time.now())
         self.state.temperatures = dumps(found.temperatures_c)
-        if found.flags:
+        if found.flags and not self._recovery.flagged(found.flags):
             axis, flags = next(iter(found.flags.items()))
             raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
         return found.problems

@@ -20,7 +20,9 @@ a recovery, each stage journaled as a ``recovery`` event (``step``):
     (`drivers.base.MotorBus.recover`): where it held before and where it reads after,
     their difference and the rig's ``health.position_tolerance_deg``;
 ``recovered``
-    the position agrees: the step (the target in flight, or a calibration) runs again;
+    the position agrees: the step in flight (a target, a fly plan's sweep, or a
+    calibration) runs again; a motor a health check found reporting an error between
+    targets is recovered the same way, and the run goes on;
 ``failed``
     a recovery that cannot go on (the motor did not cool in time, its error came back
     after the reboot, it did not answer, its position disagrees, or it was already
@@ -35,7 +37,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -98,6 +100,23 @@ class MotorRecovery:
                 if self.spec.action != "recover" or exc.axis is None:
                     raise
                 self.recover(exc, target)
+
+    def flagged(self, flags: Mapping[str, Sequence[str]]) -> bool:
+        """Recover each axis a health check found reporting a hardware error (``flags``
+        per axis) and say so (True); False, doing nothing, when the policy is stop."""
+        if self.spec.action != "recover":
+            return False
+        motor_ids = {a.name: a.motor_id for a in self.rig.bus_axes()}
+        for axis, found in flags.items():
+            fault = MotorFault(
+                f"motor {motor_ids[axis]} (axis {axis!r}) reports a hardware error: "
+                f"{', '.join(found)}",
+                motor_id=motor_ids[axis],
+                axis=axis,
+                flags=tuple(found),
+            )
+            self.recover(fault)
+        return True
 
     def recover(self, fault: MotorFault, target: int | None = None) -> None:
         """Recover the motor of ``fault`` (journaled step by step); a `MotorFault`

@@ -15,6 +15,7 @@ import numpy as np
 
 from gonio.acquire.recovery import describe, summaries
 from gonio.store.read import Run
+from gonio.workflows import session
 from tests.conftest import CliResult
 from tests.support.acquire import RunFiles
 
@@ -101,7 +102,7 @@ def test_more_recoveries_than_allowed_stop_resumable(
     tmp_path: Path, run_files: Callable[..., RunFiles]
 ) -> None:
     files = run_files(20, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [3, 7, 12], "axis": "detector_azimuth"},
+        {"kind": "motor_fault", "at": [3, 7, 12, 15], "axis": "detector_azimuth"},
     ])  # fmt: skip
     path = tmp_path / "run.sqlite"
     run = ended_by_fault(files, path, 12)
@@ -109,6 +110,11 @@ def test_more_recoveries_than_allowed_stop_resumable(
     (fault,) = run.of_kind("fault")
     assert fault.target == 12 and "not recovered: rebooted 2 times" in fault.data["message"]
     assert summaries(run)[-1]["outcome"] == "failed"
+    # Per run: a resumed session counts the reboots its journal holds.
+    again = session.resume(path)
+    assert again.report.outcome == "fault" and len(again.run) == 15
+    assert [s for t, _, s in steps(again.run) if t == 15] == ["diagnosed", "failed"]
+    assert session.resume(path).report.outcome == "completed"
 
 
 def test_a_position_that_disagrees_after_the_reboot_stops(

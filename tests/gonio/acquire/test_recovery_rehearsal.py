@@ -1,9 +1,10 @@
 """``acquisition.on_fault.motor: recover`` on the real driver path: the engine drives
 `DynamixelBus` over the emulator's pty (the arch rig, a simulated detector, time 1000×
 faster), and the emulated motors fault as real ones do — an overload latched until
-REBOOT, a motor hot above its Temperature Limit that cools on the run's clock. The run
-completes with every target measured once and each recovery journaled; a multi-turn
-motor that comes back from its reboot a turn away stops the run resumable."""
+REBOOT (mid-move), a supply error found at rest by a health check, a motor hot above
+its Temperature Limit that cools on the run's clock. The run completes with every
+target measured once and each recovery journaled; a multi-turn motor that comes back
+from its reboot a turn away stops the run resumable."""
 
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ pytestmark = pytest.mark.pty
 SCENE = CONFIGS / "scenes" / "matte.yaml"
 ACQUISITION = {
     "on_fault": {"motor": {"action": "recover", "max_recoveries": 2}},
-    "health": {"poll_s": 10},
+    "health": {"poll_s": 10, "every_samples": 5},
 }
 
 
@@ -77,12 +78,14 @@ def rehearse(
     return report, run
 
 
-def test_an_overload_and_an_overheated_motor_recover_and_the_run_completes(
+def test_an_overload_a_supply_error_and_an_overheated_motor_recover_and_the_run_completes(
     tmp_path: Path,
 ) -> None:
     def inject(emu: DxlEmulator, done: int) -> None:
         if done == 3:
             emu.inject(Fault.OVERLOAD, motor_id=3)  # detector_elevation
+        if done == 5:  # at rest: the health check due now finds it
+            emu.inject(Fault.INPUT_VOLTAGE, motor_id=4)  # sample_rotation
         if done == 6:
             emu.motors[1].heat(85.0, 600.0)  # light_elevation, above its 80 °C limit
 
@@ -94,12 +97,14 @@ def test_an_overload_and_an_overheated_motor_recover_and_the_run_completes(
         (3, "detector_elevation", "diagnosed"),
         (3, "detector_elevation", "rebooted"),
         (3, "detector_elevation", "recovered"),
+        *[(None, "sample_rotation", s) for s in ("diagnosed", "rebooted", "recovered")],
         *[(6, "light_elevation", s) for s in
           ("diagnosed", "cooling", "cooled", "rebooted", "recovered")],
     ]  # fmt: skip
     diagnosed = [e.data for e in run.of_kind("recovery") if e.data["step"] == "diagnosed"]
     assert diagnosed[0]["flags"] == ["overload"] and diagnosed[0]["load_pct"] == 0.0
-    assert diagnosed[1]["flags"] == ["overheating"] and diagnosed[1]["temperature_c"] > 65
+    assert diagnosed[1]["flags"] == ["input_voltage"]
+    assert diagnosed[2]["flags"] == ["overheating"] and diagnosed[2]["temperature_c"] > 65
     (cooled,) = [e.data for e in run.of_kind("recovery") if e.data["step"] == "cooled"]
     # 30 + 55·exp(−t/600 s) < 65 °C 271 s after the heat, on the run's clock.
     assert cooled["temperature_c"] < 65 and 100 < cooled["waited_s"] < 400
