@@ -14,7 +14,8 @@ a recovery, each stage journaled as a ``recovery`` event (``step``):
     when the cause is heat (the overheating flag, or a temperature at or above the
     rig's ``health.max_temperature_c``): the wait, on the run's clock, until the motor
     reads below that limit, polled every ``health.poll_s`` of the plan, at most
-    ``cool_down_minutes``;
+    ``cool_down_minutes`` (a first Ctrl-C ends it: the session pauses, the step in
+    flight abandoned, and a resume measures it);
 ``rebooted``
     the motor rebooted back into the configuration the bus gave it when it opened
     (`drivers.base.MotorBus.recover`): where it held before and where it reads after,
@@ -42,6 +43,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from drivers.base import Devices, DriverError, Health, MotorFault
+from gonio.acquire.signals import RunInterrupted
 from gonio.planner.schema import MotorFaultSpec
 from gonio.rig.model import Rig
 from gonio.store.read import Run
@@ -204,7 +206,10 @@ class MotorRecovery:
                     f"still {temperature:g} °C after {self.spec.cool_down_minutes:g} min "
                     f"(it must cool below the rig's health.max_temperature_c, {limit:g} °C)"
                 )
-            self.check()
+            try:
+                self.check()
+            except RunInterrupted as exc:  # mid-step: the target in flight is redone
+                raise RunInterrupted(exc.signum, abandoned=True) from None
             clock.sleep(self.poll_s)
             temperature = self.devices.bus.health()[axis].temperature_c
         waited = clock.now() - began

@@ -2,20 +2,26 @@
 completes the run with every target measured once and each recovery step journaled
 (and shown by `gonio info`), waits for a hot motor to cool on the run's clock, stops
 resumable once a motor has been recovered ``max_recoveries`` times or when its position
-after the reboot disagrees; ``stop`` ends the run with exit 3 as before."""
+after the reboot disagrees; ``stop`` ends the run with exit 3 as before; a Ctrl-C while
+a motor cools pauses the run, the target in flight measured on resume."""
 
 from __future__ import annotations
 
 import json
+import os
+import signal
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from gonio.acquire.recovery import describe, summaries
-from gonio.store.read import Run
+from gonio.acquire.signals import RunInterrupted
+from gonio.store.read import Run, open_run
 from gonio.workflows import session
+from sim.clock import ManualClock
 from tests.conftest import CliResult
 from tests.support.acquire import RunFiles
 
@@ -145,3 +151,29 @@ def test_a_motor_that_does_not_cool_in_time_stops(
     run = ended_by_fault(files, tmp_path / "run.sqlite", 4)
     assert [s for _, _, s in steps(run)] == ["diagnosed", "cooling", "failed"]
     assert "still 80 °C after 1 min" in run.of_kind("recovery")[-1].data["reason"]
+
+
+def test_ctrl_c_while_a_motor_cools_pauses_and_the_resume_measures_the_target(
+    tmp_path: Path, run_files: Callable[..., RunFiles], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    files = run_files(12, acquisition=RECOVER, faults=[
+        {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
+    ])  # fmt: skip
+    sleep = ManualClock.sleep
+
+    def ctrl_c_while_cooling(clock: ManualClock, seconds: float) -> None:
+        if seconds == 10.0:  # the cooling's poll (settling is 0.2 s)
+            os.kill(os.getpid(), signal.SIGINT)
+        sleep(clock, seconds)
+
+    monkeypatch.setattr(ManualClock, "sleep", ctrl_c_while_cooling)
+    path = tmp_path / "run.sqlite"
+    with pytest.raises(RunInterrupted):
+        files.start(path)
+    monkeypatch.setattr(ManualClock, "sleep", sleep)
+    run = open_run(path)
+    assert len(run) == 4 and run.sessions[-1].outcome == "interrupted"
+    assert [s for _, _, s in steps(run)] == ["diagnosed", "cooling"]
+    (pause,) = run.of_kind("pause")
+    assert pause.data["abandoned"] is True
+    measured_once(session.resume(path).run)
