@@ -92,9 +92,10 @@ class MotorRecovery:
         return cls(spec, devices, rig, poll_s, event, check, rebooted(history))
 
     def attempt(self, step: Callable[[], T], target: int | None = None) -> T:
-        """``step()``; after a `MotorFault` it recovers (``action: recover``) and runs
-        ``step`` again, as often as the policy allows. A fault it does not recover
-        propagates (a new `MotorFault` saying why, from the first)."""
+        """``step()``; after a `MotorFault` it recovers the motor (``action: recover``)
+        and runs ``step`` again, as often as the policy allows. With ``stop`` the fault
+        propagates as it came; one it cannot recover as a new `MotorFault` saying why
+        (from the first)."""
         while True:
             try:
                 return step()
