@@ -17,7 +17,7 @@ from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
 from gonio.planner.files import parse_plan
-from gonio.planner.fly import sweep_axis
+from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
@@ -110,17 +110,20 @@ def test_readings_and_duration_as_an_independent_computation_predicts(plan: Plan
         # the ramps cover v² / 2a each side of the constant-velocity part
         assert abs(w.entry[k, j] - w.start[k, j]) == pytest.approx(v * ramp / 2)
         assert abs(w.exit[k, j] - w.entry[k, j]) == pytest.approx(
-            v * ((w.count[k] - 1) * period + t_int)
+            v * ((w.streamed[k] - 1) * period + t_int)
         )
         t += float(rig.travel.time(here, w.start[k])) + rig.spec.settle_s + ramp
         assert w.cruise_at_s[k] == pytest.approx(t)
         assert w.first[k] == n
-        ks = np.arange(w.count[k])
         rows = slice(n, n + int(w.count[k]))
+        # the targets: stream readings (integer slots) kept by the thinning, in order,
+        # the first and the last streamed ones among them
+        ks = np.round((plan.arrival_s[rows] - t) / period)
         np.testing.assert_allclose(plan.arrival_s[rows], t + ks * period, rtol=0, atol=1e-9)
+        assert ks[0] == 0 and ks[-1] == w.streamed[k] - 1 and np.all(np.diff(ks) > 0)
         mids = w.entry[k] + w.velocity[k] * (ks * period + t_int / 2)[:, None]
         np.testing.assert_allclose(plan.angles[rows], mids, rtol=0, atol=1e-9)
-        t += (w.count[k] - 1) * period + t_int + ramp
+        t += (w.streamed[k] - 1) * period + t_int + ramp
         here, n = w.stop[k], n + int(w.count[k])
     assert n == len(plan) == s.kept >= plan.spec.sampling.target
     assert s.total_s == pytest.approx(t)
@@ -132,10 +135,13 @@ def test_readings_and_duration_as_an_independent_computation_predicts(plan: Plan
         rig.spec.settle_s + t_int
     )
     assert s.fly.stop_and_go_s == pytest.approx(expected)
-    assert s.fly.stop_and_go_s > 5 * s.total_s
+    assert s.fly.stop_and_go_s > 3 * s.total_s  # thinning keeps about half the stream
     # Requested readings: kept or refused with a reason.
     assert s.requested == s.kept + sum(s.refused.values())
     assert 0.0 <= s.fly.coverage_tv_uniform < s.fly.coverage_tv <= 1.0
+    assert 0.0 < s.fly.coverage_gap_uniform < s.fly.coverage_gap < 1.0
+    # thinned: streamed and not kept, or cut with a sweep's ends (none kept there)
+    assert s.kept <= s.fly.streamed == int(w.streamed.sum()) <= s.kept + s.refused[THINNED]
 
 
 def test_readings_are_the_generated_ones_in_a_new_order(plan: Plan) -> None:
