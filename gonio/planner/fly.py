@@ -79,6 +79,9 @@ THIN_RADIUS = 0.06
 THIN_QUANTILE = 0.9
 #: Readings streamed per kept one at first guess (laid out again until the target).
 THIN_GUESS = 2.0
+#: Anchors this near (unit box) to a laid reading are skipped at first (halved whenever
+#: a whole batch is skipped): lines go where no reading passes yet.
+ANCHOR_GAP = 0.05
 
 
 @dataclass
@@ -98,6 +101,8 @@ class _Laid:
     requested: int = 0
     anchors: int = 0  # anchors drawn
     kept: int = 0  # readings the thinning kept
+    unit: list[FloatArray] = field(default_factory=list)  # readings' coords (unit box)
+    gap: float = 0.0  # an anchor nearer than this to a reading is skipped
     readings: int = 0
     lines: int = 0
     refused: dict[str, int] = field(default_factory=dict)
@@ -229,6 +234,7 @@ def lay_out(spec: PlanSpec, rig: Rig, where: str, laid: _Laid, until: int) -> _L
     stream = sampling.Sequence("sobol", len(bounds), spec.sampling.seed)
     for _ in range(laid.anchors // ANCHOR_BATCH):
         stream.draw(ANCHOR_BATCH)  # continue the anchors already drawn
+    scale = bounds[:, 1] - bounds[:, 0]
     while laid.readings < until:
         if laid.anchors >= MAX_ANCHORS:
             raise ConfigError(
@@ -238,12 +244,28 @@ def lay_out(spec: PlanSpec, rig: Rig, where: str, laid: _Laid, until: int) -> _L
             )
         coords = sampling.to_box(stream.draw(ANCHOR_BATCH), bounds, np.ones(len(bounds)))
         laid.anchors += ANCHOR_BATCH
-        _, wi, wo = placement.directions(spec, coords)
+        valid, wi, wo = placement.directions(spec, coords)
         solution = rig.solve(wi, wo, isotropic=spec.isotropic)
-        for anchor in solution.angles[solution.ok]:
+        unit = (coords[valid][solution.ok] - bounds[:, 0]) / scale
+        old = cKDTree(np.concatenate(laid.unit)) if laid.unit else None
+        seen = len(laid.unit)
+        laid_any = False
+        for anchor, u in zip(solution.angles[solution.ok], unit, strict=True):
+            near = [old] if old is not None else []
+            if len(laid.unit) > seen:
+                near.append(cKDTree(np.concatenate(laid.unit[seen:])))
+            if any(tree.query(u)[0] < laid.gap for tree in near):
+                continue  # readings already pass near this anchor
+            before = len(laid.mids)
             lay_line(rig, fly, anchor, laid, laid.lines)
+            if len(laid.mids) > before:
+                laid_any = True
+                new = np.concatenate(laid.mids[before:])
+                laid.unit.append((_coords(spec, rig, new) - bounds[:, 0]) / scale)
             if laid.readings >= until:
                 break
+        if not laid_any:
+            laid.gap *= 0.5  # anchors everywhere near readings: accept closer ones
     return laid
 
 
@@ -279,7 +301,7 @@ def lay_out_thinned(spec: PlanSpec, rig: Rig, where: str, ref: FloatArray) -> _L
     target = spec.sampling.target
     if target is None:
         raise ConfigError(f"{where}: sampling.target: the fly strategy needs a target")
-    laid = lay_out(spec, rig, where, _Laid(), math.ceil(THIN_GUESS * target))
+    laid = lay_out(spec, rig, where, _Laid(gap=ANCHOR_GAP), math.ceil(THIN_GUESS * target))
     while True:
         kept = thin(spec, rig, laid, ref)
         laid.kept = int(sum(len(k) for k in kept))
