@@ -17,8 +17,15 @@ Layout (`build_fly`):
   and decelerates after it (trapezoidal, the axis's max acceleration), over poses that
   must be commandable (inside the limits, outside every keep-out box, checked on the
   `FINE_STEP` grid): readings whose ramp would leave them are refused ("ramp").
-- Lines are laid out, anchor after anchor, until about ``sampling.target`` readings
-  (whole lines: the last one completes the target).
+- Anchors nearer than ``ANCHOR_GAP`` (unit box) to a laid reading are skipped (the gap
+  halved when a whole batch is): lines go where no reading passes yet.
+- Thinning (`thin`): the detector streams every reading; the plan's targets are those
+  kept with probability min(1, ρ / (c ρ̂)), ρ the target density (uniform over the
+  reach) and ρ̂ the streamed one, both counted in a ``THIN_RADIUS`` ball, c the
+  ``THIN_QUANTILE`` of ρ / ρ̂; systematic along each segment. Segments are cut to their
+  first and last kept reading (`Sweeps.streamed` readings streamed on each).
+- Lines are laid out, anchor after anchor, until the kept readings reach
+  ``sampling.target`` (whole lines).
 - Order: the segments are ordered by the existing ordering on their two commanded end
   poses (`order_jointly`, each segment's run-up and overrun poses its two candidates),
   then the direction of each is chosen exactly along that order (Viterbi,
@@ -26,15 +33,18 @@ Layout (`build_fly`):
   start).
 
 Timing model: a sweep is a move at rest to its run-up pose (trapezoidal, `TravelModel`),
-the rig's ``settle_s``, the ramp up (v / a), the constant-velocity part ((n − 1) period
-+ integration), the ramp down (v / a). The stop-and-go comparison measures the same
-readings at the same poses in the same order: a move, settle and one integration each.
+the rig's ``settle_s``, the ramp up (v / a), the constant-velocity part ((m − 1) period
++ integration, m the readings streamed), the ramp down (v / a). The stop-and-go
+comparison measures the same readings at the same poses in the same order: a move,
+settle and one integration each.
 
 Coverage: the total-variation distance (half the L1 distance) between the readings'
 histogram in the plan's coordinates (`COVERAGE_BINS` bins a coordinate over its box)
 and that of `COVERAGE_POINTS` Sobol points kept where the rig reaches them (the uniform
 target density); beside it, the same figure for a uniform stop-and-go plan of as many
-targets (a second Sobol sequence), the noise floor of a uniform plan of that size.
+targets (a second Sobol sequence), the noise floor of a uniform plan of that size. A
+second figure: the largest empty ball (the largest distance, unit box, from a reference
+point to its nearest reading), the same for the uniform plan.
 """
 
 from __future__ import annotations

@@ -17,6 +17,7 @@ from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
 from gonio.planner.files import parse_plan
+from gonio.planner import fly
 from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
@@ -154,12 +155,14 @@ def test_the_summary_names_the_sweeps_and_the_trade(plans: dict[str, Plan]) -> N
     assert s.fly is not None
     assert "plan 'fly-test': isotropic rusinkiewicz, fly, rig 'arch-4axis'" in text
     assert f"  {'sweeps':<26}{s.fly.segments:>9}   (on {s.fly.lines} lines)" in text
-    assert "  readings                       " in text and "(50 Hz, 20 ms each)" in text
+    assert "  readings                       " in text
+    assert f"(50 Hz, 20 ms each; {s.fly.streamed} streamed, thinned" in text
     per_hour = 3600 * s.kept / s.total_s
     assert f"  {'readings per hour':<26}{per_hour:>9,.0f}   (stop-and-go: " in text
     assert f"{s.fly.stop_and_go_s / s.total_s:.1f}× faster)" in text
     assert f"  {'coverage (TV distance)':<26}{s.fly.coverage_tv:>9.3f}" in text
-    assert "refused: ramp" in text
+    assert f"  {'largest empty ball':<26}{s.fly.coverage_gap:>9.3f}" in text
+    assert "refused: ramp" in text and "refused: thinned" in text
 
 
 def test_a_stored_fly_plan_reads_back_bit_for_bit(plans: dict[str, Plan], tmp_path: Path) -> None:
@@ -255,3 +258,25 @@ def test_a_ramp_is_half_of_a_trapezoidal_move_that_just_reaches_the_velocity(
     assert t == pytest.approx(0.5 / a) and d[2] == pytest.approx(0.5**2 / (2 * a))
     # a move over twice the ramp's distance peaks at v exactly: twice the ramp's time
     assert travel.time(np.zeros(4), 2 * d) == pytest.approx(2 * t)
+
+
+def test_the_thinning_and_the_anchor_gap_bring_the_readings_nearer_uniform(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def figures(rig: Rig) -> Any:
+        spec = fly_spec(rate_hz=100.0, blur_deg=0.5).model_dump()
+        spec["sampling"]["target"] = 8000
+        plan = build(PlanSpec.model_validate(spec), rig)
+        assert plan.summary.fly is not None
+        return plan.summary.fly
+
+    thinned = figures(rigs["arch"])
+    # Every streamed reading kept (a zero quantile keeps all), every anchor taken: the
+    # readings evenly spaced in time along the arcs, as the layout alone gives them.
+    monkeypatch.setattr(fly, "THIN_QUANTILE", 0.0)
+    monkeypatch.setattr(fly, "ANCHOR_GAP", 0.0)
+    monkeypatch.setattr(fly, "THIN_GUESS", 1.0)
+    raw = figures(rigs["arch"])
+    assert raw.streamed < thinned.streamed
+    assert thinned.coverage_tv < 0.7 * raw.coverage_tv
+    assert thinned.coverage_gap < raw.coverage_gap
