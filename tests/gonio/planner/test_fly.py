@@ -15,9 +15,8 @@ import yaml
 
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
-from gonio.planner import build, plan_bytes, read_plan, write_plan
+from gonio.planner import build, fly, plan_bytes, read_plan, write_plan
 from gonio.planner.files import parse_plan
-from gonio.planner import fly
 from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
