@@ -48,7 +48,14 @@ from sim.dynamixel.motion import (
     spin,
 )
 from sim.dynamixel.protocol import ALERT, StatusError
-from sim.dynamixel.rules import MULTI_TURN, POSITION, check_write, resolve, targets
+from sim.dynamixel.rules import (
+    MULTI_TURN,
+    POSITION,
+    check_write,
+    check_writes,
+    resolve,
+    targets,
+)
 from sim.dynamixel.table import (
     BACKUP_RAM_ITEMS,
     BY_NAME,
@@ -57,6 +64,7 @@ from sim.dynamixel.table import (
     ITEMS,
     STARTUP_RAM_RESTORE,
     STARTUP_TORQUE_ON,
+    touches_indirect_data,
 )
 
 #: Drive Mode bit 2: time-based profile (Profile Velocity/Acceleration in ms).
@@ -223,6 +231,8 @@ class EmulatedMotor:
             )
         with self._lock:
             self._refresh()
+            if not touches_indirect_data(address, length):
+                return bytes(self._mem[address : address + length])
             out = bytearray()
             for a in range(address, address + length):
                 target = resolve(self._mem, a)
@@ -240,7 +250,12 @@ class EmulatedMotor:
             goal = range(_GOAL.address, _GOAL.address + _GOAL.size)
             if all(a in writes for a in goal):
                 self._goals.append(_GOAL.decode(bytes(writes[a] for a in goal)))
-            error = self.check_write(address, data, via_secondary=via_secondary)
+            if writes:
+                error = check_writes(
+                    self._mem, writes, shutdown=self.in_shutdown, via_secondary=via_secondary
+                )
+            else:  # a shape error: empty or outside the table
+                error = self.check_write(address, data, via_secondary=via_secondary)
             if error:
                 return error
             self._apply(writes)

@@ -35,7 +35,13 @@ from drivers.dynamixel.control_table import (
     Item,
 )
 from sim.dynamixel.protocol import StatusError
-from sim.dynamixel.table import BY_NAME, EMULATED_TABLE_SIZE, INDIRECT_SLOT, ITEM_AT
+from sim.dynamixel.table import (
+    BY_NAME,
+    EMULATED_TABLE_SIZE,
+    INDIRECT_SLOT,
+    ITEM_AT,
+    touches_indirect_data,
+)
 
 POSITION = OPERATING_MODES["position"]
 MULTI_TURN = (OPERATING_MODES["extended_position"], OPERATING_MODES["current_based_position"])
@@ -65,6 +71,8 @@ def resolve(memory: bytes | bytearray, address: int) -> int:
 def targets(memory: bytes | bytearray, address: int, data: bytes) -> dict[int, int]:
     """Where each byte of a WRITE of ``data`` at ``address`` lands: target address →
     byte, in packet order (Indirect Data resolved after the packet's direct bytes)."""
+    if not touches_indirect_data(address, len(data)):
+        return dict(zip(range(address, address + len(data)), data, strict=True))
     direct = bytearray(memory)
     for i, byte in enumerate(data):
         if address + i not in INDIRECT_SLOT:
@@ -80,17 +88,18 @@ def items_written(writes: dict[int, int]) -> tuple[list[Item], StatusError]:
     for its shape alone (nothing, outside the table, a reserved byte, part of an item)."""
     if not writes:
         return [], StatusError.DATA_LENGTH
-    items: list[Item] = []
+    items: dict[int, Item] = {}
     for a in writes:
         it = ITEM_AT[a] if 0 <= a < EMULATED_TABLE_SIZE else None
         if it is None:
             return [], StatusError.ACCESS
-        if it in items:
+        if it.address in items:
             continue
-        if any(b not in writes for b in range(it.address, it.address + it.size)):
-            return [], StatusError.DATA_LENGTH
-        items.append(it)
-    return items, StatusError.NONE
+        for b in range(it.address, it.address + it.size):
+            if b not in writes:
+                return [], StatusError.DATA_LENGTH
+        items[it.address] = it
+    return list(items.values()), StatusError.NONE
 
 
 def check_write(

@@ -82,6 +82,15 @@ INDIRECT_SLOT: dict[int, int] = {
     for k in range(count)
 }
 
+
+def touches_indirect_data(address: int, length: int) -> bool:
+    """True if ``length`` bytes from ``address`` include an Indirect Data byte."""
+    return any(
+        address < data_at + count and data_at < address + length
+        for _, _, data_at, count in INDIRECT_BLOCKS
+    )
+
+
 #: Startup Configuration bits (firmware ≥ 45).
 STARTUP_TORQUE_ON = 0x01
 STARTUP_RAM_RESTORE = 0x02
