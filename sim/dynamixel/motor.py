@@ -13,7 +13,8 @@ reverse Drive Mode (the offset's sign is not reversed); position mode ignores an
 outside ±1,024. Present Position is brought back within one turn when torque goes on
 in position mode, when the mode changes to position mode, and on reboot.
 
-Control Table Backup (instruction 0x20, firmware ≥ 45; e-manual, Protocol 2.0): with
+Control Table Backup (instruction 0x20, firmware ≥ 45; e-manual, Protocol 2.0,
+emanual.robotis.com/docs/en/dxl/protocol2/, "Control Table Backup (0x20)"): with
 torque off, "store" keeps the EEPROM area and the RAM items of `BACKUP_RAM_ITEMS` (gains,
 profile, Indirect Addresses) in a backup area that survives REBOOT and FACTORY_RESET
 (*assumption* for the latter) and sets Backup Ready (147); "restore" writes the backed-up
@@ -247,9 +248,10 @@ class EmulatedMotor:
         with self._lock:
             inside = address >= 0 and address + len(data) <= EMULATED_TABLE_SIZE
             writes = targets(self._mem, address, bytes(data)) if inside else {}
+            sent = writes or dict(zip(range(address, address + len(data)), data, strict=True))
             goal = range(_GOAL.address, _GOAL.address + _GOAL.size)
-            if all(a in writes for a in goal):
-                self._goals.append(_GOAL.decode(bytes(writes[a] for a in goal)))
+            if all(a in sent for a in goal):
+                self._goals.append(_GOAL.decode(bytes(sent[a] for a in goal)))
             if writes:
                 error = check_writes(
                     self._mem, writes, shutdown=self.in_shutdown, via_secondary=via_secondary
