@@ -58,7 +58,7 @@ from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
-from gonio.acquire.sweep import RawSweep, angular_sigma, merge, poll_arrays, run_sweep
+from gonio.acquire.sweep import RawSweep, derive, run_sweep
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
@@ -242,7 +242,7 @@ class Engine:
             began = self.time.now()
             # About the sweep's length (its readings; a move, settle and ramps besides):
             # a first Ctrl-C lets a short sweep finish, abandons a long one.
-            self._busy_until = began + count * sweeps.period_s + 2.0
+            self._busy_until = began + int(sweeps.streamed[k]) * sweeps.period_s + 2.0
             try:
                 raw = self._recovery.attempt(
                     lambda: run_sweep(
@@ -280,18 +280,16 @@ class Engine:
         sweeps = self.plan.sweeps
         assert sweeps is not None
         offset = self.time.offset
-        request, reply, positions = poll_arrays(raw.polls, self.axes)
-        started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
-        ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
-        merged = merge(request, reply, positions, started, ended, sweeps, k)
-        counts = np.array([raw.readings[r].value for r in merged.index.tolist()])
-        extra = angular_sigma(counts, merged.angles, merged.smear, merged.timing)
+        d = derive(raw, self.axes, sweeps, self.plan.arrival_s, k)
+        merged, extra = d.samples, d.extra
+        request, reply, positions = d.request, d.reply, d.positions
         first, count = int(sweeps.first[k]), int(sweeps.count[k])
         state = self._sim()
-        last = int(np.argmax(ended[merged.index])) if len(merged.index) else -1
+        last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
         data = {
             "first": first, "count": count, "readings": len(raw.readings),
-            "kept": len(merged.index), "polls": len(raw.polls), "attempts": attempts,
+            "matched": len(d.matched.index), "kept": len(merged.index), "polls": len(raw.polls),
+            "attempts": attempts,
         }  # fmt: skip
         polls = [
             (a + offset, b + offset, p)

@@ -12,8 +12,12 @@ the joint-space path covered during the window (rad); its timing uncertainty is 
 stamps' jitter (a poll's request-to-reply span / √12, the positions being sampled
 somewhere in it) × the angular speed there (rad). Only readings whose whole window lies
 inside the constant-velocity part (the swept axis between the entry and exit poses) are
-kept; each is matched to the plan's reading (target) whose planned mid-pose is nearest
-along the swept axis, one reading per target.
+matched, each to the stream slot j (the j-th reading streamed at constant velocity,
+planned mid-pose entry + v (j period + integration / 2)) nearest along the swept axis,
+one reading per slot (the nearest). The plan's targets are the slots its coverage
+thinning kept (`target_slots`); a matched reading in a slot that is no target stays in
+the journal's raw ``stream`` table only: the sweep's samples are exactly the plan's
+targets read.
 """
 
 from __future__ import annotations
@@ -41,15 +45,35 @@ class RawSweep:
 
 @dataclass(frozen=True)
 class Merged:
-    """The kept readings of a sweep: ``index`` into the raw readings, ``target`` the
-    plan's target each stands for, ``angles`` (K, A) rad at mid-window, ``smear`` and
-    ``timing`` (K,) rad."""
+    """The matched readings of a sweep, in stream order: ``index`` into the raw
+    readings, ``slot`` the stream slot each fills, ``target`` the plan's target it
+    stands for (−1: a slot the plan thinned out), ``angles`` (K, A) rad at mid-window,
+    ``smear`` and ``timing`` (K,) rad."""
 
     index: np.ndarray
+    slot: np.ndarray
     target: np.ndarray
     angles: FloatArray
     smear: FloatArray
     timing: FloatArray
+
+    def targets(self) -> Merged:
+        """Only the readings that stand for a plan's target (the sweep's samples)."""
+        keep = self.target >= 0
+        return Merged(
+            self.index[keep], self.slot[keep], self.target[keep], self.angles[keep],
+            self.smear[keep], self.timing[keep],
+        )  # fmt: skip
+
+
+def target_slots(sweeps: Sweeps, arrival_s: FloatArray, k: int) -> np.ndarray:
+    """The stream slots (K,) int64 of sweep ``k``'s targets, in target order: target i's
+    is round((arrival_s[i] − cruise_at_s[k]) / period_s), ``arrival_s`` the plan's
+    (`Plan.arrival_s`, each target's planned integration start)."""
+    first, count = int(sweeps.first[k]), int(sweeps.count[k])
+    since = np.asarray(arrival_s[first : first + count], dtype=np.float64)
+    since = since - float(sweeps.cruise_at_s[k])
+    return np.rint(since / sweeps.period_s).astype(np.int64)
 
 
 def run_sweep(
@@ -106,9 +130,12 @@ def merge(
     ended: FloatArray,
     sweeps: Sweeps,
     k: int,
+    slots: np.ndarray | None = None,
 ) -> Merged:
     """Merge a sweep's polls (request, reply (P,) s; positions (P, A) rad) with its
-    readings' windows (started, ended (R,) s) (see the module docstring)."""
+    readings' windows (started, ended (R,) s) (see the module docstring); ``slots``:
+    the stream slots of the sweep's targets (`target_slots`; None: the first ``count``
+    slots, a plan streaming its targets only)."""
     t = 0.5 * (request + reply)
     order = np.argsort(t, kind="stable")
     t, positions = t[order], positions[order]
@@ -132,24 +159,56 @@ def merge(
     v = abs(float(sweeps.velocity[k, j]))
     along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
     slot = np.rint((along - 0.5 * sweeps.integration_s) / sweeps.period_s).astype(np.int64)
-    count = int(sweeps.count[k])
-    inside &= (slot >= 0) & (slot < count)
+    inside &= (slot >= 0) & (slot < int(sweeps.streamed[k]))
     error = np.abs(along - 0.5 * sweeps.integration_s - slot * sweeps.period_s)
-    index = []
     best: dict[int, int] = {}
     for r in np.flatnonzero(inside).tolist():
         s = int(slot[r])
         if s not in best or error[r] < error[best[s]]:
             best[s] = r
-    index = sorted(best.values())
-    kept = np.array(index, dtype=np.int64)
-    return Merged(
-        kept,
-        int(sweeps.first[k]) + slot[kept],
-        angles[kept],
-        smear[kept],
-        timing[kept],
+    index = np.array(sorted(best.values()), dtype=np.int64)
+    if slots is None:
+        slots = np.arange(int(sweeps.count[k]), dtype=np.int64)
+    owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
+    target = np.array(
+        [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
+        dtype=np.int64,
     )
+    return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A sweep's raw streams as arrays (`poll_arrays`; the readings' windows, s), every
+    matched reading (`merge`), the samples (the matched readings standing for targets)
+    and each sample's added counts σ (`angular_sigma`, its slope taken over every
+    matched reading)."""
+
+    request: FloatArray
+    reply: FloatArray
+    positions: FloatArray
+    started: FloatArray
+    ended: FloatArray
+    matched: Merged
+    samples: Merged
+    extra: FloatArray
+
+
+def derive(
+    raw: RawSweep, axes: tuple[str, ...], sweeps: Sweeps, arrival_s: FloatArray, k: int
+) -> Derived:
+    """Sweep ``k``'s samples from its raw streams (``arrival_s``: the plan's)."""
+    request, reply, positions = poll_arrays(raw.polls, axes)
+    started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
+    ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
+    slots = target_slots(sweeps, arrival_s, k)
+    matched = merge(request, reply, positions, started, ended, sweeps, k, slots)
+    counts = np.array([raw.readings[r].value for r in matched.index.tolist()], dtype=np.float64)
+    extra = angular_sigma(counts, matched.angles, matched.smear, matched.timing)
+    return Derived(
+        request, reply, positions, started, ended, matched, matched.targets(),
+        extra[matched.target >= 0],
+    )  # fmt: skip
 
 
 def angular_sigma(counts: FloatArray, angles: FloatArray, smear: FloatArray, timing: FloatArray

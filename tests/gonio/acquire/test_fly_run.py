@@ -20,7 +20,7 @@ import yaml
 
 from drivers.base import Devices, StampedPositions
 from gonio.acquire.recovery import MotorRecovery
-from gonio.acquire.sweep import merge, run_sweep
+from gonio.acquire.sweep import merge, run_sweep, target_slots
 from gonio.planner.schema import MotorFaultSpec
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run, raw_streams
@@ -88,6 +88,11 @@ def test_every_sweep_is_measured_and_its_targets_read(run: Run) -> None:
     assert {s.outcome for s in run.sweeps} == {"measured"}
     assert len(run) + len(run.skipped) == len(run.plan)
     assert len(run) >= 0.95 * len(run.plan)
+    # The detector streams every slot; the samples are the plan's targets only (the
+    # thinning's other slots stay in the raw stream table).
+    matched = sum(s.data["matched"] for s in run.sweeps)
+    assert matched >= 0.95 * int(sweeps.streamed.sum()) and matched > len(run.plan)
+    assert sum(s.data["kept"] for s in run.sweeps) == len(run)
     # The angles are the read ones, near the planned mid-window poses.
     gap = np.abs(run.angles("read_back") - run.angles("commanded")).max()
     speed = float(np.abs(sweeps.velocity).max())
@@ -109,10 +114,14 @@ def test_the_journaled_streams_merge_again_into_the_samples(run: Run) -> None:
     record = run.sweeps[1]
     times, positions, readings = raw_streams(run, record.id)
     assert len(readings) == record.data["readings"] and len(times) == record.data["polls"]
-    merged = merge(
+    slots = target_slots(sweeps, run.plan.arrival_s, record.sweep)
+    matched = merge(
         times[:, 0], times[:, 1], positions, readings["started_s"], readings["ended_s"],
-        sweeps, record.sweep,
+        sweeps, record.sweep, slots,
     )  # fmt: skip
+    assert len(matched.index) == record.data["matched"]
+    merged = matched.targets()
+    assert len(merged.index) == record.data["kept"]
     rows = np.searchsorted(run.target, merged.target)
     np.testing.assert_array_equal(run.target[rows], merged.target)
     np.testing.assert_array_equal(run.angles("read_back")[rows], merged.angles)
