@@ -33,7 +33,8 @@ pytestmark = pytest.mark.pty
 SCENE = CONFIGS / "scenes" / "matte.yaml"
 ACQUISITION = {
     "on_fault": {"motor": {"action": "recover", "max_recoveries": 2}},
-    "health": {"poll_s": 10, "every_samples": 5},
+    # Health checked by count only: time runs with the wall clock here.
+    "health": {"poll_s": 10, "every_samples": 5, "every_minutes": None},
 }
 
 
@@ -87,7 +88,7 @@ def test_an_overload_a_supply_error_and_an_overheated_motor_recover_and_the_run_
         if done == 5:  # at rest: the health check due now finds it
             emu.inject(Fault.INPUT_VOLTAGE, motor_id=4)  # sample_rotation
         if done == 6:
-            emu.motors[1].heat(85.0, 600.0)  # light_elevation, above its 80 °C limit
+            emu.motors[1].heat(120.0, 600.0)  # light_elevation, above its 80 °C limit
 
     report, run = rehearse(tmp_path, 10, inject)
     assert report.outcome == "completed", report
@@ -105,9 +106,11 @@ def test_an_overload_a_supply_error_and_an_overheated_motor_recover_and_the_run_
     assert diagnosed[0]["flags"] == ["overload"] and diagnosed[0]["load_pct"] == 0.0
     assert diagnosed[1]["flags"] == ["input_voltage"]
     assert diagnosed[2]["flags"] == ["overheating"] and diagnosed[2]["temperature_c"] > 65
-    (cooled,) = [e.data for e in run.of_kind("recovery") if e.data["step"] == "cooled"]
-    # 30 + 55·exp(−t/600 s) < 65 °C 271 s after the heat, on the run's clock.
-    assert cooled["temperature_c"] < 65 and 100 < cooled["waited_s"] < 400
+    cooling, cooled = (e.data for e in run.of_kind("recovery") if e.data["step"].startswith("cool"))
+    # 30 + 90·exp(−t/600 s) < 65 °C 567 s after the heat, on the run's clock (which runs
+    # with the wall clock here: how much of it passed before the fault was seen varies).
+    assert cooling["temperature_c"] >= 65 > cooled["temperature_c"]
+    assert 0 < cooled["waited_s"] <= 567 + 100
     rebooted = [e.data for e in run.of_kind("recovery") if e.data["step"] == "rebooted"]
     assert all(r["deviation_deg"] == 0.0 for r in rebooted)
     # Read back within a tick of the commanded angles, the re-measured targets too.
