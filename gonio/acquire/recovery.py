@@ -54,6 +54,10 @@ T = TypeVar("T")
 Journaling = Callable[[str, Mapping[str, Any], int | None], None]
 
 #: The journal's event kind of every recovery step.
+# A flag a reboot must not clear unattended: the e-manual reads it as a fault in the
+# motor's circuit or its supply, which a person has to look at.
+NEVER_RECOVERED = frozenset({"electrical_shock"})
+
 KIND = "recovery"
 
 
@@ -156,6 +160,11 @@ class MotorRecovery:
             },
             target,
         )  # fmt: skip
+        if NEVER_RECOVERED & {*health.error_flags, *fault.flags}:
+            raise NotRecovered(
+                "an electrical shock is never recovered unattended: check the motor's "
+                "wiring and supply, then reboot it by hand (gonio motors reboot)"
+            )
         if n > self.spec.max_recoveries:
             raise NotRecovered(
                 f"rebooted {self.spec.max_recoveries} times in this run already "

@@ -34,5 +34,5 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(json.dumps(figures, indent=2, ensure_ascii=False))
     else:
         print(run_table.render(run))
-        print("\n".join([*recovery.describe(run), run_table.render_details(run)]))
+        print(run_table.render_details(run))
     return 0

@@ -7,6 +7,7 @@ from collections import Counter
 
 import numpy as np
 
+from gonio.acquire import recovery
 from gonio.analysis.calibrated import calibrate
 from gonio.analysis.summary import figures
 from gonio.progress import hms
@@ -33,6 +34,7 @@ def render(run: Run, errors: dict[str, float | int] | None = None, *, title: boo
         lines.append(f"  {'second pass':<24}{'':>10}   {run.plan.summary.second_pass}")
     for fault in f["faults"][-3:]:
         lines.append(f"    target {fault.get('target')}: {fault['message']}")
+    lines.extend(recovery.describe(run))
     for reason, count in f["skip_reasons"].items():
         lines.append(f"    skipped {count}: {reason}")
     if f["pauses"]:

@@ -177,3 +177,15 @@ def test_ctrl_c_while_a_motor_cools_pauses_and_the_resume_measures_the_target(
     (pause,) = run.of_kind("pause")
     assert pause.data["abandoned"] is True
     measured_once(session.resume(path).run)
+
+
+def test_an_electrical_shock_is_never_recovered(
+    tmp_path: Path, run_files: Callable[..., RunFiles]
+) -> None:
+    files = run_files(12, acquisition=RECOVER, faults=[
+        {"kind": "motor_fault", "at": [5], "axis": "detector_azimuth",
+         "flags": ["electrical_shock"]},
+    ])  # fmt: skip
+    run = ended_by_fault(files, tmp_path / "run.sqlite", 5)
+    assert [s for _, _, s in steps(run)] == ["diagnosed", "failed"]
+    assert "never recovered unattended" in run.of_kind("recovery")[-1].data["reason"]
