@@ -175,6 +175,7 @@ class SimMotorBus(Resource):
         self._pending: FaultRule | None = None  # a fault that strikes during this move
         self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
         self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
+        self._sag: tuple[float, float] | None = None  # supply sag: V, until (s)
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -279,6 +280,9 @@ class SimMotorBus(Resource):
         if self._pending is not None and self._pending.kind == "overheat":
             rule, self._pending = self._pending, None
             self._hot = (rule.axis or self._names[0], rule.temperature_c, self._t0 + rule.for_s)
+        elif self._pending is not None and self._pending.kind == "supply_sag":
+            rule, self._pending = self._pending, None
+            self._sag = (rule.voltage_v, self._t0 + rule.for_s)
         if self._model is not None:
             axes = len(goal)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -329,8 +333,9 @@ class SimMotorBus(Resource):
     def _raise_fault(self, rule: FaultRule) -> None:
         """Raise the injected motor fault ``rule`` (the axes already held)."""
         if rule.kind == "comm_error":
+            what = "no status packet" if rule.packet == "lost" else "a corrupt status packet (CRC)"
             raise CommError(
-                f"no status from the bus during the move into sample {self._sample} "
+                f"{what} from the bus during the move into sample {self._sample} "
                 "(injected); every axis told to hold",
                 port="simulated",
             )
@@ -425,6 +430,15 @@ class SimMotorBus(Resource):
         """Continue an overheat (a resumed run)."""
         self._hot = hot
 
+    @property
+    def supply_sag(self) -> tuple[float, float] | None:
+        """An injected supply sag in force: (V, until when on the clock), or None."""
+        return self._sag
+
+    def set_supply_sag(self, sag: tuple[float, float] | None) -> None:
+        """Continue a supply sag (a resumed run)."""
+        self._sag = sag
+
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
@@ -454,11 +468,13 @@ class SimMotorBus(Resource):
 
     def health(self) -> dict[str, Health]:
         self._check_open()
-        hot = self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
+        now = self.clock.now()
+        hot = self._hot if self._hot is not None and now < self._hot[2] else None
+        volts = self._sag[0] if self._sag is not None and now < self._sag[1] else 12.0
         return {
             n: Health(
                 temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
-                voltage_v=12.0,
+                voltage_v=volts,
                 error_flags=self._latched.get(n, ()),
             )
             for n in self._names
