@@ -145,9 +145,9 @@ class Kill:
 @dataclass
 class KillSchedule:
     """Seeded: ``kills`` kills spread over a run of ``targets`` (a quarter of them at
-    any moment from the spawn: opening, reading the run, restoring, planning; the rest
-    within 20 ms of a random number of new samples), and the sessions that meet a full
-    disk (``disk_full`` of them, the first after a few kills)."""
+    any moment within ``startup_s`` of the spawn: opening, reading the run, restoring;
+    the rest within 20 ms of a random number of new samples), and the sessions that
+    meet a full disk (``disk_full`` of them, spread among the first sessions)."""
 
     seed: int
     kills: int
@@ -163,9 +163,11 @@ class KillSchedule:
         spacing = max(2, self.kills + self.disk_full + 1)
         self._full = {2 + k * spacing // max(self.disk_full, 1) for k in range(self.disk_full)}
 
-    def next_kill(self) -> Kill:
+    def next_kill(self, *, planning: bool = False) -> Kill:
+        """The next kill; ``planning``: of a session that plans first (a new run),
+        killed only once it measures (a kill while it plans would only plan again)."""
         rng = self._rng
-        if rng.random() < 0.25:
+        if rng.random() < 0.25 and not planning:
             return Kill(0, rng.uniform(0.0, self.startup_s))
         mean = max(2, self.targets // max(self.kills, 1))
         return Kill(rng.randint(1, 2 * mean - 1), rng.uniform(0.0, 0.02))
@@ -476,7 +478,10 @@ def run_soak(
         else:
             argv = ["acquire", str(soak.plan), "--scene", str(soak.scene), "-o", str(soak.run),
                     "-q"]  # fmt: skip
-        kill = schedule.next_kill() if schedule is not None and kills_left > 0 else None
+        planning = not soak.run.exists()
+        kill = None
+        if schedule is not None and kills_left > 0:
+            kill = schedule.next_kill(planning=planning)
         full = schedule is not None and schedule.disk_full_at(number) and soak.run.exists()
         session = Session(number, argv, kill, full, finished_before=len(before))
         filler = None
