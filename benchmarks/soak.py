@@ -12,7 +12,7 @@ timeouts (one burst longer than the retries), saturated readings, motor overload
 overheating (a hardware error: today's policy stops the run resumable, and the loop
 resumes it), motion timeouts, an overheat of 2.5 h and a supply sag of 5 h (health
 pauses: the plan gives up a pause after 4 h, resumable) and supply sags of 10 min. A
-seeded schedule SIGKILLs the process 40 times (a quarter at any moment of a session's
+seeded schedule SIGKILLs the process 50 times (a quarter at any moment of a session's
 start, the rest a few milliseconds after some new samples were committed) and fills the
 disk twice: the run file lives on a size-limited tmpfs (when the script runs as root;
 else a file-size limit on the process stands in) that a filler file leaves 4 MB free,
@@ -68,7 +68,7 @@ def hours(seconds: float) -> str:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--targets", type=int, default=100_000)
-    parser.add_argument("--kills", type=int, default=40)
+    parser.add_argument("--kills", type=int, default=50)
     parser.add_argument("--disk-full", type=int, default=2)
     parser.add_argument("--seed", type=int, default=5)
     parser.add_argument("--rehearsal-targets", type=int, default=300)
