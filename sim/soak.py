@@ -383,9 +383,16 @@ def spawn(
     started = time.monotonic()
     child = launch(argv, preexec)
     killed = False
-    if kill is not None:
-        killed = _kill_when(child, run, kill, started + timeout_s)
-    rc, err = child.finish(max(started + timeout_s - time.monotonic(), 1.0))
+    try:
+        if kill is not None:
+            killed = _kill_when(child, run, kill, started + timeout_s)
+        rc, err = child.finish(max(started + timeout_s - time.monotonic(), 1.0))
+    except BaseException:  # the soak itself interrupted: leave no child behind
+        if child.poll() is None:
+            child.kill()
+        with contextlib.suppress(BaseException):
+            child.finish(5.0)
+        raise
     return child.pid, rc, killed and rc == -signal.SIGKILL, err, time.monotonic() - started
 
 
@@ -760,7 +767,7 @@ def story(soak: Soak, journal: Journal) -> Story:
             elif "fault" in kinds:
                 how[f"stopped resumable{where}, resumed"] += 1
             else:
-                how[f"retried ×{len(events)}"] += 1
+                how[f"retried ×{len(events)}{where}"] += 1
         elif s.rule.kind == "saturated":
             if calibration or s.index not in measured:
                 continue
