@@ -598,8 +598,8 @@ class Engine:
                 if attempt == retries:
                     raise
                 self._hold_all()
-                data = {**self._fault_data(exc), "attempt": attempt + 1, "calibration": why}
-                self._event("retry", {**data, **self._sim()})
+                failed = {**self._fault_data(exc), "attempt": attempt + 1, "calibration": why}
+                self._event("retry", {**failed, **self._sim()})
         back = [read.reference.read_back[a] for a in self.axes]
         reference = self._reading_data(read.reference.reading, read.exposure_s)
         wi, wo = self.rig.forward(np.array(back))
