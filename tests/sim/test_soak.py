@@ -17,6 +17,7 @@ from gonio.cli import main, render, run_table
 from gonio.planner import files
 from gonio.workflows import session
 from sim.soak import (
+    CALIBRATION_INDEX,
     ForkLauncher,
     Journal,
     KillSchedule,
@@ -99,3 +100,33 @@ def test_a_short_soak(tmp_path: Path) -> None:
     run_soak(reference, None, launch=launch)
     assert reference.problems == [] and reference.kills == 0
     assert same_samples(journal, Journal.read(reference.run)) == []
+
+
+def test_a_transient_fault_in_a_calibration_is_retried(tmp_path: Path) -> None:
+    """A lost status packet and a detector timeout in calibrations are retried (a
+    ``retry`` event naming the calibration); a burst longer than the retries ends the
+    session resumable, and the resume takes the calibration again."""
+    cal = CALIBRATION_INDEX
+    faults = [
+        {"kind": "comm_error", "at": [cal + 2]},  # the second calibration's reference
+        {"kind": "detector_error", "at": [cal + 5]},  # the third's dark
+        {"kind": "comm_error", "burst": 4, "at": [cal + 6]},  # the last's reference
+    ]
+    acquisition = {"calibration": {"every_samples": 20, "averages": 4},
+                   "on_fault": {"retries": 2}, "health": {"every_samples": 10}}  # fmt: skip
+    soak = write_files(tmp_path, tmp_path / "run.sqlite", 60, 3, faults, acquisition)
+    run_soak(soak, None, launch=ForkLauncher(main))
+    assert soak.problems == []
+    assert [s.returncode for s in soak.sessions] == [3, 0]
+    journal = Journal.read(soak.run)
+    retries = [(e.data["error"], e.data["calibration"]) for e in journal.of_kind("retry")]
+    assert retries == [
+        ("CommError", "scheduled"),
+        ("DetectorError", "scheduled"),
+        ("CommError", "end"),
+        ("CommError", "end"),
+        ("CommError", "end"),
+    ]
+    assert [e.target for e in journal.of_kind("fault")] == [None]
+    assert len(journal.of_kind("calibration")) == 4
+    assert story(soak, journal).problems == []
