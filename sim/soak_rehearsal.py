@@ -322,7 +322,8 @@ def run_rehearsal_soak(
             if not killed and hardware_error:
                 # A latched Hardware Error Status ends the run resumable (exit 3), or, met
                 # when the bus opens, refuses the resume (exit 2); either way the motor
-                # keeps it until rebooted.
+                # keeps it until rebooted. (A plan policy that recovers the motor by
+                # itself would take this step into the run.)
                 # What an operator does today: reboot the motor, then resume.
                 faulted = [i for i, m in emulator.motors.items() if m.get("hardware_error_status")]
                 ids = ",".join(map(str, faulted or sorted(emulator.motors)))
