@@ -13,7 +13,8 @@ from target to target, and rebuilds from the journal when a run resumes, is its
 `gonio.acquire.state.RunState`.
 
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
-is retried, then the target skipped (journaled) or the run aborted; a `MotorFault` or
+is retried (in a calibration too), then the target skipped (journaled) or the run
+aborted (a calibration's last attempt ends the run resumable); a `MotorFault` or
 `MotionTimeout` stops every axis, is journaled with the motor's flags, and ends the run
 resumable, unless the plan's ``on_fault.motor`` recovers the motor
 (`gonio.acquire.recovery`: the target or calibration in flight is then done again).
@@ -595,12 +596,25 @@ class Engine:
         if exposure is None:
             shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
-        read = self._recovery.attempt(
-            lambda: read_standard(
-                self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
-                dark=spec.dark and not subtracted, timeout_s=self.move_timeout_s,
-            )
-        )  # fmt: skip
+        retries = self.spec.on_fault.retries
+        for attempt in range(retries + 1):
+            try:
+                read = self._recovery.attempt(
+                    lambda: read_standard(
+                        self.devices, self.stage, self.rig, calibrations.k, exposure,
+                        spec.averages, dark=spec.dark and not subtracted,
+                        timeout_s=self.move_timeout_s,
+                    )
+                )  # fmt: skip
+                break
+            except (CommError, DetectorError) as exc:
+                # A transient fault in a calibration is retried as in a target; after the
+                # last attempt it ends the session resumable (a calibration is not skipped).
+                if attempt == retries:
+                    raise
+                self._hold_all()
+                failed = {**self._fault_data(exc), "attempt": attempt + 1, "calibration": why}
+                self._event("retry", {**failed, **self._sim()})
         back = [read.reference.read_back[a] for a in self.axes]
         reference = self._reading_data(read.reference.reading, read.exposure_s)
         wi, wo = self.rig.forward(np.array(back))

@@ -90,8 +90,10 @@ def render_details(run: Run) -> str:
     lines = ["  sessions"]
     for session in run.sessions:
         info = session.info
+        # A session that did not record its end: killed, crashed, or its disk full.
+        ended = session.outcome or "did not end (killed, or its disk full)"
         lines.append(
-            f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
+            f"    {session.id}: {session.started_utc} → {ended}"
             f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
         )
     sweeps = figures(run).get("sweeps")

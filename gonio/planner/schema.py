@@ -327,8 +327,9 @@ class MotorFaultSpec(Strict):
 class OnFaultSpec(Strict):
     """What a target does when a transient fault strikes (`CommError`, `DetectorError`):
     try again up to ``retries`` times, then ``skip`` it (the reason journaled) or
-    ``abort`` the run (resumable). A motor's hardware error follows ``motor``; a motion
-    timeout always stops every axis and ends the run resumable."""
+    ``abort`` the run (resumable). A calibration's reading is retried the same way and,
+    after the last attempt, ends the run resumable. A motor's hardware error follows
+    ``motor``; a motion timeout always stops every axis and ends the run resumable."""
 
     retries: int = Field(2, ge=0, le=100, description="Attempts after the first.")
     then: Literal["skip", "abort"] = Field(

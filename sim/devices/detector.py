@@ -416,7 +416,9 @@ class SimDetector(Resource):
             raise DetectorError("measure() during a stream (stop_stream first)")
         averages = int(averages)
         start = self._draws.get(self._sample, 0)
-        fault = self._faults.fired(self._sample, start, DETECTOR_KINDS) if self._faults else None
+        # The attempt at this sample: each earlier one (failed or not) used `averages` draws.
+        attempt = start // averages if start % averages == 0 else -1
+        fault = self._faults.fired(self._sample, attempt, DETECTOR_KINDS) if self._faults else None
         if fault is not None and fault.kind == "detector_error":
             self._draws[self._sample] = start + averages
             raise DetectorError(f"the detector did not answer (injected at sample {self._sample})")

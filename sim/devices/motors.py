@@ -177,6 +177,7 @@ class SimMotorBus(Resource):
         self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
         self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
         self._shift: dict[str, float] = {}  # how far an axis's encoder jumps at its reboot
+        self._sag: tuple[float, float] | None = None  # supply sag: V, until (s)
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -281,6 +282,9 @@ class SimMotorBus(Resource):
         if self._pending is not None and self._pending.kind == "overheat":
             rule, self._pending = self._pending, None
             self._hot = (rule.axis or self._names[0], rule.temperature_c, self._t0 + rule.for_s)
+        elif self._pending is not None and self._pending.kind == "supply_sag":
+            rule, self._pending = self._pending, None
+            self._sag = (rule.voltage_v, self._t0 + rule.for_s)
         if self._model is not None:
             axes = len(goal)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -331,8 +335,9 @@ class SimMotorBus(Resource):
     def _raise_fault(self, rule: FaultRule) -> None:
         """Raise the injected motor fault ``rule`` (the axes already held)."""
         if rule.kind == "comm_error":
+            what = "no status packet" if rule.packet == "lost" else "a corrupt status packet (CRC)"
             raise CommError(
-                f"no status from the bus during the move into sample {self._sample} "
+                f"{what} from the bus during the move into sample {self._sample} "
                 "(injected); every axis told to hold",
                 port="simulated",
             )
@@ -431,6 +436,15 @@ class SimMotorBus(Resource):
         """Continue an overheat (a resumed run)."""
         self._hot = hot
 
+    @property
+    def supply_sag(self) -> tuple[float, float] | None:
+        """An injected supply sag in force: (V, until when on the clock), or None."""
+        return self._sag
+
+    def set_supply_sag(self, sag: tuple[float, float] | None) -> None:
+        """Continue a supply sag (a resumed run)."""
+        self._sag = sag
+
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
@@ -467,10 +481,12 @@ class SimMotorBus(Resource):
         else 35 °C), 12 V, the latched flags; the load is not modelled (None)."""
         self._check_open()
         hot = self._hot_now()
+        now = self.clock.now()
+        volts = self._sag[0] if self._sag is not None and now < self._sag[1] else 12.0
         return {
             n: Health(
                 temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
-                voltage_v=12.0,
+                voltage_v=volts,
                 error_flags=self._latched.get(n, ()),
             )
             for n in self._names
