@@ -10,14 +10,16 @@ the stamped polls and the stamped readings.
 per axis, on each poll's mid-time) at the middle of its integration window; its smear is
 the joint-space path covered during the window (rad); its timing uncertainty is the
 stamps' jitter (a poll's request-to-reply span / √12, the positions being sampled
-somewhere in it) × the angular speed there (rad). Only readings whose whole window lies
-inside the constant-velocity part (the swept axis between the entry and exit poses) are
-matched, each to the stream slot j (the j-th reading streamed at constant velocity,
-planned mid-pose entry + v (j period + integration / 2)) nearest along the swept axis,
-one reading per slot (the nearest). The plan's targets are the slots its coverage
-thinning kept (`target_slots`); a matched reading in a slot that is no target stays in
-the journal's raw ``stream`` table only: the sweep's samples are exactly the plan's
-targets read.
+somewhere in it, and the readings' stamp slack / √12, `stamp_slack`, in quadrature) ×
+the angular speed there (rad). The readings are first stamped again with the stream's
+final clock offset (`drivers.stream.restamped`, the latency the live stamps assumed).
+Only readings whose whole window lies inside the constant-velocity part (the swept axis
+between the entry and exit poses) are matched, each to the stream slot j (the j-th
+reading streamed at constant velocity, planned mid-pose entry + v (j period +
+integration / 2)) nearest along the swept axis, one reading per slot (the nearest). The
+plan's targets are the slots its coverage thinning kept (`target_slots`); a matched
+reading in a slot that is no target stays in the journal's raw ``stream`` table only:
+the sweep's samples are exactly the plan's targets read.
 """
 
 from __future__ import annotations
@@ -28,9 +30,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.base import Devices, StampedPositions
-from drivers.stream import StreamReading, streaming
+from drivers.stream import StreamReading, restamped, streaming
 from gonio.planner.model import Sweeps
 from gonio.types import FloatArray
+
+#: A poll whose request-to-reply span exceeds this many times the sweep's median is not
+#: interpolated (when it happened within the span is too loosely known).
+SLOW_POLL = 3.0
 
 
 @dataclass(frozen=True)
@@ -111,7 +117,7 @@ def run_sweep(
     finally:
         readings += detector.stop_stream()
     bus.wait_settled(timeout_s)
-    return RawSweep(polls, readings, started, clock.now())
+    return RawSweep(polls, restamped(readings, None), started, clock.now())
 
 
 def poll_arrays(polls: list[StampedPositions], axes: tuple[str, ...]) -> tuple[FloatArray, ...]:
@@ -131,14 +137,20 @@ def merge(
     sweeps: Sweeps,
     k: int,
     slots: np.ndarray | None = None,
+    slack_s: float = 0.0,
 ) -> Merged:
     """Merge a sweep's polls (request, reply (P,) s; positions (P, A) rad) with its
     readings' windows (started, ended (R,) s) (see the module docstring); ``slots``:
     the stream slots of the sweep's targets (`target_slots`; None: the first ``count``
-    slots, a plan streaming its targets only)."""
-    t = 0.5 * (request + reply)
+    slots, a plan streaming its targets only); ``slack_s`` the readings' stamp slack
+    (`stamp_slack`), whose /√12 adds to the timing jitter in quadrature."""
+    spans = reply - request
+    steady = spans <= SLOW_POLL * float(np.median(spans)) if len(spans) else spans > 0
+    if steady.sum() < 2:
+        steady = np.ones(len(spans), dtype=np.bool_)
+    t = 0.5 * (request + reply)[steady]
     order = np.argsort(t, kind="stable")
-    t, positions = t[order], positions[order]
+    t, positions = t[order], positions[steady][order]
     middle = 0.5 * (started + ended)
 
     def at(times: FloatArray) -> FloatArray:
@@ -149,7 +161,8 @@ def merge(
     smear = np.linalg.norm(last - first, axis=1)
     span = ended - started
     speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
-    jitter = float(np.median(reply - request)) / math.sqrt(12.0) if len(t) else 0.0
+    polled = float(np.median(reply - request)) if len(t) else 0.0
+    jitter = math.hypot(polled, slack_s) / math.sqrt(12.0)
     timing = jitter * speed
     j = int(np.argmax(np.abs(sweeps.velocity[k])))
     lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
@@ -177,6 +190,15 @@ def merge(
     return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
 
 
+def stamp_slack(readings: list[StreamReading]) -> float:
+    """How late after its stamped end a window may have ended (s): the smallest
+    ``received_s − ended_s`` of the readings (a line cannot arrive before its window
+    ends); 0 without arrival times. A detector stamping from its start command
+    (``starts_on_command``) puts the truth between the stamp and the stamp + slack."""
+    late = [r.received_s - r.ended_s for r in readings if r.received_s is not None]
+    return max(0.0, min(late)) if late else 0.0
+
+
 @dataclass(frozen=True)
 class Derived:
     """A sweep's raw streams as arrays (`poll_arrays`; the readings' windows, s), every
@@ -202,7 +224,8 @@ def derive(
     started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
     ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
     slots = target_slots(sweeps, arrival_s, k)
-    matched = merge(request, reply, positions, started, ended, sweeps, k, slots)
+    slack = stamp_slack(raw.readings)
+    matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack)
     counts = np.array([raw.readings[r].value for r in matched.index.tolist()], dtype=np.float64)
     extra = angular_sigma(counts, matched.angles, matched.smear, matched.timing)
     return Derived(
