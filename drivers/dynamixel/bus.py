@@ -79,8 +79,8 @@ class DynamixelBus(Condition, Resource):
     (in motor ticks) an axis must be to its goal to count as settled; ``configure``
     writes operating mode, drive mode, position limits and profiles on open;
     ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again;
-    ``clock`` stamps `poll_positions` (default the host's monotonic clock; a rehearsal
-    passes its run's clock).
+    ``clock`` stamps `poll_positions` and paces `wait_settled`'s polls (default the
+    host's monotonic clock; a rehearsal passes its run's scaled clock, the motion's).
     """
 
     def __init__(
@@ -423,7 +423,7 @@ class DynamixelBus(Condition, Resource):
                 raise MotionTimeout(
                     f"axes did not settle within {timeout_s:g} s ({detail}); holding them"
                 )
-            time.sleep(self.poll_interval_s)
+            self.clock.sleep(self.poll_interval_s)  # the motion's time: a rehearsal's scaled
 
     def stop(self) -> None:
         """Hold every axis that answers at its present position (clamped to its limits).

@@ -314,6 +314,17 @@ class SimDetector(Resource):
                 raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
         return np.array(poses, dtype=np.float64).reshape(len(times), len(axes))
 
+    def window_counts(
+        self, started: np.ndarray, ended: np.ndarray, integration: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Counts and saturated flags (N,) of exposures of ``integration`` s over the
+        windows [started, ended] (clock times, s), as a stream's (`pose_at`, the
+        ``motion_blur`` nodes), continuing the present sample's random streams: for a
+        peer that streams these physics (a rehearsal's photometer)."""
+        return self._stream_counts(
+            np.asarray(started, dtype=np.float64), np.asarray(ended, dtype=np.float64), integration
+        )
+
     def _stream_counts(
         self, started: np.ndarray, ended: np.ndarray, integration: float
     ) -> tuple[np.ndarray, np.ndarray]:

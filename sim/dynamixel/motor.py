@@ -97,6 +97,10 @@ BACKUP_RESTORE = 0x02
 BACKUP_FIRMWARE = 45
 
 
+#: Trajectories (moves and holds) a motor remembers for `EmulatedMotor.position_at`.
+PAST_TRAJECTORIES = 8
+
+
 def _defaults() -> bytearray:
     mem = bytearray(EMULATED_TABLE_SIZE)
     for it in ITEMS:
@@ -147,6 +151,8 @@ class EmulatedMotor:
         self._boot = now
         self._t0 = now
         self._traj: Trajectory = at_rest(position)
+        #: The trajectories before the present one (start time, trajectory), newest last.
+        self._past: deque[tuple[float, Trajectory]] = deque(maxlen=PAST_TRAJECTORIES)
         self._kind = ProfileType.STEP
         self._registered: tuple[int, bytes] | None = None
         self._goals: deque[int] = deque(maxlen=GOAL_LOG_SIZE)
@@ -221,8 +227,13 @@ class EmulatedMotor:
     def position_at(self, t: float) -> float:
         """Present Position (ticks, before rounding to the register) at time ``t`` on the
         motor's clock, along its present trajectory (valid from the last goal, torque
-        change or stop on): the truth a test compares polled positions with."""
+        change or stop on) or, before it, along the last `PAST_TRAJECTORIES` moves and
+        holds: the truth a test compares polled positions with."""
         with self._lock:
+            if t < self._t0:
+                for t0, traj in reversed(self._past):
+                    if t >= t0:
+                        return traj.at(t - t0)[0]
             return self._position(t)
 
     # -- host-facing access ---------------------------------------------------------------
@@ -514,6 +525,7 @@ class EmulatedMotor:
             v_max = v * TICKS_PER_S_PER_VELOCITY_UNIT if v else INF
             a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa and not time_based else INF
             traj = move(position, velocity, goal, v_max, a_max, None if pv else ProfileType.STEP)
+        self._past.append((self._t0, self._traj))
         self._t0, self._traj, self._kind = now, traj, traj.kind
 
     def _start_spin(self, now: float) -> None:
@@ -541,6 +553,7 @@ class EmulatedMotor:
         return self._traj.at(now - self._t0)[0]
 
     def _hold(self, position: float, now: float) -> None:
+        self._past.append((self._t0, self._traj))
         self._t0, self._traj = now, at_rest(position)
 
     def _homing(self) -> int:

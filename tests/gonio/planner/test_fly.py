@@ -5,6 +5,7 @@ backends that do not sweep yet."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -199,7 +200,7 @@ def test_a_stop_and_go_plan_stores_no_sweeps(quick_plan: Plan) -> None:
     assert quick_plan.sweeps is None and not quick_plan.is_fly
 
 
-def test_the_shipped_fly_plan_plans_and_only_the_simulated_backend_acquires_it(
+def test_the_shipped_fly_plan_plans_and_hardware_refuses_it(
     run_gonio: Any, tmp_path: Path, plans: dict[str, Plan]
 ) -> None:
     out = tmp_path / "fly.csv"
@@ -209,10 +210,16 @@ def test_the_shipped_fly_plan_plans_and_only_the_simulated_backend_acquires_it(
     assert "readings per hour" in stdout and f"to {out}" in stdout
     assert read_plan(out).sweeps is not None
     refuse_fly(plans["arch"], "simulated")
-    for kind in ("rehearsal", "hardware"):
-        with pytest.raises(ConfigError, match="simulated backend only") as info:
-            refuse_fly(plans["arch"], kind)
-        assert "\n" not in str(info.value)
+    refuse_fly(plans["arch"], "rehearsal")  # its simulated detector streams
+    with pytest.raises(ConfigError, match="simulated and rehearsal backends only") as info:
+        refuse_fly(plans["arch"], "hardware")
+    assert "\n" not in str(info.value)
+    lockin = dataclasses.replace(
+        plans["arch"], rig=Rig.from_yaml(CONFIGS / "rigs/arch_lockin.yaml")
+    )
+    with pytest.raises(ConfigError, match="pymeasure detector cannot stream") as info:
+        refuse_fly(lockin, "rehearsal")
+    assert "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize(
