@@ -71,6 +71,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/lockin.py
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
+	$(BIN)/python benchmarks/soak.py
 	$(BIN)/python benchmarks/fit.py
 	$(BIN)/python benchmarks/calibration.py
 	$(BIN)/python benchmarks/evaluation.py

@@ -5,10 +5,13 @@ through anchors uniform in Rusinkiewicz's isotropic coordinates, the photometer 
 rigs at a few blur tolerances; against the same readings measured stop-and-go (a move, the rig's
 settle and one 10 ms integration each, in the same order) and against a uniform (Sobol)
 stop-and-go plan of --uniform targets ordered by the planner with the same exposure. The
-coverage column is the total-variation distance between the readings' histogram (8 bins
-a coordinate) and the uniform density over what the rig reaches; "uniform TV" is the
-same figure for a Sobol plan of as many targets (its sampling noise). A second table
-varies the reading rate at a 0.5° blur budget: fewer readings per sweep, more sweeps.
+readings are those the planner keeps of the stream (thinned to the uniform density;
+"streamed" the detector's readings). The coverage column is the total-variation distance
+between the kept readings' histogram (8 bins a coordinate) and the uniform density over
+what the rig reaches; "uniform TV" is the same figure for a Sobol plan of as many
+targets (its sampling noise); "gap" the radius of the largest empty ball (unit box)
+centred on a reachable point, against the Sobol plan's. A second table varies the
+reading rate at a 0.5° blur budget: fewer readings per sweep, more sweeps.
 Predictions of the planner's timing model (gonio.planner.fly), not measured motion.
 
 Run: .venv/bin/python benchmarks/fly_plan.py [--readings 20000] [--uniform 2000]
@@ -85,17 +88,17 @@ def main() -> None:
     print(f"\n## Blur budget ({args.readings:,} readings, 100 Hz, 10 ms each)\n")
     header = (
         "| rig | blur (°) | sweeps | velocity (°/s) | readings | duration (min) | "
-        "readings/h fly | same readings stop-and-go /h | × | uniform stop-and-go /h | × | "
-        "coverage TV | uniform TV |"
+        "streamed | readings/h fly | same readings stop-and-go /h | × | uniform stop-and-go /h "
+        "| × | coverage TV | uniform TV | gap | uniform gap |"
     )
     print(header)
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, rig in rigs.items():
         for blur in BLURS:
             print(row(name, fly_plan(rig, args.readings, blur, 100.0), blur, uniform), flush=True)
     print(f"\n## Reading rate (blur 0.5°, {args.readings:,} readings, 10 ms each)\n")
     print(header.replace("blur (°)", "rate (Hz)"))
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, rig in rigs.items():
         for rate in RATES:
             print(row(name, fly_plan(rig, args.readings, 0.5, rate), rate, uniform), flush=True)
@@ -114,8 +117,9 @@ def row(name: str, plan: Plan, knob: float, uniform: dict[str, float]) -> str:
     )
     return (
         f"| {name} | {knob:g} | {f.segments} | {speeds} | {s.kept:,} | {s.total_s / 60:.1f} | "
-        f"{fly:,.0f} | {same:,.0f} | {fly / same:.1f} | {uniform[name]:,.0f} | "
-        f"{fly / uniform[name]:.1f} | {f.coverage_tv:.3f} | {f.coverage_tv_uniform:.3f} |"
+        f"{f.streamed:,} | {fly:,.0f} | {same:,.0f} | {fly / same:.1f} | {uniform[name]:,.0f} | "
+        f"{fly / uniform[name]:.1f} | {f.coverage_tv:.3f} | {f.coverage_tv_uniform:.3f} | "
+        f"{f.coverage_gap:.3f} | {f.coverage_gap_uniform:.3f} |"
     )
 
 

@@ -41,6 +41,20 @@ Motion (`MotorBus`)
       never raises `MotorFault`.
     * ``positions()`` are read back from the devices (encoders), never the goals.
 
+Recovery (`MotorBus`)
+    * ``health()`` reads each motor's temperature, input voltage, latched hardware
+      error flags and, where the backend measures it, its load, without raising on a
+      motor's alert.
+    * ``recover(axis)`` first holds every answering axis where it is (as ``stop``),
+      then reboots only that axis's motor (clearing its latched Hardware Error Status),
+      restores the configuration ``open`` gave it (operating mode, position limits,
+      profile, torque on) and leaves it holding where it is. It returns `Recovered`:
+      the position (rad) the axis was told to hold just before the reboot and the one
+      read back after it; comparing them is the caller's. A motor whose error is still
+      there after the reboot (its cause persists: heat, load, supply) raises
+      `MotorFault`, one that does not answer again `CommError`, an unknown axis
+      `DriverError`; the other axes are never rebooted.
+
 Sweeps (`MotorBus`, for measuring while moving)
     * ``sweep(targets, velocities, accelerations)`` is ``move_to`` with a velocity
       profile chosen for this move: each named axis runs a trapezoidal profile at its
@@ -187,15 +201,29 @@ MOTION_FAULTS = (MotorFault, MotionTimeout, CommError)
 
 @dataclass(frozen=True)
 class Health:
-    """One motor's condition: temperature (°C), input voltage (V), named error flags."""
+    """One motor's condition: temperature (°C), input voltage (V), named error flags
+    and load (% of the motor's maximum, signed; None where the backend does not
+    measure it)."""
 
     temperature_c: float
     voltage_v: float
     error_flags: tuple[str, ...] = ()
+    load_pct: float | None = None
 
     @property
     def ok(self) -> bool:
         return not self.error_flags
+
+
+@dataclass(frozen=True)
+class Recovered:
+    """What `MotorBus.recover` did to ``axis``: ``held_rad``, the position it was told to
+    hold just before its motor was rebooted, and ``position_rad``, the one read back
+    after (rad)."""
+
+    axis: str
+    held_rad: float
+    position_rad: float
 
 
 @dataclass(frozen=True)
@@ -395,7 +423,13 @@ class MotorBus(Device, Protocol):
         ...
 
     def health(self) -> dict[str, Health]:
-        """Temperature, voltage and error flags per axis."""
+        """Temperature, voltage, error flags and load per axis."""
+        ...
+
+    def recover(self, axis: str) -> Recovered:
+        """Hold every axis, reboot ``axis``'s motor, restore its configuration and hold it;
+        where it was held before and read after (the module docstring). `MotorFault`
+        if its error persists, `CommError` if it does not answer again."""
         ...
 
 

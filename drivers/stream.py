@@ -51,16 +51,22 @@ class StreamReading:
         return 0.5 * (self.started_s + self.ended_s)
 
 
-def restamped(readings: Sequence[StreamReading], latency_s: float = 0.0) -> list[StreamReading]:
+def restamped(
+    readings: Sequence[StreamReading], latency_s: float | None = 0.0
+) -> list[StreamReading]:
     """``readings`` of one stream with their windows stamped again from the device's
     timestamps and the stream's final clock offset: ``ended_s = device_t_s + min(received_s
-    − device_t_s) − latency_s`` (s), each window keeping its length. A stream's live
-    stamps use the offset known when each line arrived, which a host reading late
-    overestimates at first; after the stream this removes that. Readings without a
+    − device_t_s) − latency_s`` (s), each window keeping its length; ``latency_s`` None:
+    the smallest ``received_s − ended_s`` of the live stamps (the latency they assumed,
+    the driver's configured one). A stream's live stamps use the offset known when each
+    line arrived, which a host reading late overestimates at first (and later stamps,
+    kept increasing, inherit); after the stream this removes that. Readings without a
     device timestamp (or an arrival time) are returned as they are."""
     timed = [r for r in readings if r.device_t_s is not None and r.received_s is not None]
     if not timed:
         return list(readings)
+    if latency_s is None:
+        latency_s = max(0.0, min(r.received_s - r.ended_s for r in timed))  # type: ignore[operator]
     offset = min(r.received_s - r.device_t_s for r in timed) - latency_s  # type: ignore[operator]
     out = []
     for r in readings:

@@ -68,7 +68,12 @@ class ScaledClock:
         self._origin = time.monotonic()
 
     def __call__(self) -> float:
-        return (time.monotonic() - self._origin) * self.speedup
+        return self.at(time.monotonic())
+
+    def at(self, monotonic_s: float) -> float:
+        """This clock's time (s) at a `time.monotonic` time: one mapping for every peer
+        that schedules in real time."""
+        return (monotonic_s - self._origin) * self.speedup
 
     def now(self) -> float:
         return self()

@@ -8,9 +8,13 @@ streams, so a resumed run sees exactly the faults an uninterrupted one does):
 - ``motor_fault``: a motor reports a hardware error half-way through the move into the
   sample: that axis stops where it is and keeps reporting ``flags`` (its latched
   Hardware Error Status) until the bus is rebooted; `MotorFault` is raised by
-  ``wait_settled`` after every axis was told to hold;
+  ``wait_settled`` after every axis was told to hold. With the ``overheating`` flag the
+  axis also shows ``temperature_c`` for ``for_s`` seconds (a reboot before it cooled
+  latches the error again); ``shift_deg`` makes its encoder reading jump when its motor
+  is rebooted (what the recovery's position check must catch);
 - ``comm_error``: a status poll fails half-way through the move: every axis is held
-  and ``wait_settled`` raises `CommError`;
+  and ``wait_settled`` raises `CommError`; ``packet`` says how (``lost``: no status
+  packet came; ``corrupt``: one came with a wrong CRC);
 - ``motion_timeout``: an axis is blocked: after the caller's timeout every axis is held
   and ``wait_settled`` raises `MotionTimeout`;
 - ``detector_error``: ``measure`` raises `DetectorError` (nothing is exposed);
@@ -18,10 +22,14 @@ streams, so a resumed run sees exactly the faults an uninterrupted one does):
   saturated;
 - ``overheat``: from the move into the sample on, ``axis`` reports ``temperature_c``
   in its health for ``for_s`` seconds of the run's clock, then cools back (a health
-  check sees it; nothing else changes).
+  check sees it; nothing else changes);
+- ``supply_sag``: from the move into the sample on, every axis (they share the supply)
+  reports ``voltage_v`` in its health for ``for_s`` seconds of the run's clock, then
+  the supply recovers.
 
-A rule fires on the first attempt at a sample only (the first move into it, or its first
-measurement): a retried sample succeeds, as after a transient fault on hardware.
+A rule fires on the first ``burst`` attempts at a sample (default 1: the first move into
+it, or its first measurement): a sample retried past the burst succeeds, as after a
+transient fault on hardware; a burst longer than the plan's retries skips the sample.
 """
 
 from __future__ import annotations
@@ -36,10 +44,16 @@ from gonio.config_schema import InSchema
 from sim.physics.streams import FAULT, Streams
 
 FaultKind = Literal[
-    "motor_fault", "comm_error", "motion_timeout", "detector_error", "saturated", "overheat"
+    "motor_fault",
+    "comm_error",
+    "motion_timeout",
+    "detector_error",
+    "saturated",
+    "overheat",
+    "supply_sag",
 ]
 #: The kinds the motor bus raises or shows; the others belong to the detector.
-MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout", "overheat"})
+MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout", "overheat", "supply_sag"})
 #: Hardware Error Status flags a motor_fault may name (`drivers.dynamixel.control_table`).
 MOTOR_FLAGS = frozenset(
     {"input_voltage", "overheating", "motor_encoder", "electrical_shock", "overload"}
@@ -66,10 +80,36 @@ class FaultRule(Strict):
         json_schema_extra={"minItems": 1},
     )
     temperature_c: float = Field(
-        80.0, gt=-50, lt=200, description="overheat: the temperature the axis shows (°C)."
+        80.0,
+        gt=-50,
+        lt=200,
+        description="overheat, and a motor_fault with the overheating flag: the temperature "
+        "the axis shows (°C).",
     )
     for_s: float = Field(
-        60.0, gt=0, description="overheat: how long, in seconds of the run's clock (s)."
+        60.0,
+        gt=0,
+        description="overheat, supply_sag, and a motor_fault with the overheating flag: how "
+        "long the axis stays hot or the supply low, in seconds of the run's clock (s).",
+    )
+    shift_deg: float = Field(
+        0.0,
+        description="motor_fault: how far the axis's encoder reading jumps when its motor is "
+        "rebooted (°; a multi-turn motor that lost its turn count), 0: not at all.",
+    )
+    voltage_v: float = Field(
+        9.0, ge=0, lt=100, description="supply_sag: the supply voltage every axis shows (V)."
+    )
+    packet: Literal["lost", "corrupt"] = Field(
+        "lost",
+        description="comm_error: the status packet is lost, or arrives with a wrong CRC.",
+    )
+    burst: int = Field(
+        1,
+        ge=1,
+        le=1000,
+        description="The attempts at its sample it strikes in a row (a burst longer than "
+        "the plan's retries skips the sample).",
     )
 
     @field_validator(
@@ -94,6 +134,8 @@ class FaultRule(Strict):
             raise field_error(
                 "flags", f"expected some of {', '.join(sorted(MOTOR_FLAGS))}, got {bad or '[]'}"
             )
+        if self.kind != "motor_fault" and self.shift_deg:
+            raise field_error("shift_deg", f"only a motor_fault shifts, not a {self.kind}")
         if self.kind not in ("motor_fault", "overheat") and self.axis is not None:
             raise field_error(
                 "axis", f"only a motor_fault or an overheat names an axis, not a {self.kind}"
@@ -115,11 +157,12 @@ class FaultInjector:
 
     def fired(self, index: int, attempt: int, kinds: frozenset[str]) -> FaultRule | None:
         """The first rule of ``kinds`` that fires at ``attempt`` (0 = first) of sample
-        ``index``, or None."""
-        if attempt != 0:
+        ``index``, or None (a rule fires at the first ``burst`` attempts; a negative
+        attempt never)."""
+        if attempt < 0:
             return None
         for k, (rule, at) in enumerate(zip(self.rules, self._at, strict=True)):
-            if rule.kind not in kinds:
+            if rule.kind not in kinds or attempt >= rule.burst:
                 continue
             if at is not None:
                 if index in at:

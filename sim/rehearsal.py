@@ -28,6 +28,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from drivers.base import StageTarget
 from drivers.dynamixel.axis import AxisConfig
 from gonio.config import ConfigError
@@ -44,6 +46,7 @@ from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
 from sim.visa_instruments.sr830 import SR830
 
 Pose = Callable[[], dict[str, float]]
+PoseAt = Callable[[float], dict[str, float]]
 
 
 def emulated_pose(emulator: DxlEmulator, axes: list[AxisConfig]) -> Pose:
@@ -55,6 +58,18 @@ def emulated_pose(emulator: DxlEmulator, axes: list[AxisConfig]) -> Pose:
         return {a.name: a.to_rad(motors[a.motor_id].get("present_position")) for a in axes}
 
     return pose
+
+
+def emulated_trajectory(emulator: DxlEmulator, axes: list[AxisConfig]) -> PoseAt:
+    """The axis angles (rad, unrounded) the emulated motors are at at a time on the
+    emulator's clock, along their present motion profiles (`EmulatedMotor.position_at`:
+    valid from each motor's last goal on): the truth of a sweep in time."""
+
+    def pose_at(t: float) -> dict[str, float]:
+        motors = emulator.motors
+        return {a.name: a.to_rad(motors[a.motor_id].position_at(t)) for a in axes}  # type: ignore[arg-type]
+
+    return pose_at
 
 
 @dataclass(frozen=True)
@@ -73,10 +88,23 @@ class RehearsalSide:
     uses and what is on the stage; the true joint angles are ``pose()``'s (the emulated
     motors'). A rehearsal resumes as hardware does, with no snapshot."""
 
-    def __init__(self, physics: SimDetector, pose: Pose, peers: Peers | None = None) -> None:
+    def __init__(
+        self,
+        physics: SimDetector,
+        pose: Pose,
+        peers: Peers | None = None,
+        pose_at: PoseAt | None = None,
+    ) -> None:
         self.physics = physics
         self.pose = pose
         self.peers = peers
+        self._pose_at = pose_at
+
+    def true_pose_at(self, t: float) -> dict[str, float]:
+        """The joint angles (rad) the emulated motors were at at time ``t`` on the
+        rehearsal's clock, along their present motion profiles (read-only; the truth a
+        test compares a sweep's merged angles with). Without a trajectory: now's."""
+        return self.pose() if self._pose_at is None else self._pose_at(t)
 
     def begin_sample(self, index: int) -> None:
         self.physics.begin_sample(index)
@@ -141,11 +169,21 @@ def photometer_for(rig: Rig, physics: SimDetector, clock: ScaledClock) -> Serial
         counts, _ = physics.expose(exposure_s, 1, clock.now())
         return float(counts[0, 0])
 
+    def windows(starts: list[float], ends: list[float]) -> tuple[list[float], list[bool]]:
+        """A stream's windows (`time.monotonic` s) on the rehearsal's clock, read in one
+        call at the poses the motors' profiles had then (`SimDetector.window_counts`)."""
+        started = np.array([clock.at(t) for t in starts])
+        ended = np.array([clock.at(t) for t in ends])
+        integration = float(np.median(ended - started))
+        counts, saturated = physics.window_counts(started, ended, integration)
+        return counts.tolist(), saturated.tolist()
+
     return SerialPhotometer(
         signal,
         full_scale=physics.sensor.max_count if physics.sensor_effects.saturation else None,
         reset_on_open=config.reset_banner is not None and config.settle_s > 0,
         speedup=clock.speedup,
+        windows=windows if physics.pose_at is not None else None,
     )
 
 

@@ -18,7 +18,9 @@ back in one SYNC_READ, whose status packets also carry each motor's alert bit. S
   propagates, so code that catches it inside the ``with`` block leaves no arm running;
 - with torque off `move_to` raises `TorqueOff`; on a closed bus every call but `close`
   raises `DeviceClosed` (the contract in `drivers.base`);
-- `reboot` clears faulted motors and brings them back holding, configured.
+- `reboot` clears faulted motors and brings them back holding, configured as `open`
+  configured them; `recover` does so for one axis while the others hold, and says
+  where it was held before and where it reads after.
 
 Sweeps (measuring while moving): `sweep` writes the axes' Profile Acceleration and
 Profile Velocity for that move, then the goals (three SYNC_WRITEs; the limits and the
@@ -77,8 +79,8 @@ class DynamixelBus(Condition, Resource):
     (in motor ticks) an axis must be to its goal to count as settled; ``configure``
     writes operating mode, drive mode, position limits and profiles on open;
     ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again;
-    ``clock`` stamps `poll_positions` (default the host's monotonic clock; a rehearsal
-    passes its run's clock).
+    ``clock`` stamps `poll_positions` and paces `wait_settled`'s polls (default the
+    host's monotonic clock; a rehearsal passes its run's scaled clock, the motion's).
     """
 
     def __init__(
@@ -212,11 +214,15 @@ class DynamixelBus(Condition, Resource):
                 exc.add_note(f"and holding the axes: {problem}")
             raise
 
-    def _configure(self) -> None:
+    def _configure(self, motor_ids: Sequence[int] | None = None) -> None:
         """EEPROM first (read; torque off, read back off and write only where it differs),
-        then the RAM profiles."""
+        then the RAM profiles, of every motor (or those of ``motor_ids``: a reboot's)."""
         link = self._link
-        ids = {a.motor_id: a for a in self._axes.values()}
+        ids = {
+            a.motor_id: a
+            for a in self._axes.values()
+            if motor_ids is None or a.motor_id in motor_ids
+        }
         changes: dict[int, dict[str, int]] = {}
         for motor_id, axis in ids.items():
             wanted = {"operating_mode": axis.operating_mode, "drive_mode": 0}
@@ -417,7 +423,7 @@ class DynamixelBus(Condition, Resource):
                 raise MotionTimeout(
                     f"axes did not settle within {timeout_s:g} s ({detail}); holding them"
                 )
-            time.sleep(self.poll_interval_s)
+            self.clock.sleep(self.poll_interval_s)  # the motion's time: a rehearsal's scaled
 
     def stop(self) -> None:
         """Hold every axis that answers at its present position (clamped to its limits).

@@ -1,6 +1,7 @@
-"""A Dynamixel bus's condition and recovery (`DynamixelBus`'s `health`, `check` and
-`reboot`): the motors' temperatures, supply voltage and Hardware Error Status, and
-rebooting the motors that report an error."""
+"""A Dynamixel bus's condition and recovery (`DynamixelBus`'s `health`, `check`,
+`reboot` and `recover`): the motors' temperatures, supply voltage, load and Hardware
+Error Status, and rebooting the motors that report an error back into the
+configuration the bus gave them when it opened."""
 
 from __future__ import annotations
 
@@ -8,13 +9,17 @@ import time
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
-from drivers.base import CommError, DriverError, Health, MotorFault
+from drivers.base import CommError, DriverError, Health, MotorFault, Recovered
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import VOLT_PER_UNIT, decode_hardware_error, item
 from drivers.dynamixel.link import DynamixelLink
 
+_CURRENT = item("present_current")
 _VOLTAGE = item("present_input_voltage")
 _TEMPERATURE = item("present_temperature")
+_PRESENT = item("present_position")
+#: The load a motor reports is its Present Current over the largest Current Limit (%).
+_FULL_LOAD = float(item("current_limit").high or 1)
 
 
 class Condition:
@@ -22,7 +27,9 @@ class Condition:
 
     _link: DynamixelLink
     _axes: dict[str, AxisConfig]
+    _goals: dict[str, int]
     _swept: set[int]
+    configure: bool
     poll_interval_s: float
     reboot_timeout_s: float
 
@@ -32,6 +39,8 @@ class Condition:
 
         def _axis(self, name: str) -> AxisConfig: ...
 
+        def _configure(self, motor_ids: Sequence[int] | None = None) -> None: ...
+
         def _write_profiles(self, motor_ids: Sequence[int]) -> None: ...
 
         def _hold(self, names: Sequence[str]) -> None: ...
@@ -39,9 +48,10 @@ class Condition:
     # -- recovery ----------------------------------------------------------------------
     def reboot(self, axes: Iterable[str] | None = None) -> tuple[str, ...]:
         """Reboot the motors reporting a hardware error (or those of ``axes``), wait for
-        them to answer again, restore their RAM configuration (profile velocity and
-        acceleration; EEPROM survives a reboot) and leave them holding where they are
-        with torque on. Returns the axes rebooted.
+        them to answer again, restore the configuration `open` gave them (operating
+        mode, drive mode and position limits where they differ, the profile; with
+        ``configure`` off only the profile) and leave them holding where they are with
+        torque on. Returns the axes rebooted.
 
         A motor whose error is still there after the reboot raises `MotorFault` (remove
         the cause first: load, heat, supply). In extended position mode a reboot loses
@@ -74,7 +84,10 @@ class Condition:
                     time.sleep(self.poll_interval_s)
             if link.hardware_error(motor_id):
                 raise link.fault(motor_id)
-        self._write_profiles(motor_ids)
+        if self.configure:  # as `open` did: the same code
+            self._configure(motor_ids)
+        else:
+            self._write_profiles(motor_ids)
         self._swept.difference_update(motor_ids)
         self._hold(names)
         link.sync_write("torque_enable", dict.fromkeys(motor_ids, 1))
@@ -83,21 +96,38 @@ class Condition:
                 raise DriverError(f"{link.who(motor_id)} did not turn its torque back on")
         return tuple(names)
 
+    def recover(self, axis: str) -> Recovered:
+        """Hold every axis where it is, reboot ``axis``'s motor back into its configuration
+        (`reboot`) and read its position again: the position (rad) it was told to hold
+        just before the reboot and the one it reads after. `MotorFault` if its error
+        is still there after the reboot, `CommError` if it does not answer again."""
+        self._check_open()
+        config = self._axis(axis)
+        self._hold(list(self._axes))  # every other axis too (the faulted one's goal: here)
+        held = self._goals[config.name]
+        self.reboot((config.name,))
+        present = self._link.read(config.motor_id, _PRESENT.name)
+        return Recovered(config.name, config.to_rad(held), config.to_rad(present))
+
     # -- condition ---------------------------------------------------------------------
     def health(self) -> dict[str, Health]:
-        """Temperature (°C), input voltage (V) and hardware error flags per axis."""
+        """Temperature (°C), input voltage (V), hardware error flags and load (% of the
+        largest Current Limit, signed) per axis; a motor's alert does not raise."""
         self._check_open()
         ids = [a.motor_id for a in self._axes.values()]
         status = "hardware_error_status"
         errors = self._link.sync_read(ids, status, status, alerts=False)
-        raw = self._link.sync_read(ids, _VOLTAGE.name, _TEMPERATURE.name, alerts=False)
+        raw = self._link.sync_read(ids, _CURRENT.name, _TEMPERATURE.name, alerts=False)
+        volts = _VOLTAGE.address - _CURRENT.address
+        temperature = _TEMPERATURE.address - _CURRENT.address
         out = {}
         for name, axis in self._axes.items():
             data = raw[axis.motor_id]
             out[name] = Health(
-                temperature_c=float(data[2]),
-                voltage_v=_VOLTAGE.decode(data[:2]) * VOLT_PER_UNIT,
+                temperature_c=float(data[temperature]),
+                voltage_v=_VOLTAGE.decode(data[volts : volts + _VOLTAGE.size]) * VOLT_PER_UNIT,
                 error_flags=decode_hardware_error(errors[axis.motor_id][0]),
+                load_pct=100.0 * _CURRENT.decode(data[: _CURRENT.size]) / _FULL_LOAD,
             )
         return out
 

@@ -48,7 +48,10 @@ class SerialStreamConfig:
     detector's ``saturated_status``) and ``saturated``. ``latency_s`` is the delay from
     a window's end to its line's arrival that the host subtracts when the device sends
     no timestamp. ``max_rate_hz`` is the highest rate the instrument streams at;
-    ``rate_hz`` the rate used when none is asked.
+    ``rate_hz`` the rate used when none is asked. ``starts_on_command``: the device
+    begins its first window when the start command arrives, so the host stamps the
+    windows from the time it sent it (a bound the command's delivery keeps tight)
+    rather than from the lines' arrival (which a late reader loosens).
     """
 
     start: str = "STREAM {rate_hz:g} {integration_ms:d}"
@@ -58,6 +61,7 @@ class SerialStreamConfig:
     max_rate_hz: float = 1000.0
     device_time_s: float = 1e-3
     latency_s: float = 0.0
+    starts_on_command: bool = False
 
     def check(self, bad: Callable[[str], Exception]) -> None:
         """Raise ``bad(message)`` (a message starting ``stream.<field>``) for a bad field."""

@@ -10,7 +10,10 @@ one read share that time, ``received_s``). A window's end on the host clock is
   ``received − device_t`` seen so far in this stream minus ``latency_s`` (the
   fastest line bounds the latency from above, so the offset converges in a few lines);
 * without: ``received − latency_s``, the earlier lines of a read spaced one period
-  apart before the last.
+  apart before the last;
+* with ``starts_on_command`` (the device's first window begins when the start command
+  arrives): at most ``sent + period + (device_t − the first line's device_t)``, ``sent``
+  the host clock just before the command left.
 
 Then ``ended_s`` is raised, if needed, to the previous window's end plus the
 integration, so stamps increase and windows never overlap; ``started_s = ended_s −
@@ -56,6 +59,11 @@ class _Stream:
     malformed: list[_Line] = field(default_factory=list)
     pending: deque[tuple[_Line, float]] = field(default_factory=deque)
     lines: int = 0  # data lines received: the clock of a device that sends no time
+    sent_s: float = math.nan  # host clock just before the start command was sent
+    start_offset_s: float = math.nan  # sent_s + period − the first line's device clock
+    begun: bool = False  # a data line or the start's acknowledgement came
+    stopping: bool = False  # ``stop`` was sent
+    stopped: bool = False  # ``stop`` was acknowledged (after every data line)
 
     @property
     def period_s(self) -> float:
@@ -150,12 +158,13 @@ class _Streaming:
             self.open()
         try:
             self._ready()
+            sent = self._clock.now()
             self._send(command)
         except BaseException:
             self._needs_resync = self._serial is not None
             raise
         stall = self._config.timeout_s + 2.0 / rate
-        self._stream = _Stream(rate, integration, command, time.monotonic(), stall)
+        self._stream = _Stream(rate, integration, command, time.monotonic(), stall, sent_s=sent)
 
     def _stream_arguments(
         self, cfg: SerialStreamConfig, rate_hz: float | None, integration_s: float | None
@@ -262,11 +271,13 @@ class _Streaming:
             self._check_unsolicited(line, stream.start)
             match = None if line.overflow else self._stream_line.fullmatch(line.text)
             if match is None:
-                if not line.overflow and (
-                    line.text in (stream.start.strip(), cfg.stop.strip())
-                    or (self._ack is not None and self._ack.search(line.text))
-                ):
-                    continue  # an echo or an acknowledgement
+                if not line.overflow and self._ack is not None and self._ack.search(line.text):
+                    # the start's acknowledgement, or once stopping (and begun) the stop's
+                    stream.stopped = stream.stopping and stream.begun
+                    stream.begun = True
+                    continue
+                if not line.overflow and line.text in (stream.start.strip(), cfg.stop.strip()):
+                    continue  # an echo
                 stream.malformed.append(line)
                 if len(stream.malformed) > self._config.retries:
                     raise self._error(
@@ -277,6 +288,7 @@ class _Streaming:
                     )
                 continue
             stream.malformed.clear()
+            stream.begun = True
             value = self._finite(match, "value", line)
             groups = match.groupdict()
             std = math.nan if groups.get("std") is None else self._finite(match, "std", line)
@@ -286,12 +298,16 @@ class _Streaming:
                 clock = device_t
             else:  # the device's clock is its line count: it streams at a steady rate
                 clock = stream.lines * stream.period_s
+            if not stream.lines:  # the first window began when the command arrived
+                stream.start_offset_s = stream.sent_s + stream.period_s - clock
             stream.lines += 1
             stream.offset_s = min(stream.offset_s, received - clock)
             parsed.append((value, std, self._saturated(value, match), device_t, received, clock))
         readings = []
         for value, std, saturated, device_t, received, clock in parsed:
             end = clock + stream.offset_s - cfg.latency_s
+            if cfg.starts_on_command:  # the tighter bound (never past the arrival's)
+                end = min(end, clock + stream.start_offset_s)
             end = max(end, stream.prev_ended + stream.integration_s)
             stream.prev_ended = end
             readings.append(
@@ -325,10 +341,12 @@ class _Streaming:
 
     def stop_stream(self) -> list[StreamReading]:
         """Stop the stream (idempotent; nothing is sent when none runs) and return the
-        readings that arrived until the device went quiet: at least ``max(3 periods,
-        50 ms)`` without a line, waited at most ``3 × timeout_s``. The device is then
-        idle and ``measure`` works; a device still streaming after that raises
-        (``timeout``) and the next call first waits for quiet."""
+        readings that arrived until the device acknowledged ``stop`` (with a
+        ``command_ack``: the device sends it after its last line) or, without one, went
+        quiet: at least ``max(3 periods, 50 ms)`` without a line; waited at most ``3 ×
+        timeout_s``. The device is then idle and ``measure`` works; a device still
+        streaming after that raises (``timeout``) and the next call first waits for
+        quiet."""
         stream = self._stream
         if stream is None or self._serial is None:
             self._stream = None
@@ -339,9 +357,13 @@ class _Streaming:
             readings += self._parse_pending(stream)
         try:
             self._send(cfg.stop)
+            stream.stopping = True
             quiet = max(3 * stream.period_s, _QUIET_MIN_S)
             start = time.monotonic()
             give_up = start + 3 * self._config.timeout_s
+            if self._ack is not None:
+                readings += self._until_acknowledged(stream, give_up)
+                return readings
             quiet_until = start + quiet
             while time.monotonic() < quiet_until:
                 if time.monotonic() > give_up:
@@ -360,6 +382,24 @@ class _Streaming:
         finally:
             self._stream = None
             self._clear_input_state()
+        return readings
+
+    def _until_acknowledged(self, stream: _Stream, give_up: float) -> list[StreamReading]:
+        """The readings that arrive until ``stop``'s acknowledgement (by ``give_up``,
+        monotonic s, else ``timeout``, the next call waiting for quiet first)."""
+        readings: list[StreamReading] = []
+        while not stream.stopped:
+            if time.monotonic() > give_up:
+                self._needs_resync = True
+                cfg = self._stream_config()
+                raise self._error(
+                    f"the device did not acknowledge {cfg.stop!r} within "
+                    f"{3 * self._config.timeout_s:.3g} s",
+                    "timeout",
+                )
+            self._pump(stream, block=True)
+            with contextlib.suppress(SerialDetectorError):  # a bad last line does not matter
+                readings += self._parse_pending(stream)
         return readings
 
     def _quiet_stream(self) -> None:

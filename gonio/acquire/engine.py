@@ -13,10 +13,13 @@ from target to target, and rebuilds from the journal when a run resumes, is its
 `gonio.acquire.state.RunState`.
 
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
-is retried, then the target skipped (journaled) or the run aborted; a `MotorFault` or
+is retried (in a calibration too), then the target skipped (journaled) or the run
+aborted (a calibration's last attempt ends the run resumable); a `MotorFault` or
 `MotionTimeout` stops every axis, is journaled with the motor's flags, and ends the run
-resumable. A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at
-once (`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
+resumable, unless the plan's ``on_fault.motor`` recovers the motor
+(`gonio.acquire.recovery`: the target or calibration in flight is then done again).
+A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at once
+(`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
 resumable: `gonio acquire --resume` measures exactly the targets still missing.
 
 Times: each journaled time is *run time* (`RunTime`): the simulated backend's virtual
@@ -50,12 +53,13 @@ from drivers.stream import StreamReading
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.reference import Stage, read_standard
 from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
-from gonio.acquire.sweep import RawSweep, angular_sigma, merge, poll_arrays, run_sweep
+from gonio.acquire.sweep import RawSweep, derive, run_sweep
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
@@ -122,6 +126,7 @@ class Engine:
     _current: int | None = field(init=False, default=None)  # the target in flight
     _limits: dict[str, tuple[float, float]] | None = field(init=False, default=None)
     _watch: ReadingWatch = field(init=False)  # range changes and phase drift to journal
+    _recovery: MotorRecovery = field(init=False)  # the plan's on_fault.motor
 
     def __post_init__(self) -> None:
         self.spec = self.plan.spec.acquisition
@@ -132,6 +137,10 @@ class Engine:
         self._report = Report("completed", 0, 0)
         self.stops.remaining_s = lambda: self._busy_until - self.time.now()
         self._watch = ReadingWatch.of(self.devices.detector, self.time.offset, self.history)
+        self._recovery = MotorRecovery.of(
+            self.spec.on_fault.motor, self.devices, self.rig, self.spec.health.poll_s,
+            self._event, self.history, self.stops.raise_if_requested,
+        )  # fmt: skip
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -234,11 +243,14 @@ class Engine:
             began = self.time.now()
             # About the sweep's length (its readings; a move, settle and ramps besides):
             # a first Ctrl-C lets a short sweep finish, abandons a long one.
-            self._busy_until = began + count * sweeps.period_s + 2.0
+            self._busy_until = began + int(sweeps.streamed[k]) * sweeps.period_s + 2.0
             try:
-                raw = run_sweep(
-                    self.devices, self.axes, sweeps, k,
-                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                raw = self._recovery.attempt(
+                    lambda: run_sweep(
+                        self.devices, self.axes, sweeps, k,
+                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                    ),
+                    target=first,
                 )  # fmt: skip
                 break
             except DriverError as exc:
@@ -269,18 +281,16 @@ class Engine:
         sweeps = self.plan.sweeps
         assert sweeps is not None
         offset = self.time.offset
-        request, reply, positions = poll_arrays(raw.polls, self.axes)
-        started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
-        ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
-        merged = merge(request, reply, positions, started, ended, sweeps, k)
-        counts = np.array([raw.readings[r].value for r in merged.index.tolist()])
-        extra = angular_sigma(counts, merged.angles, merged.smear, merged.timing)
+        d = derive(raw, self.axes, sweeps, self.plan.arrival_s, k)
+        merged, extra = d.samples, d.extra
+        request, reply, positions = d.request, d.reply, d.positions
         first, count = int(sweeps.first[k]), int(sweeps.count[k])
         state = self._sim()
-        last = int(np.argmax(ended[merged.index])) if len(merged.index) else -1
+        last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
         data = {
             "first": first, "count": count, "readings": len(raw.readings),
-            "kept": len(merged.index), "polls": len(raw.polls), "attempts": attempts,
+            "matched": len(d.matched.index), "kept": len(merged.index), "polls": len(raw.polls),
+            "attempts": attempts,
         }  # fmt: skip
         polls = [
             (a + offset, b + offset, p)
@@ -432,9 +442,12 @@ class Engine:
         for attempt in range(on_fault.retries + 1):
             self._busy_until = self.time.now() + float(plan.travel_s[i]) + exposure * averages
             try:
-                measured = measure_target(
-                    self.devices, i, goal, exposure, averages,
-                    settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                measured = self._recovery.attempt(
+                    lambda: measure_target(
+                        self.devices, i, goal, exposure, averages,
+                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                    ),
+                    target=i,
                 )  # fmt: skip
                 break
             except LimitError as exc:
@@ -566,7 +579,7 @@ class Engine:
         self._event("health", {**found.data(self.state.count), **self._sim()})
         self.state.health_due.done(self.state.count, self.time.now())
         self.state.temperatures = dumps(found.temperatures_c)
-        if found.flags:
+        if found.flags and not self._recovery.flagged(found.flags):
             axis, flags = next(iter(found.flags.items()))
             raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
         return found.problems
@@ -583,10 +596,25 @@ class Engine:
         if exposure is None:
             shortest, longest = self.devices.detector.exposure_range_s
             exposure = float(np.clip(np.median(self.plan.exposure_s), shortest, longest))
-        read = read_standard(
-            self.devices, self.stage, self.rig, calibrations.k, exposure, spec.averages,
-            dark=spec.dark and not subtracted, timeout_s=self.move_timeout_s,
-        )  # fmt: skip
+        retries = self.spec.on_fault.retries
+        for attempt in range(retries + 1):
+            try:
+                read = self._recovery.attempt(
+                    lambda: read_standard(
+                        self.devices, self.stage, self.rig, calibrations.k, exposure,
+                        spec.averages, dark=spec.dark and not subtracted,
+                        timeout_s=self.move_timeout_s,
+                    )
+                )  # fmt: skip
+                break
+            except (CommError, DetectorError) as exc:
+                # A transient fault in a calibration is retried as in a target; after the
+                # last attempt it ends the session resumable (a calibration is not skipped).
+                if attempt == retries:
+                    raise
+                self._hold_all()
+                failed = {**self._fault_data(exc), "attempt": attempt + 1, "calibration": why}
+                self._event("retry", {**failed, **self._sim()})
         back = [read.reference.read_back[a] for a in self.axes]
         reference = self._reading_data(read.reference.reading, read.exposure_s)
         wi, wo = self.rig.forward(np.array(back))

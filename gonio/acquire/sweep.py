@@ -9,11 +9,23 @@ the stamped polls and the stamped readings.
 `merge`: each reading's joint angles are the polled positions interpolated (linearly,
 per axis, on each poll's mid-time) at the middle of its integration window; its smear is
 the joint-space path covered during the window (rad); its timing uncertainty is the
-stamps' jitter (a poll's request-to-reply span / √12, the positions being sampled
-somewhere in it) × the angular speed there (rad). Only readings whose whole window lies
-inside the constant-velocity part (the swept axis between the entry and exit poses) are
-kept; each is matched to the plan's reading (target) whose planned mid-pose is nearest
-along the swept axis, one reading per target.
+stamps' jitter (the request-to-reply spans of the two polls interpolated, weighted as
+they are, `interpolated_span`, / √12: the positions are sampled somewhere in them; and
+the readings' stamp slack / √12, `stamp_slack`, in quadrature) × the angular speed
+there (rad); polls slower than `SLOW_POLL` × the median are left out. The readings are
+first stamped again with the stream's final clock offset (`drivers.stream.restamped`,
+the latency the live stamps assumed).
+Only readings whose whole window lies inside the constant-velocity part (the swept axis
+between the entry and exit poses) and between two polls (`bracketed`) are matched, each
+to a stream slot j (the j-th reading streamed at constant velocity, planned mid-pose
+entry + v (j period + integration / 2)). The readings are consecutive windows
+(`window_numbers`: from the device's timestamps, else their order), so one shift maps
+them all to slots: the median, over the readings inside, of the window number less the
+slot their position along the swept axis gives (robust to the scatter of each position;
+a velocity off the plan's shows as read-back angles drifting from the targets' along the
+sweep). The plan's targets are the slots its coverage thinning kept (`target_slots`); a
+matched reading in a slot that is no target stays in the journal's raw ``stream`` table
+only: the sweep's samples are exactly the plan's targets read.
 """
 
 from __future__ import annotations
@@ -24,9 +36,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.base import Devices, StampedPositions
-from drivers.stream import StreamReading, streaming
+from drivers.stream import StreamReading, restamped, streaming
 from gonio.planner.model import Sweeps
 from gonio.types import FloatArray
+
+#: A poll whose request-to-reply span exceeds this many times the sweep's median is not
+#: interpolated (when it happened within the span is too loosely known).
+SLOW_POLL = 3.0
 
 
 @dataclass(frozen=True)
@@ -41,15 +57,35 @@ class RawSweep:
 
 @dataclass(frozen=True)
 class Merged:
-    """The kept readings of a sweep: ``index`` into the raw readings, ``target`` the
-    plan's target each stands for, ``angles`` (K, A) rad at mid-window, ``smear`` and
-    ``timing`` (K,) rad."""
+    """The matched readings of a sweep, in stream order: ``index`` into the raw
+    readings, ``slot`` the stream slot each fills, ``target`` the plan's target it
+    stands for (−1: a slot the plan thinned out), ``angles`` (K, A) rad at mid-window,
+    ``smear`` and ``timing`` (K,) rad."""
 
     index: np.ndarray
+    slot: np.ndarray
     target: np.ndarray
     angles: FloatArray
     smear: FloatArray
     timing: FloatArray
+
+    def targets(self) -> Merged:
+        """Only the readings that stand for a plan's target (the sweep's samples)."""
+        keep = self.target >= 0
+        return Merged(
+            self.index[keep], self.slot[keep], self.target[keep], self.angles[keep],
+            self.smear[keep], self.timing[keep],
+        )  # fmt: skip
+
+
+def target_slots(sweeps: Sweeps, arrival_s: FloatArray, k: int) -> np.ndarray:
+    """The stream slots (K,) int64 of sweep ``k``'s targets, in target order: target i's
+    is round((arrival_s[i] − cruise_at_s[k]) / period_s), ``arrival_s`` the plan's
+    (`Plan.arrival_s`, each target's planned integration start)."""
+    first, count = int(sweeps.first[k]), int(sweeps.count[k])
+    since = np.asarray(arrival_s[first : first + count], dtype=np.float64)
+    since = since - float(sweeps.cruise_at_s[k])
+    return np.rint(since / sweeps.period_s).astype(np.int64)
 
 
 def run_sweep(
@@ -87,7 +123,7 @@ def run_sweep(
     finally:
         readings += detector.stop_stream()
     bus.wait_settled(timeout_s)
-    return RawSweep(polls, readings, started, clock.now())
+    return RawSweep(polls, restamped(readings, None), started, clock.now())
 
 
 def poll_arrays(polls: list[StampedPositions], axes: tuple[str, ...]) -> tuple[FloatArray, ...]:
@@ -106,12 +142,23 @@ def merge(
     ended: FloatArray,
     sweeps: Sweeps,
     k: int,
+    slots: np.ndarray | None = None,
+    slack_s: float = 0.0,
+    window: np.ndarray | None = None,
 ) -> Merged:
     """Merge a sweep's polls (request, reply (P,) s; positions (P, A) rad) with its
-    readings' windows (started, ended (R,) s) (see the module docstring)."""
-    t = 0.5 * (request + reply)
+    readings' windows (started, ended (R,) s) (see the module docstring); ``slots``:
+    the stream slots of the sweep's targets (`target_slots`; None: the first ``count``
+    slots, a plan streaming its targets only); ``slack_s`` the readings' stamp slack
+    (`stamp_slack`), whose /√12 adds to the timing jitter in quadrature; ``window`` the
+    readings' window numbers (`window_numbers`; None: their order)."""
+    spans = reply - request
+    steady = spans <= SLOW_POLL * float(np.median(spans)) if len(spans) else spans > 0
+    if steady.sum() < 2:
+        steady = np.ones(len(spans), dtype=np.bool_)
+    t = 0.5 * (request + reply)[steady]
     order = np.argsort(t, kind="stable")
-    t, positions = t[order], positions[order]
+    t, positions, spans = t[order], positions[steady][order], spans[steady][order]
     middle = 0.5 * (started + ended)
 
     def at(times: FloatArray) -> FloatArray:
@@ -122,34 +169,117 @@ def merge(
     smear = np.linalg.norm(last - first, axis=1)
     span = ended - started
     speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
-    jitter = float(np.median(reply - request)) / math.sqrt(12.0) if len(t) else 0.0
-    timing = jitter * speed
+    timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
     j = int(np.argmax(np.abs(sweeps.velocity[k])))
     lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
     inside = (np.minimum(first[:, j], last[:, j]) >= lo - 1e-12) & (
         np.maximum(first[:, j], last[:, j]) <= hi + 1e-12
     )
+    inside &= bracketed(t, positions[:, j], lo, hi, started, ended)
     v = abs(float(sweeps.velocity[k, j]))
     along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
-    slot = np.rint((along - 0.5 * sweeps.integration_s) / sweeps.period_s).astype(np.int64)
-    count = int(sweeps.count[k])
-    inside &= (slot >= 0) & (slot < count)
-    error = np.abs(along - 0.5 * sweeps.integration_s - slot * sweeps.period_s)
-    index = []
-    best: dict[int, int] = {}
-    for r in np.flatnonzero(inside).tolist():
-        s = int(slot[r])
-        if s not in best or error[r] < error[best[s]]:
-            best[s] = r
-    index = sorted(best.values())
-    kept = np.array(index, dtype=np.int64)
-    return Merged(
-        kept,
-        int(sweeps.first[k]) + slot[kept],
-        angles[kept],
-        smear[kept],
-        timing[kept],
+    estimate = (along - 0.5 * sweeps.integration_s) / sweeps.period_s  # slot by position
+    numbers = np.arange(len(ended)) if window is None else np.asarray(window, dtype=np.int64)
+    shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
+    slot = (numbers - shift).astype(np.int64)
+    inside &= (slot >= 0) & (slot < int(sweeps.streamed[k]))
+    _, first_of = np.unique(slot[inside], return_index=True)  # one reading a slot
+    index = np.flatnonzero(inside)[np.sort(first_of)].astype(np.int64)
+    if slots is None:
+        slots = np.arange(int(sweeps.count[k]), dtype=np.int64)
+    owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
+    target = np.array(
+        [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
+        dtype=np.int64,
     )
+    return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
+
+
+def bracketed(
+    t: FloatArray, swept: FloatArray, lo: float, hi: float, started: FloatArray, ended: FloatArray
+) -> np.ndarray:
+    """Whether each window [started, ended] lies between two polls (mid-times ``t``,
+    sorted; never extrapolated) that either are both inside the constant-velocity part
+    (``swept`` positions within [lo, hi]: linear motion between them) or are no further
+    apart than twice the median poll interval (a ramp's curvature negligible)."""
+    if len(t) < 2:
+        return np.zeros(len(started), dtype=np.bool_)
+    a = np.searchsorted(t, started, side="right") - 1
+    b = np.searchsorted(t, ended, side="left")
+    ok = (a >= 0) & (b < len(t))
+    a, b = np.clip(a, 0, len(t) - 1), np.clip(b, 0, len(t) - 1)
+    cruising = (swept >= lo - 1e-9) & (swept <= hi + 1e-9)
+    close = (t[b] - t[a]) <= 2.0 * float(np.median(np.diff(t)))
+    return np.asarray(ok & ((cruising[a] & cruising[b]) | close), dtype=np.bool_)
+
+
+def interpolated_span(t: FloatArray, spans: FloatArray, times: FloatArray) -> FloatArray:
+    """The request-to-reply span (s) that interpolating polls at mid-times ``t`` (sorted)
+    carries to each of ``times``: sqrt(((1 − w) s₀)² + (w s₁)²) of the two polls about it
+    (w its interpolation weight; beyond the ends, the end poll's span)."""
+    if not len(t):
+        return np.zeros(len(times))
+    hi = np.clip(np.searchsorted(t, times), 1, max(len(t) - 1, 1))
+    lo = hi - 1
+    if len(t) == 1:
+        return np.full(len(times), float(spans[0]))
+    gap = t[hi] - t[lo]
+    w = np.clip(np.divide(times - t[lo], gap, out=np.zeros(len(times)), where=gap > 0), 0, 1)
+    return np.asarray(np.hypot((1 - w) * spans[lo], w * spans[hi]), dtype=np.float64)
+
+
+def window_numbers(device_t: list[float | None], period_s: float) -> np.ndarray:
+    """The readings' window numbers (R,) int64 from the first: from the device's
+    timestamps (s) when each has one (a lost line leaves a gap), else their order."""
+    if not device_t or any(t is None for t in device_t):
+        return np.arange(len(device_t), dtype=np.int64)
+    t = np.array(device_t, dtype=np.float64)
+    return np.asarray(np.rint((t - t[0]) / period_s), dtype=np.int64)
+
+
+def stamp_slack(readings: list[StreamReading]) -> float:
+    """How late after its stamped end a window may have ended (s): the smallest
+    ``received_s − ended_s`` of the readings (a line cannot arrive before its window
+    ends); 0 without arrival times. A detector stamping from its start command
+    (``starts_on_command``) puts the truth between the stamp and the stamp + slack."""
+    late = [r.received_s - r.ended_s for r in readings if r.received_s is not None]
+    return max(0.0, min(late)) if late else 0.0
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A sweep's raw streams as arrays (`poll_arrays`; the readings' windows, s), every
+    matched reading (`merge`), the samples (the matched readings standing for targets)
+    and each sample's added counts σ (`angular_sigma`, its slope taken over every
+    matched reading)."""
+
+    request: FloatArray
+    reply: FloatArray
+    positions: FloatArray
+    started: FloatArray
+    ended: FloatArray
+    matched: Merged
+    samples: Merged
+    extra: FloatArray
+
+
+def derive(
+    raw: RawSweep, axes: tuple[str, ...], sweeps: Sweeps, arrival_s: FloatArray, k: int
+) -> Derived:
+    """Sweep ``k``'s samples from its raw streams (``arrival_s``: the plan's)."""
+    request, reply, positions = poll_arrays(raw.polls, axes)
+    started = np.array([r.started_s for r in raw.readings], dtype=np.float64)
+    ended = np.array([r.ended_s for r in raw.readings], dtype=np.float64)
+    slots = target_slots(sweeps, arrival_s, k)
+    slack = stamp_slack(raw.readings)
+    window = window_numbers([r.device_t_s for r in raw.readings], sweeps.period_s)
+    matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack, window)
+    counts = np.array([raw.readings[r].value for r in matched.index.tolist()], dtype=np.float64)
+    extra = angular_sigma(counts, matched.angles, matched.smear, matched.timing)
+    return Derived(
+        request, reply, positions, started, ended, matched, matched.targets(),
+        extra[matched.target >= 0],
+    )  # fmt: skip
 
 
 def angular_sigma(counts: FloatArray, angles: FloatArray, smear: FloatArray, timing: FloatArray

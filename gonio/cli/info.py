@@ -1,5 +1,6 @@
 """`gonio info RUN.sqlite`: what a run file holds — plan, backend, progress, instrument
-time, faults, skips, pauses, calibration drift (``--json`` for scripts)."""
+time, faults, skips, pauses, motor recoveries, calibration drift (``--json`` for
+scripts)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "info",
         help=help_,
         description="Print what a run file holds: plan, backend, progress, instrument time, "
-        "faults, skips, pauses and calibration drift. The file may still be being written.",
+        "faults, skips, pauses, motor recoveries (a line each) and calibration drift. The "
+        "file may still be being written.",
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
@@ -21,13 +23,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_info(args: argparse.Namespace) -> int:
+    from gonio.acquire import recovery
     from gonio.analysis import summary
     from gonio.cli import run_table
     from gonio.store import open_run
 
     run = open_run(args.run)
     if args.json:
-        print(json.dumps(summary.figures(run), indent=2, ensure_ascii=False))
+        figures = {**summary.figures(run), "recoveries": recovery.summaries(run)}
+        print(json.dumps(figures, indent=2, ensure_ascii=False))
     else:
         print(run_table.render(run))
         print(run_table.render_details(run))

@@ -89,7 +89,7 @@ def fly_lines(s: Summary) -> list[str]:
         f"  {'sweep velocity':<26}{speeds:>9}   (smear ≤ {f.smear_max_deg:.3g}° per reading, "
         f"budget {f.blur_deg:g}°)",
         f"  {'readings':<26}{s.kept:>9}   ({1 / f.period_s:g} Hz, {1e3 * f.integration_s:g} ms "
-        "each)",
+        f"each; {f.streamed} streamed, thinned to cover the coordinates uniformly)",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (constant velocity "
         f"{hms(f.cruise_s)}, ramps {hms(f.ramps_s)}, moves + settle {hms(f.moves_s)})",
         f"  {'readings per hour':<26}{per_hour:>9,.0f}   (stop-and-go: {sg_per_hour:,.0f}, "
@@ -98,6 +98,8 @@ def fly_lines(s: Summary) -> list[str]:
         f"  {'coverage (TV distance)':<26}{f.coverage_tv:>9.3f}   (to uniform over the reach, "
         f"{f.coverage_bins} bins a coordinate; a uniform stop-and-go plan of as many: "
         f"{f.coverage_tv_uniform:.3f})",
+        f"  {'largest empty ball':<26}{f.coverage_gap:>9.3f}   (radius in the unit box about a "
+        f"reachable point; the uniform plan's: {f.coverage_gap_uniform:.3f})",
     ]
 
 

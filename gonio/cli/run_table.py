@@ -7,6 +7,7 @@ from collections import Counter
 
 import numpy as np
 
+from gonio.acquire import recovery
 from gonio.analysis.calibrated import calibrate
 from gonio.analysis.summary import figures
 from gonio.progress import hms
@@ -33,6 +34,7 @@ def render(run: Run, errors: dict[str, float | int] | None = None, *, title: boo
         lines.append(f"  {'second pass':<24}{'':>10}   {run.plan.summary.second_pass}")
     for fault in f["faults"][-3:]:
         lines.append(f"    target {fault.get('target')}: {fault['message']}")
+    lines.extend(recovery.describe(run))
     for reason, count in f["skip_reasons"].items():
         lines.append(f"    skipped {count}: {reason}")
     if f["pauses"]:
@@ -88,8 +90,10 @@ def render_details(run: Run) -> str:
     lines = ["  sessions"]
     for session in run.sessions:
         info = session.info
+        # A session that did not record its end: killed, crashed, or its disk full.
+        ended = session.outcome or "did not end (killed, or its disk full)"
         lines.append(
-            f"    {session.id}: {session.started_utc} → {session.outcome or 'did not end (killed)'}"
+            f"    {session.id}: {session.started_utc} → {ended}"
             f" ({info.get('backend', '?')}, pid {info.get('pid', '?')})"
         )
     sweeps = figures(run).get("sweeps")

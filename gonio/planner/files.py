@@ -285,6 +285,8 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
 def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps:
     """A fly plan's segments from the header's JSON, every field checked."""
     fields = [*SWEEP_ARRAYS, "period_s", "integration_s"]
+    if isinstance(data, dict) and "streamed" not in data and "count" in data:
+        data = {**data, "streamed": data["count"]}  # written before the thinning
     if not isinstance(data, dict) or sorted(data) != sorted(fields):
         raise ConfigError(f"{path}:{line}: sweeps: expected exactly {', '.join(fields)}")
     arrays = {}
@@ -293,7 +295,9 @@ def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps
             value = np.array(data[name], dtype=dtype)
         except (TypeError, ValueError, OverflowError):
             raise ConfigError(f"{path}:{line}: sweeps.{name}: expected numbers") from None
-        shape = (len(data["first"]),) if name in ("first", "count", "cruise_at_s") else None
+        shape = (
+            (len(data["first"]),) if name in ("first", "count", "cruise_at_s", "streamed") else None
+        )
         wanted = shape or (len(data["first"]), axes)
         if value.shape != wanted or (
             dtype is np.int64
@@ -312,7 +316,12 @@ def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps
             raise ConfigError(f"{path}:{line}: sweeps.{name}: expected a positive number")
     count, first = arrays["count"], arrays["first"]
     expected = np.concatenate([[0], np.cumsum(count)[:-1]])
-    if np.any(count < 1) or not np.array_equal(first, expected) or count.sum() != targets:
+    if (
+        np.any(count < 1)
+        or np.any(arrays["streamed"] < count)
+        or not np.array_equal(first, expected)
+        or count.sum() != targets
+    ):
         raise ConfigError(
             f"{path}:{line}: sweeps: first and count must split the {targets} targets into "
             "consecutive segments"

@@ -17,8 +17,15 @@ Layout (`build_fly`):
   and decelerates after it (trapezoidal, the axis's max acceleration), over poses that
   must be commandable (inside the limits, outside every keep-out box, checked on the
   `FINE_STEP` grid): readings whose ramp would leave them are refused ("ramp").
-- Lines are laid out, anchor after anchor, until about ``sampling.target`` readings
-  (whole lines: the last one completes the target).
+- Anchors nearer than ``ANCHOR_GAP`` (unit box) to a laid reading are skipped (the gap
+  halved when a whole batch is): lines go where no reading passes yet.
+- Thinning (`thin`): the detector streams every reading; the plan's targets are those
+  kept with probability min(1, ρ / (c ρ̂)), ρ the target density (uniform over the
+  reach) and ρ̂ the streamed one, both counted in a ``THIN_RADIUS`` ball, c the
+  ``THIN_QUANTILE`` of ρ / ρ̂; systematic along each segment. Segments are cut to their
+  first and last kept reading (`Sweeps.streamed` readings streamed on each).
+- Lines are laid out, anchor after anchor, until the kept readings reach
+  ``sampling.target`` (whole lines).
 - Order: the segments are ordered by the existing ordering on their two commanded end
   poses (`order_jointly`, each segment's run-up and overrun poses its two candidates),
   then the direction of each is chosen exactly along that order (Viterbi,
@@ -26,15 +33,18 @@ Layout (`build_fly`):
   start).
 
 Timing model: a sweep is a move at rest to its run-up pose (trapezoidal, `TravelModel`),
-the rig's ``settle_s``, the ramp up (v / a), the constant-velocity part ((n − 1) period
-+ integration), the ramp down (v / a). The stop-and-go comparison measures the same
-readings at the same poses in the same order: a move, settle and one integration each.
+the rig's ``settle_s``, the ramp up (v / a), the constant-velocity part ((m − 1) period
++ integration, m the readings streamed), the ramp down (v / a). The stop-and-go
+comparison measures the same readings at the same poses in the same order: a move,
+settle and one integration each.
 
 Coverage: the total-variation distance (half the L1 distance) between the readings'
 histogram in the plan's coordinates (`COVERAGE_BINS` bins a coordinate over its box)
 and that of `COVERAGE_POINTS` Sobol points kept where the rig reaches them (the uniform
 target density); beside it, the same figure for a uniform stop-and-go plan of as many
-targets (a second Sobol sequence), the noise floor of a uniform plan of that size.
+targets (a second Sobol sequence), the noise floor of a uniform plan of that size. A
+second figure: the largest empty ball (the largest distance, unit box, from a reference
+point to its nearest reading), the same for the uniform plan.
 """
 
 from __future__ import annotations
@@ -44,6 +54,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from gonio import params
 from gonio.config import ConfigError, spec_text
@@ -68,6 +79,19 @@ COVERAGE_POINTS = 1 << 15
 COVERAGE_BINS = {3: 8, 4: 5}
 #: The refusal reason of readings whose ramp would leave the commandable poses.
 RAMP = "ramp"
+#: The refusal reason of readings the coverage thinning left out (streamed, not targets).
+THINNED = "thinned"
+#: Radius (coordinates scaled to the unit box) of the balls in which the thinning
+#: compares the streamed readings' density with the target density.
+THIN_RADIUS = 0.06
+#: The thinning keeps every reading where the streamed density is at most this quantile
+#: of the target/streamed density ratio allows (higher: fewer readings, more uniform).
+THIN_QUANTILE = 0.9
+#: Readings streamed per kept one at first guess (laid out again until the target).
+THIN_GUESS = 2.0
+#: Anchors this near (unit box) to a laid reading are skipped at first (halved whenever
+#: a whole batch is skipped): lines go where no reading passes yet.
+ANCHOR_GAP = 0.05
 
 
 @dataclass
@@ -83,7 +107,12 @@ class _Laid:
     smear: list[float] = field(default_factory=list)  # rad
     mids: list[FloatArray] = field(default_factory=list)  # (n, A) each
     line: list[int] = field(default_factory=list)
+    slots: list[np.ndarray] = field(default_factory=list)  # kept stream indices
     requested: int = 0
+    anchors: int = 0  # anchors drawn
+    kept: int = 0  # readings the thinning kept
+    unit: list[FloatArray] = field(default_factory=list)  # readings' coords (unit box)
+    gap: float = 0.0  # an anchor nearer than this to a reading is skipped
     readings: int = 0
     lines: int = 0
     refused: dict[str, int] = field(default_factory=dict)
@@ -181,32 +210,156 @@ def lay_line(rig: Rig, fly: FlySpec, anchor: FloatArray, laid: _Laid, line: int)
     laid.lines += int(kept_any)
 
 
-def lay_out(spec: PlanSpec, rig: Rig, where: str) -> _Laid:
-    """Lines through anchors drawn in the parametrization until the target is laid."""
+def _bounds(spec: PlanSpec) -> FloatArray:
+    p = params.get(spec.parametrization)
+    return np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
+
+
+def _coords(spec: PlanSpec, rig: Rig, angles: FloatArray) -> FloatArray:
+    """The plan's coordinates of the pairs measured at ``angles`` (N, A)."""
+    p = params.get(spec.parametrization)
+    wi, wo = rig.forward(angles)
+    return np.asarray(p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo))
+
+
+def reference(spec: PlanSpec, rig: Rig) -> FloatArray:
+    """`COVERAGE_POINTS` Sobol points kept where the rig reaches them (the uniform
+    target density), scaled to the unit box."""
+    bounds = _bounds(spec)
+    d = len(bounds)
+    stream = sampling.Sequence("sobol", d, spec.sampling.seed + 7919)
+    points = sampling.to_box(stream.draw(COVERAGE_POINTS), bounds, np.ones(d))
+    points = points[placement.kept_mask(spec, rig, points)]
+    return np.asarray((points - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0]))
+
+
+def lay_out(spec: PlanSpec, rig: Rig, where: str, laid: _Laid, until: int) -> _Laid:
+    """Lines through anchors drawn in the parametrization (the plan's Sobol stream,
+    continued after ``laid.anchors``) until ``until`` readings are laid."""
     target = spec.sampling.target
     if target is None:
         raise ConfigError(f"{where}: sampling.target: the fly strategy needs a target")
     fly = spec.sampling.fly_options()
-    p = params.get(spec.parametrization)
-    bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
+    bounds = _bounds(spec)
     stream = sampling.Sequence("sobol", len(bounds), spec.sampling.seed)
-    laid, drawn = _Laid(), 0
-    while laid.readings < target:
-        if drawn >= MAX_ANCHORS:
+    for _ in range(laid.anchors // ANCHOR_BATCH):
+        stream.draw(ANCHOR_BATCH)  # continue the anchors already drawn
+    scale = bounds[:, 1] - bounds[:, 0]
+    while laid.readings < until:
+        if laid.anchors >= MAX_ANCHORS:
             raise ConfigError(
-                f"{where}: sampling.target: only {laid.readings} of {target} readings are "
-                f"reachable on {laid.lines} sweeps after {MAX_ANCHORS} anchors; lower the "
-                "target or relax the rig's constraints"
+                f"{where}: sampling.target: only {laid.kept or laid.readings} of {target} "
+                f"readings are reachable on {laid.lines} sweeps after {MAX_ANCHORS} anchors; "
+                "lower the target or relax the rig's constraints"
             )
         coords = sampling.to_box(stream.draw(ANCHOR_BATCH), bounds, np.ones(len(bounds)))
-        drawn += ANCHOR_BATCH
-        _, wi, wo = placement.directions(spec, coords)
+        laid.anchors += ANCHOR_BATCH
+        valid, wi, wo = placement.directions(spec, coords)
         solution = rig.solve(wi, wo, isotropic=spec.isotropic)
-        for anchor in solution.angles[solution.ok]:
+        unit = (coords[valid][solution.ok] - bounds[:, 0]) / scale
+        old = cKDTree(np.concatenate(laid.unit)) if laid.unit else None
+        seen = len(laid.unit)
+        laid_any = False
+        for anchor, u in zip(solution.angles[solution.ok], unit, strict=True):
+            near = [old] if old is not None else []
+            if len(laid.unit) > seen:
+                near.append(cKDTree(np.concatenate(laid.unit[seen:])))
+            if any(tree.query(u)[0] < laid.gap for tree in near):
+                continue  # readings already pass near this anchor
+            before = len(laid.mids)
             lay_line(rig, fly, anchor, laid, laid.lines)
-            if laid.readings >= target:
+            if len(laid.mids) > before:
+                laid_any = True
+                new = np.concatenate(laid.mids[before:])
+                laid.unit.append((_coords(spec, rig, new) - bounds[:, 0]) / scale)
+            if laid.readings >= until:
                 break
+        if not laid_any:
+            laid.gap *= 0.5  # anchors everywhere near readings: accept closer ones
     return laid
+
+
+def thin(spec: PlanSpec, rig: Rig, laid: _Laid, ref: FloatArray) -> list[np.ndarray]:
+    """The stream indices kept on each segment: reading i kept with probability
+    q_i = min(1, ρ(x_i) / (c ρ̂(x_i))), ρ the target (uniform over the reach) and ρ̂ the
+    streamed readings' density, both counted in a `THIN_RADIUS` ball about x_i; c the
+    `THIN_QUANTILE` of ρ / ρ̂. Systematic sampling along each segment (a running sum
+    of q, its offset drawn from the plan's seed) spaces the kept readings evenly."""
+    mids = np.concatenate(laid.mids)
+    bounds = _bounds(spec)
+    unit = (_coords(spec, rig, mids) - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
+    near = cKDTree(unit).query_ball_point(unit, THIN_RADIUS, return_length=True)
+    want = cKDTree(ref).query_ball_point(unit, THIN_RADIUS, return_length=True)
+    ratio = (np.asarray(want, dtype=np.float64) / len(ref)) / (
+        np.asarray(near, dtype=np.float64) / len(unit)
+    )
+    scale = float(np.quantile(ratio, THIN_QUANTILE))
+    q = np.minimum(1.0, ratio / max(scale, 1e-300))
+    rng = np.random.default_rng(spec.sampling.seed)
+    kept, at = [], 0
+    for m in laid.mids:
+        running = np.cumsum(q[at : at + len(m)]) + rng.random()
+        steps = np.diff(np.floor(np.concatenate([[running[0] - q[at]], running])))
+        kept.append(np.flatnonzero(steps > 0))
+        at += len(m)
+    return kept
+
+
+def lay_out_thinned(spec: PlanSpec, rig: Rig, where: str, ref: FloatArray) -> _Laid:
+    """Lines laid out until the readings the thinning keeps reach ``sampling.target``;
+    each segment trimmed to its first and last kept reading."""
+    target = spec.sampling.target
+    if target is None:
+        raise ConfigError(f"{where}: sampling.target: the fly strategy needs a target")
+    laid = lay_out(spec, rig, where, _Laid(gap=ANCHOR_GAP), math.ceil(THIN_GUESS * target))
+    while True:
+        kept = thin(spec, rig, laid, ref)
+        laid.kept = int(sum(len(k) for k in kept))
+        if laid.kept >= target:
+            break
+        more = math.ceil(laid.readings * (target / max(laid.kept, 1) - 1.0) * 1.05) + 1
+        lay_out(spec, rig, where, laid, laid.readings + more)
+    return _trimmed(spec, rig, laid, kept)
+
+
+def _trimmed(spec: PlanSpec, rig: Rig, laid: _Laid, kept: list[np.ndarray]) -> _Laid:
+    """The segments holding kept readings, each shortened to its first and last kept
+    one (their ramps inside the checked run: commandable), ``slots`` the kept readings'
+    stream indices from the new entry."""
+    fly = spec.sampling.fly_options()
+    j = sweep_axis(rig, fly)
+    half = 0.5 * fly.integration
+    out = _Laid(
+        requested=laid.requested, readings=laid.readings, refused=laid.refused,
+        anchors=laid.anchors, kept=laid.kept,
+    )  # fmt: skip
+    lines = set()
+    for s, k in enumerate(kept):
+        if not len(k):
+            continue
+        v = float(laid.velocity[s][j])
+        ramp_d = float(laid.entry[s][j] - laid.start[s][j])
+        a, b = int(k[0]), int(k[-1])
+        x0 = float(laid.mids[s][a, j]) - half * v
+        x1 = float(laid.mids[s][b, j]) + half * v
+        row = []
+        for x in (x0 - ramp_d, x0, x1, x1 + ramp_d):
+            pose = laid.entry[s].copy()
+            pose[j] = x
+            row.append(pose)
+        out.start.append(row[0])
+        out.entry.append(row[1])
+        out.exit.append(row[2])
+        out.stop.append(row[3])
+        out.velocity.append(laid.velocity[s])
+        out.ramp_s.append(laid.ramp_s[s])
+        out.smear.append(laid.smear[s])
+        out.mids.append(laid.mids[s][k])
+        out.slots.append(k - a)
+        out.line.append(laid.line[s])
+        lines.add(laid.line[s])
+    out.lines = len(lines)
+    return out
 
 
 def order_segments(
@@ -238,36 +391,53 @@ def order_segments(
     return order, reversed_, joint
 
 
-def coverage(spec: PlanSpec, rig: Rig, where: str, coords: FloatArray) -> tuple[float, float, int]:
-    """(TV distance of ``coords`` to the uniform density over what the rig reaches, the
-    same of a uniform Sobol plan of as many targets, bins per coordinate)."""
-    p = params.get(spec.parametrization)
-    bounds = np.asarray(p.iso_bounds if spec.isotropic else p.bounds, dtype=np.float64)
+@dataclass(frozen=True)
+class Coverage:
+    """How the readings cover the reach (`coverage`)."""
+
+    tv: float  # total-variation distance to the uniform density over the reach
+    tv_uniform: float  # the same of a uniform Sobol plan of as many targets
+    bins: int  # bins a coordinate
+    gap: float  # the largest empty ball's radius (unit box) centred in the reach
+    gap_uniform: float  # the same of the uniform plan
+
+
+def coverage(
+    spec: PlanSpec, rig: Rig, where: str, coords: FloatArray, ref: FloatArray | None = None
+) -> Coverage:
+    """How ``coords`` (N, D) cover the uniform density over what the rig reaches, and
+    how a uniform Sobol plan of as many targets does (the module docstring)."""
+    bounds = _bounds(spec)
     d = len(bounds)
     bins = COVERAGE_BINS.get(d, 5)
     ones = np.ones(d)
-    seed = spec.sampling.seed
-    ref_stream = sampling.Sequence("sobol", d, seed + 7919)
-    reference = sampling.to_box(ref_stream.draw(COVERAGE_POINTS), bounds, ones)
-    reference = reference[placement.kept_mask(spec, rig, reference)]
-    uniform_stream = sampling.Sequence("sobol", d, seed + 1)
+    target_points = reference(spec, rig) if ref is None else ref
+    uniform_stream = sampling.Sequence("sobol", d, spec.sampling.seed + 1)
     uniform = placement.draw_kept(
         spec, rig, where, lambda k: sampling.to_box(uniform_stream.draw(k), bounds, ones),
         min(len(coords), COVERAGE_POINTS),
     )  # fmt: skip
     uniform = uniform[placement.kept_mask(spec, rig, uniform)]
 
-    def histogram(x: FloatArray) -> FloatArray:
-        unit = (x - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
-        cell = np.clip(np.floor(unit * bins).astype(np.int64), 0, bins - 1)
+    def unit(x: FloatArray) -> FloatArray:
+        return np.asarray((x - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0]))
+
+    def histogram(u: FloatArray) -> FloatArray:
+        cell = np.clip(np.floor(u * bins).astype(np.int64), 0, bins - 1)
         flat = np.ravel_multi_index(tuple(cell.T), (bins,) * d)
         counts = np.bincount(flat, minlength=bins**d).astype(np.float64)
         return np.asarray(counts / max(counts.sum(), 1.0), dtype=np.float64)
 
-    target = histogram(reference)
-    tv = 0.5 * float(np.abs(histogram(coords) - target).sum())
-    tv_uniform = 0.5 * float(np.abs(histogram(uniform) - target).sum())
-    return tv, tv_uniform, bins
+    def gap(u: FloatArray) -> float:
+        return float(cKDTree(u).query(target_points)[0].max())
+
+    target = histogram(target_points)
+    got, even = unit(coords), unit(uniform)
+    return Coverage(
+        tv=0.5 * float(np.abs(histogram(got) - target).sum()),
+        tv_uniform=0.5 * float(np.abs(histogram(even) - target).sum()),
+        bins=bins, gap=gap(got), gap_uniform=gap(even),
+    )  # fmt: skip
 
 
 def check_integration(spec: PlanSpec, rig: Rig, where: str) -> None:
@@ -296,7 +466,8 @@ def build_fly(
     check_integration(spec, rig, where)
     fly = spec.sampling.fly_options()
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)
-    laid = lay_out(spec, rig, where)
+    ref = reference(spec, rig)
+    laid = lay_out_thinned(spec, rig, where, ref)
     started = time.perf_counter()
     order, reversed_, joint = order_segments(spec, rig, laid, home)
     ordering_s = time.perf_counter() - started
@@ -305,6 +476,7 @@ def build_fly(
     t_int, period, settle = fly.integration, fly.period_s, rig.spec.settle_s
     rows: dict[str, list[FloatArray]] = {k: [] for k in ("start", "entry", "exit", "stop")}
     velocity, cruise_at, firsts, mids, generated, arrival = [], [], [], [], [], []
+    streamed: list[int] = []
     t, here, first = 0.0, home, 0
     moves_s = ramps_s = cruise_s = 0.0
     for s, back in zip(order.tolist(), reversed_.tolist(), strict=True):
@@ -314,8 +486,9 @@ def build_fly(
         for key, pose in zip(rows, ends, strict=True):
             rows[key].append(pose)
         move = float(rig.travel.time(here, ends[0])) + settle
-        n = int(counts[s])
-        cruise = (n - 1) * period + t_int
+        n, slots = int(counts[s]), laid.slots[s]
+        last = int(slots[-1])
+        cruise = last * period + t_int
         t += move + laid.ramp_s[s]
         velocity.append(-laid.velocity[s] if back else laid.velocity[s])
         cruise_at.append(t)
@@ -323,7 +496,8 @@ def build_fly(
         index = np.arange(n)[::-1] if back else np.arange(n)
         mids.append(laid.mids[s][index])
         generated.append(offsets[s] + index)
-        arrival.append(t + period * np.arange(n))
+        arrival.append(t + period * ((last - slots[::-1]) if back else slots))
+        streamed.append(last + 1)
         t += cruise + laid.ramp_s[s]
         moves_s += move
         ramps_s += 2.0 * laid.ramp_s[s]
@@ -342,23 +516,27 @@ def build_fly(
         start=np.array(rows["start"]), entry=np.array(rows["entry"]),
         exit=np.array(rows["exit"]), stop=np.array(rows["stop"]),
         velocity=np.array(velocity), first=np.array(firsts), count=counts[order],
-        cruise_at_s=np.array(cruise_at), period_s=period, integration_s=t_int,
+        cruise_at_s=np.array(cruise_at), streamed=np.array(streamed, dtype=np.int64),
+        period_s=period, integration_s=t_int,
     )  # fmt: skip
     previous = np.vstack([home[None, :], angles[:-1]])
     stop_and_go_s = float(rig.travel.time(previous, angles).sum()) + n_total * (settle + t_int)
-    tv, tv_uniform, bins = coverage(spec, rig, where, coords)
+    cover = coverage(spec, rig, where, coords, ref)
     speeds = np.degrees(np.abs(sweeps.velocity).max(axis=1))
     figures = FlyFigures(
         lines=laid.lines, segments=len(sweeps), integration_s=t_int, period_s=period,
         blur_deg=fly.blur, smear_max_deg=math.degrees(max(laid.smear)),
         velocity_min_deg_s=float(speeds.min()), velocity_max_deg_s=float(speeds.max()),
         cruise_s=cruise_s, ramps_s=ramps_s, moves_s=moves_s, stop_and_go_s=stop_and_go_s,
-        coverage_tv=tv, coverage_tv_uniform=tv_uniform, coverage_bins=bins,
+        coverage_tv=cover.tv, coverage_tv_uniform=cover.tv_uniform, coverage_bins=cover.bins,
+        streamed=int(sum(streamed)), coverage_gap=cover.gap,
+        coverage_gap_uniform=cover.gap_uniform,
     )  # fmt: skip
     result = joint.ordering
     dwell_s = n_total * t_int
+    refused = {**laid.refused, THINNED: laid.readings - n_total}
     summary = Summary(
-        requested=laid.requested, invalid=0, refused=laid.refused, kept=n_total,
+        requested=laid.requested, invalid=0, refused=refused, kept=n_total,
         travel_s=t - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s, moves=result.moves,
         max_moves=result.max_moves, kicks=result.kicks, kicks_kept=result.kicks_kept,
         max_kicks=result.max_kicks, stopped=result.stopped, time_cap_s=spec.time_budget_s,

@@ -55,7 +55,11 @@ class FlyFigures:
     the total-variation distance between the readings' histogram in the plan's
     coordinates and the uniform density over what the rig reaches (``coverage_bins``
     bins a coordinate); ``coverage_tv_uniform``: the same figure of a uniform (Sobol)
-    stop-and-go plan of as many targets, its sampling noise."""
+    stop-and-go plan of as many targets, its sampling noise. ``coverage_gap``: the
+    radius of the largest ball (coordinates scaled to the unit box) centred on a
+    reachable point that holds no reading; ``coverage_gap_uniform``: the same of the
+    uniform plan. ``streamed``: readings the detector streams, of which the plan keeps
+    ``kept`` as its targets (the thinning that makes them uniform)."""
 
     lines: int  # sweep lines laid out through the anchors
     segments: int  # constant-velocity segments (a line's reachable runs)
@@ -72,6 +76,9 @@ class FlyFigures:
     coverage_tv: float
     coverage_tv_uniform: float
     coverage_bins: int
+    streamed: int = 0  # readings streamed during the sweeps (kept + thinned out)
+    coverage_gap: float = 0.0  # largest empty ball's radius (unit box) among the reach
+    coverage_gap_uniform: float = 0.0  # the same of the uniform stop-and-go plan
 
 
 @dataclass(frozen=True)
@@ -157,6 +164,7 @@ SWEEP_ARRAYS: dict[str, type[np.generic]] = {
     "first": np.int64,
     "count": np.int64,
     "cruise_at_s": np.float64,
+    "streamed": np.int64,
 }
 
 
@@ -168,8 +176,11 @@ class Sweeps:
     Each segment is commanded as one move from ``start`` (at rest) to ``stop`` (at rest)
     with the axes' velocity ``velocity`` between ``entry`` (reached at ``cruise_at_s``)
     and ``exit``: readings only there, ``count`` of them, the plan's targets
-    ``first`` … ``first + count − 1``, the k-th integrating from ``cruise_at_s + k ·
-    period_s`` for ``integration_s``."""
+    ``first`` … ``first + count − 1``. The detector streams ``streamed`` readings
+    (≥ ``count``) there, the j-th integrating from ``cruise_at_s + j · period_s`` for
+    ``integration_s``; the targets are those the coverage thinning kept (in stream
+    order, target i being stream reading ``round((arrival_s[i] − cruise_at_s) /
+    period_s)``; the first and the last streamed readings are always targets)."""
 
     start: FloatArray  # (S, A) the run-up pose (at rest)
     entry: FloatArray  # (S, A) where the constant velocity begins
@@ -179,6 +190,7 @@ class Sweeps:
     first: np.ndarray  # (S,) int64
     count: np.ndarray  # (S,) int64
     cruise_at_s: FloatArray  # (S,)
+    streamed: np.ndarray  # (S,) int64 readings streamed at constant velocity (≥ count)
     period_s: float
     integration_s: float
 

@@ -315,17 +315,48 @@ class CalibrationSpec(Strict):
     averages: int = Field(16, ge=2, le=1000, description="Exposures per calibration reading.")
 
 
+class MotorFaultSpec(Strict):
+    """What a motor's hardware error (its Hardware Error Status: overload, overheating,
+    input voltage, encoder) does: ``stop`` every axis and end the run resumable, or
+    ``recover``: journal the motor's error flags, temperature and load, hold every axis,
+    wait until it has cooled below the rig's ``health.max_temperature_c`` when the cause
+    is heat (at most ``cool_down_minutes``), reboot it into its configuration, check its
+    position against where it held (the rig's ``health.position_tolerance_deg``) and
+    measure the target in flight again; at most ``max_recoveries`` times per motor per
+    run, after which the run stops resumable. A motion timeout always stops."""
+
+    action: Literal["stop", "recover"] = Field(
+        "stop",
+        description="stop: end the run resumable (reboot the motor by hand); recover: reboot "
+        "it and go on (journaled step by step).",
+    )
+    max_recoveries: int = Field(
+        3, ge=1, le=1000, description="recover: reboots per motor per run, then stop."
+    )
+    cool_down_minutes: float = Field(
+        30.0,
+        gt=0,
+        description="recover: the longest wait for a hot motor to cool below the rig's "
+        "health.max_temperature_c (min); then stop.",
+    )
+
+
 class OnFaultSpec(Strict):
     """What a target does when a transient fault strikes (`CommError`, `DetectorError`):
     try again up to ``retries`` times, then ``skip`` it (the reason journaled) or
-    ``abort`` the run (resumable). A motor fault or a motion timeout always stops every
-    axis and ends the run resumable."""
+    ``abort`` the run (resumable). A calibration's reading is retried the same way and,
+    after the last attempt, ends the run resumable. A motor's hardware error follows
+    ``motor``; a motion timeout always stops every axis and ends the run resumable."""
 
     retries: int = Field(2, ge=0, le=100, description="Attempts after the first.")
     then: Literal["skip", "abort"] = Field(
         "skip",
         description="After the last attempt: skip the target (journaled) or abort the run "
         "(resumable).",
+    )
+    motor: MotorFaultSpec = Field(
+        default_factory=MotorFaultSpec,
+        description="What a motor's hardware error does: stop (default) or recover.",
     )
 
 

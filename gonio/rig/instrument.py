@@ -269,6 +269,11 @@ class SerialStreamSpec(Strict):
         description="The shortest delay from a window's end to its line's arrival (s), "
         "subtracted from the host's stamps.",
     )
+    starts_on_command: bool = Field(
+        _stream_default("starts_on_command"),
+        description="The device begins its first window when the start command arrives: "
+        "the host stamps the windows from when it sent the command.",
+    )
 
     def config(self) -> SerialStreamConfig:
         """The driver's `SerialStreamConfig`."""

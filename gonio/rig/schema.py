@@ -146,7 +146,10 @@ class BusSpec(Strict):
 class HealthLimitsSpec(Strict):
     """The motors' safe operating range, checked during a run (`gonio acquire` pauses
     beyond it): the highest internal temperature (°C) and the input voltage range (V).
-    The defaults are inside the X-series limits (72 °C shutdown, 9.5–16 V at 12 V)."""
+    The defaults are inside the X-series limits (72 °C shutdown, 9.5–16 V at 12 V). A
+    recovering run (the plan's ``acquisition.on_fault.motor``) waits for a hot motor to
+    cool below ``max_temperature_c`` and checks a rebooted motor's position to within
+    ``position_tolerance_deg``."""
 
     max_temperature_c: float = Field(
         65.0, gt=0, le=100, description="The highest internal temperature of a motor (°C)."
@@ -155,6 +158,12 @@ class HealthLimitsSpec(Strict):
         10.0, gt=0, description="The lowest input voltage (V), below max_voltage_v."
     )
     max_voltage_v: float = Field(14.8, gt=0, description="The highest input voltage (V).")
+    position_tolerance_deg: float = Field(
+        0.5,
+        gt=0,
+        description="How far a rebooted motor's joint may read from where it held before the "
+        "reboot (°); beyond it a recovering run stops.",
+    )
 
     @model_validator(mode="after")
     def _range(self) -> HealthLimitsSpec:

@@ -30,6 +30,7 @@ from sim.rehearsal import (
     RehearsalSide,
     emulated_bus,
     emulated_pose,
+    emulated_trajectory,
     instrument_for,
     lamp_for,
     photometer_for,
@@ -61,12 +62,12 @@ def rehearsal_devices(
             light, state = driver, lamp
         else:
             light = state = SimLightSource()
-        truth = emulated_pose(emulator, axes)
+        truth, truth_at = emulated_pose(emulator, axes), emulated_trajectory(emulator, axes)
         interface = rig.spec.detector.interface
         serial = interface.kind == "serial"
         physics = SimDetector(
             scene, rig, truth if interface.kind != "simulated" else bus.positions, clock=clock,
-            streams=streams, light=state,
+            streams=streams, light=state, pose_at=truth_at,
         )  # fmt: skip
         if isinstance(interface, PyMeasureInterfaceSpec):
             instrument = stack.enter_context(instrument_for(rig, interface, physics, clock))
@@ -78,5 +79,7 @@ def rehearsal_devices(
             detector = serial_detector(rig, clock, port=photometer.path)
         else:
             detector = physics
-        side = RehearsalSide(physics, truth, Peers(emulator, photometer, lamp, instrument))
+        side = RehearsalSide(
+            physics, truth, Peers(emulator, photometer, lamp, instrument), pose_at=truth_at
+        )
         yield Devices(bus, detector, clock, light, side), clock

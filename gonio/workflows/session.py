@@ -37,6 +37,7 @@ from gonio.output import refuse_inputs
 from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, content_hash, sha256
 from gonio.planner.two_pass import Survey, extend
+from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
@@ -226,12 +227,26 @@ def _second_pass(journal: Journal, run: Run) -> Plan:
 
 
 def refuse_fly(plan: Plan, kind: str) -> None:
-    """`ConfigError` for a fly plan on a backend that does not acquire them yet (only
-    the simulated one does)."""
-    if plan.is_fly and kind != "simulated":
+    """`ConfigError` for a fly plan on a backend that does not acquire them: hardware
+    (rehearse it first), or a rehearsal whose detector cannot stream (a PyMeasure
+    instrument, a serial detector without a ``stream`` section)."""
+    if not plan.is_fly or kind == "simulated":
+        return
+    if kind == "hardware":
         raise ConfigError(
-            f"plan {plan.spec.name!r}: fly plans are acquired on the simulated backend only "
-            f"(this run's is {kind}); use `gonio simulate`, or a stop-and-go plan"
+            f"plan {plan.spec.name!r}: fly plans are acquired on the simulated and rehearsal "
+            "backends only (this run's is hardware); use `gonio simulate`, `gonio acquire "
+            "--rehearse`, or a stop-and-go plan"
+        )
+    interface = plan.rig.spec.detector.interface
+    if interface.kind == "pymeasure" or (
+        isinstance(interface, SerialInterfaceSpec) and interface.stream is None
+    ):
+        where = plan.rig.source or "rig"
+        raise ConfigError(
+            f"{where}: detector.interface: plan {plan.spec.name!r} is a fly plan and this "
+            f"{interface.kind} detector cannot stream; expected a serial detector with a "
+            "stream section, or kind: simulated"
         )
 
 

@@ -314,6 +314,17 @@ class SimDetector(Resource):
                 raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
         return np.array(poses, dtype=np.float64).reshape(len(times), len(axes))
 
+    def window_counts(
+        self, started: np.ndarray, ended: np.ndarray, integration: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Counts and saturated flags (N,) of exposures of ``integration`` s over the
+        windows [started, ended] (clock times, s), as a stream's (`pose_at`, the
+        ``motion_blur`` nodes), continuing the present sample's random streams: for a
+        peer that streams these physics (a rehearsal's photometer)."""
+        return self._stream_counts(
+            np.asarray(started, dtype=np.float64), np.asarray(ended, dtype=np.float64), integration
+        )
+
     def _stream_counts(
         self, started: np.ndarray, ended: np.ndarray, integration: float
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -416,7 +427,9 @@ class SimDetector(Resource):
             raise DetectorError("measure() during a stream (stop_stream first)")
         averages = int(averages)
         start = self._draws.get(self._sample, 0)
-        fault = self._faults.fired(self._sample, start, DETECTOR_KINDS) if self._faults else None
+        # The attempt at this sample: each earlier one (failed or not) used `averages` draws.
+        attempt = start // averages if start % averages == 0 else -1
+        fault = self._faults.fired(self._sample, attempt, DETECTOR_KINDS) if self._faults else None
         if fault is not None and fault.kind == "detector_error":
             self._draws[self._sample] = start + averages
             raise DetectorError(f"the detector did not answer (injected at sample {self._sample})")

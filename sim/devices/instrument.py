@@ -97,7 +97,8 @@ class SimulatedInstrument(Resource):
         """The state a resumed run restores (between targets, at rest), as JSON values:
         the virtual time, the motors (`MotorState`), how many moves and readings the
         present sample has used (so a retried or resumed sample continues its streams
-        and its injected faults do not fire twice) and an injected overheat in force."""
+        and its injected faults do not fire twice) and an injected overheat or supply
+        sag in force."""
         motors = self.bus.snapshot()
         true = self.bus.true_positions()
         sample = self.bus.present_sample
@@ -111,11 +112,12 @@ class SimulatedInstrument(Resource):
             "moves": self.bus.moves_of(sample),
             "draws": self.detector.draws_of(sample),
             "overheat": self.bus.overheat,
+            "supply_sag": self.bus.supply_sag,
         }
 
     def restore(self, state: Any) -> None:
         """Continue from a `snapshot`: the clock (which must not be past it), the
-        motors, the present sample's counters and an overheat in force."""
+        motors, the present sample's counters and an overheat or supply sag in force."""
         try:
             time_s = float(state["time_s"])
             motors = MotorState(
@@ -126,6 +128,8 @@ class SimulatedInstrument(Resource):
             sample, moves, draws = int(state["sample"]), int(state["moves"]), int(state["draws"])
             hot = state.get("overheat")
             overheat = None if hot is None else (str(hot[0]), float(hot[1]), float(hot[2]))
+            low = state.get("supply_sag")
+            sag = None if low is None else (float(low[0]), float(low[1]))
         except (TypeError, KeyError, ValueError) as exc:
             raise ValueError(f"not a snapshot of a simulated instrument: {exc}") from None
         if self.clock.now() > time_s:
@@ -135,3 +139,4 @@ class SimulatedInstrument(Resource):
         self.bus.set_moves(sample, moves)
         self.detector.set_draws(sample, draws)
         self.bus.set_overheat(overheat)
+        self.bus.set_supply_sag(sag)

@@ -40,6 +40,7 @@ from drivers.base import (
     LimitError,
     MotionTimeout,
     MotorFault,
+    Recovered,
     Resource,
     StampedPositions,
     TorqueOff,
@@ -175,6 +176,8 @@ class SimMotorBus(Resource):
         self._pending: FaultRule | None = None  # a fault that strikes during this move
         self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
         self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
+        self._shift: dict[str, float] = {}  # how far an axis's encoder jumps at its reboot
+        self._sag: tuple[float, float] | None = None  # supply sag: V, until (s)
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -279,6 +282,9 @@ class SimMotorBus(Resource):
         if self._pending is not None and self._pending.kind == "overheat":
             rule, self._pending = self._pending, None
             self._hot = (rule.axis or self._names[0], rule.temperature_c, self._t0 + rule.for_s)
+        elif self._pending is not None and self._pending.kind == "supply_sag":
+            rule, self._pending = self._pending, None
+            self._sag = (rule.voltage_v, self._t0 + rule.for_s)
         if self._model is not None:
             axes = len(goal)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -329,13 +335,18 @@ class SimMotorBus(Resource):
     def _raise_fault(self, rule: FaultRule) -> None:
         """Raise the injected motor fault ``rule`` (the axes already held)."""
         if rule.kind == "comm_error":
+            what = "no status packet" if rule.packet == "lost" else "a corrupt status packet (CRC)"
             raise CommError(
-                f"no status from the bus during the move into sample {self._sample} "
+                f"{what} from the bus during the move into sample {self._sample} "
                 "(injected); every axis told to hold",
                 port="simulated",
             )
         axis = rule.axis or self._names[0]
         self._latched[axis] = rule.flags
+        if rule.shift_deg:
+            self._shift[axis] = math.radians(rule.shift_deg)
+        if "overheating" in rule.flags:  # hot from now on, for the rule's time
+            self._hot = (axis, rule.temperature_c, self.clock.now() + rule.for_s)
         raise self._fault_error(axis, rule.flags)
 
     def _fault_error(self, axis: str, flags: tuple[str, ...]) -> MotorFault:
@@ -425,6 +436,15 @@ class SimMotorBus(Resource):
         """Continue an overheat (a resumed run)."""
         self._hot = hot
 
+    @property
+    def supply_sag(self) -> tuple[float, float] | None:
+        """An injected supply sag in force: (V, until when on the clock), or None."""
+        return self._sag
+
+    def set_supply_sag(self, sag: tuple[float, float] | None) -> None:
+        """Continue a supply sag (a resumed run)."""
+        self._sag = sag
+
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
@@ -452,13 +472,21 @@ class SimMotorBus(Resource):
             self._hold()
         self._torque = bool(on)
 
+    def _hot_now(self) -> tuple[str, float, float] | None:
+        """The injected overheat still in force now, or None."""
+        return self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
+
     def health(self) -> dict[str, Health]:
+        """Temperatures (an injected overheat's axis: its temperature until it has cooled,
+        else 35 °C), 12 V, the latched flags; the load is not modelled (None)."""
         self._check_open()
-        hot = self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
+        hot = self._hot_now()
+        now = self.clock.now()
+        volts = self._sag[0] if self._sag is not None and now < self._sag[1] else 12.0
         return {
             n: Health(
                 temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
-                voltage_v=12.0,
+                voltage_v=volts,
                 error_flags=self._latched.get(n, ()),
             )
             for n in self._names
@@ -475,3 +503,27 @@ class SimMotorBus(Resource):
             self._latched.pop(name, None)
         self._hold()
         return names
+
+    def recover(self, axis: str) -> Recovered:
+        """Hold every axis, then reboot ``axis``'s motor: its latched fault clears, unless
+        it is an overheating one and the axis is still hot (`MotorFault` again, as a
+        real motor re-latches it). An injected ``shift_deg`` moves its encoder reading
+        (not the joint) at the reboot. Where it was held and where it reads now (rad)."""
+        self._check_open()
+        if axis not in self._index:
+            raise DriverError(f"unknown axis {axis!r}; the axes are {', '.join(self._names)}")
+        self._hold()
+        i = self._index[axis]
+        held = float(self._goal[i])
+        flags = self._latched.get(axis, ())
+        hot = self._hot_now()
+        if "overheating" in flags and hot is not None and hot[0] == axis:
+            raise self._fault_error(axis, flags)
+        self._latched.pop(axis, None)
+        shift = self._shift.pop(axis, 0.0)
+        if shift:  # the encoder jumps, the joint stays: true = encoder + error
+            self._goal = self._goal.copy()
+            self._goal[i] += shift
+            self._start = self._goal.copy()
+            self._error[i] -= shift
+        return Recovered(axis, held, float(self._present_encoder()[i]))

@@ -14,6 +14,11 @@ return delay) for the emulator to encode, delay and write. Rules (ROBOTIS e-manu
   error (5); ACTION without REG_WRITE → Instruction error.
 * The reply leaves with the ID, baud rate and return delay the motor had when the
   packet arrived, so a write to ID or Baud Rate takes effect after its status.
+* CONTROL_TABLE_BACKUP (0x20, firmware ≥ 45): option 1 + "CTRL" stores the backup and
+  answers; option 2 + "CTRL" answers, then restores the EEPROM area and reboots. Torque
+  on → Result Fail (the refusals are `EmulatedMotor.check_backup`).
+* Reads and writes reach Indirect Data like any address (sync and bulk forms included);
+  the motor resolves the indirection.
 * FAST_SYNC_READ / FAST_BULK_READ: one status packet with ID 0xFE whose parameters are,
   per motor, ERR, ID, DATA and a CRC of the packet so far (the last one is the packet
   CRC); LEN counts the whole requested chain, so a missing motor truncates it.
@@ -24,8 +29,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from drivers.dynamixel.control_table import TABLE_SIZE
-from sim.dynamixel.motor import EmulatedMotor
+from sim.dynamixel.motor import BACKUP_RESTORE, BACKUP_STORE, EmulatedMotor
 from sim.dynamixel.protocol import (
     BROADCAST_ID,
     HEADER,
@@ -35,6 +39,7 @@ from sim.dynamixel.protocol import (
     StatusError,
     crc16,
 )
+from sim.dynamixel.table import EMULATED_TABLE_SIZE
 
 #: The magic parameters of CLEAR option 1 (reset the multi-turn count).
 CLEAR_MULTI_TURN = bytes([0x01, 0x44, 0x58, 0x4C, 0x22])
@@ -99,7 +104,7 @@ def _answers(motor: EmulatedMotor, instruction: int) -> bool:
 def _read(motor: EmulatedMotor, address: int, length: int) -> tuple[int, bytes]:
     if length < 1:
         return StatusError.DATA_LENGTH, b""
-    if address + length > TABLE_SIZE:
+    if address + length > EMULATED_TABLE_SIZE:
         return StatusError.ACCESS, b""
     return StatusError.NONE, motor.read(address, length)
 
@@ -157,12 +162,21 @@ def _unicast(packet: Packet, motor: EmulatedMotor, *, via_secondary: bool) -> tu
         if p != CLEAR_MULTI_TURN:
             return StatusError.DATA_RANGE, b""
         return motor.clear_multi_turn(), b""
+    if inst == Instruction.CONTROL_TABLE_BACKUP:
+        error = motor.check_backup(p)
+        if not error and p[0] == BACKUP_STORE:
+            motor.store_backup()
+        return error, b""
     return StatusError.INSTRUCTION, b""
 
 
 def _after_effects(packet: Packet, motor: EmulatedMotor) -> None:
-    """REBOOT and FACTORY_RESET act after the motor has answered."""
-    if packet.instruction == Instruction.REBOOT and not packet.params:
+    """REBOOT, FACTORY_RESET and a backup restore act after the motor has answered."""
+    if packet.instruction == Instruction.CONTROL_TABLE_BACKUP:
+        p = packet.params
+        if p and p[0] == BACKUP_RESTORE and not motor.check_backup(p):
+            motor.restore_backup()
+    elif packet.instruction == Instruction.REBOOT and not packet.params:
         motor.reboot()
     elif packet.instruction == Instruction.FACTORY_RESET and len(packet.params) == 1:
         option = packet.params[0]
@@ -192,9 +206,17 @@ def _broadcast(packet: Packet, motors: Sequence[EmulatedMotor]) -> list[Response
         _apply_writes(_sync_writes(p), by_id)
     elif inst == Instruction.BULK_WRITE:
         _apply_writes(_bulk_writes(p), by_id)
-    elif inst in (Instruction.WRITE, Instruction.REG_WRITE, Instruction.ACTION, Instruction.CLEAR):
+    elif inst in (
+        Instruction.WRITE,
+        Instruction.REG_WRITE,
+        Instruction.ACTION,
+        Instruction.CLEAR,
+        Instruction.CONTROL_TABLE_BACKUP,
+    ):
         for motor in motors:
-            _unicast(packet, motor, via_secondary=False)
+            error, _ = _unicast(packet, motor, via_secondary=False)
+            if not error:
+                _after_effects(packet, motor)
     elif inst in (Instruction.REBOOT, Instruction.FACTORY_RESET):
         for motor in motors:
             _after_effects(packet, motor)

@@ -1,19 +1,30 @@
 """One emulated X-series motor: its control-table memory, the write rules, and its motion.
 
-The memory is the table of :mod:`drivers.dynamixel.control_table` (addresses 0-146,
-little endian); writes go through :mod:`sim.dynamixel.rules` and a rejected write changes
-nothing. Motion follows :mod:`sim.dynamixel.motion` on the motor's clock; derived registers
-(Present Position, Present Velocity, Moving, Moving Status, trajectories, Realtime
-Tick) are computed whenever they are read.
+The memory is the table of :mod:`sim.dynamixel.table` (the driver's items plus Startup
+Configuration, the feedforward gains, Backup Ready and the Indirect Address/Data blocks;
+addresses 0-661, little endian); writes go through :mod:`sim.dynamixel.rules` (Indirect
+Data resolved there) and a rejected write changes nothing. Motion follows
+:mod:`sim.dynamixel.motion` on the motor's clock; derived registers (Present Position,
+Present Velocity, Moving, Moving Status, trajectories, Realtime Tick) are computed
+whenever they are read.
 
 Position frames (e-manual): Present Position = s·shaft + Homing Offset, with s = −1 in
 reverse Drive Mode (the offset's sign is not reversed); position mode ignores an offset
 outside ±1,024. Present Position is brought back within one turn when torque goes on
 in position mode, when the mode changes to position mode, and on reboot.
+
+Control Table Backup (instruction 0x20, firmware ≥ 45; e-manual, Protocol 2.0,
+emanual.robotis.com/docs/en/dxl/protocol2/, "Control Table Backup (0x20)"): with
+torque off, "store" keeps the EEPROM area and the RAM items of `BACKUP_RAM_ITEMS` (gains,
+profile, Indirect Addresses) in a backup area that survives REBOOT and FACTORY_RESET
+(*assumption* for the latter) and sets Backup Ready (147); "restore" writes the backed-up
+EEPROM area back and reboots. At every boot (REBOOT, restore, factory reset) Startup
+Configuration (60) bit 1 restores the backed-up RAM items and bit 0 turns torque on.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections import deque
@@ -21,12 +32,10 @@ from collections.abc import Callable
 
 from drivers.dynamixel.control_table import (
     BAUD_RATES,
-    BY_NAME,
     DRIVE_MODE_REVERSE,
     EEPROM_END,
-    ITEMS,
+    HARDWARE_ERROR_BITS,
     OPERATING_MODES,
-    TABLE_SIZE,
     TICKS_PER_REV,
 )
 from sim.clock import TimeSource
@@ -42,7 +51,24 @@ from sim.dynamixel.motion import (
     spin,
 )
 from sim.dynamixel.protocol import ALERT, StatusError
-from sim.dynamixel.rules import MULTI_TURN, POSITION, check_write
+from sim.dynamixel.rules import (
+    MULTI_TURN,
+    POSITION,
+    check_write,
+    check_writes,
+    resolve,
+    targets,
+)
+from sim.dynamixel.table import (
+    BACKUP_RAM_ITEMS,
+    BY_NAME,
+    EMULATED_TABLE_SIZE,
+    ITEM_AT,
+    ITEMS,
+    STARTUP_RAM_RESTORE,
+    STARTUP_TORQUE_ON,
+    touches_indirect_data,
+)
 
 #: Drive Mode bit 2: time-based profile (Profile Velocity/Acceleration in ms).
 DRIVE_MODE_TIME_BASED = 0x04
@@ -61,10 +87,22 @@ _GOAL = BY_NAME["goal_position"]
 #: Present Input Voltage (0.1 V) and Present Temperature (°C) of a healthy motor.
 NOMINAL_VOLTAGE = 120
 NOMINAL_TEMPERATURE = 30
+_OVERHEATING = next(bit for bit, name in HARDWARE_ERROR_BITS.items() if name == "overheating")
+
+#: CONTROL_TABLE_BACKUP (0x20): its parameters are an option then the magic "CTRL";
+#: the instruction exists from firmware 45 on (X430/X540 series).
+BACKUP_MAGIC = b"CTRL"
+BACKUP_STORE = 0x01
+BACKUP_RESTORE = 0x02
+BACKUP_FIRMWARE = 45
+
+
+#: Trajectories (moves and holds) a motor remembers for `EmulatedMotor.position_at`.
+PAST_TRAJECTORIES = 8
 
 
 def _defaults() -> bytearray:
-    mem = bytearray(TABLE_SIZE)
+    mem = bytearray(EMULATED_TABLE_SIZE)
     for it in ITEMS:
         mem[it.address : it.address + it.size] = it.encode(it.default)
     return mem
@@ -113,9 +151,13 @@ class EmulatedMotor:
         self._boot = now
         self._t0 = now
         self._traj: Trajectory = at_rest(position)
+        #: The trajectories before the present one (start time, trajectory), newest last.
+        self._past: deque[tuple[float, Trajectory]] = deque(maxlen=PAST_TRAJECTORIES)
         self._kind = ProfileType.STEP
         self._registered: tuple[int, bytes] | None = None
         self._goals: deque[int] = deque(maxlen=GOAL_LOG_SIZE)
+        self._backup: bytes | None = None  # a copy of the memory when the backup was stored
+        self._heat: tuple[float, float, float] | None = None  # since (s), °C then, τ (s)
         self._put("model_number", model)
         self._put("firmware_version", firmware)
         self._put("id", motor_id)
@@ -185,31 +227,55 @@ class EmulatedMotor:
     def position_at(self, t: float) -> float:
         """Present Position (ticks, before rounding to the register) at time ``t`` on the
         motor's clock, along its present trajectory (valid from the last goal, torque
-        change or stop on): the truth a test compares polled positions with."""
+        change or stop on) or, before it, along the last `PAST_TRAJECTORIES` moves and
+        holds: the truth a test compares polled positions with."""
         with self._lock:
+            if t < self._t0:
+                for t0, traj in reversed(self._past):
+                    if t >= t0:
+                        return traj.at(t - t0)[0]
             return self._position(t)
 
     # -- host-facing access ---------------------------------------------------------------
 
     def read(self, address: int, length: int) -> bytes:
-        """``length`` bytes from ``address`` (IndexError outside the table)."""
-        if length < 1 or address < 0 or address + length > TABLE_SIZE:
-            raise IndexError(f"read of {length} bytes at {address} is outside 0..{TABLE_SIZE}")
+        """``length`` bytes from ``address`` (IndexError outside the table); an Indirect
+        Data byte reads the byte its Indirect Address names (a reserved one reads 0)."""
+        if length < 1 or address < 0 or address + length > EMULATED_TABLE_SIZE:
+            raise IndexError(
+                f"read of {length} bytes at {address} is outside 0..{EMULATED_TABLE_SIZE}"
+            )
         with self._lock:
             self._refresh()
-            return bytes(self._mem[address : address + length])
+            if not touches_indirect_data(address, length):
+                return bytes(self._mem[address : address + length])
+            out = bytearray()
+            for a in range(address, address + length):
+                target = resolve(self._mem, a)
+                known = 0 <= target < EMULATED_TABLE_SIZE and ITEM_AT[target] is not None
+                out.append(self._mem[target] if known else 0)
+            return bytes(out)
 
     def write(self, address: int, data: bytes, *, via_secondary: bool = False) -> StatusError:
         """Apply a WRITE of ``data`` at ``address`` under the control-table rules (a
-        Goal Position in it is logged first, whether the rules accept it or not)."""
+        Goal Position in it, directly or through Indirect Data, is logged first, whether
+        the rules accept it or not)."""
         with self._lock:
-            start = _GOAL.address - address
-            if start >= 0 and start + _GOAL.size <= len(data):
-                self._goals.append(_GOAL.decode(bytes(data[start : start + _GOAL.size])))
-            error = self.check_write(address, data, via_secondary=via_secondary)
+            inside = address >= 0 and address + len(data) <= EMULATED_TABLE_SIZE
+            writes = targets(self._mem, address, bytes(data)) if inside else {}
+            sent = writes or dict(zip(range(address, address + len(data)), data, strict=True))
+            goal = range(_GOAL.address, _GOAL.address + _GOAL.size)
+            if all(a in sent for a in goal):
+                self._goals.append(_GOAL.decode(bytes(sent[a] for a in goal)))
+            if writes:
+                error = check_writes(
+                    self._mem, writes, shutdown=self.in_shutdown, via_secondary=via_secondary
+                )
+            else:  # a shape error: empty or outside the table
+                error = self.check_write(address, data, via_secondary=via_secondary)
             if error:
                 return error
-            self._apply(address, bytes(data))
+            self._apply(writes)
             return StatusError.NONE
 
     def check_write(self, address: int, data: bytes, *, via_secondary: bool = False) -> StatusError:
@@ -279,6 +345,7 @@ class EmulatedMotor:
             self._boot = now
             self._registered = None
             self._reset_ram(self._one_turn(position))
+            self._cool(now)  # still above its Temperature Limit: Overheating again
 
     def factory_reset(self, option: int) -> StatusError:
         """FACTORY_RESET: 0xFF everything, 0x01 all but ID, 0x02 all but ID and baud rate;
@@ -311,12 +378,68 @@ class EmulatedMotor:
             self._hold(self._one_turn(position), now)
             return StatusError.NONE
 
+    def heat(self, celsius: float, time_constant_s: float) -> None:
+        """The motor is at ``celsius`` (°C) now and cools toward its nominal 30 °C with
+        ``time_constant_s`` (s) on its clock (Present Temperature follows). Above its
+        Temperature Limit it latches Overheating, now and on a REBOOT while still
+        above, as a real motor does."""
+        if not time_constant_s > 0:
+            raise ValueError(f"the time constant must be > 0 s, got {time_constant_s}")
+        with self._lock:
+            now = self._clock()
+            self._heat = (now, float(celsius), float(time_constant_s))
+            self._cool(now)
+
     def raise_alert(self, bit: int) -> None:
         """Latch hardware error ``bit``; if it is in the Shutdown mask, torque goes off."""
         with self._lock:
             self._put("hardware_error_status", self.hardware_error | (1 << bit))
             if self.in_shutdown:
                 self._torque_off()
+
+    @property
+    def backup_ready(self) -> bool:
+        """True once a Control Table Backup has been stored (Backup Ready, 147)."""
+        with self._lock:
+            return self._backup is not None
+
+    def check_backup(self, params: bytes) -> StatusError:
+        """The error CONTROL_TABLE_BACKUP with ``params`` gets: Instruction error below
+        firmware 45 (*assumption*: an older motor does not know it), Data Length unless
+        five parameters, Data Range for another option or magic (*assumption*, as CLEAR),
+        Result Fail with torque on (e-manual) or a restore with no backup (*assumption*)."""
+        with self._lock:
+            if self.firmware < BACKUP_FIRMWARE:
+                return StatusError.INSTRUCTION
+            if len(params) != 1 + len(BACKUP_MAGIC):
+                return StatusError.DATA_LENGTH
+            option, magic = params[0], bytes(params[1:])
+            if option not in (BACKUP_STORE, BACKUP_RESTORE) or magic != BACKUP_MAGIC:
+                return StatusError.DATA_RANGE
+            if self._raw("torque_enable") or (option == BACKUP_RESTORE and not self._backup):
+                return StatusError.RESULT_FAIL
+            return StatusError.NONE
+
+    def store_backup(self) -> None:
+        """Keep the EEPROM area and the backed-up RAM items; Backup Ready = 1."""
+        with self._lock:
+            self._refresh()
+            self._backup = bytes(self._mem)
+            self._put("backup_ready", 1)
+
+    def restore_backup(self) -> None:
+        """Write the backed-up EEPROM area back (identity registers excepted), then reboot."""
+        with self._lock:
+            if self._backup is None:
+                return
+            shaft = self.shaft_position
+            model, firmware = self.model, self.firmware
+            self._mem[:EEPROM_END] = self._backup[:EEPROM_END]
+            self._put("model_number", model)
+            self._put("firmware_version", firmware)
+            self._t0 = self._clock()
+            self._traj = at_rest(self._from_shaft(shaft))
+            self.reboot()
 
     # -- internals ------------------------------------------------------------------------
 
@@ -331,22 +454,35 @@ class EmulatedMotor:
         self._mem[it.address : it.address + it.size] = it.encode(value)
 
     def _reset_ram(self, position: float) -> None:
+        """Boot: RAM to defaults, then Startup Configuration (RAM restore, torque on)."""
         self._mem[EEPROM_END:] = _DEFAULTS[EEPROM_END:]
         self._put("goal_pwm", self._raw("pwm_limit"))
         self._put("goal_current", self._raw("current_limit"))
         self._put("present_input_voltage", NOMINAL_VOLTAGE)
         self._put("present_temperature", NOMINAL_TEMPERATURE)
+        self._put("backup_ready", int(self._backup is not None))
+        startup = self._raw("startup_configuration")
+        if startup & STARTUP_RAM_RESTORE and self._backup is not None:
+            for it in BACKUP_RAM_ITEMS:
+                end = it.address + it.size
+                self._mem[it.address : end] = self._backup[it.address : end]
         self._kind = ProfileType.STEP
-        self._hold(position, self._clock())
+        now = self._clock()
+        self._hold(position, now)
         self._put("goal_position", _wrap32(round(position)))
+        if startup & STARTUP_TORQUE_ON:
+            self._put("torque_enable", 1)
+            self._torque_on(now)
 
-    def _apply(self, address: int, data: bytes) -> None:
+    def _apply(self, writes: dict[int, int]) -> None:
+        """Store a checked scattered write (target address → byte) and its side effects."""
         now = self._clock()
         position, _ = self._traj.at(now - self._t0)
         before = {name: self._raw(name) for name in _WATCHED}
         shaft = self._to_shaft(position)
-        self._mem[address : address + len(data)] = data
-        touched = {it.name for it in ITEMS if address <= it.address < address + len(data)}
+        for a, byte in writes.items():
+            self._mem[a] = byte
+        touched = {it.name for a in writes if (it := ITEM_AT[a]) is not None}
         changed = {name for name in _WATCHED if self._raw(name) != before[name]}
 
         if changed & {"homing_offset", "drive_mode", "operating_mode"}:
@@ -389,6 +525,7 @@ class EmulatedMotor:
             v_max = v * TICKS_PER_S_PER_VELOCITY_UNIT if v else INF
             a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa and not time_based else INF
             traj = move(position, velocity, goal, v_max, a_max, None if pv else ProfileType.STEP)
+        self._past.append((self._t0, self._traj))
         self._t0, self._traj, self._kind = now, traj, traj.kind
 
     def _start_spin(self, now: float) -> None:
@@ -416,6 +553,7 @@ class EmulatedMotor:
         return self._traj.at(now - self._t0)[0]
 
     def _hold(self, position: float, now: float) -> None:
+        self._past.append((self._t0, self._traj))
         self._t0, self._traj = now, at_rest(position)
 
     def _homing(self) -> int:
@@ -437,8 +575,19 @@ class EmulatedMotor:
         homing = self._homing()
         return homing + (position - homing) % TICKS_PER_REV
 
+    def _cool(self, now: float) -> None:
+        """Present Temperature on the way down from `heat`; Overheating above the limit."""
+        if self._heat is None:
+            return
+        since, celsius, tau = self._heat
+        excess = (celsius - NOMINAL_TEMPERATURE) * math.exp(-(now - since) / tau)
+        self._put("present_temperature", min(max(round(NOMINAL_TEMPERATURE + excess), 0), 255))
+        if self._raw("present_temperature") > self._raw("temperature_limit"):
+            self.raise_alert(_OVERHEATING)
+
     def _refresh(self) -> None:
         now = self._clock()
+        self._cool(now)
         elapsed = now - self._t0
         traj = self._traj
         position, velocity = traj.at(elapsed)

@@ -14,30 +14,37 @@ Following the ROBOTIS e-manual (Protocol 2.0 error numbers):
   (limits written in the same packet count);
 * Torque Enable = 1 while a shutdown is latched → Result Fail 1.
 
-Items are checked in address order and the first error wins.
+Indirect Data (e-manual, "Indirect Address, Indirect Data"): a host access to an
+Indirect Data byte reaches the address its Indirect Address holds (`resolve`), so the
+target's size, range and access rules apply through it — a 4-byte item mapped to four
+slots must be written in one packet through all four (Data Length error 5 otherwise),
+a read-only target stays read-only (Access error 7). The mapping is read after the
+packet's own direct bytes, so one packet may set the slots and write through them
+(*assumption*). A slot mapped to an Indirect Data address (the default maps each slot
+to itself) reaches that byte itself, with no further indirection (*assumption*).
+
+Items are checked in the order the packet reaches them and the first error wins.
 """
 
 from __future__ import annotations
 
 from drivers.dynamixel.control_table import (
-    BY_NAME,
     EXTENDED_POSITION_LIMIT,
-    ITEMS,
     OPERATING_MODES,
-    TABLE_SIZE,
     Area,
     Item,
 )
 from sim.dynamixel.protocol import StatusError
+from sim.dynamixel.table import (
+    BY_NAME,
+    EMULATED_TABLE_SIZE,
+    INDIRECT_SLOT,
+    ITEM_AT,
+    touches_indirect_data,
+)
 
 POSITION = OPERATING_MODES["position"]
 MULTI_TURN = (OPERATING_MODES["extended_position"], OPERATING_MODES["current_based_position"])
-
-#: The item each address belongs to (None for reserved bytes).
-ITEM_AT: tuple[Item | None, ...] = tuple(
-    next((it for it in ITEMS if it.address <= a < it.address + it.size), None)
-    for a in range(TABLE_SIZE)
-)
 
 _GOAL_LIMITS = {
     "goal_velocity": "velocity_limit",
@@ -52,25 +59,47 @@ def value_in(memory: bytes | bytearray, name: str) -> int:
     return it.decode(bytes(memory[it.address : it.address + it.size]))
 
 
-def items_written(address: int, length: int) -> tuple[list[Item], StatusError]:
-    """The items a write of ``length`` bytes at ``address`` covers, or the error it gets
-    for its shape alone (empty, outside the table, a reserved byte, part of an item)."""
-    end = address + length
-    if length < 1:
+def resolve(memory: bytes | bytearray, address: int) -> int:
+    """The address a host access at ``address`` reaches: itself, or for an Indirect Data
+    byte the address its Indirect Address holds."""
+    slot = INDIRECT_SLOT.get(address)
+    if slot is None:
+        return address
+    return memory[slot] | (memory[slot + 1] << 8)
+
+
+def targets(memory: bytes | bytearray, address: int, data: bytes) -> dict[int, int]:
+    """Where each byte of a WRITE of ``data`` at ``address`` lands: target address →
+    byte, in packet order (Indirect Data resolved after the packet's direct bytes)."""
+    if not touches_indirect_data(address, len(data)):
+        return dict(zip(range(address, address + len(data)), data, strict=True))
+    direct = bytearray(memory)
+    for i, byte in enumerate(data):
+        if address + i not in INDIRECT_SLOT:
+            direct[address + i] = byte
+    out: dict[int, int] = {}
+    for i, byte in enumerate(data):
+        out[resolve(direct, address + i)] = byte
+    return out
+
+
+def items_written(writes: dict[int, int]) -> tuple[list[Item], StatusError]:
+    """The items a scattered write (target address → byte) covers, or the error it gets
+    for its shape alone (nothing, outside the table, a reserved byte, part of an item)."""
+    if not writes:
         return [], StatusError.DATA_LENGTH
-    if address < 0 or end > TABLE_SIZE:
-        return [], StatusError.ACCESS
-    items: list[Item] = []
-    a = address
-    while a < end:
-        it = ITEM_AT[a]
+    items: dict[int, Item] = {}
+    for a in writes:
+        it = ITEM_AT[a] if 0 <= a < EMULATED_TABLE_SIZE else None
         if it is None:
             return [], StatusError.ACCESS
-        if it.address < address or it.address + it.size > end:
-            return [], StatusError.DATA_LENGTH
-        items.append(it)
-        a = it.address + it.size
-    return items, StatusError.NONE
+        if it.address in items:
+            continue
+        for b in range(it.address, it.address + it.size):
+            if b not in writes:
+                return [], StatusError.DATA_LENGTH
+        items[it.address] = it
+    return list(items.values()), StatusError.NONE
 
 
 def check_write(
@@ -85,11 +114,29 @@ def check_write(
 
     ``shutdown`` says a hardware error in the Shutdown mask is latched.
     """
-    items, error = items_written(address, len(data))
+    if not data:
+        return StatusError.DATA_LENGTH
+    if address < 0 or address + len(data) > EMULATED_TABLE_SIZE:
+        return StatusError.ACCESS
+    return check_writes(
+        memory, targets(memory, address, data), shutdown=shutdown, via_secondary=via_secondary
+    )
+
+
+def check_writes(
+    memory: bytes | bytearray,
+    writes: dict[int, int],
+    *,
+    shutdown: bool = False,
+    via_secondary: bool = False,
+) -> StatusError:
+    """The error a scattered write (target address → byte, see `targets`) gets."""
+    items, error = items_written(writes)
     if error:
         return error
     after = bytearray(memory)
-    after[address : address + len(data)] = data
+    for a, byte in writes.items():
+        after[a] = byte
     torque_on = value_in(memory, "torque_enable") == 1
     for it in items:
         error = _check_item(

@@ -27,6 +27,12 @@ from sim.serial_photometer.protocol import (
 from sim.serial_photometer.server import _Event, _PtyServer
 
 Signal = float | Callable[[float], float]
+#: Stream windows' counts in one call: given the windows' starts and ends
+#: (`time.monotonic` s), their counts and saturated flags (one each).
+Windows = Callable[[list[float], list[float]], tuple[list[float], list[bool]]]
+#: With ``windows``: the shortest real time (s) between two bursts of stream lines (a
+#: USB serial adapter's latency timer sends in bursts as well).
+BURST_S = 0.004
 #: The highest rate (Hz) the simulated photometer streams at.
 MAX_STREAM_RATE_HZ = 2000.0
 
@@ -55,6 +61,12 @@ class SerialPhotometer(_PtyServer):
     ``speedup`` an exposure of t s takes t / ``speedup`` real seconds (a rehearsal's
     scaled time; the counts are still those of t s).
 
+    A stream's windows are read at their middle through ``signal``, one exposure each,
+    as the pose is then; with ``windows`` instead, all the windows ended when the serving
+    thread wakes are read in one call from their true start and end times (what a
+    rehearsal needs when one exposure costs more than a sped-up period: the lines then
+    come in bursts, each stamped with its window's end).
+
     The pty and the serving thread come from :class:`~sim.serial_photometer.server._PtyServer`.
     """
 
@@ -72,6 +84,7 @@ class SerialPhotometer(_PtyServer):
         echo: bool = False,
         seed: int = 0,
         speedup: float = 1.0,
+        windows: Windows | None = None,
     ) -> None:
         if not callable(signal) and not math.isfinite(signal):
             raise ValueError(f"signal must be finite or a callable, got {signal!r}")
@@ -94,6 +107,9 @@ class SerialPhotometer(_PtyServer):
         self._echo = echo
         self._speedup = float(speedup)
         self._rng = random.Random(seed)
+        self._windows_signal = windows
+        self._stream_from = 0.0  # time.monotonic() the running stream's first window began
+        self._stream_sent = 0  # windows of the running stream read so far
 
         self._lock = threading.Lock()
         self._faults = _Faults()
@@ -232,6 +248,8 @@ class SerialPhotometer(_PtyServer):
             words = line.split()
             name, args = words[0].upper(), words[1:]
             if name == "STOP" and not args:  # idle already: acknowledged all the same
+                if self._stream is not None and self._windows_signal is not None:
+                    self._send_windows_locked(now)  # the windows ended before it
                 self._stream, self._stream_gen = None, self._stream_gen + 1
                 answer = "OK"
             elif name == "STREAM":
@@ -269,16 +287,68 @@ class SerialPhotometer(_PtyServer):
         period, integration = 1 / rate / self._speedup, integration_ms / 1000
         self._stream, self._stream_gen = (period, integration), self._stream_gen + 1
         self._window = None
+        if self._windows_signal is not None:  # the windows ended, read in one call
+            self._stream_from, self._stream_sent = at, 0
+            heapq.heappush(
+                self._events, _Event(at + period, next(self._seq), tick=self._stream_gen)
+            )
+            return "OK"
         middle = at + period - integration / self._speedup / 2
         heapq.heappush(
             self._events, _Event(middle, next(self._seq), tick=self._stream_gen, middle=True)
         )
         return "OK"
 
+    def _burst_locked(self, event: _Event) -> None:
+        """With ``windows``: send a line for every window ended by now, then wake at the
+        next window's end."""
+        if self._faults.silent:  # the stream stops, as a crashed sketch's would
+            self._stream = None
+            return
+        self._send_windows_locked(max(time.monotonic(), event.due))
+        assert self._stream is not None
+        following = self._stream_from + (self._stream_sent + 1) * self._stream[0]
+        following = max(following, time.monotonic() + BURST_S)
+        heapq.heappush(self._events, _Event(following, next(self._seq), tick=event.tick))
+
+    def _send_windows_locked(self, now: float) -> None:
+        """A line for each window of the running stream ended by ``now`` and not yet
+        sent, their counts read in one call (with ``windows``)."""
+        assert self._stream is not None and self._windows_signal is not None
+        period, integration = self._stream
+        done = math.floor((now - self._stream_from) / period + 1e-9)
+        ends = [self._stream_from + (k + 1) * period for k in range(self._stream_sent, done)]
+        self._stream_sent = max(done, self._stream_sent)
+        if not ends:
+            return
+        starts = [end - integration / self._speedup for end in ends]
+        try:
+            counts, saturated = self._windows_signal(starts, ends)
+            window: list[tuple[float, bool]] | Exception = [
+                self._scaled_locked(c, s) for c, s in zip(counts, saturated, strict=True)
+            ]
+        except Exception as exc:  # a test's signal ran out of values, say
+            window = exc
+        for k, end in enumerate(ends):
+            faulty = self._fault_line_locked()
+            if faulty is not None:
+                data = faulty
+            elif isinstance(window, list):
+                value, sat = window[k]
+                t_ms = self.device_time_s(end) * 1000
+                self._stream_ends.append(end)
+                data = _line(f"DAT {t_ms:.3f} {value!r} {'SAT' if sat else 'OK'}")
+            else:
+                data = _line(f"ERR signal failed: {type(window).__name__}")
+            self._output_locked(data)
+
     def _tick_locked(self, event: _Event) -> None:
         """A stream window's middle (``event.middle``: read the signal, as the pose is
         then) or end (send its line; schedule the next window's middle)."""
         if self._stream is None or event.tick != self._stream_gen:
+            return
+        if self._windows_signal is not None:
+            self._burst_locked(event)
             return
         period, integration = self._stream
         half = integration / self._speedup / 2
@@ -312,6 +382,12 @@ class SerialPhotometer(_PtyServer):
         """One exposure's counts (signal, noise, dark, gain) and whether it saturated."""
         signal = self._signal
         counts = float(signal(exposure_s)) if callable(signal) else signal * exposure_s
+        return self._scaled_locked(counts, False)
+
+    def _scaled_locked(self, counts: float, saturated: bool) -> tuple[float, bool]:
+        """Noise, dark and gain added to a signal's ``counts``; clipped at full scale."""
+        if saturated and self._full_scale is not None:
+            return self._full_scale, True
         if self._noise_std:
             counts += self._rng.gauss(0.0, self._noise_std)
         counts = (counts + self._dark) * self._gain

@@ -23,6 +23,7 @@ STREAM_CONFIG = SerialStreamConfig(
     rate_hz=100.0,
     max_rate_hz=2000.0,
     device_time_s=1e-3,
+    starts_on_command=True,  # its first window begins when STREAM arrives
 )
 #: What the device sends instead of an answer under :meth:`SerialPhotometer.malformed`.
 MALFORMED_LINE = "V#L 12?4 OK"

@@ -254,7 +254,7 @@ def test_a_stale_reply_in_a_sync_read_is_retried(
 ) -> None:
     emu, bus = virtual_bus()
     with bus:
-        bus.health()  # motor 2's last status: Present Input Voltage … Temperature (3 bytes)
+        bus.health()  # motor 2's last status: Present Current … Temperature (21 bytes)
         emu.inject(Fault.STALE, motor_id=2)
         assert bus.positions() == pytest.approx(dict.fromkeys(bus.axes, 0.0), abs=1e-12)
 

@@ -176,3 +176,20 @@ def test_the_simulated_photometer_reads_its_signal_at_each_window_middle() -> No
     late = sorted(c - (e - 0.005) for c, e in zip(calls, ends, strict=False))
     assert all(c < e for c, e in zip(calls, ends, strict=False))  # read before the line is sent
     assert abs(late[len(late) // 2]) < 0.002
+
+
+def test_a_device_that_starts_on_the_command_is_stamped_from_it(
+    device: SerialPhotometer,
+) -> None:
+    """``starts_on_command``: the windows are stamped from when the start command left
+    (the truth between the stamp and the stamp plus the smallest arrival delay); the
+    stop's acknowledgement ends the stream, every window the device sent received."""
+    with streaming_detector(device, starts_on_command=True) as det:
+        det.start_stream(250, 0.002)
+        readings = collect(det, 0.1) + det.stop_stream()
+        det.measure(0.01)  # idle again
+    truth = device.stream_ends
+    assert len(readings) == len(truth)
+    slack = min(r.received_s - r.ended_s for r in readings if r.received_s is not None)
+    late = [t - r.ended_s for r, t in zip(readings, truth, strict=True)]
+    assert min(late) >= -1e-3 and max(late) <= slack + 1e-3

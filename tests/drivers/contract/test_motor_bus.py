@@ -33,7 +33,7 @@ def test_close_is_idempotent_and_open_twice_is_harmless(motors: MotorHarness) ->
 
 @pytest.mark.parametrize(
     "call",
-    ["move_to", "wait_settled", "positions", "stop", "torque", "health"],
+    ["move_to", "wait_settled", "positions", "stop", "torque", "health", "recover"],
 )
 def test_every_call_on_a_closed_bus_raises_device_closed(motors: MotorHarness, call: str) -> None:
     bus = motors.make(None)
@@ -41,6 +41,7 @@ def test_every_call_on_a_closed_bus_raises_device_closed(motors: MotorHarness, c
         "move_to": (motors.target,),
         "wait_settled": (1.0,),
         "torque": (True,),
+        "recover": (motors.faulted_axis,),
     }.get(call, ())
     for _ in (0, 1):  # before it was ever opened, and after it was closed
         with pytest.raises(DeviceClosed):
@@ -163,3 +164,32 @@ def test_stop_holds_where_the_axes_are(motors: MotorHarness) -> None:
         health = bus.health()
         assert set(health) == set(bus.axes)
         assert all(h.ok for h in health.values())
+
+
+def test_recover_reboots_only_the_faulted_motor_back_into_service(motors: MotorHarness) -> None:
+    """After a hardware error mid-move: the motor rebooted, its error cleared, nothing
+    moved by the recovery (it says where it held and reads the same), and it moves to a
+    goal again; an unknown axis sends nothing."""
+    bus = motors.make("motor_fault")
+    with bus:
+        bus.move_to(motors.target)
+        motors.arm()
+        with pytest.raises(MotorFault):
+            bus.wait_settled(5.0)
+        with pytest.raises(DriverError):
+            bus.recover("no_such_axis")
+        motors.sync()
+        held = motors.observe()
+        assert not bus.health()[motors.faulted_axis].ok  # latched until the reboot
+        recovered = bus.recover(motors.faulted_axis)
+        assert recovered.axis == motors.faulted_axis
+        assert recovered.position_rad == pytest.approx(recovered.held_rad, abs=1e-9)
+        motors.sync()
+        motors.advance(30.0)
+        assert motors.observe() == pytest.approx(held, abs=1e-9)  # every axis held
+        assert all(h.ok for h in bus.health().values())
+        bus.move_to(motors.target)  # torque on, configured: it moves again
+        motors.sync()
+        motors.advance(30.0)
+        bus.wait_settled(5.0)
+        assert bus.positions() == pytest.approx(motors.target, abs=2e-3)

@@ -2,7 +2,8 @@
 raw streams in one transaction; the journaled streams merged again give the samples;
 `kill -9` mid-sweep loses at most that sweep and the resumed run equals an uninterrupted
 one bit for bit; a fault during a sweep journals it as abandoned (retried, or redone on
-resume after a motor fault)."""
+resume after a motor fault); a motor recovered by policy redoes it in the same
+session."""
 
 from __future__ import annotations
 
@@ -18,7 +19,9 @@ import pytest
 import yaml
 
 from drivers.base import Devices, StampedPositions
-from gonio.acquire.sweep import merge, run_sweep
+from gonio.acquire.recovery import MotorRecovery
+from gonio.acquire.sweep import merge, run_sweep, target_slots
+from gonio.planner.schema import MotorFaultSpec
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run, raw_streams
 from gonio.workflows import session
@@ -85,6 +88,11 @@ def test_every_sweep_is_measured_and_its_targets_read(run: Run) -> None:
     assert {s.outcome for s in run.sweeps} == {"measured"}
     assert len(run) + len(run.skipped) == len(run.plan)
     assert len(run) >= 0.95 * len(run.plan)
+    # The detector streams every slot; the samples are the plan's targets only (the
+    # thinning's other slots stay in the raw stream table).
+    matched = sum(s.data["matched"] for s in run.sweeps)
+    assert matched >= 0.95 * int(sweeps.streamed.sum()) and matched > len(run.plan)
+    assert sum(s.data["kept"] for s in run.sweeps) == len(run)
     # The angles are the read ones, near the planned mid-window poses.
     gap = np.abs(run.angles("read_back") - run.angles("commanded")).max()
     speed = float(np.abs(sweeps.velocity).max())
@@ -106,10 +114,14 @@ def test_the_journaled_streams_merge_again_into_the_samples(run: Run) -> None:
     record = run.sweeps[1]
     times, positions, readings = raw_streams(run, record.id)
     assert len(readings) == record.data["readings"] and len(times) == record.data["polls"]
-    merged = merge(
+    slots = target_slots(sweeps, run.plan.arrival_s, record.sweep)
+    matched = merge(
         times[:, 0], times[:, 1], positions, readings["started_s"], readings["ended_s"],
-        sweeps, record.sweep,
+        sweeps, record.sweep, slots,
     )  # fmt: skip
+    assert len(matched.index) == record.data["matched"]
+    merged = matched.targets()
+    assert len(merged.index) == record.data["kept"]
     rows = np.searchsorted(run.target, merged.target)
     np.testing.assert_array_equal(run.target[rows], merged.target)
     np.testing.assert_array_equal(run.angles("read_back")[rows], merged.angles)
@@ -220,4 +232,28 @@ def test_a_motor_fault_ends_the_run_resumable_and_the_resume_redoes_the_sweep(
     assert resumed.report.outcome == "completed", resumed.report.message
     done = open_run(path)
     assert [s.outcome for s in done.sweeps].count("measured") == len(sweeps)
+    assert len(done) + len(done.skipped) == len(done.plan)
+
+
+def test_a_motor_recovered_by_policy_redoes_the_sweep_in_the_same_session(
+    tmp_path: Path, run: Run, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``on_fault.motor: recover`` (set on the engine here: the plan, and its ordering,
+    stay the module's): the motor rebooted, the sweep measured again, the run done."""
+    sweeps = run.plan.sweeps
+    assert sweeps is not None
+    first = int(sweeps.first[1])
+    files = fly_files(tmp_path, faults=[{"kind": "motor_fault", "at": [first]}])
+    made = MotorRecovery.of.__func__  # type: ignore[attr-defined]
+    policy = MotorFaultSpec(action="recover")
+    monkeypatch.setattr(
+        MotorRecovery, "of", classmethod(lambda cls, _, *a, **k: made(cls, policy, *a, **k))
+    )
+    result = files.start(tmp_path / "run.sqlite")
+    assert result.report.outcome == "completed", result.report.message
+    done = result.run
+    assert [(e.target, e.data["step"]) for e in done.of_kind("recovery")] == [
+        (first, "diagnosed"), (first, "rebooted"), (first, "recovered"),
+    ]  # fmt: skip
+    assert [s.outcome for s in done.sweeps] == ["measured"] * len(sweeps)
     assert len(done) + len(done.skipped) == len(done.plan)

@@ -5,6 +5,7 @@ backends that do not sweep yet."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -16,10 +17,10 @@ import yaml
 
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
-from gonio.planner import build, plan_bytes, read_plan, write_plan
+from gonio.planner import build, fly, plan_bytes, read_plan, write_plan
 from gonio.planner.blur import blur_budget_of_width
 from gonio.planner.files import parse_plan
-from gonio.planner.fly import sweep_axis
+from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
@@ -115,17 +116,20 @@ def test_readings_and_duration_as_an_independent_computation_predicts(plan: Plan
         # the ramps cover v² / 2a each side of the constant-velocity part
         assert abs(w.entry[k, j] - w.start[k, j]) == pytest.approx(v * ramp / 2)
         assert abs(w.exit[k, j] - w.entry[k, j]) == pytest.approx(
-            v * ((w.count[k] - 1) * period + t_int)
+            v * ((w.streamed[k] - 1) * period + t_int)
         )
         t += float(rig.travel.time(here, w.start[k])) + rig.spec.settle_s + ramp
         assert w.cruise_at_s[k] == pytest.approx(t)
         assert w.first[k] == n
-        ks = np.arange(w.count[k])
         rows = slice(n, n + int(w.count[k]))
+        # the targets: stream readings (integer slots) kept by the thinning, in order,
+        # the first and the last streamed ones among them
+        ks = np.round((plan.arrival_s[rows] - t) / period)
         np.testing.assert_allclose(plan.arrival_s[rows], t + ks * period, rtol=0, atol=1e-9)
+        assert ks[0] == 0 and ks[-1] == w.streamed[k] - 1 and np.all(np.diff(ks) > 0)
         mids = w.entry[k] + w.velocity[k] * (ks * period + t_int / 2)[:, None]
         np.testing.assert_allclose(plan.angles[rows], mids, rtol=0, atol=1e-9)
-        t += (w.count[k] - 1) * period + t_int + ramp
+        t += (w.streamed[k] - 1) * period + t_int + ramp
         here, n = w.stop[k], n + int(w.count[k])
     assert n == len(plan) == s.kept >= plan.spec.sampling.target
     assert s.total_s == pytest.approx(t)
@@ -137,10 +141,13 @@ def test_readings_and_duration_as_an_independent_computation_predicts(plan: Plan
         rig.spec.settle_s + t_int
     )
     assert s.fly.stop_and_go_s == pytest.approx(expected)
-    assert s.fly.stop_and_go_s > 5 * s.total_s
+    assert s.fly.stop_and_go_s > 3 * s.total_s  # thinning keeps about half the stream
     # Requested readings: kept or refused with a reason.
     assert s.requested == s.kept + sum(s.refused.values())
     assert 0.0 <= s.fly.coverage_tv_uniform < s.fly.coverage_tv <= 1.0
+    assert 0.0 < s.fly.coverage_gap_uniform < s.fly.coverage_gap < 1.0
+    # thinned: streamed and not kept, or cut with a sweep's ends (none kept there)
+    assert s.kept <= s.fly.streamed == int(w.streamed.sum()) <= s.kept + s.refused[THINNED]
 
 
 def test_readings_are_the_generated_ones_in_a_new_order(plan: Plan) -> None:
@@ -153,12 +160,14 @@ def test_the_summary_names_the_sweeps_and_the_trade(plans: dict[str, Plan]) -> N
     assert s.fly is not None
     assert "plan 'fly-test': isotropic rusinkiewicz, fly, rig 'arch-4axis'" in text
     assert f"  {'sweeps':<26}{s.fly.segments:>9}   (on {s.fly.lines} lines)" in text
-    assert "  readings                       " in text and "(50 Hz, 20 ms each)" in text
+    assert "  readings                       " in text
+    assert f"(50 Hz, 20 ms each; {s.fly.streamed} streamed, thinned" in text
     per_hour = 3600 * s.kept / s.total_s
     assert f"  {'readings per hour':<26}{per_hour:>9,.0f}   (stop-and-go: " in text
     assert f"{s.fly.stop_and_go_s / s.total_s:.1f}× faster)" in text
     assert f"  {'coverage (TV distance)':<26}{s.fly.coverage_tv:>9.3f}" in text
-    assert "refused: ramp" in text
+    assert f"  {'largest empty ball':<26}{s.fly.coverage_gap:>9.3f}" in text
+    assert "refused: ramp" in text and "refused: thinned" in text
 
 
 def test_a_stored_fly_plan_reads_back_bit_for_bit(plans: dict[str, Plan], tmp_path: Path) -> None:
@@ -194,7 +203,7 @@ def test_a_stop_and_go_plan_stores_no_sweeps(quick_plan: Plan) -> None:
     assert quick_plan.sweeps is None and not quick_plan.is_fly
 
 
-def test_the_shipped_fly_plan_plans_and_only_the_simulated_backend_acquires_it(
+def test_the_shipped_fly_plan_plans_and_hardware_refuses_it(
     run_gonio: Any, tmp_path: Path, plans: dict[str, Plan]
 ) -> None:
     out = tmp_path / "fly.csv"
@@ -204,10 +213,16 @@ def test_the_shipped_fly_plan_plans_and_only_the_simulated_backend_acquires_it(
     assert "readings per hour" in stdout and f"to {out}" in stdout
     assert read_plan(out).sweeps is not None
     refuse_fly(plans["arch"], "simulated")
-    for kind in ("rehearsal", "hardware"):
-        with pytest.raises(ConfigError, match="simulated backend only") as info:
-            refuse_fly(plans["arch"], kind)
-        assert "\n" not in str(info.value)
+    refuse_fly(plans["arch"], "rehearsal")  # its simulated detector streams
+    with pytest.raises(ConfigError, match="simulated and rehearsal backends only") as info:
+        refuse_fly(plans["arch"], "hardware")
+    assert "\n" not in str(info.value)
+    lockin = dataclasses.replace(
+        plans["arch"], rig=Rig.from_yaml(CONFIGS / "rigs/arch_lockin.yaml")
+    )
+    with pytest.raises(ConfigError, match="pymeasure detector cannot stream") as info:
+        refuse_fly(lockin, "rehearsal")
+    assert "\n" not in str(info.value)
 
 
 @pytest.mark.parametrize(
@@ -250,3 +265,25 @@ def test_a_ramp_is_half_of_a_trapezoidal_move_that_just_reaches_the_velocity(
     assert t == pytest.approx(0.5 / a) and d[2] == pytest.approx(0.5**2 / (2 * a))
     # a move over twice the ramp's distance peaks at v exactly: twice the ramp's time
     assert travel.time(np.zeros(4), 2 * d) == pytest.approx(2 * t)
+
+
+def test_the_thinning_and_the_anchor_gap_bring_the_readings_nearer_uniform(
+    rigs: dict[str, Rig], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def figures(rig: Rig) -> Any:
+        spec = fly_spec(rate_hz=100.0, blur_deg=0.5).model_dump()
+        spec["sampling"]["target"] = 8000
+        plan = build(PlanSpec.model_validate(spec), rig)
+        assert plan.summary.fly is not None
+        return plan.summary.fly
+
+    thinned = figures(rigs["arch"])
+    # Every streamed reading kept (a zero quantile keeps all), every anchor taken: the
+    # readings evenly spaced in time along the arcs, as the layout alone gives them.
+    monkeypatch.setattr(fly, "THIN_QUANTILE", 0.0)
+    monkeypatch.setattr(fly, "ANCHOR_GAP", 0.0)
+    monkeypatch.setattr(fly, "THIN_GUESS", 1.0)
+    raw = figures(rigs["arch"])
+    assert raw.streamed < thinned.streamed
+    assert thinned.coverage_tv < 0.7 * raw.coverage_tv
+    assert thinned.coverage_gap < raw.coverage_gap

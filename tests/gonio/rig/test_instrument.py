@@ -92,6 +92,7 @@ def test_every_driver_field_can_be_set_from_yaml() -> None:
         "stream": SerialStreamConfig(
             start="GO {period_us:d}", stop="HALT", line=r"(?P<value>\S+) (?P<device_t>\d+)",
             rate_hz=50.0, max_rate_hz=500.0, device_time_s=1e-6, latency_s=0.002,
+            starts_on_command=True,
         ),
     }  # fmt: skip
     assert set(given) == driver_fields

@@ -191,7 +191,7 @@ def test_unknown_instruction_and_wrong_lengths(emulator: Emulator, raw_link: Lin
     assert [p.error for p in link.packets(bad_read)] == [StatusError.DATA_LENGTH]
     bad_write = instruction_packet(1, Instruction.WRITE, hx("74 00"))
     assert [p.error for p in link.packets(bad_write)] == [StatusError.DATA_LENGTH]
-    assert [p.error for p in link.packets(read_packet(1, 140, 10))] == [StatusError.ACCESS]
+    assert [p.error for p in link.packets(read_packet(1, 655, 10))] == [StatusError.ACCESS]
     assert [p.error for p in link.packets(read_packet(1, 0, 0))] == [StatusError.DATA_LENGTH]
     action = instruction_packet(1, Instruction.ACTION)
     assert [p.error for p in link.packets(action)] == [StatusError.INSTRUCTION]

@@ -8,11 +8,12 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from drivers.dynamixel.control_table import ITEMS, TABLE_SIZE, item
+from drivers.dynamixel.control_table import TABLE_SIZE, item
 from sim.clock import ManualClock
 from sim.dynamixel.motion import ProfileType, classify, move, move_timed, travel_time
 from sim.dynamixel.motor import EmulatedMotor
 from sim.dynamixel.protocol import ALERT, StatusError
+from sim.dynamixel.table import EMULATED_TABLE_SIZE, ITEMS
 
 VEL_UNIT = 0.229 * 4096 / 60  # ticks/s per Profile Velocity unit
 ACC_UNIT = 214.577 * 4096 / 3600  # ticks/s² per Profile Acceleration unit
@@ -72,12 +73,14 @@ def test_the_backdoor_refuses_values_a_register_cannot_hold(motor: EmulatedMotor
 
 
 def test_reads_of_any_range_inside_the_table(motor: EmulatedMotor) -> None:
-    whole = motor.read(0, TABLE_SIZE)
-    assert len(whole) == TABLE_SIZE
+    whole = motor.read(0, EMULATED_TABLE_SIZE)
+    assert len(whole) == EMULATED_TABLE_SIZE == 662
+    assert whole[:TABLE_SIZE] == motor.read(0, TABLE_SIZE)
     assert whole[0:2] == (1020).to_bytes(2, "little")
     assert motor.read(14, 6) == bytes(6)  # a reserved gap reads as zeros
+    assert motor.read(252, 326) == bytes(326)  # between the two indirect blocks
     with pytest.raises(IndexError):
-        motor.read(140, 10)
+        motor.read(655, 10)
 
 
 def test_backdoor_get_and_set(motor: EmulatedMotor) -> None:
@@ -209,7 +212,7 @@ def test_operating_mode_change_resets_profile_and_goal_pwm(motor: EmulatedMotor)
 
 @given(
     st.lists(
-        st.tuples(st.integers(0, TABLE_SIZE - 1), st.binary(min_size=1, max_size=12)),
+        st.tuples(st.integers(0, EMULATED_TABLE_SIZE - 1), st.binary(min_size=1, max_size=12)),
         max_size=30,
     )
 )

@@ -92,10 +92,10 @@ def test_error_numbers_reach_the_sdk(emulator: Emulator, sdk_port: Port, ph: Any
     assert ph.write2ByteTxRx(port, 1, GOAL, 7) == (COMM_SUCCESS, StatusError.DATA_LENGTH)
     # A refused read carries no data, but the SDK slices the CRC in as "data" (and
     # read4ByteTxRx, short of bytes, raises IndexError).
-    data, result, error = ph.readTxRx(port, 1, 146, 4)
+    data, result, error = ph.readTxRx(port, 1, 660, 4)  # past the end of the table (661)
     assert (len(data), result, error) == (2, COMM_SUCCESS, StatusError.ACCESS)
     with pytest.raises(IndexError):
-        ph.read4ByteTxRx(port, 1, 146)
+        ph.read4ByteTxRx(port, 1, 660)
     assert "out of range" in ph.getRxPacketError(StatusError.DATA_RANGE)
 
 

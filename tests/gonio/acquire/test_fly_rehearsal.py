@@ -1,0 +1,104 @@
+"""Fly sweeps on the rehearsal path: the real `DynamixelBus` polling the byte-level
+emulator's motion on its pty and the real `SerialDetector` streaming from the simulated
+photometer on its pty, on the rehearsal's one scaled clock. The samples' merged joint
+angles must lie within one encoder tick plus v·σt of the emulator's true trajectory at
+the middle of the window the photometer really integrated (its own record of the
+window's end), and a small fly plan must acquire through `gonio acquire --rehearse`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gonio.acquire.sweep import derive, run_sweep
+from gonio.planner.files import load_plan_source
+from gonio.rig.model import Rig
+from gonio.store import open_run
+from gonio.workflows.rehearsal import rehearsal_devices
+from sim.rehearsal import RehearsalSide
+from sim.scene import load_scene
+from tests.conftest import CONFIGS, CliResult
+
+pytestmark = pytest.mark.pty
+
+PLAN = CONFIGS / "plans" / "fly_rehearsal.yaml"
+RIG = CONFIGS / "rigs" / "arch_serial.yaml"
+SCENE = CONFIGS / "scenes" / "glossy_metal.yaml"
+#: Slow enough that the host's real latencies (a poll's round trip, a line's delivery)
+#: stay a few virtual milliseconds: they count `SPEEDUP` times on the rehearsal's clock.
+SPEEDUP = 5.0
+
+
+def test_merged_angles_follow_the_emulated_trajectory() -> None:
+    source = load_plan_source(PLAN)
+    plan, rig = source.build(), source.rig
+    sweeps = plan.sweeps
+    assert sweeps is not None
+    tick = np.array([a.resolution_rad for a in rig.bus_axes()])
+    with rehearsal_devices(rig, load_scene(SCENE), None, SPEEDUP) as (devices, clock):
+        side = devices.simulation
+        assert isinstance(side, RehearsalSide) and side.peers is not None
+        photometer = side.peers.photometer
+        assert photometer is not None
+        with devices:
+            for k in range(len(sweeps)):
+                before = len(photometer.stream_ends)
+                raw = run_sweep(
+                    devices, rig.axes, sweeps, k, settle_s=rig.spec.settle_s, timeout_s=30.0
+                )
+                # Every window the photometer integrated reached the host, in order.
+                ends = [clock.at(t) for t in photometer.stream_ends[before:]]
+                assert len(ends) == len(raw.readings)
+                d = derive(raw, rig.axes, sweeps, plan.arrival_s, k)
+                assert len(d.samples.index) >= 0.7 * int(
+                    sweeps.count[k]
+                )  # a loaded host polls less
+                # The truth at the middle of each window really integrated.
+                middle = np.array(ends)[d.samples.index] - 0.5 * sweeps.integration_s
+                truth = np.array(
+                    [[side.true_pose_at(t)[a] for a in rig.axes] for t in middle.tolist()]
+                )
+                error = np.abs(d.samples.angles - truth)
+                # v·σt as a bound: the two polls' and the stamps' uniform spreads summed at
+                # worst (their quadrature σ times √3·√12 = 6).
+                allowed = tick[None, :] + 6.0 * d.samples.timing[:, None]
+                within = np.all(error <= allowed, axis=1)
+                # (on a host loaded several times its cores, a few polls answer with a
+                # position sampled before their request's stamp: at most a few percent)
+                assert within.mean() >= 0.95, (k, within.mean(), (error / allowed).max())
+                # Planned against measured velocity: the register's step (0.229 rev/min).
+                j = int(np.argmax(np.abs(sweeps.velocity[k])))
+                t = 0.5 * (d.request + d.reply)
+                cruise = (t > middle[0]) & (t < middle[-1])
+                speed = np.polyfit(t[cruise], d.positions[cruise, j], 1)[0]
+                assert speed / sweeps.velocity[k, j] == pytest.approx(1.0, abs=0.02)
+
+
+def test_a_fly_plan_acquires_on_the_rehearsal_path(
+    run_gonio: Callable[..., CliResult], tmp_path: Path
+) -> None:
+    out = tmp_path / "run.sqlite"
+    result = run_gonio(
+        "acquire", str(PLAN), "--scene", str(SCENE), "--rehearse", "--speedup",
+        str(SPEEDUP), "-o", str(out), "-q",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    run = open_run(out)
+    assert run.meta["backend"] == "rehearsal" and run.complete
+    sweeps = run.plan.sweeps
+    assert sweeps is not None
+    assert [s.outcome for s in run.sweeps] == ["measured"] * len(sweeps)
+    assert len(run) >= 0.7 * len(run.plan)
+    # The axes that do not sweep hold their commanded angles to a tick or two; the swept
+    # one is read at mid-window, near its target (the velocity's register step drifts it
+    # along the sweep by at most a few readings' travel).
+    rig = Rig.from_yaml(RIG)
+    tick = np.array([a.resolution_rad for a in rig.bus_axes()])
+    gap = np.abs(run.angles("read_back") - run.angles("commanded"))
+    swept = np.abs(sweeps.velocity).max(axis=0) > 0
+    assert np.all(gap[:, ~swept] <= 2 * tick[~swept])
+    speed = float(np.abs(sweeps.velocity).max())
+    assert np.all(gap[:, swept] <= 5 * speed * sweeps.period_s)
