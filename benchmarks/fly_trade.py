@@ -195,7 +195,7 @@ def equal_time(trade: list[dict[str, Any]]) -> None:
                 continue
             left = (
                 f"| {scene} | {minutes:g} | {describe_row(stop)} | {stop['measured']:,} | "
-                f"{stop['log_rmse']:.4f} | {stop['mirror_log_rmse']:.3f} | "
+                f"{stop['log_rmse']:.4f} | {stop['mirror_log_rmse']:.3g} | "
                 f"{stop['coverage']:.2f} |"
             )
             if fly is None:
@@ -205,7 +205,7 @@ def equal_time(trade: list[dict[str, Any]]) -> None:
             target = TARGETS.get(scene, 2.0)
             print(
                 left + f" {describe_row(fly)} | {fly.get('lines')} | {fly['measured']:,} | "
-                f"{fly['log_rmse']:.4f} | {fly['mirror_log_rmse']:.3f} | "
+                f"{fly['log_rmse']:.4f} | {fly['mirror_log_rmse']:.3g} | "
                 f"{fly['coverage']:.2f} | {ratio:.2f} | "
                 f"{'met' if ratio >= target else f'not met (≥ {target:g})'} |"
             )
@@ -218,8 +218,8 @@ def equal_time(trade: list[dict[str, Any]]) -> None:
     for r in sorted(trade, key=lambda r: (r["scene"], r["minutes"], r["motion"], r["log_rmse"])):
         print(
             f"| {r['scene']} | {r['minutes']:g} | {describe_row(r)} | {r['measured']:,} | "
-            f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} | "
-            f"{r['grazing_log_rmse']:.3f} | {r['coverage']:.2f} |"
+            f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3g} | "
+            f"{r['grazing_log_rmse']:.3g} | {r['coverage']:.2f} |"
         )
 
 
@@ -246,8 +246,8 @@ def why(trade: list[dict[str, Any]], extra: list[dict[str, Any]]) -> None:
             lines = "—" if r.get("lines") is None else f"{r['lines']}"
             print(
                 f"| {scene} | {label} | {r['measured']:,} | {lines} | "
-                f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3f} | "
-                f"{r['grazing_log_rmse']:.3f} | {r['coverage']:.2f} |"
+                f"{r['instrument_s']:.0f} | {r['log_rmse']:.4f} | {r['mirror_log_rmse']:.3g} | "
+                f"{r['grazing_log_rmse']:.3g} | {r['coverage']:.2f} |"
             )
 
 
