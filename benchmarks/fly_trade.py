@@ -3,7 +3,8 @@ error at equal instrument time, why the error gains less than the sample count, 
 bias motion blur leaves in the recovered BRDF.
 
 Every figure comes from `gonio tradeoff` sweeps (plan → simulated acquisition →
-reconstruction by linear interpolation → log-RMSE on the sweep's 20 000 test pairs), each
+reconstruction by linear interpolation → log-RMSE on the sweep's 20 000 test pairs, every
+pair scored: one outside the samples' support takes the nearest sample's value), each
 plan's target fitted to a budget of predicted instrument time (`minutes`), on the glossy
 gold and the matte scene with motion blur and timestamp jitter modelled
 (configs/scenes/glossy_metal_fly.yaml, matte_fly.yaml):
@@ -11,7 +12,7 @@ gold and the matte scene with motion blur and timestamp jitter modelled
 - configs/sweeps/fly_trade.yaml (arch rig): stop-and-go Sobol or warped targets in
   Rusinkiewicz's or the hybrid parametrization at 10 or 50 ms, against fly detector arcs
   (100 readings a second, 10 ms each) at blur budgets of 0.25, 0.5 and 1°; 5, 15 and 45
-  minutes (at 45 minutes the 0.5° fly plan only);
+  minutes (1° at 5 minutes only, and 0.5° only at 45);
 - configs/sweeps/fly_trade_in_plane.yaml: the same at 5 minutes on the in-plane rig
   (matte scene), for the samples per hour;
 - configs/sweeps/fly_trade_why.yaml: uniform stop-and-go plans of 4 000 and 16 000
@@ -28,10 +29,12 @@ blur modelled and without, no other effect (no noise), on the glossy gold materi
 GGX widths α from 0.02 to 0.5 (time nodes at most 0.05°, or an eighth of
 the smear, apart); the bias is log(f blurred / f sharp), on the samples and
 on the linear reconstructions of the two runs over the test pairs (RMS over every pair,
-and over the mirror region, pairs within the lobe). The planner's default velocity rule,
+and over the mirror region of `gonio.reconstruct.regions`). The planner's default
+velocity rule,
 `gonio.planner.blur.blur_budget_of_width` (a plan naming its lobe's width), is the smear
-K · α · √tolerance with K = 233° from benchmarks/fly_blur.py; the table shows the
-largest smear measured within 0.5 % on the samples, and its K.
+K · α · √tolerance with K = 233° from benchmarks/fly_blur.py; the last table shows the
+largest smear measured within 0.5 % on every sample and on the recovered mirror region,
+and the K of each.
 
 Run: .venv/bin/python benchmarks/fly_trade.py [--runs runs/fly_trade] [--jobs 1]
      [--blur-readings 3000] [--img docs/img] [--stored-only]
