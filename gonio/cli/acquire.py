@@ -120,7 +120,8 @@ def cmd_acquire(args: argparse.Namespace) -> int:
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
                 rehearse=args.rehearse,
             ):  # fmt: skip
-                print(f"  ok: {line}")
+                # bus hygiene lines come with their level: "warning: …", "n/a: …"
+                print(f"  {line}" if line.split(":")[0] in ("warning", "n/a") else f"  ok: {line}")
             print("dry run: nothing moved, nothing written")
             return 0
         path = args.output

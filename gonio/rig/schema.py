@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from drivers.dynamixel.control_table import MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
@@ -52,6 +53,17 @@ class AxisSpec(Strict):
     max_acceleration_deg_s2: float = Field(
         gt=0, description="The joint's acceleration and deceleration (°/s²)."
     )
+    motor_model: str | Annotated[int, Field(ge=0, le=0xFFFF)] | None = Field(
+        None,
+        description="The motor the axis must find at motor_id (checked before the first "
+        f"move): a model name ({', '.join(MODELS.values())}) or a model number; none: any.",
+    )
+    motor_firmware: int | None = Field(
+        None,
+        ge=0,
+        le=255,
+        description="The firmware version the motor must answer with; none: any.",
+    )
 
     @field_validator("axis")
     @classmethod
@@ -60,6 +72,21 @@ class AxisSpec(Strict):
         if not norm > 0:
             raise ValueError("a rotation axis must not be the zero vector")
         return (v[0] / norm, v[1] / norm, v[2] / norm)
+
+    @field_validator("motor_model")
+    @classmethod
+    def _known_model(cls, v: str | int | None) -> str | int | None:
+        if isinstance(v, str) and v not in MODELS.values():
+            raise ValueError(
+                f"expected a model name ({', '.join(MODELS.values())}) or a model number, got {v!r}"
+            )
+        return v
+
+    def motor_model_number(self) -> int | None:
+        """`motor_model` as a model number (None: any model)."""
+        if isinstance(self.motor_model, str):
+            return next(n for n, name in MODELS.items() if name == self.motor_model)
+        return self.motor_model
 
     @model_validator(mode="after")
     def _ordered_limits(self) -> AxisSpec:
