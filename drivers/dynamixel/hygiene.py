@@ -115,24 +115,41 @@ def access_finding(port: str, access: Callable[[str, int], bool] = os.access) ->
     )
 
 
+@dataclass(frozen=True)
+class Expected:
+    """What one motor must be: its ID, its axis (None: a motor of no rig), and the model
+    number and firmware version it must answer with (None: any)."""
+
+    motor_id: int
+    axis: str | None = None
+    model: int | None = None
+    firmware: int | None = None
+
+    @classmethod
+    def of(cls, axis: AxisConfig) -> Expected:
+        return cls(axis.motor_id, axis.name, axis.model, axis.firmware)
+
+
 def _model_name(number: int) -> str:
     name = MODELS.get(number)
     return f"{name} (model number {number})" if name else f"model number {number}"
 
 
 def motor_findings(
-    link: DynamixelLink, axes: Sequence[AxisConfig], adapter_ms: float
+    link: DynamixelLink, axes: Sequence[Expected], adapter_ms: float
 ) -> list[Finding]:
-    """Model, firmware, Status Return Level and Return Delay Time of each axis's motor,
-    over an open ``link`` (PING and READ only); ``adapter_ms``: the adapter latency the
-    run's link counts with (`drivers.dynamixel.latency.assumed_adapter_ms`)."""
+    """Model, firmware, Status Return Level and Return Delay Time of each motor, over an
+    open ``link`` (PING and READ only); ``adapter_ms``: the adapter latency the run's
+    link counts with (`drivers.dynamixel.latency.assumed_adapter_ms`)."""
     out: list[Finding] = []
     budget_us = return_delay_budget_us(len(axes), link.baud, adapter_ms)
     limit = int(budget_us // US_PER_RETURN_DELAY_UNIT)
     port, baud = link.port_name, link.baud
     for axis in axes:
         who = link.who(axis.motor_id)
-        fix_hint = f"axes.{axis.name}"
+        if axis.axis is not None:
+            who = f"motor {axis.motor_id} (axis {axis.axis!r})"
+        field = f"axes.{axis.axis or '<axis>'}"
         try:
             model = link.ping(axis.motor_id)
         except DriverError:
@@ -151,7 +168,7 @@ def motor_findings(
                     "problem",
                     f"{who} is {_model_name(model)}; the rig file expects "
                     f"{_model_name(axis.model)}: connect the right motor, or correct "
-                    f"{fix_hint}.motor_model",
+                    f"{field}.motor_model",
                 )
             )
         elif axis.model is None and model not in MODELS:
@@ -160,7 +177,7 @@ def motor_findings(
                     "warning",
                     f"{who} is {_model_name(model)}, not an X-series model the driver knows "
                     f"({', '.join(MODELS.values())}): its control table may differ; give "
-                    f"{fix_hint}.motor_model: {model} to accept it",
+                    f"{field}.motor_model: {model} to accept it",
                 )
             )
         try:
@@ -183,7 +200,7 @@ def motor_findings(
                     "problem",
                     f"{who} runs firmware {firmware}; the rig file expects {axis.firmware}: "
                     "update it (ROBOTIS Dynamixel Wizard, firmware update) or correct "
-                    f"{fix_hint}.motor_firmware",
+                    f"{field}.motor_firmware",
                 )
             )
         if level != STATUS_RETURN_LEVEL:
@@ -244,7 +261,7 @@ def check_bus(
     try:
         with link:
             adapter_ms = assumed_adapter_ms(port, latency_ms, sysfs)
-            findings += motor_findings(link, axes, adapter_ms)
+            findings += motor_findings(link, [Expected.of(a) for a in axes], adapter_ms)
     except CommError as exc:
         findings.append(Finding("problem", str(exc)))
     return findings

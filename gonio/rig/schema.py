@@ -53,7 +53,11 @@ class AxisSpec(Strict):
     max_acceleration_deg_s2: float = Field(
         gt=0, description="The joint's acceleration and deceleration (°/s²)."
     )
-    motor_model: str | Annotated[int, Field(ge=0, le=0xFFFF)] | None = Field(
+    motor_model: (
+        Annotated[str, InSchema(enum=list(MODELS.values()))]
+        | Annotated[int, Field(ge=0, le=0xFFFF)]
+        | None
+    ) = Field(
         None,
         description="The motor the axis must find at motor_id (checked before the first "
         f"move): a model name ({', '.join(MODELS.values())}) or a model number; none: any.",
@@ -73,12 +77,14 @@ class AxisSpec(Strict):
             raise ValueError("a rotation axis must not be the zero vector")
         return (v[0] / norm, v[1] / norm, v[2] / norm)
 
-    @field_validator("motor_model")
+    @field_validator("motor_model", mode="before")
     @classmethod
-    def _known_model(cls, v: str | int | None) -> str | int | None:
-        if isinstance(v, str) and v not in MODELS.values():
+    def _known_model(cls, v: object) -> object:
+        known = isinstance(v, str) and v in MODELS.values()
+        number = isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 0xFFFF
+        if v is not None and not isinstance(v, bool) and not known and not number:
             raise ValueError(
-                f"expected a model name ({', '.join(MODELS.values())}) or a model number, got {v!r}"
+                f"expected a model name ({', '.join(MODELS.values())}) or a model number 0…65535"
             )
         return v
 

@@ -34,12 +34,13 @@ def backend_findings(rig: Rig, backend: Backend) -> list[Finding]:
         return []
     findings = rig_findings(rig, bus.port)
     problems = blocking(findings)
+    if len(problems) == 1:
+        raise GonioError(f"{problems[0].text} (nothing moved)")
     if problems:
         where = rig.source or "rig"
         lines = "\n".join(f"  {f.text}" for f in problems)
         raise GonioError(
-            f"the motors' bus is not ready for a run ({where}, {len(problems)} "
-            f"problem{'s' if len(problems) > 1 else ''}; nothing moved):\n{lines}"
+            f"{len(problems)} problems with the motors of {where} (nothing moved):\n{lines}"
         )
     return findings
 
