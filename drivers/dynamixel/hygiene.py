@@ -100,7 +100,7 @@ def access_finding(port: str, access: Callable[[str, int], bool] = os.access) ->
     if not os.path.exists(port):
         return Finding(
             "problem",
-            f"{port} does not exist: is the USB adapter plugged in (ls /dev/serial/by-id)?",
+            f"{port} does not exist: is the USB adapter plugged in?",
         )
     if access(port, os.R_OK | os.W_OK):
         return Finding("ok", f"{port}: readable and writable")

@@ -35,7 +35,7 @@ def backend_findings(rig: Rig, backend: Backend) -> list[Finding]:
     findings = rig_findings(rig, bus.port)
     problems = blocking(findings)
     if len(problems) == 1:
-        raise GonioError(f"{problems[0].text} (nothing moved)")
+        raise GonioError(problems[0].text)
     if problems:
         where = rig.source or "rig"
         lines = "\n".join(f"  {f.text}" for f in problems)
