@@ -174,6 +174,13 @@ class BusSpec(Strict):
     )
     port: str = Field("/dev/ttyUSB0", description="The motors' serial port (dynamixel).")
     baud: int = Field(57_600, description="The motors' baud rate (dynamixel).")
+    retries: int = Field(
+        3,
+        ge=0,
+        le=10,
+        description="Extra attempts of a transaction whose status was lost or corrupt, "
+        "before the run stops resumable (dynamixel; measured in docs/results/bus_retries.md).",
+    )
 
 
 class HealthLimitsSpec(Strict):
