@@ -2,12 +2,12 @@
 
 `check_bus` looks at a port and the motors of its axes and returns one `Finding` a line:
 
+- the **port**: it exists and this user may read and write it (else a *problem* naming
+  the port's group, ``dialout`` on most distributions, and how to join it);
 - the USB adapter's **latency timer** (Linux sysfs, `drivers.dynamixel.latency`): above
   1 ms a *warning* with the one-line fix and the udev rule that keeps it; on a port
   without one (a pty, a ``ttyACM`` device, a non-FTDI adapter) a line saying it does not
   apply. Never a problem: a slow adapter slows a run, it does not break it;
-- the **port**: it exists and this user may read and write it (else a *problem* naming
-  the port's group, ``dialout`` on most distributions, and how to join it);
 - every axis's **motor**: it answers at the bus rate with the model number and firmware
   version the axis expects (`AxisConfig.model`, ``firmware``; None: any);
 - its **Status Return Level** is 2 (the driver waits for the status of every WRITE and
