@@ -12,7 +12,9 @@ import pytest
 
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
+from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
+from sim.rehearsal import emulated_bus
 from tests.conftest import CliResult
 from tests.support.acquire import ARCH, RunFiles
 
@@ -74,3 +76,10 @@ def test_the_rig_file_names_motors_the_driver_knows_or_model_numbers(tmp_path: P
     for bad in ("XM540-W270", "70000"):
         with pytest.raises(ConfigError, match=r"axes\.detector_elevation\.motor_model: expected"):
             Rig.from_yaml(hardware_rig(tmp_path, "/dev/ttyUSB0", model=bad))
+
+
+def test_a_rehearsal_emulates_the_motors_the_rig_file_expects(tmp_path: Path) -> None:
+    rig = Rig.from_yaml(hardware_rig(tmp_path, "/dev/ttyUSB0", model="XL430-W250"))
+    motors = emulated_bus(rig, ManualClock()).motors  # not started: no pty
+    assert (motors[3].get("model_number"), motors[3].get("firmware_version")) == (1060, 46)
+    assert motors[1].get("model_number") == 1020  # no expectation: the default XM430-W350
