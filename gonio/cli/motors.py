@@ -19,14 +19,16 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, MODELS, RAD_PER_TICK
 from drivers.dynamixel.latency import assumed_adapter_ms
 from drivers.dynamixel.link import DynamixelLink
+from gonio.cli import EXIT_BAD_INPUT
 from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
 DEFAULT_SCAN_BAUDS = (FACTORY_BAUD, 1_000_000)
 #: Exit code of `scan` when no motor answered, and of `status` when one did not.
 EXIT_NO_ANSWER = 1
-#: Exit code of `scan` when the bus would block a run (`drivers.dynamixel.hygiene`).
-EXIT_PROBLEM = 2
+#: Exit code of `scan` when the bus would block a run (`drivers.dynamixel.hygiene`):
+#: the program's code for a device refused.
+EXIT_PROBLEM = EXIT_BAD_INPUT
 
 
 def motor_ids(text: str) -> list[int]:
@@ -79,13 +81,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "timer), send a broadcast ping at each rate and list the motors that answer: ID, "
         "model and firmware; check that each suits the driver (Status Return Level 2, a "
         "Return Delay Time its timeouts allow). With --rig, also that every axis's motor "
-        "answers at the rig's rate as the model and firmware the rig file expects.",
-        exit_codes={
-            0: "a motor answered and nothing blocks a run",
-            EXIT_NO_ANSWER: "no motor answered at any rate",
-            EXIT_PROBLEM: "the port cannot be opened, or a motor would block a run (one "
-            "line each, naming the motor and the fix)",
-        },
+        "answers at the rig's rate as the model and firmware the rig file expects. A "
+        "problem that would block a run is one line naming the motor and the fix, and exit "
+        "code 2.",
+        exit_codes={0: "a motor answered", EXIT_NO_ANSWER: "no motor answered at any rate"},
     )
     scan.add_argument("--rig", type=Path, help="a rig file: its port, rate and axes")
     scan.add_argument("--port", help="serial port, e.g. /dev/ttyUSB0 (required without --rig)")
