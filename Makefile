@@ -62,6 +62,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/bus_retries.py
 	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/fly_blur.py
 	$(BIN)/python benchmarks/stream.py

@@ -25,7 +25,9 @@ EXIT_RESUMABLE = 3
 EXIT_CODES = {
     0: "the run completed (or the dry run found everything ready)",
     EXIT_BAD_INPUT: "refused before anything moved: a bad file or option, an output that "
-    "exists or cannot be written, a port missing or busy",
+    "exists or cannot be written, a port missing, busy or not ours to open, a motor that "
+    "does not answer, is not the one the rig file expects or has settings the driver "
+    "cannot work with (one line each)",
     EXIT_RESUMABLE: "the run ended early on a fault, a pause that did not clear or a full "
     "disk (resumable with --resume)",
     EXIT_INTERRUPTED: "stopped by Ctrl-C or SIGTERM (resumable with --resume)",
@@ -120,7 +122,8 @@ def cmd_acquire(args: argparse.Namespace) -> int:
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
                 rehearse=args.rehearse,
             ):  # fmt: skip
-                print(f"  ok: {line}")
+                # bus hygiene lines come with their level: "warning: …", "n/a: …"
+                print(f"  {line}" if line.split(":")[0] in ("warning", "n/a") else f"  ok: {line}")
             print("dry run: nothing moved, nothing written")
             return 0
         path = args.output
