@@ -1,0 +1,228 @@
+"""Read-side checks of a run file's contents (docs/reference/journal.md#damaged-and-hostile-files):
+every value `gonio.store.open_run` hands on is of the type, and in the range, the writer
+gives it, or the run is refused with one line naming the file and the field.
+
+SQLite's own checks catch a damaged structure (a truncated file, a page of garbage:
+"database disk image is malformed"); these catch what a damaged or edited page can
+still say: a JSON text that does not parse or parses to another shape, a number where a
+text belongs, a sample of a target the plan does not have, a missing column. Each
+checker takes the value and ``where`` (the field, as the message names it) and returns
+the value as the readers use it, or raises `Bad`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+from gonio.config import excerpt
+
+
+class Bad(ValueError):
+    """A stored value that is not what the writer stores: ``str`` is "FIELD: expected
+    …, got …" (the caller prefixes the file)."""
+
+
+Check = Callable[[Any, str], Any]
+
+
+def _refuse(constant: str) -> Any:
+    raise ValueError(f"{constant} is not JSON")
+
+
+def json_value(text: Any, where: str) -> Any:
+    """The JSON value of a stored text (strict JSON: no NaN or Infinity)."""
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise Bad(f"{where}: expected JSON text, got bytes that are not UTF-8") from None
+    if not isinstance(text, str):
+        raise Bad(f"{where}: expected JSON text, got {excerpt(text)}")
+    try:
+        return json.loads(text, parse_constant=_refuse)
+    except (ValueError, RecursionError):
+        raise Bad(f"{where}: expected JSON text, got {excerpt(text)}") from None
+
+
+def number(value: Any, where: str) -> float:
+    """A finite number (not a bool)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise Bad(f"{where}: expected a finite number, got {excerpt(value)}")
+    return float(value)
+
+
+def positive(value: Any, where: str) -> float:
+    if number(value, where) <= 0.0:
+        raise Bad(f"{where}: expected a positive number, got {excerpt(value)}")
+    return float(value)
+
+
+def integer(value: Any, where: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise Bad(f"{where}: expected a whole number, got {excerpt(value)}")
+    return value
+
+
+def text(value: Any, where: str) -> str:
+    if not isinstance(value, str):
+        raise Bad(f"{where}: expected a text, got {excerpt(value)}")
+    return value
+
+
+def boolean(value: Any, where: str) -> bool:
+    if not isinstance(value, bool):
+        raise Bad(f"{where}: expected true or false, got {excerpt(value)}")
+    return value
+
+
+def mapping(value: Any, where: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise Bad(f"{where}: expected a JSON object, got {excerpt(value)}")
+    return value
+
+
+def names(value: Any, where: str) -> list[str]:
+    """A list of distinct non-empty texts (a rig's axes, a plan's coordinates)."""
+    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+        raise Bad(f"{where}: expected a list of names, got {excerpt(value)}")
+    if len(set(value)) != len(value):
+        raise Bad(f"{where}: expected distinct names, got {excerpt(value)}")
+    return value
+
+
+def optional(check: Check) -> Check:
+    """``check``, or None."""
+
+    def checked(value: Any, where: str) -> Any:
+        return None if value is None else check(value, where)
+
+    return checked
+
+
+def vector(length: int) -> Check:
+    """A list of ``length`` finite numbers."""
+
+    def checked(value: Any, where: str) -> list[float]:
+        if not isinstance(value, list) or len(value) != length:
+            raise Bad(f"{where}: expected a list of {length} numbers, got {excerpt(value)}")
+        return [number(v, f"{where}.{i}") for i, v in enumerate(value)]
+
+    return checked
+
+
+def fields(required: Mapping[str, Check], optional_: Mapping[str, Check] | None = None) -> Check:
+    """A JSON object with the ``required`` keys and maybe the ``optional_`` ones, each
+    checked (other keys are left as they are: a newer writer of the same version may add
+    some)."""
+
+    def checked(value: Any, where: str) -> dict[str, Any]:
+        data = mapping(value, where)
+        for key, check in required.items():
+            if key not in data:
+                raise Bad(f"{where}.{key}: missing")
+            check(data[key], f"{where}.{key}")
+        for key, check in (optional_ or {}).items():
+            if key in data:
+                check(data[key], f"{where}.{key}")
+        return data
+
+    return checked
+
+
+#: The ``meta`` keys the readers use, each with its check; the first group must be there.
+META_REQUIRED: dict[str, Check] = {
+    "axes": names,
+    "coordinate_names": names,
+    "backend": text,
+    "created_utc": text,
+    "rig_text": text,
+    "hashes": mapping,
+    "schema_version": integer,
+}
+META_OPTIONAL: dict[str, Check] = {
+    "plan_name": optional(text),
+    "rig_name": optional(text),
+    "seed": optional(integer),
+    "started_unix": number,
+    "host": optional(text),
+    "user": optional(text),
+    "versions": optional(mapping),
+    "plan_path": optional(text),
+    "rig_path": optional(text),
+    "scene_path": optional(text),
+    "plan_text": optional(text),
+    "scene_text": optional(text),
+    "speedup": optional(positive),
+    "any_detector": optional(boolean),
+}
+#: The backends a run may name.
+BACKENDS = ("simulated", "hardware", "rehearsal")
+
+
+def check_meta(meta: dict[str, Any]) -> None:
+    """`Bad` unless the decoded ``meta`` holds what the readers use, as the writer
+    stores it."""
+    fields(META_REQUIRED, META_OPTIONAL)(meta, "meta")
+    if meta["backend"] not in BACKENDS:
+        raise Bad(
+            f"meta.backend: expected one of {', '.join(BACKENDS)}, got {excerpt(meta['backend'])}"
+        )
+    for key, value in meta["hashes"].items():
+        text(value, f"meta.hashes.{key}")
+
+
+#: A journaled reading (a calibration's reference or dark).
+READING = fields(
+    {
+        "value": number,
+        "n": integer,
+        "exposure_s": positive,
+        "started_s": number,
+        "ended_s": number,
+    },
+    {"std": optional(number), "phase_deg": optional(number)},
+)
+#: The payloads of the events the read commands use, by kind.
+EVENT_DATA: dict[str, Check] = {
+    "calibration": fields(
+        {
+            "albedo": positive,
+            "source_kind": text,
+            "wi": vector(3),
+            "wo": vector(3),
+            "reference": READING,
+            "dark": optional(READING),
+        },
+        {"unit": text, "dark_reason": optional(text)},
+    ),
+    "fault": fields({"message": text}),
+    "skip": fields({}, {"reason": text}),
+}
+
+
+def event_data(kind: str, raw: Any, where: str) -> dict[str, Any]:
+    """The payload of an event of ``kind`` (a JSON object; checked further for the kinds
+    the read commands use)."""
+    data = mapping(json_value(raw, where), where)
+    check = EVENT_DATA.get(kind)
+    if check is not None:
+        check(data, where)
+    return data
+
+
+def sim_state(axes: int) -> Check:
+    """A simulated sample's state: an object whose ``true_rad`` is one angle per axis."""
+    return fields({"true_rad": vector(axes)})
+
+
+def json_texts(cells: Iterable[Any], where: str, check: Check | None = None) -> None:
+    """Each cell a JSON text (or NULL) whose value passes ``check`` (if given)."""
+    for i, cell in enumerate(cells):
+        if cell is None:
+            continue
+        value = json_value(cell, f"{where} (row {i})")
+        if check is not None:
+            check(value, f"{where} (row {i})")
