@@ -146,6 +146,11 @@ def _read(path: Path, stream: BinaryIO, size: int) -> dict[str, np.ndarray]:
         if rank > MAX_RANK:
             raise GonioError(f"{path}: tensor_file field {name!r}: rank {rank} > {MAX_RANK}")
         shape = cursor.take(f"<{rank}Q", f"field {name!r}'s shape")
+        if any(n > size for n in shape):  # even beside a 0: no array of such a side
+            raise GonioError(
+                f"{path}: tensor_file field {name!r} of shape {list(shape)}: a side longer "
+                f"than the file's {size} bytes"
+            )
         nbytes = DTYPES[code].itemsize
         for n in shape:  # Python integers: no overflow
             nbytes *= n
