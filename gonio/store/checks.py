@@ -12,6 +12,7 @@ the value as the readers use it, or raises `Bad`.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from collections.abc import Callable, Iterable, Mapping
@@ -172,6 +173,15 @@ def check_meta(meta: dict[str, Any]) -> None:
         )
     for key, value in meta["hashes"].items():
         text(value, f"meta.hashes.{key}")
+    for name in ("plan", "rig", "scene"):  # the texts are stored once, at the run's start
+        stored, expected = meta.get(f"{name}_text"), meta["hashes"].get(f"{name}_sha256")
+        if stored is None or expected is None:
+            continue
+        if hashlib.sha256(stored.encode("utf-8", "surrogatepass")).hexdigest() != expected:
+            raise Bad(
+                f"meta.{name}_text: does not match meta.hashes.{name}_sha256; the stored "
+                f"{name} text was edited"
+            )
 
 
 #: A journaled reading (a calibration's reference or dark).

@@ -150,6 +150,13 @@ def read_run(conn: sqlite3.Connection, path: Path) -> Run:
     or range the writer gives it (`gonio.store.checks`)."""
     try:
         return _read(conn, path)
+    except sqlite3.OperationalError as exc:
+        if "locked" in str(exc) or "busy" in str(exc):
+            raise JournalError(
+                f"{path}: another process holds the run file locked ({_one_line(exc)}, "
+                f"{BUSY_TIMEOUT_S:g} s waited); read it when that process is done"
+            ) from None
+        raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
     except sqlite3.DatabaseError as exc:
         raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
     except checks.Bad as exc:
