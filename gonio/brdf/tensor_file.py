@@ -146,11 +146,6 @@ def _read(path: Path, stream: BinaryIO, size: int) -> dict[str, np.ndarray]:
         if rank > MAX_RANK:
             raise GonioError(f"{path}: tensor_file field {name!r}: rank {rank} > {MAX_RANK}")
         shape = cursor.take(f"<{rank}Q", f"field {name!r}'s shape")
-        if any(n > size for n in shape):  # even beside a 0: no array of such a side
-            raise GonioError(
-                f"{path}: tensor_file field {name!r} of shape {list(shape)}: a side longer "
-                f"than the file's {size} bytes"
-            )
         nbytes = DTYPES[code].itemsize
         for n in shape:  # Python integers: no overflow
             nbytes *= n
@@ -158,6 +153,11 @@ def _read(path: Path, stream: BinaryIO, size: int) -> dict[str, np.ndarray]:
             raise GonioError(
                 f"{path}: tensor_file field {name!r} of shape {list(shape)} at byte {offset} "
                 f"({nbytes} bytes) runs past the end of the file ({size} bytes; truncated?)"
+            )
+        if any(n > size for n in shape):  # beside a 0 (no bytes): no array of such a side
+            raise GonioError(
+                f"{path}: tensor_file field {name!r} of shape {list(shape)}: a side longer "
+                f"than the file's {size} bytes"
             )
         if name in (s[0] for s in specs):
             raise GonioError(f"{path}: tensor_file field {name!r} appears twice")

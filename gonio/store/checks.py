@@ -1,4 +1,4 @@
-"""Read-side checks of a run file's contents (docs/reference/journal.md#damaged-and-hostile-files):
+"""Read-side checks of a run file's contents (docs/reference/damaged-files.md):
 every value `gonio.store.open_run` hands on is of the type, and in the range, the writer
 gives it, or the run is refused with one line naming the file and the field.
 

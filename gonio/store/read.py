@@ -5,7 +5,6 @@ that is still being written (the file is opened read-only, in one read transacti
 
 from __future__ import annotations
 
-import json
 import sqlite3
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -290,7 +289,19 @@ def _has_table(conn: sqlite3.Connection, name: str) -> bool:
 def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
     """A journaled sweep's raw streams: the polls as (P, 2) request and reply times (s)
     and (P, A) positions (rad), and the stream's readings as a structured array
-    (started_s, ended_s, value, std, saturated, device_t_s, received_s; NULL as NaN)."""
+    (started_s, ended_s, value, std, saturated, device_t_s, received_s; NULL as NaN).
+    `JournalError` (one line) if the file is damaged or a value is not the writer's."""
+    try:
+        return _raw_streams(run, sweep_id)
+    except sqlite3.DatabaseError as exc:
+        raise JournalError(f"{run.path}: not a readable run file: {_one_line(exc)}") from None
+    except (checks.Bad, ValueError, TypeError) as exc:
+        raise JournalError(
+            f"{run.path}: not a readable run file: sweep {sweep_id}'s streams: {_one_line(exc)}"
+        ) from None
+
+
+def _raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
     conn = sqlite3.connect(f"{run.path.resolve().as_uri()}?mode=ro", uri=True)
     try:
         polls = conn.execute(
@@ -305,7 +316,14 @@ def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.nda
     finally:
         conn.close()
     times = np.array([(a, b) for a, b, _ in polls], dtype=np.float64).reshape(-1, 2)
-    positions = np.array([json.loads(p) for _, _, p in polls], dtype=np.float64)
+    axes = len(run.axes)
+    positions = np.array(
+        [
+            checks.vector(axes)(checks.json_value(p, "polls.positions"), "polls.positions")
+            for _, _, p in polls
+        ],
+        dtype=np.float64,
+    )
     names = ("started_s", "ended_s", "value", "std", "saturated", "device_t_s", "received_s")
     dtype = np.dtype([(n, np.float64) for n in names])
     readings = np.array([tuple(np.nan if c is None else c for c in r) for r in stream], dtype=dtype)

@@ -1,6 +1,6 @@
 """Every command refuses a damaged or hostile file with one line naming the file or the
 field and exit code 2: never a traceback, a hang, or an allocation the file's size
-fields ask for (docs/reference/journal.md#damaged-and-hostile-files). Real files in
+fields ask for (docs/reference/damaged-files.md). Real files in
 tmp_path, each command run in-process through `gonio.cli.main`:
 
 - run files, for ``info``, ``evaluate``, ``fit``, ``plot``, ``export`` and
@@ -380,7 +380,7 @@ MATERIALS: dict[str, tuple[str, str, Callable[[Path], None], str]] = {
         "rgl",
         ".bsdf",
         lambda p: p.write_bytes(_tensor((2**40, 2**40))),
-        "a side longer than the file",
+        "runs past the end of the file",
     ),
     "RGL: a side of 2^64 - 1 beside a 0": (
         "rgl",
