@@ -248,6 +248,13 @@ class Journal:
             raise JournalError(f"{path}: no such run file")
         lock = _lock(path)
         try:
+            # Read-only first: a file that is not a gonio run (another program's database,
+            # zero bytes) is refused before anything is written to it (the WAL mode).
+            probe = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)
+            try:
+                check_version(probe, path)
+            finally:
+                probe.close()
             conn = cls._connect(str(path), durable, max_page_count)
             check_version(conn, path)
             _upgrade(conn)

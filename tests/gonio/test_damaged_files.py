@@ -77,12 +77,23 @@ READERS: dict[str, Callable[[Path, Path], list[str]]] = {
 }
 
 
+@contextlib.contextmanager
+def editing(path: Path) -> Iterator[sqlite3.Connection]:
+    """A connection to ``path`` whose changes are committed and checkpointed into the
+    file when the block ends (the last connection closed)."""
+    conn = sqlite3.connect(path)
+    try:
+        with conn:
+            yield conn
+    finally:
+        conn.close()
+
+
 def _sql(*statements: str) -> Callable[[Path], None]:
     def edit(path: Path) -> None:
-        with sqlite3.connect(path) as conn:
+        with editing(path) as conn:
             for statement in statements:
                 conn.execute(statement)
-        sqlite3.connect(path).close()
 
     return edit
 
@@ -101,7 +112,7 @@ def _not_a_run(path: Path) -> None:
 
 def _plan_edited(path: Path) -> None:
     """The stored plan with one digit of its table changed (it still parses)."""
-    with sqlite3.connect(path) as conn:
+    with editing(path) as conn:
         raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
         head, sep, body = bytes(raw).partition(b"\nindex,")
         body = body.replace(b"0.", b"1.", 1)
@@ -110,7 +121,7 @@ def _plan_edited(path: Path) -> None:
 
 def _scene_text(text: str) -> Callable[[Path], None]:
     def edit(path: Path) -> None:
-        with sqlite3.connect(path) as conn:
+        with editing(path) as conn:
             conn.execute("UPDATE meta SET value = json_quote(?) WHERE key = 'scene_text'", (text,))
 
     return edit
@@ -222,9 +233,11 @@ def test_a_damaged_run_file_is_one_line(
     shutil.copy(original, path)
     edit, words = DAMAGE[damage]
     edit(path)
+    before = path.read_bytes()
     result = bounded(lambda: run_gonio(*READERS[command](path, tmp_path)))
     assert isinstance(result, CliResult)
     one_line(result, str(path.name), words)
+    assert path.read_bytes() == before  # refused before anything is written to it
 
 
 @pytest.mark.parametrize("command", list(READERS))
@@ -289,13 +302,16 @@ def test_a_run_locked_by_another_process_is_one_line_in_bounded_time(
     one_line(result, "another process holds the run file locked", "0.5 s waited")
 
 
+#: What gonio's writer holds while it writes (`gonio.store.journal`): an exclusive flock
+#: on the file and, in WAL mode, a write transaction (plain Python: a quick start).
 WRITER = """
-import sys
-from pathlib import Path
-from gonio.store import Journal
-journal = Journal.reopen(Path(sys.argv[1]), durable=False)
-journal.conn.execute("BEGIN IMMEDIATE")
-journal.conn.execute("DELETE FROM samples")
+import fcntl, os, sqlite3, sys
+fd = os.open(sys.argv[1], os.O_RDWR)
+fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+conn = sqlite3.connect(sys.argv[1], isolation_level=None)
+conn.execute("PRAGMA journal_mode=WAL")
+conn.execute("BEGIN IMMEDIATE")
+conn.execute("DELETE FROM samples")
 print("writing", flush=True)
 sys.stdin.read()
 """
@@ -380,7 +396,7 @@ MATERIALS: dict[str, tuple[str, str, Callable[[Path], None], str]] = {
         "rgl",
         ".bsdf",
         lambda p: p.write_bytes(_tensor((2**40, 2**40))),
-        "runs past the end of the file",
+        "runs past the end",
     ),
     "RGL: a side of 2^64 - 1 beside a 0": (
         "rgl",
