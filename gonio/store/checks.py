@@ -15,7 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from gonio.config import excerpt
@@ -221,18 +221,3 @@ def event_data(kind: str, raw: Any, where: str) -> dict[str, Any]:
     if check is not None:
         check(data, where)
     return data
-
-
-def sim_state(axes: int) -> Check:
-    """A simulated sample's state: an object whose ``true_rad`` is one angle per axis."""
-    return fields({"true_rad": vector(axes)})
-
-
-def json_texts(cells: Iterable[Any], where: str, check: Check | None = None) -> None:
-    """Each cell a JSON text (or NULL) whose value passes ``check`` (if given)."""
-    for i, cell in enumerate(cells):
-        if cell is None:
-            continue
-        value = json_value(cell, f"{where} (row {i})")
-        if check is not None:
-            check(value, f"{where} (row {i})")

@@ -225,10 +225,6 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
         raise checks.Bad(
             f"samples.target: {bad}; expected 0 … {len(plan) - 1} (the plan's targets)"
         )
-    checks.json_texts(samples["temperatures_c"], "samples.temperatures_c", checks.mapping)
-    checks.json_texts(
-        samples["sim_state"], "samples.sim_state", checks.sim_state(len(meta["axes"]))
-    )
     return Run(
         path=path,
         meta=MappingProxyType(meta),

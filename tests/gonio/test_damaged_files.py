@@ -207,10 +207,6 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
         _sql("ALTER TABLE samples DROP COLUMN counts_std"),
         "samples: column 'counts_std' missing",
     ),
-    "sample: a state of another shape": (
-        _sql("""UPDATE samples SET sim_state = '{"true_rad": [1]}' WHERE target = 2"""),
-        "samples.sim_state (row 2).true_rad: expected a list of 4 numbers",
-    ),
 }
 
 
