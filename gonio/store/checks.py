@@ -114,6 +114,18 @@ def vector(length: int) -> Check:
     return checked
 
 
+#: How far a stored direction's length may be from 1 (the writer's are within 1e-15).
+UNIT_TOLERANCE = 1e-9
+
+
+def unit_vector(value: Any, where: str) -> list[float]:
+    """A direction: three finite numbers of length 1."""
+    x, y, z = vector(3)(value, where)
+    if abs(x * x + y * y + z * z - 1.0) > UNIT_TOLERANCE:
+        raise Bad(f"{where}: expected a unit vector, got {excerpt(value)}")
+    return [x, y, z]
+
+
 def fields(required: Mapping[str, Check], optional_: Mapping[str, Check] | None = None) -> Check:
     """A JSON object with the ``required`` keys and maybe the ``optional_`` ones, each
     checked (other keys are left as they are: a newer writer of the same version may add
@@ -201,8 +213,8 @@ EVENT_DATA: dict[str, Check] = {
         {
             "albedo": positive,
             "source_kind": text,
-            "wi": vector(3),
-            "wo": vector(3),
+            "wi": unit_vector,
+            "wo": unit_vector,
             "reference": READING,
             "dark": optional(READING),
         },

@@ -225,6 +225,7 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
         raise checks.Bad(
             f"samples.target: {bad}; expected 0 … {len(plan) - 1} (the plan's targets)"
         )
+    _check_samples(samples)
     return Run(
         path=path,
         meta=MappingProxyType(meta),
@@ -234,6 +235,26 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
         sessions=tuple(_session(row) for row in sessions),
         sweeps=tuple(_sweep(row) for row in sweeps),
     )
+
+
+def _check_samples(samples: Mapping[str, np.ndarray]) -> None:
+    """`checks.Bad` unless every sample's directions are unit vectors and its exposure
+    positive (as the writer stores them; the analysis divides by the exposure)."""
+    for side in ("wi", "wo"):
+        v = np.stack([samples[f"{side}_{c}"] for c in "xyz"], axis=1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            bad = ~(np.abs(np.einsum("ij,ij->i", v, v) - 1.0) <= checks.UNIT_TOLERANCE)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise checks.Bad(
+                f"samples.{side}_x, _y, _z (row {i}): expected a unit vector, got {v[i].tolist()}"
+            )
+    exposure = samples["exposure_s"]
+    if exposure.size and not (exposure > 0.0).all():
+        i = int(np.flatnonzero(~(exposure > 0.0))[0])
+        raise checks.Bad(
+            f"samples.exposure_s (row {i}): expected a positive time, got {exposure[i]}"
+        )
 
 
 def _event(row: tuple[Any, ...]) -> Event:

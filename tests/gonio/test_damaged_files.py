@@ -199,6 +199,14 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
         _sql("UPDATE samples SET counts = 1e999 WHERE target = 3"),
         "samples.counts (row 3): expected a finite number, got inf",
     ),
+    "sample: not a unit vector": (
+        _sql("UPDATE samples SET wi_x = 1e300 WHERE target = 3"),
+        "samples.wi_x, _y, _z (row 3): expected a unit vector",
+    ),
+    "sample: no exposure": (
+        _sql("UPDATE samples SET exposure_s = 0 WHERE target = 3"),
+        "samples.exposure_s (row 3): expected a positive time",
+    ),
     "sample: a target the plan lacks": (
         _sql("UPDATE samples SET target = 999 WHERE target = 3"),
         "samples.target: 999; expected 0 … 7",
