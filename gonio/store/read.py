@@ -319,7 +319,9 @@ def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.nda
 
 
 def _raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
-    conn = sqlite3.connect(f"{run.path.resolve().as_uri()}?mode=ro", uri=True)
+    conn = sqlite3.connect(
+        f"{run.path.resolve().as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S
+    )
     try:
         polls = conn.execute(
             "SELECT request_s, reply_s, positions FROM polls WHERE sweep_id = ? ORDER BY rowid",
