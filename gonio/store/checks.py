@@ -12,7 +12,6 @@ the value as the readers use it, or raises `Bad`.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from collections.abc import Callable, Mapping
@@ -145,21 +144,25 @@ def fields(required: Mapping[str, Check], optional_: Mapping[str, Check] | None 
     return checked
 
 
-#: The ``meta`` keys the readers use, each with its check; the first group must be there.
+#: The ``meta`` keys every journal holds (`gonio.store.Journal.create` needs them).
 META_REQUIRED: dict[str, Check] = {
     "axes": names,
     "coordinate_names": names,
+    "schema_version": integer,
+}
+#: The keys a run started by `gonio acquire` holds (`gonio.workflows.session`), which the
+#: commands read: all of them, or (a journal written by other code) none.
+META_SESSION: dict[str, Check] = {
     "backend": text,
     "created_utc": text,
+    "started_unix": number,
     "rig_text": text,
     "hashes": mapping,
-    "schema_version": integer,
 }
 META_OPTIONAL: dict[str, Check] = {
     "plan_name": optional(text),
     "rig_name": optional(text),
     "seed": optional(integer),
-    "started_unix": number,
     "host": optional(text),
     "user": optional(text),
     "versions": optional(mapping),
@@ -177,23 +180,18 @@ BACKENDS = ("simulated", "hardware", "rehearsal")
 
 def check_meta(meta: dict[str, Any]) -> None:
     """`Bad` unless the decoded ``meta`` holds what the readers use, as the writer
-    stores it."""
-    fields(META_REQUIRED, META_OPTIONAL)(meta, "meta")
-    if meta["backend"] not in BACKENDS:
+    stores it. (A stored text edited but well-formed is read: a resume refuses it,
+    `gonio.workflows.session.check_stored_texts`.)"""
+    session = any(key in meta for key in META_SESSION)
+    required = {**META_REQUIRED, **(META_SESSION if session else {})}
+    fields(required, {**META_OPTIONAL, **META_SESSION})(meta, "meta")
+    if "backend" in meta and meta["backend"] not in BACKENDS:
         raise Bad(
             f"meta.backend: expected one of {', '.join(BACKENDS)}, got {excerpt(meta['backend'])}"
         )
-    for key, value in meta["hashes"].items():
-        text(value, f"meta.hashes.{key}")
-    for name in ("plan", "rig", "scene"):  # the texts are stored once, at the run's start
-        stored, expected = meta.get(f"{name}_text"), meta["hashes"].get(f"{name}_sha256")
-        if stored is None or expected is None:
-            continue
-        if hashlib.sha256(stored.encode("utf-8", "surrogatepass")).hexdigest() != expected:
-            raise Bad(
-                f"meta.{name}_text: does not match meta.hashes.{name}_sha256; the stored "
-                f"{name} text was edited"
-            )
+    hashes = meta.get("hashes", {})
+    for key, value in hashes.items():
+        optional(text)(value, f"meta.hashes.{key}")
 
 
 #: A journaled reading (a calibration's reference or dark).

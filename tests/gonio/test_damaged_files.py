@@ -167,11 +167,6 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
         _sql("""UPDATE meta SET value = '["a","b","c","d"]' WHERE key = 'axes'"""),
         "meta.axes: expected the stored plan's rig axes",
     ),
-    "scene text: not YAML": (
-        _sql("""UPDATE meta SET value = '"scene: ["' WHERE key = 'scene_text'"""),
-        "meta.scene_text: does not match meta.hashes.scene_sha256",
-    ),
-    "scene text: an alias bomb": (_scene_text(LAUGHS), "meta.scene_text: does not match"),
     "event: not JSON": (
         _sql("UPDATE events SET data = '{' WHERE kind = 'calibration'"),
         ".data: expected JSON text",
@@ -253,6 +248,41 @@ def test_the_intact_copy_is_read(
     shutil.copy(original, path)
     result = run_gonio(*READERS[command](path, tmp_path))
     assert result.returncode == 0, result.stderr[-2000:]
+
+
+#: An edited stored scene → (its text, words of the refusal, the commands that read
+#: what is wrong: the YAML is parsed for the detector's band, the material for a truth).
+SCENE_TEXTS = {
+    "not YAML": ("scene: [", "not valid YAML", ("evaluate", "fit", "plot")),
+    "an alias bomb": (LAUGHS, "values (aliases expanded)", ("evaluate", "fit", "plot")),
+    "a material of another shape": (
+        "material: {name: lambert, albedo: nope}\n",
+        "material.",
+        ("evaluate",),
+    ),
+}
+
+
+@pytest.mark.parametrize("command", ["info", "evaluate", "fit", "plot", "resume"])
+@pytest.mark.parametrize("case", list(SCENE_TEXTS))
+def test_an_edited_stored_scene_is_one_line_where_it_is_read(
+    original: Path, tmp_path: Path, run_gonio: Gonio, case: str, command: str
+) -> None:
+    """The stored scene is parsed within a configuration file's bounds by the commands
+    that compare with it; a resume refuses any edited stored text (its sha256); a
+    command that does not read it reads the run."""
+    path = tmp_path / "run.sqlite"
+    shutil.copy(original, path)
+    text, words, readers = SCENE_TEXTS[case]
+    _scene_text(text)(path)
+    result = bounded(lambda: run_gonio(*READERS[command](path, tmp_path)))
+    assert isinstance(result, CliResult)
+    if command == "resume":
+        one_line(result, path.name, "the stored scene text does not match")
+    elif command in readers:
+        one_line(result, words)
+    else:
+        assert result.returncode == 0, result.stderr[-2000:]
 
 
 HOLDER = """
