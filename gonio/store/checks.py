@@ -84,6 +84,12 @@ def mapping(value: Any, where: str) -> dict[str, Any]:
     return value
 
 
+def _list(value: Any, where: str) -> list[Any]:
+    if not isinstance(value, list):
+        raise Bad(f"{where}: expected a list, got {excerpt(value)}")
+    return value
+
+
 def names(value: Any, where: str) -> list[str]:
     """A list of distinct non-empty texts (a rig's axes, a plan's coordinates)."""
     if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
@@ -219,6 +225,18 @@ EVENT_DATA: dict[str, Check] = {
         {"unit": text, "dark_reason": optional(text)},
     ),
     "fault": fields({"message": text}),
+    # a motor's recovery step (`gonio.acquire.recovery`; `gonio info` formats these)
+    "recovery": fields(
+        {},
+        {
+            "step": text,
+            "flags": lambda value, where: [text(v, where) for v in _list(value, where)],
+            "temperature_c": optional(number),
+            "load_pct": optional(number),
+            "waited_s": optional(number),
+            "deviation_deg": optional(number),
+        },
+    ),
     "skip": fields({}, {"reason": text}),
 }
 

@@ -185,6 +185,13 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
         ),
         ".data: expected JSON text",
     ),
+    "event: a recovery's number as a text": (
+        _sql(
+            'UPDATE events SET kind = \'recovery\', data = \'{"step":"diagnosed",'
+            '"temperature_c":"hot"}\' WHERE kind = \'health\''
+        ),
+        ".data.temperature_c: expected a finite number, got 'hot'",
+    ),
     "session: a list": (_sql("UPDATE sessions SET info = '[]'"), "info: expected a JSON object"),
     "sample: text for a number": (
         _sql("UPDATE samples SET counts = 'abc' WHERE target = 3"),
