@@ -16,7 +16,10 @@ from pathlib import Path
 import pytest
 import uvicorn
 
+from gonio.acquire import progress
+from gonio.cli import main
 from gonio.live import server
+from tests.gonio.live.paced import Paced
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -71,3 +74,20 @@ def printed_url(child: subprocess.Popen[str]) -> str:
         if text.startswith("watch and control: "):
             return text.rsplit(" ", 1)[-1].strip()
     raise AssertionError(f"gonio acquire printed no URL: {child.stderr and child.stderr.read()}")
+
+
+def forked_acquire(args: list[str], seconds_per_target: float) -> int:
+    """``gonio acquire ARGS`` (quiet) in a forked child paced as `paced_acquire` (no new
+    interpreter to start); its pid, its exit status the command's exit code."""
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        code = 1
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, 1)
+            os.dup2(devnull, 2)
+            progress.for_stream = lambda quiet, stream=None: Paced(seconds_per_target)  # type: ignore[assignment]
+            code = main(args)
+        finally:
+            os._exit(code)
+    return pid
