@@ -28,7 +28,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Serve a local web page of the run files in a folder (or of one run "
         "file) that updates as samples are committed: progress, ETA, the samples on the "
         "hemisphere, the in-plane curve, the motors' health, the calibrations and the "
-        "events; pause, resume and stop a running gonio acquire with the token it printed. "
+        "events; pause, resume and stop a running acquisition with the token it printed. "
         "Binds 127.0.0.1 unless --host says otherwise; a non-loopback --host needs "
         "--token-file, and every request must then carry that token.",
     )
