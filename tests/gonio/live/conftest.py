@@ -86,6 +86,7 @@ def forked_acquire(args: list[str], seconds_per_target: float) -> int:
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, 1)
             os.dup2(devnull, 2)
+            sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (until _exit)
             progress.for_stream = lambda quiet, stream=None: Paced(seconds_per_target)  # type: ignore[assignment]
             code = main(args)
         finally:
