@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import json
 import math
+import multiprocessing
 import os
 import sqlite3
-import time
+import threading
 from collections.abc import Mapping
+from concurrent.futures import BrokenExecutor, Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -31,12 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from gonio.analysis.calibrated import calibrate, is_level
+from gonio.analysis.calibrated import calibration_series, is_level
 from gonio.errors import GonioError
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
+from gonio.rig.model import Rig
 from gonio.store.journal import JournalError, check_version
-from gonio.store.read import Event, Run, Session
+from gonio.store.read import Event, Session
 from gonio.types import FloatArray
 
 #: The sample columns the views read (besides the directions).
@@ -53,6 +56,14 @@ LOGGED = frozenset(
 _FAULTS = frozenset({"fault", "aborted", "journal"})
 #: Samples whose wall time (UTC) the rate is measured over.
 _RATE_WINDOW = 200
+#: A run of at most this many samples is read whole; a larger one about `KEPT` of them
+#: (every k-th target) and every sample committed since.
+FULL_LIMIT = 200_000
+KEPT = 50_000
+#: A stored plan larger than this (bytes; about 30 000 targets) is parsed in the
+#: background; its header is read at once.
+LAZY_PLAN_BYTES = 8_000_000
+_HEAD_BYTES = 4_000_000
 
 
 def _epoch(utc: str) -> float:
@@ -78,43 +89,132 @@ def writer_holds(path: Path) -> bool:
     )
 
 
+@dataclass(frozen=True)
+class PlanInfo:
+    """What the views need of the stored plan, from its header alone (cheap even for a
+    plan of a million targets): its name, rig, number of targets, predicted total
+    (s), whether it is a fly plan or an adaptive plan's survey."""
+
+    name: str
+    rig: Rig
+    targets: int
+    total_s: float
+    fly: bool
+    survey: bool
+
+    @classmethod
+    def of(cls, head: bytes, rig_text: str, where: str) -> PlanInfo:
+        header: dict[str, Any] = {}
+        for raw in head.split(b"\n")[1:]:
+            if not raw.startswith(b"#"):
+                break
+            key, _, value = raw.decode("utf-8").removeprefix("#").strip().partition(":")
+            if key in ("spec", "summary"):
+                header[key] = json.loads(value)
+        if "spec" not in header or "summary" not in header:
+            raise JournalError(f"{where}: the stored plan has no readable header")
+        spec, summary = header["spec"], header["summary"]
+        sampling = spec.get("sampling", {})
+        targets = int(summary["kept"])
+        wanted = sampling.get("target")
+        return cls(
+            name=str(spec.get("name", "")),
+            rig=Rig.from_yaml(where, raw=rig_text.encode("utf-8")),
+            targets=targets,
+            total_s=float(summary["travel_s"]) + float(summary["dwell_s"]),
+            fly=sampling.get("strategy") == "fly",
+            survey=sampling.get("strategy") == "adaptive"
+            and wanted is not None
+            and targets < int(wanted),
+        )
+
+
+@dataclass(frozen=True)
+class PlanArrays:
+    """What the views use of the stored plan's targets: each one's predicted time (s:
+    the move into it, the settle, the exposures) and its (ωi, ωo)."""
+
+    per_target_s: FloatArray
+    wi: FloatArray
+    wo: FloatArray
+
+    @classmethod
+    def of(cls, plan: Plan) -> PlanArrays:
+        each = plan.travel_s + plan.rig.spec.settle_s + plan.exposure_s * plan.averages
+        return cls(np.asarray(each, np.float64), plan.wi, plan.wo)
+
+
+def _parse_in_background(path: Path) -> tuple[PlanArrays, np.ndarray]:
+    """A large run's `PlanArrays` and its measured targets (in another process)."""
+    uri = f"{path.resolve().as_uri()}?mode=ro"
+    conn = sqlite3.connect(uri, uri=True, isolation_level=None)
+    try:
+        conn.execute("BEGIN")
+        raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
+        plan = parse_plan(bytes(raw), f"{path}#plan_file")
+        targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")], np.int64)
+        conn.execute("COMMIT")
+    finally:
+        conn.close()
+    return PlanArrays.of(plan), targets
+
+
 @dataclass
 class LiveRun:
     """A run file followed as it grows (see the module docstring). `JournalError` (one
-    line) if ``path`` is not a readable run file."""
+    line) if ``path`` is not a readable run file.
+
+    ``samples``: the samples' columns the views use, in commit order: every sample of a
+    run of at most `FULL_LIMIT` when first read, else about `KEPT` of those already
+    there (every k-th target) and every one committed since. ``measured``: how many
+    the run holds. The stored plan itself (`plan`) is parsed once, in the background
+    when it is large (its header, `info`, is read at once)."""
 
     path: Path
-    run: Run = field(init=False)
     version: int = field(init=False, default=0)  # changes whenever something new is read
+    meta: Mapping[str, Any] = field(init=False)
+    info: PlanInfo = field(init=False)
+    samples: dict[str, np.ndarray] = field(init=False)
+    measured: int = field(init=False, default=0)
+    skipped: int = field(init=False, default=0)
+    events: list[Event] = field(init=False, default_factory=list)
+    sessions: tuple[Session, ...] = field(init=False, default=())
     _conn: sqlite3.Connection = field(init=False, repr=False)
-    _columns: dict[str, list[np.ndarray]] = field(init=False, repr=False)
+    _parts: dict[str, list[np.ndarray]] = field(init=False, repr=False)
     _last_ended: float = field(init=False, default=-math.inf)
     _last_event: int = field(init=False, default=0)
     _data_version: int = field(init=False, default=-1)
     _plan_size: int = field(init=False, default=-1)
     _recent: list[tuple[float, float]] = field(init=False, default_factory=list)
     _writing: bool = field(init=False, default=False)
+    _plan: PlanArrays | None = field(init=False, default=None)
+    _done: np.ndarray | None = field(init=False, default=None)  # measured, per target
+    _loader: Future[tuple[PlanArrays, np.ndarray]] | None = field(init=False, default=None)
+    _lock: threading.Lock = field(init=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
         if not self.path.is_file():
             raise JournalError(f"{self.path}: no such run file")
-        uri = f"{self.path.resolve().as_uri()}?mode=ro"
-        self._conn = sqlite3.connect(uri, uri=True, isolation_level=None, check_same_thread=False)
+        self._conn = self._connect()
         try:
             check_version(self._conn, self.path)
         except sqlite3.DatabaseError as exc:
             self._conn.close()
             raise JournalError(f"{self.path}: not a readable run file: {exc}") from None
-        self._columns = {}
-        self._events: list[Event] = []
+        self._parts = {}
         self.refresh()
+
+    def _connect(self) -> sqlite3.Connection:
+        uri = f"{self.path.resolve().as_uri()}?mode=ro"
+        return sqlite3.connect(uri, uri=True, isolation_level=None, check_same_thread=False)
 
     def close(self) -> None:
         self._conn.close()
 
     def refresh(self) -> bool:
         """Read what was committed since the last refresh; whether anything was."""
+        self._poll_loader()
         writing = writer_holds(self.path)
         try:
             changed = self._read()
@@ -126,6 +226,7 @@ class LiveRun:
             return True
         return False
 
+    # -- reading -------------------------------------------------------------------------
     def _read(self) -> bool:
         conn = self._conn
         data_version = int(conn.execute("PRAGMA data_version").fetchone()[0])
@@ -136,16 +237,30 @@ class LiveRun:
             self._data_version = data_version
             size = conn.execute("SELECT length(value) FROM meta WHERE key = 'plan_file'")
             plan_size = int(size.fetchone()[0])
-            meta_rows = None
             if plan_size != self._plan_size:  # the first read, or an adaptive second pass
-                meta_rows = conn.execute("SELECT key, value FROM meta").fetchall()
+                self._read_meta(conn, plan_size)
             names = [r[1] for r in conn.execute("PRAGMA table_info(samples)")]
             wanted = [c for c in (*_COLUMNS, "utc") if c in names]
             quoted = ", ".join(f'"{c}"' for c in wanted)
-            rows = conn.execute(
-                f"SELECT {quoted} FROM samples WHERE ended_s > ? ORDER BY ended_s",
-                (self._last_ended,),
-            ).fetchall()
+            self.measured = int(conn.execute("SELECT count(*) FROM samples").fetchone()[0])
+            if not self._parts and self.measured > FULL_LIMIT:
+                stride = -(-self.measured // KEPT)
+                rows = conn.execute(
+                    f"SELECT {quoted} FROM samples WHERE target % ? = 0 ORDER BY ended_s",
+                    (stride,),
+                ).fetchall()
+                last = conn.execute("SELECT max(ended_s) FROM samples").fetchone()[0]
+                newest = conn.execute(
+                    "SELECT ended_s, utc FROM samples ORDER BY target DESC LIMIT ?",
+                    (_RATE_WINDOW,),
+                ).fetchall()
+                self._recent = sorted((float(t), _epoch(u)) for t, u in newest)
+            else:
+                rows = conn.execute(
+                    f"SELECT {quoted} FROM samples WHERE ended_s > ? ORDER BY ended_s",
+                    (self._last_ended,),
+                ).fetchall()
+                last = None
             events = conn.execute(
                 "SELECT id, session, kind, target, t_s, utc, data FROM events WHERE id > ? "
                 "ORDER BY id",
@@ -154,43 +269,85 @@ class LiveRun:
             sessions = conn.execute(
                 "SELECT id, started_utc, info, ended_utc, outcome FROM sessions ORDER BY id"
             ).fetchall()
+            for i, sn, k, t, ts, u, d in events:
+                self.events.append(Event(i, sn, k, t, ts, u, MappingProxyType(json.loads(d))))
+            if events:
+                self._last_event = int(events[-1][0])
+            self.skipped = self._skipped(conn)
         finally:
             conn.execute("COMMIT")
-        if meta_rows is not None:
-            self._meta(meta_rows, plan_size)
-        self._add_samples(wanted, rows)
-        for i, s, k, t, ts, u, d in events:
-            self._events.append(Event(i, s, k, t, ts, u, MappingProxyType(json.loads(d))))
-        if events:
-            self._last_event = int(events[-1][0])
-        self.run = Run(
-            path=self.path,
-            meta=self._meta_map,
-            plan=self._plan,
-            samples=MappingProxyType({k: self._column(k) for k in self._columns}),
-            events=tuple(self._events),
-            sessions=tuple(
-                Session(i, st, MappingProxyType(json.loads(info)), en, out)
-                for i, st, info, en, out in sessions
-            ),
+        self._add_samples(wanted, rows, track=last is None)
+        if last is not None:
+            self._last_ended = float(last)
+        self.sessions = tuple(
+            Session(i, st, MappingProxyType(json.loads(info)), en, out)
+            for i, st, info, en, out in sessions
         )
         return True
 
-    def _meta(self, rows: list[tuple[str, Any]], plan_size: int) -> None:
-        meta: dict[str, Any] = {}
-        plan_file = b""
-        for key, value in rows:
-            if key == "plan_file":
-                plan_file = bytes(value)
-            else:
-                meta[key] = json.loads(value)
-        self._meta_map: Mapping[str, Any] = MappingProxyType(meta)
-        self._plan: Plan = parse_plan(plan_file, f"{self.path}#plan_file")
-        self._plan_size = plan_size
+    def _skipped(self, conn: sqlite3.Connection) -> int:
+        """Targets skipped and not measured since."""
+        skips = (e.target for e in self.events if e.kind == "skip" and e.target is not None)
+        skipped = sorted(set(skips))
+        measured = 0
+        for k in range(0, len(skipped), 500):
+            chunk = skipped[k : k + 500]
+            marks = ", ".join("?" * len(chunk))
+            found = conn.execute(f"SELECT count(*) FROM samples WHERE target IN ({marks})", chunk)
+            measured += int(found.fetchone()[0])
+        return len(skipped) - measured
 
-    def _add_samples(self, names: list[str], rows: list[tuple[Any, ...]]) -> None:
-        if not self._columns:
-            self._columns = {n: [] for n in names if n != "utc"}
+    def _read_meta(self, conn: sqlite3.Connection, plan_size: int) -> None:
+        meta: dict[str, Any] = {}
+        for key, value in conn.execute("SELECT key, value FROM meta WHERE key != 'plan_file'"):
+            meta[key] = json.loads(value)
+        self.meta = MappingProxyType(meta)
+        head = conn.execute(
+            "SELECT substr(value, 1, ?) FROM meta WHERE key = 'plan_file'", (_HEAD_BYTES,)
+        ).fetchone()[0]
+        where = f"{self.path}#plan_file"
+        self.info = PlanInfo.of(bytes(head), str(meta.get("rig_text", "")), where)
+        self._plan_size = plan_size
+        with self._lock:
+            self._plan, self._done = None, None
+        if plan_size <= LAZY_PLAN_BYTES:
+            self._load_plan(conn)
+        else:  # another process: parsing holds its interpreter for seconds
+            pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+            self._loader = pool.submit(_parse_in_background, self.path)
+            pool.shutdown(wait=False)
+
+    def _load_plan(self, conn: sqlite3.Connection) -> None:
+        raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
+        plan = parse_plan(bytes(raw), f"{self.path}#plan_file")
+        targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")], np.int64)
+        self._install(PlanArrays.of(plan), targets)
+
+    def _install(self, arrays: PlanArrays, targets: np.ndarray) -> None:
+        done = np.zeros(len(arrays.per_target_s), dtype=np.bool_)
+        done[targets] = True
+        with self._lock:
+            if self._done is not None:  # marked meanwhile by new samples
+                done |= self._done[: len(done)]
+            self._plan, self._done = arrays, done
+
+    def _poll_loader(self) -> None:
+        """Install what the background process parsed, once it is done."""
+        loader = self._loader
+        if loader is None or not loader.done():
+            return
+        self._loader = None
+        try:
+            arrays, targets = loader.result()
+        except (GonioError, sqlite3.DatabaseError, OSError, BrokenExecutor):
+            return  # the views go on with the plan's header
+        self._install(arrays, targets)
+        self._data_version = -1
+
+    def _add_samples(self, names: list[str], rows: list[tuple[Any, ...]], track: bool) -> None:
+        if not self._parts:
+            self._parts = {n: [] for n in names if n != "utc"}
+            self.samples = {n: self._column(n) for n in self._parts}
         if not rows:
             return
         cells = list(zip(*rows, strict=True))
@@ -199,20 +356,25 @@ class LiveRun:
                 continue
             if n in _INT:
                 column = np.array(values, dtype=np.int64)
-                self._columns[n].append(column.astype(np.bool_) if n == "saturated" else column)
+                self._parts[n].append(column.astype(np.bool_) if n == "saturated" else column)
             else:
-                self._columns[n].append(
+                self._parts[n].append(
                     np.array([math.nan if v is None else v for v in values], dtype=np.float64)
                 )
+        with self._lock:
+            if self._done is not None:
+                self._done[np.array(cells[names.index("target")], dtype=np.int64)] = True
+        self.samples = {n: self._column(n) for n in self._parts}
+        if not track:
+            return
         self._last_ended = float(rows[-1][names.index("ended_s")])
-        ended = rows[-1 - min(len(rows) - 1, _RATE_WINDOW) :]
-        j, u = names.index("ended_s"), names.index("utc") if "utc" in names else -1
-        if u >= 0:
-            self._recent.extend((float(r[j]), _epoch(r[u])) for r in ended)
+        if "utc" in names:
+            j, u = names.index("ended_s"), names.index("utc")
+            self._recent.extend((float(r[j]), _epoch(r[u])) for r in rows[-_RATE_WINDOW:])
             self._recent = self._recent[-_RATE_WINDOW:]
 
     def _column(self, name: str) -> np.ndarray:
-        parts = self._columns[name]
+        parts = self._parts[name]
         if not parts:
             dtype = np.bool_ if name == "saturated" else np.int64 if name in _INT else np.float64
             return np.empty(0, dtype=dtype)
@@ -222,6 +384,31 @@ class LiveRun:
 
     # -- what is derived ---------------------------------------------------------------
     @property
+    def plan(self) -> PlanArrays | None:
+        """What the views use of the stored plan's targets, once parsed (None while a
+        large one is parsed)."""
+        return self._plan
+
+    def missing(self) -> np.ndarray | None:
+        """The targets not measured nor skipped, in the plan's order (None until the
+        plan is parsed)."""
+        with self._lock:
+            if self._plan is None or self._done is None:
+                return None
+            left = ~self._done
+        skipped = [e.target for e in self.events if e.kind == "skip" and e.target is not None]
+        left[np.array(skipped, dtype=np.int64)] = False
+        return np.flatnonzero(left)
+
+    def of_kind(self, *kinds: str) -> list[Event]:
+        return [e for e in self.events if e.kind in kinds]
+
+    @property
+    def complete(self) -> bool:
+        done = bool(self.sessions) and self.sessions[-1].outcome == "completed"
+        return done and not self.info.survey
+
+    @property
     def writing(self) -> bool:
         """A ``gonio acquire`` holds the run file (as of the last refresh)."""
         return self._writing
@@ -229,10 +416,9 @@ class LiveRun:
     def state(self) -> str:
         """``running``, ``paused``, ``completed``, ``stopped`` or ``fault`` (module
         docstring)."""
-        run = self.run
         if self._writing:
-            current = run.sessions[-1].id if run.sessions else None
-            for e in reversed(run.events):
+            current = self.sessions[-1].id if self.sessions else None
+            for e in reversed(self.events):
                 if e.session != current:
                     break
                 if e.kind == "pause":
@@ -240,9 +426,9 @@ class LiveRun:
                 if e.kind in ("resume", "start"):
                     return "running"
             return "running"
-        if run.complete:
+        if self.complete:
             return "completed"
-        ended = [s for s in run.sessions if s.outcome is not None]
+        ended = [s for s in self.sessions if s.outcome is not None]
         if ended and ended[-1].outcome in _FAULTS:
             return "fault"
         return "stopped"
@@ -255,18 +441,12 @@ class LiveRun:
         return (len(recent) - 1) / (recent[-1] - recent[0])
 
 
-def _instrument_time(run: Run) -> float:
-    times = [e.t_s for e in run.events]
-    ended = run.samples["ended_s"]
-    lo = min(times[0] if times else math.inf, float(ended.min()) if len(ended) else math.inf)
-    hi = max(times[-1] if times else -math.inf, float(ended.max()) if len(ended) else -math.inf)
-    return float(hi - lo) if math.isfinite(lo) and math.isfinite(hi) else 0.0
-
-
-def _per_target_s(plan: Plan) -> FloatArray:
-    return np.asarray(
-        plan.travel_s + plan.rig.spec.settle_s + plan.exposure_s * plan.averages, np.float64
-    )
+def _instrument_time(live: LiveRun) -> float:
+    ended = live.samples["ended_s"]
+    times = [e.t_s for e in live.events]
+    if len(ended):
+        times += [float(ended.min()), float(ended.max())]
+    return float(max(times) - min(times)) if times else 0.0
 
 
 def _event_line(e: Event) -> dict[str, Any]:
@@ -286,18 +466,21 @@ def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
     plan's prediction, rate, ETA (wall s), the motors' health readings against the rig's
     limits, the calibrations and the source drift, the last ``events`` logged events and
     the command that resumes it when it stopped."""
-    run, plan = live.run, live.run.plan
-    measured, targets = len(run), len(plan)
-    skipped = int(run.skipped.size)
-    missing = run.missing()
-    per_target = _per_target_s(plan)
-    predicted_left = float(per_target[missing].sum())
+    info, plan = live.info, live.plan
+    measured, targets, skipped = live.measured, info.targets, live.skipped
+    left = max(targets - measured - skipped, 0)
+    missing = live.missing()
+    if plan is not None and missing is not None:
+        per_target = plan.per_target_s
+        predicted_left = float(per_target[missing].sum())
+        predicted_done = float(per_target.sum()) - predicted_left
+    else:  # a large plan still being parsed: in proportion
+        predicted_left = info.total_s * left / max(targets, 1)
+        predicted_done = info.total_s - predicted_left
     rate = live.rate_per_s()
     state = live.state()
-    eta = None
-    if state in ("running", "paused") and rate:
-        eta = float(missing.size / rate)
-    health_spec = plan.rig.spec.health
+    eta = float(left / rate) if state in ("running", "paused") and rate else None
+    health_spec = info.rig.spec.health
     health = [
         {
             "t_s": e.t_s,
@@ -306,9 +489,9 @@ def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
             "voltages_v": e.data.get("voltages_v", {}),
             "problems": e.data.get("problems", []),
         }
-        for e in run.of_kind("health")
+        for e in live.of_kind("health")
     ]
-    calibrations = run.of_kind("calibration")
+    calibrations = live.of_kind("calibration")
     first_rate = _reference_rate(calibrations[0].data) if calibrations else None
     cal = [
         {
@@ -320,29 +503,29 @@ def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
         }
         for e in calibrations
     ]
-    logged = [_event_line(e) for e in run.events if e.kind in LOGGED]
+    logged = [_event_line(e) for e in live.events if e.kind in LOGGED]
     stopped = state in ("stopped", "fault")
     return {
-        "name": run.path.name,
+        "name": live.path.name,
         "version": live.version,
         "state": state,
-        "plan": plan.spec.name,
-        "rig": plan.rig.spec.name,
-        "backend": run.meta.get("backend"),
-        "fly": plan.is_fly,
+        "plan": info.name,
+        "rig": info.rig.spec.name,
+        "backend": live.meta.get("backend"),
+        "fly": info.fly,
         "targets": targets,
         "measured": measured,
         "skipped": skipped,
-        "missing": int(missing.size),
+        "missing": left,
         "progress": (measured + skipped) / targets if targets else 1.0,
-        "instrument_time_s": _instrument_time(run),
-        "predicted_s": float(plan.summary.total_s),
-        "predicted_done_s": float(per_target.sum() - predicted_left),
+        "instrument_time_s": _instrument_time(live),
+        "predicted_s": info.total_s,
+        "predicted_done_s": predicted_done,
         "predicted_left_s": predicted_left,
         "rate_per_s": rate,
         "eta_s": eta,
-        "sessions": len(run.sessions),
-        "outcome": run.sessions[-1].outcome if run.sessions else None,
+        "sessions": len(live.sessions),
+        "outcome": live.sessions[-1].outcome if live.sessions else None,
         "health": health[-500:],
         "health_limits": {
             "max_temperature_c": health_spec.max_temperature_c,
@@ -352,7 +535,7 @@ def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
         "calibrations": cal[-500:],
         "events": logged[-events:],
         "events_total": len(logged),
-        "resume": f"gonio acquire --resume {run.path}" if stopped else None,
+        "resume": f"gonio acquire --resume {live.path}" if stopped else None,
     }
 
 
@@ -375,69 +558,72 @@ def _pick(n: int, limit: int, newest: int) -> np.ndarray:
     return np.unique(np.concatenate([head, tail]))
 
 
+def _values(live: LiveRun, index: np.ndarray) -> tuple[FloatArray, FloatArray, str]:
+    """The samples' BRDF and 1σ (sr⁻¹) by the run's calibrations
+    (`gonio.analysis.calibrated`), or without one the reading per second of exposure."""
+    s = {k: v[index] for k, v in live.samples.items()}
+    exposure = s["exposure_s"]
+    counts, std = s["counts"], s["counts_std"]
+    calibrations = tuple(live.of_kind("calibration"))
+    try:
+        series = calibration_series(calibrations)
+    except GonioError:
+        safe = np.maximum(exposure, 1e-12)
+        return counts / safe, np.nan_to_num(std, nan=0.0) / safe, "per s"
+    if is_level(calibrations[0].data):
+        counts, std = counts * exposure, std * exposure
+    wi = np.stack([s["wi_x"], s["wi_y"], s["wi_z"]], axis=1)
+    wo = np.stack([s["wo_x"], s["wo_y"], s["wo_z"]], axis=1)
+    t = 0.5 * (s["started_s"] + s["ended_s"])
+    f, sigma = series.brdf(counts, std, s["n"], exposure, wi, wo, t)
+    return np.asarray(f, np.float64), np.asarray(sigma, np.float64), "sr⁻¹"
+
+
 def points(
     live: LiveRun, *, limit: int = 20_000, pending: int = 5_000, plane_deg: float = 5.0
 ) -> dict[str, Any]:
     """The samples on the hemisphere (at most ``limit``, decimated on time order with
-    the newest kept), the plan's targets still to measure (at most ``pending``), and
-    the in-plane samples (ωo within ``plane_deg`` of the plane of incidence) with their
-    BRDF and 1σ: JSON values, rounded for size. The value is the BRDF (sr⁻¹) once the
-    run has a calibration, else the reading per second of exposure."""
-    run, plan = live.run, live.run.plan
-    n = len(run)
-    pick = _pick(n, limit, newest=min(500, limit // 4))
-    sub = _subset(run, pick)
-    wi, wo = sub.directions()
-    try:
-        cal = calibrate(sub)
-        value, sigma, unit = cal.brdf, cal.sigma, "sr⁻¹"
-    except GonioError:
-        exposure = np.maximum(sub.samples["exposure_s"], 1e-12)
-        value, unit = sub.samples["counts"] / exposure, "per s"
-        sigma = np.nan_to_num(sub.samples["counts_std"], nan=0.0) / exposure
+    the newest kept), the plan's targets still to measure (at most ``pending``; none
+    while a large plan is parsed), and the in-plane samples (ωo within ``plane_deg`` of
+    the plane of incidence) with their BRDF and 1σ: JSON values, rounded for size. The
+    value is the BRDF (sr⁻¹) once the run has a calibration, else the reading per second
+    of exposure."""
+    s = live.samples
+    pick = _pick(len(s["target"]), limit, newest=min(500, limit // 4))
+    value, sigma, unit = _values(live, pick)
+    wi = np.stack([s["wi_x"][pick], s["wi_y"][pick], s["wi_z"][pick]], axis=1)
+    wo = np.stack([s["wo_x"][pick], s["wo_y"][pick], s["wo_z"][pick]], axis=1)
     xy = _rotated(wi, wo)
-    missing = run.missing()
-    grey = missing[_pick(missing.size, pending, newest=0)]
-    gxy = _rotated(plan.wi[grey], plan.wo[grey]) if grey.size else np.empty((0, 2))
+    plan, missing = live.plan, live.missing()
+    gxy = np.empty((0, 2))
+    if plan is not None and missing is not None and missing.size:
+        grey = missing[_pick(missing.size, pending, newest=0)]
+        gxy = _rotated(plan.wi[grey], plan.wo[grey])
     theta_i = np.degrees(np.arccos(np.clip(wi[:, 2], -1.0, 1.0)))
     theta_o = np.degrees(np.arccos(np.clip(wo[:, 2], -1.0, 1.0)))
     sin_o = np.hypot(xy[:, 0], xy[:, 1])
     off_plane = np.degrees(np.arcsin(np.clip(np.abs(xy[:, 1]) / np.maximum(sin_o, 1e-12), 0, 1)))
     in_plane = np.flatnonzero((off_plane <= plane_deg) | (sin_o < 1e-6))
     signed = np.where(xy[in_plane, 0] >= 0, 1.0, -1.0) * theta_o[in_plane]
-    finite = np.isfinite(value)
     return {
-        "name": run.path.name,
+        "name": live.path.name,
         "version": live.version,
-        "measured": n,
+        "measured": live.measured,
         "shown": int(pick.size),
         "unit": unit,
         "xy": np.round(xy, 4).ravel().tolist(),
-        "value": [float(v) if f else None for v, f in zip(value.tolist(), finite, strict=True)],
+        "value": [_round(v) for v in value.tolist()],
         "pending_xy": np.round(gxy, 4).ravel().tolist(),
-        "pending": int(missing.size),
+        "pending": max(live.info.targets - live.measured - live.skipped, 0),
         "in_plane": {
             "theta_o_deg": np.round(signed, 3).tolist(),
             "theta_i_deg": np.round(theta_i[in_plane], 2).tolist(),
-            "value": [_finite(v) for v in value[in_plane].tolist()],
-            "sigma": [_finite(v) for v in sigma[in_plane].tolist()],
+            "value": [_round(v) for v in value[in_plane].tolist()],
+            "sigma": [_round(v) for v in sigma[in_plane].tolist()],
         },
     }
 
 
-def _finite(v: float) -> float | None:
-    return float(v) if math.isfinite(v) else None
-
-
-def _subset(run: Run, index: np.ndarray) -> Run:
-    """``run`` with only the samples at ``index`` (the views' decimation)."""
-    samples = {k: v[index] for k, v in run.samples.items()}
-    return Run(
-        path=run.path, meta=run.meta, plan=run.plan, samples=MappingProxyType(samples),
-        events=run.events, sessions=run.sessions,
-    )  # fmt: skip
-
-
-def wall_now() -> float:
-    """The wall clock (s since the epoch), for the views' ages."""
-    return time.time()
+def _round(v: float) -> float | None:
+    """``v`` to 5 significant digits (None if not finite)."""
+    return float(f"{v:.5g}") if math.isfinite(v) else None

@@ -8,8 +8,6 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
 from gonio.live.model import LiveRun
 
 
@@ -61,12 +59,10 @@ def screen(live: LiveRun, o: Mapping[str, Any], *, width: int = 80, height: int 
     ]
     if o["resume"]:
         out.append(f"resume with: {o['resume']}")
-    run = live.run
-    if len(run):
-        order = np.argsort(run.samples["ended_s"])[-3:]
+    s = live.samples
+    if len(s["target"]):
         out.append("last samples:")
-        for k in order.tolist():
-            s = run.samples
+        for k in range(max(len(s["target"]) - 3, 0), len(s["target"])):
             out.append(
                 f"  target {int(s['target'][k])}: {float(s['counts'][k]):.6g} at "
                 f"{float(s['exposure_s'][k]):g} s (t = {float(s['ended_s'][k]):.1f} s)"
