@@ -120,7 +120,7 @@ def _epoch(utc: str) -> float:
 
 
 def latency(folder: Path, pace_s: float, screenshot: Path | None) -> None:
-    plan = plan_file(folder, 120, "paced")
+    plan = plan_file(folder, 300, "paced")
     run = folder / "paced.sqlite"
     child = paced(["acquire", str(plan), "--scene", str(GLOSSY), "-o", str(run)], pace_s)
     assert child.stdout is not None
@@ -134,7 +134,7 @@ def latency(folder: Path, pace_s: float, screenshot: Path | None) -> None:
             shot = threading.Thread(target=take_screenshot, args=(url, base, screenshot))
             shot.start()
         give_up = time.monotonic() + 600
-        while time.monotonic() < give_up:
+        while time.monotonic() < give_up:  # until the run completed
             o = get(f"{base}/api/overview?run=paced.sqlite")
             now = time.time()
             if first is None:
@@ -174,8 +174,9 @@ def take_screenshot(url: str, base: str, path: Path) -> None:
         )  # fmt: skip
         page = context.new_page()
         page.goto(url.replace("http://127.0.0.1:8765", base))
-        page.wait_for_function("Number(document.getElementById('count').textContent) >= 60")
-        time.sleep(1.5)
+        page.wait_for_function(
+            "Number(document.getElementById('hemisphere').dataset.samples) >= 40"
+        )
         page.screenshot(path=str(path), full_page=True)
         context.close()
 

@@ -91,7 +91,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         if args.plan is not None or args.output is not None:
             raise ConfigError("--resume RUN continues RUN: give no plan file and no -o")
         path: Path | None = args.resume
-        _print_control(args.resume)
+        _print_control(args.resume, args.quiet)
         try:
             outcome = session.resume(
                 args.resume, rig_path=args.rig, scene_path=args.scene, force=args.force,
@@ -127,7 +127,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             print("dry run: nothing moved, nothing written")
             return 0
         path = args.output
-        _print_control(args.output)
+        _print_control(args.output, args.quiet)
         try:
             outcome = session.start(
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
@@ -146,15 +146,17 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     return EXIT_RESUMABLE
 
 
-def _print_control(path: Path) -> None:
-    """Issue the run's control token (beside it, owner-only) and print how to watch and
-    control the run from a browser (the token in the URL's fragment, never sent to a
-    server: the page sends it in a header)."""
+def _print_control(path: Path, quiet: bool) -> None:
+    """Issue the run's control token (beside it, owner-only) and print (unless
+    ``quiet``) how to watch and control the run from a browser (the token in the URL's
+    fragment, never sent to a server: the page sends it in a header)."""
     try:
         token = control.issue_token(path)
     except OSError as exc:
         why = exc.strerror or exc
         raise ConfigError(f"{path}: cannot write its control token: {why}") from None
+    if quiet:
+        return
     url = f"http://127.0.0.1:8765/run/{quote(path.name)}#token={token}"
     print(f"watch and control: gonio serve {shlex.quote(str(path))}, then open {url}", flush=True)
 
