@@ -79,7 +79,7 @@ def served(folder: Path) -> Any:
     try:
         for _ in range(300):
             with contextlib.suppress(OSError):
-                urllib.request.urlopen(base + "/api/runs", timeout=5).close()
+                urllib.request.urlopen(base + "/", timeout=5).close()  # opens no run
                 break
             time.sleep(0.05)
         yield base

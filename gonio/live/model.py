@@ -24,9 +24,10 @@ import os
 import sqlite3
 import threading
 from collections.abc import Mapping
-from concurrent.futures import BrokenExecutor, Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
 from datetime import datetime
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -144,19 +145,26 @@ class PlanArrays:
         return cls(np.asarray(each, np.float64), plan.wi, plan.wo)
 
 
-def _parse_in_background(path: Path) -> tuple[PlanArrays, np.ndarray]:
-    """A large run's `PlanArrays` and its measured targets (in another process)."""
+def _parse_in_background(path: Path, out: Connection) -> None:
+    """Send a large run's `PlanArrays` and its measured targets through ``out`` (None
+    if the plan cannot be parsed): the work of another process."""
     uri = f"{path.resolve().as_uri()}?mode=ro"
-    conn = sqlite3.connect(uri, uri=True, isolation_level=None)
+    result: tuple[PlanArrays, np.ndarray] | None = None
     try:
-        conn.execute("BEGIN")
-        raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
-        plan = parse_plan(bytes(raw), f"{path}#plan_file")
-        targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")], np.int64)
-        conn.execute("COMMIT")
-    finally:
-        conn.close()
-    return PlanArrays.of(plan), targets
+        conn = sqlite3.connect(uri, uri=True, isolation_level=None)
+        try:
+            conn.execute("BEGIN")
+            raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
+            plan = parse_plan(bytes(raw), f"{path}#plan_file")
+            targets = [r[0] for r in conn.execute("SELECT target FROM samples")]
+            conn.execute("COMMIT")
+        finally:
+            conn.close()
+        result = (PlanArrays.of(plan), np.array(targets, dtype=np.int64))
+    except (GonioError, sqlite3.DatabaseError):
+        pass
+    out.send(result)
+    out.close()
 
 
 @dataclass
@@ -189,7 +197,7 @@ class LiveRun:
     _writing: bool = field(init=False, default=False)
     _plan: PlanArrays | None = field(init=False, default=None)
     _done: np.ndarray | None = field(init=False, default=None)  # measured, per target
-    _loader: Future[tuple[PlanArrays, np.ndarray]] | None = field(init=False, default=None)
+    _loader: tuple[BaseProcess, Connection] | None = field(init=False, default=None)
     _lock: threading.Lock = field(init=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
@@ -313,9 +321,14 @@ class LiveRun:
         if plan_size <= LAZY_PLAN_BYTES:
             self._load_plan(conn)
         else:  # another process: parsing holds its interpreter for seconds
-            pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
-            self._loader = pool.submit(_parse_in_background, self.path)
-            pool.shutdown(wait=False)
+            context = multiprocessing.get_context("spawn")
+            mine, theirs = context.Pipe(duplex=False)
+            process = context.Process(
+                target=_parse_in_background, args=(self.path, theirs), daemon=True
+            )
+            process.start()
+            theirs.close()
+            self._loader = (process, mine)
 
     def _load_plan(self, conn: sqlite3.Connection) -> None:
         raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
@@ -332,16 +345,21 @@ class LiveRun:
             self._plan, self._done = arrays, done
 
     def _poll_loader(self) -> None:
-        """Install what the background process parsed, once it is done."""
+        """Install what the background process parsed, once it sent it."""
         loader = self._loader
-        if loader is None or not loader.done():
+        if loader is None or not loader[1].poll():
             return
+        process, conn = loader
         self._loader = None
         try:
-            arrays, targets = loader.result()
-        except (GonioError, sqlite3.DatabaseError, OSError, BrokenExecutor):
-            return  # the views go on with the plan's header
-        self._install(arrays, targets)
+            result = conn.recv()
+        except (EOFError, OSError):
+            result = None
+        conn.close()
+        process.join(1)
+        if result is None:
+            return  # the plan could not be parsed: the views go on with its header
+        self._install(*result)
         self._data_version = -1
 
     def _add_samples(self, names: list[str], rows: list[tuple[Any, ...]], track: bool) -> None:
