@@ -11,14 +11,14 @@
 3. The acquisition's per-sample time (engine + journal, measured as
    benchmarks/acquire.py does: between the first and the last sample's commit) of a
    Sobol plan on the glossy metal scene, with no client, then with five clients polling
-   the run as the page does (overview every second, samples when they changed) through
-   a `gonio serve` in its own process. Target: no difference beyond the noise (the
-   repeats' spread is printed).
+   the run as the page does (overview every second, samples when they changed), each in
+   a process of its own as a browser is, through a `gonio serve` in its own process.
+   Target: no difference beyond the noise (the repeats' spread is printed).
 
 With ``--screenshot PNG`` (and Chromium at /usr/bin/chromium with Playwright), the page
 of the paced run of part 1 is saved there, as the docs show it.
 
-Run: .venv/bin/python benchmarks/live.py [--repeat 3] [--screenshot docs/img/live-page.png]
+Run: .venv/bin/python benchmarks/live.py [--repeat 5] [--screenshot docs/img/live-page.png]
 """
 
 from __future__ import annotations
@@ -247,21 +247,37 @@ def opening(folder: Path, n: int) -> None:
             print(f"| {k + 1} | {a:.2f} | {b:.2f} | {a + b:.2f} | {p['shown']:,} |")
 
 
-def clients(base: str, run: str, count: int, stop: threading.Event) -> list[threading.Thread]:
-    def poll() -> None:
-        version = -1
-        while not stop.is_set():
-            with contextlib.suppress(OSError, ValueError):
-                o = get(f"{base}/api/overview?run={run}")
-                if o["version"] != version:
-                    version = o["version"]
-                    get(f"{base}/api/points?run={run}")
-            stop.wait(1.0)
+#: One client, as a browser's page polls: the overview every second, the samples when
+#: they changed (a process of its own, as a browser is).
+CLIENT = """
+import json, sys, time, urllib.request
+base, run = sys.argv[1], sys.argv[2]
+version = -1
+while True:
+    try:
+        with urllib.request.urlopen(f"{base}/api/overview?run={run}", timeout=30) as r:
+            o = json.loads(r.read())
+        if o["version"] != version:
+            version = o["version"]
+            with urllib.request.urlopen(f"{base}/api/points?run={run}", timeout=30) as r:
+                json.loads(r.read())
+    except (OSError, ValueError, KeyError):
+        pass
+    time.sleep(1.0)
+"""
 
-    threads = [threading.Thread(target=poll, daemon=True) for _ in range(count)]
-    for t in threads:
-        t.start()
-    return threads
+
+@contextlib.contextmanager
+def clients(base: str, run: str, count: int) -> Any:
+    """``count`` clients polling ``run`` on ``base``, each in its own process."""
+    procs = [subprocess.Popen([sys.executable, "-c", CLIENT, base, run]) for _ in range(count)]
+    try:
+        time.sleep(1.0)  # they have started polling
+        yield
+    finally:
+        for proc in procs:
+            proc.terminate()
+            proc.wait()
 
 
 def engine_s(folder: Path, plan: Plan, files: session.Files, scene: Any) -> float:
@@ -295,13 +311,8 @@ def overhead(folder: Path, targets: int, repeat: int) -> None:
     alone, watched = [], []
     for _ in range(repeat):
         alone.append(engine_s(work, plan, files, scene))
-        with served(work) as base:
-            stop = threading.Event()
-            threads = clients(base, "bench.sqlite", 5, stop)
+        with served(work) as base, clients(base, "bench.sqlite", 5):
             watched.append(engine_s(work, plan, files, scene))
-            stop.set()
-            for t in threads:
-                t.join()
     print(f"\n3. The acquisition's time per sample, {targets:,} targets, {repeat} repeats\n")
     print("| clients | best (µs/sample) | median (µs/sample) | worst (µs/sample) |")
     print("|---|---:|---:|---:|")
@@ -312,7 +323,7 @@ def overhead(folder: Path, targets: int, repeat: int) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--pace", type=float, default=0.1, help="part 1: s per target")
     parser.add_argument("--samples", type=int, default=1_000_000, help="part 2's run")
     parser.add_argument("--targets", type=int, default=5_000, help="part 3's plan")

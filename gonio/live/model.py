@@ -189,7 +189,8 @@ class LiveRun:
     sessions: tuple[Session, ...] = field(init=False, default=())
     _conn: sqlite3.Connection = field(init=False, repr=False)
     _parts: dict[str, list[np.ndarray]] = field(init=False, repr=False)
-    _last_ended: float = field(init=False, default=-math.inf)
+    _top: int = field(init=False, default=-1)  # the largest target read
+    _retried_targets: set[int] = field(init=False, default_factory=set)
     _last_event: int = field(init=False, default=0)
     _data_version: int = field(init=False, default=-1)
     _plan_size: int = field(init=False, default=-1)
@@ -250,25 +251,35 @@ class LiveRun:
             names = [r[1] for r in conn.execute("PRAGMA table_info(samples)")]
             wanted = [c for c in (*_COLUMNS, "utc") if c in names]
             quoted = ", ".join(f'"{c}"' for c in wanted)
-            self.measured = int(conn.execute("SELECT count(*) FROM samples").fetchone()[0])
-            if not self._parts and self.measured > FULL_LIMIT:
-                stride = -(-self.measured // KEPT)
+            first = not self._parts
+            if first:  # one scan of the table: later reads seek by target (the rowid)
+                count, top = conn.execute("SELECT count(*), max(target) FROM samples").fetchone()
+                self.measured, self._top = int(count), -1 if top is None else int(top)
+            if first and self.measured > FULL_LIMIT:
+                stride = -(-(self._top + 1) // KEPT)
                 rows = conn.execute(
-                    f"SELECT {quoted} FROM samples WHERE target % ? = 0 ORDER BY ended_s",
-                    (stride,),
+                    "WITH RECURSIVE k(t) AS (SELECT 0 UNION ALL SELECT t + ? FROM k WHERE t + ? "
+                    f"<= ?) SELECT {quoted} FROM samples JOIN k ON target = k.t ORDER BY target",
+                    (stride, stride, self._top),
                 ).fetchall()
-                last = conn.execute("SELECT max(ended_s) FROM samples").fetchone()[0]
                 newest = conn.execute(
                     "SELECT ended_s, utc FROM samples ORDER BY target DESC LIMIT ?",
                     (_RATE_WINDOW,),
                 ).fetchall()
                 self._recent = sorted((float(t), _epoch(u)) for t, u in newest)
+            elif first:
+                rows = conn.execute(f"SELECT {quoted} FROM samples ORDER BY ended_s").fetchall()
             else:
+                # What was committed since: targets beyond the last one read (a plan is
+                # measured in its order), and skipped targets measured again since.
                 rows = conn.execute(
-                    f"SELECT {quoted} FROM samples WHERE ended_s > ? ORDER BY ended_s",
-                    (self._last_ended,),
+                    f"SELECT {quoted} FROM samples WHERE target > ? ORDER BY target",
+                    (self._top,),
                 ).fetchall()
-                last = None
+                rows += self._retried(conn, quoted)
+                self.measured += len(rows)
+            if rows:
+                self._top = max(self._top, max(int(r[0]) for r in rows))
             events = conn.execute(
                 "SELECT id, session, kind, target, t_s, utc, data FROM events WHERE id > ? "
                 "ORDER BY id",
@@ -281,29 +292,46 @@ class LiveRun:
                 self.events.append(Event(i, sn, k, t, ts, u, MappingProxyType(json.loads(d))))
             if events:
                 self._last_event = int(events[-1][0])
-            self.skipped = self._skipped(conn)
+            retried = self._skipped(conn)
+            if first:
+                self._retried_targets = retried
+            skips = {e.target for e in self.events if e.kind == "skip" and e.target is not None}
+            self.skipped = len(skips) - len(retried)
         finally:
             conn.execute("COMMIT")
-        self._add_samples(wanted, rows, track=last is None)
-        if last is not None:
-            self._last_ended = float(last)
+        self._add_samples(wanted, rows, track=not (first and self.measured > FULL_LIMIT))
         self.sessions = tuple(
             Session(i, st, MappingProxyType(json.loads(info)), en, out)
             for i, st, info, en, out in sessions
         )
         return True
 
-    def _skipped(self, conn: sqlite3.Connection) -> int:
-        """Targets skipped and not measured since."""
+    def _retried(self, conn: sqlite3.Connection, quoted: str) -> list[tuple[Any, ...]]:
+        """The rows of skipped targets (at or below the last target read) measured since
+        the last read (``gonio acquire --resume --retry-skipped``)."""
+        skips = {e.target for e in self.events if e.kind == "skip" and e.target is not None}
+        wanted = sorted(t for t in skips - self._retried_targets if t <= self._top)
+        rows: list[tuple[Any, ...]] = []
+        for k in range(0, len(wanted), 500):
+            chunk = wanted[k : k + 500]
+            marks = ", ".join("?" * len(chunk))
+            rows += conn.execute(
+                f"SELECT {quoted} FROM samples WHERE target IN ({marks})", chunk
+            ).fetchall()
+        self._retried_targets.update(int(r[0]) for r in rows)
+        return rows
+
+    def _skipped(self, conn: sqlite3.Connection) -> set[int]:
+        """The skipped targets that were measured since (by a retry)."""
         skips = (e.target for e in self.events if e.kind == "skip" and e.target is not None)
         skipped = sorted(set(skips))
-        measured = 0
+        measured: set[int] = set()
         for k in range(0, len(skipped), 500):
             chunk = skipped[k : k + 500]
             marks = ", ".join("?" * len(chunk))
-            found = conn.execute(f"SELECT count(*) FROM samples WHERE target IN ({marks})", chunk)
-            measured += int(found.fetchone()[0])
-        return len(skipped) - measured
+            found = conn.execute(f"SELECT target FROM samples WHERE target IN ({marks})", chunk)
+            measured.update(int(r[0]) for r in found)
+        return measured
 
     def _read_meta(self, conn: sqlite3.Connection, plan_size: int) -> None:
         meta: dict[str, Any] = {}
@@ -383,10 +411,7 @@ class LiveRun:
             if self._done is not None:
                 self._done[np.array(cells[names.index("target")], dtype=np.int64)] = True
         self.samples = {n: self._column(n) for n in self._parts}
-        if not track:
-            return
-        self._last_ended = float(rows[-1][names.index("ended_s")])
-        if "utc" in names:
+        if track and "utc" in names:
             j, u = names.index("ended_s"), names.index("utc")
             self._recent.extend((float(r[j]), _epoch(r[u])) for r in rows[-_RATE_WINDOW:])
             self._recent = self._recent[-_RATE_WINDOW:]

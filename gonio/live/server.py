@@ -50,7 +50,7 @@ STATIC = Path(__file__).resolve().parent / "static"
 #: The header that carries a token (never a cookie, never the URL).
 TOKEN_HEADER = "x-gonio-token"
 #: How often a run file is read again at most (s): every client shares the reads.
-REFRESH_S = 0.25
+REFRESH_S = 0.5
 #: Control requests per run: a burst of ``BURST``, then one per ``EVERY_S`` seconds.
 BURST = 5
 EVERY_S = 2.0
