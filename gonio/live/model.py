@@ -148,6 +148,7 @@ class PlanArrays:
 def _parse_in_background(path: Path, out: Connection) -> None:
     """Send a large run's `PlanArrays` and its measured targets through ``out`` (None
     if the plan cannot be parsed): the work of another process."""
+    os.nice(10)  # after the acquisition and the server
     uri = f"{path.resolve().as_uri()}?mode=ro"
     result: tuple[PlanArrays, np.ndarray] | None = None
     try:
@@ -200,6 +201,7 @@ class LiveRun:
     _done: np.ndarray | None = field(init=False, default=None)  # measured, per target
     _loader: tuple[BaseProcess, Connection] | None = field(init=False, default=None)
     _lock: threading.Lock = field(init=False, default_factory=threading.Lock)
+    _load_next: bool = field(init=False, default=False)  # start the plan's loader
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
@@ -223,6 +225,8 @@ class LiveRun:
 
     def refresh(self) -> bool:
         """Read what was committed since the last refresh; whether anything was."""
+        if self._load_next:
+            self._start_loader()
         self._poll_loader()
         writing = writer_holds(self.path)
         try:
@@ -253,7 +257,8 @@ class LiveRun:
             quoted = ", ".join(f'"{c}"' for c in wanted)
             first = not self._parts
             if first:  # one scan of the table: later reads seek by target (the rowid)
-                count, top = conn.execute("SELECT count(*), max(target) FROM samples").fetchone()
+                count = conn.execute("SELECT count(*) FROM samples").fetchone()[0]
+                top = conn.execute("SELECT max(target) FROM samples").fetchone()[0]  # the rowid
                 self.measured, self._top = int(count), -1 if top is None else int(top)
             if first and self.measured > FULL_LIMIT:
                 stride = -(-(self._top + 1) // KEPT)
@@ -338,9 +343,9 @@ class LiveRun:
         for key, value in conn.execute("SELECT key, value FROM meta WHERE key != 'plan_file'"):
             meta[key] = json.loads(value)
         self.meta = MappingProxyType(meta)
-        head = conn.execute(
-            "SELECT substr(value, 1, ?) FROM meta WHERE key = 'plan_file'", (_HEAD_BYTES,)
-        ).fetchone()[0]
+        rowid = conn.execute("SELECT rowid FROM meta WHERE key = 'plan_file'").fetchone()[0]
+        with conn.blobopen("meta", "value", rowid, readonly=True) as blob:  # its start only
+            head = blob.read(_HEAD_BYTES)
         where = f"{self.path}#plan_file"
         self.info = PlanInfo.of(bytes(head), str(meta.get("rig_text", "")), where)
         self._plan_size = plan_size
@@ -348,15 +353,20 @@ class LiveRun:
             self._plan, self._done = None, None
         if plan_size <= LAZY_PLAN_BYTES:
             self._load_plan(conn)
-        else:  # another process: parsing holds its interpreter for seconds
-            context = multiprocessing.get_context("spawn")
-            mine, theirs = context.Pipe(duplex=False)
-            process = context.Process(
-                target=_parse_in_background, args=(self.path, theirs), daemon=True
-            )
-            process.start()
-            theirs.close()
-            self._loader = (process, mine)
+        else:  # another process, from the next refresh on (not competing with this one)
+            self._load_next = True
+
+    def _start_loader(self) -> None:
+        """Parse the plan in another process (parsing holds an interpreter for seconds)."""
+        self._load_next = False
+        context = multiprocessing.get_context("spawn")
+        mine, theirs = context.Pipe(duplex=False)
+        process = context.Process(
+            target=_parse_in_background, args=(self.path, theirs), daemon=True
+        )
+        process.start()
+        theirs.close()
+        self._loader = (process, mine)
 
     def _load_plan(self, conn: sqlite3.Connection) -> None:
         raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]

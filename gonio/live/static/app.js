@@ -229,6 +229,7 @@ function series(c, rows, key, limits, label) {
   const vals = rows.flatMap((r) => Object.values(r[key] || {}));
   const all = vals.concat(limits);
   const xr = ts.length ? [Math.min(...ts), Math.max(...ts)] : [0, 1];
+  if (xr[1] <= xr[0]) xr[1] = xr[0] + 1;  // one reading: a point, not a line
   const yr = all.length ? [Math.min(...all) - 1, Math.max(...all) + 1] : [0, 1];
   const [X, Y] = axes(g, c, xr, yr, "instrument time (s)", label);
   g.setLineDash([4, 4]); g.strokeStyle = "#e0523f";
@@ -236,9 +237,11 @@ function series(c, rows, key, limits, label) {
   g.setLineDash([]);
   [...names].forEach((n, i) => {
     g.strokeStyle = viridis(i / Math.max(names.size - 1, 1) * 0.85);
+    g.fillStyle = g.strokeStyle;
     g.beginPath();
     rows.forEach((r, k) => { const v = (r[key] || {})[n]; if (v !== undefined) (k ? g.lineTo : g.moveTo).call(g, X(r.t_s), Y(v)); });
     g.stroke();
+    rows.forEach((r) => { const v = (r[key] || {})[n]; if (v !== undefined) g.fillRect(X(r.t_s) - 2, Y(v) - 2, 4, 4); });
   });
 }
 
