@@ -3,11 +3,14 @@ followed as it grows (`LiveRun`), and what is shown of it (`overview`, `points`)
 
 `LiveRun` keeps one read-only connection to the run file and reads, at each
 `LiveRun.refresh`, only what was committed since the last one (the samples' columns
-the views need, the new events); each read is one read transaction, so it sees a
-consistent snapshot while ``gonio acquire`` writes (SQLite's WAL). What it holds is a
-`gonio.store.read.Run` (the stored plan, the metadata, the events and sessions of
-`gonio.store.read`), so the analysis (`gonio.analysis.calibrated`) works on it as on a
-run opened whole. A run of a million samples opens in about a second this way.
+the views need, by target: the rowid; the new events); each read is one read
+transaction, so it sees a consistent snapshot while ``gonio acquire`` writes (SQLite's
+WAL), and it uses the journal's own types (`gonio.store.read.Event`, ``Session``) and
+the analysis's calibration (`gonio.analysis.calibrated`). A large run (over
+`FULL_LIMIT` samples) is read by a share of its targets plus every sample committed
+since, and its stored plan (over `LAZY_PLAN_BYTES`) by its header at once and its
+targets in another process: a run of a million samples opens in seconds, not minutes
+(docs/results/live.md).
 
 State: ``running`` while a ``gonio acquire`` holds the run file's lock, ``paused`` if
 it holds it and its last pause (a request, or a health condition) has not been resumed
