@@ -1,10 +1,11 @@
 """The page as a person uses it, in a real browser: headless Chromium (Debian's
 ``chromium``, driven by Playwright through ``executable_path``; Playwright's own browser
 download is never used) opens the URL ``gonio acquire`` printed for a run it is
-acquiring, sees the sample count and the hemisphere plot change, pauses the run (the
-page shows it paused, the journal records who asked), resumes it, and the run
-completes. Screenshots are checked by content. Skipped, with the reason, only where no
-browser is installed and not in CI (``make test`` installs it where it can)."""
+acquiring (held paused until the page is up, however slow the machine), resumes it,
+sees the sample count and the hemisphere plot change, pauses the run (the page shows
+it paused, the journal records who asked), resumes it, and the run completes.
+Screenshots are checked by content. Skipped, with the reason, only where no browser is
+installed and not in CI (``make test`` installs it where it can)."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from gonio.acquire import control
 from gonio.live import server
 from gonio.store.read import open_run
 from tests.gonio.live.conftest import paced_acquire, printed_url
@@ -84,19 +86,24 @@ def test_watch_pause_resume_in_a_browser(
 ) -> None:
     folder = tmp_path / "runs"
     folder.mkdir()
-    plan = plan_file(tmp_path, target=50)
+    plan = plan_file(tmp_path, target=80)
     path = folder / "live.sqlite"
     child = paced_acquire(["acquire", str(plan), "--scene", str(MATTE), "-o", str(path)], 0.05)
     try:
         url = printed_url(child)
+        _until(lambda: path.exists() and len(open_run(path)) >= 2)
+        # Held until the page is up, however slow the machine: it resumes from the page.
+        control.post_request(path, "pause", "the test")
         with serve(server.Served(folder)) as base:
             page = browser.new_page()
             page.goto(url.replace("http://127.0.0.1:8765", base))
             assert "#token" not in page.url  # taken out of the address bar at once
-            page.wait_for_function("Number(document.getElementById('count').textContent) > 0")
+            page.wait_for_function("document.getElementById('state').dataset.state === 'paused'")
             page.wait_for_function("document.getElementById('hemisphere').dataset.samples")
             first = int(page.inner_text("#count"))
             plotted = page.get_attribute("#hemisphere", "data-samples")
+            assert first >= 2 and plotted == str(first)
+            page.click("#resume")
             page.wait_for_function(
                 f"Number(document.getElementById('count').textContent) > {first} && "
                 f"document.getElementById('hemisphere').dataset.samples !== '{plotted}'"
@@ -114,7 +121,7 @@ def test_watch_pause_resume_in_a_browser(
             assert int(page.inner_text("#count")) == held == len(open_run(path))
             assert page.is_enabled("#resume") and not page.is_enabled("#pause")
             page.wait_for_selector("#events tr.pause")
-            pause = open_run(path).of_kind("pause")[-1]
+            pause = open_run(path).of_kind("pause")[-1]  # the page's
             assert pause.data["reason"] == "request" and pause.data["action"] == "pause"
             assert pause.data["by"].startswith("127.0.0.1 via gonio serve")
 
@@ -122,8 +129,8 @@ def test_watch_pause_resume_in_a_browser(
             page.wait_for_function(
                 "document.getElementById('state').dataset.state === 'completed'", timeout=60_000
             )
-            assert page.inner_text("#count") == "50"
-            assert page.get_attribute("#hemisphere", "data-samples") == "50"
+            assert page.inner_text("#count") == "80"
+            assert page.get_attribute("#hemisphere", "data-samples") == "80"
             assert _ink(page.locator("#inplane").screenshot()) > 200
             assert page.is_hidden("#control")
             page.close()
@@ -132,6 +139,7 @@ def test_watch_pause_resume_in_a_browser(
         child.kill()
         child.communicate()
     run = open_run(path)
-    assert run.complete and len(run) == 50
+    assert run.complete and len(run) == 80
     resume = [e for e in run.of_kind("resume") if e.data.get("reason") == "request"]
-    assert len(resume) == 1 and resume[0].data["paused_s"] >= 0.6
+    assert len(resume) == 2 and resume[1].data["paused_s"] >= 0.6
+    assert all(e.data["by"].startswith("127.0.0.1 via gonio serve") for e in resume)

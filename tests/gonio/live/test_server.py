@@ -63,7 +63,7 @@ def test_every_refusal_leaves_the_run_alone(
 ) -> None:
     folder = tmp_path / "served"
     folder.mkdir()
-    plan = plan_file(tmp_path, target=50)
+    plan = plan_file(tmp_path, target=100)
     path = folder / "run.sqlite"
     pid = forked_acquire(["acquire", str(plan), "--scene", str(MATTE), "-o", str(path)], 0.04)
     try:
