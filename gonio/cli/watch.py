@@ -18,8 +18,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from gonio.cli.arguments import positive_seconds
-from gonio.live.model import LiveRun, overview
+from gonio.live.model import LiveRun
 from gonio.live.terminal import line, screen
+from gonio.live.views import overview
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:

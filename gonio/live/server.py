@@ -7,8 +7,8 @@ Endpoints (``RUN``: a run file's path relative to the served folder):
 - ``GET /`` and ``GET /run/RUN``: the page (the same bytes for everyone; it holds no
   data); ``GET /static/…``: its script and style sheet;
 - ``GET /api/runs``: the runs under the served path, their state, progress and ETA;
-- ``GET /api/overview?run=RUN``: a run's figures (`gonio.live.model.overview`);
-- ``GET /api/points?run=RUN``: its samples, decimated (`gonio.live.model.points`);
+- ``GET /api/overview?run=RUN``: a run's figures (`gonio.live.views.overview`);
+- ``GET /api/points?run=RUN``: its samples, decimated (`gonio.live.views.points`);
 - ``POST /api/control?run=RUN`` with ``{"action": "pause" | "resume" | "stop"}``: a
   request the acquiring process reads between targets (`gonio.acquire.control`).
 
@@ -44,7 +44,8 @@ from starlette.staticfiles import StaticFiles
 
 from gonio.acquire import control
 from gonio.errors import GonioError
-from gonio.live.model import LiveRun, overview, points
+from gonio.live.model import LiveRun
+from gonio.live.views import overview, points
 
 STATIC = Path(__file__).resolve().parent / "static"
 #: The header that carries a token (never a cookie, never the URL).

@@ -1,4 +1,4 @@
-"""``gonio watch``'s text: a run's figures (`gonio.live.model.overview`) as the lines a
+"""``gonio watch``'s text: a run's figures (`gonio.live.views.overview`) as the lines a
 terminal redraws in place (`screen`), or as one plain line when stdout is not a
 terminal (`line`)."""
 

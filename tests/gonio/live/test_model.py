@@ -11,7 +11,8 @@ import pytest
 
 from gonio.cli import main
 from gonio.live import model
-from gonio.live.model import LiveRun, overview, points
+from gonio.live.model import LiveRun
+from gonio.live.views import overview, points
 from tests.support.acquire import MATTE, plan_file
 
 
