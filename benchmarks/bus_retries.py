@@ -25,7 +25,6 @@ Run: .venv/bin/python benchmarks/bus_retries.py [--polls N] [--steps N]
 from __future__ import annotations
 
 import argparse
-import math
 import multiprocessing
 import os
 import statistics
@@ -39,25 +38,13 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
+from bus import AXES  # the four axes benchmarks/bus.py times
 
 from drivers.base import CommError, DriverError
-from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.link import DynamixelLink
 from sim.dynamixel.emulator import DxlEmulator, Fault
 
-AXES = [
-    AxisConfig(
-        f"axis{i}",
-        i,
-        -1.0,
-        1.0,
-        zero_offset_rad=-math.pi,
-        profile_velocity_rad_s=4.0,
-        profile_acceleration_rad_s2=40.0,
-    )
-    for i in range(1, 5)
-]
 IDS = [a.motor_id for a in AXES]
 LOSS_RATES = (0.0, 0.001, 0.01, 0.05)
 #: The link's and the bus's default number of extra attempts.

@@ -46,6 +46,7 @@ import _report
 import numpy as np
 import yaml
 from _machine import describe
+from acquire import engine as acquire_engine  # benchmarks/acquire.py
 
 from gonio.cli import main as gonio
 from gonio.planner import load_plan_source
@@ -281,21 +282,8 @@ def clients(base: str, run: str, count: int) -> Any:
 
 
 def engine_s(folder: Path, plan: Plan, files: session.Files, scene: Any) -> float:
-    out = folder / "bench.sqlite"
-    stamps: list[float] = []
-
-    class Clock:
-        def start(self, plan: Plan, todo: np.ndarray) -> None:
-            stamps.append(time.perf_counter())
-
-        def advance(self, done: int) -> None:
-            stamps.append(time.perf_counter())
-
-        def close(self) -> None:
-            pass
-
-    session.start(plan, files, scene=scene, output=out, overwrite=True, progress=Clock())
-    return (stamps[-1] - stamps[0]) / max(len(stamps) - 1, 1)
+    """Wall seconds of the engine per sample (benchmarks/acquire.py's measure)."""
+    return acquire_engine(files, plan, scene, folder) / len(plan)
 
 
 def overhead(folder: Path, targets: int, repeat: int) -> None:
