@@ -6,7 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint docs pytest bench bench-studies clean
+.PHONY: demo test lint docs pytest browser bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,8 +47,18 @@ docs: $(VENV)/.installed-docs
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
 # by CPU-bound tests from the other two.
-pytest: $(VENV)/.installed-test
+pytest: $(VENV)/.installed-test browser
 	$(BIN)/python -m pytest -q -n 3 --dist loadgroup
+
+# The browser tests (tests/gonio/live/test_browser.py) drive Debian's Chromium: installed
+# here when missing and running as root (as CI does); elsewhere they skip, saying why
+# (never in CI, where they fail instead).
+browser:
+	@if [ ! -x /usr/bin/chromium ] && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+		echo "installing chromium for the browser tests"; \
+		{ apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+			chromium >/dev/null; } || echo "could not install chromium"; \
+	fi
 
 test: lint docs pytest
 
@@ -62,6 +72,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/extremes_study.py
 	$(BIN)/python benchmarks/lobes.py
 	$(BIN)/python benchmarks/bus.py
+	$(BIN)/python benchmarks/bus_retries.py
 	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/fly_blur.py
 	$(BIN)/python benchmarks/stream.py
@@ -72,6 +83,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/soak.py
+	$(BIN)/python benchmarks/live.py --screenshot docs/img/live-page.png
 	$(BIN)/python benchmarks/fit.py
 	$(BIN)/python benchmarks/calibration.py
 	$(BIN)/python benchmarks/evaluation.py

@@ -230,8 +230,9 @@ def instrument_for(
 
 
 def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> DxlEmulator:
-    """A (not yet started) byte-level emulator of the rig's motors, at home, in their
-    operating modes, at the rig's bus rate; as fast as the host reads, or with
+    """A (not yet started) byte-level emulator of the rig's motors (of the models and
+    firmware the rig file expects), at home, in their operating modes, at the rig's bus
+    rate; as fast as the host reads, or with
     ``wire_time`` as a real bus (bytes on the wire and the motors' return delays)."""
     axes = rig.bus_axes()
     emulator = DxlEmulator(
@@ -245,4 +246,8 @@ def emulated_bus(rig: Rig, clock: TimeSource, *, wire_time: bool = False) -> Dxl
         motor = emulator.motors[axis.motor_id]
         motor.set("operating_mode", axis.operating_mode)
         motor.set("present_position", axis.to_ticks(float(home)))
+        if axis.model is not None:  # the motors the rig file expects
+            motor.set("model_number", axis.model)
+        if axis.firmware is not None:
+            motor.set("firmware_version", axis.firmware)
     return emulator

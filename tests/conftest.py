@@ -178,6 +178,8 @@ SHARED_SETUP = {
     "tests/gonio/export/test_merl.py": "merl-export",
     "tests/gonio/planner/test_plan.py": "small-plans",
     "tests/gonio/reconstruct/test_fit.py": "long-runs",
+    "tests/gonio/store/test_run_fuzz.py": "fuzzed-run",
+    "tests/gonio/test_damaged_files.py": "damaged-files",
     "tests/gonio/tradeoff/test_executors.py": "reference-sweep",
     "tests/gonio/tradeoff/test_sweep.py": "reference-sweep",
     "tests/sim/test_simulate.py": "shipped-plans",

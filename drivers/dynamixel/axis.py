@@ -1,9 +1,11 @@
 """How a rig axis maps onto a Dynamixel motor: configuration and unit conversion.
 
 axis angle (rad) = zero_offset + direction · motor angle / gear_ratio, and motor angle =
-ticks · 2π/4096. ``gear_ratio`` is motor revolutions per axis revolution. Profile
-velocity and acceleration are given for the axis (rad/s, rad/s²) and converted to the
-motor's register units (0.229 rev/min, 214.577 rev/min²).
+ticks · 2π/4096. ``gear_ratio`` is motor revolutions per axis revolution; ``model`` and
+``firmware``, when given, are what the motor must answer with
+(`drivers.dynamixel.hygiene`). Profile velocity and acceleration are given for the
+axis (rad/s, rad/s²) and converted to the motor's register units (0.229 rev/min,
+214.577 rev/min²).
 """
 
 from __future__ import annotations
@@ -38,6 +40,9 @@ class AxisConfig:
     mode: str = "position"
     profile_velocity_rad_s: float = 1.0
     profile_acceleration_rad_s2: float = 4.0
+    #: The model number and firmware version the motor must answer with (None: any).
+    model: int | None = None
+    firmware: int | None = None
 
     def __post_init__(self) -> None:
         problems = []
@@ -55,6 +60,10 @@ class AxisConfig:
             problems.append(f"mode {self.mode!r} must be one of {', '.join(MODES)}")
         if not self.profile_velocity_rad_s > 0 or not self.profile_acceleration_rad_s2 > 0:
             problems.append("profile velocity and acceleration must be positive")
+        if self.model is not None and not 0 <= self.model <= 0xFFFF:
+            problems.append(f"model {self.model} is not a model number (0…65535)")
+        if self.firmware is not None and not 0 <= self.firmware <= 0xFF:
+            problems.append(f"firmware {self.firmware} is not a firmware version (0…255)")
         if problems:
             raise ValueError(f"axis {self.name!r}: " + "; ".join(problems))
         lo, hi = sorted((self.to_ticks_exact(self.min_rad), self.to_ticks_exact(self.max_rad)))

@@ -37,7 +37,7 @@ import serial
 
 from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
 from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
-from drivers.dynamixel.latency import DEFAULT_LATENCY_MS, adapter_latency_ms, sdk_latency_timer
+from drivers.dynamixel.latency import assumed_adapter_ms, sdk_latency_timer
 from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
@@ -107,10 +107,7 @@ class DynamixelLink(Resource):
     def latency_timer_ms(self) -> float:
         """The latency timer (ms) of this link's reply timeouts (SDK: 2 × it + 2 ms +
         the reply's wire time)."""
-        adapter = self.latency_ms
-        if adapter is None:
-            adapter = adapter_latency_ms(self.port_name)
-        return sdk_latency_timer(DEFAULT_LATENCY_MS if adapter is None else adapter, self.baud)
+        return sdk_latency_timer(assumed_adapter_ms(self.port_name, self.latency_ms), self.baud)
 
     def open(self) -> None:
         """Open and lock the port at the configured baud; `CommError` if it cannot."""

@@ -19,7 +19,9 @@ aborted (a calibration's last attempt ends the run resumable); a `MotorFault` or
 resumable, unless the plan's ``on_fault.motor`` recovers the motor
 (`gonio.acquire.recovery`: the target or calibration in flight is then done again).
 A first Ctrl-C / SIGTERM finishes the sample in flight, a second stops at once
-(`gonio.acquire.signals`). Every outcome leaves the journal consistent and the run
+(`gonio.acquire.signals`); a stop request posted beside the run file does what the
+first does, a pause request holds the axes between targets until a resume request
+(`gonio.acquire.control`). Every outcome leaves the journal consistent and the run
 resumable: `gonio acquire --resume` measures exactly the targets still missing.
 
 Times: each journaled time is *run time* (`RunTime`): the simulated backend's virtual
@@ -31,6 +33,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -50,6 +53,7 @@ from drivers.base import (
     reading_unit,
 )
 from drivers.stream import StreamReading
+from gonio.acquire.control import ControlRequests, Request, StopRequested
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
@@ -114,6 +118,8 @@ class Engine:
     retry_skipped: bool = False
     progress: Observer = field(default_factory=Unobserved)
     stops: StopRequests = field(default_factory=StopRequests)
+    # Pause/resume/stop requests posted beside the run file (default: the journal's file's)
+    control: ControlRequests | None = None
     move_timeout_s: float = MOVE_TIMEOUT_S
     # Set from the plan (and the history) when made:
     spec: AcquisitionSpec = field(init=False)
@@ -141,6 +147,8 @@ class Engine:
             self.spec.on_fault.motor, self.devices, self.rig, self.spec.health.poll_s,
             self._event, self.history, self.stops.raise_if_requested,
         )  # fmt: skip
+        if self.control is None:
+            self.control = ControlRequests(self.journal.path)
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -188,6 +196,7 @@ class Engine:
                 self._target(i)
                 self.progress.advance(done + 1)
                 self.stops.raise_if_requested()
+                self._obey()
             if self.state.calibrations.closing(self.state.count, measuring=bool(todo.size)):
                 self._calibrate("end")
         finally:
@@ -216,6 +225,7 @@ class Engine:
             done += self._sweep(k)
             self.progress.advance(min(done, len(todo)))
             self.stops.raise_if_requested()
+            self._obey()
         self._closing(bool(ks))
 
     def _sweep(self, k: int) -> int:
@@ -359,6 +369,31 @@ class Engine:
         simulation.restore(state)
         return True
 
+    def _obey(self) -> None:
+        """Act on the control requests posted since the last target
+        (`gonio.acquire.control`): a ``stop`` ends the session as a first Ctrl-C does; a
+        ``pause`` holds the axes and waits (wall time) for a ``resume``."""
+        assert self.control is not None
+        requests = self.control.poll()
+        paused: Request | None = None
+        began = 0.0
+        while True:
+            for r in requests:
+                if r.action == "stop":
+                    raise StopRequested(r)
+                if r.action == "pause" and paused is None:
+                    self._hold_all()
+                    self._event("pause", {"reason": "request", **r.data(), **self._sim()})
+                    paused, began = r, time.monotonic()
+                elif r.action == "resume" and paused is not None:
+                    data = {"reason": "request", **r.data(), "paused_s": time.monotonic() - began}
+                    self._event("resume", {**data, **self._sim()})
+                    paused = None
+            if paused is None:
+                return
+            self.stops.raise_if_requested()
+            requests = self.control.wait(0.1)
+
     def _between_targets(self) -> None:
         if self.state.health_due.due(self.state.count, self.time.now()):
             self._check_health()
@@ -374,6 +409,8 @@ class Engine:
             # snapshot taken now would resume the simulation mid-step).
             state = {} if exc.abandoned else self._sim()
             data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
+            if isinstance(exc, StopRequested):
+                data = {"reason": "request", **exc.request.data(), "abandoned": False}
             self._event("pause", {**data, **state})
             return "interrupted", f"stopped by {exc.args[0]}"
         if isinstance(exc, MotorFault | MotionTimeout):

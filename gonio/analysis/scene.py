@@ -4,19 +4,24 @@ measurement is compared with)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
+from pydantic import ValidationError
 
 from gonio.brdf.material import MaterialSpec
+from gonio.config import ConfigError, describe, read_yaml
 from gonio.errors import GonioError
 from gonio.radiometry.bands import band_eval
 from gonio.types import BrdfEval
 
 
-def _data(scene_text: str) -> dict[str, Any]:
-    data = yaml.safe_load(scene_text)
+def _data(scene_text: str, scene_path: str | None = None) -> dict[str, Any]:
+    """The stored scene's YAML, read within the bounds of a configuration file (a stored
+    text may have been edited: `ConfigError`, one line, not a hang or a traceback)."""
+    where = Path(f"{scene_path or 'scene'} (as stored in the run)")
+    data, _ = read_yaml(where, scene_text.encode("utf-8", "surrogatepass"))
     return data if isinstance(data, dict) else {}
 
 
@@ -35,10 +40,18 @@ def scene_truth(scene_text: str, scene_path: str | None, band: str | None = None
     """f(ωi, ωo) (sr⁻¹) of the scene's ``material:`` (a relative ``path`` resolves against
     ``scene_path``) as ``band`` sees it (None: the scene detector's band; ``rgb``: the
     three channels, (..., 3)); `GonioError` if the stored scene has no material."""
-    data = _data(scene_text)
+    data = _data(scene_text, scene_path)
     if data.get("material") is None:
         raise GonioError(f"{scene_path or 'scene'}: the stored scene has no material")
-    spec = MaterialSpec.model_validate(data["material"], context={"path": scene_path or "scene"})
+    try:
+        spec = MaterialSpec.model_validate(
+            data["material"], context={"path": scene_path or "scene"}
+        )
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        raise ConfigError(
+            f"{scene_path or 'scene'} (as stored in the run): material.{describe(first)}"
+        ) from None
     model = spec.model()
     band = _band(data) if band is None else band
     if band == "rgb":

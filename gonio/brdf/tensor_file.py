@@ -154,6 +154,11 @@ def _read(path: Path, stream: BinaryIO, size: int) -> dict[str, np.ndarray]:
                 f"{path}: tensor_file field {name!r} of shape {list(shape)} at byte {offset} "
                 f"({nbytes} bytes) runs past the end of the file ({size} bytes; truncated?)"
             )
+        if any(n > size for n in shape):  # beside a 0 (no bytes): no array of such a side
+            raise GonioError(
+                f"{path}: tensor_file field {name!r} of shape {list(shape)}: a side longer "
+                f"than the file's {size} bytes"
+            )
         if name in (s[0] for s in specs):
             raise GonioError(f"{path}: tensor_file field {name!r} appears twice")
         specs.append((name, DTYPES[code], offset, shape))

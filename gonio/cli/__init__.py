@@ -57,6 +57,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "sweep plans over scenes and axes: error against instrument time, the fastest plan",
     ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
+    "serve": (
+        "gonio.cli.serve",
+        "a local web page of runs, live as samples land; pause, resume, stop with the run's token",
+    ),
+    "watch": ("gonio.cli.watch", "a run live in the terminal: progress, ETA, samples, events"),
     "export": (
         "gonio.cli.export",
         "write a run as csv, hdf5, alta, bluesky documents, a MERL table or an RGL material",

@@ -11,8 +11,10 @@ import contextlib
 import shlex
 import sys
 from pathlib import Path
+from urllib.parse import quote
 
 from gonio import progress as planning
+from gonio.acquire import control
 from gonio.acquire import progress as progress_module
 from gonio.acquire.signals import RunInterrupted
 from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, arguments
@@ -25,7 +27,9 @@ EXIT_RESUMABLE = 3
 EXIT_CODES = {
     0: "the run completed (or the dry run found everything ready)",
     EXIT_BAD_INPUT: "refused before anything moved: a bad file or option, an output that "
-    "exists or cannot be written, a port missing or busy",
+    "exists or cannot be written, a port missing, busy or not ours to open, a motor that "
+    "does not answer, is not the one the rig file expects or has settings the driver "
+    "cannot work with (one line each)",
     EXIT_RESUMABLE: "the run ended early on a fault, a pause that did not clear or a full "
     "disk (resumable with --resume)",
     EXIT_INTERRUPTED: "stopped by Ctrl-C or SIGTERM (resumable with --resume)",
@@ -89,6 +93,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         if args.plan is not None or args.output is not None:
             raise ConfigError("--resume RUN continues RUN: give no plan file and no -o")
         path: Path | None = args.resume
+        _print_control(args.resume, args.quiet)
         try:
             outcome = session.resume(
                 args.resume, rig_path=args.rig, scene_path=args.scene, force=args.force,
@@ -120,10 +125,12 @@ def cmd_acquire(args: argparse.Namespace) -> int:
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
                 rehearse=args.rehearse,
             ):  # fmt: skip
-                print(f"  ok: {line}")
+                # bus hygiene lines come with their level: "warning: …", "n/a: …"
+                print(f"  {line}" if line.split(":")[0] in ("warning", "n/a") else f"  ok: {line}")
             print("dry run: nothing moved, nothing written")
             return 0
         path = args.output
+        _print_control(args.output, args.quiet)
         try:
             outcome = session.start(
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
@@ -140,6 +147,21 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     print(f"gonio: the run ended early: {report.message}", file=sys.stderr)
     print(f"resume with: {_resume_command(path)}", file=sys.stderr)
     return EXIT_RESUMABLE
+
+
+def _print_control(path: Path, quiet: bool) -> None:
+    """Issue the run's control token (beside it, owner-only) and print (unless
+    ``quiet``) how to watch and control the run from a browser (the token in the URL's
+    fragment, never sent to a server: the page sends it in a header)."""
+    try:
+        token = control.issue_token(path)
+    except OSError as exc:
+        why = exc.strerror or exc
+        raise ConfigError(f"{path}: cannot write its control token: {why}") from None
+    if quiet:
+        return
+    url = f"http://127.0.0.1:8765/run/{quote(path.name)}#token={token}"
+    print(f"watch and control: gonio serve {shlex.quote(str(path))}, then open {url}", flush=True)
 
 
 def _interrupted(path: Path | None) -> int:

@@ -14,15 +14,21 @@ import math
 from pathlib import Path
 
 from drivers.base import CommError, DriverError
+from drivers.dynamixel import hygiene
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, MODELS, RAD_PER_TICK
+from drivers.dynamixel.latency import assumed_adapter_ms
 from drivers.dynamixel.link import DynamixelLink
+from gonio.cli import EXIT_BAD_INPUT
 from gonio.config import ConfigError
 
 #: The rates `scan` tries by default: factory default first, then the SDK's default.
 DEFAULT_SCAN_BAUDS = (FACTORY_BAUD, 1_000_000)
 #: Exit code of `scan` when no motor answered, and of `status` when one did not.
 EXIT_NO_ANSWER = 1
+#: Exit code of `scan` when the bus would block a run (`drivers.dynamixel.hygiene`):
+#: the program's code for a device refused.
+EXIT_PROBLEM = EXIT_BAD_INPUT
 
 
 def motor_ids(text: str) -> list[int]:
@@ -70,17 +76,23 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
     scan = cmds.add_parser(
         "scan",
-        help="list the motors answering on a port",
-        description="Send a broadcast ping at each rate and list the motors that answer: "
-        "ID, model and firmware.",
+        help="list the motors answering on a port, and check the bus",
+        description="Check the port (this user may open it; the USB adapter's latency "
+        "timer), send a broadcast ping at each rate and list the motors that answer: ID, "
+        "model and firmware; check that each suits the driver (Status Return Level 2, a "
+        "Return Delay Time its timeouts allow). With --rig, also that every axis's motor "
+        "answers at the rig's rate as the model and firmware the rig file expects. A "
+        "problem that would block a run is one line naming the motor and the fix, and exit "
+        "code 2.",
         exit_codes={0: "a motor answered", EXIT_NO_ANSWER: "no motor answered at any rate"},
     )
-    scan.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
+    scan.add_argument("--rig", type=Path, help="a rig file: its port, rate and axes")
+    scan.add_argument("--port", help="serial port, e.g. /dev/ttyUSB0 (required without --rig)")
     scan.add_argument(
         "--baud",
         type=baud_rate,
         action="append",
-        help="baud rate to try (repeatable; default "
+        help="baud rate to try (repeatable; default the rig's, else "
         f"{' then '.join(map(str, DEFAULT_SCAN_BAUDS))})",
     )
     scan.set_defaults(func=cmd_scan)
@@ -123,21 +135,52 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_scan(args: argparse.Namespace) -> int:
-    found_any = False
-    for baud in args.baud or DEFAULT_SCAN_BAUDS:
-        with DynamixelLink(args.port, baud, retries=0) as link:
+    axes: list[AxisConfig] = []
+    port, bauds, rig_baud = args.port, args.baud, None
+    if args.rig is not None:
+        from gonio.rig.model import Rig
+
+        rig = Rig.from_yaml(args.rig)
+        axes = rig.bus_axes()
+        port = port or rig.spec.bus.port
+        rig_baud = rig.spec.bus.baud
+        bauds = bauds or [rig_baud]
+    if port is None:
+        raise ConfigError("motors scan: give --port or --rig RIG.yaml")
+    access = hygiene.access_finding(port)
+    if access.level == "problem":  # nothing more can be checked: one line, exit 2
+        raise ConfigError(access.text)
+    _show([access, hygiene.latency_finding(port)])
+    found_any = problem = False
+    names = {a.motor_id: a.name for a in axes}
+    for baud in bauds or DEFAULT_SCAN_BAUDS:
+        with DynamixelLink(port, baud, retries=1, names=names, raise_alerts=False) as link:
             found = link.scan()
-        print(f"{args.port} at {baud} baud: {len(found)} motor(s)")
-        if found:
-            found_any = True
-            print(f"  {'ID':>3}  {'model':<12} {'number':>6}  firmware")
-            for motor_id, (model, firmware) in sorted(found.items()):
-                name = MODELS.get(model, "unknown")
-                print(f"  {motor_id:>3}  {name:<12} {model:>6}  {firmware}")
+            print(f"{port} at {baud} baud: {len(found)} motor(s)")
+            if found:
+                found_any = True
+                print(f"  {'ID':>3}  {'model':<12} {'number':>6}  firmware")
+                for motor_id, (model, firmware) in sorted(found.items()):
+                    name = MODELS.get(model, "unknown")
+                    print(f"  {motor_id:>3}  {name:<12} {model:>6}  {firmware}")
+            # The rig's axes at the rig's rate (a missing one is a problem), else whoever
+            # answered, for what the driver needs of any motor.
+            expected = [hygiene.Expected.of(a) for a in axes] if baud == rig_baud else []
+            expected += [hygiene.Expected(m) for m in sorted(found) if m not in names]
+            if expected:
+                adapter_ms = assumed_adapter_ms(port)
+                checks = hygiene.motor_findings(link, expected, adapter_ms)
+                _show(checks, indent="  ")
+                problem = problem or bool(hygiene.blocking(checks))
     if not found_any:
         print("no motor answered: check power (the LED blinks once at power-up), wiring, and rate")
         return EXIT_NO_ANSWER
-    return 0
+    return EXIT_PROBLEM if problem else 0
+
+
+def _show(findings: list[hygiene.Finding], indent: str = "") -> None:
+    for finding in findings:
+        print(f"{indent}{finding.level}: {finding.text}")
 
 
 def _status_target(args: argparse.Namespace) -> tuple[str, int, list[int], dict[int, AxisConfig]]:

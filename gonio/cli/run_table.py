@@ -105,11 +105,15 @@ def render_details(run: Run) -> str:
     if len(run) and run.of_kind("calibration"):
         cal = calibrate(run)
         ok = np.isfinite(cal.brdf) & (cal.brdf > 0)
-        rel = cal.sigma[ok] / cal.brdf[ok]
-        lines.append(
-            f"  {'derived BRDF':<24}{int(ok.sum()):>10}   values, {cal.brdf[ok].min():.4g} to "
-            f"{cal.brdf[ok].max():.4g} sr⁻¹, median uncertainty {100 * np.median(rel):.3f} % (1σ)"
-        )
+        if ok.any():
+            rel = cal.sigma[ok] / cal.brdf[ok]
+            lines.append(
+                f"  {'derived BRDF':<24}{int(ok.sum()):>10}   values, {cal.brdf[ok].min():.4g} "
+                f"to {cal.brdf[ok].max():.4g} sr⁻¹, median uncertainty "
+                f"{100 * np.median(rel):.3f} % (1σ)"
+            )
+        else:  # every reading at or below the dark: no positive value to show
+            lines.append(f"  {'derived BRDF':<24}{0:>10}   positive values (every reading ≤ dark)")
     if run.path.is_file():
         size = run.path.stat().st_size
         lines.append(

@@ -384,6 +384,8 @@ class Rig:
                     mode=s.mode,
                     profile_velocity_rad_s=math.radians(s.max_velocity_deg_s),
                     profile_acceleration_rad_s2=math.radians(s.max_acceleration_deg_s2),
+                    model=s.motor_model_number(),
+                    firmware=s.motor_firmware,
                 )
             except ValueError as exc:
                 where = str(self.source) if self.source else "rig"

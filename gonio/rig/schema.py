@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from drivers.dynamixel.control_table import MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
@@ -52,6 +53,21 @@ class AxisSpec(Strict):
     max_acceleration_deg_s2: float = Field(
         gt=0, description="The joint's acceleration and deceleration (°/s²)."
     )
+    motor_model: (
+        Annotated[str, InSchema(enum=list(MODELS.values()))]
+        | Annotated[int, Field(ge=0, le=0xFFFF)]
+        | None
+    ) = Field(
+        None,
+        description="The motor the axis must find at motor_id (checked before the first "
+        f"move): a model name ({', '.join(MODELS.values())}) or a model number; none: any.",
+    )
+    motor_firmware: int | None = Field(
+        None,
+        ge=0,
+        le=255,
+        description="The firmware version the motor must answer with; none: any.",
+    )
 
     @field_validator("axis")
     @classmethod
@@ -60,6 +76,23 @@ class AxisSpec(Strict):
         if not norm > 0:
             raise ValueError("a rotation axis must not be the zero vector")
         return (v[0] / norm, v[1] / norm, v[2] / norm)
+
+    @field_validator("motor_model", mode="before")
+    @classmethod
+    def _known_model(cls, v: object) -> object:
+        known = isinstance(v, str) and v in MODELS.values()
+        number = isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 0xFFFF
+        if v is not None and not isinstance(v, bool) and not known and not number:
+            raise ValueError(
+                f"expected a model name ({', '.join(MODELS.values())}) or a model number 0…65535"
+            )
+        return v
+
+    def motor_model_number(self) -> int | None:
+        """`motor_model` as a model number (None: any model)."""
+        if isinstance(self.motor_model, str):
+            return next(n for n, name in MODELS.items() if name == self.motor_model)
+        return self.motor_model
 
     @model_validator(mode="after")
     def _ordered_limits(self) -> AxisSpec:
@@ -141,6 +174,13 @@ class BusSpec(Strict):
     )
     port: str = Field("/dev/ttyUSB0", description="The motors' serial port (dynamixel).")
     baud: int = Field(57_600, description="The motors' baud rate (dynamixel).")
+    retries: int = Field(
+        3,
+        ge=0,
+        le=10,
+        description="Extra attempts of a transaction whose status was lost or corrupt, "
+        "before the run stops resumable (dynamixel; measured in docs/results/bus_retries.md).",
+    )
 
 
 class HealthLimitsSpec(Strict):

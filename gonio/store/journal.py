@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from gonio.errors import GonioError
+from gonio.store import checks
 from gonio.store.schema import ADDED_IN_2, samples_ddl, samples_table
 
 #: The layout version this gonio writes (and the newest it reads).
@@ -133,8 +134,7 @@ class Journal:
         self.path = path
         self._lock_fd = lock_fd
         self.session = 0
-        axes = json.loads(self._meta_text("axes"))
-        coords = json.loads(self._meta_text("coordinate_names"))
+        axes, coords = (self._meta_names(key) for key in ("axes", "coordinate_names"))
         self.columns = [c.name for c in samples_table(axes, coords)]
         names = ", ".join(f'"{c}"' for c in self.columns)
         marks = ", ".join("?" for _ in self.columns)
@@ -248,6 +248,13 @@ class Journal:
             raise JournalError(f"{path}: no such run file")
         lock = _lock(path)
         try:
+            # Read-only first: a file that is not a gonio run (another program's database,
+            # zero bytes) is refused before anything is written to it (the WAL mode).
+            probe = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)
+            try:
+                check_version(probe, path)
+            finally:
+                probe.close()
             conn = cls._connect(str(path), durable, max_page_count)
             check_version(conn, path)
             _upgrade(conn)
@@ -264,6 +271,13 @@ class Journal:
         if row is None:
             raise JournalError(f"{self.path}: meta.{key}: missing")
         return str(row[0])
+
+    def _meta_names(self, key: str) -> list[str]:
+        """A list of names in ``meta`` (`JournalError`, one line, if it is not one)."""
+        try:
+            return checks.names(checks.json_value(self._meta_text(key), f"meta.{key}"), key)
+        except checks.Bad as exc:
+            raise JournalError(f"{self.path}: not a usable run file: {exc}") from None
 
     def _write(self, sql: str, args: Sequence[Any]) -> None:
         try:

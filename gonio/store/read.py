@@ -5,7 +5,6 @@ that is still being written (the file is opened read-only, in one read transacti
 
 from __future__ import annotations
 
-import json
 import sqlite3
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -15,11 +14,27 @@ from typing import Any
 
 import numpy as np
 
+from gonio.config import ConfigError
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
+from gonio.store import checks
 from gonio.store.journal import JournalError, check_version
-from gonio.store.schema import ADDED_IN_2, FLOAT64, Column, commanded, read_back, samples_table
+from gonio.store.schema import (
+    ADDED_IN_2,
+    FLOAT64,
+    INT64,
+    OBJECT,
+    Column,
+    commanded,
+    read_back,
+    samples_table,
+)
 from gonio.types import FloatArray
+
+#: Seconds a reader waits for a lock another process holds on the file (a writer that
+#: took it whole: ``PRAGMA locking_mode=EXCLUSIVE``, or a checkpoint) before giving up
+#: with one line; gonio's own writer never blocks readers (WAL mode).
+BUSY_TIMEOUT_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -129,12 +144,28 @@ class Run:
 
 def read_run(conn: sqlite3.Connection, path: Path) -> Run:
     """The run in an open connection (one read transaction: a consistent snapshot);
-    `JournalError` (one line) if the file is not a readable run file (a table missing,
-    the database damaged)."""
+    `JournalError` (one line naming the file and the field) if the file is not a readable
+    run file: a table missing, the database damaged, or a stored value not of the type
+    or range the writer gives it (`gonio.store.checks`)."""
     try:
         return _read(conn, path)
+    except sqlite3.OperationalError as exc:
+        if "locked" in str(exc) or "busy" in str(exc):
+            raise JournalError(
+                f"{path}: another process holds the run file locked ({_one_line(exc)}, "
+                f"{BUSY_TIMEOUT_S:g} s waited); read it when that process is done"
+            ) from None
+        raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
     except sqlite3.DatabaseError as exc:
+        raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
+    except checks.Bad as exc:
         raise JournalError(f"{path}: not a readable run file: {exc}") from None
+    except ConfigError as exc:  # the stored plan (its message names the run file)
+        raise JournalError(str(exc)) from None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())[:300]
 
 
 def _read(conn: sqlite3.Connection, path: Path) -> Run:
@@ -164,29 +195,106 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
     meta: dict[str, Any] = {}
     plan_file = b""
     for key, value in meta_rows:
+        if not isinstance(key, str):
+            raise checks.Bad(f"meta: expected text keys, got {key!r:.40}")
         if key == "plan_file":
-            plan_file = bytes(value)
+            if not isinstance(value, bytes):
+                raise checks.Bad(
+                    f"meta.plan_file: expected the stored plan's bytes, got {value!r:.40}"
+                )
+            plan_file = value
         else:
-            meta[key] = json.loads(value)
+            meta[key] = checks.json_value(value, f"meta.{key}")
+    checks.check_meta(meta)
     plan = parse_plan(plan_file, f"{path}#plan_file")
+    if tuple(meta["axes"]) != plan.rig.axes:
+        raise checks.Bad(
+            f"meta.axes: expected the stored plan's rig axes {list(plan.rig.axes)}, "
+            f"got {meta['axes']}"
+        )
+    if tuple(meta["coordinate_names"]) != plan.coordinate_names:
+        raise checks.Bad(
+            f"meta.coordinate_names: expected the stored plan's {list(plan.coordinate_names)}, "
+            f"got {meta['coordinate_names']}"
+        )
     table = samples_table(meta["axes"], meta["coordinate_names"])
+    samples = _columns(names, rows, table)
+    target = samples["target"]
+    if target.size and (target[0] < 0 or target[-1] >= len(plan)):
+        bad = int(target[0] if target[0] < 0 else target[-1])
+        raise checks.Bad(
+            f"samples.target: {bad}; expected 0 … {len(plan) - 1} (the plan's targets)"
+        )
+    _check_samples(samples)
     return Run(
         path=path,
         meta=MappingProxyType(meta),
         plan=plan,
-        samples=MappingProxyType(_columns(names, rows, table)),
-        events=tuple(
-            Event(i, s, k, t, ts, u, MappingProxyType(json.loads(d)))
-            for i, s, k, t, ts, u, d in events
-        ),
-        sessions=tuple(
-            Session(i, st, MappingProxyType(json.loads(info)), en, out)
-            for i, st, info, en, out in sessions
-        ),
-        sweeps=tuple(
-            SweepRecord(i, s, k, o, a, b, MappingProxyType(json.loads(d)))
-            for i, s, k, o, a, b, d in sweeps
-        ),
+        samples=MappingProxyType(samples),
+        events=tuple(_event(row) for row in events),
+        sessions=tuple(_session(row) for row in sessions),
+        sweeps=tuple(_sweep(row) for row in sweeps),
+    )
+
+
+def _check_samples(samples: Mapping[str, np.ndarray]) -> None:
+    """`checks.Bad` unless every sample's directions are unit vectors and its exposure
+    positive (as the writer stores them; the analysis divides by the exposure)."""
+    for side in ("wi", "wo"):
+        v = np.stack([samples[f"{side}_{c}"] for c in "xyz"], axis=1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            bad = ~(np.abs(np.einsum("ij,ij->i", v, v) - 1.0) <= checks.UNIT_TOLERANCE)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise checks.Bad(
+                f"samples.{side}_x, _y, _z (row {i}): expected a unit vector, got {v[i].tolist()}"
+            )
+    exposure = samples["exposure_s"]
+    if exposure.size and not (exposure > 0.0).all():
+        i = int(np.flatnonzero(~(exposure > 0.0))[0])
+        raise checks.Bad(
+            f"samples.exposure_s (row {i}): expected a positive time, got {exposure[i]}"
+        )
+
+
+def _event(row: tuple[Any, ...]) -> Event:
+    i, s, k, t, ts, u, d = row
+    where = f"events (id {i!r:.20})"
+    kind = checks.text(k, f"{where}.kind")
+    return Event(
+        checks.integer(i, f"{where}.id"),
+        checks.integer(s, f"{where}.session"),
+        kind,
+        checks.optional(checks.integer)(t, f"{where}.target"),
+        checks.number(ts, f"{where}.t_s"),
+        checks.text(u, f"{where}.utc"),
+        MappingProxyType(checks.event_data(kind, d, f"{where}.data")),
+    )
+
+
+def _session(row: tuple[Any, ...]) -> Session:
+    i, st, info, en, out = row
+    where = f"sessions (id {i!r:.20})"
+    return Session(
+        checks.integer(i, f"{where}.id"),
+        checks.text(st, f"{where}.started_utc"),
+        MappingProxyType(checks.mapping(checks.json_value(info, f"{where}.info"), f"{where}.info")),
+        checks.optional(checks.text)(en, f"{where}.ended_utc"),
+        checks.optional(checks.text)(out, f"{where}.outcome"),
+    )
+
+
+def _sweep(row: tuple[Any, ...]) -> SweepRecord:
+    i, s, k, o, a, b, d = row
+    where = f"sweeps (id {i!r:.20})"
+    return SweepRecord(
+        checks.integer(i, f"{where}.id"),
+        checks.integer(s, f"{where}.session"),
+        checks.integer(k, f"{where}.sweep"),
+        checks.text(o, f"{where}.outcome"),
+        checks.number(a, f"{where}.started_s"),
+        checks.number(b, f"{where}.ended_s"),
+        MappingProxyType(checks.mapping(checks.json_value(d, f"{where}.data"), f"{where}.data")),
     )
 
 
@@ -198,8 +306,22 @@ def _has_table(conn: sqlite3.Connection, name: str) -> bool:
 def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
     """A journaled sweep's raw streams: the polls as (P, 2) request and reply times (s)
     and (P, A) positions (rad), and the stream's readings as a structured array
-    (started_s, ended_s, value, std, saturated, device_t_s, received_s; NULL as NaN)."""
-    conn = sqlite3.connect(f"{run.path.resolve().as_uri()}?mode=ro", uri=True)
+    (started_s, ended_s, value, std, saturated, device_t_s, received_s; NULL as NaN).
+    `JournalError` (one line) if the file is damaged or a value is not the writer's."""
+    try:
+        return _raw_streams(run, sweep_id)
+    except sqlite3.DatabaseError as exc:
+        raise JournalError(f"{run.path}: not a readable run file: {_one_line(exc)}") from None
+    except (checks.Bad, ValueError, TypeError) as exc:
+        raise JournalError(
+            f"{run.path}: not a readable run file: sweep {sweep_id}'s streams: {_one_line(exc)}"
+        ) from None
+
+
+def _raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
+    conn = sqlite3.connect(
+        f"{run.path.resolve().as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S
+    )
     try:
         polls = conn.execute(
             "SELECT request_s, reply_s, positions FROM polls WHERE sweep_id = ? ORDER BY rowid",
@@ -213,7 +335,14 @@ def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.nda
     finally:
         conn.close()
     times = np.array([(a, b) for a, b, _ in polls], dtype=np.float64).reshape(-1, 2)
-    positions = np.array([json.loads(p) for _, _, p in polls], dtype=np.float64)
+    axes = len(run.axes)
+    positions = np.array(
+        [
+            checks.vector(axes)(checks.json_value(p, "polls.positions"), "polls.positions")
+            for _, _, p in polls
+        ],
+        dtype=np.float64,
+    )
     names = ("started_s", "ended_s", "value", "std", "saturated", "device_t_s", "received_s")
     dtype = np.dtype([(n, np.float64) for n in names])
     readings = np.array([tuple(np.nan if c is None else c for c in r) for r in stream], dtype=dtype)
@@ -224,19 +353,61 @@ def _columns(
     names: list[str], rows: list[tuple[Any, ...]], table: Sequence[Column]
 ) -> dict[str, np.ndarray]:
     """The samples as numpy columns, each of its dtype in ``table`` (a column the table
-    does not name reads as float64)."""
-    dtypes = {c.name: c.dtype for c in table}
+    does not name reads as float64); `checks.Bad` for a column of the table missing (but
+    those a version-1 file lacks) or a cell not of its column's type: a finite number
+    where a number belongs (NULL only where the column allows it, read as NaN), a whole
+    number where one does, a text where a text does."""
+    missing = [c.name for c in table if c.name not in names and c.name not in ADDED_IN_2]
+    if missing:
+        raise checks.Bad(f"samples: column {missing[0]!r} missing")
+    columns = {c.name: c for c in table}
     out: dict[str, np.ndarray] = {}
     for j, name in enumerate(names):
         cells = [r[j] for r in rows]
-        dtype = dtypes.get(name, FLOAT64)
-        if dtype == FLOAT64:  # NULL (a spread the device did not give) reads as NaN
-            out[name] = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
-        else:
-            out[name] = np.array(cells, dtype=dtype)
+        column = columns.get(name, Column(name, "REAL", FLOAT64, nullable=True))
+        values = _column(cells, column)
+        if values is None:
+            _first_bad_cell(name, cells, column)
+            raise checks.Bad(f"samples.{name}: expected values of type {column.sql}")
+        out[name] = values
     for name in ADDED_IN_2:  # a version-1 run: no fly columns
         out.setdefault(name, np.full(len(rows), np.nan))
     return out
+
+
+def _column(cells: list[Any], column: Column) -> np.ndarray | None:
+    """The column's array, or None if a cell is not of its type."""
+    if column.dtype == OBJECT:
+        ok = all(isinstance(c, str) or (c is None and column.nullable) for c in cells)
+        return np.array(cells, dtype=object) if ok else None
+    if column.dtype != FLOAT64:  # whole numbers (a bool column stores 0/1)
+        if not all(type(c) is int for c in cells):
+            return None
+        try:
+            return np.array(cells, dtype=INT64).astype(column.dtype)
+        except OverflowError:
+            return None
+    if not all(type(c) is float or type(c) is int or c is None for c in cells):
+        return None
+    values = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
+    finite = np.isfinite(values) if not column.nullable else ~np.isinf(values)
+    return values if finite.all() else None
+
+
+def _first_bad_cell(name: str, cells: list[Any], column: Column) -> None:
+    """`checks.Bad` naming the first cell of ``name`` that is not of its column's type."""
+    for i, cell in enumerate(cells):
+        if cell is None and column.nullable:
+            continue
+        where = f"samples.{name} (row {i})"
+        if column.dtype == OBJECT:
+            checks.text(cell, where)
+        elif column.dtype == FLOAT64:
+            checks.number(cell, where)
+        else:
+            checks.integer(cell, where)
+            if not -(2**63) <= cell < 2**63:
+                raise checks.Bad(f"{where}: {cell} is out of the 64-bit range")
 
 
 def open_run(path: str | Path) -> Run:
@@ -247,7 +418,12 @@ def open_run(path: str | Path) -> Run:
     if not path.is_file():
         raise JournalError(f"{path}: no such run file")
     try:
-        conn = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, isolation_level=None)
+        conn = sqlite3.connect(
+            f"{path.resolve().as_uri()}?mode=ro",
+            uri=True,
+            isolation_level=None,
+            timeout=BUSY_TIMEOUT_S,
+        )
     except sqlite3.Error as exc:
         raise JournalError(f"{path}: cannot open the run file: {exc}") from None
     try:

@@ -13,6 +13,7 @@ a task carries its sweep's file bytes, so they need none of its files.
 
 from __future__ import annotations
 
+import asyncio
 import importlib
 import ipaddress
 import multiprocessing
@@ -29,7 +30,7 @@ Done = Callable[[dict[str, Any]], None]
 
 #: A scheduler's address: [PROTOCOL://]HOST:PORT (an IPv6 host in brackets).
 ADDRESS = re.compile(r"([a-z][a-z0-9+.-]*://)?(\[[0-9a-fA-F:.]+\]|[^\s/:\[\]]+):[0-9]{1,5}")
-#: Seconds to wait for a Dask scheduler to answer.
+#: Seconds to wait for a Dask scheduler to answer (`run_dask`'s ``timeout_s``).
 CONNECT_TIMEOUT_S = 30.0
 #: Tasks queued ahead per worker of the local pool (a killed sweep loses what is queued
 #: too: it is in flight).
@@ -84,19 +85,24 @@ def check_address(scheduler: str) -> str:
     return scheduler
 
 
-def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
+def run_dask(
+    tasks: Sequence[Task], scheduler: str, done: Done, *, timeout_s: float | None = None
+) -> None:
     """On the Dask cluster whose scheduler is at ``scheduler`` (``tcp://HOST:PORT``),
-    waiting at most `CONNECT_TIMEOUT_S` for it to answer."""
+    once it answered within ``timeout_s`` seconds (default `CONNECT_TIMEOUT_S`;
+    `check_scheduler`)."""
     check_address(scheduler)
+    timeout = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
     try:  # (untyped: used through Any)
         distributed: Any = importlib.import_module("distributed")
     except ImportError:
         raise ConfigError(
             "--scheduler needs dask.distributed: pip install 'gonio[distributed]'"
         ) from None
+    check_scheduler(scheduler, timeout)
     try:
-        client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
+        client = distributed.Client(scheduler, timeout=timeout, set_as_default=False)
+    except (OSError, TimeoutError, ValueError, MemoryError) as exc:
         raise ConfigError(f"--scheduler {scheduler}: cannot reach the scheduler: {exc}") from None
     with client:
         futures = client.map(runner.run, list(tasks), pure=False)
@@ -106,3 +112,40 @@ def run_dask(tasks: Sequence[Task], scheduler: str, done: Done) -> None:
         except BaseException:
             client.cancel(futures)
             raise
+
+
+def check_scheduler(scheduler: str, timeout_s: float) -> None:
+    """`ConfigError` (one line) unless a Dask scheduler at ``scheduler`` answers its
+    identity within ``timeout_s`` seconds (s), all told: connecting, the handshake and
+    the answer. `distributed.Client`'s own timeout covers only the connection: a peer
+    that accepts and never speaks holds it forever, and one that answers with other
+    bytes can make it allocate what they say (both refused here)."""
+    comm: Any = importlib.import_module("distributed.comm")
+
+    async def identity() -> Any:
+        channel = await comm.connect(scheduler, timeout=timeout_s)
+        try:
+            await channel.write({"op": "identity", "reply": True})
+            return await channel.read()
+        finally:
+            channel.abort()
+
+    async def bounded() -> Any:
+        return await asyncio.wait_for(identity(), timeout_s)
+
+    why = None
+    try:
+        answer = asyncio.run(bounded())
+    except TimeoutError:
+        why = f"no answer within {timeout_s:g} s"
+    except MemoryError:  # a length field of another protocol's bytes
+        why = "it answered with bytes that are not Dask's protocol"
+    except (OSError, ValueError, EOFError) as exc:
+        why = " ".join(str(exc).split())[:200] or type(exc).__name__
+    except Exception as exc:  # a peer speaking another protocol: whatever its bytes raise
+        why = f"not a Dask scheduler ({type(exc).__name__})"
+    else:
+        if not (isinstance(answer, dict) and answer.get("type") == "Scheduler"):
+            why = "it answered, but not as a Dask scheduler"
+    if why is not None:
+        raise ConfigError(f"--scheduler {scheduler}: cannot reach the scheduler: {why}")

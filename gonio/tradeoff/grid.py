@@ -118,6 +118,15 @@ def load_sweep(path: str | Path) -> Sweep:
         line = line_of(node, loc)
         return ConfigError(f"{path}{'' if line is None else f':{line}'}: {dotted(loc)}: {message}")
 
+    # Counted from the lists as written, before a rig is scaled or a scene read: a sweep
+    # of a billion combinations is one line at once, whatever else it asks for.
+    size = len(spec.scenes) * spec.replicates
+    for name in AXIS_NAMES:
+        size *= len(getattr(spec.axes, name))
+    if size > MAX_COMBINATIONS:
+        raise refuse(
+            ("axes",), f"{size:,} combinations; expected at most {MAX_COMBINATIONS:,} in one sweep"
+        )
     rig_path = _named_file(path, spec.rig, ("rig",), refuse)
     rig = Rig.from_yaml(rig_path)
     _check_detector(spec, rig, refuse)
@@ -131,13 +140,6 @@ def load_sweep(path: str | Path) -> Sweep:
             ) from None
     scenes = _scenes(spec, path, rig, refuse)
     _check_effects(spec, scenes, refuse)
-    size = len(scenes) * spec.replicates
-    for name in AXIS_NAMES:
-        size *= len(getattr(spec.axes, name))
-    if size > MAX_COMBINATIONS:
-        raise refuse(
-            ("axes",), f"{size:,} combinations; expected at most {MAX_COMBINATIONS:,} in one sweep"
-        )
     tasks = []
     for scene in scenes:
         seen: set[str] = set()

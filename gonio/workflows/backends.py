@@ -127,7 +127,9 @@ def hardware(
 
 
 def _with_simulated_detector(rig: Rig, scene: Scene, seed: int | None, clock: Clock) -> Devices:
-    bus = DynamixelBus(rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud)
+    bus = DynamixelBus(
+        rig.spec.bus.port, rig.bus_axes(), baud=rig.spec.bus.baud, retries=rig.spec.bus.retries
+    )
     light = SimLightSource()
     detector = SimDetector(
         scene, rig, bus.positions, clock=clock,

@@ -31,7 +31,9 @@ def dynamixel_bus(rig: Rig, *, port: str | None = None, clock: Clock | None = No
     """The rig's motors (``bus`` and ``axes``), on ``port`` if given, their polls stamped
     by ``clock`` (default the host's monotonic clock)."""
     bus = rig.spec.bus
-    return DynamixelBus(port or bus.port, rig.bus_axes(), baud=bus.baud, clock=clock)
+    return DynamixelBus(
+        port or bus.port, rig.bus_axes(), baud=bus.baud, retries=bus.retries, clock=clock
+    )
 
 
 def serial_detector(rig: Rig, clock: Clock, *, port: str | None = None) -> SerialDetector:

@@ -41,7 +41,7 @@ from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
-from gonio.workflows import backends
+from gonio.workflows import backends, hygiene
 from gonio.workflows.adaptive import estimate
 from gonio.workflows.backends import BackendKind
 from sim.scene import Scene, load_scene
@@ -278,7 +278,7 @@ def start(
         kind, rig, scene, seed, started, speedup=speedup, any_detector=force_simulated
     )
     try:
-        preflight(plan, backend, files.plan_path)
+        hygiene.warn(preflight(plan, backend, files.plan_path))
     except GonioError:
         backend.close()
         raise
@@ -316,8 +316,12 @@ def _anything_measured(journal: Journal) -> bool:
     return bool(samples or events)
 
 
-def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> None:
-    """Refuse, before anything is created or moved, a run the backend cannot finish."""
+def preflight(
+    plan: Plan, backend: backends.Backend, plan_path: Path | None, rig: Rig | None = None
+) -> list[hygiene.Finding]:
+    """Refuse, before anything is created or moved, a run the backend cannot finish;
+    the findings of the bus hygiene checks (`gonio.workflows.hygiene`) on the devices of
+    ``rig`` (default the plan's), whose warnings the caller shows."""
     reference_pose(plan.rig)  # a reference reading the calibration could not trust
     spec = plan.spec.acquisition.calibration
     # A detector whose readings are dark-subtracted (a lock-in) takes no dark reading.
@@ -334,6 +338,7 @@ def preflight(plan: Plan, backend: backends.Backend, plan_path: Path | None) -> 
             "the reference standard is put on the stage by the operator and no one can be "
             "asked (no terminal): run gonio acquire from a terminal"
         )
+    return hygiene.backend_findings(rig or plan.rig, backend)
 
 
 def changed_files(run: Run, files: Files) -> list[str]:
@@ -427,7 +432,7 @@ def resume(
             any_detector=bool(run.meta.get("any_detector")),
         )  # fmt: skip
         try:
-            preflight(run.plan, backend, files.plan_path)
+            hygiene.warn(preflight(run.plan, backend, files.plan_path, rig))
         except GonioError:
             backend.close()
             raise
@@ -482,7 +487,9 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
         )
     backend = backends.build(kind, rig, scene, None if scene is None else scene.seed, time.time())
     try:
-        preflight(plan, backend, files.plan_path)  # what a run refuses, its dry run refuses
+        # what a run refuses, its dry run refuses
+        findings = preflight(plan, backend, files.plan_path)
+        lines += [str(f) for f in findings]
         with backend.devices as devices:
             positions = devices.bus.positions()
             health = devices.bus.health()

@@ -230,9 +230,17 @@ class DxlEmulator:
             for motor in targets:
                 self._faults.add(motor, fault, count)
 
+    def inject_rate(self, fault: Fault, rate: float, *, seed: int = 0) -> None:
+        """Let reply ``fault`` strike every motor's status packets at random, each with
+        probability ``rate`` (0 ends it; faults queued by `inject` come first), from a
+        generator seeded with ``seed``: a lossy bus (`Fault.NO_REPLY`), a noisy one."""
+        with self._lock:
+            self._faults.strike(fault, rate, seed)
+
     def clear_faults(self, *, alerts: bool = False) -> None:
-        """End reply faults and `Fault.SILENT`; with ``alerts``, also clear every motor's
-        Hardware Error Status (otherwise only REBOOT does, as on hardware)."""
+        """End reply faults (queued and at a rate) and `Fault.SILENT`; with ``alerts``,
+        also clear every motor's Hardware Error Status (otherwise only REBOOT does, as on
+        hardware)."""
         with self._lock:
             self._faults.clear()
             self._silent = False

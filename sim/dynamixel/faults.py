@@ -1,12 +1,14 @@
 """Injected bus faults and how they change the bytes a motor sends.
 
 Reply faults are queued per motor and consumed one status packet at a time (a count
-of None never runs out); hardware alerts are not kept here, they latch a bit in the
-motor's Hardware Error Status.
+of None never runs out), or strike each status packet at random with a rate
+(`FaultBook.strike`, after the queued ones); hardware alerts are not kept here, they
+latch a bit in the motor's Hardware Error Status.
 """
 
 from __future__ import annotations
 
+import random
 from dataclasses import dataclass
 from enum import Enum
 
@@ -67,6 +69,9 @@ class FaultBook:
 
     def __init__(self) -> None:
         self._queues: dict[EmulatedMotor, list[_Pending]] = {}
+        #: Reply faults striking any status packet at random: [(fault, probability)].
+        self._rates: list[tuple[Fault, float]] = []
+        self._rng = random.Random(0)
         #: Each motor's last status packet as it left (clean), for `Fault.STALE`.
         self._last: dict[EmulatedMotor, bytes] = {}
 
@@ -77,13 +82,29 @@ class FaultBook:
             raise ValueError(f"count must be ≥ 1 or None, got {count}")
         self._queues.setdefault(motor, []).append(_Pending(fault, count))
 
+    def strike(self, fault: Fault, rate: float, seed: int = 0) -> None:
+        """Let ``fault`` strike each status packet with probability ``rate`` (on top of
+        other rates; 0 ends it), drawn from a generator seeded with ``seed``."""
+        if fault not in REPLY_FAULTS:
+            raise ValueError(f"{fault} is not a reply fault")
+        if not 0.0 <= rate <= 1.0:
+            raise ValueError(f"rate must be in [0, 1], got {rate}")
+        self._rates = [(f, r) for f, r in self._rates if f is not fault]
+        if rate > 0:
+            self._rates.append((fault, rate))
+        self._rng = random.Random(seed)
+
     def clear(self) -> None:
         self._queues.clear()
+        self._rates.clear()
 
     def take(self, motor: EmulatedMotor) -> Fault | None:
         """The fault for ``motor``'s next status packet (consumes one count)."""
         queue = self._queues.get(motor)
         if not queue:
+            for fault, rate in self._rates:
+                if self._rng.random() < rate:
+                    return fault
             return None
         head = queue[0]
         if head.remaining is not None:

@@ -109,3 +109,44 @@ def test_status_needs_a_port_and_ids_or_a_rig(run_gonio: Gonio) -> None:
     r = run_gonio("motors", "status", "--rig", "/nowhere/rig.yaml")
     assert r.returncode == 2
     assert "/nowhere/rig.yaml: cannot read the file" in r.stderr
+
+
+def test_scan_checks_the_bus_and_with_a_rig_each_axis(
+    emulator: Emulator, tmp_path: Path, run_gonio: Gonio
+) -> None:
+    """scan: the port's checks first, then every motor found suits the driver; with
+    --rig, every axis's motor is the one the rig file expects (at the rig's rate). A
+    mismatch is one line naming the motor and the fix, and exit 2."""
+    import yaml
+
+    emu = emulator(ids=(1, 2, 3, 4, 9), baud=1_000_000)  # a broadcast ping's wait is shorter
+    emu.motors[9].set("status_return_level", 1)
+    r = run_gonio("motors", "scan", "--port", emu.path, "--baud", "1000000")
+    assert r.returncode == 2, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[:2] == [
+        f"ok: {emu.path}: readable and writable",
+        f"n/a: {emu.path}: latency timer does not apply (not a USB-serial adapter)",
+    ]
+    (problem,) = [line for line in lines if "problem:" in line]
+    assert "motor 9 has Status Return Level 1" in problem
+    assert f"gonio motors reboot --port {emu.path} --ids 9" in problem
+
+    emu.motors[9].set("status_return_level", 2)
+    emu.motors[2].set("firmware_version", 45)
+    rig = yaml.safe_load((CONFIGS / "rigs" / "arch.yaml").read_text())
+    rig["bus"] = {"kind": "dynamixel", "port": emu.path, "baud": 1_000_000}
+    for spec in rig["axes"].values():
+        spec |= {"motor_model": "XM430-W350", "motor_firmware": 46}
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(rig), encoding="utf-8")
+    r = run_gonio("motors", "scan", "--rig", str(path))
+    assert r.returncode == 2, r.stderr
+    assert f"{emu.path} at 1000000 baud: 5 motor(s)" in r.stdout
+    problems = [line.strip() for line in r.stdout.splitlines() if "problem:" in line]
+    assert problems == [
+        "problem: motor 2 (axis 'detector_azimuth') runs firmware 45; the rig file expects "
+        "46: update it (ROBOTIS Dynamixel Wizard, firmware update) or correct "
+        "axes.detector_azimuth.motor_firmware"
+    ]
+    assert "ok: motor 9: XM430-W350, firmware 46" in r.stdout  # not in the rig: any model

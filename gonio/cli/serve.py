@@ -1,0 +1,96 @@
+"""`gonio serve [RUN.sqlite | FOLDER]`: a local web page of runs that updates as samples
+are committed, with pause, resume and stop of a running acquisition for whoever holds
+its token (`gonio.live.server`; docs/how-to/watch-a-run.md)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import stat
+from pathlib import Path
+
+from gonio.acquire import control
+from gonio.config import ConfigError
+
+
+def port(text: str) -> int:
+    """A TCP port, 1–65535."""
+    value = int(text) if text.isdigit() else 0
+    if not 0 < value < 65536:
+        raise argparse.ArgumentTypeError(f"expected a port number 1–65535, got {text!r}")
+    return value
+
+
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
+    p = sub.add_parser(
+        "serve",
+        help=help_,
+        description="Serve a local web page of the run files in a folder (or of one run "
+        "file) that updates as samples are committed: progress, ETA, the samples on the "
+        "hemisphere, the in-plane curve, the motors' health, the calibrations and the "
+        "events; pause, resume and stop a running acquisition with the token it printed. "
+        "Binds 127.0.0.1 unless --host says otherwise; a non-loopback --host needs "
+        "--token-file, and every request must then carry that token.",
+    )
+    p.add_argument(
+        "path", type=Path, nargs="?", default=Path("."),
+        help="a run file, or a folder of run files (default: the current folder)",
+    )  # fmt: skip
+    p.add_argument("--host", default="127.0.0.1", help="the address to bind (default 127.0.0.1)")
+    p.add_argument("--port", type=port, default=8765, help="the port (default 8765)")
+    p.add_argument(
+        "--token-file", type=Path, metavar="FILE",
+        help="a file (owner-only) holding the token every request needs on a non-loopback "
+        "--host; it also allows control of every served run",
+    )  # fmt: skip
+    p.set_defaults(func=cmd_serve)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    try:
+        import uvicorn  # optional: the live extra
+
+        from gonio.live import server  # optional: the live extra (Starlette)
+    except ImportError:
+        raise ConfigError(
+            "gonio serve needs Starlette and uvicorn: pip install 'gonio[live]'"
+        ) from None
+    path: Path = args.path
+    if not path.exists():
+        raise ConfigError(f"{path}: no such run file or folder")
+    if path.is_file() and path.suffix != ".sqlite":
+        raise ConfigError(f"{path}: expected a run file (.sqlite) or a folder")
+    token = None
+    if args.token_file is not None:
+        token = _token_file(args.token_file)
+    loopback = server.is_loopback(args.host)
+    if not loopback and token is None and path.is_file():
+        token = control.read_token(path)  # the run's own token gates the whole server
+    served = server.Served(path, loopback=loopback, token=token)
+    host = f"[{args.host}]" if ":" in args.host else args.host
+    url = f"http://{host}:{args.port}/"
+    if path.is_file():
+        url += f"run/{path.name}"
+    print(f"serving {path} at {url} (Ctrl-C to stop)", flush=True)
+    if not loopback:
+        print("every request needs the token (the page takes it as #token=… in its URL)")
+    uvicorn.run(
+        server.app(served), host=args.host, port=args.port, log_level="warning",
+        server_header=False, date_header=False,
+    )  # fmt: skip
+    return 0
+
+
+def _token_file(path: Path) -> str:
+    """The token in ``path`` (`ConfigError` unless it is an owner-only file holding one
+    of 16 characters or more)."""
+    try:
+        st = os.stat(path)
+        text = path.read_text(encoding="ascii").strip()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"--token-file {path}: cannot read it: {exc}") from None
+    if stat.S_IMODE(st.st_mode) & 0o077:
+        raise ConfigError(f"--token-file {path}: readable by others; chmod 600 it")
+    if len(text) < 16:
+        raise ConfigError(f"--token-file {path}: expected a token of 16 characters or more")
+    return text
