@@ -152,7 +152,16 @@ class Served:
 
     def view(self, path: Path, which: str) -> bytes:
         """The JSON of ``which`` view of a run (``overview`` or ``points``), read again
-        at most every `REFRESH_S` and made once per change, whoever asks."""
+        at most every `REFRESH_S` and made once per change, whoever asks; `GonioError`
+        (one line naming the file) if the run file cannot be read or shown."""
+        try:
+            return self._view(path, which)
+        except GonioError as exc:
+            if path.name in str(exc):
+                raise
+            raise GonioError(f"{path}: {exc}") from None
+
+    def _view(self, path: Path, which: str) -> bytes:
         entry = self.entry(path)
         with entry.lock:
             now = time.monotonic()

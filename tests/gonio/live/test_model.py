@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 from gonio.cli import main
-from gonio.live import model
 from gonio.live.model import LiveRun
 from gonio.live.views import overview, points
+from gonio.store import follow as model
 from tests.support.acquire import MATTE, plan_file
 
 
