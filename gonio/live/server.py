@@ -44,8 +44,9 @@ from starlette.staticfiles import StaticFiles
 
 from gonio.acquire import control
 from gonio.errors import GonioError
+from gonio.live import derived
 from gonio.live.model import LiveRun
-from gonio.live.views import overview, points
+from gonio.live.views import overview, points, values
 
 STATIC = Path(__file__).resolve().parent / "static"
 #: The header that carries a token (never a cookie, never the URL).
@@ -91,7 +92,7 @@ class _Entry:
     live: LiveRun
     lock: threading.Lock = field(default_factory=threading.Lock)
     read_at: float = 0.0
-    cache: dict[str, tuple[int, bytes]] = field(default_factory=dict)
+    cache: dict[str, tuple[tuple[int, int], bytes]] = field(default_factory=dict)
     bucket: float = BURST
     bucket_at: float = field(default_factory=time.monotonic)
 
@@ -105,10 +106,14 @@ class Served:
     root: Path
     loopback: bool = True
     token: str | None = None
+    refit_every: int = derived.EVERY
+    fit_model: str = derived.MODEL
     _runs: dict[Path, _Entry] = field(default_factory=dict)
     _lock: threading.Lock = field(default_factory=threading.Lock)
+    _deriver: derived.Deriver = field(init=False)
 
     def __post_init__(self) -> None:
+        self._deriver = derived.Deriver(values, every=self.refit_every, spec=self.fit_model)
         self.root = self.root.resolve()
         if not self.loopback and not self.token:
             raise GonioError(
@@ -168,10 +173,15 @@ class Served:
             if now - entry.read_at >= REFRESH_S:
                 entry.live.refresh()
                 entry.read_at = now
-            version = entry.live.version
+            self._deriver.ask(str(path), entry.live)
+            version = (entry.live.version, self._deriver.generation)
             cached = entry.cache.get(which)
             if cached is None or cached[0] != version:
-                value = overview(entry.live) if which == "overview" else points(entry.live)
+                if which == "overview":
+                    value = overview(entry.live)
+                    value["derived"] = self._deriver.generation
+                else:
+                    value = points(entry.live, derived=self._deriver.latest(str(path)))
                 value["name"] = self.name_of(path)
                 text = json.dumps(value, allow_nan=False, separators=(",", ":")).encode()
                 cached = entry.cache[which] = (version, text)

@@ -97,7 +97,8 @@ def writer_holds(path: Path) -> bool:
 class PlanInfo:
     """What a live view needs of the stored plan, from its header alone (cheap even for
     a plan of a million targets): its name, rig, number of targets, predicted total
-    (s), whether it is a fly plan or an adaptive plan's survey."""
+    (s), whether it is a fly plan or an adaptive plan's survey, its parametrization and
+    whether it is isotropic (three coordinates, else four)."""
 
     name: str
     rig: Rig
@@ -105,6 +106,8 @@ class PlanInfo:
     total_s: float
     fly: bool
     survey: bool
+    parametrization: str = "rusinkiewicz"
+    isotropic: bool = True
 
     @classmethod
     def of(cls, head: bytes, rig_text: str, where: str) -> PlanInfo:
@@ -143,6 +146,10 @@ class PlanInfo:
             survey=sampling.get("strategy") == "adaptive"
             and wanted is not None
             and targets < wanted,
+            parametrization=checks.text(
+                spec.get("parametrization", "rusinkiewicz"), f"{field_}.spec.parametrization"
+            ),
+            isotropic=checks.boolean(spec.get("isotropic", True), f"{field_}.spec.isotropic"),
         )
 
 
