@@ -28,8 +28,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help=help_,
         description="Serve a local web page of the run files in a folder (or of one run "
         "file) that updates as samples are committed: progress, ETA, the samples on the "
-        "hemisphere, the in-plane curve, the motors' health, the calibrations and the "
-        "events; pause, resume and stop a running acquisition with the token it printed. "
+        "hemisphere (coloured by value or by residual against a fit), the reconstruction's "
+        "slice, the in-plane curve, the motors' health, the calibrations and the events; "
+        "pause, resume and stop a running acquisition with the token it printed. "
         "Binds 127.0.0.1 unless --host says otherwise; a non-loopback --host needs "
         "--token-file, and every request must then carry that token.",
     )

@@ -231,6 +231,8 @@ class Deriver:
         last job is still running."""
         with self._lock:
             last = self._asked.get(key)
+            if last is not None and live.measured < last:  # the run was started again
+                last = None
             due = live.measured >= MINIMUM if last is None else live.measured - last >= self.every
             if not due or key in self._running:
                 return

@@ -6,9 +6,13 @@ Endpoints (``RUN``: a run file's path relative to the served folder):
 
 - ``GET /`` and ``GET /run/RUN``: the page (the same bytes for everyone; it holds no
   data); ``GET /static/…``: its script and style sheet;
-- ``GET /api/runs``: the runs under the served path, their state, progress and ETA;
+- ``GET /api/runs``: the runs under the served path, their state, progress and ETA (a
+  run file that cannot be read: ``unreadable`` and the one line why);
 - ``GET /api/overview?run=RUN``: a run's figures (`gonio.live.views.overview`);
-- ``GET /api/points?run=RUN``: its samples, decimated (`gonio.live.views.points`);
+- ``GET /api/points?run=RUN``: its samples, decimated, with their residuals against the
+  fit and the reconstruction's slice that `gonio.live.derived` made last
+  (`gonio.live.views.points`);
+- a run file that cannot be read or shown: HTTP 422, ``{"error": …}`` naming the file;
 - ``POST /api/control?run=RUN`` with ``{"action": "pause" | "resume" | "stop"}``: a
   request the acquiring process reads between targets (`gonio.acquire.control`).
 
@@ -148,8 +152,12 @@ class Served:
 
     # -- runs ----------------------------------------------------------------------------
     def entry(self, path: Path) -> _Entry:
+        """The run's entry; a new one when the file was replaced (a run started again
+        over it with ``--overwrite``)."""
         with self._lock:
             entry = self._runs.get(path)
+            if entry is not None and entry.live.replaced():
+                entry = None  # the old one closes when no request holds it any more
             if entry is None:
                 entry = self._runs[path] = _Entry(LiveRun(path))
                 entry.read_at = time.monotonic()
@@ -173,7 +181,8 @@ class Served:
             if now - entry.read_at >= REFRESH_S:
                 entry.live.refresh()
                 entry.read_at = now
-            self._deriver.ask(str(path), entry.live)
+            if which == "points":  # the runs whose samples someone looks at
+                self._deriver.ask(str(path), entry.live)
             version = (entry.live.version, self._deriver.generation)
             cached = entry.cache.get(which)
             if cached is None or cached[0] != version:

@@ -35,10 +35,9 @@ from gonio.errors import GonioError
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
 from gonio.rig.model import Rig
-from gonio.store import checks
+from gonio.store import checks, read
 from gonio.store.journal import JournalError, check_version
 from gonio.store.read import (
-    BUSY_TIMEOUT_S,
     Event,
     Session,
     check_plan,
@@ -177,10 +176,19 @@ class PlanArrays:
         )
 
 
+def _identity(path: Path) -> tuple[int, int] | None:
+    """The file ``path`` names (device, inode), None if none."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
 def _connect(path: Path) -> sqlite3.Connection:
     uri = f"{path.resolve().as_uri()}?mode=ro"
     return sqlite3.connect(
-        uri, uri=True, isolation_level=None, check_same_thread=False, timeout=BUSY_TIMEOUT_S
+        uri, uri=True, isolation_level=None, check_same_thread=False, timeout=read.BUSY_TIMEOUT_S
     )
 
 
@@ -249,11 +257,13 @@ class RunFollower:
     _lock: threading.Lock = field(init=False, default_factory=threading.Lock)
     _load_next: bool = field(init=False, default=False)  # start the plan's loader
     _broken: str | None = field(init=False, default=None)  # why the plan cannot be read
+    _identity: tuple[int, int] | None = field(init=False, default=None)
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
         if not self.path.is_file():
             raise JournalError(f"{self.path}: no such run file")
+        self._identity = _identity(self.path)
         try:
             self._conn = _connect(self.path)
         except sqlite3.Error as exc:
@@ -269,6 +279,11 @@ class RunFollower:
 
     def close(self) -> None:
         self._conn.close()
+
+    def replaced(self) -> bool:
+        """Whether the path now names another file (a run started again over it with
+        ``--overwrite``, or removed): this follower reads the file it opened."""
+        return _identity(self.path) != self._identity
 
     def refresh(self) -> bool:
         """Read what was committed since the last refresh; whether anything was (or the

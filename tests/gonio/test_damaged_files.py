@@ -372,7 +372,7 @@ def held(original: Path, tmp_path: Path) -> Iterator[Path]:
         yield path
 
 
-@pytest.mark.parametrize("command", ["info", "evaluate", "export"])
+@pytest.mark.parametrize("command", ["info", "evaluate", "export", "watch"])
 def test_a_run_locked_by_another_process_is_one_line_in_bounded_time(
     held: Path, tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, command: str
 ) -> None:

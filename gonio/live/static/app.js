@@ -49,7 +49,8 @@ async function showRuns() {
   $("runs").hidden = false;
   const rows = body.runs.map((r) => {
     const tr = document.createElement("tr");
-    const cells = [r.name, r.state, r.plan || "", r.measured === undefined ? "" : `${r.measured} / ${r.targets}`,
+    tr.className = r.state;  // "unreadable": the plan's cell holds the one line why
+    const cells = [r.name, r.state, r.plan || r.error || "", r.measured === undefined ? "" : `${r.measured} / ${r.targets}`,
       r.progress === undefined ? "" : `${(100 * r.progress).toFixed(1)} %`, duration(r.eta_s)];
     cells.forEach((c, i) => {
       const td = document.createElement("td");
