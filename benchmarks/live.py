@@ -14,7 +14,8 @@
    the run as the page does (overview every second, samples when they changed), each in
    a process of its own as a browser is, through a `gonio serve` in its own process
    (which fits and reconstructs the run every 200 new samples, its default, as it
-   serves it). Target: no difference beyond the noise (the repeats' spread is printed).
+   serves it; and again with a server that does not, to tell the two costs apart).
+   Target: no difference beyond the noise (the repeats' spread is printed).
 4. The server's derivation of part 3's run: one fit (``lambert+ggx``, one start) and
    one ``rbf`` reconstruction's slice from the at most 1,500 samples it uses, the work
    its worker process does (at nice 19) every ``--refit-every`` new samples (here in
@@ -76,11 +77,11 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def served(folder: Path) -> Any:
-    """``gonio serve FOLDER`` in its own process; its base URL."""
+def served(folder: Path, *options: str) -> Any:
+    """``gonio serve FOLDER [OPTIONS]`` in its own process; its base URL."""
     port = free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gonio", "serve", str(folder), "--port", str(port)],
+        [sys.executable, "-m", "gonio", "serve", str(folder), "--port", str(port), *options],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
     )  # fmt: skip
     base = f"http://127.0.0.1:{port}"
@@ -317,15 +318,22 @@ def overhead(folder: Path, targets: int, repeat: int) -> None:
     work = folder / "served"
     work.mkdir()
     engine_s(work, plan, files, scene)  # warm: the optics, the imports
-    alone, watched = [], []
+    alone, watched, unfitted = [], [], []
     for _ in range(repeat):
         alone.append(engine_s(work, plan, files, scene))
         with served(work) as base, clients(base, "bench.sqlite", 5):
             watched.append(engine_s(work, plan, files, scene))
+        with served(work, "--refit-every", "1000000000") as base, clients(base, "bench.sqlite", 5):
+            unfitted.append(engine_s(work, plan, files, scene))
     print(f"\n3. The acquisition's time per sample, {targets:,} targets, {repeat} repeats\n")
     print("| clients | best (µs/sample) | median (µs/sample) | worst (µs/sample) |")
     print("|---|---:|---:|---:|")
-    for label, xs in (("none", alone), ("5 polling through gonio serve", watched)):
+    rows = (
+        ("none", alone),
+        ("5 polling through gonio serve", watched),
+        ("5 polling, the server not fitting (--refit-every 10⁹)", unfitted),
+    )
+    for label, xs in rows:
         a = 1e6 * np.array(xs)
         print(f"| {label} | {a.min():.0f} | {np.median(a):.0f} | {a.max():.0f} |")
     live = LiveRun(work / "bench.sqlite")

@@ -4,12 +4,12 @@ in the plan's coordinates (`gonio.reconstruct.reconstruct` by ``rbf``, as
 ``gonio evaluate --method rbf`` reconstructs), recomputed every ``every`` new samples,
 never per request.
 
-Bounded so the acquisition does not feel it: at most `SAMPLES` samples (evenly spaced
-in commit order, the newest among them) are fitted, from one start, and reconstructed;
-the slice is `RESOLUTION`² points; the work runs in one worker process of the server
-(`Deriver`) at the lowest CPU priority (nice 19), one job per run at a time, while
-requests are answered at once from what was derived last. The residual of a shown sample is
-(f − f_fit)/σ, evaluated when the samples' view is made.
+Bounded, so the acquisition does not feel it (docs/results/live.md): at most `SAMPLES`
+samples (evenly spaced in commit order, the newest among them) are fitted, from one
+start, and reconstructed; the slice is `RESOLUTION`² points; the work runs in one worker
+process of the server (`Deriver`) at the lowest CPU priority (nice 19), one job per run
+at a time, while requests are answered at once from what was derived last. The residual
+of a shown sample is (f − f_fit)/σ, evaluated when the samples' view is made.
 """
 
 from __future__ import annotations
