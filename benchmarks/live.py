@@ -12,8 +12,14 @@
    benchmarks/acquire.py does: between the first and the last sample's commit) of a
    Sobol plan on the glossy metal scene, with no client, then with five clients polling
    the run as the page does (overview every second, samples when they changed), each in
-   a process of its own as a browser is, through a `gonio serve` in its own process.
+   a process of its own as a browser is, through a `gonio serve` in its own process
+   (which fits and reconstructs the run every 200 new samples, its default, as it
+   serves it; and again with a server that does not, to tell the two costs apart).
    Target: no difference beyond the noise (the repeats' spread is printed).
+4. The server's derivation of part 3's run: one fit (``lambert+ggx``, one start) and
+   one ``rbf`` reconstruction's slice from the at most 1,500 samples it uses, the work
+   its worker process does (at nice 19) every ``--refit-every`` new samples (here in
+   the benchmark's own process, at its priority).
 
 With ``--screenshot PNG`` (and Chromium at /usr/bin/chromium with Playwright), the page
 of the paced run of part 1 is saved there, as the docs show it.
@@ -49,6 +55,9 @@ from _machine import describe
 from acquire import engine as acquire_engine  # benchmarks/acquire.py
 
 from gonio.cli import main as gonio
+from gonio.live import derived
+from gonio.live.model import LiveRun
+from gonio.live.views import values
 from gonio.planner import load_plan_source
 from gonio.planner.files import plan_bytes
 from gonio.planner.model import ARRAYS, Plan
@@ -69,11 +78,11 @@ def free_port() -> int:
 
 
 @contextlib.contextmanager
-def served(folder: Path) -> Any:
-    """``gonio serve FOLDER`` in its own process; its base URL."""
+def served(folder: Path, *options: str) -> Any:
+    """``gonio serve FOLDER [OPTIONS]`` in its own process; its base URL."""
     port = free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gonio", "serve", str(folder), "--port", str(port)],
+        [sys.executable, "-m", "gonio", "serve", str(folder), "--port", str(port), *options],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
     )  # fmt: skip
     base = f"http://127.0.0.1:{port}"
@@ -176,7 +185,8 @@ def take_screenshot(url: str, base: str, path: Path) -> None:
         page = context.new_page()
         page.goto(url.replace("http://127.0.0.1:8765", base))
         page.wait_for_function(
-            "Number(document.getElementById('hemisphere').dataset.samples) >= 40"
+            "Number(document.getElementById('hemisphere').dataset.samples) >= 40 && "
+            "Number(document.getElementById('slice').dataset.filled) > 0"
         )
         page.screenshot(path=str(path), full_page=True)
         context.close()
@@ -296,17 +306,36 @@ def overhead(folder: Path, targets: int, repeat: int) -> None:
     work = folder / "served"
     work.mkdir()
     engine_s(work, plan, files, scene)  # warm: the optics, the imports
-    alone, watched = [], []
+    alone, watched, unfitted = [], [], []
     for _ in range(repeat):
         alone.append(engine_s(work, plan, files, scene))
         with served(work) as base, clients(base, "bench.sqlite", 5):
             watched.append(engine_s(work, plan, files, scene))
+        with served(work, "--refit-every", "1000000000") as base, clients(base, "bench.sqlite", 5):
+            unfitted.append(engine_s(work, plan, files, scene))
     print(f"\n3. The acquisition's time per sample, {targets:,} targets, {repeat} repeats\n")
     print("| clients | best (µs/sample) | median (µs/sample) | worst (µs/sample) |")
     print("|---|---:|---:|---:|")
-    for label, xs in (("none", alone), ("5 polling through gonio serve", watched)):
+    rows = (
+        ("none", alone),
+        ("5 polling through gonio serve", watched),
+        ("5 polling, the server not fitting (--refit-every 10⁹)", unfitted),
+    )
+    for label, xs in rows:
         a = 1e6 * np.array(xs)
         print(f"| {label} | {a.min():.0f} | {np.median(a):.0f} | {a.max():.0f} |")
+    live = LiveRun(work / "bench.sqlite")
+    print(f"\n4. The server's derivation from {derived.SAMPLES:,} of part 3's samples\n")
+    print("| repeat | fit and slice (s) | samples used | χ²/dof | slice points with a value |")
+    print("|---:|---:|---:|---:|---:|")
+    for k in range(3):
+        t = time.perf_counter()
+        result = derived.derive(derived.inputs_of(live, values))
+        took = time.perf_counter() - t
+        assert result.slice is not None and result.chi2_red is not None, result.summary()
+        shaded = sum(v is not None for v in result.slice["f"])
+        print(f"| {k + 1} | {took:.2f} | {result.used:,} | {result.chi2_red:.3g} | {shaded:,} |")
+    live.close()
 
 
 def main() -> None:

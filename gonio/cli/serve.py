@@ -10,6 +10,7 @@ import stat
 from pathlib import Path
 
 from gonio.acquire import control
+from gonio.brdf.family import parse
 from gonio.config import ConfigError
 
 
@@ -27,8 +28,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help=help_,
         description="Serve a local web page of the run files in a folder (or of one run "
         "file) that updates as samples are committed: progress, ETA, the samples on the "
-        "hemisphere, the in-plane curve, the motors' health, the calibrations and the "
-        "events; pause, resume and stop a running acquisition with the token it printed. "
+        "hemisphere (coloured by value or by residual against a fit), the reconstruction's "
+        "slice, the in-plane curve, the motors' health, the calibrations and the events; "
+        "pause, resume and stop a running acquisition with the token it printed. "
         "Binds 127.0.0.1 unless --host says otherwise; a non-loopback --host needs "
         "--token-file, and every request must then carry that token.",
     )
@@ -43,7 +45,25 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="a file (owner-only) holding the token every request needs on a non-loopback "
         "--host; it also allows control of every served run",
     )  # fmt: skip
+    p.add_argument(
+        "--refit-every", type=_count, default=200, metavar="N",
+        help="new samples between two fits of --fit-model and two reconstructions of a "
+        "run's slice, done in the server at the lowest priority (default 200)",
+    )  # fmt: skip
+    p.add_argument(
+        "--fit-model", default="lambert+ggx", metavar="SPEC",
+        help="the model family fitted to a run's samples for the residuals, as gonio fit "
+        "--model takes it (default lambert+ggx)",
+    )  # fmt: skip
     p.set_defaults(func=cmd_serve)
+
+
+def _count(text: str) -> int:
+    """A number of samples, ≥ 1."""
+    value = int(text) if text.isdigit() else 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of samples ≥ 1, got {text!r}")
+    return value
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
@@ -66,7 +86,14 @@ def cmd_serve(args: argparse.Namespace) -> int:
     loopback = server.is_loopback(args.host)
     if not loopback and token is None and path.is_file():
         token = control.read_token(path)  # the run's own token gates the whole server
-    served = server.Served(path, loopback=loopback, token=token)
+    parse(args.fit_model)  # an unknown family: one line before anything is served
+    served = server.Served(
+        path,
+        loopback=loopback,
+        token=token,
+        refit_every=args.refit_every,
+        fit_model=args.fit_model,
+    )
     host = f"[{args.host}]" if ":" in args.host else args.host
     url = f"http://{host}:{args.port}/"
     if path.is_file():

@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from gonio.cli.arguments import positive_seconds
+from gonio.errors import GonioError
 from gonio.live.model import LiveRun
 from gonio.live.terminal import line, screen
 from gonio.live.views import overview
@@ -42,11 +43,15 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_watch(args: argparse.Namespace) -> int:
-    live = LiveRun(args.run)
+    live = LiveRun(args.run)  # JournalError: one line naming the file and the field
     try:
         if args.once or not sys.stdout.isatty():
             return _plain(live, args.every, once=args.once)
         return _live(live, args.every)
+    except GonioError as exc:  # what the views cannot show (a value out of its domain)
+        if args.run.name in str(exc):
+            raise
+        raise GonioError(f"{args.run}: {exc}") from None
     finally:
         live.close()
 

@@ -6,9 +6,13 @@ Endpoints (``RUN``: a run file's path relative to the served folder):
 
 - ``GET /`` and ``GET /run/RUN``: the page (the same bytes for everyone; it holds no
   data); ``GET /static/…``: its script and style sheet;
-- ``GET /api/runs``: the runs under the served path, their state, progress and ETA;
+- ``GET /api/runs``: the runs under the served path, their state, progress and ETA (a
+  run file that cannot be read: ``unreadable`` and the one line why);
 - ``GET /api/overview?run=RUN``: a run's figures (`gonio.live.views.overview`);
-- ``GET /api/points?run=RUN``: its samples, decimated (`gonio.live.views.points`);
+- ``GET /api/points?run=RUN``: its samples, decimated, with their residuals against the
+  fit and the reconstruction's slice that `gonio.live.derived` made last
+  (`gonio.live.views.points`);
+- a run file that cannot be read or shown: HTTP 422, ``{"error": …}`` naming the file;
 - ``POST /api/control?run=RUN`` with ``{"action": "pause" | "resume" | "stop"}``: a
   request the acquiring process reads between targets (`gonio.acquire.control`).
 
@@ -44,8 +48,9 @@ from starlette.staticfiles import StaticFiles
 
 from gonio.acquire import control
 from gonio.errors import GonioError
+from gonio.live import derived
 from gonio.live.model import LiveRun
-from gonio.live.views import overview, points
+from gonio.live.views import overview, points, values
 
 STATIC = Path(__file__).resolve().parent / "static"
 #: The header that carries a token (never a cookie, never the URL).
@@ -91,7 +96,7 @@ class _Entry:
     live: LiveRun
     lock: threading.Lock = field(default_factory=threading.Lock)
     read_at: float = 0.0
-    cache: dict[str, tuple[int, bytes]] = field(default_factory=dict)
+    cache: dict[str, tuple[tuple[int, int], bytes]] = field(default_factory=dict)
     bucket: float = BURST
     bucket_at: float = field(default_factory=time.monotonic)
 
@@ -105,10 +110,14 @@ class Served:
     root: Path
     loopback: bool = True
     token: str | None = None
+    refit_every: int = derived.EVERY
+    fit_model: str = derived.MODEL
     _runs: dict[Path, _Entry] = field(default_factory=dict)
     _lock: threading.Lock = field(default_factory=threading.Lock)
+    _deriver: derived.Deriver = field(init=False)
 
     def __post_init__(self) -> None:
+        self._deriver = derived.Deriver(values, every=self.refit_every, spec=self.fit_model)
         self.root = self.root.resolve()
         if not self.loopback and not self.token:
             raise GonioError(
@@ -143,8 +152,12 @@ class Served:
 
     # -- runs ----------------------------------------------------------------------------
     def entry(self, path: Path) -> _Entry:
+        """The run's entry; a new one when the file was replaced (a run started again
+        over it with ``--overwrite``)."""
         with self._lock:
             entry = self._runs.get(path)
+            if entry is not None and entry.live.replaced():
+                entry = None  # the old one closes when no request holds it any more
             if entry is None:
                 entry = self._runs[path] = _Entry(LiveRun(path))
                 entry.read_at = time.monotonic()
@@ -152,17 +165,32 @@ class Served:
 
     def view(self, path: Path, which: str) -> bytes:
         """The JSON of ``which`` view of a run (``overview`` or ``points``), read again
-        at most every `REFRESH_S` and made once per change, whoever asks."""
+        at most every `REFRESH_S` and made once per change, whoever asks; `GonioError`
+        (one line naming the file) if the run file cannot be read or shown."""
+        try:
+            return self._view(path, which)
+        except GonioError as exc:
+            if path.name in str(exc):
+                raise
+            raise GonioError(f"{path}: {exc}") from None
+
+    def _view(self, path: Path, which: str) -> bytes:
         entry = self.entry(path)
         with entry.lock:
             now = time.monotonic()
             if now - entry.read_at >= REFRESH_S:
                 entry.live.refresh()
                 entry.read_at = now
-            version = entry.live.version
+            if which == "points":  # the runs whose samples someone looks at
+                self._deriver.ask(str(path), entry.live)
+            version = (entry.live.version, self._deriver.generation)
             cached = entry.cache.get(which)
             if cached is None or cached[0] != version:
-                value = overview(entry.live) if which == "overview" else points(entry.live)
+                if which == "overview":
+                    value = overview(entry.live)
+                    value["derived"] = self._deriver.generation
+                else:
+                    value = points(entry.live, derived=self._deriver.latest(str(path)))
                 value["name"] = self.name_of(path)
                 text = json.dumps(value, allow_nan=False, separators=(",", ":")).encode()
                 cached = entry.cache[which] = (version, text)

@@ -14,6 +14,7 @@ import numpy as np
 
 from gonio.analysis.calibrated import calibration_series, is_level
 from gonio.errors import GonioError
+from gonio.live.derived import Result, residuals
 from gonio.live.model import LiveRun
 from gonio.store.read import Event
 from gonio.types import FloatArray
@@ -141,7 +142,7 @@ def _pick(n: int, limit: int, newest: int) -> np.ndarray:
     return np.unique(np.concatenate([head, tail]))
 
 
-def _values(live: LiveRun, index: np.ndarray) -> tuple[FloatArray, FloatArray, str]:
+def values(live: LiveRun, index: np.ndarray) -> tuple[FloatArray, FloatArray, str]:
     """The samples' BRDF and 1σ (sr⁻¹) by the run's calibrations
     (`gonio.analysis.calibrated`), or without one the reading per second of exposure."""
     s = {k: v[index] for k, v in live.samples.items()}
@@ -163,17 +164,23 @@ def _values(live: LiveRun, index: np.ndarray) -> tuple[FloatArray, FloatArray, s
 
 
 def points(
-    live: LiveRun, *, limit: int = 20_000, pending: int = 5_000, plane_deg: float = 5.0
+    live: LiveRun,
+    *,
+    limit: int = 20_000,
+    pending: int = 5_000,
+    plane_deg: float = 5.0,
+    derived: Result | None = None,
 ) -> dict[str, Any]:
     """The samples on the hemisphere (at most ``limit``, decimated on time order with
     the newest kept), the plan's targets still to measure (at most ``pending``; none
     while a large plan is parsed), and the in-plane samples (ωo within ``plane_deg`` of
     the plane of incidence) with their BRDF and 1σ: JSON values, rounded for size. The
     value is the BRDF (sr⁻¹) once the run has a calibration, else the reading per second
-    of exposure."""
+    of exposure. With ``derived`` (`gonio.live.derived`): each shown sample's residual
+    against the fit, the fit's figures and the reconstruction's slice."""
     s = live.samples
     pick = _pick(len(s["target"]), limit, newest=min(500, limit // 4))
-    value, sigma, unit = _values(live, pick)
+    value, sigma, unit = values(live, pick)
     wi = np.stack([s["wi_x"][pick], s["wi_y"][pick], s["wi_z"][pick]], axis=1)
     wo = np.stack([s["wo_x"][pick], s["wo_y"][pick], s["wo_z"][pick]], axis=1)
     xy = _rotated(wi, wo)
@@ -188,10 +195,17 @@ def points(
     off_plane = np.degrees(np.arcsin(np.clip(np.abs(xy[:, 1]) / np.maximum(sin_o, 1e-12), 0, 1)))
     in_plane = np.flatnonzero((off_plane <= plane_deg) | (sin_o < 1e-6))
     signed = np.where(xy[in_plane, 0] >= 0, 1.0, -1.0) * theta_o[in_plane]
+    residual: list[float | None] | None = None
+    if derived is not None and derived.model is not None:
+        r = residuals(derived.model, wi, wo, value, sigma)
+        residual = [_round(v) for v in np.round(r, 3).tolist()]
     return {
         "name": live.path.name,
         "version": live.version,
         "measured": live.measured,
+        "fit": None if derived is None else derived.summary(),
+        "residual": residual,
+        "slice": None if derived is None else derived.slice,
         "shown": int(pick.size),
         "unit": unit,
         "xy": np.round(xy, 4).ravel().tolist(),

@@ -5,8 +5,9 @@ that is still being written (the file is opened read-only, in one read transacti
 
 from __future__ import annotations
 
+import contextlib
 import sqlite3
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -147,8 +148,17 @@ def read_run(conn: sqlite3.Connection, path: Path) -> Run:
     `JournalError` (one line naming the file and the field) if the file is not a readable
     run file: a table missing, the database damaged, or a stored value not of the type
     or range the writer gives it (`gonio.store.checks`)."""
-    try:
+    with refusing(path):
         return _read(conn, path)
+
+
+@contextlib.contextmanager
+def refusing(path: Path) -> Iterator[None]:
+    """Inside: a damaged file, a value the writer does not store (`checks.Bad`), a
+    stored plan that does not parse or a lock held too long is `JournalError`, one line
+    naming the file (and the field)."""
+    try:
+        yield
     except sqlite3.OperationalError as exc:
         if "locked" in str(exc) or "busy" in str(exc):
             raise JournalError(
@@ -192,21 +202,42 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
         )
     finally:
         conn.execute("COMMIT")
+    meta = decode_meta(meta_rows)
+    plan_file = next((v for k, v in meta_rows if k == "plan_file"), b"")
+    if not isinstance(plan_file, bytes):
+        raise checks.Bad(f"meta.plan_file: expected the stored plan's bytes, got {plan_file!r:.40}")
+    plan = parse_plan(plan_file, f"{path}#plan_file")
+    check_plan(meta, plan)
+    table = samples_table(meta["axes"], meta["coordinate_names"])
+    samples = sample_columns(names, rows, table)
+    check_targets(samples["target"], len(plan))
+    check_samples(samples)
+    return Run(
+        path=path,
+        meta=MappingProxyType(meta),
+        plan=plan,
+        samples=MappingProxyType(samples),
+        events=tuple(event_of(row) for row in events),
+        sessions=tuple(session_of(row) for row in sessions),
+        sweeps=tuple(_sweep(row) for row in sweeps),
+    )
+
+
+def decode_meta(rows: Sequence[tuple[Any, Any]]) -> dict[str, Any]:
+    """The ``meta`` table's rows (key, value) but the stored plan, decoded and checked
+    (`checks.check_meta`); `checks.Bad` otherwise."""
     meta: dict[str, Any] = {}
-    plan_file = b""
-    for key, value in meta_rows:
+    for key, value in rows:
         if not isinstance(key, str):
             raise checks.Bad(f"meta: expected text keys, got {key!r:.40}")
-        if key == "plan_file":
-            if not isinstance(value, bytes):
-                raise checks.Bad(
-                    f"meta.plan_file: expected the stored plan's bytes, got {value!r:.40}"
-                )
-            plan_file = value
-        else:
+        if key != "plan_file":
             meta[key] = checks.json_value(value, f"meta.{key}")
     checks.check_meta(meta)
-    plan = parse_plan(plan_file, f"{path}#plan_file")
+    return meta
+
+
+def check_plan(meta: Mapping[str, Any], plan: Plan) -> None:
+    """`checks.Bad` unless the run's axes and coordinates are its stored plan's."""
     if tuple(meta["axes"]) != plan.rig.axes:
         raise checks.Bad(
             f"meta.axes: expected the stored plan's rig axes {list(plan.rig.axes)}, "
@@ -217,27 +248,16 @@ def _read(conn: sqlite3.Connection, path: Path) -> Run:
             f"meta.coordinate_names: expected the stored plan's {list(plan.coordinate_names)}, "
             f"got {meta['coordinate_names']}"
         )
-    table = samples_table(meta["axes"], meta["coordinate_names"])
-    samples = _columns(names, rows, table)
-    target = samples["target"]
-    if target.size and (target[0] < 0 or target[-1] >= len(plan)):
-        bad = int(target[0] if target[0] < 0 else target[-1])
-        raise checks.Bad(
-            f"samples.target: {bad}; expected 0 … {len(plan) - 1} (the plan's targets)"
-        )
-    _check_samples(samples)
-    return Run(
-        path=path,
-        meta=MappingProxyType(meta),
-        plan=plan,
-        samples=MappingProxyType(samples),
-        events=tuple(_event(row) for row in events),
-        sessions=tuple(_session(row) for row in sessions),
-        sweeps=tuple(_sweep(row) for row in sweeps),
-    )
 
 
-def _check_samples(samples: Mapping[str, np.ndarray]) -> None:
+def check_targets(target: np.ndarray, targets: int) -> None:
+    """`checks.Bad` unless every sample's target is one of the plan's ``targets``."""
+    if target.size and (target.min() < 0 or target.max() >= targets):
+        bad = int(target.min() if target.min() < 0 else target.max())
+        raise checks.Bad(f"samples.target: {bad}; expected 0 … {targets - 1} (the plan's targets)")
+
+
+def check_samples(samples: Mapping[str, np.ndarray]) -> None:
     """`checks.Bad` unless every sample's directions are unit vectors and its exposure
     positive (as the writer stores them; the analysis divides by the exposure)."""
     for side in ("wi", "wo"):
@@ -257,7 +277,7 @@ def _check_samples(samples: Mapping[str, np.ndarray]) -> None:
         )
 
 
-def _event(row: tuple[Any, ...]) -> Event:
+def event_of(row: tuple[Any, ...]) -> Event:
     i, s, k, t, ts, u, d = row
     where = f"events (id {i!r:.20})"
     kind = checks.text(k, f"{where}.kind")
@@ -272,7 +292,7 @@ def _event(row: tuple[Any, ...]) -> Event:
     )
 
 
-def _session(row: tuple[Any, ...]) -> Session:
+def session_of(row: tuple[Any, ...]) -> Session:
     i, st, info, en, out = row
     where = f"sessions (id {i!r:.20})"
     return Session(
@@ -349,7 +369,7 @@ def _raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.nd
     return times, positions.reshape(len(polls), -1), readings
 
 
-def _columns(
+def sample_columns(
     names: list[str], rows: list[tuple[Any, ...]], table: Sequence[Column]
 ) -> dict[str, np.ndarray]:
     """The samples as numpy columns, each of its dtype in ``table`` (a column the table

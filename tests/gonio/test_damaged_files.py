@@ -3,10 +3,11 @@ field and exit code 2: never a traceback, a hang, or an allocation the file's si
 fields ask for (docs/reference/damaged-files.md). Real files in
 tmp_path, each command run in-process through `gonio.cli.main`:
 
-- run files, for ``info``, ``evaluate``, ``fit``, ``plot``, ``export`` and
-  ``acquire --resume``: zero bytes, truncated, random bytes, an SQLite file that is not
-  a run, a newer schema, the stored plan or texts edited (to garbage, or to a value
-  that parses but is not what the writer stores), a run locked by another process;
+- run files, for ``info``, ``evaluate``, ``fit``, ``plot``, ``export``, ``watch``,
+  ``acquire --resume`` and ``serve`` (its folder listing and its endpoints): zero
+  bytes, truncated, random bytes, an SQLite file that is not a run, a newer schema, the
+  stored plan or texts edited (to garbage, or to a value that parses but is not what
+  the writer stores), a run locked by another process;
 - measured-material files (MERL, UTIA, RGL ``.bsdf``, the factored format) truncated or
   with absurd sizes in their header, through a scene of ``gonio simulate``;
 - sweep files of ``gonio tradeoff``: an alias bomb, an unknown axis, a billion
@@ -74,6 +75,7 @@ READERS: dict[str, Callable[[Path, Path], list[str]]] = {
     "plot": lambda run, tmp: ["plot", str(run), "--kind", "coverage", "-o", str(tmp / "p.png")],
     "export": lambda run, tmp: ["export", str(run), "--format", "csv", "-o", str(tmp / "x.csv")],
     "resume": lambda run, tmp: ["acquire", "--resume", str(run), "-q"],
+    "watch": lambda run, tmp: ["watch", str(run), "--once"],
 }
 
 
@@ -221,13 +223,14 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
 
 
 #: The damage to the file as a whole, tried with every reader; the damage to a value,
-#: which `open_run` refuses for all of them alike, with three (evaluate also reads the
-#: stored scene and the calibrations; resume writes).
+#: which `open_run` refuses for all of them alike, with four (evaluate also reads the
+#: stored scene and the calibrations; resume writes; watch follows the file as it grows,
+#: `gonio.store.follow`, with the same checks).
 WHOLE_FILE = ("zero bytes", "truncated", "random bytes", "an SQLite file, not a run")
 CASES = [
     (damage, command)
     for damage in DAMAGE
-    for command in (READERS if damage in WHOLE_FILE else ("info", "evaluate", "resume"))
+    for command in (READERS if damage in WHOLE_FILE else ("info", "evaluate", "resume", "watch"))
 ]
 
 
@@ -255,6 +258,43 @@ def test_the_intact_copy_is_read(
     shutil.copy(original, path)
     result = run_gonio(*READERS[command](path, tmp_path))
     assert result.returncode == 0, result.stderr[-2000:]
+
+
+def test_a_served_folder_of_damaged_run_files_lists_each_as_unreadable(
+    original: Path, tmp_path: Path
+) -> None:
+    """``gonio serve`` over a folder holding every damaged file beside an intact copy:
+    the listing shows each damaged one as unreadable with the one-line reason, its
+    endpoints answer a JSON error (422) naming the file, and the intact one is served."""
+    pytest.importorskip("starlette", reason="gonio serve needs the live extra")
+    from gonio.live import server  # optional: the live extra (Starlette)
+    from tests.gonio.live.conftest import serving
+    from tests.gonio.live.test_server import call
+
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    shutil.copy(original, folder / "intact.sqlite")
+    files = {}
+    for i, (damage, (edit, words)) in enumerate(DAMAGE.items()):
+        path = folder / f"damaged-{i:02d}.sqlite"
+        shutil.copy(original, path)
+        edit(path)
+        files[path.name] = (damage, words)
+    with serving(server.Served(folder)) as url:
+        status, body, _ = call(f"{url}/api/runs")
+        assert status == 200, body
+        listed = {run["name"]: run for run in body["runs"]}
+        assert listed["intact.sqlite"]["state"] == "completed"
+        for name, (damage, words) in files.items():
+            run = listed[name]
+            assert run["state"] == "unreadable", (damage, run)
+            assert "\n" not in run["error"] and name in run["error"], (damage, run)
+            assert words in run["error"], (damage, run)
+            for view in ("overview", "points"):
+                status, answer, _ = call(f"{url}/api/{view}?run={name}")
+                assert status == 422 and name in answer["error"], (damage, view, answer)
+        for view in ("overview", "points"):
+            assert call(f"{url}/api/{view}?run=intact.sqlite")[0] == 200
 
 
 #: An edited stored scene → (its text, words of the refusal, the commands that read
@@ -332,7 +372,7 @@ def held(original: Path, tmp_path: Path) -> Iterator[Path]:
         yield path
 
 
-@pytest.mark.parametrize("command", ["info", "evaluate", "export"])
+@pytest.mark.parametrize("command", ["info", "evaluate", "export", "watch"])
 def test_a_run_locked_by_another_process_is_one_line_in_bounded_time(
     held: Path, tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, command: str
 ) -> None:

@@ -4,7 +4,7 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { run: null, token: null, version: -1, pointsVersion: -1, single: false };
+const state = { run: null, token: null, version: -1, pointsVersion: "", single: false, points: null };
 
 function readToken() {
   const hash = new URLSearchParams(location.hash.slice(1));
@@ -49,7 +49,8 @@ async function showRuns() {
   $("runs").hidden = false;
   const rows = body.runs.map((r) => {
     const tr = document.createElement("tr");
-    const cells = [r.name, r.state, r.plan || "", r.measured === undefined ? "" : `${r.measured} / ${r.targets}`,
+    tr.className = r.state;  // "unreadable": the plan's cell holds the one line why
+    const cells = [r.name, r.state, r.plan || r.error || "", r.measured === undefined ? "" : `${r.measured} / ${r.targets}`,
       r.progress === undefined ? "" : `${(100 * r.progress).toFixed(1)} %`, duration(r.eta_s)];
     cells.forEach((c, i) => {
       const td = document.createElement("td");
@@ -72,11 +73,14 @@ async function poll() {
   try {
     const o = await getJSON("/api/overview?run=" + encodeURIComponent(state.run));
     showOverview(o);
-    if (o.version !== state.pointsVersion) {
+    const wanted = `${o.version}:${o.derived}`;
+    if (wanted !== state.pointsVersion) {
       const p = await getJSON("/api/points?run=" + encodeURIComponent(state.run));
-      state.pointsVersion = p.version;
+      state.pointsVersion = wanted;
+      state.points = p;
       drawHemisphere(p);
       drawInPlane(p);
+      drawSlice(p);
     }
   } catch (e) {
     message(e.message, true);
@@ -177,14 +181,64 @@ function drawHemisphere(p) {
   }
   const [lo, hi] = logRange(p.value);
   const size = p.shown > 5000 ? 2 : 4;
+  const residual = $("colour").value === "residual" && p.residual !== null;
   for (let k = 0; k < p.value.length; k++) {
     const v = p.value[k];
-    g.fillStyle = v !== null && v > 0 ? viridis((Math.log10(v) - lo) / (hi - lo)) : "#e0523f";
+    if (residual) {
+      const e = p.residual[k];
+      g.fillStyle = e === null ? "#b9bfc6" : diverging(e / 3);
+    } else {
+      g.fillStyle = v !== null && v > 0 ? viridis((Math.log10(v) - lo) / (hi - lo)) : "#e0523f";
+    }
     g.fillRect(cx + r * p.xy[2 * k] - size / 2, cy - r * p.xy[2 * k + 1] - size / 2, size, size);
   }
-  $("unit").textContent = `log₁₀ value (${p.unit}), ${lo.toFixed(2)}…${hi.toFixed(2)}`;
+  const fit = p.fit;
+  $("unit").textContent = residual
+    ? `residual (f − fit)/σ of ${fit.model}, blue −3 … red +3 (χ²/dof ${fit.chi2_red}, fitted at ${fit.measured} samples)`
+    : `log₁₀ value (${p.unit}), ${lo.toFixed(2)}…${hi.toFixed(2)}`
+      + (fit && fit.error ? `; fit: ${fit.error}` : fit === null || p.residual === null ? "; fit: not yet" : "");
+  c.dataset.colour = residual ? "residual" : "value";
   $("shown").textContent = `${p.shown} of ${p.measured} samples shown; ${p.pending} targets to measure`;
   c.dataset.samples = String(p.measured);
+}
+
+function diverging(t) {
+  t = Math.min(1, Math.max(-1, t));
+  const a = [59, 76, 192], w = [235, 235, 235], b = [180, 4, 38];
+  const [from, to, f] = t < 0 ? [w, a, -t] : [w, b, t];
+  const c = from.map((v, k) => Math.round(v + f * (to[k] - v)));
+  return `rgb(${c[0]},${c[1]},${c[2]})`;
+}
+
+function drawSlice(p) {
+  const c = $("slice"), g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  const s = p.slice;
+  if (!s) {
+    $("slice-caption").textContent = p.fit && p.fit.slice_error ? p.fit.slice_error : "not yet";
+    c.dataset.filled = "0";
+    return;
+  }
+  const [lo, hi] = logRange(s.f);
+  const m = 30, w = (c.width - m - 4) / s.n, h = (c.height - m - 4) / s.n;
+  let filled = 0;
+  for (let j = 0; j < s.n; j++) {
+    for (let i = 0; i < s.n; i++) {
+      const v = s.f[j * s.n + i];
+      g.fillStyle = v !== null && v > 0 ? viridis((Math.log10(v) - lo) / (hi - lo)) : "#e4e7ea";
+      if (v !== null && v > 0) filled++;
+      g.fillRect(m + i * w, c.height - m - (j + 1) * h, Math.ceil(w), Math.ceil(h));
+    }
+  }
+  g.fillStyle = "#6b737b"; g.font = "11px system-ui";
+  // angles (θ…, φ…) in degrees, the other coordinates as they are
+  const show = (name, x) => /^(theta|phi)/.test(name) ? (x * 180 / Math.PI).toFixed(0) + "°" : x.toFixed(2);
+  g.fillText(`${s.names[0]} ${show(s.names[0], s.x[0])} … ${show(s.names[0], s.x[1])}`, m, c.height - 10);
+  g.save(); g.translate(12, c.height - m); g.rotate(-Math.PI / 2);
+  g.fillText(`${s.names[1]} ${show(s.names[1], s.y[0])} … ${show(s.names[1], s.y[1])}`, 0, 0); g.restore();
+  const fixed = Object.entries(s.fixed).map(([k, v]) => `${k} = ${show(k, v)}`).join(", ");
+  $("slice-caption").textContent = `${fixed}; rbf from ${s.samples} samples at ${p.fit.measured}; log₁₀ f ${lo.toFixed(2)}…${hi.toFixed(2)}`;
+  c.dataset.filled = String(filled);
 }
 
 function axes(g, c, xr, yr, xlabel, ylabel) {
@@ -262,6 +316,7 @@ function start() {
   $("pause").onclick = () => send("pause");
   $("resume").onclick = () => send("resume");
   $("stop").onclick = () => { if (confirm("Stop the run? It stays resumable.")) send("stop"); };
+  $("colour").onchange = () => { if (state.points) drawHemisphere(state.points); };
   $("token-set").onclick = () => { state.token = $("token").value.trim() || null; $("token-form").hidden = true; };
   const m = location.pathname.match(/^\/run\/(.+)$/);
   if (m) {

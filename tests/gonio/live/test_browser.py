@@ -3,7 +3,9 @@
 download is never used) opens the URL ``gonio acquire`` printed for a run it is
 acquiring (held paused until the page is up, however slow the machine), resumes it,
 sees the sample count and the hemisphere plot change, pauses the run (the page shows
-it paused, the journal records who asked), resumes it, and the run completes.
+it paused, the journal records who asked), resumes it, and the run completes; then the
+reconstruction's slice is drawn and the samples turn to their residuals against the
+fit.
 Screenshots are checked by content. Skipped, with the reason, only where no browser is
 installed and not in CI (``make test`` installs it where it can)."""
 
@@ -94,7 +96,7 @@ def test_watch_pause_resume_in_a_browser(
         _until(lambda: path.exists() and len(open_run(path)) >= 2)
         # Held until the page is up, however slow the machine: it resumes from the page.
         control.post_request(path, "pause", "the test")
-        with serve(server.Served(folder)) as base:
+        with serve(server.Served(folder, refit_every=20)) as base:
             page = browser.new_page()
             page.goto(url.replace("http://127.0.0.1:8765", base))
             assert "#token" not in page.url  # taken out of the address bar at once
@@ -130,8 +132,17 @@ def test_watch_pause_resume_in_a_browser(
                 "document.getElementById('state').dataset.state === 'completed'", timeout=60_000
             )
             assert page.inner_text("#count") == "80"
-            assert page.get_attribute("#hemisphere", "data-samples") == "80"
+            # the samples are fetched after the figures: drawn a moment later
+            page.wait_for_function("document.getElementById('hemisphere').dataset.samples === '80'")
             assert _ink(page.locator("#inplane").screenshot()) > 200
+            # The reconstruction's slice and the residuals against the fit (every 20).
+            page.wait_for_function("Number(document.getElementById('slice').dataset.filled) > 0")
+            assert _ink(page.locator("#slice").screenshot()) > 500
+            page.select_option("#colour", "residual")
+            page.wait_for_function(
+                "document.getElementById('hemisphere').dataset.colour === 'residual'"
+            )
+            assert "residual" in page.inner_text("#unit")
             assert page.is_hidden("#control")
             page.close()
         assert child.wait(30) == 0

@@ -4,15 +4,18 @@ second refresh on; what the views show then equals what a whole read shows."""
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
 import pytest
 
 from gonio.cli import main
-from gonio.live import model
+from gonio.errors import GonioError
+from gonio.live import server
 from gonio.live.model import LiveRun
 from gonio.live.views import overview, points
+from gonio.store import follow as model
 from tests.support.acquire import MATTE, plan_file
 
 
@@ -44,3 +47,20 @@ def test_a_large_run_is_read_in_part_and_its_plan_in_the_background(
     assert missing is not None and missing.size == 0
     later = overview(part)
     assert later["predicted_done_s"] == pytest.approx(same["predicted_done_s"])
+
+
+def test_a_run_started_again_over_the_file_is_followed_anew(tmp_path: Path) -> None:
+    """``gonio acquire --overwrite`` replaces the file: the server reads the new one."""
+    path = tmp_path / "runs" / "run.sqlite"
+    path.parent.mkdir()
+    for n in (12, 8):
+        plan = plan_file(tmp_path, target=n, name=f"plan{n}")
+        args = ["acquire", str(plan), "--scene", str(MATTE), "-o", str(path), "-q"]
+        assert main([*args, "--overwrite"]) == 0
+        if n == 12:
+            served = server.Served(path.parent)
+        assert json.loads(served.view(path, "overview"))["measured"] == n
+    assert not served.entry(path).live.replaced()
+    path.unlink()
+    with pytest.raises(GonioError, match=r"run\.sqlite"):
+        served.view(path, "overview")

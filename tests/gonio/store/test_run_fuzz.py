@@ -1,9 +1,9 @@
 """Fuzzed run files: a real small run (acquired once) with pages of its SQLite file
 damaged — bits flipped, bytes replaced, a page zeroed, the file cut at a page boundary
-— read by `open_run` and by every read command in-process. Whatever the damage, a run
-file is read or refused with `JournalError` (one line), a command exits 0 or 2 (one
-line), never another exception, within a bounded CPU time and memory. Lean by default
-(``FUZZ_EXAMPLES=N`` for a longer search)."""
+— read by `open_run`, by a follower (`RunFollower`) and by every read command
+in-process. Whatever the damage, a run file is read or refused with `JournalError` (one
+line), a command exits 0 or 2 (one line), never another exception, within a bounded CPU
+time and memory. Lean by default (``FUZZ_EXAMPLES=N`` for a longer search)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gonio.store import JournalError, open_run
+from gonio.store.follow import RunFollower
 from tests.conftest import CliResult
 from tests.gonio.test_config_fuzz import bounded, examples
 from tests.support.acquire import acquire, plan_file, scene_file
@@ -78,6 +79,18 @@ def check_open(path: Path) -> bool:
     return True
 
 
+def check_follow(path: Path) -> bool:
+    """Whether a follower of the run (``gonio serve``, ``gonio watch``) opens it; a
+    refusal must be one short line."""
+    try:
+        bounded(lambda: RunFollower(path).close())
+    except JournalError as exc:
+        message = str(exc)
+        assert "\n" not in message and len(message) < 600, message[:2000]
+        return False
+    return True
+
+
 @settings(max_examples=examples(40), suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(damage=DAMAGE)
 def test_a_damaged_page_is_read_or_refused_in_one_line(
@@ -95,6 +108,7 @@ COMMANDS: dict[str, Callable[[Path, Path], list[str]]] = {
     "plot": lambda run, tmp: ["plot", str(run), "--kind", "coverage", "-o", str(tmp / "p.png")],
     "export csv": lambda run, tmp: ["export", str(run), "--format", "csv", "-o", str(tmp / "x")],
     "export hdf5": lambda run, tmp: ["export", str(run), "--format", "hdf5", "-o", str(tmp / "h")],
+    "watch": lambda run, tmp: ["watch", str(run), "--once"],
 }
 
 
@@ -124,7 +138,9 @@ def test_every_page_zeroed_or_cut_is_read_or_refused(pristine: bytes, tmp_path: 
         start = page * PAGE
         zeroed = pristine[:start] + bytes(PAGE) + pristine[start + PAGE :]
         outcomes.append(check_open(written(tmp_path, zeroed)))
+        check_follow(written(tmp_path, zeroed))
         outcomes.append(check_open(written(tmp_path, pristine[:start])))
+        check_follow(written(tmp_path, pristine[:start]))
     assert not all(outcomes)  # the damage reached what the reader reads
 
 

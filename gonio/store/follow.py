@@ -1,0 +1,557 @@
+"""Following a run file as it grows: `RunFollower` reads, at each `RunFollower.refresh`,
+only what was committed since the last one (the samples' columns a live view needs, by
+target: the rowid; the new events; the sessions), each read in one read transaction of
+a read-only connection, so it sees a consistent snapshot while ``gonio acquire`` writes
+(SQLite's WAL). Every row it hands on passed the checks `open_run` applies
+(`gonio.store.checks` through `gonio.store.read`): a damaged or edited file is
+`JournalError`, one line naming the file and the field, at the refresh that meets it.
+
+A large run (over `FULL_LIMIT` samples) is read by a share of its targets plus every
+sample committed since, and its stored plan (over `LAZY_PLAN_BYTES`) by its header at
+once and its targets in another process: a run of a million samples opens in seconds,
+not minutes (docs/results/live.md). `writer_holds` tells whether a ``gonio acquire``
+holds the file's writer lock (nothing is locked or opened for writing to find out).
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import sqlite3
+import threading
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import datetime
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from gonio.errors import GonioError
+from gonio.planner.files import parse_plan
+from gonio.planner.model import Plan
+from gonio.rig.model import Rig
+from gonio.store import checks, read
+from gonio.store.journal import JournalError, check_version
+from gonio.store.read import (
+    Event,
+    Session,
+    check_plan,
+    check_samples,
+    check_targets,
+    decode_meta,
+    event_of,
+    refusing,
+    sample_columns,
+    session_of,
+)
+from gonio.store.schema import samples_table
+from gonio.types import FloatArray
+
+#: The sample columns a follower reads (besides ``utc``, when the table has it).
+COLUMNS = (
+    "target", "counts", "counts_std", "n", "exposure_s", "started_s", "ended_s",
+    "saturated", "wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z",
+)  # fmt: skip
+#: Samples whose wall time (UTC) the rate is measured over.
+RATE_WINDOW = 200
+#: A run of at most this many samples is read whole; a larger one about `KEPT` of them
+#: (every k-th target) and every sample committed since.
+FULL_LIMIT = 200_000
+KEPT = 50_000
+#: A stored plan larger than this (bytes; about 30 000 targets) is parsed in the
+#: background; its header is read at once.
+LAZY_PLAN_BYTES = 8_000_000
+_HEAD_BYTES = 4_000_000
+
+
+def _epoch(utc: Any) -> float:
+    try:
+        return datetime.fromisoformat(utc).timestamp()
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def writer_holds(path: Path) -> bool:
+    """Whether a process holds the run file's writer lock (``gonio acquire``'s flock),
+    read from ``/proc/locks`` (nothing is locked or opened for writing to find out).
+    Where that file is missing, False."""
+    try:
+        st = os.stat(path)
+        text = Path("/proc/locks").read_text()
+    except OSError:
+        return False
+    dev = f"{os.major(st.st_dev):02x}:{os.minor(st.st_dev):02x}:{st.st_ino}"
+    return any(
+        len(parts) > 5 and parts[1] == "FLOCK" and parts[5] == dev
+        for parts in (line.split() for line in text.splitlines())
+    )
+
+
+@dataclass(frozen=True)
+class PlanInfo:
+    """What a live view needs of the stored plan, from its header alone (cheap even for
+    a plan of a million targets): its name, rig, number of targets, predicted total
+    (s), whether it is a fly plan or an adaptive plan's survey, its parametrization and
+    whether it is isotropic (three coordinates, else four)."""
+
+    name: str
+    rig: Rig
+    targets: int
+    total_s: float
+    fly: bool
+    survey: bool
+    parametrization: str = "rusinkiewicz"
+    isotropic: bool = True
+
+    @classmethod
+    def of(cls, head: bytes, rig_text: str, where: str) -> PlanInfo:
+        """The header of a stored plan's first bytes ``head``; `checks.Bad` (or the rig
+        file's `ConfigError`) when it is not one."""
+        field_ = "meta.plan_file"
+        header: dict[str, Any] = {}
+        for raw in head.split(b"\n")[1:]:
+            if not raw.startswith(b"#"):
+                break
+            try:
+                line = raw.decode("utf-8")
+            except UnicodeDecodeError:
+                break
+            key, _, value = line.removeprefix("#").strip().partition(":")
+            if key in ("spec", "summary"):
+                header[key] = checks.mapping(
+                    checks.json_value(value, f"{field_}.{key}"), f"{field_}.{key}"
+                )
+        if "spec" not in header or "summary" not in header:
+            raise checks.Bad(f"{field_}: expected a stored plan's header, found none")
+        spec, summary = header["spec"], header["summary"]
+        sampling = checks.mapping(spec.get("sampling", {}), f"{field_}.spec.sampling")
+        targets = checks.integer(summary.get("kept"), f"{field_}.summary.kept")
+        if targets < 0:
+            raise checks.Bad(f"{field_}.summary.kept: expected a count, got {targets}")
+        wanted = checks.optional(checks.integer)(sampling.get("target"), f"{field_}.target")
+        travel = checks.number(summary.get("travel_s"), f"{field_}.summary.travel_s")
+        dwell = checks.number(summary.get("dwell_s"), f"{field_}.summary.dwell_s")
+        return cls(
+            name=str(spec.get("name", "")),
+            rig=Rig.from_yaml(where, raw=rig_text.encode("utf-8")),  # ConfigError: one line
+            targets=targets,
+            total_s=travel + dwell,
+            fly=sampling.get("strategy") == "fly",
+            survey=sampling.get("strategy") == "adaptive"
+            and wanted is not None
+            and targets < wanted,
+            parametrization=checks.text(
+                spec.get("parametrization", "rusinkiewicz"), f"{field_}.spec.parametrization"
+            ),
+            isotropic=checks.boolean(spec.get("isotropic", True), f"{field_}.spec.isotropic"),
+        )
+
+
+@dataclass(frozen=True)
+class PlanArrays:
+    """What a live view uses of the stored plan's targets: each one's predicted time
+    (s: the move into it, the settle, the exposures), its (ωi, ωo) and its coordinates
+    in the plan's parametrization (their names: ``coordinate_names``)."""
+
+    per_target_s: FloatArray
+    wi: FloatArray
+    wo: FloatArray
+    coords: FloatArray
+    coordinate_names: tuple[str, ...]
+
+    @classmethod
+    def of(cls, plan: Plan) -> PlanArrays:
+        each = plan.travel_s + plan.rig.spec.settle_s + plan.exposure_s * plan.averages
+        return cls(
+            np.asarray(each, np.float64),
+            plan.wi,
+            plan.wo,
+            np.asarray(plan.coords, np.float64),
+            tuple(plan.coordinate_names),
+        )
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    """The file ``path`` names (device, inode), None if none."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _connect(path: Path) -> sqlite3.Connection:
+    uri = f"{path.resolve().as_uri()}?mode=ro"
+    return sqlite3.connect(
+        uri, uri=True, isolation_level=None, check_same_thread=False, timeout=read.BUSY_TIMEOUT_S
+    )
+
+
+def _parse_in_background(path: Path, out: Connection) -> None:
+    """Send a large run's `PlanArrays` and its measured targets through ``out`` (or the
+    one line why the plan cannot be read): the work of another process."""
+    os.nice(10)  # after the acquisition and the server
+    result: tuple[PlanArrays, np.ndarray] | str
+    try:
+        with refusing(path):
+            conn = _connect(path)
+            try:
+                conn.execute("BEGIN")
+                meta = decode_meta(conn.execute("SELECT key, value FROM meta").fetchall())
+                raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
+                plan = parse_plan(bytes(raw), f"{path}#plan_file")
+                check_plan(meta, plan)
+                targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")])
+                conn.execute("COMMIT")
+            finally:
+                conn.close()
+            if targets.dtype != np.int64 and targets.size:
+                raise checks.Bad("samples.target: expected whole numbers")
+            check_targets(targets, len(plan))
+        result = (PlanArrays.of(plan), targets.astype(np.int64))
+    except GonioError as exc:
+        result = str(exc)
+    out.send(result)
+    out.close()
+
+
+@dataclass
+class RunFollower:
+    """A run file followed as it grows (see the module docstring). `JournalError` (one
+    line) if ``path`` is not a readable run file, at once or at the refresh that finds
+    it damaged.
+
+    ``samples``: the samples' columns in `COLUMNS`, in commit order: every sample of a
+    run of at most `FULL_LIMIT` when first read, else about `KEPT` of those already
+    there (every k-th target) and every one committed since. ``measured``: how many
+    the run holds. The stored plan itself (`plan`) is parsed once, in the background
+    when it is large (its header, `info`, is read at once). ``version`` changes
+    whenever something new is read (or the writer came or went)."""
+
+    path: Path
+    version: int = field(init=False, default=0)
+    meta: Mapping[str, Any] = field(init=False)
+    info: PlanInfo = field(init=False)
+    samples: dict[str, np.ndarray] = field(init=False)
+    measured: int = field(init=False, default=0)
+    skipped: int = field(init=False, default=0)
+    events: list[Event] = field(init=False, default_factory=list)
+    sessions: tuple[Session, ...] = field(init=False, default=())
+    _conn: sqlite3.Connection = field(init=False, repr=False)
+    _parts: dict[str, list[np.ndarray]] = field(init=False, repr=False)
+    _top: int = field(init=False, default=-1)  # the largest target read
+    _retried_targets: set[int] = field(init=False, default_factory=set)
+    _last_event: int = field(init=False, default=0)
+    _data_version: int = field(init=False, default=-1)
+    _plan_size: int = field(init=False, default=-1)
+    _recent: list[tuple[float, float]] = field(init=False, default_factory=list)
+    _writing: bool = field(init=False, default=False)
+    _plan: PlanArrays | None = field(init=False, default=None)
+    _done: np.ndarray | None = field(init=False, default=None)  # measured, per target
+    _loader: tuple[BaseProcess, Connection] | None = field(init=False, default=None)
+    _lock: threading.Lock = field(init=False, default_factory=threading.Lock)
+    _load_next: bool = field(init=False, default=False)  # start the plan's loader
+    _broken: str | None = field(init=False, default=None)  # why the plan cannot be read
+    _identity: tuple[int, int] | None = field(init=False, default=None)
+
+    def __post_init__(self) -> None:
+        self.path = Path(self.path)
+        if not self.path.is_file():
+            raise JournalError(f"{self.path}: no such run file")
+        self._identity = _identity(self.path)
+        try:
+            self._conn = _connect(self.path)
+        except sqlite3.Error as exc:
+            raise JournalError(f"{self.path}: cannot open the run file: {exc}") from None
+        try:
+            with refusing(self.path):
+                check_version(self._conn, self.path)
+            self._parts = {}
+            self.refresh()
+        except BaseException:
+            self._conn.close()
+            raise
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def replaced(self) -> bool:
+        """Whether the path now names another file (a run started again over it with
+        ``--overwrite``, or removed): this follower reads the file it opened."""
+        return _identity(self.path) != self._identity
+
+    def refresh(self) -> bool:
+        """Read what was committed since the last refresh; whether anything was (or the
+        writer came or went). `JournalError` if what was committed is not the writer's."""
+        if self._broken is not None:
+            raise JournalError(self._broken)
+        if self._load_next:
+            self._start_loader()
+        self._poll_loader()
+        writing = writer_holds(self.path)
+        with refusing(self.path):
+            changed = self._read()
+        if changed or writing != self._writing:
+            self._writing = writing
+            self.version += 1
+            return True
+        return False
+
+    @property
+    def writing(self) -> bool:
+        """A ``gonio acquire`` holds the run file (as of the last refresh)."""
+        return self._writing
+
+    # -- reading -------------------------------------------------------------------------
+    def _read(self) -> bool:
+        conn = self._conn
+        data_version = int(conn.execute("PRAGMA data_version").fetchone()[0])
+        if data_version == self._data_version:
+            return False
+        conn.execute("BEGIN")
+        try:
+            row = conn.execute(
+                "SELECT typeof(value), length(value) FROM meta WHERE key = 'plan_file'"
+            ).fetchone()
+            if row is None:
+                raise checks.Bad("meta.plan_file: missing")
+            if row[0] != "blob":
+                raise checks.Bad(f"meta.plan_file: expected the stored plan's bytes, got {row[0]}")
+            plan_size = int(row[1])
+            if plan_size != self._plan_size:  # the first read, or an adaptive second pass
+                self._read_meta(conn, plan_size)
+            names = [r[1] for r in conn.execute("PRAGMA table_info(samples)")]
+            table = samples_table(self.meta["axes"], self.meta["coordinate_names"])
+            sample_columns(names, [], table)  # a column missing
+            wanted = [c for c in (*COLUMNS, "utc") if c in names]
+            quoted = ", ".join(f'"{c}"' for c in wanted)
+            first = not self._parts
+            measured, top, recent = self.measured, self._top, None
+            if first:  # one scan of the table: later reads seek by target (the rowid)
+                count = conn.execute("SELECT count(*) FROM samples").fetchone()[0]
+                most = conn.execute("SELECT max(target) FROM samples").fetchone()[0]  # rowid
+                measured, top = int(count), -1 if most is None else checks.integer(most, "target")
+            if first and measured > FULL_LIMIT:
+                stride = -(-(top + 1) // KEPT)
+                rows = conn.execute(
+                    "WITH RECURSIVE k(t) AS (SELECT 0 UNION ALL SELECT t + ? FROM k WHERE t + ? "
+                    f"<= ?) SELECT {quoted} FROM samples JOIN k ON target = k.t ORDER BY target",
+                    (stride, stride, top),
+                ).fetchall()
+                newest = conn.execute(
+                    "SELECT ended_s, utc FROM samples ORDER BY target DESC LIMIT ?",
+                    (RATE_WINDOW,),
+                ).fetchall()
+                recent = sorted((checks.number(t, "samples.ended_s"), _epoch(u)) for t, u in newest)
+            elif first:
+                rows = conn.execute(f"SELECT {quoted} FROM samples ORDER BY ended_s").fetchall()
+            else:
+                # What was committed since: targets beyond the last one read (a plan is
+                # measured in its order), and skipped targets measured again since.
+                rows = conn.execute(
+                    f"SELECT {quoted} FROM samples WHERE target > ? ORDER BY target", (top,)
+                ).fetchall()
+                rows += self._retried(conn, quoted)
+                measured += len(rows)
+            events = conn.execute(
+                "SELECT id, session, kind, target, t_s, utc, data FROM events WHERE id > ? "
+                "ORDER BY id",
+                (self._last_event,),
+            ).fetchall()
+            sessions = conn.execute(
+                "SELECT id, started_utc, info, ended_utc, outcome FROM sessions ORDER BY id"
+            ).fetchall()
+            columns = sample_columns(wanted, rows, [c for c in table if c.name in wanted])
+            check_targets(columns["target"], self.info.targets)
+            check_samples(columns)
+            new_events = [event_of(row) for row in events]
+            self.sessions = tuple(session_of(row) for row in sessions)
+            self.events.extend(new_events)
+            if new_events:
+                self._last_event = new_events[-1].id
+            retried = self._skipped(conn)
+            self._data_version = data_version
+        finally:
+            conn.execute("COMMIT")
+        self.measured = measured
+        if len(columns["target"]):
+            top = max(top, int(columns["target"].max()))
+        self._top = top
+        if first:
+            self._retried_targets = retried
+        if recent is not None:
+            self._recent = recent
+        skips = {e.target for e in self.events if e.kind == "skip" and e.target is not None}
+        self.skipped = len(skips) - len(retried)
+        self._add_samples(columns, track=not (first and measured > FULL_LIMIT))
+        return True
+
+    def _retried(self, conn: sqlite3.Connection, quoted: str) -> list[tuple[Any, ...]]:
+        """The rows of skipped targets (at or below the last target read) measured since
+        the last read (``gonio acquire --resume --retry-skipped``)."""
+        skips = {e.target for e in self.events if e.kind == "skip" and e.target is not None}
+        wanted = sorted(t for t in skips - self._retried_targets if t <= self._top)
+        rows: list[tuple[Any, ...]] = []
+        for k in range(0, len(wanted), 500):
+            chunk = wanted[k : k + 500]
+            marks = ", ".join("?" * len(chunk))
+            rows += conn.execute(
+                f"SELECT {quoted} FROM samples WHERE target IN ({marks})", chunk
+            ).fetchall()
+        self._retried_targets.update(r[0] for r in rows if type(r[0]) is int)
+        return rows
+
+    def _skipped(self, conn: sqlite3.Connection) -> set[int]:
+        """The skipped targets that were measured since (by a retry)."""
+        skips = (e.target for e in self.events if e.kind == "skip" and e.target is not None)
+        skipped = sorted(set(skips))
+        measured: set[int] = set()
+        for k in range(0, len(skipped), 500):
+            chunk = skipped[k : k + 500]
+            marks = ", ".join("?" * len(chunk))
+            found = conn.execute(f"SELECT target FROM samples WHERE target IN ({marks})", chunk)
+            measured.update(int(r[0]) for r in found)
+        return measured
+
+    def _read_meta(self, conn: sqlite3.Connection, plan_size: int) -> None:
+        rows = conn.execute("SELECT key, value FROM meta WHERE key != 'plan_file'").fetchall()
+        meta = decode_meta(rows)
+        rowid = conn.execute("SELECT rowid FROM meta WHERE key = 'plan_file'").fetchone()[0]
+        with conn.blobopen("meta", "value", rowid, readonly=True) as blob:  # its start only
+            head = blob.read(_HEAD_BYTES)
+        plan = None
+        if plan_size <= LAZY_PLAN_BYTES:  # parsed whole: its own checks first
+            raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
+            plan = parse_plan(bytes(raw), f"{self.path}#plan_file")
+            check_plan(meta, plan)
+            targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")])
+            if targets.size and targets.dtype != np.int64:
+                raise checks.Bad("samples.target: expected whole numbers")
+            check_targets(targets, len(plan))
+        rig_where = f"{self.path}#rig_text"
+        info = PlanInfo.of(bytes(head), str(meta.get("rig_text", "")), rig_where)
+        self.meta, self.info, self._plan_size = MappingProxyType(meta), info, plan_size
+        with self._lock:
+            self._plan, self._done = None, None
+        if plan is not None:
+            self._install(PlanArrays.of(plan), targets.astype(np.int64))
+        else:  # another process, from the next refresh on (not competing with this one)
+            self._load_next = True
+
+    def _start_loader(self) -> None:
+        """Parse the plan in another process (parsing holds an interpreter for seconds)."""
+        self._load_next = False
+        context = multiprocessing.get_context("spawn")
+        mine, theirs = context.Pipe(duplex=False)
+        process = context.Process(
+            target=_parse_in_background, args=(self.path, theirs), daemon=True
+        )
+        process.start()
+        theirs.close()
+        self._loader = (process, mine)
+
+    def _install(self, arrays: PlanArrays, targets: np.ndarray) -> None:
+        done = np.zeros(len(arrays.per_target_s), dtype=np.bool_)
+        done[targets] = True
+        with self._lock:
+            if self._done is not None:  # marked meanwhile by new samples
+                done |= self._done[: len(done)]
+            self._plan, self._done = arrays, done
+
+    def _poll_loader(self) -> None:
+        """Install what the background process parsed, once it sent it (`JournalError`
+        if the plan cannot be read)."""
+        loader = self._loader
+        if loader is None or not loader[1].poll():
+            return
+        process, conn = loader
+        self._loader = None
+        try:
+            result = conn.recv()
+        except (EOFError, OSError):
+            result = None
+        conn.close()
+        process.join(1)
+        if isinstance(result, str):
+            self._broken = result
+            raise JournalError(result)
+        if result is None:
+            return  # the process died: the views go on with the plan's header
+        self._install(*result)
+        self._data_version = -1
+
+    def _add_samples(self, columns: Mapping[str, np.ndarray], track: bool) -> None:
+        names = [n for n in columns if n != "utc"]
+        if not self._parts:  # the first read (its columns' dtypes, even when empty)
+            self._parts = {n: [columns[n]] for n in names}
+        elif len(columns["target"]):
+            for n in names:
+                self._parts[n].append(columns[n])
+        else:
+            return
+        with self._lock:
+            if self._done is not None:
+                self._done[columns["target"]] = True
+        self.samples = {n: self._column(n) for n in self._parts}
+        if track and "utc" in columns:
+            ended, utc = columns["ended_s"][-RATE_WINDOW:], columns["utc"][-RATE_WINDOW:]
+            self._recent.extend(zip(ended.tolist(), map(_epoch, utc), strict=True))
+            self._recent = self._recent[-RATE_WINDOW:]
+
+    def _column(self, name: str) -> np.ndarray:
+        parts = self._parts[name]
+        if len(parts) > 1:
+            parts[:] = [np.concatenate(parts)]
+        return parts[0]
+
+    # -- what is derived ---------------------------------------------------------------
+    @property
+    def plan(self) -> PlanArrays | None:
+        """What a live view uses of the stored plan's targets, once parsed (None while a
+        large one is parsed)."""
+        return self._plan
+
+    def missing(self) -> np.ndarray | None:
+        """The targets not measured nor skipped, in the plan's order (None until the
+        plan is parsed)."""
+        with self._lock:
+            if self._plan is None or self._done is None:
+                return None
+            left = ~self._done
+        skipped = [e.target for e in self.events if e.kind == "skip" and e.target is not None]
+        left[np.array(skipped, dtype=np.int64)] = False
+        return np.flatnonzero(left)
+
+    def of_kind(self, *kinds: str) -> list[Event]:
+        """The events of these kinds, in order."""
+        return [e for e in self.events if e.kind in kinds]
+
+    @property
+    def complete(self) -> bool:
+        """The last session ended the run (for an adaptive plan, its second pass too)."""
+        done = bool(self.sessions) and self.sessions[-1].outcome == "completed"
+        return done and not self.info.survey
+
+    def rate_per_s(self) -> float | None:
+        """Samples per second of wall time over the last samples (None: too few)."""
+        recent = [u for _, u in self._recent if math.isfinite(u)]
+        if len(recent) < 3 or recent[-1] <= recent[0]:
+            return None
+        return (len(recent) - 1) / (recent[-1] - recent[0])
+
+
+__all__: Sequence[str] = (
+    "COLUMNS",
+    "FULL_LIMIT",
+    "KEPT",
+    "LAZY_PLAN_BYTES",
+    "PlanArrays",
+    "PlanInfo",
+    "RunFollower",
+    "writer_holds",
+)
