@@ -57,9 +57,15 @@ def test_merged_angles_follow_the_emulated_trajectory() -> None:
                 # bracket closely is left out (65 % kept at load 7 on 2 cores).
                 t_poll = 0.5 * (d.request + d.reply)
                 assert len(d.samples.index) >= 0.5 * int(sweeps.count[k]), (
-                    k, len(raw.polls), t_poll.min(), t_poll.max(), d.started.min(),
-                    d.ended.max(), float(np.median(np.diff(t_poll))),
-                    float(np.max(np.diff(t_poll))), float(np.median(d.reply - d.request)),
+                    k,
+                    len(raw.polls),
+                    t_poll.min(),
+                    t_poll.max(),
+                    d.started.min(),
+                    d.ended.max(),
+                    float(np.median(np.diff(t_poll))),
+                    float(np.max(np.diff(t_poll))),
+                    float(np.median(d.reply - d.request)),
                     float(np.max(d.reply - d.request)),
                 )
                 # The truth at the middle of each window really integrated.
