@@ -45,29 +45,25 @@ def test_merged_angles_follow_the_emulated_trajectory() -> None:
         assert photometer is not None
         with devices:
             for k in range(len(sweeps)):
-                before = len(photometer.stream_ends)
-                raw = run_sweep(
-                    devices, rig.axes, sweeps, k, settle_s=rig.spec.settle_s, timeout_s=30.0
-                )
-                # Every window the photometer integrated reached the host, in order.
-                ends = [clock.at(t) for t in photometer.stream_ends[before:]]
-                assert len(ends) == len(raw.readings)
-                d = derive(raw, rig.axes, sweeps, plan.arrival_s, k)
-                # A loaded host polls less, and a target whose window no two polls
-                # bracket closely is left out (65 % kept at load 7 on 2 cores).
-                t_poll = 0.5 * (d.request + d.reply)
-                assert len(d.samples.index) >= 0.5 * int(sweeps.count[k]), (
-                    k,
-                    len(raw.polls),
-                    t_poll.min(),
-                    t_poll.max(),
-                    d.started.min(),
-                    d.ended.max(),
-                    float(np.median(np.diff(t_poll))),
-                    float(np.max(np.diff(t_poll))),
-                    float(np.median(d.reply - d.request)),
-                    float(np.max(d.reply - d.request)),
-                )
+                for attempt in range(2):
+                    before = len(photometer.stream_ends)
+                    raw = run_sweep(
+                        devices, rig.axes, sweeps, k, settle_s=rig.spec.settle_s, timeout_s=30.0
+                    )
+                    # Every window the photometer integrated reached the host, in order.
+                    ends = [clock.at(t) for t in photometer.stream_ends[before:]]
+                    assert len(ends) == len(raw.readings)
+                    d = derive(raw, rig.axes, sweeps, plan.arrival_s, k)
+                    if len(d.samples.index) >= 0.5 * int(sweeps.count[k]):
+                        break
+                    # A loaded host polls less, and a window no two polls bracket closely
+                    # is left out: a stall of the host (tens of polls' worth, counted
+                    # SPEEDUP times on the clock) loses the rest of a sweep. Only such a
+                    # stall excuses it, and only once.
+                    gaps = np.diff(0.5 * (d.request + d.reply))
+                    assert attempt == 0 and gaps.max() > 20 * np.median(gaps), (
+                        k, len(d.samples.index), len(raw.polls), gaps.max(), np.median(gaps)
+                    )  # fmt: skip
                 # The truth at the middle of each window really integrated.
                 middle = np.array(ends)[d.samples.index] - 0.5 * sweeps.integration_s
                 truth = np.array(
