@@ -227,9 +227,8 @@ EVENT_DATA: dict[str, Check] = {
     "fault": fields({"message": text}),
     # a motor's recovery step (`gonio.acquire.recovery`; `gonio info` formats these)
     "recovery": fields(
-        {},
+        {"axis": text, "step": text},
         {
-            "step": text,
             "flags": lambda value, where: [text(v, where) for v in _list(value, where)],
             "temperature_c": optional(number),
             "load_pct": optional(number),

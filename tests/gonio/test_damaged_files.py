@@ -190,9 +190,16 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
     "event: a recovery's number as a text": (
         _sql(
             'UPDATE events SET kind = \'recovery\', data = \'{"step":"diagnosed",'
-            '"temperature_c":"hot"}\' WHERE kind = \'health\''
+            '"axis":"light_elevation","temperature_c":"hot"}\' WHERE kind = \'health\''
         ),
         ".data.temperature_c: expected a finite number, got 'hot'",
+    ),
+    "event: a recovery's axis missing": (
+        _sql(
+            'UPDATE events SET kind = \'recovery\', data = \'{"step":"rebooted"}\' '
+            "WHERE kind = 'health'"
+        ),
+        ".data.axis: missing",
     ),
     "session: a list": (_sql("UPDATE sessions SET info = '[]'"), "info: expected a JSON object"),
     "sample: text for a number": (
