@@ -146,9 +146,7 @@ def motor_findings(
     limit = int(budget_us // US_PER_RETURN_DELAY_UNIT)
     port, baud = link.port_name, link.baud
     for axis in axes:
-        who = link.who(axis.motor_id)
-        if axis.axis is not None:
-            who = f"motor {axis.motor_id} (axis {axis.axis!r})"
+        who = link.who(axis.motor_id)  # the link names the rig's axes
         field = f"axes.{axis.axis or '<axis>'}"
         try:
             model = link.ping(axis.motor_id)

@@ -28,11 +28,10 @@ from drivers.dynamixel.control_table import Area, Item
 #: DATA_BLOCKS[k][0] + (n - first): (first slot number, address of its Indirect Address,
 #: address of its Indirect Data, slots in the block).
 INDIRECT_BLOCKS: tuple[tuple[int, int, int, int], ...] = ((1, 168, 224, 28), (29, 578, 634, 28))
-#: The addresses an Indirect Address may hold (the RAM area).
-INDIRECT_TARGETS = range(64, 662)
-
 #: One past the last address of the emulated table.
 EMULATED_TABLE_SIZE = 662
+#: The addresses an Indirect Address may hold (the RAM area).
+INDIRECT_TARGETS = range(64, EMULATED_TABLE_SIZE)
 
 
 def _indirect_items() -> tuple[Item, ...]:
