@@ -70,13 +70,14 @@ class Result:
             "measured": self.measured,
             "used": self.used,
             "model": self.spec,
-            "chi2_red": _round(self.chi2_red) if self.chi2_red is not None else None,
+            "chi2_red": rounded(self.chi2_red) if self.chi2_red is not None else None,
             "error": self.error,
             "slice_error": self.slice_error,
         }
 
 
-def _round(v: float) -> float | None:
+def rounded(v: float) -> float | None:
+    """``v`` to 5 significant digits (None if not finite), as the page shows it."""
     return float(f"{v:.5g}") if math.isfinite(v) else None
 
 
@@ -181,7 +182,7 @@ def _slice(measured: Measured, n: int) -> dict[str, Any]:
         "x": [float(bounds[0, 0]), float(bounds[0, 1])],
         "y": [float(bounds[1, 0]), float(bounds[1, 1])],
         "n": n,
-        "f": [_round(v) for v in out.tolist()],
+        "f": [rounded(v) for v in out.tolist()],
         "samples": len(measured),
     }
 

@@ -96,7 +96,8 @@ class _Entry:
     live: LiveRun
     lock: threading.Lock = field(default_factory=threading.Lock)
     read_at: float = 0.0
-    cache: dict[str, tuple[tuple[int, int], bytes]] = field(default_factory=dict)
+    #: Per view: the version it was made at, the view and its JSON.
+    cache: dict[str, tuple[tuple[int, int], dict[str, Any], bytes]] = field(default_factory=dict)
     bucket: float = BURST
     bucket_at: float = field(default_factory=time.monotonic)
 
@@ -167,6 +168,10 @@ class Served:
         """The JSON of ``which`` view of a run (``overview`` or ``points``), read again
         at most every `REFRESH_S` and made once per change, whoever asks; `GonioError`
         (one line naming the file) if the run file cannot be read or shown."""
+        return self._made(path, which)[2]
+
+    def _made(self, path: Path, which: str) -> tuple[tuple[int, int], dict[str, Any], bytes]:
+        """`view`'s cache entry: its version, the view and its JSON."""
         try:
             return self._view(path, which)
         except GonioError as exc:
@@ -174,7 +179,7 @@ class Served:
                 raise
             raise GonioError(f"{path}: {exc}") from None
 
-    def _view(self, path: Path, which: str) -> bytes:
+    def _view(self, path: Path, which: str) -> tuple[tuple[int, int], dict[str, Any], bytes]:
         entry = self.entry(path)
         with entry.lock:
             now = time.monotonic()
@@ -193,15 +198,15 @@ class Served:
                     value = points(entry.live, derived=self._deriver.latest(str(path)))
                 value["name"] = self.name_of(path)
                 text = json.dumps(value, allow_nan=False, separators=(",", ":")).encode()
-                cached = entry.cache[which] = (version, text)
-        return cached[1]
+                cached = entry.cache[which] = (version, value, text)
+        return cached
 
     def listing(self) -> list[dict[str, Any]]:
         out = []
         for name in self.names():
             path = self.run_path(name)
             try:
-                o = json.loads(self.view(path, "overview"))
+                o = self._made(path, "overview")[1]
             except GonioError as exc:
                 out.append({"name": name, "state": "unreadable", "error": str(exc)})
                 continue

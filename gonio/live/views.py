@@ -6,7 +6,6 @@ ones with their BRDF and 1σ), as JSON values for ``gonio serve``'s page and
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -14,7 +13,7 @@ import numpy as np
 
 from gonio.analysis.calibrated import calibration_series, is_level
 from gonio.errors import GonioError
-from gonio.live.derived import Result, residuals
+from gonio.live.derived import Result, residuals, rounded
 from gonio.live.model import LiveRun
 from gonio.store.read import Event
 from gonio.types import FloatArray
@@ -198,7 +197,7 @@ def points(
     residual: list[float | None] | None = None
     if derived is not None and derived.model is not None:
         r = residuals(derived.model, wi, wo, value, sigma)
-        residual = [_round(v) for v in np.round(r, 3).tolist()]
+        residual = [rounded(v) for v in np.round(r, 3).tolist()]
     return {
         "name": live.path.name,
         "version": live.version,
@@ -209,18 +208,13 @@ def points(
         "shown": int(pick.size),
         "unit": unit,
         "xy": np.round(xy, 4).ravel().tolist(),
-        "value": [_round(v) for v in value.tolist()],
+        "value": [rounded(v) for v in value.tolist()],
         "pending_xy": np.round(gxy, 4).ravel().tolist(),
         "pending": max(live.info.targets - live.measured - live.skipped, 0),
         "in_plane": {
             "theta_o_deg": np.round(signed, 3).tolist(),
             "theta_i_deg": np.round(theta_i[in_plane], 2).tolist(),
-            "value": [_round(v) for v in value[in_plane].tolist()],
-            "sigma": [_round(v) for v in sigma[in_plane].tolist()],
+            "value": [rounded(v) for v in value[in_plane].tolist()],
+            "sigma": [rounded(v) for v in sigma[in_plane].tolist()],
         },
     }
-
-
-def _round(v: float) -> float | None:
-    """``v`` to 5 significant digits (None if not finite)."""
-    return float(f"{v:.5g}") if math.isfinite(v) else None
