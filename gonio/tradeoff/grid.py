@@ -334,41 +334,28 @@ def _task(
     # Under a time budget the runner fits the target (`gonio.tradeoff.runner`); the
     # plan carries its first guess.
     target = combination["samples"] or (FLY_PILOT if combination["motion"] == FLY else STOP_PILOT)
-    if combination["motion"] == FLY:
-        plan = {
-            "name": f"{spec.name}-{id_}",
-            "parametrization": parametrization,
-            "isotropic": spec.isotropic,
-            "sampling": {
-                "strategy": FLY,
-                "target": target,
-                "seed": plan_seed,
-                "fly": {
-                    "segment": combination["segment"],
-                    "rate_hz": combination["rate_hz"],
-                    "blur_deg": combination["blur_deg"],
-                },
-            },
-            **spec.plan.model_dump(mode="json"),
-        }
+    fly = combination["motion"] == FLY
+    sampling: dict[str, Any] = {
+        "strategy": FLY if fly else "sobol" if strategy == WARPED else strategy,
+        "target": target,
+        "seed": plan_seed,
+    }
+    if fly:
+        sampling["fly"] = {k: combination[k] for k in ("segment", "rate_hz", "blur_deg")}
     else:
-        plan = {
-            "name": f"{spec.name}-{id_}",
-            "parametrization": parametrization,
-            "isotropic": spec.isotropic,
-            "sampling": {
-                "strategy": "sobol" if strategy == WARPED else strategy,
-                "target": target,
-                "seed": plan_seed,
-                "warps": {c: {"power": w.power} for c, w in warps.items()},
-                **adaptive,
-            },
-            "exposure": {
-                "seconds": combination["exposure_s"],
-                "averages": combination["averages"],
-            },
-            **spec.plan.model_dump(mode="json"),
+        sampling |= {"warps": {c: {"power": w.power} for c, w in warps.items()}, **adaptive}
+    plan: dict[str, Any] = {
+        "name": f"{spec.name}-{id_}",
+        "parametrization": parametrization,
+        "isotropic": spec.isotropic,
+        "sampling": sampling,
+    }
+    if not fly:
+        plan["exposure"] = {
+            "seconds": combination["exposure_s"],
+            "averages": combination["averages"],
         }
+    plan |= spec.plan.model_dump(mode="json")
     inputs = {
         "id": id_,
         "scene": scene.name,
