@@ -49,7 +49,11 @@ from sim.dynamixel.faults import Fault
 from sim.physics.streams import Streams
 from sim.rehearsal import emulated_bus, emulated_pose, lamp_for, photometer_for
 from sim.scene import Scene
-from sim.soak import ROOT, Kill, Session, _connect, _kill_when, finished, integrity
+from sim.soak.children import kill_when
+from sim.soak.journal import connect, finished, integrity
+from sim.soak.loop import Session
+from sim.soak.scenario import ROOT, sobol_plan
+from sim.soak.schedule import Kill
 
 ARCH_SERIAL = ROOT / "configs" / "rigs" / "arch_serial.yaml"
 #: How many times faster than real time the emulated motors move.
@@ -150,21 +154,12 @@ def rig_text(bus: str, detector: str, lamp: str) -> str:
 
 
 def plan_text(rig: Path, targets: int) -> str:
-    spec = {
-        "name": "soak-rehearsal",
-        "rig": str(rig),
-        "parametrization": "hybrid",
-        "isotropic": True,
-        "sampling": {"strategy": "sobol", "target": targets, "seed": 1},
-        "exposure": {"seconds": 0.005, "averages": 1},
-        "time_budget_s": 5,
-        "acquisition": {
-            "calibration": {"every_samples": 100, "averages": 2},
-            "on_fault": {"retries": 2, "then": "skip"},
-            "health": {"every_samples": 25},
-        },
-    }
-    return yaml.safe_dump(spec, sort_keys=False)
+    return sobol_plan(
+        "soak-rehearsal", rig, targets, {"seconds": 0.005, "averages": 1},
+        {"calibration": {"every_samples": 100, "averages": 2},
+         "on_fault": {"retries": 2, "then": "skip"},
+         "health": {"every_samples": 25}},
+    )  # fmt: skip
 
 
 class TtyChild:
@@ -295,7 +290,7 @@ def run_rehearsal_soak(
             killed = False
             try:
                 if kill is not None:
-                    killed = _kill_when(child, soak.run, kill, t0 + 600)
+                    killed = kill_when(child, soak.run, kill, t0 + 600)
                 rc, err = child.finish(600)
             finally:
                 stop.set()
@@ -344,7 +339,7 @@ def run_rehearsal_soak(
 
 def read_events(path: Path) -> dict[str, int]:
     """Events by kind in a run file."""
-    conn = _connect(path)
+    conn = connect(path)
     try:
         return {
             k: int(n) for k, n in conn.execute("SELECT kind, COUNT(*) FROM events GROUP BY kind")
