@@ -111,8 +111,6 @@ def main() -> None:
     rows = {baud: measure(baud, args.repeat) for baud in (57_600, 1_000_000)}
     print(f"machine: {describe()}")
     print(f"4 axes, emulator with wire time and 500 µs return delay, median of {args.repeat}\n")
-    print("| | 57 600 baud | 1 000 000 baud |")
-    print("| --- | ---: | ---: |")
     lines = [
         ("SYNC_READ poll (Moving … Present Position), ms", "poll_ms", ".2f"),
         ("poll: theoretical minimum (bytes × 10 / baud + return delays), ms", "poll_min_ms", ".2f"),
@@ -122,6 +120,14 @@ def main() -> None:
         ("hold step: bytes on the line", "hold_bytes", ".0f"),
         ("move 0.02 rad and settle, ms", "small_ms", ".1f"),
     ]
+    two_rate_table(rows, lines)
+
+
+def two_rate_table(rows: dict[int, dict[str, float]], lines: list[tuple[str, str, str]]) -> None:
+    """Print a markdown table of ``lines`` (label, key in ``rows``, format) at the two
+    baud rates, 57 600 and 1 000 000."""
+    print("| | 57 600 baud | 1 000 000 baud |")
+    print("| --- | ---: | ---: |")
     for label, key, fmt in lines:
         a, b = rows[57_600][key], rows[1_000_000][key]
         print(f"| {label} | {a:{fmt}} | {b:{fmt}} |")

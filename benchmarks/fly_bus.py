@@ -28,7 +28,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
-from bus import AXES  # the four axes benchmarks/bus.py times
+from bus import AXES, two_rate_table  # the four axes benchmarks/bus.py times
 
 from drivers.base import StampedPositions
 from drivers.dynamixel.bus import DynamixelBus
@@ -145,8 +145,6 @@ def main() -> None:
         f"4 axes, {args.sweeps} sweeps of {STROKE} rad at {SPEED} rad/s per rate, emulator "
         "with wire time and 500 µs return delay, host on time.monotonic\n"
     )
-    print("| | 57 600 baud | 1 000 000 baud |")
-    print("| --- | ---: | ---: |")
     lines = [
         ("polls during the sweeps", "polls", ".0f"),
         ("polls per second, measured", "rate", ".1f"),
@@ -164,9 +162,7 @@ def main() -> None:
         ("emulator in its own process: poll window, median, ms", "apart_window_ms", ".2f"),
         ("emulator in its own process: poll window, 95th pct, ms", "apart_window_p95_ms", ".2f"),
     ]
-    for label, key, fmt in lines:
-        a, b = rows[57_600][key], rows[1_000_000][key]
-        print(f"| {label} | {a:{fmt}} | {b:{fmt}} |")
+    two_rate_table(rows, lines)
 
 
 if __name__ == "__main__":
