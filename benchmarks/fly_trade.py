@@ -45,6 +45,7 @@ again)
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import statistics
@@ -69,7 +70,7 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import region_masks
 from gonio.rig.model import Rig
-from gonio.tradeoff.grid import load_sweep, scaled_rig
+from gonio.tradeoff.grid import Sweep, load_sweep, scaled_rig
 from gonio.tradeoff.store import open_store
 from gonio.tradeoff.sweep import run_sweep
 from gonio.workflows.simulate import simulate_plan
@@ -90,13 +91,14 @@ TOLERANCE = 0.005
 def rows_of(name: str, runs: Path, jobs: int, stored_only: bool) -> list[dict[str, Any]]:
     """The rows of sweep ``name``, running what ``runs/name`` does not hold yet (with
     ``stored_only``, the rows it holds, the others counted as not run)."""
-    sweep = load_sweep(SWEEPS / f"{name}.yaml")
+    sweep = sweep_and_rig(name)[0]
     folder = runs / name
     started = time.perf_counter()
     if stored_only:
         with open_store(folder) as store:
             rows = [store.rows[t.id] for t in sweep.tasks if t.id in store.rows]
-        missing = [t for t in sweep.tasks if t.id not in {r["id"] for r in rows}]
+        have = {r["id"] for r in rows}
+        missing = [t for t in sweep.tasks if t.id not in have]
         print(f"sweep {name}: {len(rows)} of {len(sweep.tasks)} combinations in {folder}")
         for task in missing:
             i = task.inputs
@@ -130,14 +132,21 @@ def best(rows: Sequence[dict[str, Any]], metric: str = "log_rmse") -> dict[str, 
     return min(scored, key=lambda r: r[metric]) if scored else None
 
 
-def streamed(row: dict[str, Any], name: str) -> int:
-    """The readings a fly row's plan streams (kept and thinned out): the plan of its
-    combination at the target it asked, built again (plans are deterministic)."""
-    spec = load_sweep(SWEEPS / f"{name}.yaml").task(row["id"]).plan_spec()
-    sampling = spec.sampling.model_copy(update={"target": row["asked"]})
+@functools.cache
+def sweep_and_rig(name: str) -> tuple[Sweep, Rig]:
+    """The sweep file ``name`` and its rig, read once for all its rows."""
     rig = Rig.from_yaml(
         ROOT / "configs" / "rigs" / ("arch.yaml" if name == TRADE else "in_plane.yaml")
     )
+    return load_sweep(SWEEPS / f"{name}.yaml"), rig
+
+
+def streamed(row: dict[str, Any], name: str) -> int:
+    """The readings a fly row's plan streams (kept and thinned out): the plan of its
+    combination at the target it asked, built again (plans are deterministic)."""
+    sweep, rig = sweep_and_rig(name)
+    spec = sweep.task(row["id"]).plan_spec()
+    sampling = spec.sampling.model_copy(update={"target": row["asked"]})
     with planning.quiet():
         plan = build(spec.model_copy(update={"sampling": sampling}), rig)
     assert plan.summary.fly is not None and len(plan) == row["targets"]
