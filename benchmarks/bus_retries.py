@@ -49,6 +49,8 @@ IDS = [a.motor_id for a in AXES]
 LOSS_RATES = (0.0, 0.001, 0.01, 0.05)
 #: The link's and the bus's default number of extra attempts.
 RETRIES = 3
+#: The larger number of extra attempts the table compares with.
+MORE_RETRIES = 5
 #: The adapter latency (ms) whose reply timeouts the link uses (`--adapter-ms`).
 ADAPTER_MS = 16.0
 #: How the emulator's processes were scheduled (`prioritize`).
@@ -177,7 +179,7 @@ def measure(baud: int, n_polls: int, n_steps: int, adapter_ms: float) -> list[di
         row |= {
             "retried_expected": q,
             "failed_expected": q ** (RETRIES + 1),
-            "failed_expected_5": q**6,
+            "failed_expected_more": q ** (MORE_RETRIES + 1),
         }
         rows.append(row)
     return rows
@@ -190,9 +192,9 @@ def table(baud: int, rows: list[dict[str, float]], n_polls: int, n_steps: int) -
         )
     )
     print(
-        "| status packets lost | polls retried (expected) | polls failed after 4 attempts "
-        "(expected; with 5 retries) | time per poll, mean / p99 (ms) | time per sample on "
-        "the bus (ms) | samples failed |"
+        "| status packets lost | polls retried (expected) | polls failed after "
+        f"{RETRIES + 1} attempts (expected; with {MORE_RETRIES} retries) | time per poll, "
+        "mean / p99 (ms) | time per sample on the bus (ms) | samples failed |"
     )
     print("| ---: | ---: | ---: | ---: | ---: | ---: |")
     for r in rows:
@@ -200,7 +202,7 @@ def table(baud: int, rows: list[dict[str, float]], n_polls: int, n_steps: int) -
             f"| {100 * r['rate']:g} % | {100 * r['retried']:.2f} % "
             f"({100 * r['retried_expected']:.2f} %) | {int(r['failed_n'])} = "
             f"{100 * r['failed']:.3f} % ({100 * r['failed_expected']:.2g} %; "
-            f"{100 * r['failed_expected_5']:.2g} %) | "
+            f"{100 * r['failed_expected_more']:.2g} %) | "
             f"{r['mean_ms']:.2f} / {r['p99_ms']:.1f} | {r['step_ms']:.2f} | "
             f"{int(r['step_failed'])} |"
         )
