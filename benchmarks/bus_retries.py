@@ -40,9 +40,9 @@ import _report
 from _machine import describe
 from bus import AXES  # the four axes benchmarks/bus.py times
 
-from drivers.base import CommError, DriverError
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError
 from sim.dynamixel.emulator import DxlEmulator, Fault
 
 IDS = [a.motor_id for a in AXES]

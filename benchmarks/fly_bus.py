@@ -30,9 +30,9 @@ import _report
 from _machine import describe
 from bus import AXES, two_rate_table  # the four axes benchmarks/bus.py times
 
-from drivers.base import StampedPositions
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, poll_seconds
+from drivers.values import StampedPositions
 from sim.dynamixel.emulator import DxlEmulator
 
 SPEED = 1.0  # rad/s

@@ -1,22 +1,19 @@
 """Hardware drivers: Dynamixel arm motors over serial and a serial detector.
 
 This package imports nothing from :mod:`gonio` or :mod:`sim`; the interfaces every
-backend implements and the error hierarchy live in :mod:`drivers.base`.
+backend implements live in :mod:`drivers.base`, the error hierarchy in :mod:`drivers.errors`.
 """
 
-from drivers.base import (
+from drivers.base import Detector, LightSource, MotorBus
+from drivers.errors import (
     CommError,
-    Detector,
     DetectorError,
     DriverError,
-    Health,
-    LightSource,
     LimitError,
     MotionTimeout,
-    MotorBus,
     MotorFault,
-    Reading,
 )
+from drivers.values import Health, Reading
 
 __all__ = [
     "CommError",

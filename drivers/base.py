@@ -1,4 +1,4 @@
-"""The device contract every backend implements, its values and its errors.
+"""The device contract every backend implements: its protocols and their rules.
 
 The acquisition engine talks to an instrument only through the small protocols here
 (in the manner of ophyd's ``Movable`` / ``Readable``): `MotorBus`, `Detector`,
@@ -7,7 +7,9 @@ The acquisition engine talks to an instrument only through the small protocols h
 `drivers.light.serial_switch.SerialLightSwitch`) and the simulated ones (`sim.devices`)
 follow the same rules, and one contract suite (``tests/drivers/contract/``) runs every
 rule against every backend. Units: radians, seconds, degrees Celsius, volts; detector
-values in the detector's counts.
+values in the detector's counts. The values the calls return are in `drivers.values`,
+the errors they raise in `drivers.errors`, the lifecycle mixin and one run's `Devices` in
+`drivers.devices`, the checks of a sweep's profile in `drivers.sweep`.
 
 The rules, in one place
 -----------------------
@@ -113,181 +115,17 @@ Simulation only (`Simulated`)
     reading use, whether the stage shows the sample or the reference standard, the
     true joint angles, snapshots for resume — sits behind the optional `Simulated`
     protocol. The engine uses it only when a backend offers it (the run's
-    ``gonio.acquire.Devices.simulation``), never by poking attributes.
+    ``drivers.devices.Devices.simulation``), never by poking attributes.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping
-from contextlib import ExitStack
-from dataclasses import dataclass, field
 from types import TracebackType
 from typing import Any, Literal, Protocol, Self
 
-# -- errors ---------------------------------------------------------------------------
-
-
-class DriverError(Exception):
-    """Base of every error a driver raises on purpose."""
-
-
-class CommError(DriverError):
-    """Communication failed: timeout, corrupt packet, port busy or missing.
-
-    ``port``, ``motor_id`` and ``result`` (the SDK's COMM_* code, when there is one) say
-    where; the message is one line a user can act on.
-    """
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        port: str | None = None,
-        motor_id: int | None = None,
-        result: int | None = None,
-    ) -> None:
-        super().__init__(message)
-        self.port = port
-        self.motor_id = motor_id
-        self.result = result
-
-
-class MotorFault(DriverError):
-    """A motor reported a hardware error (its Hardware Error Status, decoded)."""
-
-    def __init__(self, message: str, *, motor_id: int, axis: str | None, flags: tuple[str, ...]):
-        super().__init__(message)
-        self.motor_id = motor_id
-        self.axis = axis
-        self.flags = flags
-
-
-class MotionTimeout(DriverError):
-    """Axes did not settle at their goals in time (blocked, overloaded, or too slow);
-    the bus has already told them to hold where they are."""
-
-
-class LimitError(DriverError):
-    """A command outside an axis's configured limits; nothing was sent."""
-
-
-class TorqueOff(DriverError):
-    """A move was commanded with torque off; nothing was sent."""
-
-
-class DeviceClosed(DriverError):
-    """The device is not open (or was closed); nothing was sent."""
-
-
-class DetectorError(DriverError):
-    """The detector did not answer, answered nonsense, or was reset mid-read."""
-
-
-class StreamNotSupported(DetectorError):
-    """The detector cannot stream readings (no streaming mode, or none configured)."""
-
-
-class LightError(DriverError):
-    """The light source did not acknowledge a switch, or cannot be switched."""
-
-
-#: The errors that mean axes may have been moving when they were raised.
-MOTION_FAULTS = (MotorFault, MotionTimeout, CommError)
-
-# -- values ---------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Health:
-    """One motor's condition: temperature (°C), input voltage (V), named error flags
-    and load (% of the motor's maximum, signed; None where the backend does not
-    measure it)."""
-
-    temperature_c: float
-    voltage_v: float
-    error_flags: tuple[str, ...] = ()
-    load_pct: float | None = None
-
-    @property
-    def ok(self) -> bool:
-        return not self.error_flags
-
-
-@dataclass(frozen=True)
-class Recovered:
-    """What `MotorBus.recover` did to ``axis``: ``held_rad``, the position it was told to
-    hold just before its motor was rebooted, and ``position_rad``, the one read back
-    after (rad)."""
-
-    axis: str
-    held_rad: float
-    position_rad: float
-
-
-@dataclass(frozen=True)
-class Reading:
-    """A detector measurement.
-
-    ``value`` is the mean signal in the detector's units (counts), ``std`` the standard
-    deviation of the ``n`` raw samples averaged (0 for one sample), ``saturated`` whether
-    any sample hit the full scale, ``started_s`` / ``ended_s`` the clock's time (s) when
-    the first exposure began and the last one ended (readout included), ``raw`` the
-    individual samples, ``exposure_s`` the exposure actually integrated (s) when the
-    device's step made it differ from the one asked (e.g. whole milliseconds), else None,
-    ``phase_deg`` a lock-in's mean phase (°) over the samples, else None.
-    """
-
-    value: float
-    std: float
-    n: int
-    saturated: bool
-    started_s: float
-    ended_s: float
-    raw: tuple[float, ...] = field(default_factory=tuple)
-    exposure_s: float | None = None
-    phase_deg: float | None = None
-
-    @property
-    def middle_s(self) -> float:
-        """The middle of the measurement (s): where a drifting source is sampled."""
-        return 0.5 * (self.started_s + self.ended_s)
-
-
-@dataclass(frozen=True)
-class RangeChange:
-    """The instrument's range changed (auto-ranging): when (the clock's s), from, to
-    (in the reading's unit)."""
-
-    at_s: float
-    old: float | None
-    new: float
-
-
-@dataclass(frozen=True)
-class StampedPositions:
-    """One poll of the axes while they may move: ``positions`` (rad, per axis) read in
-    one transaction, ``request_s`` the clock's time (s) just before the request was sent
-    and ``reply_s`` just after the last reply arrived; the positions were sampled in
-    between. ``arrived`` is True when every axis is within its position tolerance of its
-    last goal (the sweep's motion is over; ``wait_settled`` confirms it)."""
-
-    positions: dict[str, float]
-    request_s: float
-    reply_s: float
-    arrived: bool = False
-
-    @property
-    def middle_s(self) -> float:
-        """The middle of the poll's window (s): the best single time for its positions."""
-        return 0.5 * (self.request_s + self.reply_s)
-
-    @property
-    def window_s(self) -> float:
-        """How long the poll took (s): its timing uncertainty is at most this."""
-        return self.reply_s - self.request_s
-
+from drivers.values import Health, RangeChange, Reading, Recovered, StampedPositions
 
 # -- time -------------------------------------------------------------------------------
 
@@ -314,33 +152,6 @@ class SystemClock:
         if seconds < 0:
             raise ValueError(f"cannot sleep a negative time ({seconds} s)")
         time.sleep(seconds)
-
-
-# -- a shared shape ----------------------------------------------------------------------
-
-
-class Resource:
-    """Mixin: a context manager that calls ``open()`` on entry and ``close()`` on exit
-    (also on an exception or Ctrl-C). Subclasses implement both; ``close`` must be safe
-    to call twice and must release the device whatever state it is in."""
-
-    def open(self) -> None:
-        raise NotImplementedError
-
-    def close(self) -> None:
-        raise NotImplementedError
-
-    def __enter__(self) -> Self:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 # -- protocols ------------------------------------------------------------------------
@@ -471,41 +282,6 @@ def range_changes(detector: Detector) -> tuple[RangeChange, ...]:
     return tuple(getattr(detector, "range_changes", ()))
 
 
-def sweep_profile(
-    targets: Mapping[str, float],
-    velocities: Mapping[str, float],
-    accelerations: Mapping[str, float] | None,
-    top_velocity: Mapping[str, float],
-    top_acceleration: Mapping[str, float],
-) -> dict[str, tuple[float, float]]:
-    """A sweep's (velocity rad/s, acceleration rad/s²) per target axis, checked against
-    the configured ``top_velocity`` / ``top_acceleration`` (the rules of ``sweep``):
-    `DriverError` for an axis without a target or unknown, `LimitError` for a rate that
-    is missing, not finite, not positive or above the configured one. Sends nothing."""
-    accelerations = accelerations or {}
-    for name in (*velocities, *accelerations):
-        if name not in targets:
-            raise DriverError(f"sweep: axis {name!r} has a velocity but no target")
-    out = {}
-    for name in targets:
-        if name not in top_velocity:
-            raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(top_velocity)}")
-        if name not in velocities:
-            raise LimitError(f"sweep: axis {name!r} has no velocity; nothing was sent")
-        rates = (float(velocities[name]), float(accelerations.get(name, top_acceleration[name])))
-        tops = (top_velocity[name], top_acceleration[name])
-        for what, rate, top, unit in zip(
-            ("velocity", "acceleration"), rates, tops, ("rad/s", "rad/s²"), strict=True
-        ):
-            if not (math.isfinite(rate) and 0 < rate <= top * (1 + 1e-9)):
-                raise LimitError(
-                    f"axis {name!r}: sweep {what} {rate!r} {unit} is not in (0, {top:.6g}] "
-                    f"{unit} (its configured {what}); nothing was sent"
-                )
-        out[name] = rates
-    return out
-
-
 class LightSource(Device, Protocol):
     """A switchable source."""
 
@@ -550,33 +326,3 @@ class Simulated(Protocol):
     def restore(self, state: Any) -> None:
         """Continue from a `snapshot`."""
         ...
-
-
-@dataclass
-class Devices(Resource):
-    """The instrument one run drives: a motor bus, a detector, an optional switchable
-    light source, the clock they share and, for a simulated backend, its `Simulated`
-    side. A context manager that opens them all and closes them all (in reverse order,
-    also on an error), so the motors hold and every port is released whatever happens.
-    Backends are built by composition code (`gonio.workflows`) and handed to the
-    acquisition engine as `Devices`."""
-
-    bus: MotorBus
-    detector: Detector
-    clock: Clock
-    light: LightSource | None = None
-    simulation: Simulated | None = None
-    _stack: ExitStack = field(default_factory=ExitStack, repr=False)
-
-    def open(self) -> None:
-        """Open the bus, the detector and the light; if one fails, close those opened."""
-        with ExitStack() as stack:
-            stack.enter_context(self.bus)
-            stack.enter_context(self.detector)
-            if self.light is not None:
-                stack.enter_context(self.light)
-            self._stack = stack.pop_all()
-
-    def close(self) -> None:
-        """Close them in reverse order (safe to call twice)."""
-        self._stack.close()

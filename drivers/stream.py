@@ -21,7 +21,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Protocol
 
-from drivers.base import Detector, StreamNotSupported
+from drivers.base import Detector
+from drivers.errors import StreamNotSupported
 
 
 @dataclass(frozen=True)

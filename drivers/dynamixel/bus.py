@@ -42,20 +42,8 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import TracebackType
 
-from drivers.base import (
-    MOTION_FAULTS,
-    Clock,
-    CommError,
-    DeviceClosed,
-    DriverError,
-    LimitError,
-    MotionTimeout,
-    Resource,
-    StampedPositions,
-    SystemClock,
-    TorqueOff,
-    sweep_profile,
-)
+from drivers.base import Clock, SystemClock
+from drivers.devices import Resource
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.condition import Condition
 from drivers.dynamixel.control_table import (
@@ -66,6 +54,17 @@ from drivers.dynamixel.control_table import (
     item,
 )
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import (
+    MOTION_FAULTS,
+    CommError,
+    DeviceClosed,
+    DriverError,
+    LimitError,
+    MotionTimeout,
+    TorqueOff,
+)
+from drivers.sweep import sweep_profile
+from drivers.values import StampedPositions
 
 _MOVING = item("moving")
 _PRESENT = item("present_position")

@@ -9,10 +9,11 @@ import time
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
-from drivers.base import CommError, DriverError, Health, MotorFault, Recovered
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import VOLT_PER_UNIT, decode_hardware_error, item
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError, MotorFault
+from drivers.values import Health, Recovered
 
 _CURRENT = item("present_current")
 _VOLTAGE = item("present_input_voltage")

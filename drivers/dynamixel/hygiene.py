@@ -33,7 +33,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from drivers.base import CommError, DriverError
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import MODELS, item
 from drivers.dynamixel.latency import (
@@ -45,6 +44,7 @@ from drivers.dynamixel.latency import (
     usb_serial_name,
 )
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError
 
 Level = Literal["ok", "n/a", "warning", "problem"]
 #: The latency timer (ms) above which the adapter gets a warning.

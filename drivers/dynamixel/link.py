@@ -35,10 +35,11 @@ from typing import Any, TypeVar
 import dynamixel_sdk as sdk
 import serial
 
-from drivers.base import CommError, DriverError, LimitError, MotorFault, Resource
+from drivers.devices import Resource
 from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
 from drivers.dynamixel.latency import assumed_adapter_ms, sdk_latency_timer
 from drivers.dynamixel.sdk_boundary import PacketHandler, Port
+from drivers.errors import CommError, DriverError, LimitError, MotorFault
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
 RETRYABLE = frozenset(

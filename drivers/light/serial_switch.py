@@ -22,7 +22,9 @@ from typing import Any
 
 import serial
 
-from drivers.base import Clock, DeviceClosed, LightError, Resource, SystemClock
+from drivers.base import Clock, SystemClock
+from drivers.devices import Resource
+from drivers.errors import DeviceClosed, LightError
 from drivers.light.config import SerialLightConfig
 
 _POLL_S = 0.02  # the serial read timeout: how late a deadline may be noticed

@@ -21,17 +21,12 @@ import statistics
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from drivers.base import (
-    Clock,
-    DetectorError,
-    DeviceClosed,
-    RangeChange,
-    Reading,
-    Resource,
-    SystemClock,
-)
+from drivers.base import Clock, SystemClock
+from drivers.devices import Resource
+from drivers.errors import DetectorError, DeviceClosed
 from drivers.pymeasure import boundary
 from drivers.pymeasure.config import OVERFLOW, PyMeasureDetectorConfig
+from drivers.values import RangeChange, Reading
 
 log = logging.getLogger(__name__)
 

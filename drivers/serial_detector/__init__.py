@@ -7,7 +7,7 @@ expression that has a named group ``value``. It is written to be left alone at n
 * it never hangs: every wait has a monotonic deadline (the exposure plus
   ``timeout_s``), writes have a timeout, and the port is closed without waiting for
   unsent bytes;
-* every failure is a :class:`SerialDetectorError` (a :class:`~drivers.base.DetectorError`)
+* every failure is a :class:`SerialDetectorError` (a :class:`~drivers.errors.DetectorError`)
   whose message is one line naming the port and what happened, with ``kind`` saying
   which failure it was (``"timeout"``, ``"malformed"``, ``"reset"``, ...);
 * the port is always released: on leaving the context manager, when opening or

@@ -14,7 +14,8 @@ from typing import Any
 
 import serial
 
-from drivers.base import Clock, Reading, Resource, SystemClock
+from drivers.base import Clock, SystemClock
+from drivers.devices import Resource
 from drivers.serial_detector.config import SerialDetectorConfig, _as_int, _as_real
 from drivers.serial_detector.errors import (
     _OPEN_ERRORS,
@@ -24,6 +25,7 @@ from drivers.serial_detector.errors import (
 )
 from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote, is_saturated
 from drivers.serial_detector.stream import _Streaming
+from drivers.values import Reading
 
 log = logging.getLogger("drivers.serial_detector")  # one logger for the package
 

@@ -7,7 +7,7 @@ import errno
 import os
 from typing import Literal
 
-from drivers.base import DetectorError, DeviceClosed
+from drivers.errors import DetectorError, DeviceClosed
 
 try:  # POSIX only; tcflush failures on a vanished device raise termios.error
     import termios

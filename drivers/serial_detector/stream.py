@@ -31,7 +31,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from drivers.base import Clock, StreamNotSupported
+from drivers.base import Clock
+from drivers.errors import StreamNotSupported
 from drivers.serial_detector.config import SerialDetectorConfig, SerialStreamConfig, _as_real
 from drivers.serial_detector.errors import (
     SerialDetectorClosed,

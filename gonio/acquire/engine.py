@@ -40,19 +40,18 @@ from typing import Any, Literal
 
 import numpy as np
 
-from drivers.base import (
+from drivers.base import dark_subtracted, reading_unit
+from drivers.devices import Devices
+from drivers.errors import (
     CommError,
     DetectorError,
-    Devices,
     DriverError,
     LimitError,
     MotionTimeout,
     MotorFault,
-    Reading,
-    dark_subtracted,
-    reading_unit,
 )
 from drivers.stream import StreamReading
+from drivers.values import Reading
 from gonio.acquire.control import ControlRequests, Request, StopRequested
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Health
+from drivers.values import Health
 from gonio.acquire.suspenders import Suspender
 
 

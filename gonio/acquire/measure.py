@@ -15,7 +15,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Devices, Reading
+from drivers.devices import Devices
+from drivers.values import Reading
 
 #: How long one move may take before `wait_settled` gives up (s).
 MOVE_TIMEOUT_S = 600.0

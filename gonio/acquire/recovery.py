@@ -2,7 +2,7 @@
 silently.
 
 A motor that reports a hardware error (its Hardware Error Status: overload,
-overheating, input voltage, encoder) raises `drivers.base.MotorFault`, and the bus has
+overheating, input voltage, encoder) raises `drivers.errors.MotorFault`, and the bus has
 already told every axis to hold. With ``action: stop`` (the default) the run ends
 resumable. With ``action: recover`` `MotorRecovery.attempt` runs the step again after
 a recovery, each stage journaled as a ``recovery`` event (``step``):
@@ -42,7 +42,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from drivers.base import Devices, DriverError, Health, MotorFault
+from drivers.devices import Devices
+from drivers.errors import DriverError, MotorFault
+from drivers.values import Health
 from gonio.acquire.signals import RunInterrupted
 from gonio.planner.schema import MotorFaultSpec
 from gonio.rig.model import Rig

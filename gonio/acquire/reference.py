@@ -19,7 +19,9 @@ from typing import Protocol
 
 import numpy as np
 
-from drivers.base import Devices, Reading, StageTarget, reading_unit
+from drivers.base import StageTarget, reading_unit
+from drivers.devices import Devices
+from drivers.values import Reading
 from gonio import radiometry
 from gonio.acquire.measure import TargetReading, measure_target
 from gonio.config import ConfigError, line_of, read_yaml

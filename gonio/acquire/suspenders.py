@@ -2,7 +2,7 @@
 suspenders: small objects that look at what the instrument reports and say what holds
 the run, in words.
 
-A `Suspender` looks at every motor's health (`drivers.base.Health`, per axis); the
+A `Suspender` looks at every motor's health (`drivers.values.Health`, per axis); the
 rig's are `health_suspenders` (the rig file's ``health`` limits: a temperature ceiling
 and a supply band). At a health check the engine reads the health once and asks each
 suspender; a `Suspension` is that check's state: running, paused (a suspender tripped:
@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Protocol
 
-from drivers.base import Health
+from drivers.values import Health
 from gonio.rig.schema import HealthLimitsSpec
 
 

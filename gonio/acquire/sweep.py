@@ -35,8 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.base import Devices, StampedPositions
+from drivers.devices import Devices
 from drivers.stream import StreamReading, restamped, streaming
+from drivers.values import StampedPositions
 from gonio.planner.model import Sweeps
 from gonio.types import FloatArray
 

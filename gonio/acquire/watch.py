@@ -15,7 +15,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import Detector, Reading, phase_tolerance_deg, range_changes, reading_unit
+from drivers.base import Detector, phase_tolerance_deg, range_changes, reading_unit
+from drivers.values import Reading
 from gonio.store.read import Run
 
 

@@ -21,7 +21,7 @@ import sys
 from collections.abc import Mapping, Sequence
 from typing import Any, NoReturn
 
-from drivers.base import DriverError
+from drivers.errors import DriverError
 from gonio import __version__
 from gonio.errors import GonioError
 

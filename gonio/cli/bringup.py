@@ -20,11 +20,11 @@ from pathlib import Path
 
 import dynamixel_sdk as sdk
 
-from drivers.base import CommError, DriverError
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import FACTORY_BAUD, MODELS
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError
 from gonio.cli.arguments import positive_seconds
 from gonio.config import ConfigError
 

@@ -13,12 +13,12 @@ import argparse
 import math
 from pathlib import Path
 
-from drivers.base import CommError, DriverError
 from drivers.dynamixel import hygiene
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, MODELS, RAD_PER_TICK
 from drivers.dynamixel.latency import assumed_adapter_ms
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError
 from gonio.cli import EXIT_BAD_INPUT
 from gonio.config import ConfigError
 

@@ -20,7 +20,8 @@ from contextlib import ExitStack
 from dataclasses import dataclass, field
 from typing import IO, Literal
 
-from drivers.base import Clock, Devices, StageTarget, SystemClock
+from drivers.base import Clock, StageTarget, SystemClock
+from drivers.devices import Devices
 from drivers.dynamixel.bus import DynamixelBus
 from gonio.acquire.reference import Stage
 from gonio.acquire.runtime import RunTime, wall_offset

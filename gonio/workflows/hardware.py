@@ -14,7 +14,8 @@ from __future__ import annotations
 import dataclasses
 from typing import TYPE_CHECKING
 
-from drivers.base import Clock, Detector, Devices, SystemClock
+from drivers.base import Clock, Detector, SystemClock
+from drivers.devices import Devices
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector

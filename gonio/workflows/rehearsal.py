@@ -12,7 +12,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 
-from drivers.base import Detector, Devices, LightSource
+from drivers.base import Detector, LightSource
+from drivers.devices import Devices
 from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig

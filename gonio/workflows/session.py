@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import DriverError, dark_subtracted, reading_unit
+from drivers.base import dark_subtracted, reading_unit
+from drivers.errors import DriverError
 from gonio import __version__
 from gonio.acquire.engine import Engine, Report
 from gonio.acquire.progress import Observer, Unobserved

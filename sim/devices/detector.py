@@ -33,17 +33,12 @@ from typing import Protocol
 
 import numpy as np
 
-from drivers.base import (
-    Clock,
-    DetectorError,
-    DeviceClosed,
-    Reading,
-    Resource,
-    StageTarget,
-    StreamNotSupported,
-)
+from drivers.base import Clock, StageTarget
+from drivers.devices import Resource
+from drivers.errors import DetectorError, DeviceClosed, StreamNotSupported
 from drivers.pymeasure.config import PyMeasureDetectorConfig
 from drivers.stream import StreamReading
+from drivers.values import Reading
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from sim.faults import FaultInjector

@@ -2,7 +2,7 @@
 clock, one run seed and the scene's injected faults.
 
 `SimulatedInstrument` is the simulated backend as the engine sees it: `devices()` gives
-the `drivers.base.Devices` (the contract), and the instrument itself is
+the `drivers.devices.Devices` (the contract), and the instrument itself is
 their `drivers.base.Simulated` side (which sample comes next, sample or reference on the
 stage, the true joint angles, snapshots for resume). `sim.simulate.simulate` computes
 a whole run vectorized; `gonio.workflows.simulate.measure_targets` measures the same
@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import Devices, Resource, StageTarget
+from drivers.base import StageTarget
+from drivers.devices import Devices, Resource
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.detector import SimDetector, SimLightSource

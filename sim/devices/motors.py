@@ -32,21 +32,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.base import (
+from drivers.devices import Resource
+from drivers.dynamixel.wire import poll_seconds
+from drivers.errors import (
     CommError,
     DeviceClosed,
     DriverError,
-    Health,
     LimitError,
     MotionTimeout,
     MotorFault,
-    Recovered,
-    Resource,
-    StampedPositions,
     TorqueOff,
-    sweep_profile,
 )
-from drivers.dynamixel.wire import poll_seconds
+from drivers.sweep import sweep_profile
+from drivers.values import Health, Recovered, StampedPositions
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.clock import ManualClock

@@ -31,7 +31,7 @@ from typing import NamedTuple, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from drivers.base import Reading
+from drivers.values import Reading
 from gonio.errors import DomainError
 from sim.physics.streams import DARK, READ, SHOT, Streams
 
@@ -202,7 +202,7 @@ def _poisson_cap(full_well: float) -> float:
 
 
 class Summary(NamedTuple):
-    """Per-sample statistics of A exposures, the fields of `drivers.base.Reading`."""
+    """Per-sample statistics of A exposures, the fields of `drivers.values.Reading`."""
 
     value: FloatArray
     """Mean counts (N,)."""
@@ -232,7 +232,7 @@ def summarize(counts: ArrayLike, saturated: ArrayLike) -> Summary:
 def readings(
     counts: ArrayLike, saturated: ArrayLike, started_s: ArrayLike, ended_s: ArrayLike
 ) -> list[Reading]:
-    """One `drivers.base.Reading` per sample (with the raw counts), stamped with the
+    """One `drivers.values.Reading` per sample (with the raw counts), stamped with the
     times (s) its first exposure started and its last ended (N,)."""
     c = np.asarray(counts, dtype=np.float64)
     summary = summarize(c, saturated)

@@ -17,12 +17,12 @@ from pathlib import Path
 import dynamixel_sdk as sdk
 import pytest
 
-from drivers.base import CommError, DriverError, LimitError, MotionTimeout, MotorFault
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK
 from drivers.dynamixel.latency import sdk_latency_timer
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError, LimitError, MotionTimeout, MotorFault
 from sim.dynamixel.emulator import DxlEmulator
 from sim.dynamixel.faults import Fault
 from tests.support.dynamixel import axes

@@ -10,9 +10,9 @@ from collections.abc import Callable
 
 import pytest
 
-from drivers.base import MotorFault
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
+from drivers.errors import MotorFault
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
 

@@ -18,12 +18,12 @@ import pytest
 from dynamixel_sdk import port_handler
 
 import drivers.dynamixel.bus as bus_module
-from drivers.base import CommError, DriverError, MotionTimeout, MotorFault
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK, item
 from drivers.dynamixel.latency import sdk_latency_timer
 from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError, DriverError, MotionTimeout, MotorFault
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
 from sim.dynamixel.faults import Fault

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from drivers.base import LightError
+from drivers.errors import LightError
 from drivers.light import SerialLightConfig
 from drivers.light.serial_switch import SerialLightSwitch
 from sim.clock import ManualClock

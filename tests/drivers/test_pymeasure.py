@@ -21,7 +21,7 @@ from pymeasure.instruments.srs import SR830, SR860
 from pymeasure.instruments.thorlabs import ThorlabsPM100USB
 from pymeasure.test import expected_protocol
 
-from drivers.base import DetectorError
+from drivers.errors import DetectorError
 from drivers.pymeasure import SETTLE_TAU, boundary
 from drivers.pymeasure.config import settle_tau
 from drivers.pymeasure.detector import PyMeasureDetector, PyMeasureDetectorError

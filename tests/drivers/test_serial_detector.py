@@ -23,13 +23,14 @@ import numpy as np
 import pytest
 import serial
 
-from drivers.base import DetectorError, DriverError, Reading
+from drivers.errors import DetectorError, DriverError
 from drivers.serial_detector import (
     SerialDetectorConfig,
     SerialDetectorError,
     SerialDetectorValueError,
 )
 from drivers.serial_detector.detector import SerialDetector
+from drivers.values import Reading
 from sim.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
 
 TIMEOUT_S = 0.2  # the per-line margin used throughout: deadlines are exposure + this

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from drivers.base import StreamNotSupported
+from drivers.errors import StreamNotSupported
 from drivers.serial_detector import SerialDetectorError
 from drivers.serial_detector.detector import SerialDetector
 from drivers.stream import StreamReading, can_stream, restamped

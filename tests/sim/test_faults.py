@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.base import CommError, DetectorError, MotionTimeout, MotorFault
+from drivers.errors import CommError, DetectorError, MotionTimeout, MotorFault
 from gonio.acquire.measure import measure_target
 from gonio.config import ConfigError
 from gonio.errors import GonioError

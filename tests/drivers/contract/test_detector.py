@@ -6,15 +6,9 @@ import math
 
 import pytest
 
-from drivers.base import (
-    DetectorError,
-    DeviceClosed,
-    RangeChange,
-    dark_subtracted,
-    phase_tolerance_deg,
-    range_changes,
-    reading_unit,
-)
+from drivers.base import dark_subtracted, phase_tolerance_deg, range_changes, reading_unit
+from drivers.errors import DetectorError, DeviceClosed
+from drivers.values import RangeChange
 from tests.drivers.contract.conftest import DetectorHarness
 
 

@@ -9,7 +9,7 @@ import math
 
 import pytest
 
-from drivers.base import DetectorError, DeviceClosed, StreamNotSupported
+from drivers.errors import DetectorError, DeviceClosed, StreamNotSupported
 from drivers.stream import StreamingDetector, StreamReading, can_stream, streaming
 from tests.drivers.contract.conftest import INSTRUMENTS, DetectorHarness
 

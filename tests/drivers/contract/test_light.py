@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from drivers.base import DeviceClosed
+from drivers.errors import DeviceClosed
 from tests.drivers.contract.conftest import LightHarness
 
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from drivers.base import (
+from drivers.errors import (
     CommError,
     DeviceClosed,
     DriverError,

@@ -10,16 +10,9 @@ import math
 
 import pytest
 
-from drivers.base import (
-    CommError,
-    DeviceClosed,
-    DriverError,
-    LimitError,
-    MotorBus,
-    MotorFault,
-    StampedPositions,
-    TorqueOff,
-)
+from drivers.base import MotorBus
+from drivers.errors import CommError, DeviceClosed, DriverError, LimitError, MotorFault, TorqueOff
+from drivers.values import StampedPositions
 from tests.drivers.contract.conftest import MOTOR_FAULTS, MotorHarness
 
 FAULTS = {"motor_fault": MotorFault, "comm_error": CommError}

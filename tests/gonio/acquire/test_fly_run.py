@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 import yaml
 
-from drivers.base import Devices, StampedPositions
+from drivers.devices import Devices
+from drivers.values import StampedPositions
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.sweep import merge, run_sweep, target_slots
 from gonio.planner.schema import MotorFaultSpec

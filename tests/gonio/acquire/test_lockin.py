@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from drivers.base import RangeChange, Reading
+from drivers.values import RangeChange, Reading
 from gonio.acquire.watch import ReadingWatch, phase_drift
 from gonio.analysis.summary import error_figures
 from gonio.errors import GonioError

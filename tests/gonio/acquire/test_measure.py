@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from drivers.base import LimitError
+from drivers.errors import LimitError
 from gonio.acquire.measure import measure_target
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig

@@ -4,7 +4,7 @@ steps of a health pause."""
 
 from __future__ import annotations
 
-from drivers.base import Health
+from drivers.values import Health
 from gonio.acquire.health import assess
 from gonio.acquire.schedule import Calibrations, Every
 from gonio.acquire.suspenders import Step, Suspension, health_suspenders

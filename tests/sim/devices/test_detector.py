@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from drivers.base import DetectorError
+from drivers.errors import DetectorError
 from gonio import radiometry
 from gonio.rig.model import Rig
 from sim.devices.instrument import SimulatedInstrument

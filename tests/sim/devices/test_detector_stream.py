@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from drivers.base import DetectorError, StreamNotSupported
+from drivers.errors import DetectorError, StreamNotSupported
 from drivers.stream import can_stream
 from gonio.rig.model import Rig
 from sim.clock import ManualClock

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from drivers.base import DriverError, LimitError, MotionTimeout
+from drivers.errors import DriverError, LimitError, MotionTimeout
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus, profile_position

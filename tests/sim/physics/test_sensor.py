@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from drivers.base import Reading
+from drivers.values import Reading
 from sim.physics.sensor import SensorEffects, SensorSpec, read_out, readings, summarize
 from sim.physics.streams import DARK, READ, SHOT, Streams
 
