@@ -196,7 +196,7 @@ DAMAGE: dict[str, tuple[Callable[[Path], None], str]] = {
     ),
     "event: a recovery's axis missing": (
         _sql(
-            'UPDATE events SET kind = \'recovery\', data = \'{"step":"rebooted"}\' '
+            "UPDATE events SET kind = 'recovery', data = '{\"step\":\"rebooted\"}' "
             "WHERE kind = 'health'"
         ),
         ".data.axis: missing",
