@@ -44,7 +44,7 @@ from typing import Any, TypeVar
 
 from drivers.base import Devices, DriverError, Health, MotorFault
 from gonio.acquire.signals import RunInterrupted
-from gonio.planner.schema import MotorFaultSpec
+from gonio.planner.policies import MotorFaultSpec
 from gonio.rig.model import Rig
 from gonio.store.read import Run
 

@@ -21,7 +21,7 @@ import yaml
 from drivers.base import Devices, StampedPositions
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.sweep import merge, run_sweep, target_slots
-from gonio.planner.schema import MotorFaultSpec
+from gonio.planner.policies import MotorFaultSpec
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run, raw_streams
 from gonio.workflows import session
