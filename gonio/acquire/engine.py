@@ -66,7 +66,7 @@ from gonio.acquire.sweep import RawSweep, derive, run_sweep
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
-from gonio.planner.schema import AcquisitionSpec
+from gonio.planner.policies import AcquisitionSpec
 from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run

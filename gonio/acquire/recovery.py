@@ -46,7 +46,7 @@ from drivers.devices import Devices
 from drivers.errors import DriverError, MotorFault
 from drivers.values import Health
 from gonio.acquire.signals import RunInterrupted
-from gonio.planner.schema import MotorFaultSpec
+from gonio.planner.policies import MotorFaultSpec
 from gonio.rig.model import Rig
 from gonio.store.read import Run
 

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from gonio.acquire.schedule import Calibrations, Every
-from gonio.planner.schema import AcquisitionSpec
+from gonio.planner.policies import AcquisitionSpec
 from gonio.store.journal import dumps
 from gonio.store.read import Run
 

@@ -5,7 +5,8 @@ uniform plans reach a given error with the fewest samples on every shipped scene
 docs/explanations/tradeoff.md "The study"), whether the material is isotropic (three coordinates:
 the pair's azimuth is rotated out and the reciprocity fold applies) or anisotropic
 (four; the sample rotation stage is used), how to place points, and how long to expose
-each target.
+each target. How `gonio acquire` runs the plan (its ``acquisition`` section) is
+validated by `gonio.planner.policies`.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.errors import GonioError
 from gonio.planner.blur import DEFAULT_TOLERANCE, blur_budget_of_width
+from gonio.planner.policies import AcquisitionSpec
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
 #: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
@@ -291,118 +293,6 @@ class ExposureSpec(Strict):
     adapt: AdaptSpec | None = Field(
         None,
         description="Scale exposure and averages by 1/expected signal (none: the same for all).",
-    )
-
-
-class CalibrationSpec(Strict):
-    """When the reference standard is read: always at the start and at the end of a
-    run, and again after ``every_samples`` targets or ``every_minutes`` of run time
-    (whichever comes first; none: never in between). ``dark``: a dark reading (light
-    off) with each reference reading. ``averages``: exposures per calibration reading
-    (at least 2: their spread is what the uncertainty of every sample is scaled by)."""
-
-    every_samples: int | None = Field(
-        None, ge=1, description="Read the standard again after this many targets (none: never)."
-    )
-    every_minutes: float | None = Field(
-        None,
-        gt=0,
-        description="Read the standard again after this much run time (min; none: never).",
-    )
-    dark: bool = Field(
-        True, description="Take a dark reading (light off) with each reference reading."
-    )
-    averages: int = Field(16, ge=2, le=1000, description="Exposures per calibration reading.")
-
-
-class MotorFaultSpec(Strict):
-    """What a motor's hardware error (its Hardware Error Status: overload, overheating,
-    input voltage, encoder) does: ``stop`` every axis and end the run resumable, or
-    ``recover``: journal the motor's error flags, temperature and load, hold every axis,
-    wait until it has cooled below the rig's ``health.max_temperature_c`` when the cause
-    is heat (at most ``cool_down_minutes``), reboot it into its configuration, check its
-    position against where it held (the rig's ``health.position_tolerance_deg``) and
-    measure the target in flight again; at most ``max_recoveries`` times per motor per
-    run, after which the run stops resumable. A motion timeout always stops."""
-
-    action: Literal["stop", "recover"] = Field(
-        "stop",
-        description="stop: end the run resumable (reboot the motor by hand); recover: reboot "
-        "it and go on (journaled step by step).",
-    )
-    max_recoveries: int = Field(
-        3, ge=1, le=1000, description="recover: reboots per motor per run, then stop."
-    )
-    cool_down_minutes: float = Field(
-        30.0,
-        gt=0,
-        description="recover: the longest wait for a hot motor to cool below the rig's "
-        "health.max_temperature_c (min); then stop.",
-    )
-
-
-class OnFaultSpec(Strict):
-    """What a target does when a transient fault strikes (`CommError`, `DetectorError`):
-    try again up to ``retries`` times, then ``skip`` it (the reason journaled) or
-    ``abort`` the run (resumable). A calibration's reading is retried the same way and,
-    after the last attempt, ends the run resumable. A motor's hardware error follows
-    ``motor``; a motion timeout always stops every axis and ends the run resumable."""
-
-    retries: int = Field(2, ge=0, le=100, description="Attempts after the first.")
-    then: Literal["skip", "abort"] = Field(
-        "skip",
-        description="After the last attempt: skip the target (journaled) or abort the run "
-        "(resumable).",
-    )
-    motor: MotorFaultSpec = Field(
-        default_factory=MotorFaultSpec,
-        description="What a motor's hardware error does: stop (default) or recover.",
-    )
-
-
-class SaturationSpec(Strict):
-    """A saturated reading is measured again at half the exposure (never below the
-    detector's shortest), up to ``attempts`` more times, when ``remeasure``; a reading
-    still saturated is kept and flagged."""
-
-    remeasure: bool = Field(
-        True, description="Measure a saturated reading again at half the exposure."
-    )
-    attempts: int = Field(6, ge=1, le=60, description="Halvings at most, per reading.")
-
-
-class HealthSpec(Strict):
-    """Motor health (temperature, voltage: limits in the rig file's ``health``) checked
-    every ``every_samples`` targets or ``every_minutes``; beyond a limit the run pauses
-    with the axes holding, checks again every ``poll_s`` and resumes once the condition
-    clears, or ends resumable after ``pause_timeout_minutes``."""
-
-    every_samples: int | None = Field(
-        100, ge=1, description="Check after this many targets (none: not by count)."
-    )
-    every_minutes: float | None = Field(
-        5.0, gt=0, description="Check after this much run time (min; none: not by time)."
-    )
-    poll_s: float = Field(10.0, gt=0, description="While paused, check again this often (s).")
-    pause_timeout_minutes: float = Field(
-        30.0, gt=0, description="End the run resumable after a pause this long (min)."
-    )
-
-
-class AcquisitionSpec(Strict):
-    """How `gonio acquire` runs the plan (docs/explanations/acquisition.md)."""
-
-    calibration: CalibrationSpec = Field(
-        default_factory=CalibrationSpec, description="When the reference standard is read."
-    )
-    on_fault: OnFaultSpec = Field(
-        default_factory=OnFaultSpec, description="What a target does after a transient fault."
-    )
-    saturation: SaturationSpec = Field(
-        default_factory=SaturationSpec, description="What a saturated reading does."
-    )
-    health: HealthSpec = Field(
-        default_factory=HealthSpec, description="When the motors' health is checked."
     )
 
 

@@ -20,7 +20,8 @@ from gonio import params
 from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
-from gonio.planner.schema import AcquisitionSpec, AdaptiveSpec, PlanSpec, Strategy, Warp
+from gonio.planner.policies import AcquisitionSpec
+from gonio.planner.schema import AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE

@@ -22,7 +22,7 @@ from drivers.devices import Devices
 from drivers.values import StampedPositions
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.sweep import merge, run_sweep, target_slots
-from gonio.planner.schema import MotorFaultSpec
+from gonio.planner.policies import MotorFaultSpec
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run, raw_streams
 from gonio.workflows import session

@@ -17,10 +17,11 @@ import yaml
 
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
-from gonio.planner import build, fly, plan_bytes, read_plan, write_plan
+from gonio.planner import build, fly_thin, plan_bytes, read_plan, write_plan
 from gonio.planner.blur import blur_budget_of_width
 from gonio.planner.files import parse_plan
-from gonio.planner.fly import THINNED, sweep_axis
+from gonio.planner.fly_lines import sweep_axis
+from gonio.planner.fly_thin import THINNED
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
@@ -280,9 +281,9 @@ def test_the_thinning_and_the_anchor_gap_bring_the_readings_nearer_uniform(
     thinned = figures(rigs["arch"])
     # Every streamed reading kept (a zero quantile keeps all), every anchor taken: the
     # readings evenly spaced in time along the arcs, as the layout alone gives them.
-    monkeypatch.setattr(fly, "THIN_QUANTILE", 0.0)
-    monkeypatch.setattr(fly, "ANCHOR_GAP", 0.0)
-    monkeypatch.setattr(fly, "THIN_GUESS", 1.0)
+    monkeypatch.setattr(fly_thin, "THIN_QUANTILE", 0.0)
+    monkeypatch.setattr(fly_thin, "ANCHOR_GAP", 0.0)
+    monkeypatch.setattr(fly_thin, "THIN_GUESS", 1.0)
     raw = figures(rigs["arch"])
     assert raw.streamed < thinned.streamed
     assert thinned.coverage_tv < 0.7 * raw.coverage_tv
