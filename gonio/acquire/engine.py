@@ -10,7 +10,8 @@ its supply out of range: `gonio.acquire.suspenders`) and a calibration (the refe
 standard, and a dark reading; when: `gonio.acquire.schedule.Calibrations`). The
 reference is read at the start and at the end of every run. What the engine carries
 from target to target, and rebuilds from the journal when a run resumes, is its
-`gonio.acquire.state.RunState`.
+`gonio.acquire.state.RunState`. A fly plan is measured sweep after sweep instead, with
+the same checks between sweeps (`gonio.acquire.fly_loop.FlyLoop`, a base class of `Engine`).
 
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
 is retried (in a calibration too), then the target skipped (journaled) or the run
@@ -36,7 +37,7 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -50,9 +51,10 @@ from drivers.errors import (
     MotionTimeout,
     MotorFault,
 )
-from drivers.stream import StreamReading
 from drivers.values import Reading
 from gonio.acquire.control import ControlRequests, Request, StopRequested
+from gonio.acquire.ending import EndSession, Outcome
+from gonio.acquire.fly_loop import FlyLoop
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
@@ -62,7 +64,6 @@ from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
-from gonio.acquire.sweep import RawSweep, derive, run_sweep
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
@@ -71,9 +72,6 @@ from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run
 from gonio.store.schema import commanded, coordinate, read_back
-from gonio.types import FloatArray
-
-Outcome = Literal["completed", "interrupted", "fault", "aborted", "paused", "journal"]
 
 
 @dataclass
@@ -86,20 +84,12 @@ class Report:
     message: str = ""
 
 
-class _Stop(Exception):
-    """Ends the session with ``outcome`` (raised inside the loop)."""
-
-    def __init__(self, outcome: Outcome, message: str) -> None:
-        super().__init__(message)
-        self.outcome = outcome
-
-
 #: What ends a session early: each is journaled (`Engine._ending`), the session ended.
-_ENDINGS = (RunInterrupted, DriverError, _Stop, GonioError)
+_ENDINGS = (RunInterrupted, DriverError, EndSession, GonioError)
 
 
 @dataclass
-class Engine:
+class Engine(FlyLoop):
     """Runs ``plan`` on ``devices`` into ``journal`` (see the module docstring).
 
     ``history``: the run as journaled so far (None for a new run). ``stage``: how the
@@ -196,155 +186,13 @@ class Engine:
                 self.progress.advance(done + 1)
                 self.stops.raise_if_requested()
                 self._obey()
-            if self.state.calibrations.closing(self.state.count, measuring=bool(todo.size)):
-                self._calibrate("end")
+            self._closing(bool(todo.size))
         finally:
             self.stops.disarm()  # a signal now must not cut the ending short
 
     def _closing(self, measuring: bool) -> None:
         if self.state.calibrations.closing(self.state.count, measuring=measuring):
             self._calibrate("end")
-
-    # -- a fly plan: sweep after sweep ----------------------------------------------------
-    def _fly(self, todo: np.ndarray) -> None:
-        """Each sweep with a target still to measure, whole (`gonio.acquire.sweep`);
-        a health check and a calibration before it when due."""
-        sweeps = self.plan.sweeps
-        assert sweeps is not None
-        left = np.zeros(len(self.plan), dtype=np.bool_)
-        left[todo] = True
-        ks = [
-            k for k in range(len(sweeps))
-            if left[int(sweeps.first[k]) : int(sweeps.first[k] + sweeps.count[k])].any()
-        ]  # fmt: skip
-        self.progress.start(self.plan, todo)
-        done = 0
-        for k in ks:
-            self._between_targets()
-            done += self._sweep(k)
-            self.progress.advance(min(done, len(todo)))
-            self.stops.raise_if_requested()
-            self._obey()
-        self._closing(bool(ks))
-
-    def _sweep(self, k: int) -> int:
-        """Measure sweep ``k`` and commit it in one transaction; the targets it
-        finished (measured or skipped). Faults follow the plan's ``on_fault``: the
-        sweep is journaled as abandoned (its raw streams with it), then retried,
-        skipped or the run ended (a motor fault: resumable, the sweep redone)."""
-        sweeps = self.plan.sweeps
-        assert sweeps is not None
-        first, count = int(sweeps.first[k]), int(sweeps.count[k])
-        targets = range(first, first + count)
-        self._current = first
-        for name in ("start", "stop"):
-            refused = self._within_limits(getattr(sweeps, name)[k])
-            if refused is not None:
-                with self.journal.transaction():
-                    for i in targets:
-                        self._skip(i, f"sweep {k}: {refused}")
-                return count
-        on_fault = self.spec.on_fault
-        simulation = self.devices.simulation
-        for attempt in range(on_fault.retries + 1):
-            if simulation is not None:
-                simulation.begin_sample(first)
-            began = self.time.now()
-            # About the sweep's length (its readings; a move, settle and ramps besides):
-            # a first Ctrl-C lets a short sweep finish, abandons a long one.
-            self._busy_until = began + int(sweeps.streamed[k]) * sweeps.period_s + 2.0
-            try:
-                raw = self._recovery.attempt(
-                    lambda: run_sweep(
-                        self.devices, self.axes, sweeps, k,
-                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
-                    ),
-                    target=first,
-                )  # fmt: skip
-                break
-            except DriverError as exc:
-                self._hold_all()
-                data = {**self._fault_data(exc), "attempt": attempt + 1}
-                with self.journal.transaction():
-                    self.journal.sweep(k, "abandoned", began, self.time.now(), data, [], [])
-                if isinstance(exc, MotorFault | MotionTimeout) or not isinstance(
-                    exc, CommError | DetectorError
-                ):
-                    raise
-                if attempt < on_fault.retries:
-                    self._event("retry", {**data, **self._sim()}, target=first)
-                    continue
-                if on_fault.then == "skip":
-                    with self.journal.transaction():
-                        for i in targets:
-                            self._skip(i, f"sweep {k}: {type(exc).__name__}: {exc}")
-                    return count
-                self._event("fault", data, target=first)
-                raise _Stop("aborted", f"sweep {k}: {exc}") from None
-        self._commit_sweep(k, attempt + 1, raw)
-        return count
-
-    def _commit_sweep(self, k: int, attempts: int, raw: RawSweep) -> None:
-        """Merge the sweep's streams and journal it, its raw streams, its samples and
-        the targets it did not read (skipped), in one transaction."""
-        sweeps = self.plan.sweeps
-        assert sweeps is not None
-        offset = self.time.offset
-        d = derive(raw, self.axes, sweeps, self.plan.arrival_s, k)
-        merged, extra = d.samples, d.extra
-        request, reply, positions = d.request, d.reply, d.positions
-        first, count = int(sweeps.first[k]), int(sweeps.count[k])
-        state = self._sim()
-        last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
-        data = {
-            "first": first, "count": count, "readings": len(raw.readings),
-            "matched": len(d.matched.index), "kept": len(merged.index), "polls": len(raw.polls),
-            "attempts": attempts,
-        }  # fmt: skip
-        polls = [
-            (a + offset, b + offset, p)
-            for a, b, p in zip(request.tolist(), reply.tolist(), positions.tolist(), strict=True)
-        ]
-        stream = [
-            (
-                r.started_s + offset, r.ended_s + offset, r.value,
-                r.std if math.isfinite(r.std) else None, int(r.saturated),
-                r.device_t_s, None if r.received_s is None else r.received_s + offset,
-            )
-            for r in raw.readings
-        ]  # fmt: skip
-        read = set(merged.target.tolist())
-        with self.journal.transaction():
-            self.journal.sweep(
-                k, "measured", raw.started_s + offset, raw.ended_s + offset, data, polls, stream
-            )
-            for n, r in enumerate(merged.index.tolist()):
-                reading = raw.readings[r]
-                i = int(merged.target[n])
-                self._fly_sample(
-                    i, attempts, raw.started_s, merged.angles[n], reading,
-                    float(merged.smear[n]), float(merged.timing[n]), float(extra[n]),
-                    state if n == last else {},
-                )  # fmt: skip
-            for i in range(first, first + count):
-                if i not in read:
-                    self._skip(i, f"sweep {k}: no reading in the constant-velocity part")
-
-    def _fly_sample(
-        self, i: int, attempts: int, settled_s: float, angles: FloatArray,
-        reading: StreamReading, smear: float, timing: float, extra: float,
-        state: Mapping[str, Any],
-    ) -> None:  # fmt: skip
-        std = reading.std if math.isfinite(reading.std) else 0.0
-        offset = self.time.offset
-        self._write_sample(
-            i, attempts, angles.tolist(), settled_s + offset, state,
-            exposure_s=reading.ended_s - reading.started_s, averages=1, n=1,
-            counts=reading.value, counts_std=math.hypot(std, extra),
-            saturated=int(reading.saturated), remeasured=0,
-            started_s=reading.started_s + offset, ended_s=reading.ended_s + offset,
-            smear_rad=smear, timing_rad=timing,
-        )  # fmt: skip
 
     def _start(self, *, resuming: bool) -> None:
         restored = resuming and not self.calibrate_on_resume and self._restore_simulation()
@@ -418,7 +266,7 @@ class Engine:
         if isinstance(exc, DriverError):  # outside a target's retries: a calibration, the light
             self._event("fault", {**self._fault_data(exc), **self._sim()})
             return "fault", str(exc)
-        if isinstance(exc, _Stop):
+        if isinstance(exc, EndSession):
             return exc.outcome, str(exc)
         return ("journal" if isinstance(exc, JournalError) else "aborted"), str(exc)
 
@@ -499,7 +347,7 @@ class Engine:
                     self._skip(i, f"{type(exc).__name__} after {attempt + 1} attempts: {exc}")
                     return
                 self._event("fault", data, target=i)
-                raise _Stop("aborted", f"target {i}: {exc}") from None
+                raise EndSession("aborted", f"target {i}: {exc}") from None
         reading, exposure, remeasured = self._unsaturated(i, measured.reading, exposure, averages)
         self._journal_sample(i, attempt + 1, measured, reading, exposure, remeasured)
         for kind, data in self._watch.events(reading):
@@ -604,12 +452,12 @@ class Engine:
                 problems = suspension.problems
                 self._event("pause", {"reason": "health", "problems": problems, **self._sim()})
             if suspension.expired(self.time.now()):
-                raise _Stop("paused", suspension.reason())
+                raise EndSession("paused", suspension.reason())
             self.stops.raise_if_requested()
             self.devices.clock.sleep(spec.poll_s)
 
     def _read_health(self) -> list[str]:
-        """Read every motor's health and journal it; what trips the suspenders (`_Stop`
+        """Read every motor's health and journal it; what trips the suspenders (`EndSession`
         if a motor reports a hardware error)."""
         found = assess(self.devices.bus.health(), self.suspenders)
         self._event("health", {**found.data(self.state.count), **self._sim()})
@@ -617,7 +465,7 @@ class Engine:
         self.state.temperatures = dumps(found.temperatures_c)
         if found.flags and not self._recovery.flagged(found.flags):
             axis, flags = next(iter(found.flags.items()))
-            raise _Stop("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
+            raise EndSession("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
         return found.problems
 
     # -- calibration ---------------------------------------------------------------------

@@ -167,7 +167,7 @@ def slowed(devices: Devices, *args: Any, **kwargs: Any) -> Any:
 def test_kill_9_mid_sweep_loses_at_most_that_sweep(
     files: RunFiles, run: Run, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr("gonio.acquire.engine.run_sweep", slowed)  # the children inherit it
+    monkeypatch.setattr("gonio.acquire.fly_loop.run_sweep", slowed)  # the children inherit it
     path = tmp_path / "run.sqlite"
     rng = random.Random(0)
     sweeps = run.plan.sweeps
