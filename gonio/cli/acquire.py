@@ -85,7 +85,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     from gonio.cli import run_table
     from gonio.cli.render import render_summary
     from gonio.planner.files import load_plan_source
-    from gonio.workflows import session
+    from gonio.workflows import preflight, session
 
     progress = progress_module.for_stream(args.quiet)
     argv = ["gonio", *sys.argv[1:]]
@@ -111,17 +111,17 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         scene_text = None
         if args.scene is not None:
             scene, scene_text = session.load_scene_file(args.scene, source.rig)
-        files = session.Files(
+        files = preflight.Files(
             source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
         )
-        session.check_scene(files, source.rig, scene, rehearse=args.rehearse)
+        preflight.check_scene(files, source.rig, scene, rehearse=args.rehearse)
         if args.output is not None:
-            session.check_output(args.output, args.overwrite, files)
+            preflight.check_output(args.output, args.overwrite, files)
         with planning.quiet() if args.quiet else contextlib.nullcontext():
             plan = source.build()
         print(render_summary(plan), flush=True)
         if args.dry_run:
-            for line in session.dry_run(
+            for line in preflight.dry_run(
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
                 rehearse=args.rehearse,
             ):  # fmt: skip

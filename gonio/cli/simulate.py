@@ -23,7 +23,7 @@ from gonio.cli import arguments
 from gonio.cli.run_table import render
 from gonio.planner.files import load_plan_source
 from gonio.rig.constraints import footprint_ok, view_on_sample
-from gonio.workflows import session
+from gonio.workflows import preflight, session
 from gonio.workflows.simulate import Result, simulate_plan
 
 
@@ -114,7 +114,7 @@ def _footprint_note(result: Result) -> list[str]:
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     if args.output is not None:
-        session.check_output(args.output, args.overwrite)
+        preflight.check_output(args.output, args.overwrite)
     source = load_plan_source(args.plan, args.rig)
     scene, text = session.load_scene_file(args.scene, source.rig)
     if args.no_effects:
@@ -122,7 +122,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         from gonio.config import spec_text
 
         text = spec_text(scene)
-    files = session.Files(
+    files = preflight.Files(
         source.path, source.text, source.rig.source, source.rig.text, args.scene, text
     )
     with planning.quiet() if args.quiet else contextlib.nullcontext():

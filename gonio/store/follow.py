@@ -8,9 +8,10 @@ a read-only connection, so it sees a consistent snapshot while ``gonio acquire``
 
 A large run (over `FULL_LIMIT` samples) is read by a share of its targets plus every
 sample committed since, and its stored plan (over `LAZY_PLAN_BYTES`) by its header at
-once and its targets in another process: a run of a million samples opens in seconds,
-not minutes (docs/results/live.md). `writer_holds` tells whether a ``gonio acquire``
-holds the file's writer lock (nothing is locked or opened for writing to find out).
+once and its targets in another process (`gonio.store.plan_view`): a run of a million
+samples opens in seconds, not minutes (docs/results/live.md). `writer_holds` tells
+whether a ``gonio acquire`` holds the file's writer lock (nothing is locked or opened for
+writing to find out).
 """
 
 from __future__ import annotations
@@ -31,12 +32,10 @@ from typing import Any
 
 import numpy as np
 
-from gonio.errors import GonioError
 from gonio.planner.files import parse_plan
-from gonio.planner.model import Plan
-from gonio.rig.model import Rig
-from gonio.store import checks, read
+from gonio.store import checks
 from gonio.store.journal import JournalError, check_version
+from gonio.store.plan_view import PlanArrays, PlanInfo, connect, parse_in_background
 from gonio.store.read import (
     Event,
     Session,
@@ -50,7 +49,6 @@ from gonio.store.read import (
     session_of,
 )
 from gonio.store.schema import samples_table
-from gonio.types import FloatArray
 
 #: The sample columns a follower reads (besides ``utc``, when the table has it).
 COLUMNS = (
@@ -92,90 +90,6 @@ def writer_holds(path: Path) -> bool:
     )
 
 
-@dataclass(frozen=True)
-class PlanInfo:
-    """What a live view needs of the stored plan, from its header alone (cheap even for
-    a plan of a million targets): its name, rig, number of targets, predicted total
-    (s), whether it is a fly plan or an adaptive plan's survey, its parametrization and
-    whether it is isotropic (three coordinates, else four)."""
-
-    name: str
-    rig: Rig
-    targets: int
-    total_s: float
-    fly: bool
-    survey: bool
-    parametrization: str = "rusinkiewicz"
-    isotropic: bool = True
-
-    @classmethod
-    def of(cls, head: bytes, rig_text: str, where: str) -> PlanInfo:
-        """The header of a stored plan's first bytes ``head``; `checks.Bad` (or the rig
-        file's `ConfigError`) when it is not one."""
-        field_ = "meta.plan_file"
-        header: dict[str, Any] = {}
-        for raw in head.split(b"\n")[1:]:
-            if not raw.startswith(b"#"):
-                break
-            try:
-                line = raw.decode("utf-8")
-            except UnicodeDecodeError:
-                break
-            key, _, value = line.removeprefix("#").strip().partition(":")
-            if key in ("spec", "summary"):
-                header[key] = checks.mapping(
-                    checks.json_value(value, f"{field_}.{key}"), f"{field_}.{key}"
-                )
-        if "spec" not in header or "summary" not in header:
-            raise checks.Bad(f"{field_}: expected a stored plan's header, found none")
-        spec, summary = header["spec"], header["summary"]
-        sampling = checks.mapping(spec.get("sampling", {}), f"{field_}.spec.sampling")
-        targets = checks.integer(summary.get("kept"), f"{field_}.summary.kept")
-        if targets < 0:
-            raise checks.Bad(f"{field_}.summary.kept: expected a count, got {targets}")
-        wanted = checks.optional(checks.integer)(sampling.get("target"), f"{field_}.target")
-        travel = checks.number(summary.get("travel_s"), f"{field_}.summary.travel_s")
-        dwell = checks.number(summary.get("dwell_s"), f"{field_}.summary.dwell_s")
-        return cls(
-            name=str(spec.get("name", "")),
-            rig=Rig.from_yaml(where, raw=rig_text.encode("utf-8")),  # ConfigError: one line
-            targets=targets,
-            total_s=travel + dwell,
-            fly=sampling.get("strategy") == "fly",
-            survey=sampling.get("strategy") == "adaptive"
-            and wanted is not None
-            and targets < wanted,
-            parametrization=checks.text(
-                spec.get("parametrization", "rusinkiewicz"), f"{field_}.spec.parametrization"
-            ),
-            isotropic=checks.boolean(spec.get("isotropic", True), f"{field_}.spec.isotropic"),
-        )
-
-
-@dataclass(frozen=True)
-class PlanArrays:
-    """What a live view uses of the stored plan's targets: each one's predicted time
-    (s: the move into it, the settle, the exposures), its (ωi, ωo) and its coordinates
-    in the plan's parametrization (their names: ``coordinate_names``)."""
-
-    per_target_s: FloatArray
-    wi: FloatArray
-    wo: FloatArray
-    coords: FloatArray
-    coordinate_names: tuple[str, ...]
-
-    @classmethod
-    def of(cls, plan: Plan) -> PlanArrays:
-        each = plan.travel_s + plan.rig.spec.settle_s + plan.exposure_s * plan.averages
-        return cls(
-            np.asarray(each, np.float64),
-            plan.wi,
-            plan.wo,
-            np.asarray(plan.coords, np.float64),
-            tuple(plan.coordinate_names),
-        )
-
-
 def _identity(path: Path) -> tuple[int, int] | None:
     """The file ``path`` names (device, inode), None if none."""
     try:
@@ -183,41 +97,6 @@ def _identity(path: Path) -> tuple[int, int] | None:
     except OSError:
         return None
     return st.st_dev, st.st_ino
-
-
-def _connect(path: Path) -> sqlite3.Connection:
-    uri = f"{path.resolve().as_uri()}?mode=ro"
-    return sqlite3.connect(
-        uri, uri=True, isolation_level=None, check_same_thread=False, timeout=read.BUSY_TIMEOUT_S
-    )
-
-
-def _parse_in_background(path: Path, out: Connection) -> None:
-    """Send a large run's `PlanArrays` and its measured targets through ``out`` (or the
-    one line why the plan cannot be read): the work of another process."""
-    os.nice(10)  # after the acquisition and the server
-    result: tuple[PlanArrays, np.ndarray] | str
-    try:
-        with refusing(path):
-            conn = _connect(path)
-            try:
-                conn.execute("BEGIN")
-                meta = decode_meta(conn.execute("SELECT key, value FROM meta").fetchall())
-                raw = conn.execute("SELECT value FROM meta WHERE key = 'plan_file'").fetchone()[0]
-                plan = parse_plan(bytes(raw), f"{path}#plan_file")
-                check_plan(meta, plan)
-                targets = np.array([r[0] for r in conn.execute("SELECT target FROM samples")])
-                conn.execute("COMMIT")
-            finally:
-                conn.close()
-            if targets.dtype != np.int64 and targets.size:
-                raise checks.Bad("samples.target: expected whole numbers")
-            check_targets(targets, len(plan))
-        result = (PlanArrays.of(plan), targets.astype(np.int64))
-    except GonioError as exc:
-        result = str(exc)
-    out.send(result)
-    out.close()
 
 
 @dataclass
@@ -265,7 +144,7 @@ class RunFollower:
             raise JournalError(f"{self.path}: no such run file")
         self._identity = _identity(self.path)
         try:
-            self._conn = _connect(self.path)
+            self._conn = connect(self.path)
         except sqlite3.Error as exc:
             raise JournalError(f"{self.path}: cannot open the run file: {exc}") from None
         try:
@@ -448,9 +327,7 @@ class RunFollower:
         self._load_next = False
         context = multiprocessing.get_context("spawn")
         mine, theirs = context.Pipe(duplex=False)
-        process = context.Process(
-            target=_parse_in_background, args=(self.path, theirs), daemon=True
-        )
+        process = context.Process(target=parse_in_background, args=(self.path, theirs), daemon=True)
         process.start()
         theirs.close()
         self._loader = (process, mine)
@@ -550,8 +427,6 @@ __all__: Sequence[str] = (
     "FULL_LIMIT",
     "KEPT",
     "LAZY_PLAN_BYTES",
-    "PlanArrays",
-    "PlanInfo",
     "RunFollower",
     "writer_holds",
 )

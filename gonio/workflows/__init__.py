@@ -6,7 +6,8 @@ adaptive plan's passes, and simulates a plan end to end.
 ``gonio acquire`` / ``gonio simulate``.
 """
 
-from gonio.workflows.session import Files, SessionResult, dry_run, resume, start
+from gonio.workflows.preflight import Files, dry_run
+from gonio.workflows.session import SessionResult, resume, start
 from gonio.workflows.simulate import Result, measure_targets, simulate_plan
 
 __all__ = [

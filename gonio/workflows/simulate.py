@@ -29,6 +29,7 @@ from gonio.planner.model import Plan
 from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
+from gonio.workflows.preflight import Files
 from sim.devices.instrument import SimulatedInstrument
 from sim.record import SimRun
 from sim.scene import Scene
@@ -90,7 +91,7 @@ def simulate_plan(
     scene: Scene,
     seed: int | None = None,
     *,
-    files: session.Files | None = None,
+    files: Files | None = None,
     output: Path | None = None,
     overwrite: bool = False,
     progress: Observer | None = None,
@@ -99,9 +100,7 @@ def simulate_plan(
     ``files``: the texts the run is made from (default: the plan's and rig's, and the
     scene as validated); ``output``: keep the run journal there."""
     if files is None:
-        files = session.Files(
-            None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene)
-        )
+        files = Files(None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene))
     started = time.perf_counter()
     outcome = session.start(
         plan, files, scene=scene, output=output, overwrite=overwrite, seed=seed,

@@ -26,7 +26,7 @@ from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
 from gonio.rig.model import Reason, Rig
-from gonio.workflows.session import refuse_fly
+from gonio.workflows.preflight import refuse_fly
 from tests.conftest import CONFIGS, RIG_FILES
 
 FLY = CONFIGS / "plans" / "fly.yaml"

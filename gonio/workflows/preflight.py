@@ -1,0 +1,200 @@
+"""What is checked before a run creates or moves anything: the files it is made from
+(`Files`), the backend the rig chooses and the scene it needs (`check_scene`), the run
+file to create (`check_output`), a fly plan's backend (`refuse_fly`) and the backend's
+devices (`preflight`, with the bus hygiene findings of `gonio.workflows.hygiene`).
+`dry_run` checks all of it, and that the devices answer, without moving.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from drivers.base import dark_subtracted, reading_unit
+from gonio.acquire.reference import geometry_label, reference_pose
+from gonio.config import ConfigError
+from gonio.errors import GonioError
+from gonio.output import refuse_inputs
+from gonio.planner.model import Plan, content_hash, sha256
+from gonio.rig.instrument import SerialInterfaceSpec
+from gonio.rig.model import Rig
+from gonio.workflows import backends, hygiene
+from gonio.workflows.backends import BackendKind
+from sim.scene import Scene
+
+#: Journal bytes per sample, measured on the shipped plans (with a simulated
+#: snapshot), for the disk-space check of a dry run; doubled there for the WAL.
+BYTES_PER_SAMPLE = 700
+
+
+@dataclass(frozen=True)
+class Files:
+    """The files a run is made from: paths (None: made in code) and bytes."""
+
+    plan_path: Path | None
+    plan_text: bytes
+    rig_path: Path | None
+    rig_text: bytes
+    scene_path: Path | None = None
+    scene_text: bytes | None = None
+
+    def hashes(self) -> dict[str, str | None]:
+        return {
+            "plan_sha256": sha256(self.plan_text),
+            "rig_sha256": sha256(self.rig_text),
+            "scene_sha256": None if self.scene_text is None else sha256(self.scene_text),
+            "content": content_hash(self.plan_text, self.rig_text, self.scene_text),
+        }
+
+
+def check_scene(
+    files: Files,
+    rig: Rig,
+    scene: Scene | None,
+    *,
+    rehearse: bool = False,
+    force_simulated: bool = False,
+) -> BackendKind:
+    """The backend the rig file chooses (``force_simulated``: the simulated one whatever
+    its bus); `ConfigError` if that backend needs a scene and none is given (a command
+    checks it before planning, so the refusal is its only line)."""
+    kind: BackendKind = "simulated" if force_simulated else backends.kind_of(rig, rehearse)
+    if backends.needs_scene(rig, kind) and scene is None:
+        why = "the detector is simulated"
+        if kind == "rehearsal":
+            why = "--rehearse simulates what the detector sees"
+        raise ConfigError(f"{files.rig_path or 'rig'}: {why}: give --scene")
+    return kind
+
+
+def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None) -> None:
+    """`ConfigError` unless a run file can be created at ``path`` (checked by creating
+    and removing a file beside it, not only by permission bits) and is none of the run's
+    ``inputs``."""
+    if path is None:
+        return
+    if inputs is not None:
+        refuse_inputs(path, "-o", (inputs.plan_path, inputs.rig_path, inputs.scene_path))
+    if path.is_dir():
+        raise ConfigError(f"-o {path}: is a folder; expected a run file name")
+    if (path.exists() or path.is_symlink()) and not overwrite:
+        raise ConfigError(
+            f"-o {path}: a run file already exists; give another name, continue it with "
+            "--resume, or replace it with --overwrite"
+        )
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise ConfigError(f"-o {path}: the folder {folder} does not exist")
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=f".{path.name}.", suffix=".probe"):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"-o {path}: cannot write in {folder}: {exc.strerror or exc}") from None
+
+
+def refuse_fly(plan: Plan, kind: str) -> None:
+    """`ConfigError` for a fly plan on a backend that does not acquire them: hardware
+    (rehearse it first), or a rehearsal whose detector cannot stream (a PyMeasure
+    instrument, a serial detector without a ``stream`` section)."""
+    if not plan.is_fly or kind == "simulated":
+        return
+    if kind == "hardware":
+        raise ConfigError(
+            f"plan {plan.spec.name!r}: fly plans are acquired on the simulated and rehearsal "
+            "backends only (this run's is hardware); use `gonio simulate`, `gonio acquire "
+            "--rehearse`, or a stop-and-go plan"
+        )
+    interface = plan.rig.spec.detector.interface
+    if interface.kind == "pymeasure" or (
+        isinstance(interface, SerialInterfaceSpec) and interface.stream is None
+    ):
+        where = plan.rig.source or "rig"
+        raise ConfigError(
+            f"{where}: detector.interface: plan {plan.spec.name!r} is a fly plan and this "
+            f"{interface.kind} detector cannot stream; expected a serial detector with a "
+            "stream section, or kind: simulated"
+        )
+
+
+def preflight(
+    plan: Plan, backend: backends.Backend, plan_path: Path | None, rig: Rig | None = None
+) -> list[hygiene.Finding]:
+    """Refuse, before anything is created or moved, a run the backend cannot finish;
+    the findings of the bus hygiene checks (`gonio.workflows.hygiene`) on the devices of
+    ``rig`` (default the plan's), whose warnings the caller shows."""
+    reference_pose(plan.rig)  # a reference reading the calibration could not trust
+    spec = plan.spec.acquisition.calibration
+    # A detector whose readings are dark-subtracted (a lock-in) takes no dark reading.
+    subtracted = dark_subtracted(backend.devices.detector)
+    if spec.dark and backend.devices.light is None and not subtracted:
+        raise ConfigError(
+            f"{plan_path or 'plan'}: acquisition.calibration.dark: the rig's light cannot be "
+            "switched (light.switch: none), so no dark reading can be taken; give the rig a "
+            "switch, or set dark: false (the dark signal is then taken as 0 counts)"
+        )
+    stage = backend.stage
+    if isinstance(stage, backends.OperatorStage) and not stage.can_ask():
+        raise GonioError(
+            "the reference standard is put on the stage by the operator and no one can be "
+            "asked (no terminal): run gonio acquire from a terminal"
+        )
+    return hygiene.backend_findings(rig or plan.rig, backend)
+
+
+def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | None, overwrite: bool,
+            rehearse: bool = False) -> list[str]:  # fmt: skip
+    """Check what a run needs without moving anything; the lines to print (raises a
+    `GonioError` at the first problem)."""
+    rig = plan.rig
+    kind = check_scene(files, rig, scene, rehearse=rehearse)
+    refuse_fly(plan, kind)
+    lines = [f"backend {kind}: rig {rig.spec.name!r} ({files.rig_path or 'in code'})"]
+    lo, hi = rig.limits[:, 0], rig.limits[:, 1]
+    outside = ~np.all((plan.angles >= lo) & (plan.angles <= hi), axis=1)
+    if outside.any():
+        raise GonioError(
+            f"{int(outside.sum())} targets lie outside the axis limits (first: target "
+            f"{int(np.flatnonzero(outside)[0])}); re-plan with this rig"
+        )
+    lines.append(f"targets: {len(plan)} within the axis limits")
+    reference_pose(rig)
+    lines.append(
+        f"reference standard: read at {geometry_label(rig)} on "
+        f"{rig.reference_diameter_mm:g} mm, unclipped"
+    )
+    check_output(output, overwrite, files)
+    if output is not None:
+        folder = output.parent if str(output.parent) else Path(".")
+        need = 2 * BYTES_PER_SAMPLE * len(plan) + (1 << 20)
+        free = shutil.disk_usage(folder).free
+        if free < need:
+            raise GonioError(
+                f"-o {output}: {free / 1e6:.1f} MB free in {folder}; the run needs about "
+                f"{need / 1e6:.1f} MB"
+            )
+        lines.append(
+            f"output: {output} writable, {free / 1e9:.1f} GB free (needs {need / 1e6:.1f} MB)"
+        )
+    backend = backends.build(kind, rig, scene, None if scene is None else scene.seed, time.time())
+    try:
+        # what a run refuses, its dry run refuses
+        findings = preflight(plan, backend, files.plan_path)
+        lines += [str(f) for f in findings]
+        with backend.devices as devices:
+            positions = devices.bus.positions()
+            health = devices.bus.health()
+            reading = devices.detector.measure(devices.detector.exposure_range_s[0], 1)
+        lines.append(
+            f"motors: {len(positions)} axes answer, "
+            f"{max(h.temperature_c for h in health.values()):g} °C at most"
+        )
+        unit = reading_unit(devices.detector)
+        lines.append(f"detector: answers ({reading.value:g} {unit} at its shortest exposure)")
+    finally:
+        backend.close()
+    return lines
