@@ -166,7 +166,7 @@ def refusing(path: Path) -> Iterator[None]:
                 f"{BUSY_TIMEOUT_S:g} s waited); read it when that process is done"
             ) from None
         raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
-    except sqlite3.DatabaseError as exc:
+    except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:  # a text stored damaged
         raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
     except checks.Bad as exc:
         raise JournalError(f"{path}: not a readable run file: {exc}") from None
