@@ -122,7 +122,6 @@ class RunFollower:
     events: list[Event] = field(init=False, default_factory=list)
     sessions: tuple[Session, ...] = field(init=False, default=())
     _conn: sqlite3.Connection = field(init=False, repr=False)
-    _parts: dict[str, list[np.ndarray]] = field(init=False, repr=False)
     _top: int = field(init=False, default=-1)  # the largest target read
     _retried_targets: set[int] = field(init=False, default_factory=set)
     _last_event: int = field(init=False, default=0)
@@ -150,7 +149,7 @@ class RunFollower:
         try:
             with refusing(self.path):
                 check_version(self._conn, self.path)
-            self._parts = {}
+            self.samples = {}
             self.refresh()
         except BaseException:
             self._conn.close()
@@ -209,7 +208,7 @@ class RunFollower:
             sample_columns(names, [], table)  # a column missing
             wanted = [c for c in (*COLUMNS, "utc") if c in names]
             quoted = ", ".join(f'"{c}"' for c in wanted)
-            first = not self._parts
+            first = not self.samples
             measured, top, recent = self.measured, self._top, None
             if first:  # one scan of the table: later reads seek by target (the rowid)
                 count = conn.execute("SELECT count(*) FROM samples").fetchone()[0]
@@ -364,27 +363,20 @@ class RunFollower:
 
     def _add_samples(self, columns: Mapping[str, np.ndarray], track: bool) -> None:
         names = [n for n in columns if n != "utc"]
-        if not self._parts:  # the first read (its columns' dtypes, even when empty)
-            self._parts = {n: [columns[n]] for n in names}
+        if not self.samples:  # the first read (its columns' dtypes, even when empty)
+            samples = {n: columns[n] for n in names}
         elif len(columns["target"]):
-            for n in names:
-                self._parts[n].append(columns[n])
+            samples = {n: np.concatenate([self.samples[n], columns[n]]) for n in names}
         else:
             return
         with self._lock:
             if self._done is not None:
                 self._done[columns["target"]] = True
-        self.samples = {n: self._column(n) for n in self._parts}
+        self.samples = samples
         if track and "utc" in columns:
             ended, utc = columns["ended_s"][-RATE_WINDOW:], columns["utc"][-RATE_WINDOW:]
             self._recent.extend(zip(ended.tolist(), map(_epoch, utc), strict=True))
             self._recent = self._recent[-RATE_WINDOW:]
-
-    def _column(self, name: str) -> np.ndarray:
-        parts = self._parts[name]
-        if len(parts) > 1:
-            parts[:] = [np.concatenate(parts)]
-        return parts[0]
 
     # -- what is derived ---------------------------------------------------------------
     @property
