@@ -5,7 +5,8 @@ Implements `drivers.base.MotorBus` (every rule of the contract). Nothing sleeps:
 (the rig file's velocity and acceleration; `gonio.rig.travel`), so a simulated run
 reports the hours the real rig would take in the seconds it computes. The rig's settle
 dwell is the caller's to wait, as on hardware. Faults are injected from the scene's
-``faults:`` rules (`sim.faults`) for the sample named by `begin_sample`.
+``faults:`` rules (`sim.faults`) for the sample named by `begin_sample`; their state and
+the health they leave are `sim.devices.motor_faults.MotorFaults`.
 
 Positions: each axis moves from where it is to its goal; a new goal starts a new
 profile from the present position (at rest: blending is not modelled). With the
@@ -35,12 +36,10 @@ import numpy as np
 from drivers.devices import Resource
 from drivers.dynamixel.wire import poll_seconds
 from drivers.errors import (
-    CommError,
     DeviceClosed,
     DriverError,
     LimitError,
     MotionTimeout,
-    MotorFault,
     TorqueOff,
 )
 from drivers.sweep import sweep_profile
@@ -48,7 +47,8 @@ from drivers.values import Health, Recovered, StampedPositions
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.clock import ManualClock
-from sim.faults import MOTOR_KINDS, FaultInjector, FaultRule
+from sim.devices.motor_faults import MotorFaults
+from sim.faults import FaultInjector, FaultRule
 from sim.physics import streams as streams_module
 from sim.scene import PositionErrorSpec
 
@@ -145,9 +145,9 @@ class SimMotorBus(Resource):
         self.rig = rig
         self.clock = clock
         streams = streams or streams_module.Streams(0)
-        self._faults = faults or FaultInjector((), streams)
         self._names = rig.axes
-        self._motor_ids = {a.name: a.motor_id for a in rig.bus_axes()}
+        motor_ids = {a.name: a.motor_id for a in rig.bus_axes()}
+        self._faults = MotorFaults(faults or FaultInjector((), streams), self._names, motor_ids)
         self._index = {n: i for i, n in enumerate(self._names)}
         self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
         self._v, self._a = rig.velocity, rig.acceleration
@@ -171,11 +171,6 @@ class SimMotorBus(Resource):
         self._open = False
         self._torque = True
         self._sample = 0  # the sample the next move belongs to (streams, faults)
-        self._pending: FaultRule | None = None  # a fault that strikes during this move
-        self._latched: dict[str, tuple[str, ...]] = {}  # faulted axes and their flags
-        self._hot: tuple[str, float, float] | None = None  # overheat: axis, °C, until (s)
-        self._shift: dict[str, float] = {}  # how far an axis's encoder jumps at its reboot
-        self._sag: tuple[float, float] | None = None  # supply sag: V, until (s)
 
     # -- Resource / MotorBus ----------------------------------------------------------
     @property
@@ -228,8 +223,7 @@ class SimMotorBus(Resource):
             goal[i] = value
         if not self._torque:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
-        if self._latched:
-            raise self._fault_error(*next(iter(self._latched.items())))
+        self._faults.check_clear()
         return goal
 
     def velocity_limits(self) -> dict[str, float]:
@@ -276,13 +270,7 @@ class SimMotorBus(Resource):
             self._end = self._t0 + profile_duration(here, goal, v, a)
         k = self._moves.get(self._sample, 0)
         self._moves[self._sample] = k + 1
-        self._pending = self._faults.fired(self._sample, k, MOTOR_KINDS) if self._faults else None
-        if self._pending is not None and self._pending.kind == "overheat":
-            rule, self._pending = self._pending, None
-            self._hot = (rule.axis or self._names[0], rule.temperature_c, self._t0 + rule.for_s)
-        elif self._pending is not None and self._pending.kind == "supply_sag":
-            rule, self._pending = self._pending, None
-            self._sag = (rule.voltage_v, self._t0 + rule.for_s)
+        self._faults.arm(self._sample, k, self._t0)
         if self._model is not None:
             axes = len(goal)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -301,8 +289,8 @@ class SimMotorBus(Resource):
         ``timeout_s`` and raise `MotionTimeout`. An injected fault strikes half-way
         through the move: every axis is held, then the fault is raised."""
         self._check_open()
-        if self._pending is not None:
-            self._strike(self._pending, timeout_s)
+        if self._faults.pending is not None:
+            self._strike(self._faults.pending, timeout_s)
         remaining = self._end - self.clock.now()
         if remaining > timeout_s:
             self.clock.advance(timeout_s)
@@ -316,7 +304,7 @@ class SimMotorBus(Resource):
 
     def _strike(self, rule: FaultRule, timeout_s: float) -> None:
         """Raise the injected fault ``rule`` of the present move, holding every axis."""
-        self._pending = None
+        self._faults.disarm()
         now = self.clock.now()
         if rule.kind == "motion_timeout":
             self.clock.advance(timeout_s)
@@ -328,33 +316,7 @@ class SimMotorBus(Resource):
         if self._end > now:
             self.clock.advance_to(now + 0.5 * (self._end - now))
         self._hold()
-        self._raise_fault(rule)
-
-    def _raise_fault(self, rule: FaultRule) -> None:
-        """Raise the injected motor fault ``rule`` (the axes already held)."""
-        if rule.kind == "comm_error":
-            what = "no status packet" if rule.packet == "lost" else "a corrupt status packet (CRC)"
-            raise CommError(
-                f"{what} from the bus during the move into sample {self._sample} "
-                "(injected); every axis told to hold",
-                port="simulated",
-            )
-        axis = rule.axis or self._names[0]
-        self._latched[axis] = rule.flags
-        if rule.shift_deg:
-            self._shift[axis] = math.radians(rule.shift_deg)
-        if "overheating" in rule.flags:  # hot from now on, for the rule's time
-            self._hot = (axis, rule.temperature_c, self.clock.now() + rule.for_s)
-        raise self._fault_error(axis, rule.flags)
-
-    def _fault_error(self, axis: str, flags: tuple[str, ...]) -> MotorFault:
-        motor_id = self._motor_ids[axis]
-        return MotorFault(
-            f"motor {motor_id} (axis {axis!r}) reports a hardware error: {', '.join(flags)}",
-            motor_id=motor_id,
-            axis=axis,
-            flags=flags,
-        )
+        raise self._faults.strike(rule, self._sample, self.clock.now())
 
     def positions(self) -> dict[str, float]:
         """The encoder's reading of each axis (rad)."""
@@ -369,13 +331,13 @@ class SimMotorBus(Resource):
         self._check_open()
         request_s = self.clock.now()
         self.clock.advance(0.5 * self.poll_s)
-        rule = self._pending
+        rule = self._faults.pending
         halfway = self.clock.now() >= 0.5 * (self._t0 + self._end)
         if rule is not None and rule.kind != "motion_timeout" and halfway:
-            self._pending = None
+            self._faults.disarm()
             self.clock.advance(0.5 * self.poll_s)
             self._hold()
-            self._raise_fault(rule)
+            raise self._faults.strike(rule, self._sample, self.clock.now())
         here = self._present_encoder()
         if self._model is not None:
             here = self._model.quantize(here)
@@ -428,20 +390,20 @@ class SimMotorBus(Resource):
     @property
     def overheat(self) -> tuple[str, float, float] | None:
         """An injected overheat in force: (axis, °C, until when on the clock), or None."""
-        return self._hot
+        return self._faults.overheat
 
     def set_overheat(self, hot: tuple[str, float, float] | None) -> None:
         """Continue an overheat (a resumed run)."""
-        self._hot = hot
+        self._faults.overheat = hot
 
     @property
     def supply_sag(self) -> tuple[float, float] | None:
         """An injected supply sag in force: (V, until when on the clock), or None."""
-        return self._sag
+        return self._faults.supply_sag
 
     def set_supply_sag(self, sag: tuple[float, float] | None) -> None:
         """Continue a supply sag (a resumed run)."""
-        self._sag = sag
+        self._faults.supply_sag = sag
 
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
@@ -462,7 +424,7 @@ class SimMotorBus(Resource):
         here = self._present_encoder()
         self._start, self._goal, self._t0 = here, here, self.clock.now()
         self._end = self._t0
-        self._pending = None
+        self._faults.disarm()
 
     def torque(self, on: bool) -> None:
         self._check_open()
@@ -470,35 +432,21 @@ class SimMotorBus(Resource):
             self._hold()
         self._torque = bool(on)
 
-    def _hot_now(self) -> tuple[str, float, float] | None:
-        """The injected overheat still in force now, or None."""
-        return self._hot if self._hot is not None and self.clock.now() < self._hot[2] else None
-
     def health(self) -> dict[str, Health]:
         """Temperatures (an injected overheat's axis: its temperature until it has cooled,
         else 35 °C), 12 V, the latched flags; the load is not modelled (None)."""
         self._check_open()
-        hot = self._hot_now()
-        now = self.clock.now()
-        volts = self._sag[0] if self._sag is not None and now < self._sag[1] else 12.0
-        return {
-            n: Health(
-                temperature_c=hot[1] if hot is not None and hot[0] == n else 35.0,
-                voltage_v=volts,
-                error_flags=self._latched.get(n, ()),
-            )
-            for n in self._names
-        }
+        return self._faults.health(self.clock.now())
 
     def reboot(self, axes: tuple[str, ...] | None = None) -> tuple[str, ...]:
         """Clear the latched faults (of ``axes``, or every faulted axis), holding; the
         axes rebooted."""
         self._check_open()
-        names = tuple(self._latched) if axes is None else tuple(axes)
+        names = tuple(self._faults.latched) if axes is None else tuple(axes)
         for name in names:
             if name not in self._index:
                 raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(self._names)}")
-            self._latched.pop(name, None)
+            self._faults.clear(name)
         self._hold()
         return names
 
@@ -513,12 +461,7 @@ class SimMotorBus(Resource):
         self._hold()
         i = self._index[axis]
         held = float(self._goal[i])
-        flags = self._latched.get(axis, ())
-        hot = self._hot_now()
-        if "overheating" in flags and hot is not None and hot[0] == axis:
-            raise self._fault_error(axis, flags)
-        self._latched.pop(axis, None)
-        shift = self._shift.pop(axis, 0.0)
+        shift = self._faults.recover(axis, self.clock.now())
         if shift:  # the encoder jumps, the joint stays: true = encoder + error
             self._goal = self._goal.copy()
             self._goal[i] += shift

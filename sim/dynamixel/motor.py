@@ -1,12 +1,12 @@
-"""One emulated X-series motor: its control-table memory, the write rules, and its motion.
+"""One emulated X-series motor: its control-table memory, the write rules, the backup.
 
 The memory is the table of :mod:`sim.dynamixel.table` (the driver's items plus Startup
 Configuration, the feedforward gains, Backup Ready and the Indirect Address/Data blocks;
 addresses 0-661, little endian); writes go through :mod:`sim.dynamixel.rules` (Indirect
-Data resolved there) and a rejected write changes nothing. Motion follows
-:mod:`sim.dynamixel.motion` on the motor's clock; derived registers (Present Position,
-Present Velocity, Moving, Moving Status, trajectories, Realtime Tick) are computed
-whenever they are read.
+Data resolved there) and a rejected write changes nothing. Motion and heat are the
+motor's :mod:`sim.dynamixel.drive` on its clock, started from the registers written;
+derived registers (Present Position, Present Velocity, Moving, Moving Status,
+trajectories, Realtime Tick, Present Temperature) are computed whenever they are read.
 
 Position frames (e-manual): Present Position = s·shaft + Homing Offset, with s = −1 in
 reverse Drive Mode (the offset's sign is not reversed); position mode ignores an offset
@@ -24,7 +24,6 @@ Configuration (60) bit 1 restores the backed-up RAM items and bit 0 turns torque
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 from collections import deque
@@ -39,17 +38,8 @@ from drivers.dynamixel.control_table import (
     TICKS_PER_REV,
 )
 from sim.clock import TimeSource
-from sim.dynamixel.motion import (
-    INF,
-    TICKS_PER_S2_PER_ACCELERATION_UNIT,
-    TICKS_PER_S_PER_VELOCITY_UNIT,
-    ProfileType,
-    Trajectory,
-    at_rest,
-    move,
-    move_timed,
-    spin,
-)
+from sim.dynamixel.drive import NOMINAL_TEMPERATURE, Drive, Heat
+from sim.dynamixel.motion import TICKS_PER_S_PER_VELOCITY_UNIT
 from sim.dynamixel.protocol import ALERT, StatusError
 from sim.dynamixel.rules import (
     MULTI_TURN,
@@ -84,9 +74,8 @@ _POSITION_MODE_HOMING_LIMIT = 1024
 GOAL_LOG_SIZE = 100_000
 _GOAL = BY_NAME["goal_position"]
 
-#: Present Input Voltage (0.1 V) and Present Temperature (°C) of a healthy motor.
+#: Present Input Voltage (0.1 V) of a healthy motor (its temperature: `NOMINAL_TEMPERATURE`).
 NOMINAL_VOLTAGE = 120
-NOMINAL_TEMPERATURE = 30
 _OVERHEATING = next(bit for bit, name in HARDWARE_ERROR_BITS.items() if name == "overheating")
 
 #: CONTROL_TABLE_BACKUP (0x20): its parameters are an option then the magic "CTRL";
@@ -95,10 +84,6 @@ BACKUP_MAGIC = b"CTRL"
 BACKUP_STORE = 0x01
 BACKUP_RESTORE = 0x02
 BACKUP_FIRMWARE = 45
-
-
-#: Trajectories (moves and holds) a motor remembers for `EmulatedMotor.position_at`.
-PAST_TRAJECTORIES = 8
 
 
 def _defaults() -> bytearray:
@@ -149,15 +134,11 @@ class EmulatedMotor:
         self._mem = bytearray(_DEFAULTS)
         now = clock()
         self._boot = now
-        self._t0 = now
-        self._traj: Trajectory = at_rest(position)
-        #: The trajectories before the present one (start time, trajectory), newest last.
-        self._past: deque[tuple[float, Trajectory]] = deque(maxlen=PAST_TRAJECTORIES)
-        self._kind = ProfileType.STEP
+        self._drive = Drive(position, now)
         self._registered: tuple[int, bytes] | None = None
         self._goals: deque[int] = deque(maxlen=GOAL_LOG_SIZE)
         self._backup: bytes | None = None  # a copy of the memory when the backup was stored
-        self._heat: tuple[float, float, float] | None = None  # since (s), °C then, τ (s)
+        self._heat = Heat()
         self._put("model_number", model)
         self._put("firmware_version", firmware)
         self._put("id", motor_id)
@@ -221,20 +202,16 @@ class EmulatedMotor:
         """The physical shaft angle (ticks, counter-clockwise seen from the front), which
         Homing Offset and the reverse bit of Drive Mode map to Present Position."""
         with self._lock:
-            position, _ = self._traj.at(self._clock() - self._t0)
-            return self._to_shaft(position)
+            return self._to_shaft(self._drive.position(self._clock()))
 
     def position_at(self, t: float) -> float:
         """Present Position (ticks, before rounding to the register) at time ``t`` on the
         motor's clock, along its present trajectory (valid from the last goal, torque
-        change or stop on) or, before it, along the last `PAST_TRAJECTORIES` moves and
-        holds: the truth a test compares polled positions with."""
+        change or stop on) or, before it, along the last
+        `sim.dynamixel.drive.PAST_TRAJECTORIES` moves and holds: the truth a test compares
+        polled positions with."""
         with self._lock:
-            if t < self._t0:
-                for t0, traj in reversed(self._past):
-                    if t >= t0:
-                        return traj.at(t - t0)[0]
-            return self._position(t)
+            return self._drive.position_at(t)
 
     # -- host-facing access ---------------------------------------------------------------
 
@@ -311,8 +288,7 @@ class EmulatedMotor:
         """
         with self._lock:
             if name == "present_position":
-                self._t0 = self._clock()
-                self._traj = at_rest(value)
+                self._drive.place(value, self._clock())
             self._put(name, value)
 
     # -- instructions other than READ / WRITE ---------------------------------------------
@@ -341,7 +317,7 @@ class EmulatedMotor:
         Position back within one turn (the multi-turn count is lost), tick restarts."""
         with self._lock:
             now = self._clock()
-            position, _ = self._traj.at(now - self._t0)
+            position = self._drive.position(now)
             self._boot = now
             self._registered = None
             self._reset_ram(self._one_turn(position))
@@ -363,8 +339,7 @@ class EmulatedMotor:
                 self._put("id", keep_id)
             if option == 0x02:
                 self._put("baud_rate", keep_baud)
-            self._t0 = self._clock()
-            self._traj = at_rest(self._from_shaft(shaft))
+            self._drive.place(self._from_shaft(shaft), self._clock())
             self.reboot()
         return StatusError.NONE
 
@@ -372,10 +347,9 @@ class EmulatedMotor:
         """CLEAR (option 1): Present Position back within one turn; Result Fail if moving."""
         with self._lock:
             now = self._clock()
-            if self._traj.running(now - self._t0):
+            if self._drive.running(now):
                 return StatusError.RESULT_FAIL
-            position, _ = self._traj.at(now - self._t0)
-            self._hold(self._one_turn(position), now)
+            self._hold(self._one_turn(self._drive.position(now)), now)
             return StatusError.NONE
 
     def heat(self, celsius: float, time_constant_s: float) -> None:
@@ -387,7 +361,7 @@ class EmulatedMotor:
             raise ValueError(f"the time constant must be > 0 s, got {time_constant_s}")
         with self._lock:
             now = self._clock()
-            self._heat = (now, float(celsius), float(time_constant_s))
+            self._heat.set(now, celsius, time_constant_s)
             self._cool(now)
 
     def raise_alert(self, bit: int) -> None:
@@ -437,8 +411,7 @@ class EmulatedMotor:
             self._mem[:EEPROM_END] = self._backup[:EEPROM_END]
             self._put("model_number", model)
             self._put("firmware_version", firmware)
-            self._t0 = self._clock()
-            self._traj = at_rest(self._from_shaft(shaft))
+            self._drive.place(self._from_shaft(shaft), self._clock())
             self.reboot()
 
     # -- internals ------------------------------------------------------------------------
@@ -466,7 +439,7 @@ class EmulatedMotor:
             for it in BACKUP_RAM_ITEMS:
                 end = it.address + it.size
                 self._mem[it.address : end] = self._backup[it.address : end]
-        self._kind = ProfileType.STEP
+        self._drive.reset_kind()
         now = self._clock()
         self._hold(position, now)
         self._put("goal_position", _wrap32(round(position)))
@@ -477,7 +450,7 @@ class EmulatedMotor:
     def _apply(self, writes: dict[int, int]) -> None:
         """Store a checked scattered write (target address → byte) and its side effects."""
         now = self._clock()
-        position, _ = self._traj.at(now - self._t0)
+        position = self._drive.position(now)
         before = {name: self._raw(name) for name in _WATCHED}
         shaft = self._to_shaft(position)
         for a, byte in writes.items():
@@ -512,29 +485,17 @@ class EmulatedMotor:
         start(now)
 
     def _start_move(self, now: float) -> None:
-        position, velocity = self._traj.at(now - self._t0)
-        goal = self._raw("goal_position")
-        pv, pa = self._raw("profile_velocity"), self._raw("profile_acceleration")
-        limit = self._raw("velocity_limit")
-        time_based = bool(self._raw("drive_mode") & DRIVE_MODE_TIME_BASED)
-        if time_based and pv:
-            traj = move_timed(position, goal, pv / 1000.0, pa / 1000.0)
-        else:
-            # Profile Velocity 0: as fast as the Velocity Limit allows (0 too: a step).
-            v = min(pv, limit) if pv and limit else (pv or limit)
-            v_max = v * TICKS_PER_S_PER_VELOCITY_UNIT if v else INF
-            a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa and not time_based else INF
-            traj = move(position, velocity, goal, v_max, a_max, None if pv else ProfileType.STEP)
-        self._past.append((self._t0, self._traj))
-        self._t0, self._traj, self._kind = now, traj, traj.kind
+        self._drive.move(
+            now,
+            self._raw("goal_position"),
+            self._raw("profile_velocity"),
+            self._raw("profile_acceleration"),
+            self._raw("velocity_limit"),
+            bool(self._raw("drive_mode") & DRIVE_MODE_TIME_BASED),
+        )
 
     def _start_spin(self, now: float) -> None:
-        position, velocity = self._traj.at(now - self._t0)
-        pa = self._raw("profile_acceleration")
-        a_max = pa * TICKS_PER_S2_PER_ACCELERATION_UNIT if pa else INF
-        goal = self._raw("goal_velocity") * TICKS_PER_S_PER_VELOCITY_UNIT
-        self._t0, self._traj = now, spin(position, velocity, goal, a_max)
-        self._kind = self._traj.kind
+        self._drive.spin(now, self._raw("goal_velocity"), self._raw("profile_acceleration"))
 
     def _torque_on(self, now: float) -> None:
         """Torque on: position mode wraps to one turn; the goal becomes the present position."""
@@ -550,11 +511,10 @@ class EmulatedMotor:
         self._hold(self._position(now), now)
 
     def _position(self, now: float) -> float:
-        return self._traj.at(now - self._t0)[0]
+        return self._drive.position(now)
 
     def _hold(self, position: float, now: float) -> None:
-        self._past.append((self._t0, self._traj))
-        self._t0, self._traj = now, at_rest(position)
+        self._drive.hold(position, now)
 
     def _homing(self) -> int:
         offset = self._raw("homing_offset")
@@ -577,27 +537,21 @@ class EmulatedMotor:
 
     def _cool(self, now: float) -> None:
         """Present Temperature on the way down from `heat`; Overheating above the limit."""
-        if self._heat is None:
+        temperature = self._heat.temperature(now)
+        if temperature is None:
             return
-        since, celsius, tau = self._heat
-        excess = (celsius - NOMINAL_TEMPERATURE) * math.exp(-(now - since) / tau)
-        self._put("present_temperature", min(max(round(NOMINAL_TEMPERATURE + excess), 0), 255))
+        self._put("present_temperature", temperature)
         if self._raw("present_temperature") > self._raw("temperature_limit"):
             self.raise_alert(_OVERHEATING)
 
     def _refresh(self) -> None:
         now = self._clock()
         self._cool(now)
-        elapsed = now - self._t0
-        traj = self._traj
-        position, velocity = traj.at(elapsed)
-        running = traj.running(elapsed) and not traj.endless
-        if not running and not traj.endless and traj.segments:
-            self._hold(traj.target, now)
+        position, velocity, running, endless = self._drive.sample(now)
         present = _wrap32(round(position))
         speed = _wrap32(round(velocity / TICKS_PER_S_PER_VELOCITY_UNIT))
         moving = running or abs(speed) > self._raw("moving_threshold")
-        status = int(self._kind)
+        status = int(self._drive.kind)
         if running:
             status |= 0x02
         mode = self._raw("operating_mode")
@@ -613,7 +567,7 @@ class EmulatedMotor:
         self._put("present_velocity", speed)
         self._put("moving", int(moving))
         self._put("moving_status", status)
-        self._put("velocity_trajectory", speed if running or traj.endless else 0)
+        self._put("velocity_trajectory", speed if running or endless else 0)
         self._put("position_trajectory", present)
         self._put("realtime_tick", int((now - self._boot) * 1000) % 32768)
 
