@@ -7,6 +7,8 @@ bytes cannot form FF FF FD except in rare position values, which add one byte ea
 
 from __future__ import annotations
 
+import math
+
 #: Bits on the line per byte: start, 8 data, stop.
 BITS_PER_BYTE = 10
 #: The motors' factory Return Delay Time (250 × 2 µs), in seconds.
@@ -40,3 +42,35 @@ def poll_seconds(
     """The shortest time (s) one such SYNC_READ can take at ``baud``: its bytes on the
     line plus each motor's return delay (no host or adapter latency)."""
     return poll_bytes(motors, data) * BITS_PER_BYTE / baud + motors * return_delay_s
+
+
+#: Data bytes one streamed set-point writes per motor: Profile Acceleration, Profile
+#: Velocity and Goal Position (addresses 108-119 of the X series, contiguous).
+SETPOINT_BYTES = 12
+#: The shortest set-point period (s) a trajectory asks of any bus: a host's loop.
+MIN_SETPOINT_PERIOD_S = 0.01
+#: Wire time of one period (a SYNC_WRITE and a SYNC_READ) over the set-point period:
+#: the rest is left to the host and the adapter's latency.
+SETPOINT_DUTY = 0.5
+
+
+def sync_write_bytes(motors: int, data: int = SETPOINT_BYTES) -> int:
+    """A SYNC_WRITE instruction: header 4, ID, LEN 2, INST, address 2, length 2, then
+    per motor its ID and ``data`` bytes, CRC 2 (no status packet comes back)."""
+    return 4 + 1 + 2 + 1 + 2 + 2 + motors * (1 + data) + 2
+
+
+def setpoint_seconds(
+    motors: int, baud: int, return_delay_s: float = DEFAULT_RETURN_DELAY_S
+) -> float:
+    """The shortest time (s) one period of a streamed trajectory takes at ``baud``: the
+    SYNC_WRITE of every motor's set-point and the SYNC_READ poll of their positions."""
+    write = sync_write_bytes(motors) * BITS_PER_BYTE / baud
+    return write + poll_seconds(motors, baud, return_delay_s=return_delay_s)
+
+
+def setpoint_period(motors: int, baud: int) -> float:
+    """The set-point period (s) a trajectory on this bus uses: the wire time of one
+    period over `SETPOINT_DUTY`, at least `MIN_SETPOINT_PERIOD_S`, rounded up to 1 ms."""
+    wire = setpoint_seconds(motors, baud) / SETPOINT_DUTY
+    return max(MIN_SETPOINT_PERIOD_S, math.ceil(wire * 1000.0 - 1e-9) / 1000.0)
