@@ -37,7 +37,10 @@ def render_summary(plan: Plan) -> str:
     if s.second_pass is not None:
         lines.append(f"  {'second pass':<26}{'':>9}   {s.second_pass}")
     if s.fly is not None:
-        return "\n".join([*lines, "", *fly_lines(s), f"  {'ordering':<26}{ordering_line(s)}"])
+        paths = spec.sampling.fly_options().segment == "theta_h_line"
+        return "\n".join(
+            [*lines, "", *fly_lines(s, paths), f"  {'ordering':<26}{ordering_line(s)}"]
+        )
     lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
@@ -72,9 +75,10 @@ def render_summary(plan: Plan) -> str:
     return "\n".join(lines)
 
 
-def fly_lines(s: Summary) -> list[str]:
+def fly_lines(s: Summary, paths: bool = False) -> list[str]:
     """A fly plan's lines of the summary: its sweeps, their velocities, the predicted
-    readings and duration against stop-and-go, and the coverage figure."""
+    readings and duration against stop-and-go, and the coverage figure; ``paths``: its
+    sweeps are path lines along θh (every axis moving)."""
     f = s.fly
     assert f is not None
     per_hour = 3600.0 * s.kept / max(s.total_s, 1e-12)
@@ -84,14 +88,30 @@ def fly_lines(s: Summary) -> list[str]:
         if abs(f.velocity_max_deg_s - f.velocity_min_deg_s) < 1e-9
         else f"{f.velocity_min_deg_s:.3g}–{f.velocity_max_deg_s:.3g}°/s"
     )
+    if paths:
+        head = [
+            f"  {'sweeps':<26}{f.segments:>9}   (on {f.lines} lines along θh at fixed θd, φd; "
+            "every axis follows a trajectory)",
+            f"  {'fastest axis':<26}{speeds:>9}   (smear ≤ {f.smear_max_deg:.3g}° per reading, "
+            f"budget {f.blur_deg:g}°)",
+            f"  {'readings':<26}{s.kept:>9}   ({1 / f.period_s:g} Hz, {1e3 * f.integration_s:g} "
+            f"ms each; {f.streamed} streamed, those at least half the budget apart along θh "
+            "kept)",
+            f"  {'predicted duration':<26}{hms(s.total_s):>9}   (on the lines "
+            f"{hms(f.cruise_s)}, moves + settle {hms(f.moves_s)})",
+        ]
+    else:
+        head = [
+            f"  {'sweeps':<26}{f.segments:>9}   (on {f.lines} lines)",
+            f"  {'sweep velocity':<26}{speeds:>9}   (smear ≤ {f.smear_max_deg:.3g}° per "
+            f"reading, budget {f.blur_deg:g}°)",
+            f"  {'readings':<26}{s.kept:>9}   ({1 / f.period_s:g} Hz, {1e3 * f.integration_s:g} "
+            f"ms each; {f.streamed} streamed, thinned to cover the coordinates uniformly)",
+            f"  {'predicted duration':<26}{hms(s.total_s):>9}   (constant velocity "
+            f"{hms(f.cruise_s)}, ramps {hms(f.ramps_s)}, moves + settle {hms(f.moves_s)})",
+        ]
     return [
-        f"  {'sweeps':<26}{f.segments:>9}   (on {f.lines} lines)",
-        f"  {'sweep velocity':<26}{speeds:>9}   (smear ≤ {f.smear_max_deg:.3g}° per reading, "
-        f"budget {f.blur_deg:g}°)",
-        f"  {'readings':<26}{s.kept:>9}   ({1 / f.period_s:g} Hz, {1e3 * f.integration_s:g} ms "
-        f"each; {f.streamed} streamed, thinned to cover the coordinates uniformly)",
-        f"  {'predicted duration':<26}{hms(s.total_s):>9}   (constant velocity "
-        f"{hms(f.cruise_s)}, ramps {hms(f.ramps_s)}, moves + settle {hms(f.moves_s)})",
+        *head,
         f"  {'readings per hour':<26}{per_hour:>9,.0f}   (stop-and-go: {sg_per_hour:,.0f}, "
         f"{hms(f.stop_and_go_s)} for as many; {f.stop_and_go_s / max(s.total_s, 1e-12):.1f}× "
         "faster)",

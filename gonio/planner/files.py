@@ -41,7 +41,15 @@ from pydantic import TypeAdapter, ValidationError
 from gonio.config import ConfigError, describe, line_of, load, read_bytes, read_yaml
 from gonio.output import reserve_output
 from gonio.planner.builder import build
-from gonio.planner.model import SWEEP_ARRAYS, Plan, Summary, Sweeps, content_hash, sha256
+from gonio.planner.model import (
+    PATH_ARRAYS,
+    SWEEP_ARRAYS,
+    Plan,
+    Summary,
+    Sweeps,
+    content_hash,
+    sha256,
+)
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 
@@ -158,11 +166,19 @@ def plan_bytes(plan: Plan) -> bytes:
     }
     if plan.sweeps is not None:
         w = plan.sweeps
-        header["sweeps"] = {
+        sweeps: dict[str, Any] = {
             **{name: getattr(w, name).tolist() for name in SWEEP_ARRAYS},
             "period_s": w.period_s,
             "integration_s": w.integration_s,
         }
+        header["sweeps"] = sweeps
+        if w.has_paths:  # an axis-sweep plan's bytes as before path segments existed
+            assert w.path is not None
+            sweeps |= {
+                **{name: getattr(w, name).tolist() for name in PATH_ARRAYS},
+                "path": w.path.tolist(),
+                "path_period_s": w.path_period_s,
+            }
     lines = [MAGIC, *(f"# {key}: {_json(header[key])}" for key in KEYS[:-1] if key in header)]
     before = ("\n".join(lines) + "\n").encode("utf-8")
     hashes = {
@@ -287,17 +303,19 @@ def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps
     fields = [*SWEEP_ARRAYS, "period_s", "integration_s"]
     if isinstance(data, dict) and "streamed" not in data and "count" in data:
         data = {**data, "streamed": data["count"]}  # written before the thinning
+    paths = [*PATH_ARRAYS, "path", "path_period_s"]
+    if isinstance(data, dict) and "path" in data:
+        fields += paths
     if not isinstance(data, dict) or sorted(data) != sorted(fields):
         raise ConfigError(f"{path}:{line}: sweeps: expected exactly {', '.join(fields)}")
-    arrays = {}
-    for name, dtype in SWEEP_ARRAYS.items():
+    arrays: dict[str, Any] = {}
+    for name, dtype in {**SWEEP_ARRAYS, **(PATH_ARRAYS if "path" in data else {})}.items():
         try:
             value = np.array(data[name], dtype=dtype)
         except (TypeError, ValueError, OverflowError):
             raise ConfigError(f"{path}:{line}: sweeps.{name}: expected numbers") from None
-        shape = (
-            (len(data["first"]),) if name in ("first", "count", "cruise_at_s", "streamed") else None
-        )
+        rows = ("first", "count", "cruise_at_s", "streamed", *PATH_ARRAYS)
+        shape = (len(data["first"]),) if name in rows else None
         wanted = shape or (len(data["first"]), axes)
         if value.shape != wanted or (
             dtype is np.int64
@@ -326,9 +344,40 @@ def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps
             f"{path}:{line}: sweeps: first and count must split the {targets} targets into "
             "consecutive segments"
         )
+    extra: dict[str, Any] = {}
+    if "path" in data:
+        extra = _path_fields(path, data, line, axes, arrays)
     return Sweeps(
-        **arrays, period_s=float(data["period_s"]), integration_s=float(data["integration_s"])
-    )
+        **arrays, period_s=float(data["period_s"]), integration_s=float(data["integration_s"]),
+        **extra,
+    )  # fmt: skip
+
+
+def _path_fields(
+    path: Path, data: dict[str, Any], line: int, axes: int, arrays: dict[str, np.ndarray]
+) -> dict[str, Any]:
+    """The path segments' set-points of a fly plan's header, every field checked."""
+    try:
+        points = np.array(data["path"], dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise ConfigError(f"{path}:{line}: sweeps.path: expected numbers") from None
+    if points.ndim != 2 or points.shape[1:] != (axes,) or not np.all(np.isfinite(points)):
+        raise ConfigError(f"{path}:{line}: sweeps.path: expected rows of {axes} finite numbers")
+    first, count = arrays["path_first"], arrays["path_count"]
+    if (
+        np.any(count < 0)
+        or np.any(first < 0)
+        or np.any(first + count > len(points))
+        or (np.any((count > 0) & (count < 2)))
+    ):
+        raise ConfigError(
+            f"{path}:{line}: sweeps.path_first, path_count: expected runs of at least 2 "
+            f"set-points inside the {len(points)} of sweeps.path"
+        )
+    period = data["path_period_s"]
+    if not isinstance(period, float | int) or isinstance(period, bool) or not 0 < period < math.inf:
+        raise ConfigError(f"{path}:{line}: sweeps.path_period_s: expected a positive number")
+    return {"path": points, "path_period_s": float(period)}
 
 
 def _rows(path: Path, text: str, names: list[str], first_line: int) -> list[np.ndarray]:

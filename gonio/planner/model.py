@@ -166,6 +166,9 @@ SWEEP_ARRAYS: dict[str, type[np.generic]] = {
     "cruise_at_s": np.float64,
     "streamed": np.int64,
 }
+#: The array fields of `Sweeps` that locate each segment's trajectory in ``path`` (one row
+#: per segment; a count of 0: a sweep of one axis at constant velocity, no trajectory).
+PATH_ARRAYS: dict[str, type[np.generic]] = {"path_first": np.int64, "path_count": np.int64}
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,7 +183,14 @@ class Sweeps:
     (≥ ``count``) there, the j-th integrating from ``cruise_at_s + j · period_s`` for
     ``integration_s``; the targets are those the coverage thinning kept (in stream
     order, target i being stream reading ``round((arrival_s[i] − cruise_at_s) /
-    period_s)``; the first and the last streamed readings are always targets)."""
+    period_s)``; the first and the last streamed readings are always targets).
+
+    A path segment (``path_count`` > 0, `gonio.planner.fly_paths`) is instead a
+    trajectory every axis follows: the set-points ``path[path_first : path_first +
+    path_count]`` (rad), one every ``path_period_s`` from ``start`` (at rest, set-point
+    0, due at ``cruise_at_s``) to ``stop`` (at rest); ``entry`` = ``start``, ``exit`` =
+    ``stop``, ``velocity`` zero, and the stream's slot j integrates from ``cruise_at_s +
+    j · period_s`` along the path."""
 
     start: FloatArray  # (S, A) the run-up pose (at rest)
     entry: FloatArray  # (S, A) where the constant velocity begins
@@ -193,15 +203,40 @@ class Sweeps:
     streamed: np.ndarray  # (S,) int64 readings streamed at constant velocity (≥ count)
     period_s: float
     integration_s: float
+    path_first: np.ndarray | None = None  # (S,) int64; None: no path segment
+    path_count: np.ndarray | None = None  # (S,) int64
+    path: FloatArray | None = None  # (P, A) the path segments' set-points, rad
+    path_period_s: float = 0.0
 
     def __post_init__(self) -> None:
         n = len(self.first)
-        for name, dtype in SWEEP_ARRAYS.items():
+        if self.path_count is None:
+            object.__setattr__(self, "path_first", np.zeros(n, dtype=np.int64))
+            object.__setattr__(self, "path_count", np.zeros(n, dtype=np.int64))
+        for name, dtype in {**SWEEP_ARRAYS, **PATH_ARRAYS}.items():
             value = np.array(getattr(self, name), dtype=dtype)
             if value.shape[:1] != (n,):
                 raise ValueError(f"Sweeps.{name}: expected {n} rows, got shape {value.shape}")
             value.setflags(write=False)
             object.__setattr__(self, name, value)
+        axes = np.shape(self.start)[1] if np.ndim(self.start) == 2 else 0
+        path = np.array(
+            np.zeros((0, axes)) if self.path is None else self.path, dtype=np.float64
+        ).reshape(-1, axes)
+        path.setflags(write=False)
+        object.__setattr__(self, "path", path)
+
+    @property
+    def has_paths(self) -> bool:
+        """Whether any segment follows a trajectory (`path_count` > 0)."""
+        return bool(np.any(np.asarray(self.path_count) > 0))
+
+    def set_points(self, k: int) -> FloatArray:
+        """Segment ``k``'s trajectory set-points (K, A) rad (empty for an axis sweep)."""
+        assert self.path is not None and self.path_first is not None
+        assert self.path_count is not None
+        a = int(self.path_first[k])
+        return np.asarray(self.path[a : a + int(self.path_count[k])])
 
     def __len__(self) -> int:
         return len(self.first)
@@ -212,7 +247,11 @@ class Sweeps:
         return (
             self.period_s == other.period_s
             and self.integration_s == other.integration_s
-            and all(same_bits(getattr(self, n), getattr(other, n)) for n in SWEEP_ARRAYS)
+            and self.path_period_s == other.path_period_s
+            and all(
+                same_bits(getattr(self, n), getattr(other, n))
+                for n in (*SWEEP_ARRAYS, *PATH_ARRAYS, "path")
+            )
         )
 
     __hash__ = None  # type: ignore[assignment]

@@ -89,10 +89,12 @@ class FlySpec(Strict):
     Sweeps run through anchor points drawn (Sobol) in the parametrization until about
     ``sampling.target`` readings are laid out."""
 
-    segment: Literal["detector_arc", "light_arc"] = Field(
+    segment: Literal["detector_arc", "light_arc", "theta_h_line"] = Field(
         "detector_arc",
         description="What sweeps: detector_arc (the detector's last axis, the light and the "
-        "sample still) or light_arc (the light's last axis, the detector and sample still).",
+        "sample still), light_arc (the light's last axis, the detector and sample still), or "
+        "theta_h_line (lines along θh at fixed θd, φd of Rusinkiewicz's coordinates, every "
+        "axis following a streamed trajectory; isotropic plans).",
     )
     rate_hz: float = Field(
         100.0, gt=0, le=10_000, description="Readings per second the detector streams."

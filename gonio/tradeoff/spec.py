@@ -171,11 +171,11 @@ class Axes(Strict):
         "1 / rate_hz (a fly plan's sampling.fly.rate_hz).",
         json_schema_extra=UNIQUE,
     )
-    segment: list[Literal["detector_arc", "light_arc"]] = Field(
+    segment: list[Literal["detector_arc", "light_arc", "theta_h_line"]] = Field(
         ["detector_arc"],
         min_length=1,
-        description="Fly only: what sweeps, detector_arc or light_arc (a fly plan's "
-        "sampling.fly.segment).",
+        description="Fly only: what sweeps, detector_arc, light_arc or theta_h_line (a fly "
+        "plan's sampling.fly.segment).",
         json_schema_extra=UNIQUE,
     )
 

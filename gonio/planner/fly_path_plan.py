@@ -1,0 +1,212 @@
+"""Fly plans of path lines (``fly.segment: theta_h_line``): lines along θh at fixed
+(θd, φd), every axis following a streamed trajectory (`gonio.planner.fly_paths`).
+
+Layout (`build_paths`):
+
+- Lines: (θd, φd) drawn (scrambled Sobol, the plan's seed) over [0, π/2] × [0, π], each
+  line's reachable segments laid out (`line_segments`) with their time law and their
+  readings, until the readings reach ``sampling.target`` (whole lines).
+- Order: the segments ordered by the existing ordering on their two end poses
+  (`gonio.planner.fly.order_segments`: the order, then each segment's direction exactly
+  along it); each then gets its trajectory and readings in the chosen direction.
+
+Timing model: a segment is a move at rest to its first set-point (trapezoidal,
+`TravelModel`), the rig's ``settle_s``, then the trajectory ((K − 1) set-point periods,
+rest to rest). The stop-and-go comparison measures the same readings at the same poses
+in the same order (a move, settle and one integration each).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from gonio import params
+from gonio.config import ConfigError, spec_text
+from gonio.planner import sampling
+from gonio.planner.fly import check_integration, order_segments
+from gonio.planner.fly_coverage import coverage, reference
+from gonio.planner.fly_lines import Laid
+from gonio.planner.fly_paths import (
+    PathSegment,
+    checked_trajectory,
+    line_segments,
+    path_readings,
+    rig_setpoint_period,
+)
+from gonio.planner.model import FlyFigures, Plan, Summary, Sweeps
+from gonio.planner.schema import PlanSpec
+from gonio.rig.constraints import separation
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+
+#: Lines drawn per batch (a power of two for Sobol).
+LINE_BATCH = 32
+#: Lines drawn at most before a plan is refused for reaching too few readings.
+MAX_LINES = 1 << 14
+#: The refusal reason of streamed readings closer along θh than the step to a kept one.
+CLOSE = "close"
+
+
+def _min_step(blur_rad: float) -> float:
+    """The least θh step (rad) between two targets of a line: half the blur budget."""
+    return 0.5 * blur_rad
+
+
+def lay_out_paths(
+    spec: PlanSpec, rig: Rig, where: str, period_s: float
+) -> tuple[list[PathSegment], int, int, dict[str, int]]:
+    """(segments, lines, readings laid, refusals): lines drawn until their readings
+    reach ``sampling.target``."""
+    target = spec.sampling.target
+    if target is None:
+        raise ConfigError(f"{where}: sampling.target: the fly strategy needs a target")
+    if not spec.isotropic:
+        raise ConfigError(
+            f"{where}: sampling.fly.segment: theta_h_line lines need an isotropic plan "
+            "(isotropic: true); use detector_arc or light_arc"
+        )
+    fly = spec.sampling.fly_options()
+    blur = math.radians(fly.blur)
+    stream = sampling.Sequence("sobol", 2, spec.sampling.seed)
+    box = np.array([[0.0, 0.5 * math.pi], [0.0, math.pi]])
+    segments: list[PathSegment] = []
+    refused: dict[str, int] = {}
+    readings = lines = drawn = 0
+    while readings < target:
+        if drawn >= MAX_LINES:
+            raise ConfigError(
+                f"{where}: sampling.target: only {readings} of {target} readings are "
+                f"reachable on {lines} lines after {MAX_LINES} lines drawn; lower the target "
+                "or relax the rig's constraints"
+            )
+        unit = stream.draw(LINE_BATCH)
+        drawn += LINE_BATCH
+        points = box[:, 0] + unit * (box[:, 1] - box[:, 0])
+        for theta_d, phi_d in points.tolist():
+            laid = line_segments(rig, theta_d, phi_d, lines, spec.isotropic, refused)
+            kept_any = False
+            for seg in laid:
+                out = checked_trajectory(rig, seg, blur, fly.integration, period_s, False)
+                if out is None:
+                    refused["dynamics"] = refused.get("dynamics", 0) + len(seg.theta_h)
+                    continue
+                trajectory, _, theta = out
+                got = path_readings(trajectory, theta, fly.rate_hz, fly.integration,
+                                    _min_step(blur))  # fmt: skip
+                segments.append(seg)
+                readings += len(got.slots)
+                kept_any = True
+            lines += int(kept_any)
+            if readings >= target:
+                break
+    return segments, lines, readings, refused
+
+
+def build_paths(
+    spec: PlanSpec,
+    rig: Rig,
+    *,
+    where: str = "plan",
+    text: bytes | None = None,
+    start: FloatArray | None = None,
+) -> Plan:
+    """The fly plan of path lines of ``spec`` on ``rig`` (module docstring): its readings
+    as the plan's targets in measuring order (each at its mid-integration pose,
+    ``arrival_s`` its integration start) and its segments (`Plan.sweeps`, each with its
+    trajectory). `ConfigError` when the rig reaches too few readings."""
+    check_integration(spec, rig, where)
+    fly = spec.sampling.fly_options()
+    blur = math.radians(fly.blur)
+    home = rig.home if start is None else np.asarray(start, dtype=np.float64)
+    period_s = rig_setpoint_period(rig)
+    segments, lines, laid_readings, refused = lay_out_paths(spec, rig, where, period_s)
+    ends = Laid(start=[s.poses[0] for s in segments], stop=[s.poses[-1] for s in segments])
+    started = time.perf_counter()
+    order, reversed_, joint = order_segments(spec, rig, ends, home)
+    ordering_s = time.perf_counter() - started
+    t_int, period, settle = fly.integration, fly.period_s, rig.spec.settle_s
+    rows: dict[str, list[FloatArray]] = {"start": [], "stop": []}
+    path_rows, path_first, path_count = [], [], []
+    cruise_at, firsts, counts, mids, arrival, streamed = [], [], [], [], [], []
+    t, here, first, at = 0.0, home, 0, 0
+    moves_s = cruise_s = 0.0
+    smear_max, speeds = 0.0, []
+    for s, back in zip(order.tolist(), reversed_.tolist(), strict=True):
+        out = checked_trajectory(rig, segments[s], blur, t_int, period_s, bool(back))
+        if out is None:  # the forward law passed; the backward one is its mirror
+            raise AssertionError("a segment's reversed trajectory failed the rig's checks")
+        trajectory, _, theta = out
+        got = path_readings(trajectory, theta, fly.rate_hz, t_int, _min_step(blur))
+        goals = trajectory.goals
+        move = float(rig.travel.time(here, goals[0])) + settle
+        t += move
+        rows["start"].append(goals[0])
+        rows["stop"].append(goals[-1])
+        path_rows.append(goals)
+        path_first.append(at)
+        path_count.append(len(goals))
+        cruise_at.append(t)
+        firsts.append(first)
+        counts.append(len(got.slots))
+        mids.append(got.mids)
+        arrival.append(t + period * got.slots)
+        streamed.append(got.streamed)
+        wi, wo = rig.forward(goals)
+        rate = np.maximum(separation(wi[1:], wi[:-1]), separation(wo[1:], wo[:-1]))
+        smear_max = max(smear_max, float(rate.max()) / period_s * t_int)
+        speeds.append(float(np.abs(trajectory.velocities()).max()))
+        t += trajectory.duration_s
+        moves_s += move
+        cruise_s += trajectory.duration_s
+        here, first, at = goals[-1], first + len(got.slots), at + len(goals)
+    angles = np.concatenate(mids)
+    arrival_s = np.concatenate(arrival)
+    n_total = len(angles)
+    exposure = np.full(n_total, t_int)
+    before = np.concatenate([[0.0], arrival_s[:-1] + t_int])
+    travel_s = arrival_s - before
+    wi, wo = rig.forward(angles)
+    p = params.get(spec.parametrization)
+    coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
+    start_rows, stop_rows = np.array(rows["start"]), np.array(rows["stop"])
+    sweeps = Sweeps(
+        start=start_rows, entry=start_rows, exit=stop_rows, stop=stop_rows,
+        velocity=np.zeros_like(start_rows), first=np.array(firsts), count=np.array(counts),
+        cruise_at_s=np.array(cruise_at), streamed=np.array(streamed, dtype=np.int64),
+        period_s=period, integration_s=t_int, path_first=np.array(path_first),
+        path_count=np.array(path_count), path=np.concatenate(path_rows),
+        path_period_s=period_s,
+    )  # fmt: skip
+    previous = np.vstack([home[None, :], angles[:-1]])
+    stop_and_go_s = float(rig.travel.time(previous, angles).sum()) + n_total * (settle + t_int)
+    cover = coverage(spec, rig, where, coords, reference(spec, rig))
+    figures = FlyFigures(
+        lines=lines, segments=len(sweeps), integration_s=t_int, period_s=period,
+        blur_deg=fly.blur, smear_max_deg=math.degrees(smear_max),
+        velocity_min_deg_s=math.degrees(min(speeds)),
+        velocity_max_deg_s=math.degrees(max(speeds)), cruise_s=cruise_s, ramps_s=0.0,
+        moves_s=moves_s, stop_and_go_s=stop_and_go_s, coverage_tv=cover.tv,
+        coverage_tv_uniform=cover.tv_uniform, coverage_bins=cover.bins,
+        streamed=int(sum(streamed)), coverage_gap=cover.gap,
+        coverage_gap_uniform=cover.gap_uniform,
+    )  # fmt: skip
+    result = joint.ordering
+    dwell_s = n_total * t_int
+    refused = {**refused, CLOSE: int(sum(streamed)) - n_total}
+    summary = Summary(
+        requested=laid_readings, invalid=0, refused=refused, kept=n_total,
+        travel_s=t - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s, moves=result.moves,
+        max_moves=result.max_moves, kicks=result.kicks, kicks_kept=result.kicks_kept,
+        max_kicks=result.max_kicks, stopped=result.stopped, time_cap_s=spec.time_budget_s,
+        target=spec.sampling.target, fly=figures,
+    )  # fmt: skip
+    return Plan(
+        spec=spec, rig=rig, coordinate_names=spec.coordinates(), coords=coords,
+        generated=np.arange(n_total), wi=wi, wo=wo, angles=angles,
+        exposure_s=exposure, averages=np.ones(n_total, dtype=np.int64), travel_s=travel_s,
+        arrival_s=arrival_s, summary=summary,
+        plan_text=spec_text(spec) if text is None else text, ordering=result, sweeps=sweeps,
+    )  # fmt: skip
