@@ -1,5 +1,5 @@
 """How a session of a run ends: its `Outcome`, and `EndSession`, the exception the
-engine's loops (`gonio.acquire.engine`, `gonio.acquire.fly_loop`) raise to end it."""
+engine's loops (`gonio.acquire.engine`, `gonio.acquire.fly.loop`) raise to end it."""
 
 from __future__ import annotations
 

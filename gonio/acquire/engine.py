@@ -11,7 +11,7 @@ standard, and a dark reading; when: `gonio.acquire.schedule.Calibrations`). The
 reference is read at the start and at the end of every run. What the engine carries
 from target to target, and rebuilds from the journal when a run resumes, is its
 `gonio.acquire.state.RunState`. A fly plan is measured sweep after sweep instead, with
-the same checks between sweeps (`gonio.acquire.fly_loop.FlyLoop`, a base class of `Engine`).
+the same checks between sweeps (`gonio.acquire.fly.FlyLoop`, which the engine holds).
 
 Faults follow the plan's ``acquisition.on_fault``: a `CommError` or `DetectorError`
 is retried (in a calibration too), then the target skipped (journaled) or the run
@@ -54,7 +54,7 @@ from drivers.errors import (
 from drivers.values import Reading
 from gonio.acquire.control import ControlRequests, Request, StopRequested
 from gonio.acquire.ending import EndSession, Outcome
-from gonio.acquire.fly_loop import FlyLoop
+from gonio.acquire.fly import FlyContext, FlyLoop
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
@@ -89,7 +89,7 @@ _ENDINGS = (RunInterrupted, DriverError, EndSession, GonioError)
 
 
 @dataclass
-class Engine(FlyLoop):
+class Engine:
     """Runs ``plan`` on ``devices`` into ``journal`` (see the module docstring).
 
     ``history``: the run as journaled so far (None for a new run). ``stage``: how the
@@ -122,6 +122,7 @@ class Engine(FlyLoop):
     _limits: dict[str, tuple[float, float]] | None = field(init=False, default=None)
     _watch: ReadingWatch = field(init=False)  # range changes and phase drift to journal
     _recovery: MotorRecovery = field(init=False)  # the plan's on_fault.motor
+    _fly_loop: FlyLoop | None = field(init=False, default=None)  # a fly plan's loop
 
     def __post_init__(self) -> None:
         self.spec = self.plan.spec.acquisition
@@ -138,6 +139,27 @@ class Engine(FlyLoop):
         )  # fmt: skip
         if self.control is None:
             self.control = ControlRequests(self.journal.path)
+        if self.plan.sweeps is not None:
+            self._fly_loop = FlyLoop(self._fly_context())
+
+    def _fly_context(self) -> FlyContext:
+        """What the fly loop uses of the engine: its run's parts and its machinery."""
+
+        def in_flight(target: int) -> None:
+            self._current = target
+
+        def busy_until(run_s: float) -> None:
+            self._busy_until = run_s
+
+        return FlyContext(
+            plan=self.plan, devices=self.devices, journal=self.journal, time=self.time,
+            progress=self.progress, stops=self.stops, spec=self.spec, rig=self.rig,
+            axes=self.axes, move_timeout_s=self.move_timeout_s, recovery=self._recovery,
+            between_targets=self._between_targets, obey=self._obey,
+            within_limits=self._within_limits, skip=self._skip, hold_all=self._hold_all,
+            event=self._event, sim_state=self._sim, fault_data=self._fault_data,
+            write_sample=self._write_sample, in_flight=in_flight, busy_until=busy_until,
+        )  # fmt: skip
 
     def todo(self) -> np.ndarray:
         """The plan indices this session measures, in the plan's order."""
@@ -174,8 +196,8 @@ class Engine(FlyLoop):
         it when due), then the closing calibration."""
         try:
             self._start(resuming=self.history is not None)
-            if self.plan.sweeps is not None:
-                self._fly(todo)
+            if self._fly_loop is not None:
+                self._closing(self._fly_loop.run(todo))
                 return
             if self.devices.simulation is not None:
                 self.devices.simulation.expect(self.plan.angles[todo], todo)

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.sweep import derive, run_sweep
+from gonio.acquire.fly import derive, run_sweep
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from gonio.store import open_run

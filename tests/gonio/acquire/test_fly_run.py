@@ -20,8 +20,8 @@ import yaml
 
 from drivers.devices import Devices
 from drivers.values import StampedPositions
+from gonio.acquire.fly import merge, run_sweep, target_slots
 from gonio.acquire.recovery import MotorRecovery
-from gonio.acquire.sweep import merge, run_sweep, target_slots
 from gonio.planner.policies import MotorFaultSpec
 from gonio.store.journal import remove_run_file
 from gonio.store.read import Run, open_run, raw_streams
@@ -167,7 +167,7 @@ def slowed(devices: Devices, *args: Any, **kwargs: Any) -> Any:
 def test_kill_9_mid_sweep_loses_at_most_that_sweep(
     files: RunFiles, run: Run, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr("gonio.acquire.fly_loop.run_sweep", slowed)  # the children inherit it
+    monkeypatch.setattr("gonio.acquire.fly.loop.run_sweep", slowed)  # the children inherit it
     path = tmp_path / "run.sqlite"
     rng = random.Random(0)
     sweeps = run.plan.sweeps

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 import yaml
 
+import gonio.planner.fly.thin as fly_thin
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
-from gonio.planner import build, fly_thin, plan_bytes, read_plan, write_plan
+from gonio.planner import build, plan_bytes, read_plan, write_plan
 from gonio.planner.blur import blur_budget_of_width
 from gonio.planner.files import parse_plan
-from gonio.planner.fly_lines import sweep_axis
-from gonio.planner.fly_thin import THINNED
+from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation

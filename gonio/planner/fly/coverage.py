@@ -17,7 +17,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gonio.planner import placement, sampling
-from gonio.planner.fly_lines import box
+from gonio.planner.fly.lines import box
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray

@@ -3,9 +3,9 @@
 Layout (`build_fly`):
 
 - Lines: segments laid out through anchors drawn in the parametrization, their velocity
-  from the blur budget (`gonio.planner.fly_lines`).
+  from the blur budget (`gonio.planner.fly.lines`).
 - Thinning: the streamed readings thinned to the target density until the kept ones
-  reach ``sampling.target`` (`gonio.planner.fly_thin`).
+  reach ``sampling.target`` (`gonio.planner.fly.thin`).
 - Order: the segments are ordered by the existing ordering on their two commanded end
   poses (`order_jointly`, each segment's run-up and overrun poses its two candidates),
   then the direction of each is chosen exactly along that order (Viterbi,
@@ -18,7 +18,7 @@ the rig's ``settle_s``, the ramp up (v / a), the constant-velocity part ((m − 
 comparison measures the same readings at the same poses in the same order: a move,
 settle and one integration each.
 
-Coverage: the figures of `gonio.planner.fly_coverage`.
+Coverage: the figures of `gonio.planner.fly.coverage`.
 """
 
 from __future__ import annotations
@@ -30,9 +30,9 @@ import numpy as np
 
 from gonio import params
 from gonio.config import ConfigError, spec_text
-from gonio.planner.fly_coverage import coverage, reference
-from gonio.planner.fly_lines import Laid
-from gonio.planner.fly_thin import THINNED, lay_out_thinned
+from gonio.planner.fly.coverage import coverage, reference
+from gonio.planner.fly.lines import Laid
+from gonio.planner.fly.thin import THINNED, lay_out_thinned
 from gonio.planner.model import FlyFigures, Plan, Summary, Sweeps
 from gonio.planner.ordering import Joint, default_kicks, default_moves, order_jointly
 from gonio.planner.poses import choose

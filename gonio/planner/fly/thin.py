@@ -5,7 +5,7 @@ min(1, ρ / (c ρ̂)), ρ the target density (uniform over the reach) and ρ̂ t
 one, both counted in a ``THIN_RADIUS`` ball, c the ``THIN_QUANTILE`` of ρ / ρ̂;
 systematic along each segment. Segments are cut to their first and last kept reading
 (`Sweeps.streamed` readings streamed on each). Lines are laid out
-(`gonio.planner.fly_lines`) until the kept readings reach ``sampling.target``.
+(`gonio.planner.fly.lines`) until the kept readings reach ``sampling.target``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gonio.config import ConfigError
-from gonio.planner.fly_lines import ANCHOR_GAP, Laid, box, lay_out, plan_coords, sweep_axis
+from gonio.planner.fly.lines import ANCHOR_GAP, Laid, box, lay_out, plan_coords, sweep_axis
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray

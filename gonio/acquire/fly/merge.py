@@ -1,10 +1,5 @@
-"""One sweep of a fly plan, measured and merged (docs/explanations/acquisition.md).
-
-`run_sweep`: move to the sweep's start (at rest) and settle, start the detector's stream,
-command the sweep (the swept axes at the plan's velocity, to the stop pose), then poll
-the positions and read the stream in turn until the motion is over (on the simulated
-backend both advance the one virtual clock), stop the stream. What comes back is raw:
-the stamped polls and the stamped readings.
+"""A fly sweep's streams merged into samples: pure estimation, no device I/O
+(docs/explanations/acquisition.md).
 
 `merge`: each reading's joint angles are the polled positions interpolated (linearly,
 per axis, on each poll's mid-time) at the middle of its integration window; its smear is
@@ -12,9 +7,7 @@ the joint-space path covered during the window (rad); its timing uncertainty is 
 stamps' jitter (the request-to-reply spans of the two polls interpolated, weighted as
 they are, `interpolated_span`, / √12: the positions are sampled somewhere in them; and
 the readings' stamp slack / √12, `stamp_slack`, in quadrature) × the angular speed
-there (rad); polls slower than `SLOW_POLL` × the median are left out. The readings are
-first stamped again with the stream's final clock offset (`drivers.stream.restamped`,
-the latency the live stamps assumed).
+there (rad); polls slower than `SLOW_POLL` × the median are left out.
 Only readings whose whole window lies inside the constant-velocity part (the swept axis
 between the entry and exit poses) and between two polls (`bracketed`) are matched, each
 to a stream slot j (the j-th reading streamed at constant velocity, planned mid-pose
@@ -25,7 +18,7 @@ slot their position along the swept axis gives (robust to the scatter of each po
 a velocity off the plan's shows as read-back angles drifting from the targets' along the
 sweep). The plan's targets are the slots its coverage thinning kept (`target_slots`); a
 matched reading in a slot that is no target stays in the journal's raw ``stream`` table
-only: the sweep's samples are exactly the plan's targets read.
+only: the sweep's samples are exactly the plan's targets read (`derive`).
 """
 
 from __future__ import annotations
@@ -35,8 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.devices import Devices
-from drivers.stream import StreamReading, restamped, streaming
+from drivers.stream import StreamReading
 from drivers.values import StampedPositions
 from gonio.planner.model import Sweeps
 from gonio.types import FloatArray
@@ -87,44 +79,6 @@ def target_slots(sweeps: Sweeps, arrival_s: FloatArray, k: int) -> np.ndarray:
     since = np.asarray(arrival_s[first : first + count], dtype=np.float64)
     since = since - float(sweeps.cruise_at_s[k])
     return np.rint(since / sweeps.period_s).astype(np.int64)
-
-
-def run_sweep(
-    devices: Devices,
-    axes: tuple[str, ...],
-    sweeps: Sweeps,
-    k: int,
-    *,
-    settle_s: float,
-    timeout_s: float,
-) -> RawSweep:
-    """Measure sweep ``k`` of ``sweeps`` (see the module docstring). A driver error
-    propagates with the stream stopped (the bus already held the axes)."""
-    bus, clock = devices.bus, devices.clock
-    detector = streaming(devices.detector)
-    start = dict(zip(axes, sweeps.start[k].tolist(), strict=True))
-    stop = dict(zip(axes, sweeps.stop[k].tolist(), strict=True))
-    moving = {a: abs(v) for a, v in zip(axes, sweeps.velocity[k].tolist(), strict=True) if v}
-    bus.move_to(start)
-    bus.wait_settled(timeout_s)
-    clock.sleep(settle_s)
-    started = clock.now()
-    polls: list[StampedPositions] = []
-    readings: list[StreamReading] = []
-    detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
-    try:
-        bus.sweep({a: stop[a] for a in moving}, moving)
-        deadline = started + timeout_s
-        while True:
-            poll = bus.poll_positions()
-            polls.append(poll)
-            readings += detector.read_stream(0.0)
-            if poll.arrived or poll.reply_s > deadline:
-                break
-    finally:
-        readings += detector.stop_stream()
-    bus.wait_settled(timeout_s)
-    return RawSweep(polls, restamped(readings, None), started, clock.now())
 
 
 def poll_arrays(polls: list[StampedPositions], axes: tuple[str, ...]) -> tuple[FloatArray, ...]:

@@ -18,7 +18,7 @@
 - Anchors nearer than ``ANCHOR_GAP`` (unit box) to a laid reading are skipped (the gap
   halved when a whole batch is): lines go where no reading passes yet.
 - Lines are laid out, anchor after anchor, until the readings laid reach the count asked
-  (whole lines; `gonio.planner.fly_thin` asks until the kept ones reach
+  (whole lines; `gonio.planner.fly.thin` asks until the kept ones reach
   ``sampling.target``).
 """
 

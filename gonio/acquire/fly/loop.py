@@ -1,10 +1,12 @@
-"""The engine's loop for a fly plan: sweep after sweep (docs/explanations/acquisition.md).
+"""The fly loop: a fly plan's sweeps measured one after another
+(docs/explanations/acquisition.md).
 
-`FlyLoop`, a base class of `gonio.acquire.engine.Engine`, which runs it in place of the
-stop-and-go loop when the plan has sweeps. Each sweep with a target still to measure is
-measured whole (`gonio.acquire.sweep.run_sweep`), a health check and a calibration
-before it when due; its streams are merged (`gonio.acquire.sweep.derive`) and committed
-with its samples and the targets it did not read in one transaction (`_commit_sweep`).
+`FlyLoop`, held by `gonio.acquire.engine.Engine`, which runs it in place of the
+stop-and-go loop when the plan has sweeps; it sees the engine through a `FlyContext`.
+Each sweep with a target still to measure is measured whole
+(`gonio.acquire.fly.run.run_sweep`), a health check and a calibration before it when
+due; its streams are merged (`gonio.acquire.fly.merge.derive`) and committed with its
+samples and the targets it did not read in one transaction (`FlyLoop._commit_sweep`).
 A fault abandons the sweep (journaled, its raw streams with it) and follows the plan's
 ``acquisition.on_fault``: retried, its targets skipped, or the session ended.
 """
@@ -12,8 +14,9 @@ A fault abandons the sweep (journaled, its raw streams with it) and follows the 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -21,11 +24,12 @@ from drivers.devices import Devices
 from drivers.errors import CommError, DetectorError, DriverError, MotionTimeout, MotorFault
 from drivers.stream import StreamReading
 from gonio.acquire.ending import EndSession
+from gonio.acquire.fly.merge import RawSweep, derive
+from gonio.acquire.fly.run import run_sweep
 from gonio.acquire.progress import Observer
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.runtime import RunTime
 from gonio.acquire.signals import StopRequests
-from gonio.acquire.sweep import RawSweep, derive, run_sweep
 from gonio.planner.model import Plan
 from gonio.planner.policies import AcquisitionSpec
 from gonio.rig.model import Rig
@@ -33,116 +37,134 @@ from gonio.store.journal import Journal
 from gonio.types import FloatArray
 
 
-class FlyLoop:
-    """The fly loop of `gonio.acquire.engine.Engine` (a base class of it): `_fly`
-    measures the sweeps of a fly plan, on the engine's devices, into its journal."""
+class EventWriter(Protocol):
+    """Journal an event of ``kind`` (about ``target``, if any)."""
 
-    # The engine's, set when it is made (`Engine`):
+    def __call__(self, kind: str, data: Mapping[str, Any], target: int | None = None) -> None: ...
+
+
+class SampleWriter(Protocol):
+    """Journal target ``i``'s sample read back at ``angles`` (`Engine._write_sample`)."""
+
+    def __call__(
+        self, i: int, attempts: int, angles: list[float], settled_s: float,
+        state: Mapping[str, Any], **measured: Any,
+    ) -> None: ...  # fmt: skip
+
+
+@dataclass(frozen=True)
+class FlyContext:
+    """What the fly loop uses of the engine that holds it: the run's parts, and the
+    engine's machinery as callables."""
+
     plan: Plan
     devices: Devices
     journal: Journal
     time: RunTime
     progress: Observer
     stops: StopRequests
-    move_timeout_s: float
     spec: AcquisitionSpec
     rig: Rig
     axes: tuple[str, ...]
-    _busy_until: float
-    _current: int | None
-    _recovery: MotorRecovery
+    move_timeout_s: float
+    recovery: MotorRecovery
+    between_targets: Callable[[], None]  # a health check and a calibration when due
+    obey: Callable[[], None]  # the control requests posted since the last step
+    within_limits: Callable[[np.ndarray], str | None]  # why a pose must not be commanded
+    skip: Callable[[int, str], None]  # journal a target skipped, and why
+    hold_all: Callable[[], None]  # tell every axis to hold
+    event: EventWriter
+    sim_state: Callable[[], dict[str, Any]]  # ``{"sim_state": …}`` on a simulated backend
+    fault_data: Callable[[DriverError], dict[str, Any]]  # a driver error as event data
+    write_sample: SampleWriter
+    in_flight: Callable[[int], None]  # the target in flight (a motor fault names it)
+    busy_until: Callable[[float], None]  # the run time the step in flight ends
 
-    if TYPE_CHECKING:  # the engine's machinery the loop uses (`Engine`)
 
-        def _between_targets(self) -> None: ...
-        def _obey(self) -> None: ...
-        def _closing(self, measuring: bool) -> None: ...
-        def _within_limits(self, pose: np.ndarray) -> str | None: ...
-        def _skip(self, i: int, reason: str) -> None: ...
-        def _hold_all(self) -> None: ...
-        def _event(self, kind: str, data: Mapping[str, Any], target: int | None = None) -> None: ...
-        def _sim(self) -> dict[str, Any]: ...
-        @staticmethod
-        def _fault_data(exc: DriverError) -> dict[str, Any]: ...
-        def _write_sample(
-            self, i: int, attempts: int, angles: list[float], settled_s: float,
-            state: Mapping[str, Any], **measured: Any,
-        ) -> None: ...  # fmt: skip
+@dataclass(frozen=True)
+class FlyLoop:
+    """Measures the sweeps of a fly plan, on the devices of ``context``, into its
+    journal (see the module docstring)."""
 
-    def _fly(self, todo: np.ndarray) -> None:
-        """Each sweep with a target still to measure, whole (`gonio.acquire.sweep`);
-        a health check and a calibration before it when due."""
-        sweeps = self.plan.sweeps
+    context: FlyContext
+
+    def run(self, todo: np.ndarray) -> bool:
+        """Each sweep with a target still to measure, whole; a health check and a
+        calibration before it when due. Whether any sweep was measured (the engine's
+        closing calibration is due then)."""
+        c = self.context
+        sweeps = c.plan.sweeps
         assert sweeps is not None
-        left = np.zeros(len(self.plan), dtype=np.bool_)
+        left = np.zeros(len(c.plan), dtype=np.bool_)
         left[todo] = True
         ks = [
             k for k in range(len(sweeps))
             if left[int(sweeps.first[k]) : int(sweeps.first[k] + sweeps.count[k])].any()
         ]  # fmt: skip
-        self.progress.start(self.plan, todo)
+        c.progress.start(c.plan, todo)
         done = 0
         for k in ks:
-            self._between_targets()
+            c.between_targets()
             done += self._sweep(k)
-            self.progress.advance(min(done, len(todo)))
-            self.stops.raise_if_requested()
-            self._obey()
-        self._closing(bool(ks))
+            c.progress.advance(min(done, len(todo)))
+            c.stops.raise_if_requested()
+            c.obey()
+        return bool(ks)
 
     def _sweep(self, k: int) -> int:
         """Measure sweep ``k`` and commit it in one transaction; the targets it
         finished (measured or skipped). Faults follow the plan's ``on_fault``: the
         sweep is journaled as abandoned (its raw streams with it), then retried,
         skipped or the run ended (a motor fault: resumable, the sweep redone)."""
-        sweeps = self.plan.sweeps
+        c = self.context
+        sweeps = c.plan.sweeps
         assert sweeps is not None
         first, count = int(sweeps.first[k]), int(sweeps.count[k])
         targets = range(first, first + count)
-        self._current = first
+        c.in_flight(first)
         for name in ("start", "stop"):
-            refused = self._within_limits(getattr(sweeps, name)[k])
+            refused = c.within_limits(getattr(sweeps, name)[k])
             if refused is not None:
-                with self.journal.transaction():
+                with c.journal.transaction():
                     for i in targets:
-                        self._skip(i, f"sweep {k}: {refused}")
+                        c.skip(i, f"sweep {k}: {refused}")
                 return count
-        on_fault = self.spec.on_fault
-        simulation = self.devices.simulation
+        on_fault = c.spec.on_fault
+        simulation = c.devices.simulation
         for attempt in range(on_fault.retries + 1):
             if simulation is not None:
                 simulation.begin_sample(first)
-            began = self.time.now()
+            began = c.time.now()
             # About the sweep's length (its readings; a move, settle and ramps besides):
             # a first Ctrl-C lets a short sweep finish, abandons a long one.
-            self._busy_until = began + int(sweeps.streamed[k]) * sweeps.period_s + 2.0
+            c.busy_until(began + int(sweeps.streamed[k]) * sweeps.period_s + 2.0)
             try:
-                raw = self._recovery.attempt(
+                raw = c.recovery.attempt(
                     lambda: run_sweep(
-                        self.devices, self.axes, sweeps, k,
-                        settle_s=self.rig.spec.settle_s, timeout_s=self.move_timeout_s,
+                        c.devices, c.axes, sweeps, k,
+                        settle_s=c.rig.spec.settle_s, timeout_s=c.move_timeout_s,
                     ),
                     target=first,
                 )  # fmt: skip
                 break
             except DriverError as exc:
-                self._hold_all()
-                data = {**self._fault_data(exc), "attempt": attempt + 1}
-                with self.journal.transaction():
-                    self.journal.sweep(k, "abandoned", began, self.time.now(), data, [], [])
+                c.hold_all()
+                data = {**c.fault_data(exc), "attempt": attempt + 1}
+                with c.journal.transaction():
+                    c.journal.sweep(k, "abandoned", began, c.time.now(), data, [], [])
                 if isinstance(exc, MotorFault | MotionTimeout) or not isinstance(
                     exc, CommError | DetectorError
                 ):
                     raise
                 if attempt < on_fault.retries:
-                    self._event("retry", {**data, **self._sim()}, target=first)
+                    c.event("retry", {**data, **c.sim_state()}, target=first)
                     continue
                 if on_fault.then == "skip":
-                    with self.journal.transaction():
+                    with c.journal.transaction():
                         for i in targets:
-                            self._skip(i, f"sweep {k}: {type(exc).__name__}: {exc}")
+                            c.skip(i, f"sweep {k}: {type(exc).__name__}: {exc}")
                     return count
-                self._event("fault", data, target=first)
+                c.event("fault", data, target=first)
                 raise EndSession("aborted", f"sweep {k}: {exc}") from None
         self._commit_sweep(k, attempt + 1, raw)
         return count
@@ -150,14 +172,15 @@ class FlyLoop:
     def _commit_sweep(self, k: int, attempts: int, raw: RawSweep) -> None:
         """Merge the sweep's streams and journal it, its raw streams, its samples and
         the targets it did not read (skipped), in one transaction."""
-        sweeps = self.plan.sweeps
+        c = self.context
+        sweeps = c.plan.sweeps
         assert sweeps is not None
-        offset = self.time.offset
-        d = derive(raw, self.axes, sweeps, self.plan.arrival_s, k)
+        offset = c.time.offset
+        d = derive(raw, c.axes, sweeps, c.plan.arrival_s, k)
         merged, extra = d.samples, d.extra
         request, reply, positions = d.request, d.reply, d.positions
         first, count = int(sweeps.first[k]), int(sweeps.count[k])
-        state = self._sim()
+        state = c.sim_state()
         last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
         data = {
             "first": first, "count": count, "readings": len(raw.readings),
@@ -177,8 +200,8 @@ class FlyLoop:
             for r in raw.readings
         ]  # fmt: skip
         read = set(merged.target.tolist())
-        with self.journal.transaction():
-            self.journal.sweep(
+        with c.journal.transaction():
+            c.journal.sweep(
                 k, "measured", raw.started_s + offset, raw.ended_s + offset, data, polls, stream
             )
             for n, r in enumerate(merged.index.tolist()):
@@ -191,16 +214,17 @@ class FlyLoop:
                 )  # fmt: skip
             for i in range(first, first + count):
                 if i not in read:
-                    self._skip(i, f"sweep {k}: no reading in the constant-velocity part")
+                    c.skip(i, f"sweep {k}: no reading in the constant-velocity part")
 
     def _fly_sample(
         self, i: int, attempts: int, settled_s: float, angles: FloatArray,
         reading: StreamReading, smear: float, timing: float, extra: float,
         state: Mapping[str, Any],
     ) -> None:  # fmt: skip
+        c = self.context
         std = reading.std if math.isfinite(reading.std) else 0.0
-        offset = self.time.offset
-        self._write_sample(
+        offset = c.time.offset
+        c.write_sample(
             i, attempts, angles.tolist(), settled_s + offset, state,
             exposure_s=reading.ended_s - reading.started_s, averages=1, n=1,
             counts=reading.value, counts_std=math.hypot(std, extra),

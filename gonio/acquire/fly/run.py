@@ -1,0 +1,56 @@
+"""One sweep of a fly plan measured on the devices (docs/explanations/acquisition.md).
+
+`run_sweep`: move to the sweep's start (at rest) and settle, start the detector's stream,
+command the sweep (the swept axes at the plan's velocity, to the stop pose), then poll
+the positions and read the stream in turn until the motion is over (on the simulated
+backend both advance the one virtual clock), stop the stream. What comes back is raw
+(`RawSweep`): the stamped polls and the stamped readings, the readings stamped again
+with the stream's final clock offset (`drivers.stream.restamped`, the latency the live
+stamps assumed). Merging them is `gonio.acquire.fly.merge`'s.
+"""
+
+from __future__ import annotations
+
+from drivers.devices import Devices
+from drivers.stream import StreamReading, restamped, streaming
+from drivers.values import StampedPositions
+from gonio.acquire.fly.merge import RawSweep
+from gonio.planner.model import Sweeps
+
+
+def run_sweep(
+    devices: Devices,
+    axes: tuple[str, ...],
+    sweeps: Sweeps,
+    k: int,
+    *,
+    settle_s: float,
+    timeout_s: float,
+) -> RawSweep:
+    """Measure sweep ``k`` of ``sweeps`` (see the module docstring). A driver error
+    propagates with the stream stopped (the bus already held the axes)."""
+    bus, clock = devices.bus, devices.clock
+    detector = streaming(devices.detector)
+    start = dict(zip(axes, sweeps.start[k].tolist(), strict=True))
+    stop = dict(zip(axes, sweeps.stop[k].tolist(), strict=True))
+    moving = {a: abs(v) for a, v in zip(axes, sweeps.velocity[k].tolist(), strict=True) if v}
+    bus.move_to(start)
+    bus.wait_settled(timeout_s)
+    clock.sleep(settle_s)
+    started = clock.now()
+    polls: list[StampedPositions] = []
+    readings: list[StreamReading] = []
+    detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
+    try:
+        bus.sweep({a: stop[a] for a in moving}, moving)
+        deadline = started + timeout_s
+        while True:
+            poll = bus.poll_positions()
+            polls.append(poll)
+            readings += detector.read_stream(0.0)
+            if poll.arrived or poll.reply_s > deadline:
+                break
+    finally:
+        readings += detector.stop_stream()
+    bus.wait_settled(timeout_s)
+    return RawSweep(polls, restamped(readings, None), started, clock.now())

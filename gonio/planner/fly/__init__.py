@@ -1,0 +1,12 @@
+"""Fly plans: readings taken while one axis sweeps at constant velocity.
+
+Modules: `lines` (the segments, their velocity from the blur budget), `thin` (the
+streamed readings thinned to the target density), `coverage` (how the readings cover the
+reach), `build` (`build_fly`: the layout, its order and timing).
+"""
+
+from gonio.planner.fly.build import build_fly
+from gonio.planner.fly.lines import sweep_axis
+from gonio.planner.fly.thin import THINNED
+
+__all__ = ["THINNED", "build_fly", "sweep_axis"]
