@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from gonio.config import ConfigError, spec_text
-from gonio.planner import fly, fly_path_plan, lkh, placement, poses, sampling
+from gonio.planner import fly, lkh, placement, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.model import Plan, Summary
@@ -199,7 +199,7 @@ def build(
     lower bounds)."""
     if spec.sampling.strategy == "fly" and placed is None:
         if spec.sampling.fly_options().segment == "theta_h_line":
-            return fly_path_plan.build_paths(spec, rig, where=where, text=text, start=start)
+            return fly.build_paths(spec, rig, where=where, text=text, start=start)
         return fly.build_fly(spec, rig, where=where, text=text, start=start)
     check_detector(spec, rig, where, text)
     coords, shape = place(spec, rig, where) if placed is None else (placed, None)

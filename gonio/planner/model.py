@@ -185,7 +185,7 @@ class Sweeps:
     order, target i being stream reading ``round((arrival_s[i] − cruise_at_s) /
     period_s)``; the first and the last streamed readings are always targets).
 
-    A path segment (``path_count`` > 0, `gonio.planner.fly_paths`) is instead a
+    A path segment (``path_count`` > 0, `gonio.planner.fly.paths`) is instead a
     trajectory every axis follows: the set-points ``path[path_first : path_first +
     path_count]`` (rad), one every ``path_period_s`` from ``start`` (at rest, set-point
     0, due at ``cruise_at_s``) to ``stop`` (at rest); ``entry`` = ``start``, ``exit`` =

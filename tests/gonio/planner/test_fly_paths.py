@@ -17,7 +17,7 @@ from drivers.trajectory import check_trajectory
 from gonio import params
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
-from gonio.planner.fly_paths import (
+from gonio.planner.fly.paths import (
     FINE_STEP,
     checked_trajectory,
     line_pairs,

@@ -1,5 +1,5 @@
 """Fly plans of path lines (``fly.segment: theta_h_line``): lines along θh at fixed
-(θd, φd), every axis following a streamed trajectory (`gonio.planner.fly_paths`).
+(θd, φd), every axis following a streamed trajectory (`gonio.planner.fly.paths`).
 
 Layout (`build_paths`):
 
@@ -7,7 +7,7 @@ Layout (`build_paths`):
   line's reachable segments laid out (`line_segments`) with their time law and their
   readings, until the readings reach ``sampling.target`` (whole lines).
 - Order: the segments ordered by the existing ordering on their two end poses
-  (`gonio.planner.fly.order_segments`: the order, then each segment's direction exactly
+  (`gonio.planner.fly.build.order_segments`: the order, then each segment's direction exactly
   along it); each then gets its trajectory and readings in the chosen direction.
 
 Timing model: a segment is a move at rest to its first set-point (trapezoidal,
@@ -26,10 +26,10 @@ import numpy as np
 from gonio import params
 from gonio.config import ConfigError, spec_text
 from gonio.planner import sampling
-from gonio.planner.fly import check_integration, order_segments
-from gonio.planner.fly_coverage import coverage, reference
-from gonio.planner.fly_lines import Laid
-from gonio.planner.fly_paths import (
+from gonio.planner.fly.build import check_integration, order_segments
+from gonio.planner.fly.coverage import coverage, reference
+from gonio.planner.fly.lines import Laid
+from gonio.planner.fly.paths import (
     PathSegment,
     checked_trajectory,
     line_segments,
