@@ -9,7 +9,8 @@ follow the same rules, and one contract suite (``tests/drivers/contract/``) runs
 rule against every backend. Units: radians, seconds, degrees Celsius, volts; detector
 values in the detector's counts. The values the calls return are in `drivers.values`,
 the errors they raise in `drivers.errors`, the lifecycle mixin and one run's `Devices` in
-`drivers.devices`, the checks of a sweep's profile in `drivers.sweep`.
+`drivers.devices`, the checks of a sweep's profile in `drivers.sweep`, streamed set-points in
+`drivers.trajectory`.
 
 The rules, in one place
 -----------------------
@@ -78,6 +79,26 @@ Sweeps (`MotorBus`, for measuring while moving)
     * Polled positions are monotone along a sweep's path, and a sweep ends, like any
       move, with ``wait_settled``.
 
+Trajectories (`MotorBus`, coordinated multi-axis motion; `drivers.trajectory`)
+    * ``follow(trajectory, on_poll)`` streams a `Trajectory`'s set-points: one write of
+      every axis's goal per period, interleaved with one ``poll_positions`` per period,
+      each axis's profile set so that it follows without stopping (on the X series a
+      new goal re-plans the profile from the present velocity). The axes must be at
+      rest at set-point 0 (the caller moves there with ``move_to`` and
+      ``wait_settled``): otherwise `DriverError` and nothing is sent. The whole
+      trajectory is checked first (`drivers.trajectory.check_trajectory`: limits,
+      velocity, acceleration, unknown axes) and with torque off `TorqueOff` is raised:
+      nothing is sent.
+    * ``on_poll`` (optional) is called with each poll as soon as it is made (a caller
+      reads its detector's stream there); an exception it raises holds every axis and
+      propagates.
+    * It returns a `Followed` once the last set-point is reached (as ``wait_settled``):
+      the trajectory's origin on the clock, when each set-point was sent, the polls,
+      and the tracking error (the largest distance of a poll from the path at the
+      poll's middle), which stays within the backend's stated bound.
+    * A fault on the way (`MotorFault`, `MotionTimeout`, `CommError`) holds every
+      answering axis before it propagates, as for ``move_to``.
+
 Measuring (`Detector`)
     ``measure(exposure_s, averages)`` exposes ``averages`` times and returns one
     `Reading` stamped with the clock's time at the start and the end of the exposures.
@@ -121,10 +142,11 @@ Simulation only (`Simulated`)
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from types import TracebackType
 from typing import Any, Literal, Protocol, Self
 
+from drivers.trajectory import Followed, Trajectory
 from drivers.values import Health, RangeChange, Reading, Recovered, StampedPositions
 
 # -- time -------------------------------------------------------------------------------
@@ -218,6 +240,16 @@ class MotorBus(Device, Protocol):
         with ``accelerations`` (rad/s²; default the configured ones), for this move only;
         returns at once with the velocities commanded (rad/s). `LimitError`, `TorqueOff`
         or `DriverError` before anything is sent (the module docstring)."""
+        ...
+
+    def follow(
+        self,
+        trajectory: Trajectory,
+        on_poll: Callable[[StampedPositions], None] | None = None,
+    ) -> Followed:
+        """Stream ``trajectory``'s set-points (one write and one poll per period), from
+        rest at set-point 0 to rest at the last; `LimitError`, `TorqueOff` or
+        `DriverError` before anything is sent (the module docstring)."""
         ...
 
     def poll_positions(self) -> StampedPositions:

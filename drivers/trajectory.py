@@ -19,7 +19,7 @@ configured acceleration (both with `RATE_MARGIN`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,6 +31,9 @@ from drivers.values import StampedPositions
 #: Relative slack on the configured velocity and acceleration when a trajectory is
 #: checked (a planner's time law meets them exactly; rounding must not refuse it).
 RATE_MARGIN = 1e-6
+#: Seconds a backend waits, after sending the last set-point, for the axes to settle
+#: there before it holds them and raises `MotionTimeout`.
+SETTLE_TIMEOUT_S = 5.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,6 +92,18 @@ class Followed:
     polls: list[StampedPositions] = field(default_factory=list)
     tracking_rad: float = 0.0
     ended_s: float = 0.0
+
+
+def tracking_error(
+    trajectory: Trajectory, started_s: float, polls: Sequence[StampedPositions]
+) -> float:
+    """The largest distance (rad, over ``polls`` and the trajectory's axes) between a
+    poll's position and the path at the poll's middle (``started_s``: the origin)."""
+    if not polls:
+        return 0.0
+    middles = np.array([p.middle_s for p in polls]) - started_s
+    read = np.array([[p.positions[n] for n in trajectory.axes] for p in polls])
+    return float(np.max(np.abs(read - trajectory.at(middles))))
 
 
 def check_trajectory(

@@ -22,6 +22,7 @@ from drivers.dynamixel.control_table import (
     TICKS_PER_REV,
     item,
 )
+from drivers.errors import LimitError
 
 MODES = ("position", "extended_position")
 
@@ -119,6 +120,22 @@ class AxisConfig:
             min(high_v, max(1, round(velocity))),
             min(high_a, max(1, round(acceleration))),
         )
+
+    def rate_registers(self, velocity: float, acceleration: float) -> tuple[int, int]:
+        """(Profile Velocity, Profile Acceleration) register values of a sweep's rates
+        (rad/s, rad/s²; checked against the configured ones already); `LimitError` for a
+        rate below one register step (0 would mean "unlimited")."""
+        v = round(velocity * self.gear_ratio / RAD_S_PER_VELOCITY_UNIT)
+        a = round(acceleration * self.gear_ratio / RAD_S2_PER_ACCELERATION_UNIT)
+        if v < 1 or a < 1:
+            raise LimitError(
+                f"axis {self.name!r}: sweep velocity {velocity:.6g} rad/s or acceleration "
+                f"{acceleration:.6g} rad/s² is below one register step of the motor "
+                f"({RAD_S_PER_VELOCITY_UNIT / self.gear_ratio:.6g} rad/s, "
+                f"{RAD_S2_PER_ACCELERATION_UNIT / self.gear_ratio:.6g} rad/s²); "
+                "nothing was sent"
+            )
+        return v, a
 
     def contains(self, angle_rad: float) -> bool:
         return math.isfinite(angle_rad) and self.min_rad <= angle_rad <= self.max_rad

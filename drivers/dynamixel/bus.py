@@ -36,9 +36,10 @@ off (and read back off) before it, so opening a configured bus never drops an ar
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import TracebackType
 
@@ -49,10 +50,10 @@ from drivers.dynamixel.condition import Condition
 from drivers.dynamixel.control_table import (
     FACTORY_BAUD,
     MODELS,
-    RAD_S2_PER_ACCELERATION_UNIT,
     RAD_S_PER_VELOCITY_UNIT,
     item,
 )
+from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import (
     MOTION_FAULTS,
@@ -64,6 +65,7 @@ from drivers.errors import (
     TorqueOff,
 )
 from drivers.sweep import sweep_profile
+from drivers.trajectory import SETTLE_TIMEOUT_S, Followed, Trajectory
 from drivers.values import StampedPositions
 
 _MOVING = item("moving")
@@ -110,6 +112,7 @@ class DynamixelBus(Condition, Resource):
             latency_ms=latency_ms,
             names=dict(zip(ids, names, strict=True)),
         )
+        self._stream = SetpointStream(self._link)
         self.settle_ticks = settle_ticks
         self.poll_interval_s = poll_interval_s
         self.configure = configure
@@ -202,11 +205,16 @@ class DynamixelBus(Condition, Resource):
         return None
 
     @contextmanager
-    def _holding_on_fault(self) -> Iterator[None]:
-        """Hold every answering axis before a motion fault propagates (the contract)."""
+    def _holding_on_fault(
+        self, caught: type[BaseException] | tuple[type[BaseException], ...] = MOTION_FAULTS
+    ) -> Iterator[None]:
+        """Hold every answering axis before a motion fault (or what is ``caught``)
+        propagates (the contract); after Ctrl-C, a reply still on its way is let in first."""
         try:
             yield
-        except MOTION_FAULTS as exc:
+        except caught as exc:
+            if not isinstance(exc, DriverError):
+                self._link.reset()
             try:
                 self.stop()
             except DriverError as problem:
@@ -326,18 +334,10 @@ class DynamixelBus(Condition, Resource):
         commanded: dict[str, float] = {}
         for name, (velocity, acceleration) in rates.items():
             axis = self._axes[name]
-            v = round(velocity * axis.gear_ratio / RAD_S_PER_VELOCITY_UNIT)
-            a = round(acceleration * axis.gear_ratio / RAD_S2_PER_ACCELERATION_UNIT)
-            if v < 1 or a < 1:
-                raise LimitError(
-                    f"axis {name!r}: sweep velocity {velocity:.6g} rad/s or acceleration "
-                    f"{acceleration:.6g} rad/s² is below one register step of the motor "
-                    f"({RAD_S_PER_VELOCITY_UNIT / axis.gear_ratio:.6g} rad/s, "
-                    f"{RAD_S2_PER_ACCELERATION_UNIT / axis.gear_ratio:.6g} rad/s²); "
-                    "nothing was sent"
-                )
-            registers[axis.motor_id] = (v, a)
-            commanded[name] = v * RAD_S_PER_VELOCITY_UNIT / axis.gear_ratio
+            registers[axis.motor_id] = axis.rate_registers(velocity, acceleration)
+            commanded[name] = (
+                registers[axis.motor_id][0] * RAD_S_PER_VELOCITY_UNIT / axis.gear_ratio
+            )
         if not self._torque_on:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
         with self._holding_on_fault():
@@ -347,6 +347,30 @@ class DynamixelBus(Condition, Resource):
             link.sync_write("profile_velocity", {m: r[0] for m, r in registers.items()})
             self._send_goals(goals)
         return commanded
+
+    def follow(
+        self,
+        trajectory: Trajectory,
+        on_poll: Callable[[StampedPositions], None] | None = None,
+    ) -> Followed:
+        """Stream ``trajectory`` (`drivers.dynamixel.follow`): per period one SYNC_WRITE of
+        each axis's Profile Acceleration, Profile Velocity and a look-ahead Goal Position,
+        then one `poll_positions` and ``on_poll``; then `wait_settled`. `LimitError`,
+        `TorqueOff` and `DriverError` (an unknown axis; the axes not at rest within
+        ``settle_ticks`` of set-point 0) send nothing; a fault, an exception of
+        ``on_poll`` or Ctrl-C holds every answering axis before it propagates."""
+        self._check_open()
+        plan = SetpointPlan.of(trajectory, self._axes)
+        if not self._torque_on:
+            raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
+        with self._holding_on_fault():
+            plan.check_start(self._state(), self.settle_ticks)
+        with self._holding_on_fault(BaseException):
+            self._swept.update(plan.motor_ids)
+            self._goals.update(plan.last_goals())
+            followed = self._stream.run(plan, self.clock, self.poll_positions, on_poll)
+            self._wait_settled(SETTLE_TIMEOUT_S)
+        return dataclasses.replace(followed, ended_s=self.clock.now())
 
     def _state(self) -> dict[str, tuple[bool, int]]:
         """{axis: (moving, present ticks)} from one SYNC_READ of Moving … Present Position."""

@@ -27,9 +27,10 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import itertools
 import os
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, TypeVar
 
 import dynamixel_sdk as sdk
@@ -368,22 +369,40 @@ class DynamixelLink(Resource):
 
     def sync_write(self, name: str, values: Mapping[int, int]) -> None:
         """One SYNC_WRITE of item ``name``: {motor id: value} (no status packets come back)."""
+        self.sync_write_items((name,), {m: (v,) for m, v in values.items()})
+
+    def sync_write_items(self, names: Sequence[str], values: Mapping[int, Sequence[int]]) -> None:
+        """One SYNC_WRITE of the contiguous items ``names`` (in address order): {motor id:
+        one value per item}. Every value is checked as `write` checks it (its item's
+        range; an EEPROM item with torque on) before anything is sent."""
         if not values:
             return
-        reg = item(name)
-        for motor_id, value in values.items():
-            self._writable(name, value)
-            self._check_eeprom(motor_id, reg, value)
-        group = sdk.GroupSyncWrite(self._handler(), self._packets, reg.address, reg.size)
-        for motor_id, value in values.items():
-            group.addParam(motor_id, list(reg.encode(value)))
-        if name == "torque_enable":  # no status comes back: on is presumed, off unknown
-            for motor_id, value in values.items():
-                if value:
+        regs = [item(name) for name in names]
+        for a, b in itertools.pairwise(regs):
+            if b.address != a.address + a.size:
+                raise ValueError(f"{a.name} and {b.name} are not contiguous")
+        payload: dict[int, list[int]] = {}
+        for motor_id, row in values.items():
+            if len(row) != len(regs):
+                raise ValueError(f"{len(row)} values for {len(regs)} items ({', '.join(names)})")
+            payload[motor_id] = []
+            for reg, value in zip(regs, row, strict=True):
+                self._writable(reg.name, value)
+                self._check_eeprom(motor_id, reg, value)
+                payload[motor_id] += reg.encode(value)
+        size = sum(reg.size for reg in regs)
+        group = sdk.GroupSyncWrite(self._handler(), self._packets, regs[0].address, size)
+        for motor_id, data in payload.items():
+            group.addParam(motor_id, data)
+        if "torque_enable" in names:  # no status comes back: on is presumed, off unknown
+            at = list(names).index("torque_enable")
+            for motor_id, row in values.items():
+                if row[at]:
                     self._torque[motor_id] = True
                 else:
                     self._torque.pop(motor_id, None)
-        self._attempt(f"sync-writing {name}", None, lambda: (None, group.txPacket()))
+        what = f"sync-writing {', '.join(names)}"
+        self._attempt(what, None, lambda: (None, group.txPacket()))
 
     def sync_read(
         self, ids: Iterable[int], first: str, last: str, *, alerts: bool = True

@@ -23,18 +23,25 @@ it is given, for that move only. `poll_positions` takes the time of one poll on 
 virtual clock (``poll_s``; default the SYNC_READ of Present Position on the rig's bus
 at its baud, return delays included: `drivers.dynamixel.wire`) and reads the encoder
 at the middle of it, so a loop of polls walks along the profile as a real bus does.
+
+Trajectories: `follow` tracks a `drivers.trajectory.Trajectory` ideally: the joints are
+on its path (the set-points, on encoder ticks with the position_error effect, joined by
+straight lines; `sim.devices.motion.JointPath`) while it lasts, each set-point's
+SYNC_WRITE takes its wire time on the clock and each poll ``poll_s``. A trajectory is
+one move for the sample's random streams and faults: one repeatability draw per axis
+that moves, backlash from the direction of each axis's last motion along the path, an
+injected fault striking half-way through it.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from drivers.devices import Resource
-from drivers.dynamixel.wire import poll_seconds
+from drivers.dynamixel.wire import BITS_PER_BYTE, poll_seconds, sync_write_bytes
 from drivers.errors import (
     DeviceClosed,
     DriverError,
@@ -43,90 +50,25 @@ from drivers.errors import (
     TorqueOff,
 )
 from drivers.sweep import sweep_profile
+from drivers.trajectory import (
+    SETTLE_TIMEOUT_S,
+    Followed,
+    Trajectory,
+    check_trajectory,
+    tracking_error,
+)
 from drivers.values import Health, Recovered, StampedPositions
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.clock import ManualClock
+from sim.devices.motion import JointPath, profile_duration, profile_position
 from sim.devices.motor_faults import MotorFaults
+from sim.devices.position_error import MotorState, PositionModel
 from sim.faults import FaultInjector, FaultRule
 from sim.physics import streams as streams_module
 from sim.scene import PositionErrorSpec
 
-
-def profile_position(
-    start: FloatArray, goal: FloatArray, v: FloatArray, a: FloatArray, elapsed: float
-) -> FloatArray:
-    """Where trapezoidal profiles (rest to rest, per axis) from ``start`` to ``goal`` are
-    after ``elapsed`` seconds (rad); at the goal once each profile has ended."""
-    d = np.abs(goal - start)
-    sign = np.sign(goal - start)
-    t_acc = np.minimum(v / a, np.sqrt(d / a))  # time spent accelerating
-    v_peak = a * t_acc
-    cruise = np.where(v_peak > 0, d / np.where(v_peak > 0, v_peak, 1.0) - t_acc, 0.0)
-    total = 2.0 * t_acc + cruise
-    t = np.minimum(elapsed, total)
-    accelerating = 0.5 * a * t * t
-    cruising = 0.5 * a * t_acc**2 + v_peak * (t - t_acc)
-    braking = d - 0.5 * a * (total - t) ** 2
-    s = np.where(t < t_acc, accelerating, np.where(t < t_acc + cruise, cruising, braking))
-    return np.asarray(np.where(t >= total, goal, start + sign * s), dtype=np.float64)
-
-
-def profile_duration(start: FloatArray, goal: FloatArray, v: FloatArray, a: FloatArray) -> float:
-    """Seconds until every trapezoidal profile (rest to rest) of `profile_position` ends."""
-    d = np.abs(goal - start)
-    t_acc = np.minimum(v / a, np.sqrt(d / a))
-    v_peak = a * t_acc
-    cruise = np.where(v_peak > 0, d / np.where(v_peak > 0, v_peak, 1.0) - t_acc, 0.0)
-    return float(np.max(2.0 * t_acc + cruise, initial=0.0))
-
-
-class PositionModel:
-    """Encoder quantization, backlash and repeatability of the rig's axes (radians).
-
-    The repeatability error is downstream of the encoder (a belt, a worm, a coupling):
-    the encoder never sees it. Each axis draws a new one when it moves and keeps it
-    while it stays put.
-    """
-
-    def __init__(self, rig: Rig, spec: PositionErrorSpec, streams: streams_module.Streams):
-        self.spec = spec
-        self.streams = streams
-        axes = rig.bus_axes()
-        self.tick = np.array([a.resolution_rad for a in axes])
-        self.zero = np.array([a.zero_offset_rad for a in axes])
-        self.backlash = math.radians(spec.backlash_deg)
-        self.sigma = math.radians(spec.repeatability_deg)
-
-    def quantize(self, angles: FloatArray) -> FloatArray:
-        """The nearest encoder tick (joint angle, rad) of each axis."""
-        if not self.spec.ticks:
-            return np.asarray(angles, dtype=np.float64)
-        steps = np.round((angles - self.zero) / self.tick)
-        return np.asarray(self.zero + steps * self.tick, dtype=np.float64)
-
-    def backlash_error(self, direction: FloatArray) -> FloatArray:
-        """Joint minus encoder angle from backlash, after last moves in ``direction``
-        (sign per axis, 0 before any move): the joint lags half the backlash behind."""
-        return np.asarray(-0.5 * self.backlash * np.asarray(direction), dtype=np.float64)
-
-    def repeatability_draw(self, index: np.ndarray, axes: int, start: int = 0) -> FloatArray:
-        """(N, A) repeatability errors of a move made for samples ``index``; ``start`` is
-        the draw offset of a sample's second, third … move."""
-        if self.sigma == 0:
-            return np.zeros((len(index), axes))
-        n = self.streams.normal(index, streams_module.POSITION, axes, start=start)
-        return np.asarray(self.sigma * n, dtype=np.float64)
-
-
-@dataclass(frozen=True)
-class MotorState:
-    """What a resumed run needs of the motors: encoder angles at rest, the direction of
-    each axis's last move (for backlash) and the joints' present error (rad)."""
-
-    encoder: tuple[float, ...]
-    direction: tuple[float, ...]
-    repeatability: tuple[float, ...]
+__all__ = ["MotorState", "PositionModel", "SimMotorBus", "profile_duration", "profile_position"]
 
 
 class SimMotorBus(Resource):
@@ -167,6 +109,7 @@ class SimMotorBus(Resource):
         self._direction = np.zeros(len(home))  # sign of each axis's last move
         self._repeat = np.zeros(len(home))  # each axis's repeatability error
         self._error = np.zeros(len(home))  # joint − encoder
+        self._path: JointPath | None = None  # the trajectory being followed, if any
         self._moves: dict[int, int] = {}  # moves made so far per sample index
         self._open = False
         self._torque = True
@@ -268,11 +211,17 @@ class SimMotorBus(Resource):
         else:
             self._move_v, self._move_a = v, a
             self._end = self._t0 + profile_duration(here, goal, v, a)
+        self._path = None
+        self._count_move(moved)
+
+    def _count_move(self, moved: np.ndarray) -> None:
+        """One more move of the present sample from ``_t0``: arm its faults, and draw its
+        repeatability error for the axes that ``moved`` (backlash from ``_direction``)."""
         k = self._moves.get(self._sample, 0)
         self._moves[self._sample] = k + 1
         self._faults.arm(self._sample, k, self._t0)
         if self._model is not None:
-            axes = len(goal)
+            axes = len(moved)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
             self._repeat = np.where(moved, draw, self._repeat)
             self._error = self._model.backlash_error(self._direction) + self._repeat
@@ -281,7 +230,84 @@ class SimMotorBus(Resource):
         now = self.clock.now()
         if now >= self._end:  # at rest (the common case: read after settling)
             return self._goal.copy()
+        if self._path is not None:
+            return self._path.at(now)
         return profile_position(self._start, self._goal, self._move_v, self._move_a, now - self._t0)
+
+    def _error_at(self, t: float) -> FloatArray:
+        """Joint minus encoder (rad) at clock time ``t`` of the present motion."""
+        if self._path is None or self._model is None or t >= self._end:
+            return self._error
+        backlash = self._model.backlash_error(self._path.direction_at(t))
+        return np.asarray(backlash + self._repeat, dtype=np.float64)
+
+    # -- trajectories -----------------------------------------------------------------
+    def follow(
+        self,
+        trajectory: Trajectory,
+        on_poll: Callable[[StampedPositions], None] | None = None,
+    ) -> Followed:
+        """Follow ``trajectory`` ideally: the joints on its path (set-points joined by
+        straight lines, on encoder ticks with the position_error effect) from now on,
+        each set-point's SYNC_WRITE taking its wire time and each poll ``poll_s``.
+
+        `DriverError` (an unknown axis; the axes moving or not within one encoder tick
+        of set-point 0), `LimitError`, `TorqueOff` or a latched `MotorFault` before
+        anything moves. A fault (struck half-way, as in a move) or an exception of
+        ``on_poll`` holds every axis before it propagates.
+        """
+        self._check_open()
+        top_a = {n: float(self._a[i]) for n, i in self._index.items()}
+        check_trajectory(trajectory, self.limits(), self.velocity_limits(), top_a)
+        if not self._torque:
+            raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
+        self._faults.check_clear()
+        goals = self._path_goals(trajectory)
+        started = self.clock.now()
+        period = trajectory.period_s
+        path = JointPath(Trajectory(self._names, period, goals), started, self._direction)
+        self._start, self._goal, self._t0, self._end = goals[0], goals[-1], started, path.end_s
+        self._path = path
+        self._direction = path.direction_at(path.end_s)
+        self._count_move(path.moved)
+        write_s = sync_write_bytes(len(trajectory.axes)) * BITS_PER_BYTE / self.rig.spec.bus.baud
+        sent: list[float] = []
+        polls: list[StampedPositions] = []
+        try:
+            for k in range(len(trajectory)):
+                sent.append(self.clock.advance_to(max(started + k * period, self.clock.now())))
+                self.clock.advance(write_s)
+                polls.append(self.poll_positions())
+                if on_poll is not None:
+                    on_poll(polls[-1])
+        except BaseException:
+            self._hold()
+            raise
+        self.wait_settled(SETTLE_TIMEOUT_S)
+        tracking = tracking_error(trajectory, started, polls)
+        return Followed(started, tuple(sent), polls, tracking, self.clock.now())
+
+    def _path_goals(self, trajectory: Trajectory) -> FloatArray:
+        """(K, A) set-points of every axis (the others hold still), on encoder ticks with
+        the position_error effect, starting where the axes are; `DriverError` unless they
+        are at rest within one tick of set-point 0."""
+        here = self._present_encoder()
+        columns = [self._index[n] for n in trajectory.axes]
+        tick = np.array([a.resolution_rad for a in self.rig.bus_axes()])[columns]
+        off = np.abs(here[columns] - trajectory.goals[0]) > tick
+        if self.clock.now() < self._end or off.any():
+            where = ", ".join(f"{n} {x:.6f} rad" for n, x in zip(self._names, here, strict=True))
+            raise DriverError(
+                "follow: the axes must be at rest at the trajectory's set-point 0 (move_to "
+                f"and wait_settled first); they are {'moving, ' if not off.any() else ''}"
+                f"at {where}; nothing moved"
+            )
+        goals = np.repeat(here[None, :], len(trajectory), axis=0)
+        goals[:, columns] = trajectory.goals
+        if self._model is not None:
+            goals = np.clip(self._model.quantize(goals), self._lo, self._hi)
+        goals[0] = here
+        return goals
 
     def wait_settled(self, timeout_s: float) -> None:
         """Advance the clock to the end of the motion (at once if that has passed); if
@@ -353,7 +379,7 @@ class SimMotorBus(Resource):
         """Where the joints really are (rad): the encoder reading plus backlash and
         repeatability (equal to `positions` without the position_error effect)."""
         self._check_open()
-        true = self._present_encoder() + self._error
+        true = self._present_encoder() + self._error_at(self.clock.now())
         return dict(zip(self._names, true.tolist(), strict=True))
 
     def true_position_at(self, t: float) -> dict[str, float]:
@@ -361,10 +387,12 @@ class SimMotorBus(Resource):
         (at its start before it, at its goal after it): a stream window's pose."""
         if t >= self._end:
             here = self._goal
+        elif self._path is not None:
+            here = self._path.at(t)
         else:
             dt = max(t - self._t0, 0.0)
             here = profile_position(self._start, self._goal, self._move_v, self._move_a, dt)
-        return dict(zip(self._names, (here + self._error).tolist(), strict=True))
+        return dict(zip(self._names, (here + self._error_at(t)).tolist(), strict=True))
 
     def snapshot(self) -> MotorState:
         """The motors' state (at rest: call after `wait_settled`)."""
@@ -410,6 +438,7 @@ class SimMotorBus(Resource):
         here = np.array(state.encoder, dtype=np.float64)
         self._start, self._goal, self._t0 = here, here.copy(), self.clock.now()
         self._end = self._t0
+        self._path = None
         self._direction = np.array(state.direction, dtype=np.float64)
         self._repeat = np.array(state.repeatability, dtype=np.float64)
         backlash = self._model.backlash_error(self._direction) if self._model else 0.0
@@ -422,8 +451,12 @@ class SimMotorBus(Resource):
 
     def _hold(self) -> None:
         here = self._present_encoder()
+        if self._path is not None and self._model is not None:  # where a path left it
+            self._direction = self._path.direction_at(self.clock.now())
+            self._error = self._error_at(self.clock.now())
         self._start, self._goal, self._t0 = here, here, self.clock.now()
         self._end = self._t0
+        self._path = None
         self._faults.disarm()
 
     def torque(self, on: bool) -> None:

@@ -19,6 +19,8 @@ import pytest
 from drivers.base import Detector, LightSource, MotorBus
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
+from drivers.dynamixel.control_table import FACTORY_BAUD
+from drivers.dynamixel.wire import setpoint_period
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.model import Rig
@@ -37,6 +39,9 @@ from tests.conftest import CONFIGS
 
 #: The motor faults every bus must survive the same way.
 MOTOR_FAULTS = ("motor_fault", "comm_error")
+#: The tracking error (rad) `DynamixelBus.follow` keeps on the emulated X series: a
+#: trajectory at half the configured velocity and acceleration (4 rad/s, 40 rad/s²).
+EMULATOR_TRACKING_RAD = 0.05
 
 
 # -- motor buses ---------------------------------------------------------------------
@@ -56,6 +61,13 @@ class MotorHarness:
     faulted_axis: str
     arm: Callable[[], None] = lambda: None
     sync: Callable[[], None] = lambda: None  # wait until the motors have been told everything sent
+    #: Each axis's configured acceleration (rad/s²), the set-point period (s) of a
+    #: trajectory on this bus, and the tracking error (rad) the backend states for it.
+    accelerations: dict[str, float] = field(default_factory=dict)
+    period_s: float = 0.0
+    tracking_bound: float = 0.0
+    #: Changes whenever a goal reaches a motor (the device's own record).
+    goals_sent: Callable[[], object] = lambda: None
 
     def advance(self, seconds: float) -> None:
         self.clock.advance(seconds)
@@ -80,8 +92,12 @@ def _sim_motors(rig: Rig, clock: ManualClock) -> MotorHarness:
         return bus
 
     return MotorHarness(
-        "sim", clock, target, make, lambda: buses[-1].true_positions(), faulted_axis=faulted
-    )
+        "sim", clock, target, make, lambda: buses[-1].true_positions(), faulted_axis=faulted,
+        accelerations=dict(zip(rig.axes, rig.acceleration.tolist(), strict=True)),
+        period_s=setpoint_period(len(rig.axes), rig.spec.bus.baud),
+        tracking_bound=1e-9,  # ideal tracking, no encoder ticks without the position_error effect
+        goals_sent=lambda: buses[-1].moves_of(0),
+    )  # fmt: skip
 
 
 def _dynamixel_motors(emulator: Callable[..., DxlEmulator], latency_ms: int) -> MotorHarness:
@@ -120,6 +136,9 @@ def _dynamixel_motors(emulator: Callable[..., DxlEmulator], latency_ms: int) -> 
     return MotorHarness(
         "dynamixel", clock, {"axis1": 0.8, "axis2": -0.8, "axis3": 0.5}, make, observe,
         faulted_axis="axis3", arm=arm, sync=lambda: state["bus"].health(),
+        accelerations=dict.fromkeys(("axis1", "axis2", "axis3"), 40.0),
+        period_s=setpoint_period(3, FACTORY_BAUD), tracking_bound=EMULATOR_TRACKING_RAD,
+        goals_sent=lambda: [emu.motors[i].goals_written for i in (1, 2, 3)],
     )  # fmt: skip
 
 
