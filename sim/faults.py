@@ -20,6 +20,9 @@ streams, so a resumed run sees exactly the faults an uninterrupted one does):
 - ``detector_error``: ``measure`` raises `DetectorError` (nothing is exposed);
 - ``saturated``: ``measure`` returns a reading at the sensor's full scale, flagged
   saturated;
+- ``stream_gap``: a stream started for the sample loses `STREAM_GAP` consecutive
+  windows from its `STREAM_GAP_FROM`-th on (a host that stalled: their lines never
+  arrive), nothing else changes;
 - ``overheat``: from the move into the sample on, ``axis`` reports ``temperature_c``
   in its health for ``for_s`` seconds of the run's clock, then cools back (a health
   check sees it; nothing else changes);
@@ -49,9 +52,13 @@ FaultKind = Literal[
     "motion_timeout",
     "detector_error",
     "saturated",
+    "stream_gap",
     "overheat",
     "supply_sag",
 ]
+#: The windows a ``stream_gap`` loses, and the first of them (from the stream's start).
+STREAM_GAP = 40
+STREAM_GAP_FROM = 100
 #: The kinds the motor bus raises or shows; the others belong to the detector.
 MOTOR_KINDS = frozenset({"motor_fault", "comm_error", "motion_timeout", "overheat", "supply_sag"})
 #: Hardware Error Status flags a motor_fault may name (`drivers.dynamixel.control_table`).

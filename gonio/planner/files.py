@@ -173,7 +173,6 @@ def plan_bytes(plan: Plan) -> bytes:
         }
         header["sweeps"] = sweeps
         if w.has_paths:  # an axis-sweep plan's bytes as before path segments existed
-            assert w.path is not None
             sweeps |= {
                 **{name: getattr(w, name).tolist() for name in PATH_ARRAYS},
                 "path": w.path.tolist(),

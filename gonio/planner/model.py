@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import numpy as np
@@ -171,6 +171,10 @@ SWEEP_ARRAYS: dict[str, type[np.generic]] = {
 PATH_ARRAYS: dict[str, type[np.generic]] = {"path_first": np.int64, "path_count": np.int64}
 
 
+def _no_rows() -> np.ndarray:
+    return np.zeros(0, dtype=np.int64)
+
+
 @dataclass(frozen=True, eq=False)
 class Sweeps:
     """The segments of a fly plan in measuring order. Angles in radians (rows in
@@ -203,14 +207,14 @@ class Sweeps:
     streamed: np.ndarray  # (S,) int64 readings streamed at constant velocity (≥ count)
     period_s: float
     integration_s: float
-    path_first: np.ndarray | None = None  # (S,) int64; None: no path segment
-    path_count: np.ndarray | None = None  # (S,) int64
-    path: FloatArray | None = None  # (P, A) the path segments' set-points, rad
+    path_first: np.ndarray = field(default_factory=_no_rows)  # (S,) int64; none: no paths
+    path_count: np.ndarray = field(default_factory=_no_rows)  # (S,) int64
+    path: FloatArray = field(default_factory=_no_rows)  # (P, A) set-points of the paths, rad
     path_period_s: float = 0.0
 
     def __post_init__(self) -> None:
         n = len(self.first)
-        if self.path_count is None:
+        if not len(self.path_count):
             object.__setattr__(self, "path_first", np.zeros(n, dtype=np.int64))
             object.__setattr__(self, "path_count", np.zeros(n, dtype=np.int64))
         for name, dtype in {**SWEEP_ARRAYS, **PATH_ARRAYS}.items():
@@ -220,9 +224,7 @@ class Sweeps:
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         axes = np.shape(self.start)[1] if np.ndim(self.start) == 2 else 0
-        path = np.array(
-            np.zeros((0, axes)) if self.path is None else self.path, dtype=np.float64
-        ).reshape(-1, axes)
+        path = np.array(self.path, dtype=np.float64).reshape(-1, axes)
         path.setflags(write=False)
         object.__setattr__(self, "path", path)
 
@@ -233,8 +235,6 @@ class Sweeps:
 
     def set_points(self, k: int) -> FloatArray:
         """Segment ``k``'s trajectory set-points (K, A) rad (empty for an axis sweep)."""
-        assert self.path is not None and self.path_first is not None
-        assert self.path_count is not None
         a = int(self.path_first[k])
         return np.asarray(self.path[a : a + int(self.path_count[k])])
 

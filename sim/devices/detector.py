@@ -41,13 +41,15 @@ from drivers.stream import StreamReading
 from drivers.values import Reading
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
-from sim.faults import FaultInjector
+from sim.faults import STREAM_GAP, STREAM_GAP_FROM, FaultInjector
 from sim.physics import lockin, sensor
 from sim.physics.optics import SceneOptics
 from sim.physics.streams import TIMING, Streams
 from sim.scene import Scene
 
 DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
+#: The injected faults a stream meets.
+STREAM_KINDS = frozenset({"stream_gap"})
 
 
 def blur_nodes(smear_deg: np.ndarray, max_step_deg: float, max_nodes: int) -> np.ndarray:
@@ -152,6 +154,8 @@ class SimDetector(Resource):
         self._sample = 0  # whose random streams the next measurement uses
         self._open = False
         self._draws: dict[int, int] = {}  # draws used so far per sample index
+        self._streams_started: dict[int, int] = {}  # streams started per sample index
+        self._gap = (0, 0)  # the present stream's lost windows [from, to) (stream_gap)
         self._prepared: dict[tuple[float, ...], float] = {}
         #: Measurements that found their pose prepared.
         self.prepared_hits = 0
@@ -237,6 +241,10 @@ class SimDetector(Resource):
             )
         self._stream = (self._clock.now(), period, float(integration))
         self._windows = 0
+        attempt = self._streams_started.get(self._sample, 0)
+        self._streams_started[self._sample] = attempt + 1
+        gap = self._faults.fired(self._sample, attempt, STREAM_KINDS) if self._faults else None
+        self._gap = (STREAM_GAP_FROM, STREAM_GAP_FROM + STREAM_GAP) if gap else (0, 0)
         self.stream_truth, self.stream_nodes = [], []
 
     def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
@@ -275,15 +283,18 @@ class SimDetector(Resource):
         counts, saturated = self._stream_counts(started, ended, integration)
         self.stream_truth += list(zip(started.tolist(), ended.tolist(), strict=True))
         shift = self._stamp_shift(len(k), start)
+        lost = (k >= self._gap[0]) & (k < self._gap[1])
         return [
             StreamReading(value=c, std=np.nan, started_s=a, ended_s=b, saturated=sat)
-            for c, sat, a, b in zip(
+            for c, sat, a, b, gone in zip(
                 counts.tolist(),
                 saturated.tolist(),
                 (started + shift).tolist(),
                 (ended + shift).tolist(),
+                lost.tolist(),
                 strict=True,
             )
+            if not gone
         ]
 
     def _stamp_shift(self, n: int, start: int) -> np.ndarray | float:

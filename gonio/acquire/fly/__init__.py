@@ -15,12 +15,13 @@ from gonio.acquire.fly.merge import (
     derive,
     interpolated_span,
     merge,
+    merge_path,
     poll_arrays,
     stamp_slack,
     target_slots,
     window_numbers,
 )
-from gonio.acquire.fly.run import run_sweep
+from gonio.acquire.fly.run import run_path_sweep, run_sweep
 
 __all__ = [
     "Derived",
@@ -33,7 +34,9 @@ __all__ = [
     "derive",
     "interpolated_span",
     "merge",
+    "merge_path",
     "poll_arrays",
+    "run_path_sweep",
     "run_sweep",
     "stamp_slack",
     "target_slots",

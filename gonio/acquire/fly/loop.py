@@ -24,7 +24,7 @@ from drivers.devices import Devices
 from drivers.errors import CommError, DetectorError, DriverError, MotionTimeout, MotorFault
 from drivers.stream import StreamReading
 from gonio.acquire.ending import EndSession
-from gonio.acquire.fly.merge import RawSweep, derive
+from gonio.acquire.fly.merge import Derived, RawSweep, derive
 from gonio.acquire.fly.run import run_sweep
 from gonio.acquire.progress import Observer
 from gonio.acquire.recovery import MotorRecovery
@@ -146,7 +146,6 @@ class FlyLoop:
                     ),
                     target=first,
                 )  # fmt: skip
-                break
             except DriverError as exc:
                 c.hold_all()
                 data = {**c.fault_data(exc), "attempt": attempt + 1}
@@ -166,30 +165,28 @@ class FlyLoop:
                     return count
                 c.event("fault", data, target=first)
                 raise EndSession("aborted", f"sweep {k}: {exc}") from None
-        self._commit_sweep(k, attempt + 1, raw)
+            d = derive(raw, c.axes, sweeps, c.plan.arrival_s, k)
+            kept = len(d.samples.index)
+            if kept >= count or attempt == on_fault.retries:
+                break
+            # Fewer readings than the plan asks (a host stall, a lost stream): redone.
+            data = {"short": True, "kept": kept, "count": count, "attempt": attempt + 1}
+            started, ended, polls, stream = self._raw_rows(raw, d)
+            with c.journal.transaction():
+                c.journal.sweep(k, "abandoned", started, ended, data, polls, stream)
+            c.event("retry", {**data, **c.sim_state()}, target=first)
+        self._commit_sweep(k, attempt + 1, raw, d)
         return count
 
-    def _commit_sweep(self, k: int, attempts: int, raw: RawSweep) -> None:
-        """Merge the sweep's streams and journal it, its raw streams, its samples and
-        the targets it did not read (skipped), in one transaction."""
-        c = self.context
-        sweeps = c.plan.sweeps
-        assert sweeps is not None
-        offset = c.time.offset
-        d = derive(raw, c.axes, sweeps, c.plan.arrival_s, k)
-        merged, extra = d.samples, d.extra
-        request, reply, positions = d.request, d.reply, d.positions
-        first, count = int(sweeps.first[k]), int(sweeps.count[k])
-        state = c.sim_state()
-        last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
-        data = {
-            "first": first, "count": count, "readings": len(raw.readings),
-            "matched": len(d.matched.index), "kept": len(merged.index), "polls": len(raw.polls),
-            "attempts": attempts,
-        }  # fmt: skip
+    def _raw_rows(self, raw: RawSweep, d: Derived) -> tuple[float, float, list[Any], list[Any]]:
+        """(started, ended, polls, stream) of a sweep's raw streams for the journal, in
+        run time."""
+        offset = self.context.time.offset
         polls = [
             (a + offset, b + offset, p)
-            for a, b, p in zip(request.tolist(), reply.tolist(), positions.tolist(), strict=True)
+            for a, b, p in zip(
+                d.request.tolist(), d.reply.tolist(), d.positions.tolist(), strict=True
+            )
         ]
         stream = [
             (
@@ -199,11 +196,27 @@ class FlyLoop:
             )
             for r in raw.readings
         ]  # fmt: skip
+        return raw.started_s + offset, raw.ended_s + offset, polls, stream
+
+    def _commit_sweep(self, k: int, attempts: int, raw: RawSweep, d: Derived) -> None:
+        """Journal the sweep (its merge ``d``), its raw streams, its samples and the
+        targets it did not read (skipped), in one transaction."""
+        c = self.context
+        sweeps = c.plan.sweeps
+        assert sweeps is not None
+        merged, extra = d.samples, d.extra
+        first, count = int(sweeps.first[k]), int(sweeps.count[k])
+        state = c.sim_state()
+        last = int(np.argmax(d.ended[merged.index])) if len(merged.index) else -1
+        data = {
+            "first": first, "count": count, "readings": len(raw.readings),
+            "matched": len(d.matched.index), "kept": len(merged.index), "polls": len(raw.polls),
+            "attempts": attempts,
+        }  # fmt: skip
+        started, ended, polls, stream = self._raw_rows(raw, d)
         read = set(merged.target.tolist())
         with c.journal.transaction():
-            c.journal.sweep(
-                k, "measured", raw.started_s + offset, raw.ended_s + offset, data, polls, stream
-            )
+            c.journal.sweep(k, "measured", started, ended, data, polls, stream)
             for n, r in enumerate(merged.index.tolist()):
                 reading = raw.readings[r]
                 i = int(merged.target[n])

@@ -9,7 +9,8 @@ they are, `interpolated_span`, / √12: the positions are sampled somewhere in t
 the readings' stamp slack / √12, `stamp_slack`, in quadrature) × the angular speed
 there (rad); polls slower than `SLOW_POLL` × the median are left out.
 Only readings whose whole window lies inside the constant-velocity part (the swept axis
-between the entry and exit poses) and between two polls (`bracketed`) are matched, each
+between the entry and exit poses, give or take one period's travel: the stream's phase is
+the device's) and between two polls (`bracketed`) are matched, each
 to a stream slot j (the j-th reading streamed at constant velocity, planned mid-pose
 entry + v (j period + integration / 2)). The readings are consecutive windows
 (`window_numbers`: from the device's timestamps, else their order), so one shift maps
@@ -19,6 +20,12 @@ a velocity off the plan's shows as read-back angles drifting from the targets' a
 sweep). The plan's targets are the slots its coverage thinning kept (`target_slots`); a
 matched reading in a slot that is no target stays in the journal's raw ``stream`` table
 only: the sweep's samples are exactly the plan's targets read (`derive`).
+
+`merge_path`: a path sweep's (a trajectory every axis follows) readings get their angles
+the same way; their slots by time since the trajectory's origin (set-point 0 due):
+through one shift of the window numbers when the device stamps its windows, else each
+reading's round((started − origin) / period_s). Only readings whose whole window lies
+between the first and the last poll are matched.
 """
 
 from __future__ import annotations
@@ -46,6 +53,7 @@ class RawSweep:
     readings: list[StreamReading]
     started_s: float
     ended_s: float
+    origin_s: float | None = None  # a path sweep's: when its set-point 0 was due
 
 
 @dataclass(frozen=True)
@@ -127,8 +135,11 @@ def merge(
     timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
     j = int(np.argmax(np.abs(sweeps.velocity[k])))
     lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
-    inside = (np.minimum(first[:, j], last[:, j]) >= lo - 1e-12) & (
-        np.maximum(first[:, j], last[:, j]) <= hi + 1e-12
+    # The stream's phase is the device's: its first or last window may reach up to one
+    # period's travel into a ramp (its angles and smear are still measured, by the polls).
+    margin = abs(float(sweeps.velocity[k, j])) * sweeps.period_s
+    inside = (np.minimum(first[:, j], last[:, j]) >= lo - margin) & (
+        np.maximum(first[:, j], last[:, j]) <= hi + margin
     )
     inside &= bracketed(t, positions[:, j], lo, hi, started, ended)
     v = abs(float(sweeps.velocity[k, j]))
@@ -142,6 +153,57 @@ def merge(
     index = np.flatnonzero(inside)[np.sort(first_of)].astype(np.int64)
     if slots is None:
         slots = np.arange(int(sweeps.count[k]), dtype=np.int64)
+    owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
+    target = np.array(
+        [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
+        dtype=np.int64,
+    )
+    return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
+
+
+def merge_path(
+    request: FloatArray,
+    reply: FloatArray,
+    positions: FloatArray,
+    started: FloatArray,
+    ended: FloatArray,
+    sweeps: Sweeps,
+    k: int,
+    origin_s: float,
+    slots: np.ndarray,
+    slack_s: float = 0.0,
+    window: np.ndarray | None = None,
+) -> Merged:
+    """Merge path sweep ``k``'s polls (request, reply (P,) s; positions (P, A) rad) with
+    its readings' windows (started, ended (R,) s), the trajectory's origin ``origin_s``
+    (s, the clock's); ``slots`` and ``slack_s`` as for `merge`; ``window`` the readings'
+    window numbers from the device's timestamps (None without them: each reading's slot
+    is then round((started − origin) / period_s), robust to lost lines)."""
+    t = 0.5 * (request + reply)
+    order = np.argsort(t, kind="stable")
+    t, positions, spans = t[order], positions[order], (reply - request)[order]
+    middle = 0.5 * (started + ended)
+
+    def at(times: FloatArray) -> FloatArray:
+        cols = [np.interp(times, t, positions[:, j]) for j in range(positions.shape[1])]
+        return np.stack(cols, axis=1).reshape(len(times), positions.shape[1])
+
+    angles, first, last = at(middle), at(started), at(ended)
+    smear = np.linalg.norm(last - first, axis=1)
+    span = ended - started
+    speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
+    timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
+    inside = (started >= t[0]) & (ended <= t[-1]) if len(t) >= 2 else np.zeros(len(started), bool)
+    estimate = (started - origin_s) / sweeps.period_s
+    if window is None:  # no device timestamps: each reading's own stamps (a lost line is
+        slot = np.rint(estimate).astype(np.int64)  # no gap in an order-based count)
+    else:
+        numbers = np.asarray(window, dtype=np.int64)
+        shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
+        slot = (numbers - shift).astype(np.int64)
+    inside &= (slot >= 0) & (slot < int(sweeps.streamed[k]))
+    _, first_of = np.unique(slot[inside], return_index=True)  # one reading a slot
+    index = np.flatnonzero(inside)[np.sort(first_of)].astype(np.int64)
     owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
     target = np.array(
         [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
@@ -228,7 +290,12 @@ def derive(
     slots = target_slots(sweeps, arrival_s, k)
     slack = stamp_slack(raw.readings)
     window = window_numbers([r.device_t_s for r in raw.readings], sweeps.period_s)
-    matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack, window)
+    if raw.origin_s is not None:
+        stamped = all(r.device_t_s is not None for r in raw.readings)
+        matched = merge_path(request, reply, positions, started, ended, sweeps, k, raw.origin_s,
+                             slots, slack, window if stamped else None)  # fmt: skip
+    else:
+        matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack, window)
     counts = np.array([raw.readings[r].value for r in matched.index.tolist()], dtype=np.float64)
     extra = angular_sigma(counts, matched.angles, matched.smear, matched.timing)
     return Derived(

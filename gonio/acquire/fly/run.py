@@ -7,12 +7,21 @@ backend both advance the one virtual clock), stop the stream. What comes back is
 (`RawSweep`): the stamped polls and the stamped readings, the readings stamped again
 with the stream's final clock offset (`drivers.stream.restamped`, the latency the live
 stamps assumed). Merging them is `gonio.acquire.fly.merge`'s.
+
+`run_path_sweep`: a path sweep (a trajectory every axis follows): move to its first
+set-point (at rest) and settle, poll the positions there (the first window starts after
+it), start the detector's stream, follow the trajectory
+(`drivers.base.MotorBus.follow`: a write of every axis's set-point and a poll per
+period), reading the stream after each poll, then stop the stream. Its `RawSweep` also
+holds the trajectory's origin on the clock (set-point 0 due). `run_sweep` runs it for a
+sweep with set-points.
 """
 
 from __future__ import annotations
 
 from drivers.devices import Devices
 from drivers.stream import StreamReading, restamped, streaming
+from drivers.trajectory import Trajectory
 from drivers.values import StampedPositions
 from gonio.acquire.fly.merge import RawSweep
 from gonio.planner.model import Sweeps
@@ -29,6 +38,8 @@ def run_sweep(
 ) -> RawSweep:
     """Measure sweep ``k`` of ``sweeps`` (see the module docstring). A driver error
     propagates with the stream stopped (the bus already held the axes)."""
+    if int(sweeps.path_count[k]):
+        return run_path_sweep(devices, axes, sweeps, k, settle_s=settle_s, timeout_s=timeout_s)
     bus, clock = devices.bus, devices.clock
     detector = streaming(devices.detector)
     start = dict(zip(axes, sweeps.start[k].tolist(), strict=True))
@@ -54,3 +65,36 @@ def run_sweep(
         readings += detector.stop_stream()
     bus.wait_settled(timeout_s)
     return RawSweep(polls, restamped(readings, None), started, clock.now())
+
+
+def run_path_sweep(
+    devices: Devices,
+    axes: tuple[str, ...],
+    sweeps: Sweeps,
+    k: int,
+    *,
+    settle_s: float,
+    timeout_s: float,
+) -> RawSweep:
+    """Measure path sweep ``k`` of ``sweeps`` (the module docstring). A driver error
+    propagates with the stream stopped (the bus already held the axes)."""
+    bus, clock = devices.bus, devices.clock
+    detector = streaming(devices.detector)
+    trajectory = Trajectory(axes, sweeps.path_period_s, sweeps.set_points(k))
+    bus.move_to(dict(zip(axes, trajectory.goals[0].tolist(), strict=True)))
+    bus.wait_settled(timeout_s)
+    clock.sleep(settle_s)
+    started = clock.now()
+    readings: list[StreamReading] = []
+
+    def read(_: StampedPositions) -> None:
+        readings.extend(detector.read_stream(0.0))
+
+    at_rest = bus.poll_positions()  # where the first window starts: before it
+    detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
+    try:
+        followed = bus.follow(trajectory, read)
+    finally:
+        readings += detector.stop_stream()
+    polls = [at_rest, *followed.polls]
+    return RawSweep(polls, restamped(readings, None), started, clock.now(), followed.started_s)

@@ -98,7 +98,10 @@ def test_a_fly_plan_acquires_on_the_rehearsal_path(
     assert run.meta["backend"] == "rehearsal" and run.complete
     sweeps = run.plan.sweeps
     assert sweeps is not None
-    assert [s.outcome for s in run.sweeps] == ["measured"] * len(sweeps)
+    # every sweep measured once; one that kept fewer readings than asked (a host stall)
+    # was journaled as abandoned, short, and redone within on_fault.retries
+    assert [s.sweep for s in run.sweeps if s.outcome == "measured"] == list(range(len(sweeps)))
+    assert all(s.data.get("short") for s in run.sweeps if s.outcome == "abandoned")
     assert len(run) >= 0.7 * len(run.plan)
     # The axes that do not sweep hold their commanded angles to a tick or two; the swept
     # one is read at mid-window, near its target (the velocity's register step drifts it

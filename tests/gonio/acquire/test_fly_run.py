@@ -260,3 +260,21 @@ def test_a_motor_recovered_by_policy_redoes_the_sweep_in_the_same_session(
     ]  # fmt: skip
     assert [s.outcome for s in done.sweeps] == ["measured"] * len(sweeps)
     assert len(done) + len(done.skipped) == len(done.plan)
+
+
+def test_a_sweep_that_kept_fewer_readings_is_redone(tmp_path: Path, run: Run) -> None:
+    sweeps = run.plan.sweeps
+    assert sweeps is not None
+    k = int(np.argmax(sweeps.count))  # the longest sweep: the gap takes some of its targets
+    first = int(sweeps.first[k])
+    files = fly_files(tmp_path, faults=[{"kind": "stream_gap", "at": [first]}])
+    result = files.start(tmp_path / "run.sqlite")
+    assert result.report.outcome == "completed", result.report.message
+    gapped = open_run(tmp_path / "run.sqlite")
+    mine = [s for s in gapped.sweeps if s.sweep == k]
+    assert [s.outcome for s in mine] == ["abandoned", "measured"]
+    short, measured = mine
+    assert short.data["short"] is True and short.data["kept"] < short.data["count"]
+    assert measured.data["kept"] == measured.data["count"] and measured.data["attempts"] == 2
+    assert any(e.kind == "retry" and e.data.get("short") for e in gapped.events)
+    assert len(gapped) == len(run) and not len(gapped.skipped)
