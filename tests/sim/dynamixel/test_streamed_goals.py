@@ -82,3 +82,18 @@ def test_a_new_profile_velocity_is_reached_from_the_present_one(
     assert motor.get("present_velocity") == pytest.approx(60, abs=1)  # half-way up the ramp
     clock.advance(0.5 * change + 0.01)
     assert motor.get("present_velocity") == 80
+
+
+def test_the_motor_remembers_where_it_was_along_streamed_set_points(
+    motor: EmulatedMotor, clock: ManualClock
+) -> None:
+    """A detector's window long past reads the pose along the set-points then."""
+    start = motor.get("present_position")
+    seen = []
+    for k in range(200):
+        setpoint(motor, ACCEL, 40, start + 5 * k + 50)
+        clock.advance(PERIOD / 2)
+        seen.append((clock.now(), motor.position_at(clock.now())))
+        clock.advance(PERIOD / 2)
+    for t, position in seen:
+        assert motor.position_at(t) == position
