@@ -9,16 +9,21 @@ motor to run along the path without braking (`setpoint_registers`):
 * the goal is a look-ahead set-point, `lookahead` periods on, but never past a turning
   point of its axis or the last set-point (every goal is a set-point: inside the limits);
 * the profile velocity is the path's speed at set-point k + 1 (the mean of the straight
-  segments around it, the slope of the smooth time law the set-points sample), its
-  rounding to the register step carried from one set-point to the next so that the
-  distance commanded does not drift, at least one step (0 means "unlimited");
+  segments around it, the slope of the smooth time law the set-points sample), at
+  least one register step (0 means "unlimited");
 * the profile acceleration is that speed's change over one period, but at least what
   keeps the braking distance short of the look-ahead goal (the motor cruises), rounded
-  up to the register step and at most the configured one.
+  up to the register step and at most the configured one;
+* from the second set-point on, the last poll corrects both (`SetpointPlan.corrected`):
+  the speed makes up the distance the motors were behind the path (or ahead) in
+  `CATCH_UP_PERIODS` periods, and the acceleration reaches that speed within a period
+  from the velocity the last two polls show.
 
 Tracking: a motor that can change its speed by the path's change within one period
 stays within about a · period² / 8 of the straight segments (the smooth curve's
-distance from its chords); the contract suite states each backend's bound.
+distance from its chords), plus an encoder tick and what the one-period-old feedback
+leaves at a turn; the contract suite states the bound on the emulated X series, and
+benchmarks/trajectory_bus.py measures it on the rehearsal path.
 """
 
 from __future__ import annotations
@@ -43,6 +48,9 @@ from drivers.values import StampedPositions
 
 #: The items one set-point writes, in address order.
 SETPOINT_ITEMS = ("profile_acceleration", "profile_velocity", "goal_position")
+#: A motor behind the path (or ahead) at a poll makes the distance up in this many
+#: periods (`SetpointPlan.corrected`): the poll is a period old when it is used.
+CATCH_UP_PERIODS = 2.0
 #: The look-ahead keeps each axis's braking distance at its fastest within this share of
 #: the distance to its goal at its configured acceleration (`lookahead`).
 BRAKING_SHARE = 0.125
@@ -74,10 +82,14 @@ def _turns(trajectory: Trajectory) -> NDArray[np.int64]:
     return turns
 
 
-def setpoint_registers(trajectory: Trajectory, axes: Sequence[AxisConfig]) -> NDArray[np.int64]:
-    """(K, A, 3) the Profile Acceleration, Profile Velocity and Goal Position registers of
-    each set-point for the trajectory's axes ``axes`` (the module docstring). The
-    trajectory is checked already (`drivers.trajectory.check_trajectory`)."""
+def setpoint_registers(
+    trajectory: Trajectory, axes: Sequence[AxisConfig]
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The registers (K, A, 3: Profile Acceleration, Profile Velocity, Goal Position) of
+    each set-point for the trajectory's axes ``axes`` (the module docstring), the speed
+    they aim at (K, A, in velocity steps, before rounding) and the sign of each goal's
+    direction from its set-point (K, A). The trajectory is checked already
+    (`drivers.trajectory.check_trajectory`)."""
     period = trajectory.period_s
     goals = trajectory.goals
     k_count = len(goals)
@@ -102,27 +114,27 @@ def setpoint_registers(trajectory: Trajectory, axes: Sequence[AxisConfig]) -> ND
     braking = np.where(room > 0, aim * aim / (2.0 * np.where(room > 0, room, 1.0)), 0.0)
     accel = np.maximum(change, braking) * gear / RAD_S2_PER_ACCELERATION_UNIT
     accel_reg = np.clip(np.ceil(accel - 1e-9), 1, configured[:, 1])
-    # speed in register steps, its rounding carried on (the distance commanded stays exact)
-    steps = np.cumsum(np.abs(aim) * gear / RAD_S_PER_VELOCITY_UNIT, axis=0)
-    rounded = np.round(steps)
-    speed_reg = np.clip(
-        np.diff(np.vstack([np.zeros((1, len(axes))), rounded]), axis=0), 1, configured[:, 0]
-    )
+    speed = np.abs(aim) * gear / RAD_S_PER_VELOCITY_UNIT
+    speed_reg = np.clip(np.round(speed), 1, configured[:, 0])
     direction = np.array([a.direction for a in axes])
     zero = np.array([a.zero_offset_rad for a in axes])
     ticks = np.round(direction * (target - zero) * gear / RAD_PER_TICK)
     limits = np.array([a.tick_limits() for a in axes])
     ticks = np.clip(ticks, limits[:, 0], limits[:, 1])
-    return np.stack([accel_reg, speed_reg, ticks], axis=-1).astype(np.int64)
+    registers = np.stack([accel_reg, speed_reg, ticks], axis=-1).astype(np.int64)
+    return registers, speed, np.sign(target - goals)
 
 
 @dataclass(frozen=True, eq=False)
 class SetpointPlan:
-    """A checked trajectory and its set-points' registers (K, A, 3) for ``axes``."""
+    """A checked trajectory for ``axes``: its set-points' registers (K, A, 3), the speed
+    each aims at (K, A, velocity steps) and its goal's direction (K, A) (`setpoint_registers`)."""
 
     trajectory: Trajectory
     axes: tuple[AxisConfig, ...]
     registers: NDArray[np.int64]
+    speed: NDArray[np.float64]
+    toward: NDArray[np.float64]
 
     @classmethod
     def of(cls, trajectory: Trajectory, axes: Mapping[str, AxisConfig]) -> SetpointPlan:
@@ -135,7 +147,26 @@ class SetpointPlan:
             {n: a.profile_acceleration_rad_s2 for n, a in axes.items()},
         )
         named = tuple(axes[n] for n in trajectory.axes)
-        return cls(trajectory, named, setpoint_registers(trajectory, named))
+        return cls(trajectory, named, *setpoint_registers(trajectory, named))
+
+    def corrected(
+        self, k: int, behind: NDArray[np.float64], velocity: NDArray[np.float64]
+    ) -> NDArray[np.int64]:
+        """Set-point ``k``'s registers (A, 3), each axis's speed raised by what makes up
+        ``behind`` (A, rad: the path minus the last poll) in `CATCH_UP_PERIODS` periods
+        (lowered when ahead), and its acceleration raised to what reaches that speed
+        within one period from ``velocity`` (A, rad/s: the motors' last, polled)."""
+        row: NDArray[np.int64] = self.registers[k].copy()
+        gear = np.array([a.gear_ratio for a in self.axes])
+        top = np.array([a.profile_registers() for a in self.axes])  # (A, 2) velocity, accel
+        period = self.trajectory.period_s
+        extra = self.toward[k] * behind / (CATCH_UP_PERIODS * period)  # rad/s
+        speed = np.clip(self.speed[k] + extra * gear / RAD_S_PER_VELOCITY_UNIT, 1.0, top[:, 0])
+        change = np.abs(self.toward[k] * speed * RAD_S_PER_VELOCITY_UNIT / gear - velocity)
+        needed = np.ceil(change / period * gear / RAD_S2_PER_ACCELERATION_UNIT - 1e-9)
+        row[:, 1] = np.round(speed)
+        row[:, 0] = np.clip(np.maximum(row[:, 0], needed), 1, top[:, 1])
+        return row
 
     @property
     def motor_ids(self) -> list[int]:
@@ -184,12 +215,21 @@ class SetpointStream:
         started = clock.now()
         sent: list[float] = []
         polls: list[StampedPositions] = []
-        for k, row in enumerate(plan.registers.tolist()):
+        path = plan.trajectory
+        for k in range(len(path)):
+            row = plan.registers[k]
+            if len(polls) >= 2:  # make up the distance the last poll was behind the path
+                before, last = (
+                    np.array([p.positions[a.name] for a in plan.axes]) for p in polls[-2:]
+                )
+                velocity = (last - before) / (polls[-1].middle_s - polls[-2].middle_s)
+                behind = path.at(polls[-1].middle_s - started) - last
+                row = plan.corrected(k, behind, velocity)
             wait = started + k * period - clock.now()
             if wait > 0:
                 clock.sleep(wait)
             sent.append(clock.now())
-            self._link.sync_write_items(SETPOINT_ITEMS, dict(zip(ids, row, strict=True)))
+            self._link.sync_write_items(SETPOINT_ITEMS, dict(zip(ids, row.tolist(), strict=True)))
             polls.append(poll())
             if on_poll is not None:
                 on_poll(polls[-1])

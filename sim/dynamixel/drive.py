@@ -27,8 +27,9 @@ from sim.dynamixel.motion import (
     spin,
 )
 
-#: Trajectories (moves and holds) a motor remembers for `Drive.position_at`.
-PAST_TRAJECTORIES = 8
+#: Trajectories (moves and holds) a motor remembers for `Drive.position_at`: a streamed
+#: trajectory writes a goal every period, so ten seconds of set-points at 100 Hz.
+PAST_TRAJECTORIES = 1024
 
 #: Present Temperature (°C) of a motor that is not heated.
 NOMINAL_TEMPERATURE = 30

@@ -41,7 +41,7 @@ from tests.conftest import CONFIGS
 MOTOR_FAULTS = ("motor_fault", "comm_error")
 #: The tracking error (rad) `DynamixelBus.follow` keeps on the emulated X series: a
 #: trajectory at half the configured velocity and acceleration (4 rad/s, 40 rad/s²).
-EMULATOR_TRACKING_RAD = 0.05
+EMULATOR_TRACKING_RAD = 0.015
 
 
 # -- motor buses ---------------------------------------------------------------------
