@@ -259,14 +259,14 @@ class SerialPhotometer(_PtyServer):
             if name == "STOP" and not args:  # idle already: acknowledged all the same
                 if self._stream is not None and self._windows_signal is not None:
                     self._send_windows_locked(now)  # the windows ended before it
-                quirks = self._quirks
-                if self._stream is not None and quirks.lines_after_stop_ack:
+                quirks, streaming = self._quirks, self._stream is not None
+                if streaming and quirks.lines_after_stop_ack:
                     self._stop_after = quirks.lines_after_stop_ack
                 else:
                     self._stream, self._stream_gen = None, self._stream_gen + 1
-                if quirks.stop_ack_delay_s is None:
+                if streaming and quirks.stop_ack_delay_s is None:
                     return
-                delay += quirks.stop_ack_delay_s
+                delay += quirks.stop_ack_delay_s or 0.0 if streaming else 0.0
                 answer = "OK"
             elif name == "STREAM":
                 answer = self._start_stream_locked(args, start + delay)

@@ -16,9 +16,10 @@ class StreamQuirks:
     """How the simulated photometer's stream departs from the requirements.
 
     ``lines_after_stop_ack``: data lines it still sends after acknowledging ``STOP``
-    (one a period). ``stop_ack_delay_s``: how long after ``STOP`` its ``OK`` comes
-    (real s; None: never). ``start_delay_s``: the first window begins this long after
-    ``STREAM`` arrives (real s) instead of at once. ``tick_aligned``: windows end on
+    (one a period). ``stop_ack_delay_s``: how long after a stream's ``STOP`` its ``OK``
+    comes (real s; None: never; a ``STOP`` when idle is answered at once).
+    ``start_delay_s``: the first window begins this long after ``STREAM`` arrives
+    (real s) instead of at once. ``tick_aligned``: windows end on
     multiples of the period of the device's clock, not one period after the command.
     ``period_jitter``: each period is drawn uniformly within ± this fraction of it.
     ``drop_every``: every n-th line is lost (0: none). ``timestamp_missing_every``:
