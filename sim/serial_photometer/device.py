@@ -227,6 +227,13 @@ class SerialPhotometer(_PtyServer):
             self._reset_locked(time.monotonic())
         self._wakeup()
 
+    def set_quirks(self, quirks: StreamQuirks) -> None:
+        """Stream with ``quirks`` from the next ``STREAM`` on (`StreamQuirks`)."""
+        if self._windows_signal is not None and quirks != CONFORMING:
+            raise ValueError("quirks apply to a stream read window by window, not with windows")
+        with self._lock:
+            self._quirks, self._link_latency_s = quirks, quirks.link_latency_s
+
     def clear(self) -> None:
         """Remove every fault."""
         with self._lock:

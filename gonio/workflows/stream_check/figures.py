@@ -219,9 +219,9 @@ def _start(records: list[StreamRecord], claimed: bool, unit: float, limits: Limi
         "tolerance_s": tolerance,
     }
     measured = (
-        f"over {len(records)} starts the first window ends {_ms(early)} to "
-        f"{_ms(float(leads.max()))} after one period from the command (its round trip "
-        f"{_ms(float(np.median(replies)))}; tolerance {_ms(tolerance)})"
+        f"over {len(records)} starts the first window begins {_ms(float(late.min()))} to "
+        f"{_ms(float(late.max()))} after the command arrives (a lead of {_ms(early)} to "
+        f"{_ms(float(leads.max()))} less the command's round trip; tolerance {_ms(tolerance)})"
     )
     if not problems:
         note = "" if claimed else "; starts_on_command is false: it may be set true"
