@@ -159,6 +159,7 @@ PTY_TESTS = (
     "tests/sim/test_serial_photometer.py",
     "tests/sim/devices/test_rehearsal.py",
     "tests/gonio/cli/test_motors.py",
+    "tests/gonio/cli/test_detector.py",
     "tests/gonio/acquire/test_hardware.py",
     "tests/gonio/acquire/test_fly_rehearsal.py",
 )

@@ -31,7 +31,8 @@ file is checked without opening anything); the driver is
 :mod:`~drivers.serial_detector.errors` (the failures),
 :mod:`~drivers.serial_detector.config` (the configuration and its validation),
 :mod:`~drivers.serial_detector.lines` (reading lines from the port),
-:mod:`~drivers.serial_detector.stream` (the streaming mode) and
+:mod:`~drivers.serial_detector.stream` (the streaming mode),
+:mod:`~drivers.serial_detector.trace` (what the driver saw of a stream) and
 :mod:`~drivers.serial_detector.detector` (the driver). Its logger is
 ``drivers.serial_detector``.
 """
@@ -45,6 +46,7 @@ from drivers.serial_detector.errors import (
     SerialDetectorError,
     SerialDetectorValueError,
 )
+from drivers.serial_detector.trace import StreamTrace
 
 __all__ = [
     "ErrorKind",
@@ -52,4 +54,5 @@ __all__ = [
     "SerialDetectorError",
     "SerialDetectorValueError",
     "SerialStreamConfig",
+    "StreamTrace",
 ]

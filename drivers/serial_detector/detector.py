@@ -206,6 +206,36 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         log.debug("%s: %s", self.port, reading)
         return reading
 
+    def ask(self, command: str) -> str:
+        """Send ``command`` (no template fields) and return the first line answered
+        within ``timeout_s``, an echo skipped: an identification query (``ID?``,
+        ``*IDN?``) or any other one-line exchange. Fails as a query does (``timeout``,
+        ``device`` for an error reply, ``reset``); ``streaming`` during a stream."""
+        if self._serial is None and not self._reopen:
+            raise self._error("the port is not open (use open() first)", "closed")
+        if not isinstance(command, str) or not command.strip() or not command.isascii():
+            raise self._invalid(f"a command must be a non-empty ASCII string, got {command!r}")
+        if "\r" in command or "\n" in command:
+            raise self._invalid(f"a command must not contain a line ending, got {command!r}")
+        if self._stream is not None:
+            raise self._error("ask() during a stream (stop_stream first)", "streaming")
+        if self._serial is None:
+            self.open()
+        try:
+            self._ready()
+            self._send(command)
+            deadline = time.monotonic() + self._config.timeout_s
+            while (line := self._next_line(deadline)) is not None:
+                self._check_unsolicited(line, command)
+                if line.overflow or line.text != command.strip():
+                    return line.text
+            raise self._timeout(command, self._config.timeout_s, "answer")
+        except BaseException as exc:
+            answered = isinstance(exc, SerialDetectorError) and exc.kind in _ANSWERED
+            if not answered and self._serial is not None:
+                self._needs_resync = True
+            raise
+
     def _check_arguments(self, exposure_s: object, averages: object) -> tuple[float, int]:
         exposure, n = _as_real(exposure_s), _as_int(averages)
         if exposure is None or not (0 < exposure < math.inf):

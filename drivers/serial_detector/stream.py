@@ -40,6 +40,7 @@ from drivers.serial_detector.errors import (
     SerialDetectorValueError,
 )
 from drivers.serial_detector.lines import _Line, _number, _quote, is_saturated
+from drivers.serial_detector.trace import StreamTrace
 from drivers.stream import StreamReading
 
 #: The shortest quiet (s) after ``stop`` that means the device has stopped.
@@ -65,6 +66,11 @@ class _Stream:
     begun: bool = False  # a data line or the start's acknowledgement came
     stopping: bool = False  # ``stop`` was sent
     stopped: bool = False  # ``stop`` was acknowledged (after every data line)
+    start_ack_s: float | None = None  # host clock when the start's acknowledgement came
+    stop_sent_s: float | None = None  # host clock just before ``stop`` was sent
+    stop_ack_s: float | None = None  # host clock when the stop's acknowledgement came
+    after_ack: int = 0  # data lines read after the stop's acknowledgement
+    longest: int = 0  # the longest data line (bytes, without its line ending)
 
     @property
     def period_s(self) -> float:
@@ -113,6 +119,7 @@ class _Streaming:
         stream = self._config.stream
         self._stream_line = None if stream is None else re.compile(stream.line)
         self._stream: _Stream | None = None
+        self._last_trace: StreamTrace | None = None
 
     @property
     def can_stream(self) -> bool:
@@ -122,6 +129,26 @@ class _Streaming:
     @property
     def is_streaming(self) -> bool:
         return self._stream is not None
+
+    @property
+    def last_stream(self) -> StreamTrace | None:
+        """What the driver saw of the last stream stopped or failed (`StreamTrace`), None
+        before the first."""
+        return self._last_trace
+
+    def _keep_trace(self, stream: _Stream) -> None:
+        self._last_trace = StreamTrace(
+            command=stream.start,
+            rate_hz=stream.rate_hz,
+            integration_s=stream.integration_s,
+            sent_s=stream.sent_s,
+            start_acknowledged_s=stream.start_ack_s,
+            stop_sent_s=stream.stop_sent_s,
+            stop_acknowledged_s=stream.stop_ack_s,
+            data_lines=stream.lines,
+            lines_after_ack=stream.after_ack,
+            longest_line_bytes=stream.longest,
+        )
 
     def _stream_config(self) -> SerialStreamConfig:
         if self._config.stream is None:
@@ -274,7 +301,12 @@ class _Streaming:
             if match is None:
                 if not line.overflow and self._ack is not None and self._ack.search(line.text):
                     # the start's acknowledgement, or once stopping (and begun) the stop's
-                    stream.stopped = stream.stopping and stream.begun
+                    if stream.stopping and stream.begun:
+                        if not stream.stopped:
+                            stream.stop_ack_s = received
+                        stream.stopped = True
+                    elif not stream.begun:
+                        stream.start_ack_s = received
                     stream.begun = True
                     continue
                 if not line.overflow and line.text in (stream.start.strip(), cfg.stop.strip()):
@@ -290,6 +322,8 @@ class _Streaming:
                 continue
             stream.malformed.clear()
             stream.begun = True
+            stream.after_ack += stream.stopped
+            stream.longest = max(stream.longest, len(line.text))
             value = self._finite(match, "value", line)
             groups = match.groupdict()
             std = math.nan if groups.get("std") is None else self._finite(match, "std", line)
@@ -357,6 +391,7 @@ class _Streaming:
         with contextlib.suppress(SerialDetectorError):  # a bad last line does not matter
             readings += self._parse_pending(stream)
         try:
+            stream.stop_sent_s = self._clock.now()
             self._send(cfg.stop)
             stream.stopping = True
             quiet = max(3 * stream.period_s, _QUIET_MIN_S)
@@ -382,6 +417,7 @@ class _Streaming:
                 readings += self._parse_pending(stream)
         finally:
             self._stream = None
+            self._keep_trace(stream)
             self._clear_input_state()
         return readings
 
@@ -403,6 +439,23 @@ class _Streaming:
                 readings += self._parse_pending(stream)
         return readings
 
+    def listen(self, duration_s: float) -> list[tuple[str, float]]:
+        """The lines that arrive unasked in the next ``duration_s`` seconds, each with the
+        clock when it was read (s): what a device sends after its stream was stopped.
+        ``streaming`` error while a stream runs (read it with `read_stream`)."""
+        if self._serial is None:
+            raise self._error("the port is not open (use open() first)", "closed")
+        if self._stream is not None:
+            raise self._error("listen() during a stream (read_stream reads it)", "streaming")
+        heard: list[tuple[str, float]] = []
+        deadline = time.monotonic() + max(0.0, float(duration_s))
+        while time.monotonic() < deadline:
+            self._receive()
+            now = self._clock.now()
+            heard += [(line.text, now) for line in self._lines]
+            self._lines.clear()
+        return heard
+
     def _quiet_stream(self) -> None:
         """After opening, with a stream section: send ``stop`` (a device still
         streaming for a killed run stops; an idle one answers or refuses it) and discard
@@ -421,6 +474,8 @@ class _Streaming:
     def _abort_stream(self) -> None:
         """After a failure mid-stream: ask the device to stop, listen it out next time."""
         cfg = self._config.stream
+        if self._stream is not None:
+            self._keep_trace(self._stream)
         self._stream = None
         if self._serial is not None and cfg is not None:
             with contextlib.suppress(Exception):

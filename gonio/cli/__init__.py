@@ -74,6 +74,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.motors",
         "a Dynamixel bus: scan, status, reboot; bring-up: move, home, torque, set-id",
     ),
+    "detector": (
+        "gonio.cli.detector",
+        "a serial detector: check-stream qualifies its streaming for fly plans on hardware",
+    ),
     "schema": (
         "gonio.cli.schema",
         "the JSON Schema of a plan, rig, scene or sweep file, for an editor to check it",
@@ -161,7 +165,7 @@ def build_parser(
 
 def _prog(args: argparse.Namespace) -> str:
     """``gonio`` and the (sub)command words of ``args`` (for a usage error's hint)."""
-    words = [getattr(args, key, None) for key in ("command", "motors_command")]
+    words = [getattr(args, key, None) for key in ("command", "motors_command", "detector_command")]
     return " ".join(["gonio", *(w for w in words if w)])
 
 

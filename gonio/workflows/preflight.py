@@ -1,6 +1,7 @@
 """What is checked before a run creates or moves anything: the files it is made from
 (`Files`), the backend the rig chooses and the scene it needs (`check_scene`), the run
-file to create (`check_output`), a fly plan's backend (`refuse_fly`) and the backend's
+file to create (`check_output`), a fly plan's backend (`refuse_fly`, with the stream
+check of a hardware detector, `gonio.workflows.stream_check`) and the backend's
 devices (`preflight`, with the bus hygiene findings of `gonio.workflows.hygiene`).
 `dry_run` checks all of it, and that the devices answer, without moving.
 """
@@ -23,7 +24,7 @@ from gonio.output import refuse_inputs
 from gonio.planner.model import Plan, content_hash, sha256
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
-from gonio.workflows import backends, hygiene
+from gonio.workflows import backends, hygiene, stream_check
 from gonio.workflows.backends import BackendKind
 from sim.scene import Scene
 
@@ -99,17 +100,26 @@ def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None
 
 def refuse_fly(plan: Plan, kind: str) -> None:
     """`ConfigError` for a fly plan on a backend that does not acquire them: hardware
-    (rehearse it first), or a rehearsal whose detector cannot stream (a PyMeasure
-    instrument, a serial detector without a ``stream`` section)."""
+    whose serial detector has no passing stream check for its configuration and the
+    plan's rate (`gonio.workflows.stream_check.fly_refusal`), or a rehearsal whose
+    detector cannot stream (a PyMeasure instrument, a serial detector without a
+    ``stream`` section)."""
     if not plan.is_fly or kind == "simulated":
         return
+    interface = plan.rig.spec.detector.interface
     if kind == "hardware":
+        if isinstance(interface, SerialInterfaceSpec) and interface.stream is not None:
+            fly = plan.spec.sampling.fly
+            why = stream_check.fly_refusal(plan.rig, None if fly is None else fly.rate_hz)
+            if why is None:
+                return
+            raise ConfigError(f"plan {plan.spec.name!r} is a fly plan: {why}")
         raise ConfigError(
             f"plan {plan.spec.name!r}: fly plans are acquired on the simulated and rehearsal "
-            "backends only (this run's is hardware); use `gonio simulate`, `gonio acquire "
-            "--rehearse`, or a stop-and-go plan"
+            "backends only, and on hardware whose serial detector passed `gonio detector "
+            "check-stream` (this run's detector is not one); use `gonio simulate`, `gonio "
+            "acquire --rehearse`, or a stop-and-go plan"
         )
-    interface = plan.rig.spec.detector.interface
     if interface.kind == "pymeasure" or (
         isinstance(interface, SerialInterfaceSpec) and interface.stream is None
     ):

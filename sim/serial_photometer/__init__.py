@@ -35,7 +35,9 @@ exposure time (plus ``reply_delay_s``), as on a real single-threaded device.
 The package: :mod:`~sim.serial_photometer.protocol` (the device's fixed lines and the
 matching driver configuration), :mod:`~sim.serial_photometer.server` (the pty and the
 serving thread), :mod:`~sim.serial_photometer.device` (the photometer: its settings,
-faults and answers) and :mod:`~sim.serial_photometer.cli` (the command line).
+faults and answers), :mod:`~sim.serial_photometer.quirks` (the ways its stream can fall
+short of the requirements, for testing a qualification) and
+:mod:`~sim.serial_photometer.cli` (the command line).
 """
 
 from sim.serial_photometer.cli import main
@@ -49,6 +51,7 @@ from sim.serial_photometer.protocol import (
     default_config,
 )
 from sim.serial_photometer.protocol import IDENTITY as IDENTITY
+from sim.serial_photometer.quirks import StreamQuirks
 
 __all__ = [
     "BANNER",
@@ -56,6 +59,7 @@ __all__ = [
     "RESPONSE",
     "STREAM_CONFIG",
     "SerialPhotometer",
+    "StreamQuirks",
     "default_config",
     "main",
 ]

@@ -24,6 +24,7 @@ from sim.serial_photometer.protocol import (
     _line,
     default_config,
 )
+from sim.serial_photometer.quirks import CONFORMING, StreamQuirks
 from sim.serial_photometer.server import _Event, _PtyServer
 
 Signal = float | Callable[[float], float]
@@ -85,6 +86,7 @@ class SerialPhotometer(_PtyServer):
         seed: int = 0,
         speedup: float = 1.0,
         windows: Windows | None = None,
+        quirks: StreamQuirks = CONFORMING,
     ) -> None:
         if not callable(signal) and not math.isfinite(signal):
             raise ValueError(f"signal must be finite or a callable, got {signal!r}")
@@ -92,6 +94,8 @@ class SerialPhotometer(_PtyServer):
             raise ValueError("noise_std, reply_delay_s and boot_s must be ≥ 0")
         if not (math.isfinite(speedup) and speedup > 0):
             raise ValueError(f"speedup must be finite and > 0, got {speedup!r}")
+        if windows is not None and quirks != CONFORMING:
+            raise ValueError("quirks apply to a stream read window by window, not with windows")
         if full_scale is not None and not full_scale > 0:
             raise ValueError(f"full_scale must be > 0 or None, got {full_scale!r}")
         if reset_on_open and not hasattr(termios, "TIOCPKT"):  # pragma: no cover
@@ -110,6 +114,10 @@ class SerialPhotometer(_PtyServer):
         self._windows_signal = windows
         self._stream_from = 0.0  # time.monotonic() the running stream's first window began
         self._stream_sent = 0  # windows of the running stream read so far
+        self._quirks = quirks
+        self._quirk_rng = random.Random(seed + 1)
+        self._stream_index = 0  # data lines of the running stream so far
+        self._stop_after: int | None = None  # lines still sent after an acknowledged STOP
 
         self._lock = threading.Lock()
         self._faults = _Faults()
@@ -124,6 +132,7 @@ class SerialPhotometer(_PtyServer):
         self._stream_ends: list[float] = []  # time.monotonic() of each DAT line's window end
         self._t0 = time.monotonic()  # the device's clock starts at zero here
         self._init_pty_state()
+        self._link_latency_s = quirks.link_latency_s
 
     # -- configuration -------------------------------------------------------------
 
@@ -218,6 +227,13 @@ class SerialPhotometer(_PtyServer):
             self._reset_locked(time.monotonic())
         self._wakeup()
 
+    def set_quirks(self, quirks: StreamQuirks) -> None:
+        """Stream with ``quirks`` from the next ``STREAM`` on (`StreamQuirks`)."""
+        if self._windows_signal is not None and quirks != CONFORMING:
+            raise ValueError("quirks apply to a stream read window by window, not with windows")
+        with self._lock:
+            self._quirks, self._link_latency_s = quirks, quirks.link_latency_s
+
     def clear(self) -> None:
         """Remove every fault."""
         with self._lock:
@@ -250,7 +266,14 @@ class SerialPhotometer(_PtyServer):
             if name == "STOP" and not args:  # idle already: acknowledged all the same
                 if self._stream is not None and self._windows_signal is not None:
                     self._send_windows_locked(now)  # the windows ended before it
-                self._stream, self._stream_gen = None, self._stream_gen + 1
+                quirks, streaming = self._quirks, self._stream is not None
+                if streaming and quirks.lines_after_stop_ack:
+                    self._stop_after = quirks.lines_after_stop_ack
+                else:
+                    self._stream, self._stream_gen = None, self._stream_gen + 1
+                if streaming and quirks.stop_ack_delay_s is None:
+                    return
+                delay += quirks.stop_ack_delay_s or 0.0 if streaming else 0.0
                 answer = "OK"
             elif name == "STREAM":
                 answer = self._start_stream_locked(args, start + delay)
@@ -287,13 +310,14 @@ class SerialPhotometer(_PtyServer):
         period, integration = 1 / rate / self._speedup, integration_ms / 1000
         self._stream, self._stream_gen = (period, integration), self._stream_gen + 1
         self._window = None
+        self._stream_index, self._stop_after = 0, None
         if self._windows_signal is not None:  # the windows ended, read in one call
             self._stream_from, self._stream_sent = at, 0
             heapq.heappush(
                 self._events, _Event(at + period, next(self._seq), tick=self._stream_gen)
             )
             return "OK"
-        middle = at + period - integration / self._speedup / 2
+        middle = self._quirks.first_end(at, period, self._t0) - integration / self._speedup / 2
         heapq.heappush(
             self._events, _Event(middle, next(self._seq), tick=self._stream_gen, middle=True)
         )
@@ -370,12 +394,21 @@ class SerialPhotometer(_PtyServer):
         elif isinstance(window, tuple):
             counts, saturated = window
             t_ms = self.device_time_s(event.due) * 1000
-            self._stream_ends.append(event.due)
-            data = _line(f"DAT {t_ms:.3f} {counts!r} {'SAT' if saturated else 'OK'}")
+            status = "SAT" if saturated else "OK"
+            index, self._stream_index = self._stream_index, self._stream_index + 1
+            text = self._quirks.data_line(index, t_ms, period * self._speedup * 1e3, counts, status)
+            if text is not None:
+                self._stream_ends.append(event.due)
+            data = b"" if text is None else _line(text)
         else:
             data = _line(f"ERR signal failed: {type(window).__name__}")
         self._output_locked(data)
-        middle = event.due + period - half
+        if self._stop_after is not None:  # still streaming after an acknowledged STOP
+            self._stop_after -= 1
+            if self._stop_after <= 0:
+                self._stream, self._stream_gen, self._stop_after = None, self._stream_gen + 1, None
+                return
+        middle = event.due + self._quirks.next_period(period, self._quirk_rng) - half
         heapq.heappush(self._events, _Event(middle, next(self._seq), tick=event.tick, middle=True))
 
     def _counts_locked(self, exposure_s: float) -> tuple[float, bool]:

@@ -35,6 +35,7 @@ class _Event:
     reset: bool = field(compare=False, default=False)
     tick: int = field(compare=False, default=-1)  # ≥ 0: a stream's window (its generation)
     middle: bool = field(compare=False, default=False)  # the window's middle, not its end
+    linked: bool = field(compare=False, default=False)  # output already delayed by the link
 
 
 class _PtyServer:
@@ -58,6 +59,7 @@ class _PtyServer:
     _stopping: threading.Event
     _path: str | None
     _error: BaseException | None
+    _link_latency_s: float
 
     if TYPE_CHECKING:
 
@@ -82,6 +84,7 @@ class _PtyServer:
         self._stopping = threading.Event()
         self._path = None
         self._error = None
+        self._link_latency_s = 0.0  # every byte sent reaches the host this much later (s)
 
     # -- life cycle ---------------------------------------------------------------
 
@@ -225,9 +228,13 @@ class _PtyServer:
                 elif event.tick >= 0:
                     self._tick_locked(event)
                 else:
-                    self._output_locked(event.data)
+                    self._output_locked(event.data, linked=event.linked)
 
-    def _output_locked(self, data: bytes) -> None:
+    def _output_locked(self, data: bytes, *, linked: bool = False) -> None:
+        if self._link_latency_s and not linked and data:
+            due = time.monotonic() + self._link_latency_s
+            heapq.heappush(self._events, _Event(due, next(self._seq), data, linked=True))
+            return
         room = _MAX_OUT - len(self._outbuf)
         self._outbuf += data[: max(room, 0)]
 

@@ -14,7 +14,7 @@ from gonio.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[3]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), ROOT / "configs" / "README.md"]
-COMMAND = re.compile(r"gonio (motors [a-z-]+|[a-z]+)\b([^`\n]*)")
+COMMAND = re.compile(r"gonio ((?:motors|detector) [a-z-]+|[a-z]+)\b([^`\n]*)")
 OPTION = re.compile(r"(?<![\w-])(--[a-z][a-z-]*|-[a-zA-Z])\b")
 NOT_COMMANDS = {"import", "content", "run", "reads", "uses", "locks", "adds", "never"}
 
