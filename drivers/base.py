@@ -144,10 +144,12 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping
 from types import TracebackType
-from typing import Any, Literal, Protocol, Self
+from typing import TYPE_CHECKING, Any, Literal, Protocol, Self
 
-from drivers.trajectory import Followed, Trajectory
 from drivers.values import Health, RangeChange, Reading, Recovered, StampedPositions
+
+if TYPE_CHECKING:  # numpy arrays: kept out of `gonio --help`'s imports
+    from drivers.trajectory import Followed, Trajectory
 
 # -- time -------------------------------------------------------------------------------
 
