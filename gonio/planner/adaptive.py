@@ -127,11 +127,16 @@ def _measure_density(
 
 
 def error_indicator(
-    f: BrdfEval, parametrization: str, isotropic: bool, shape: tuple[int, ...]
+    f: BrdfEval,
+    parametrization: str,
+    isotropic: bool,
+    shape: tuple[int, ...],
+    dims: tuple[int, ...] | None = None,
 ) -> FloatArray:
     """(f/(1 + f))·‖∇²log(f + ε)‖_F at each cell centre (cells,), derivatives in the
     unit box by central differences on the grid (outside the parametrization's domain
-    the nearest valid cell's value is used)."""
+    the nearest valid cell's value is used); ``dims``: only the second derivatives in
+    these coordinates (default all)."""
     p = params.get(parametrization)
     bounds = _bounds(parametrization, isotropic)
     box = bounds[:, 0] + centres(shape) * (bounds[:, 1] - bounds[:, 0])
@@ -152,9 +157,11 @@ def error_indicator(
     steps = [1.0 / n for n in shape]
     first = np.gradient(g, *steps)
     square = np.zeros_like(g)
-    for d_i in first:
-        for d_ij in np.gradient(d_i, *steps):
-            square += d_ij**2
+    keep = range(len(shape)) if dims is None else dims
+    for i, d_i in enumerate(first):
+        for j, d_ij in enumerate(np.gradient(d_i, *steps)):
+            if i in keep and j in keep:
+                square += d_ij**2
     return np.asarray((np.sqrt(square) * grid / (1.0 + grid)).ravel(), dtype=np.float64)
 
 

@@ -78,6 +78,19 @@ class AdaptiveSpec(Strict):
         return self
 
 
+def material_model(material: dict[str, Any]) -> brdf.BRDF:
+    """An expected material (its name, a `gonio.brdf` model, and its parameters beside
+    it) as a model; a field error naming what is wrong."""
+    if "name" not in material:
+        raise field_error("material", "expected a name (a gonio.brdf model) and its parameters")
+    params = dict(material)
+    name = params.pop("name")
+    try:
+        return build(name, params)
+    except MaterialError as exc:
+        raise field_error(f"material.{exc.param or 'name'}", str(exc)) from None
+
+
 class FlySpec(Strict):
     """The fly strategy (docs/reference/planner.md, "Fly plans"): readings taken while one
     axis sweeps at constant velocity, ``rate_hz`` readings a second, each integrating
@@ -127,6 +140,13 @@ class FlySpec(Strict):
         description="The share of lobe_width_deg one reading may smear (none: the blur "
         "budget of the lobe, gonio.planner.blur: about 0.11 of the width at a 0.5 % bias).",
     )
+    material: dict[str, Any] | None = Field(
+        None,
+        description="theta_h_line only: the expected material (name, a gonio.brdf model, and "
+        "its parameters beside it), whose variation across the lines sets their density over "
+        "(θd, φd) (none: lines denser toward grazing θd, 1 / cos θd).",
+        json_schema_extra=material_schema(nested=False),
+    )  # checked by gonio.brdf.material
     blur_tolerance: float = Field(
         DEFAULT_TOLERANCE,
         gt=0,
@@ -145,7 +165,15 @@ class FlySpec(Strict):
             )
         if self.blur_deg is not None and self.lobe_width_deg is not None:
             raise field_error("blur_deg", "give blur_deg or lobe_width_deg, not both")
+        if self.material is not None:
+            if self.segment != "theta_h_line":
+                raise field_error("material", "only theta_h_line lines take a material")
+            self.model()
         return self
+
+    def model(self) -> brdf.BRDF | None:
+        """The expected material as a `gonio.brdf` model (None when not given)."""
+        return None if self.material is None else material_model(self.material)
 
     @property
     def period_s(self) -> float:
@@ -270,19 +298,12 @@ class AdaptSpec(Strict):
     def _range(self) -> AdaptSpec:
         if self.min_s > self.max_s:
             raise field_error("min_s", f"expected at most max_s ({self.max_s}), got {self.min_s}")
-        if "name" not in self.material:
-            raise field_error("material", "expected a name (a gonio.brdf model) and its parameters")
         self.model()  # refuse an unknown model or bad parameters when the file is read
         return self
 
     def model(self) -> brdf.BRDF:
         """The expected material as a `gonio.brdf` model."""
-        material = dict(self.material)
-        name = material.pop("name")
-        try:
-            return build(name, material)
-        except MaterialError as exc:
-            raise field_error(f"material.{exc.param or 'name'}", str(exc)) from None
+        return material_model(self.material)
 
 
 class ExposureSpec(Strict):

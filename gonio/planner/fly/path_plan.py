@@ -3,8 +3,9 @@
 
 Layout (`build_paths`):
 
-- Lines: (θd, φd) drawn (scrambled Sobol, the plan's seed) over [0, π/2] × [0, π], θd
-  warped to the density `line_theta_d` (the test measure's weight^(1/3)), each
+- Lines: (θd, φd) drawn (scrambled Sobol, the plan's seed) over [0, π/2] × [0, π] from
+  the density `line_density` (denser where the expected material varies more across the
+  lines, per second of a line), each
   line's reachable segments laid out (`line_segments`) with their time law and their
   readings, until the readings reach ``sampling.target`` (whole lines).
 - Order: the segments ordered by the existing ordering on their two end poses
@@ -27,6 +28,7 @@ import numpy as np
 from gonio import params
 from gonio.config import ConfigError, spec_text
 from gonio.planner import sampling
+from gonio.planner.adaptive import Density, error_indicator, measure_density
 from gonio.planner.fly.build import check_integration, order_segments
 from gonio.planner.fly.coverage import coverage, reference
 from gonio.planner.fly.lines import Laid
@@ -49,20 +51,49 @@ LINE_BATCH = 32
 MAX_LINES = 1 << 14
 #: The refusal reason of streamed readings closer along θh than the step to a kept one.
 CLOSE = "close"
-#: Points of the grid on which the lines' density over θd is inverted.
-DENSITY_GRID = 4096
+#: The lines' density grid over (θd, φd): cells per coordinate.
+LINE_CELLS = 32
+#: The largest θd (rad) the default density's 1 / cos θd is taken at (beyond: constant).
+GRAZING_THETA_D = math.radians(80.0)
+#: A line's cost in seconds: a move and settle, then its θh extent at a typical speed.
+LINE_OVERHEAD_S = 1.2
+LINE_SPEED = math.radians(25.0)
+#: The share of the lines spread uniformly over the cells the test measure reaches.
+LINE_FLOOR = 0.25
 
 
-def line_theta_d(u: FloatArray) -> FloatArray:
-    """θd (rad) of lines drawn at ``u`` ∈ [0, 1): the inverse CDF of the density
-    p(θd) ∝ sin(2θd)^(1/3) over [0, π/2]. The test measure (uniform in dωi dωo) weighs
-    θd by sin 2θd (Rusinkiewicz's Jacobian); interpolation error across lines spaced h
-    apart goes as h², so the density that spends lines best over two slow coordinates
-    goes as the weight^(1/3) (the weight w, error ∝ w h⁴ summed, h² ∝ 1 / density)."""
-    grid = np.linspace(0.0, 0.5 * math.pi, DENSITY_GRID)
-    density = np.sin(2.0 * grid) ** (1.0 / 3.0)
-    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (density[1:] + density[:-1]))])
-    return np.asarray(np.interp(u, cdf / cdf[-1], grid), dtype=np.float64)
+def line_density(spec: PlanSpec, rig: Rig) -> Density:
+    """The density of the lines over (θd, φd) (the unit square, `LINE_CELLS` a side).
+
+    With an expected material (``fly.material``): the across-line error of a line
+    spacing h is about h² times the second derivatives of log f across the lines (θd,
+    φd: `gonio.planner.adaptive.error_indicator` on those two coordinates), summed along
+    each line with the test measure's weight (`measure_density`); a line costs c (a move
+    and its θh extent, `LINE_OVERHEAD_S`, `LINE_SPEED`). The error Σ w e² ρ^(−2) at a
+    time Σ c ρ is least for ρ ∝ (w e² / c)^(1/3); a share `LINE_FLOOR` is uniform.
+    Without one: ρ ∝ 1 / cos θd (up to `GRAZING_THETA_D`): the glossy and the matte
+    scenes' errors sit at grazing θd (measured: benchmarks/fly_trade.py)."""
+    shape3 = (LINE_CELLS,) * 3
+    w = measure_density(rig, "rusinkiewicz", True, shape3).reshape(shape3)
+    reached = w.sum(axis=0) > 0  # (θd, φd) cells some test pair reaches
+    uniform = reached / reached.sum()
+    model = spec.sampling.fly_options().model()
+    if model is None:
+        theta_d = (np.arange(LINE_CELLS) + 0.5) / LINE_CELLS * 0.5 * math.pi
+        weight = np.broadcast_to(
+            1.0 / np.cos(np.minimum(theta_d, GRAZING_THETA_D))[:, None], reached.shape
+        )
+        optimal = np.where(reached, weight, 0.0)
+    else:
+        e = error_indicator(model.eval, "rusinkiewicz", True, shape3, dims=(1, 2))
+        error = (w * e.reshape(shape3) ** 2).sum(axis=0)
+        extent = (w > 0).sum(axis=0) * (0.5 * math.pi / LINE_CELLS)
+        cost = LINE_OVERHEAD_S + extent / LINE_SPEED
+        optimal = np.where(reached, error / cost, 0.0) ** (1.0 / 3.0)
+    total = optimal.sum()
+    shaped = optimal / total if total > 0 else uniform
+    p = (1.0 - LINE_FLOOR) * shaped + LINE_FLOOR * uniform
+    return Density((LINE_CELLS, LINE_CELLS), np.asarray(p.ravel(), dtype=np.float64))
 
 
 def _min_step(blur_rad: float) -> float:
@@ -85,7 +116,8 @@ def lay_out_paths(
         )
     fly = spec.sampling.fly_options()
     blur = math.radians(fly.blur)
-    stream = sampling.Sequence("sobol", 2, spec.sampling.seed)
+    density = line_density(spec, rig)
+    stream = sampling.Sequence("sobol", 3, spec.sampling.seed)
     segments: list[PathSegment] = []
     refused: dict[str, int] = {}
     readings = lines = drawn = 0
@@ -98,7 +130,7 @@ def lay_out_paths(
             )
         unit = stream.draw(LINE_BATCH)
         drawn += LINE_BATCH
-        points = np.stack([line_theta_d(unit[:, 0]), math.pi * unit[:, 1]], axis=1)
+        points = density.points(unit) * np.array([0.5 * math.pi, math.pi])
         for theta_d, phi_d in points.tolist():
             laid = line_segments(rig, theta_d, phi_d, lines, spec.isotropic, refused)
             kept_any = False

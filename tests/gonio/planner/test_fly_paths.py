@@ -17,6 +17,7 @@ from drivers.trajectory import check_trajectory
 from gonio import params
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
+from gonio.planner.fly.path_plan import line_density
 from gonio.planner.fly.paths import (
     FINE_STEP,
     checked_trajectory,
@@ -158,3 +159,26 @@ def test_a_plan_of_lines_reads_back_and_times_as_predicted(tmp_path: Any) -> Non
 def test_path_lines_need_an_isotropic_plan() -> None:
     with pytest.raises(ConfigError, match="theta_h_line lines need an isotropic plan"):
         build(path_spec(isotropic=False), arch())
+
+
+def test_lines_follow_their_density() -> None:
+    rig = arch()
+    plain = line_density(path_spec(), rig)
+    p = plain.p.reshape(plain.shape)
+    assert p.sum() == pytest.approx(1.0) and np.all(p >= 0)
+    by_theta_d = p.sum(axis=1)
+    reached = by_theta_d > 0
+    # no material: denser toward grazing θd, where the test measure reaches
+    assert np.all(np.diff(by_theta_d[reached][: int(reached.sum() * 0.8)]) > 0)
+    gold = {"name": "cook_torrance", "alpha": 0.05, "fresnel": "conductor",
+            "ior": [0.18, 0.42, 1.37], "k": [3.42, 2.35, 1.77]}  # fmt: skip
+    guessed = line_density(path_spec(material=gold), rig).p
+    assert guessed.sum() == pytest.approx(1.0) and not np.allclose(guessed, plain.p)
+    assert np.array_equal(guessed > 0, plain.p > 0)  # the floor keeps every reached cell
+
+
+def test_a_material_is_for_theta_h_lines_only() -> None:
+    with pytest.raises(ValueError, match="only theta_h_line lines take a material"):
+        path_spec(segment="detector_arc", material={"name": "lambert"})
+    with pytest.raises(ValueError, match="material"):
+        path_spec(material={"alpha": 0.1})
