@@ -181,14 +181,27 @@ def barycentric_transforms(points: FloatArray, simplices: np.ndarray) -> FloatAr
 
 class Rbf(Interpolant):
     """Thin-plate-spline RBF with a linear polynomial on each query's nearest
-    `RBF_NEIGHBORS` points; defined everywhere (the domain mask bounds it)."""
+    `RBF_NEIGHBORS` points; defined everywhere (the domain mask bounds it).
 
-    def __init__(self, points: FloatArray, table: FloatArray) -> None:
+    ``stretch`` (d,): factors the coordinates are multiplied by first (None: none). On
+    line data the first axis is stretched until a line's step is as long as the lines'
+    spacing: unstretched, a query's nearest points are one line's collinear samples, on
+    which a linear polynomial is not determined (a singular or ill-conditioned solve).
+    """
+
+    def __init__(
+        self, points: FloatArray, table: FloatArray, stretch: FloatArray | None = None
+    ) -> None:
         neighbors = min(RBF_NEIGHBORS, len(points))
+        self.stretch = np.ones(points.shape[1]) if stretch is None else np.asarray(stretch)
         self.rbf = RBFInterpolator(
-            points, table, neighbors=neighbors, kernel="thin_plate_spline", degree=1
+            points * self.stretch,
+            table,
+            neighbors=neighbors,
+            kernel="thin_plate_spline",
+            degree=1,
         )
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
-        out = np.asarray(self.rbf(x), dtype=np.float64)
+        out = np.asarray(self.rbf(x * self.stretch), dtype=np.float64)
         return out, np.ones(len(x), dtype=np.bool_)

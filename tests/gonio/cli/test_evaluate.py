@@ -77,6 +77,7 @@ def test_another_parametrization(run_gonio: Gonio, run: Path) -> None:
         (["--truth", "lambert:albedo=2"], "a reflectance is at most 1"),
         (["--parametrization", "polar"], "unknown parametrization 'polar'"),
         (["--method", "velvet"], "method 'velvet'"),
+        (["--method", "lines"], "method 'lines' needs samples on lines"),
     ],
 )
 def test_mistakes_are_one_line_and_exit_2(
