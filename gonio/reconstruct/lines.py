@@ -8,12 +8,15 @@ label per sample.
 
 `Lines` interpolates such data as it was measured: along each line piecewise linearly
 in the first coordinate (the line mirrored through a pole at 0, as the space's seam
-there requires), then across lines linearly on the Delaunay triangulation of the lines'
-positions (padded across the seams), each corner line read at the query's first
-coordinate. Its weights are linear in the table, so the same weights carry the values
-and their σ. A query is defined inside the positions' hull where at least one corner
-line reaches its first coordinate; the corners that do not are left out and the others'
-weights renormalized. Samples off every line (stop-and-go targets of a mixed plan)
+there requires), then across lines at the query's first coordinate: a thin-plate spline
+with an affine part through the `SPLINE_LINES` lines nearest the query's position (a
+line that does not reach that coordinate takes no part), or, where fewer than d + 1 of
+them reach it, linearly on the Delaunay triangulation of the lines' positions (the
+corners that reach it, their weights renormalized); the positions are padded across the
+seams. The weights are linear in the table, so the same weights carry the values and
+their σ; both stages reproduce what is linear along lines and affine across them, and
+the samples themselves. A query is defined inside the positions' hull where the spline
+or a corner line answers. Samples off every line (stop-and-go targets of a mixed plan)
 take no part: the reconstruction's fill answers where no line does.
 """
 
@@ -199,7 +202,9 @@ class Lines(Interpolant):
         t, label, rows = x[on, ALONG], lines.labels[on], np.asarray(table, dtype=np.float64)[on]
         if _mirrors_along(space):
             # The pole at 0 of the first coordinate: (−t, position) is (t, position).
-            t, label, rows = np.concatenate([t, -t]), np.tile(label, 2), np.tile(rows, (2, 1))
+            up = t > 0.0
+            t, label = np.concatenate([t, -t[up]]), np.concatenate([label, label[up]])
+            rows = np.concatenate([rows, rows[up]])
         order = np.lexsort((t, label))
         self.t, self.label, self.table = t[order], label[order], rows[order]
         n = len(lines)
@@ -245,13 +250,14 @@ class Lines(Interpolant):
         values, reached = self._along(line, np.broadcast_to(t[:, None], line.shape))
         weight = np.where(reached & inside[:, None], bary, 0.0)
         total = weight.sum(axis=1)
-        defined = inside & reached.any(axis=1) & (total > 0.0)
+        defined = inside & (total > 0.0)
         weight = weight / np.where(total > 0.0, total, 1.0)[:, None]
         out = np.einsum("mv,mvk->mk", weight, values)
-        rows = np.flatnonzero(defined)
+        rows = np.flatnonzero(inside)
         if self.neighbours > dims + 1 and len(rows):
             spline, solved = self._spline(a[rows], t[rows])
             out[rows[solved]] = spline[solved]
+            defined[rows[solved]] = True
         return np.where(defined[:, None], out, np.nan), np.asarray(defined, dtype=np.bool_)
 
     def _spline(self, a: FloatArray, t: FloatArray) -> tuple[FloatArray, BoolArray]:
