@@ -20,6 +20,7 @@ import numpy as np
 from scipy.interpolate import RBFInterpolator
 from scipy.spatial import Delaunay
 
+from gonio.errors import GonioError
 from gonio.types import BoolArray, FloatArray
 
 #: A simplex whose |det| is below this fraction of the product of its edge lengths
@@ -35,6 +36,10 @@ MAX_STEPS = 64
 SEARCH_BLOCK = 1 << 16
 #: Neighbours of each query the ``rbf`` method solves with (scipy's ``neighbors``).
 RBF_NEIGHBORS = 32
+#: An ``rbf`` value farther than this many half-ranges of the samples' columns from
+#: their middle is the sign of an ill-conditioned solve (a spline through the samples
+#: stays within a few).
+RBF_RANGE = 1e3
 
 
 class Interpolant(ABC):
@@ -194,6 +199,8 @@ class Rbf(Interpolant):
     ) -> None:
         neighbors = min(RBF_NEIGHBORS, len(points))
         self.stretch = np.ones(points.shape[1]) if stretch is None else np.asarray(stretch)
+        low, high = np.min(table, axis=0), np.max(table, axis=0)
+        self.centre, self.spread = 0.5 * (low + high), np.maximum(0.5 * (high - low), 1e-12)
         self.rbf = RBFInterpolator(
             points * self.stretch,
             table,
@@ -203,5 +210,15 @@ class Rbf(Interpolant):
         )
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
-        out = np.asarray(self.rbf(x * self.stretch), dtype=np.float64)
+        try:
+            out = np.asarray(self.rbf(x * self.stretch), dtype=np.float64)
+            lost = not np.all(np.abs(out - self.centre) <= RBF_RANGE * self.spread)
+        except np.linalg.LinAlgError:
+            lost = True
+        if lost:
+            raise GonioError(
+                "method 'rbf': the samples nearest some queries lie on a line or a plane "
+                "(a linear polynomial is not determined there: a singular or "
+                "ill-conditioned solve); expected samples that vary every coordinate"
+            )
         return out, np.ones(len(x), dtype=np.bool_)

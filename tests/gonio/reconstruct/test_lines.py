@@ -138,3 +138,17 @@ def test_lines_are_refused_in_one_line_without_lines(matte_iso: Measured) -> Non
     with pytest.raises(GonioError, match="not lines of isotropic 'spherical'"):
         reconstruct(matte_iso, method="lines", parametrization="spherical",
                     lines=np.arange(len(matte_iso)) // 50)  # fmt: skip
+
+
+def test_rbf_on_too_few_lines_is_one_line(
+    arch: Rig, glossy_lines: tuple[Measured, np.ndarray, BRDF]
+) -> None:
+    """Two lines are not line data (fewer than four): the solve is singular or so
+    ill-conditioned that its values overflow; a refusal, not a warning or inf."""
+    measured, label, _ = glossy_lines
+    pairs = testset.draw(arch, isotropic=True, size=500)
+    for lines in (1, 2, 3):
+        r = reconstruct(measured.subset(label < lines), method="rbf", max_distance=1.0)
+        with pytest.raises(GonioError, match="method 'rbf': the samples nearest") as err:
+            r.eval(pairs.wi, pairs.wo)
+        assert "\n" not in str(err.value)
