@@ -90,6 +90,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/evaluation.py
 	$(BIN)/python benchmarks/reconstruct.py
 	$(BIN)/python benchmarks/reconstruct.py --transforms
+	$(BIN)/python benchmarks/line_reconstruction.py
 	$(BIN)/python benchmarks/factored.py
 	$(BIN)/python benchmarks/export.py
 	$(BIN)/python benchmarks/point_source.py

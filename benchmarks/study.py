@@ -93,12 +93,12 @@ def setting(scene: str) -> tuple[Rig, bool, BrdfEval]:
 
 
 def score(measured: Measured, method: str, truth: BrdfEval, rig: Rig, iso: bool) -> dict[str, Any]:
-    """log-RMSE as `gonio tradeoff` scores it (pairs the reconstruction declines to answer,
-    outside the samples' hull, left out; ``answered`` is the share kept), by region, and
+    """log-RMSE as the study sweeps score it (only the pairs inside the reconstruction's
+    support; ``answered`` is their share), by region, and
     over every pair with the nearest sample's value filled in (``log_rmse_nearest``)."""
     pairs = testset.draw(rig, isotropic=iso)
     candidate = reconstruction(measured, method, None)
-    result = evaluate(candidate, truth, rig, isotropic=iso, test_set=pairs)
+    result = evaluate(candidate, truth, rig, isotropic=iso, test_set=pairs, only_supported=True)
     out: dict[str, Any] = {"log_rmse": result.regions["all"].scores.log_rmse}
     out.update({f"{r}_log_rmse": result.regions[r].scores.log_rmse for r in REGIONS})
     out["answered"] = result.regions["all"].scores.count / result.regions["all"].pairs

@@ -7,7 +7,8 @@ import argparse
 import json
 from pathlib import Path
 
-from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE, names
+from gonio.reconstruct.evaluate import DEFAULT_FILL
+from gonio.reconstruct.methods import DEFAULT_METHOD, FILLS, NAIVE, names
 from gonio.reconstruct.methods import reconstruction as _reconstruction
 
 
@@ -18,7 +19,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Reconstruct a run's BRDF and score it against a truth on a fixed, "
         "seeded set of pairs the rig can measure: log-RMSE, cosine-weighted log-RMSE, "
         "relative RMSE, median and 95th-percentile relative error, overall and near the "
-        "mirror direction, near retro-reflection, at grazing angles and elsewhere.",
+        "mirror direction, near retro-reflection, at grazing angles and elsewhere. Every "
+        "test pair is scored (outside the reconstruction's support with its fill) unless "
+        "--only-supported; the coverage column is the share inside the support.",
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument(
@@ -39,6 +42,19 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         metavar="P",
         help="the parametrization to reconstruct in (default: the run's plan's)",
     )
+    p.add_argument(
+        "--extrapolate",
+        choices=FILLS,
+        default=DEFAULT_FILL,
+        help="the fill outside the support: nearest (the inverse-distance mean of the "
+        "nearest samples, in log(1 + f)) or model (model+residual's fitted model); "
+        f"default {DEFAULT_FILL}",
+    )
+    p.add_argument(
+        "--only-supported",
+        action="store_true",
+        help="score only the test pairs inside the reconstruction's support (no fill)",
+    )
     p.add_argument("--json", action="store_true", help="print the scores as JSON")
     p.set_defaults(func=cmd_evaluate)
 
@@ -58,11 +74,17 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         measured,
         reconstruct=lambda other: _reconstruction(other, args.method, args.parametrization),
     )
-    candidate = _reconstruction(measured, args.method, args.parametrization)
+    fill = None if args.only_supported else args.extrapolate
+    candidate = _reconstruction(measured, args.method, args.parametrization, extrapolate=fill)
     parametrization = args.parametrization or measured.parametrization
     label = f"{args.method} ({parametrization}, {len(measured)} samples of {args.run})"
     result = evaluate(
-        candidate, truth, measured.rig, isotropic=measured.isotropic, candidate_label=label
+        candidate,
+        truth,
+        measured.rig,
+        isotropic=measured.isotropic,
+        candidate_label=label,
+        only_supported=args.only_supported,
     )
     if args.json:
         print(json.dumps(result.to_json(), indent=2, ensure_ascii=False))

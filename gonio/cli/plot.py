@@ -156,9 +156,12 @@ def _coverage(args: argparse.Namespace, measured: Measured) -> Drawing:
 def _error(args: argparse.Namespace, measured: Measured) -> Drawing:
     from gonio.plots import error
     from gonio.reconstruct import testset
+    from gonio.reconstruct.evaluate import DEFAULT_FILL
+    from gonio.reconstruct.methods import reconstruction
 
     truth = _truth(args, measured)
-    surface = _surface(args, measured)
+    # Every test pair, as `gonio evaluate` scores them: the fill outside the support.
+    surface = reconstruction(measured, args.method, args.parametrization, extrapolate=DEFAULT_FILL)
     pairs = testset.draw(measured.rig, isotropic=measured.isotropic)
     truth_supported = None
     if truth.supported is not None:

@@ -6,7 +6,9 @@ coordinate against the second and against the third), and the scores of each reg
 (`gonio.reconstruct.metrics.REGIONS`) as bars.
 
 Pairs where the truth is not finite, or the reconstruction declines to answer (NaN),
-are left out, as `gonio evaluate` leaves them out; an empty bin is masked (white).
+are left out; `gonio plot --kind error` gives the reconstruction the fill `gonio
+evaluate` gives it, so that every pair is scored as there. An empty bin is masked
+(white).
 """
 
 from __future__ import annotations

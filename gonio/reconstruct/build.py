@@ -20,11 +20,20 @@ from gonio.reconstruct.coordinates import Space, morton_order
 from gonio.reconstruct.domain import Domain, spacings
 from gonio.reconstruct.grid import GridInterpolant, detect, refuse
 from gonio.reconstruct.interpolants import Interpolant, Linear, Rbf
+from gonio.reconstruct.lines import (
+    ALONG,
+    LINE_REACH,
+    Lines,
+    check_space,
+    dense_lines,
+    line_set,
+    refuse_lines,
+)
 from gonio.reconstruct.result import Reconstruction
 from gonio.types import ArrayLike, FloatArray
 
 #: The interpolation methods, by name.
-METHODS = ("linear", "rbf", "grid", "model+residual")
+METHODS = ("linear", "rbf", "grid", "lines", "model+residual")
 #: What an unsupported query may be filled with (None: NaN).
 EXTRAPOLATIONS = (None, "nearest", "model")
 #: The transform interpolated by default (chosen by measurement:
@@ -52,6 +61,7 @@ def reconstruct(
     model: Model | None = None,
     transform: str | None = None,
     max_distance: float | None = None,
+    lines: np.ndarray | None = None,
 ) -> Reconstruction:
     """The reconstruction of ``measured`` by ``method`` (one of `METHODS`) in
     ``parametrization`` (default: the plan's).
@@ -60,6 +70,9 @@ def reconstruct(
     ``transform``: one of `transforms.TRANSFORMS` (default `DEFAULT_TRANSFORM`; the
     model+residual method interpolates the log ratio to the model instead).
     ``max_distance``: the support distance (scaled units; `gonio.reconstruct.domain`).
+    ``lines``: the line of each sample (N,) integers, negative for none (a fly plan's
+    sweeps), for ``lines`` and ``rbf`` on line data; default: found from the
+    coordinates (`gonio.reconstruct.lines`).
     `GonioError` (one line) for an unknown name or a missing model.
     """
     if method not in METHODS:
@@ -87,7 +100,10 @@ def reconstruct(
     wi, wo = measured.wi, measured.wo
     f = _columns(measured.f)
     x = space.scaled(wi, wo)
-    x, wi, wo, f, sigma = _merge_repeats(x, wi, wo, f, _columns(measured.sigma))
+    labels = None if lines is None else np.asarray(lines)
+    if labels is not None and labels.shape != (len(x),):
+        raise GonioError(f"lines: expected one label per sample ({len(x)}), got {labels.shape}")
+    x, wi, wo, f, sigma, labels = _merge_repeats(x, wi, wo, f, _columns(measured.sigma), labels)
     table = np.concatenate([chosen.encode(f, wi, wo), chosen.slope(f, wi, wo) * sigma], axis=1)
 
     spacing, local = spacings(x)
@@ -95,6 +111,17 @@ def reconstruct(
     padded = space.pad(x, margin)
     order = morton_order(padded.points)
     points, source = padded.points[order], padded.source[order]
+    found = line_set(x, labels)
+    dense = dense_lines(x, found)
+    if method == "lines":
+        check_space(space)
+        if dense is None:
+            raise refuse_lines(method, found)
+        # Support: where the lines reach (inside their positions' hull), not a distance.
+        max_distance = max_distance or 2.0 * space.dims
+    elif dense is not None and max_distance is None:
+        # Line data: a query between lines is as near its samples as the lines' spacing.
+        max_distance = LINE_REACH * dense[1]
     domain = Domain(points, source, local, measured.rig, measured.isotropic, max_distance)
     interpolant: Interpolant
     if method == "grid":
@@ -102,8 +129,15 @@ def reconstruct(
         if grid is None:
             raise refuse(space.parametrization)
         interpolant = GridInterpolant(grid, table, space)
+    elif method == "lines":
+        interpolant = Lines(x, table, found, space)
+        margin = interpolant.margin
     elif method == "rbf":
-        interpolant = Rbf(points, table[source])
+        stretch = None
+        if dense is not None:
+            stretch = np.ones(space.dims)
+            stretch[ALONG] = dense[1] / dense[0]
+        interpolant = Rbf(points, table[source], stretch=stretch)
     else:
         try:
             interpolant = Linear(points, table[source])
@@ -134,19 +168,26 @@ def _columns(a: FloatArray) -> FloatArray:
 
 
 def _merge_repeats(
-    x: FloatArray, wi: FloatArray, wo: FloatArray, f: FloatArray, sigma: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Samples at the same coordinates as one: the mean value, σ of the mean."""
+    x: FloatArray,
+    wi: FloatArray,
+    wo: FloatArray,
+    f: FloatArray,
+    sigma: FloatArray,
+    labels: np.ndarray | None,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, np.ndarray | None]:
+    """Samples at the same coordinates as one: the mean value, σ of the mean (and the
+    first one's line label)."""
     key = np.round(x / REPEAT).astype(np.int64) if len(x) else x
     _, first, inverse, count = np.unique(
         key, axis=0, return_index=True, return_inverse=True, return_counts=True
     )
     if len(first) == len(x):
-        return x, wi, wo, f, sigma
+        return x, wi, wo, f, sigma, labels
     inverse = inverse.ravel()
     n = count[:, None].astype(np.float64)
     mean = np.zeros((len(first), f.shape[1]))
     var = np.zeros_like(mean)
     np.add.at(mean, inverse, f)
     np.add.at(var, inverse, sigma**2)
-    return x[first], wi[first], wo[first], mean / n, np.sqrt(var) / n
+    kept = None if labels is None else labels[first]
+    return x[first], wi[first], wo[first], mean / n, np.sqrt(var) / n, kept

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.interpolate import RBFInterpolator
 from scipy.spatial import Delaunay
 
+from gonio.errors import GonioError
 from gonio.types import BoolArray, FloatArray
 
 #: A simplex whose |det| is below this fraction of the product of its edge lengths
@@ -35,6 +36,10 @@ MAX_STEPS = 64
 SEARCH_BLOCK = 1 << 16
 #: Neighbours of each query the ``rbf`` method solves with (scipy's ``neighbors``).
 RBF_NEIGHBORS = 32
+#: An ``rbf`` value farther than this many half-ranges of the samples' columns from
+#: their middle is the sign of an ill-conditioned solve (a spline through the samples
+#: stays within a few).
+RBF_RANGE = 1e3
 
 
 class Interpolant(ABC):
@@ -181,14 +186,39 @@ def barycentric_transforms(points: FloatArray, simplices: np.ndarray) -> FloatAr
 
 class Rbf(Interpolant):
     """Thin-plate-spline RBF with a linear polynomial on each query's nearest
-    `RBF_NEIGHBORS` points; defined everywhere (the domain mask bounds it)."""
+    `RBF_NEIGHBORS` points; defined everywhere (the domain mask bounds it).
 
-    def __init__(self, points: FloatArray, table: FloatArray) -> None:
+    ``stretch`` (d,): factors the coordinates are multiplied by first (None: none). On
+    line data the first axis is stretched until a line's step is as long as the lines'
+    spacing: unstretched, a query's nearest points are one line's collinear samples, on
+    which a linear polynomial is not determined (a singular or ill-conditioned solve).
+    """
+
+    def __init__(
+        self, points: FloatArray, table: FloatArray, stretch: FloatArray | None = None
+    ) -> None:
         neighbors = min(RBF_NEIGHBORS, len(points))
+        self.stretch = np.ones(points.shape[1]) if stretch is None else np.asarray(stretch)
+        low, high = np.min(table, axis=0), np.max(table, axis=0)
+        self.centre, self.spread = 0.5 * (low + high), np.maximum(0.5 * (high - low), 1e-12)
         self.rbf = RBFInterpolator(
-            points, table, neighbors=neighbors, kernel="thin_plate_spline", degree=1
+            points * self.stretch,
+            table,
+            neighbors=neighbors,
+            kernel="thin_plate_spline",
+            degree=1,
         )
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
-        out = np.asarray(self.rbf(x), dtype=np.float64)
+        try:
+            out = np.asarray(self.rbf(x * self.stretch), dtype=np.float64)
+            lost = not np.all(np.abs(out - self.centre) <= RBF_RANGE * self.spread)
+        except np.linalg.LinAlgError:
+            lost = True
+        if lost:
+            raise GonioError(
+                "method 'rbf': the samples nearest some queries lie on a line or a plane "
+                "(a linear polynomial is not determined there: a singular or "
+                "ill-conditioned solve); expected samples that vary every coordinate"
+            )
         return out, np.ones(len(x), dtype=np.bool_)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from gonio.errors import UnknownNameError
-from gonio.reconstruct.build import METHODS, reconstruct
+from gonio.reconstruct.build import EXTRAPOLATIONS, METHODS, reconstruct
 from gonio.reconstruct.fit import fit
 from gonio.reconstruct.naive import NaiveReconstruction
 
@@ -23,6 +23,8 @@ NAIVE = "naive"
 DEFAULT_METHOD = "linear"
 #: The family fitted for ``model+residual`` unless another is named (docs/explanations/fitting.md).
 DEFAULT_MODEL = "lambert+ggx"
+#: The fills a command may name (`gonio.reconstruct.build.EXTRAPOLATIONS` less none).
+FILLS = tuple(e for e in EXTRAPOLATIONS if e is not None)
 
 
 def names() -> tuple[str, ...]:

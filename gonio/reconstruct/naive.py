@@ -41,6 +41,8 @@ class NaiveReconstruction:
     `default_nodes`). ``eval`` returns (...,) values in sr⁻¹, or (..., C) for RGB."""
 
     method = "naive"
+    #: Outside the support (a node without samples): the nearest measured node's value.
+    extrapolate = "nearest-node"
 
     def __init__(
         self,

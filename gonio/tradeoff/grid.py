@@ -86,6 +86,7 @@ class Task:
     test_seed: int
     budget_s: float | None = None  # instrument time the plan's target is fitted to (s)
     extrapolate: str | None = None  # how the reconstruction fills unsupported pairs
+    only_supported: bool = False  # score only the pairs inside the support
 
     def plan_spec(self) -> PlanSpec:
         return PlanSpec.model_validate(self.plan)
@@ -321,11 +322,7 @@ def _task(
         "warps": {c: w.power for c, w in warps.items()},
         **adaptive,
         "plan": spec.plan.model_dump(mode="json"),
-        "evaluation": {
-            k: v
-            for k, v in spec.evaluation.model_dump(mode="json").items()
-            if not (k == "extrapolate" and v is None)  # the ids of before it existed
-        },
+        "evaluation": evaluation_identity(spec),
         "replicate": replicate,
     }
     digest = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
@@ -380,5 +377,15 @@ def _task(
         test_pairs=spec.evaluation.pairs,
         test_seed=spec.evaluation.seed,
         budget_s=None if combination["minutes"] is None else 60.0 * combination["minutes"],
-        extrapolate=spec.evaluation.extrapolate,
+        extrapolate=None if spec.evaluation.only_supported else spec.evaluation.extrapolate,
+        only_supported=spec.evaluation.only_supported,
     )
+
+
+def evaluation_identity(spec: SweepSpec) -> dict[str, Any]:
+    """What of the evaluation settings enters a combination's id: the test set, and the
+    fill when every pair is scored. Scoring the supported pairs only keeps the ids of the
+    sweeps written before the fill existed (they scored those pairs)."""
+    e = spec.evaluation
+    fill = {} if e.only_supported else {"extrapolate": e.extrapolate}
+    return {"pairs": e.pairs, "seed": e.seed, **fill}

@@ -65,7 +65,13 @@ def render(
         f"{len(rows)} of {len(sweep.tasks)} combinations finished ({len(failed)} failed) over "
         f"{len(sweep.scenes)} scene{'s' if len(sweep.scenes) != 1 else ''} on rig "
         f"{sweep.rig.spec.name!r}. Error: {metric} on the test set of "
-        f"{spec.evaluation.pairs} pairs (seed {spec.evaluation.seed}); time: the simulated "
+        f"{spec.evaluation.pairs} pairs (seed {spec.evaluation.seed}), "
+        + (
+            "the pairs inside each reconstruction's support only"
+            if spec.evaluation.only_supported
+            else f"every pair (outside the support: {spec.evaluation.extrapolate} fill)"
+        )
+        + "; time: the simulated "
         "instrument time in seconds (predicted: the planner's estimate). Every row is in "
         "results.csv.",
     ]

@@ -23,6 +23,7 @@ from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
 from gonio.planner.policies import AcquisitionSpec
 from gonio.planner.schema import AdaptiveSpec, PlanSpec, Strategy, Warp
 from gonio.reconstruct import methods
+from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
 from sim.scene import EffectsSpec
@@ -282,12 +283,17 @@ class EvaluationSettings(Strict):
         DEFAULT_SIZE, ge=1, le=1_000_000, description="Direction pairs in the test set."
     )
     seed: int = Field(DEFAULT_SEED, ge=0, description="The seed the test set is drawn with.")
-    extrapolate: Literal["nearest"] | None = Field(
-        None,
+    extrapolate: Literal["nearest"] = Field(
+        DEFAULT_FILL,
         description="How a reconstruction answers a test pair outside its samples' support: "
-        "none (it declines, and the pair is not scored) or nearest (the nearest sample's "
-        "value, so every pair is scored: plans of different layouts compare on the same "
-        "pairs).",
+        "nearest (the inverse-distance mean of the nearest samples in log(1 + f)). Every "
+        "pair is scored, so plans of different layouts compare on the same pairs; the "
+        "coverage columns give the share inside the support.",
+    )
+    only_supported: bool = Field(
+        False,
+        description="Score only the test pairs inside each reconstruction's support (no "
+        "fill): plans of different layouts are then scored on different pairs.",
     )
 
 

@@ -28,9 +28,10 @@ def test_the_table_has_a_row_per_region(run_gonio: Gonio, run: Path) -> None:
     lines = r.stdout.splitlines()
     assert lines[0] == f"naive (hybrid, 300 samples of {run}) vs the scene of {run}"
     assert lines[1].startswith(f"test set: {DEFAULT_SIZE} pairs (seed 14)")
-    assert lines[2].split() == ["region", "pairs", "coverage", "log-RMSE", "cos", "log-RMSE",
+    assert lines[2].startswith("scored: every pair (outside the support: nearest-node fill)")
+    assert lines[3].split() == ["region", "pairs", "coverage", "log-RMSE", "cos", "log-RMSE",
                                 "rel", "RMSE", "rel", "median", "rel", "p95"]  # fmt: skip
-    assert [line.split()[0] for line in lines[3:]] == ["all", *REGIONS]
+    assert [line.split()[0] for line in lines[4:]] == ["all", *REGIONS]
 
 
 def test_json_gives_every_metric_and_the_naive_floor_is_close_on_a_matte_run(
@@ -76,6 +77,7 @@ def test_another_parametrization(run_gonio: Gonio, run: Path) -> None:
         (["--truth", "lambert:albedo=2"], "a reflectance is at most 1"),
         (["--parametrization", "polar"], "unknown parametrization 'polar'"),
         (["--method", "velvet"], "method 'velvet'"),
+        (["--method", "lines"], "method 'lines' needs samples on lines"),
     ],
 )
 def test_mistakes_are_one_line_and_exit_2(
@@ -99,3 +101,30 @@ def test_every_method_scores_the_demo_like_run(run_gonio: Gonio, run: Path) -> N
         assert r.returncode == 0, r.stderr
         scores = json.loads(r.stdout)["regions"]["all"]
         assert 0.0 <= scores["log_rmse"] < 0.2, (method, scores)
+
+
+def test_every_pair_is_scored_with_the_fill_stated_or_only_the_supported_ones(
+    run_gonio: Gonio, run: Path
+) -> None:
+    r = run_gonio("evaluate", str(run), "--method", "linear")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[2] == (
+        "scored: every pair (outside the support: nearest fill); coverage: the share inside "
+        "the support"
+    )
+    every = json.loads(run_gonio("evaluate", str(run), "--method", "linear", "--json").stdout)
+    assert every["only_supported"] is False and every["fill"] == "nearest"
+    overall = every["regions"]["all"]
+    assert overall["scored"] == overall["pairs"] == DEFAULT_SIZE
+    assert 0.5 < overall["coverage"] < 1.0
+    r = run_gonio("evaluate", str(run), "--method", "linear", "--only-supported", "--json")
+    assert r.returncode == 0, r.stderr
+    inside = json.loads(r.stdout)
+    assert inside["only_supported"] is True
+    assert inside["regions"]["all"]["scored"] == round(overall["coverage"] * DEFAULT_SIZE)
+    assert inside["regions"]["all"]["coverage"] == overall["coverage"]
+
+
+def test_a_model_fill_without_a_model_is_one_line(run_gonio: Gonio, run: Path) -> None:
+    r = run_gonio("evaluate", str(run), "--method", "linear", "--extrapolate", "model")
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "needs a model" in r.stderr

@@ -262,7 +262,7 @@ def test_bad_options_are_one_line_errors(
 
 
 def test_every_method_is_named_and_reported(matte_iso: Measured, matte: BRDF) -> None:
-    assert METHODS == ("linear", "rbf", "grid", "model+residual")
+    assert METHODS == ("linear", "rbf", "grid", "lines", "model+residual")
     r = reconstruct(matte_iso, method="rbf", parametrization="spherical")
     assert (r.method, r.parametrization, r.isotropic, r.transform) == (
         "rbf",

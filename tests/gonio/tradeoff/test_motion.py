@@ -55,12 +55,22 @@ def test_a_stop_and_go_sweep_keeps_its_ids(tmp_path: Path) -> None:
     assert [t.id for t in before] == [t.id for t in after]
 
 
-def test_extrapolating_to_every_pair_is_a_setting_of_the_evaluation(tmp_path: Path) -> None:
-    plain = load_sweep(write_sweep(tmp_path, "a")).tasks
-    filled = load_sweep(write_sweep(tmp_path, "b", evaluation={"extrapolate": "nearest"})).tasks
-    assert {t.extrapolate for t in plain} == {None}
-    assert {t.extrapolate for t in filled} == {"nearest"}
-    assert not {t.id for t in plain} & {t.id for t in filled}
+def test_every_pair_is_scored_by_default_and_supported_only_keeps_the_old_ids(
+    tmp_path: Path,
+) -> None:
+    every = load_sweep(write_sweep(tmp_path, "a")).tasks
+    named = load_sweep(
+        write_sweep(tmp_path, "b", evaluation={"pairs": 2000, "extrapolate": "nearest"})
+    ).tasks
+    inside = load_sweep(
+        write_sweep(tmp_path, "c", evaluation={"pairs": 2000, "only_supported": True})
+    ).tasks
+    assert {(t.extrapolate, t.only_supported) for t in every} == {("nearest", False)}
+    assert [t.id for t in every] == [t.id for t in named]
+    assert {(t.extrapolate, t.only_supported) for t in inside} == {(None, True)}
+    assert not {t.id for t in every} & {t.id for t in inside}
+    # A sweep scored on the supported pairs keeps the ids it had before the fill existed.
+    assert inside[0].id == "83a5dc1dc4ce15ce"
 
 
 @pytest.mark.parametrize(
