@@ -11,7 +11,7 @@ fast direction densely; a coarse set of lines covers the slow ones.
   chosen along the line (`gonio.planner.poses.choose`, the least total travel).
 - Segments: the runs of the line whose chosen poses measure their pair (`Rig.pose_reasons`
   OK) without a jump between neighbours (an axis turning more than `JUMP_PER_STEP` × the
-  step: a branch change or a singular stretch), at least `MIN_READINGS` readings long.
+  step: a branch change or a singular stretch), at least `MIN_POINTS` grid points long.
 - Time law (`time_law`): a speed along the line v(θh) from rest to rest, limited by the
   blur budget (the measured directions' angular rate × v × integration ≤ blur), every
   axis's velocity (|dq/dθh| v ≤ its max) and a share `ACCELERATION_SHARE` of every axis's
@@ -49,8 +49,8 @@ JUMP_PER_STEP = 10.0
 #: The share of each axis's acceleration the time law spends along the path (the rest
 #: is left to the path's curvature).
 ACCELERATION_SHARE = 0.5
-#: A segment needs at least this many readings.
-MIN_READINGS = 8
+#: A segment spans at least this many grid points (shorter runs are refused, "short").
+MIN_POINTS = 8
 #: Factor on the speed and acceleration limits of a time law whose trajectory failed
 #: the rig's checks (tried up to `TRIES` times).
 SLOWER = 0.7
@@ -116,7 +116,7 @@ def line_segments(
         run_id = np.cumsum(np.concatenate([[0], (~good[:-1] | ~good[1:] | cut[:-1])]))
         for r_id in np.unique(run_id[good]).tolist():
             idx = np.flatnonzero((run_id == r_id) & good)
-            if len(idx) < 2:
+            if len(idx) < MIN_POINTS:
                 refused[SHORT] = refused.get(SHORT, 0) + len(idx)
                 continue
             out.append(PathSegment(line, theta_d, phi_d, theta_h[a + idx], poses[idx]))
@@ -145,7 +145,11 @@ def time_law(
     back = reach[-1] - reach  # ∫ 2a ds to the end
     backward = back + np.minimum.accumulate((v_node**2 - back)[::-1])[::-1]
     v = np.sqrt(np.maximum(np.minimum(forward, backward), 0.0))
-    dt = 2.0 * ds / np.maximum(v[1:] + v[:-1], tiny)
+    both = v[1:] + v[:-1]
+    # An interval between two nodes at rest (a segment of two): accelerate over half
+    # of it and brake over the other half.
+    rest = 2.0 * np.sqrt(ds / np.maximum(a_int, tiny))
+    dt = np.where(both > tiny, 2.0 * ds / np.where(both > tiny, both, 1.0), rest)
     return np.concatenate([[0.0], np.cumsum(dt)])
 
 

@@ -20,11 +20,13 @@ from gonio.planner import build, plan_bytes, read_plan, write_plan
 from gonio.planner.fly.path_plan import line_density
 from gonio.planner.fly.paths import (
     FINE_STEP,
+    PathSegment,
     checked_trajectory,
     line_pairs,
     line_segments,
     path_readings,
     rig_setpoint_period,
+    time_law,
 )
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
@@ -182,3 +184,11 @@ def test_a_material_is_for_theta_h_lines_only() -> None:
         path_spec(segment="detector_arc", material={"name": "lambert"})
     with pytest.raises(ValueError, match="material"):
         path_spec(material={"alpha": 0.1})
+
+
+def test_a_short_segment_takes_a_finite_time() -> None:
+    rig = arch()
+    seg = line_segments(rig, math.radians(30), math.radians(60), 0, True, {})[0]
+    two = PathSegment(seg.line, seg.theta_d, seg.phi_d, seg.theta_h[:2], seg.poses[:2])
+    t = time_law(rig, two, math.radians(1.0), 0.01)
+    assert np.all(np.isfinite(t)) and 0 < t[-1] < 1.0
