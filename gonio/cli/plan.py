@@ -1,4 +1,5 @@
-"""`gonio plan PLAN.yaml [--rig RIG.yaml] [-o plan.csv] [--plot coverage.png] [--bounds]`."""
+"""`gonio plan PLAN.yaml [--rig RIG.yaml] [-o plan.csv] [--plot coverage.png] [--bounds]
+[--budget-min M --material SPEC [--test-pairs N]]`."""
 
 from __future__ import annotations
 
@@ -6,9 +7,12 @@ import argparse
 import contextlib
 from pathlib import Path
 
-from gonio.cli.render import render_summary
+from gonio.cli.arguments import positive
+from gonio.cli.render import render_choice, render_summary
+from gonio.errors import GonioError
 from gonio.output import reserve_output
-from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner import Plan
+from gonio.planner.files import PlanSource, load_plan_source, plan_bytes
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -18,7 +22,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         description="Place targets uniformly in the plan's parametrization, keep what the "
         "rig can reach, order them for the motors and predict the duration. Nothing moves; "
         "nothing is written without -o (each output is created before planning and "
-        "replaced whole).",
+        "replaced whole). With --budget-min and --material, choose the plan for a time "
+        "budget: stop-and-go or fly, whichever is predicted to reconstruct the material "
+        "best, never a fly plan predicted worse than the best stop-and-go one.",
     )
     plan.add_argument("plan", type=Path, help="the plan file (YAML)")
     plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
@@ -36,10 +42,45 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "--bounds", action="store_true",
         help="also compute the duration in generation order and the MST lower bound",
     )  # fmt: skip
+    plan.add_argument(
+        "--budget-min", type=_minutes,
+        metavar="M",
+        help="choose the plan for M minutes of predicted instrument time: stop-and-go "
+        "Sobol and warped targets in Rusinkiewicz's coordinates, fly detector arcs and θh "
+        "lines, each fitted to the budget, their errors predicted for --material; prints "
+        "the candidates and the choice, and -o stores the chosen plan "
+        "(docs/explanations/tradeoff.md)",
+    )  # fmt: skip
+    plan.add_argument(
+        "--material", metavar="SPEC",
+        help="the material guess of --budget-min: a material or scene YAML file, or a model "
+        "NAME:key=value,... (e.g. cook_torrance:alpha=0.05,fresnel=conductor)",
+    )  # fmt: skip
+    plan.add_argument(
+        "--test-pairs", type=_pairs,
+        metavar="N", help="test pairs the --budget-min predictions are scored on "
+        "(default 5000)",
+    )  # fmt: skip
     plan.set_defaults(func=cmd_plan)
 
 
+def _minutes(text: str) -> float:
+    """A positive number of minutes."""
+    return positive(text, "a positive number of minutes")
+
+
+def _pairs(text: str) -> int:
+    """A whole number of pairs, at least 1."""
+    value = positive(text, "a whole number of pairs, at least 1")
+    if value != int(value) or value < 1:
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number of pairs, at least 1, got {text!r}"
+        )
+    return int(value)
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
+    _check_choice_options(args)
     if args.plot is not None:
         from gonio.plots import check_figure_format
 
@@ -54,7 +95,11 @@ def cmd_plan(args: argparse.Namespace) -> int:
         figure = None
         if args.plot is not None:
             figure = outputs.enter_context(reserve_output(args.plot, "--plot", inputs=inputs))
-        plan = load_plan_source(args.plan, args.rig).build(bounds=args.bounds)
+        source = load_plan_source(args.plan, args.rig)
+        if args.budget_min is None:
+            plan = source.build(bounds=args.bounds)
+        else:
+            plan = _choose(args, source)
         print(render_summary(plan))
         if stored is not None:
             stored.write_bytes(plan_bytes(plan))
@@ -71,3 +116,32 @@ def cmd_plan(args: argparse.Namespace) -> int:
                 "(gonio.planner.read_plan reads it back)"
             )
     return 0
+
+
+def _check_choice_options(args: argparse.Namespace) -> None:
+    """The options of a choice come together, one line (exit 2) otherwise."""
+    choosing = args.budget_min is not None
+    if choosing and args.material is None:
+        raise GonioError("--budget-min needs --material SPEC: the material guess it predicts for")
+    if not choosing and (args.material is not None or args.test_pairs is not None):
+        given = "--material" if args.material is not None else "--test-pairs"
+        raise GonioError(f"{given} applies with --budget-min M (the choice of plan)")
+    if choosing and args.bounds:
+        raise GonioError("--bounds applies to the plan as written, not with --budget-min")
+
+
+def _choose(args: argparse.Namespace, source: PlanSource) -> Plan:
+    """The chosen plan for ``--budget-min`` and ``--material``, its candidates printed."""
+    from gonio.tradeoff import TEST_PAIRS, choose, material_guess
+
+    spec, rig = source.spec, source.rig
+    material = material_guess(
+        args.material, parametrization=spec.parametrization, isotropic=spec.isotropic, rig=rig
+    )
+    choice = choose(
+        spec, rig, 60.0 * args.budget_min, material, test_pairs=args.test_pairs or TEST_PAIRS,
+        where=str(source.path),
+    )  # fmt: skip
+    print(render_choice(choice))
+    print()
+    return choice.plan

@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from gonio.planner import Plan, Summary
 from gonio.progress import hms
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
+
+if TYPE_CHECKING:  # the choice's module is imported only by the command that chooses
+    from gonio.tradeoff import Choice
+    from gonio.tradeoff.choice import Prediction
 
 
 def render_summary(plan: Plan) -> str:
@@ -144,3 +150,71 @@ def ordering_line(s: Summary) -> str:
         f"moves, {s.kicks:,} of {s.max_kicks:,} kicks): not converged, and this order "
         "depends on the machine's speed"
     )
+
+
+def render_choice(choice: Choice) -> str:
+    """The candidates of a choice of plan, their predictions and the choice, with why."""
+    minutes = f"{choice.budget_s / 60.0:g} min"
+    lines = [
+        f"choice of plan for {minutes} of instrument time, the material guess {choice.material}",
+        f"  predicted on {choice.test_pairs} test pairs (seed {choice.test_seed}): the guess "
+        "sampled without noise or blur at each plan's pairs,",
+        "  interpolated linearly across every gap (outside the samples' hull, the nearest "
+        "sample's value), log-RMSE over every pair",
+        f"  {'candidate':<34}{'motion':<7}{'time':>9}{'samples':>9}{'log-RMSE':>10}"
+        f"{'coverage':>10}{'gap':>7}",
+    ]
+    for p in choice.predictions:
+        head = f"  {p.name:<34}{'fly' if p.is_fly else 'stop':<7}"
+        if p.plan is None or p.log_rmse is None:
+            lines.append(f"{head}{'—':>9}   ({p.error or 'no prediction'})")
+            continue
+        mark = "   ← chosen" if p is choice.chosen else ""
+        lines.append(
+            f"{head}{hms(p.seconds or 0.0):>9}{p.samples:>9}{p.log_rmse:>10.3g}"
+            f"{_percent(p.coverage):>10}{_number(p.gap):>7}{mark}"
+        )
+    lines += [
+        "  (coverage: the share of test pairs inside the samples' hull; gap: the largest "
+        "distance from a test pair",
+        "  to its nearest sample, in the unit box of the plan's coordinates)",
+        f"chose {choice.chosen.name} for {minutes}: {choice_reason(choice)} (chosen in "
+        f"{choice.wall_s:.1f} s)",
+    ]
+    return "\n".join(lines)
+
+
+def choice_reason(choice: Choice) -> str:
+    """Why the chosen candidate: its predicted error against the best of the other
+    motion's."""
+    chosen, stop = choice.chosen, choice.best_stop
+    assert chosen.log_rmse is not None
+    if chosen.is_fly:
+        if stop is None or stop.log_rmse is None:
+            return f"predicted log-RMSE {chosen.log_rmse:.3g}; no stop-and-go plan fits"
+        return (
+            f"predicted log-RMSE {chosen.log_rmse:.3g} against {stop.log_rmse:.3g} for the "
+            f"best stop-and-go ({stop.name}), {stop.log_rmse / chosen.log_rmse:.1f}× lower"
+        )
+    fly = _best_of(choice.predictions)
+    if fly is None or fly.log_rmse is None:
+        return f"predicted log-RMSE {chosen.log_rmse:.3g}; no fly plan fits"
+    return (
+        f"the lowest predicted log-RMSE, {chosen.log_rmse:.3g}; the best fly plan "
+        f"({fly.name}) is predicted {fly.log_rmse:.3g}, and a fly plan is chosen only "
+        "when predicted lower than every stop-and-go one"
+    )
+
+
+def _best_of(predictions: tuple[Prediction, ...]) -> Prediction | None:
+    """The fly candidate of lowest predicted error (None if none has one)."""
+    scored = [p for p in predictions if p.is_fly and p.log_rmse is not None]
+    return min(scored, key=lambda p: p.log_rmse or 0.0) if scored else None
+
+
+def _percent(share: float | None) -> str:
+    return "—" if share is None else f"{100.0 * share:.0f} %"
+
+
+def _number(value: float | None) -> str:
+    return "—" if value is None else f"{value:.3f}"

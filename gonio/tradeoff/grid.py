@@ -27,7 +27,7 @@ from gonio.config import (
     read_yaml,
     spec_text,
 )
-from gonio.planner.schema import PlanSpec
+from gonio.planner.schema import PlanSpec, Warp
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import (
@@ -288,6 +288,32 @@ def resolved_effects(effects: Effects, scene: SceneFile) -> dict[str, Any]:
     return {name: scene.effects.get(name, {}) for name in effects}
 
 
+def sampling_fields(
+    combination: dict[str, Any],
+    *,
+    target: int,
+    seed: int,
+    warps: dict[str, Warp],
+    adaptive: dict[str, Any],
+) -> dict[str, Any]:
+    """The ``sampling`` field of a combination's plan: ``target`` and ``seed``; a fly
+    combination's ``segment``, ``rate_hz`` and ``blur_deg``, or a stop-and-go one's
+    strategy (``warped``: Sobol with ``warps``) and the adaptive options (``adaptive``:
+    ``{"adaptive": …}`` or empty)."""
+    strategy = combination["sampling"]
+    fly = combination["motion"] == FLY
+    sampling: dict[str, Any] = {
+        "strategy": FLY if fly else "sobol" if strategy == WARPED else strategy,
+        "target": target,
+        "seed": seed,
+    }
+    if fly:
+        sampling["fly"] = {k: combination[k] for k in ("segment", "rate_hz", "blur_deg")}
+    else:
+        sampling |= {"warps": {c: {"power": w.power} for c, w in warps.items()}, **adaptive}
+    return sampling
+
+
 def _task(
     spec: SweepSpec,
     scene: SceneFile,
@@ -332,15 +358,9 @@ def _task(
     # plan carries its first guess.
     target = combination["samples"] or (FLY_PILOT if combination["motion"] == FLY else STOP_PILOT)
     fly = combination["motion"] == FLY
-    sampling: dict[str, Any] = {
-        "strategy": FLY if fly else "sobol" if strategy == WARPED else strategy,
-        "target": target,
-        "seed": plan_seed,
-    }
-    if fly:
-        sampling["fly"] = {k: combination[k] for k in ("segment", "rate_hz", "blur_deg")}
-    else:
-        sampling |= {"warps": {c: {"power": w.power} for c, w in warps.items()}, **adaptive}
+    sampling = sampling_fields(
+        combination, target=target, seed=plan_seed, warps=warps, adaptive=adaptive
+    )
     plan: dict[str, Any] = {
         "name": f"{spec.name}-{id_}",
         "parametrization": parametrization,
