@@ -115,24 +115,8 @@ def merge(
     slots, a plan streaming its targets only); ``slack_s`` the readings' stamp slack
     (`stamp_slack`), whose /√12 adds to the timing jitter in quadrature; ``window`` the
     readings' window numbers (`window_numbers`; None: their order)."""
-    spans = reply - request
-    steady = spans <= SLOW_POLL * float(np.median(spans)) if len(spans) else spans > 0
-    if steady.sum() < 2:
-        steady = np.ones(len(spans), dtype=np.bool_)
-    t = 0.5 * (request + reply)[steady]
-    order = np.argsort(t, kind="stable")
-    t, positions, spans = t[order], positions[steady][order], spans[steady][order]
-    middle = 0.5 * (started + ended)
-
-    def at(times: FloatArray) -> FloatArray:
-        cols = [np.interp(times, t, positions[:, j]) for j in range(positions.shape[1])]
-        return np.stack(cols, axis=1).reshape(len(times), positions.shape[1])
-
-    angles, first, last = at(middle), at(started), at(ended)
-    smear = np.linalg.norm(last - first, axis=1)
-    span = ended - started
-    speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
-    timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
+    w = _windows(request, reply, positions, started, ended, slack_s)
+    t, angles, first, last = w.t, w.angles, w.first, w.last
     j = int(np.argmax(np.abs(sweeps.velocity[k])))
     lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
     # The stream's phase is the device's: its first or last window may reach up to one
@@ -141,24 +125,16 @@ def merge(
     inside = (np.minimum(first[:, j], last[:, j]) >= lo - margin) & (
         np.maximum(first[:, j], last[:, j]) <= hi + margin
     )
-    inside &= bracketed(t, positions[:, j], lo, hi, started, ended)
+    inside &= bracketed(t, w.positions[:, j], lo, hi, started, ended)
     v = abs(float(sweeps.velocity[k, j]))
     along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
     estimate = (along - 0.5 * sweeps.integration_s) / sweeps.period_s  # slot by position
     numbers = np.arange(len(ended)) if window is None else np.asarray(window, dtype=np.int64)
     shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
     slot = (numbers - shift).astype(np.int64)
-    inside &= (slot >= 0) & (slot < int(sweeps.streamed[k]))
-    _, first_of = np.unique(slot[inside], return_index=True)  # one reading a slot
-    index = np.flatnonzero(inside)[np.sort(first_of)].astype(np.int64)
     if slots is None:
         slots = np.arange(int(sweeps.count[k]), dtype=np.int64)
-    owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
-    target = np.array(
-        [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
-        dtype=np.int64,
-    )
-    return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
+    return _matched(w, slot, inside, slots, sweeps, k)
 
 
 def merge_path(
@@ -179,9 +155,45 @@ def merge_path(
     (s, the clock's); ``slots`` and ``slack_s`` as for `merge`; ``window`` the readings'
     window numbers from the device's timestamps (None without them: each reading's slot
     is then round((started − origin) / period_s), robust to lost lines)."""
-    t = 0.5 * (request + reply)
+    w = _windows(request, reply, positions, started, ended, slack_s)
+    t = w.t
+    inside = (started >= t[0]) & (ended <= t[-1]) if len(t) >= 2 else np.zeros(len(started), bool)
+    estimate = (started - origin_s) / sweeps.period_s
+    if window is None:  # no device timestamps: each reading's own stamps (a lost line is
+        slot = np.rint(estimate).astype(np.int64)  # no gap in an order-based count)
+    else:
+        numbers = np.asarray(window, dtype=np.int64)
+        shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
+        slot = (numbers - shift).astype(np.int64)
+    return _matched(w, slot, inside, slots, sweeps, k)
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """The readings' windows against the polls: the steady polls' mid-times ``t`` (P′,)
+    sorted and their ``positions`` (P′, A), each window's angles at its middle, start
+    and end (R, A), its ``smear`` and ``timing`` (R,) rad (the module docstring)."""
+
+    t: FloatArray
+    positions: FloatArray
+    angles: FloatArray
+    first: FloatArray
+    last: FloatArray
+    smear: FloatArray
+    timing: FloatArray
+
+
+def _windows(
+    request: FloatArray, reply: FloatArray, positions: FloatArray, started: FloatArray,
+    ended: FloatArray, slack_s: float,
+) -> _Windows:  # fmt: skip
+    spans = reply - request
+    steady = spans <= SLOW_POLL * float(np.median(spans)) if len(spans) else spans > 0
+    if steady.sum() < 2:
+        steady = np.ones(len(spans), dtype=np.bool_)
+    t = 0.5 * (request + reply)[steady]
     order = np.argsort(t, kind="stable")
-    t, positions, spans = t[order], positions[order], (reply - request)[order]
+    t, positions, spans = t[order], positions[steady][order], spans[steady][order]
     middle = 0.5 * (started + ended)
 
     def at(times: FloatArray) -> FloatArray:
@@ -193,15 +205,16 @@ def merge_path(
     span = ended - started
     speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
     timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
-    inside = (started >= t[0]) & (ended <= t[-1]) if len(t) >= 2 else np.zeros(len(started), bool)
-    estimate = (started - origin_s) / sweeps.period_s
-    if window is None:  # no device timestamps: each reading's own stamps (a lost line is
-        slot = np.rint(estimate).astype(np.int64)  # no gap in an order-based count)
-    else:
-        numbers = np.asarray(window, dtype=np.int64)
-        shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
-        slot = (numbers - shift).astype(np.int64)
-    inside &= (slot >= 0) & (slot < int(sweeps.streamed[k]))
+    return _Windows(t, positions, angles, first, last, smear, timing)
+
+
+def _matched(
+    w: _Windows, slot: np.ndarray, inside: np.ndarray, slots: np.ndarray, sweeps: Sweeps,
+    k: int,
+) -> Merged:  # fmt: skip
+    """The readings ``inside`` whose ``slot`` is one of the stream's, one a slot, each
+    standing for the target whose slot it is (−1: a slot the plan thinned out)."""
+    inside = inside & (slot >= 0) & (slot < int(sweeps.streamed[k]))
     _, first_of = np.unique(slot[inside], return_index=True)  # one reading a slot
     index = np.flatnonzero(inside)[np.sort(first_of)].astype(np.int64)
     owner = dict(zip(np.asarray(slots).tolist(), range(len(slots)), strict=True))
@@ -209,7 +222,7 @@ def merge_path(
         [int(sweeps.first[k]) + owner[s] if s in owner else -1 for s in slot[index].tolist()],
         dtype=np.int64,
     )
-    return Merged(index, slot[index], target, angles[index], smear[index], timing[index])
+    return Merged(index, slot[index], target, w.angles[index], w.smear[index], w.timing[index])
 
 
 def bracketed(

@@ -45,10 +45,7 @@ def run_sweep(
     start = dict(zip(axes, sweeps.start[k].tolist(), strict=True))
     stop = dict(zip(axes, sweeps.stop[k].tolist(), strict=True))
     moving = {a: abs(v) for a, v in zip(axes, sweeps.velocity[k].tolist(), strict=True) if v}
-    bus.move_to(start)
-    bus.wait_settled(timeout_s)
-    clock.sleep(settle_s)
-    started = clock.now()
+    started = _settled_at(devices, start, settle_s, timeout_s)
     polls: list[StampedPositions] = []
     readings: list[StreamReading] = []
     detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
@@ -81,10 +78,8 @@ def run_path_sweep(
     bus, clock = devices.bus, devices.clock
     detector = streaming(devices.detector)
     trajectory = Trajectory(axes, sweeps.path_period_s, sweeps.set_points(k))
-    bus.move_to(dict(zip(axes, trajectory.goals[0].tolist(), strict=True)))
-    bus.wait_settled(timeout_s)
-    clock.sleep(settle_s)
-    started = clock.now()
+    start = dict(zip(axes, trajectory.goals[0].tolist(), strict=True))
+    started = _settled_at(devices, start, settle_s, timeout_s)
     readings: list[StreamReading] = []
 
     def read(_: StampedPositions) -> None:
@@ -98,3 +93,13 @@ def run_path_sweep(
         readings += detector.stop_stream()
     polls = [at_rest, *followed.polls]
     return RawSweep(polls, restamped(readings, None), started, clock.now(), followed.started_s)
+
+
+def _settled_at(devices: Devices, pose: dict[str, float], settle_s: float, timeout_s: float
+                ) -> float:  # fmt: skip
+    """Move to ``pose`` (rad), wait until settled and the rig's settle dwell; the clock's
+    time then (s)."""
+    devices.bus.move_to(pose)
+    devices.bus.wait_settled(timeout_s)
+    devices.clock.sleep(settle_s)
+    return devices.clock.now()

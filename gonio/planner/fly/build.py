@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -133,15 +135,6 @@ def build_fly(
         ramps_s += 2.0 * laid.ramp_s[s]
         cruise_s += cruise
         here, first = ends[3], first + n
-    angles = np.concatenate(mids)
-    arrival_s = np.concatenate(arrival)
-    n_total = len(angles)
-    exposure = np.full(n_total, t_int)
-    before = np.concatenate([[0.0], arrival_s[:-1] + t_int])
-    travel_s = arrival_s - before
-    wi, wo = rig.forward(angles)
-    p = params.get(spec.parametrization)
-    coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
     sweeps = Sweeps(
         start=np.array(rows["start"]), entry=np.array(rows["entry"]),
         exit=np.array(rows["exit"]), stop=np.array(rows["stop"]),
@@ -149,33 +142,71 @@ def build_fly(
         cruise_at_s=np.array(cruise_at), streamed=np.array(streamed, dtype=np.int64),
         period_s=period, integration_s=t_int,
     )  # fmt: skip
+    speeds = np.degrees(np.abs(sweeps.velocity).max(axis=1))
+    figures = {
+        "lines": laid.lines, "smear_max_deg": math.degrees(max(laid.smear)),
+        "velocity_min_deg_s": float(speeds.min()), "velocity_max_deg_s": float(speeds.max()),
+        "cruise_s": cruise_s, "ramps_s": ramps_s, "moves_s": moves_s,
+    }  # fmt: skip
+    readings = Readings(np.concatenate(mids), np.concatenate(arrival), np.concatenate(generated))
+    refused = {**laid.refused, THINNED: laid.readings - len(readings.angles)}
+    return assemble(
+        spec, rig, where, text, home, readings, sweeps, figures, total_s=t,
+        requested=laid.requested, refused=refused, ordering_s=ordering_s, joint=joint, ref=ref,
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Readings:
+    """A fly plan's targets in measuring order: their mid-integration poses (N, A) rad,
+    their integration starts (N,) s and their generation order (N,)."""
+
+    angles: FloatArray
+    arrival_s: FloatArray
+    generated: np.ndarray
+
+
+def assemble(
+    spec: PlanSpec, rig: Rig, where: str, text: bytes | None, home: FloatArray,
+    readings: Readings, sweeps: Sweeps, figures: dict[str, Any], *, total_s: float,
+    requested: int, refused: dict[str, int], ordering_s: float, joint: Joint,
+    ref: FloatArray,
+) -> Plan:  # fmt: skip
+    """The fly plan of ``readings`` on ``sweeps`` (whose layout took ``total_s``): the
+    targets' pairs and coordinates, their travel and exposure, the stop-and-go time of
+    the same readings in the same order (a move, settle and one integration each), the
+    coverage figures, and ``figures`` (the layout's own `FlyFigures` fields)."""
+    fly = spec.sampling.fly_options()
+    t_int, settle = fly.integration, rig.spec.settle_s
+    angles, arrival_s = readings.angles, readings.arrival_s
+    n_total = len(angles)
+    before = np.concatenate([[0.0], arrival_s[:-1] + t_int])
+    wi, wo = rig.forward(angles)
+    p = params.get(spec.parametrization)
+    coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
     previous = np.vstack([home[None, :], angles[:-1]])
     stop_and_go_s = float(rig.travel.time(previous, angles).sum()) + n_total * (settle + t_int)
     cover = coverage(spec, rig, where, coords, ref)
-    speeds = np.degrees(np.abs(sweeps.velocity).max(axis=1))
-    figures = FlyFigures(
-        lines=laid.lines, segments=len(sweeps), integration_s=t_int, period_s=period,
-        blur_deg=fly.blur, smear_max_deg=math.degrees(max(laid.smear)),
-        velocity_min_deg_s=float(speeds.min()), velocity_max_deg_s=float(speeds.max()),
-        cruise_s=cruise_s, ramps_s=ramps_s, moves_s=moves_s, stop_and_go_s=stop_and_go_s,
-        coverage_tv=cover.tv, coverage_tv_uniform=cover.tv_uniform, coverage_bins=cover.bins,
-        streamed=int(sum(streamed)), coverage_gap=cover.gap,
+    fly_figures = FlyFigures(
+        **figures, segments=len(sweeps), integration_s=t_int, period_s=fly.period_s,
+        blur_deg=fly.blur, stop_and_go_s=stop_and_go_s, coverage_tv=cover.tv,
+        coverage_tv_uniform=cover.tv_uniform, coverage_bins=cover.bins,
+        streamed=int(sweeps.streamed.sum()), coverage_gap=cover.gap,
         coverage_gap_uniform=cover.gap_uniform,
     )  # fmt: skip
     result = joint.ordering
     dwell_s = n_total * t_int
-    refused = {**laid.refused, THINNED: laid.readings - n_total}
     summary = Summary(
-        requested=laid.requested, invalid=0, refused=refused, kept=n_total,
-        travel_s=t - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s, moves=result.moves,
-        max_moves=result.max_moves, kicks=result.kicks, kicks_kept=result.kicks_kept,
-        max_kicks=result.max_kicks, stopped=result.stopped, time_cap_s=spec.time_budget_s,
-        target=spec.sampling.target, fly=figures,
+        requested=requested, invalid=0, refused=refused, kept=n_total,
+        travel_s=total_s - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s,
+        moves=result.moves, max_moves=result.max_moves, kicks=result.kicks,
+        kicks_kept=result.kicks_kept, max_kicks=result.max_kicks, stopped=result.stopped,
+        time_cap_s=spec.time_budget_s, target=spec.sampling.target, fly=fly_figures,
     )  # fmt: skip
     return Plan(
         spec=spec, rig=rig, coordinate_names=spec.coordinates(), coords=coords,
-        generated=np.concatenate(generated), wi=wi, wo=wo, angles=angles,
-        exposure_s=exposure, averages=np.ones(n_total, dtype=np.int64), travel_s=travel_s,
-        arrival_s=arrival_s, summary=summary,
+        generated=readings.generated, wi=wi, wo=wo, angles=angles,
+        exposure_s=np.full(n_total, t_int), averages=np.ones(n_total, dtype=np.int64),
+        travel_s=arrival_s - before, arrival_s=arrival_s, summary=summary,
         plan_text=spec_text(spec) if text is None else text, ordering=result, sweeps=sweeps,
     )  # fmt: skip

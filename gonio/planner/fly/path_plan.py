@@ -25,12 +25,11 @@ import time
 
 import numpy as np
 
-from gonio import params
-from gonio.config import ConfigError, spec_text
+from gonio.config import ConfigError
 from gonio.planner import sampling
 from gonio.planner.adaptive import Density, error_indicator, measure_density
-from gonio.planner.fly.build import check_integration, order_segments
-from gonio.planner.fly.coverage import coverage, reference
+from gonio.planner.fly.build import Readings, assemble, check_integration, order_segments
+from gonio.planner.fly.coverage import reference
 from gonio.planner.fly.lines import Laid
 from gonio.planner.fly.paths import (
     PathSegment,
@@ -39,7 +38,7 @@ from gonio.planner.fly.paths import (
     path_readings,
     rig_setpoint_period,
 )
-from gonio.planner.model import FlyFigures, Plan, Summary, Sweeps
+from gonio.planner.model import Plan, Sweeps
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
 from gonio.rig.model import Rig
@@ -208,15 +207,6 @@ def build_paths(
         moves_s += move
         cruise_s += trajectory.duration_s
         here, first, at = goals[-1], first + len(got.slots), at + len(goals)
-    angles = np.concatenate(mids)
-    arrival_s = np.concatenate(arrival)
-    n_total = len(angles)
-    exposure = np.full(n_total, t_int)
-    before = np.concatenate([[0.0], arrival_s[:-1] + t_int])
-    travel_s = arrival_s - before
-    wi, wo = rig.forward(angles)
-    p = params.get(spec.parametrization)
-    coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
     start_rows, stop_rows = np.array(rows["start"]), np.array(rows["stop"])
     sweeps = Sweeps(
         start=start_rows, entry=start_rows, exit=stop_rows, stop=stop_rows,
@@ -226,33 +216,17 @@ def build_paths(
         path_count=np.array(path_count), path=np.concatenate(path_rows),
         path_period_s=period_s,
     )  # fmt: skip
-    previous = np.vstack([home[None, :], angles[:-1]])
-    stop_and_go_s = float(rig.travel.time(previous, angles).sum()) + n_total * (settle + t_int)
-    cover = coverage(spec, rig, where, coords, reference(spec, rig))
-    figures = FlyFigures(
-        lines=lines, segments=len(sweeps), integration_s=t_int, period_s=period,
-        blur_deg=fly.blur, smear_max_deg=math.degrees(smear_max),
-        velocity_min_deg_s=math.degrees(min(speeds)),
-        velocity_max_deg_s=math.degrees(max(speeds)), cruise_s=cruise_s, ramps_s=0.0,
-        moves_s=moves_s, stop_and_go_s=stop_and_go_s, coverage_tv=cover.tv,
-        coverage_tv_uniform=cover.tv_uniform, coverage_bins=cover.bins,
-        streamed=int(sum(streamed)), coverage_gap=cover.gap,
-        coverage_gap_uniform=cover.gap_uniform,
-    )  # fmt: skip
-    result = joint.ordering
-    dwell_s = n_total * t_int
-    refused = {**refused, CLOSE: int(sum(streamed)) - n_total}
-    summary = Summary(
-        requested=laid_readings, invalid=0, refused=refused, kept=n_total,
-        travel_s=t - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s, moves=result.moves,
-        max_moves=result.max_moves, kicks=result.kicks, kicks_kept=result.kicks_kept,
-        max_kicks=result.max_kicks, stopped=result.stopped, time_cap_s=spec.time_budget_s,
-        target=spec.sampling.target, fly=figures,
-    )  # fmt: skip
-    return Plan(
-        spec=spec, rig=rig, coordinate_names=spec.coordinates(), coords=coords,
-        generated=np.arange(n_total), wi=wi, wo=wo, angles=angles,
-        exposure_s=exposure, averages=np.ones(n_total, dtype=np.int64), travel_s=travel_s,
-        arrival_s=arrival_s, summary=summary,
-        plan_text=spec_text(spec) if text is None else text, ordering=result, sweeps=sweeps,
+    figures = {
+        "lines": lines, "smear_max_deg": math.degrees(smear_max),
+        "velocity_min_deg_s": math.degrees(min(speeds)),
+        "velocity_max_deg_s": math.degrees(max(speeds)), "cruise_s": cruise_s,
+        "ramps_s": 0.0, "moves_s": moves_s,
+    }  # fmt: skip
+    angles = np.concatenate(mids)
+    readings = Readings(angles, np.concatenate(arrival), np.arange(len(angles)))
+    refused = {**refused, CLOSE: int(sum(streamed)) - len(angles)}
+    return assemble(
+        spec, rig, where, text, home, readings, sweeps, figures, total_s=t,
+        requested=laid_readings, refused=refused, ordering_s=ordering_s, joint=joint,
+        ref=reference(spec, rig),
     )  # fmt: skip

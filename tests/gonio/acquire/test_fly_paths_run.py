@@ -12,52 +12,24 @@ from typing import Any
 
 import numpy as np
 import pytest
-import yaml
 
 from drivers.devices import Devices
 from drivers.stream import StreamReading
 from gonio.acquire.fly import merge_path, run_sweep, target_slots
 from gonio.store.read import Run, open_run, raw_streams
 from gonio.workflows import session
+from tests.gonio.acquire.test_fly_run import fly_files
 from tests.support.acquire import (
-    ARCH,
-    BRUSHED,
     RunFiles,
     acquire_in_child,
     assert_same_samples,
     integrity,
-    scene_yaml,
 )
 
 
 def path_files(folder: Path) -> RunFiles:
-    spec = {
-        "name": "fly-paths-small",
-        "rig": str(ARCH),
-        "parametrization": "rusinkiewicz",
-        "isotropic": True,
-        "sampling": {
-            "strategy": "fly",
-            "target": 900,
-            "seed": 2,
-            "fly": {
-                "segment": "theta_h_line",
-                "rate_hz": 100,
-                "integration_s": 0.01,
-                "blur_deg": 1.0,
-            },
-        },
-        "time_budget_s": 5,
-        "acquisition": {
-            "calibration": {"every_samples": 500, "averages": 2},
-            "on_fault": {"retries": 1, "then": "skip"},
-        },
-    }
-    plan = folder / "paths.yaml"
-    plan.write_text(yaml.safe_dump(spec, sort_keys=False))
-    scene = folder / "scene.yaml"
-    scene.write_text(scene_yaml(None, BRUSHED))
-    return RunFiles(plan, scene)
+    lines = {"segment": "theta_h_line", "rate_hz": 100, "integration_s": 0.01, "blur_deg": 1.0}
+    return fly_files(folder, target=900, seed=2, fly=lines)
 
 
 @pytest.fixture(scope="module")

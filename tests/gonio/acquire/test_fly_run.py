@@ -38,7 +38,16 @@ from tests.support.acquire import (
 )
 
 
-def fly_files(folder: Path, faults: list[dict[str, object]] | None = None) -> RunFiles:
+def fly_files(
+    folder: Path,
+    faults: list[dict[str, object]] | None = None,
+    *,
+    target: int = 700,
+    seed: int = 1,
+    fly: dict[str, object] | None = None,
+) -> RunFiles:
+    """A small fly plan on the arch rig and the brushed scene (with ``faults``); ``fly``:
+    its fly options (default detector arcs at 0.5°)."""
     spec = {
         "name": "fly-small",
         "rig": str(ARCH),
@@ -46,9 +55,9 @@ def fly_files(folder: Path, faults: list[dict[str, object]] | None = None) -> Ru
         "isotropic": True,
         "sampling": {
             "strategy": "fly",
-            "target": 700,
-            "seed": 1,
-            "fly": {"rate_hz": 100, "integration_s": 0.01, "blur_deg": 0.5},
+            "target": target,
+            "seed": seed,
+            "fly": fly or {"rate_hz": 100, "integration_s": 0.01, "blur_deg": 0.5},
         },
         "time_budget_s": 5,
         "acquisition": {
