@@ -117,9 +117,7 @@ def reconstruct(
         check_space(space)
         if dense is None:
             raise refuse_lines(method, found)
-        # Support: where the lines reach (inside their positions' hull), not a distance.
-        max_distance = max_distance or 2.0 * space.dims
-    elif dense is not None and max_distance is None:
+    if dense is not None and max_distance is None:
         # Line data: a query between lines is as near its samples as the lines' spacing.
         max_distance = LINE_REACH * dense[1]
     domain = Domain(points, source, local, measured.rig, measured.isotropic, max_distance)
@@ -129,15 +127,16 @@ def reconstruct(
         if grid is None:
             raise refuse(space.parametrization)
         interpolant = GridInterpolant(grid, table, space)
-    elif method == "lines":
-        interpolant = Lines(x, table, found, space)
-        margin = interpolant.margin
-    elif method == "rbf":
+    elif method in ("lines", "rbf"):
         stretch = None
         if dense is not None:
             stretch = np.ones(space.dims)
             stretch[ALONG] = dense[1] / dense[0]
         interpolant = Rbf(points, table[source], stretch=stretch)
+        if method == "lines":
+            # Beyond the lines' ends (where the rig stops a line), the stretched rbf.
+            interpolant = Lines(x, table, found, space, fallback=interpolant)
+            margin = interpolant.margin
     else:
         try:
             interpolant = Linear(points, table[source])

@@ -38,8 +38,8 @@ SEARCH_BLOCK = 1 << 16
 RBF_NEIGHBORS = 32
 #: An ``rbf`` value farther than this many half-ranges of the samples' columns from
 #: their middle is the sign of an ill-conditioned solve (a spline through the samples
-#: stays within a few).
-RBF_RANGE = 1e3
+#: stays within a few; in log f, 10 half-ranges of a glossy run's are e^±80).
+RBF_RANGE = 10.0
 
 
 class Interpolant(ABC):
@@ -200,7 +200,10 @@ class Rbf(Interpolant):
         neighbors = min(RBF_NEIGHBORS, len(points))
         self.stretch = np.ones(points.shape[1]) if stretch is None else np.asarray(stretch)
         low, high = np.min(table, axis=0), np.max(table, axis=0)
-        self.centre, self.spread = 0.5 * (low + high), np.maximum(0.5 * (high - low), 1e-12)
+        self.centre = 0.5 * (low + high)
+        #: Half the range of each column, at least 10⁻⁶ of its magnitude (a constant column).
+        floor = 1e-6 * np.maximum(np.maximum(np.abs(low), np.abs(high)), 1e-300)
+        self.spread = np.maximum(0.5 * (high - low), floor)
         self.rbf = RBFInterpolator(
             points * self.stretch,
             table,

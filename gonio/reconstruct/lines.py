@@ -15,9 +15,10 @@ them reach it, linearly on the Delaunay triangulation of the lines' positions (t
 corners that reach it, their weights renormalized); the positions are padded across the
 seams. The weights are linear in the table, so the same weights carry the values and
 their σ; both stages reproduce what is linear along lines and affine across them, and
-the samples themselves. A query is defined inside the positions' hull where the spline
-or a corner line answers. Samples off every line (stop-and-go targets of a mixed plan)
-take no part: the reconstruction's fill answers where no line does.
+the samples themselves. A query is answered inside the positions' hull where the spline
+or a corner line answers, elsewhere by a fallback interpolant (the ``lines`` method's:
+``rbf`` stretched as on line data), within the support distance of line data. Samples
+off every line (stop-and-go targets of a mixed plan) take no part in the lines.
 """
 
 from __future__ import annotations
@@ -193,11 +194,20 @@ class Lines(Interpolant):
     """Interpolation of line data: along each line, then across lines (module doc).
 
     ``x`` (N, d) the scaled samples, ``table`` (N, K) their columns, ``lines`` their
-    `LineSet` (structured), ``space`` the space they are in (its seams).
+    `LineSet` (structured), ``space`` the space they are in (its seams); ``fallback``
+    answers the queries the lines do not (e.g. beyond a line's end).
     """
 
-    def __init__(self, x: FloatArray, table: FloatArray, lines: LineSet, space: Space) -> None:
+    def __init__(
+        self,
+        x: FloatArray,
+        table: FloatArray,
+        lines: LineSet,
+        space: Space,
+        fallback: Interpolant | None = None,
+    ) -> None:
         check_space(space)
+        self.fallback = fallback
         on = lines.labels >= 0
         t, label, rows = x[on, ALONG], lines.labels[on], np.asarray(table, dtype=np.float64)[on]
         if _mirrors_along(space):
@@ -258,6 +268,9 @@ class Lines(Interpolant):
             spline, solved = self._spline(a[rows], t[rows])
             out[rows[solved]] = spline[solved]
             defined[rows[solved]] = True
+        rest = np.flatnonzero(~defined)
+        if self.fallback is not None and len(rest):
+            out[rest], defined[rest] = self.fallback(x[rest], nearest[rest])
         return np.where(defined[:, None], out, np.nan), np.asarray(defined, dtype=np.bool_)
 
     def _spline(self, a: FloatArray, t: FloatArray) -> tuple[FloatArray, BoolArray]:
