@@ -159,10 +159,10 @@ def render_choice(choice: Choice) -> str:
         f"choice of plan for {minutes} of instrument time, the material guess {choice.material}",
         f"  predicted on {choice.test_pairs} test pairs (seed {choice.test_seed}): the guess "
         "sampled without noise or blur at each plan's pairs,",
-        "  interpolated linearly across every gap (outside the samples' hull, the nearest "
-        "sample's value), log-RMSE over every pair",
+        "  reconstructed linearly across every gap and by rbf (the lower counts; outside "
+        "the support, the nearest sample's value), log-RMSE over every pair",
         f"  {'candidate':<34}{'motion':<7}{'time':>9}{'samples':>9}{'log-RMSE':>10}"
-        f"{'coverage':>10}{'gap':>7}",
+        f"{'method':>8}{'coverage':>10}{'gap':>7}",
     ]
     for p in choice.predictions:
         head = f"  {p.name:<34}{'fly' if p.is_fly else 'stop':<7}"
@@ -172,10 +172,10 @@ def render_choice(choice: Choice) -> str:
         mark = "   ← chosen" if p is choice.chosen else ""
         lines.append(
             f"{head}{hms(p.seconds or 0.0):>9}{p.samples:>9}{p.log_rmse:>10.3g}"
-            f"{_percent(p.coverage):>10}{_number(p.gap):>7}{mark}"
+            f"{p.method:>8}{_percent(p.coverage):>10}{_number(p.gap):>7}{mark}"
         )
     lines += [
-        "  (coverage: the share of test pairs inside the samples' hull; gap: the largest "
+        "  (coverage: the share of test pairs inside the method's support; gap: the largest "
         "distance from a test pair",
         "  to its nearest sample, in the unit box of the plan's coordinates)",
         f"chose {choice.chosen.name} for {minutes}: {choice_reason(choice)} (chosen in "

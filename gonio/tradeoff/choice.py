@@ -9,8 +9,9 @@ error model for all: the noise-free material guess sampled at the plan's pairs
 (``plan.wi``, ``plan.wo``), reconstructed by linear interpolation in the plan's
 coordinates with a support distance that spans every gap between the samples (the
 diagonal of the unit box; the largest empty ball about a test pair, ``gap``, is
-reported) and the nearest sample's value outside their hull, and scored by log-RMSE
-over every pair of a seeded test set against the guess itself.
+reported) and by rbf, the nearest sample's value outside their support, and scored by
+log-RMSE over every pair of a seeded test set against the guess itself; the lower of
+the two counts (a run is reconstructed the way that serves it best).
 
 The rule (`pick`): the lowest predicted error, but never a fly plan predicted worse
 than the best stop-and-go one; a tie goes to stop-and-go.
@@ -48,8 +49,10 @@ TEST_PAIRS = 5000
 #: First guesses of a plan's size per second of budget (stop-and-go targets, fly
 #: readings), from which `runner.fit_to_budget` fits it.
 STOP_PER_S, FLY_PER_S = 1.0, 20.0
-#: The reconstruction every candidate is predicted with.
-METHOD, EXTRAPOLATE = "linear", "nearest"
+#: The reconstructions each candidate is predicted with (its lower error counts: a
+#: run is reconstructed the way that serves it best; rbf refuses data on too few lines,
+#: such as detector arcs), and the fill outside the support.
+METHODS, EXTRAPOLATE = ("linear", "rbf"), "nearest"
 
 
 @dataclass(frozen=True)
@@ -141,6 +144,7 @@ class Prediction:
     gap: float | None
     error: str = ""
     wall_s: float = 0.0  # fitting and predicting
+    method: str = ""  # the reconstruction of the prediction (`METHODS`)
 
     @property
     def is_fly(self) -> bool:
@@ -256,7 +260,7 @@ def predict(
                            None, one.error, one.wall_s)
             )  # fmt: skip
             continue
-        log_rmse, coverage, gap = _predicted(one.plan, material, rig, test_set)
+        log_rmse, coverage, gap, method = _predicted(one.plan, material, rig, test_set)
         predictions.append(
             Prediction(
                 name=one.candidate.name,
@@ -268,6 +272,7 @@ def predict(
                 coverage=coverage,
                 gap=gap,
                 wall_s=one.wall_s + time.perf_counter() - begun,
+                method=method,
             )
         )
     errors = [p.log_rmse for p in predictions]
@@ -333,26 +338,37 @@ def choose(
 
 def _predicted(
     plan: Plan, material: Truth, rig: Rig, test_set: TestSet
-) -> tuple[float | None, float | None, float | None]:
-    """(log-RMSE, coverage, gap) of the plan's noise-free samples of ``material``."""
+) -> tuple[float | None, float | None, float | None, str]:
+    """(log-RMSE, coverage, gap, method) of the plan's noise-free samples of
+    ``material``, reconstructed by each of `METHODS` (the lower error counts)."""
     f = np.asarray(material.eval(plan.wi, plan.wo), dtype=np.float64)
     measured = Measured(
         wi=plan.wi, wo=plan.wo, f=f, sigma=np.zeros_like(f),
         parametrization=plan.spec.parametrization, isotropic=plan.spec.isotropic, rig=rig,
         scene_text=None, band="luminance", source=plan.spec.name,
     )  # fmt: skip
-    # The unit box's diagonal: every test pair lies within the support distance, so
-    # the interpolant answers wherever it is defined (inside the samples' hull).
+    # linear: the unit box's diagonal as the support distance, so that the interpolant
+    # answers wherever it is defined (inside the samples' hull); rbf: its own support.
     dims = len(plan.spec.coordinates())
-    candidate = reconstruct(
-        measured, method=METHOD, extrapolate=EXTRAPOLATE, max_distance=math.sqrt(dims)
-    )
-    distance, _ = candidate.domain.nearest(
-        candidate.space.scaled(test_set.wi, test_set.wo), bounded=False
-    )
-    scored = evaluate(candidate, material, rig, isotropic=plan.spec.isotropic, test_set=test_set)
-    every = scored.regions["all"]
-    return every.scores.log_rmse, every.coverage, float(distance.max())
+    best: tuple[float | None, float | None, float | None, str] = (None, None, None, "")
+    for method in METHODS:
+        try:
+            candidate = reconstruct(
+                measured, method=method, extrapolate=EXTRAPOLATE,
+                max_distance=math.sqrt(dims) if method == "linear" else None,
+            )  # fmt: skip
+            every = evaluate(
+                candidate, material, rig, isotropic=plan.spec.isotropic, test_set=test_set
+            ).regions["all"]
+        except GonioError:
+            continue  # rbf on samples on too few lines or planes
+        distance, _ = candidate.domain.nearest(
+            candidate.space.scaled(test_set.wi, test_set.wo), bounded=False
+        )
+        error = every.scores.log_rmse
+        if error is not None and (best[0] is None or error < best[0]):
+            best = (error, every.coverage, float(distance.max()), method)
+    return best
 
 
 def best_stop(errors: Sequence[float | None], motions: Sequence[str]) -> int | None:

@@ -31,8 +31,8 @@ def test_choice_on_glossy_gold(tmp_path: Path, run_gonio: Gonio) -> None:
         f"choice of plan for 1.5 min of instrument time, the material guess the material of {GOLD}"
     )
     assert lines[1].startswith("  predicted on 1000 test pairs (seed 14): ")
-    assert lines[3].split() == ["candidate", "motion", "time", "samples", "log-RMSE", "coverage",
-                                "gap"]  # fmt: skip
+    assert lines[3].split() == ["candidate", "motion", "time", "samples", "log-RMSE", "method",
+                                "coverage", "gap"]  # fmt: skip
     rows = {}
     for line in lines[4:10]:
         name, rest = line[2:36].strip(), line[36:].split()
@@ -47,6 +47,7 @@ def test_choice_on_glossy_gold(tmp_path: Path, run_gonio: Gonio) -> None:
     assert errors[chosen[0]] == min(errors.values())
     for name, rest in rows.items():
         assert rest[0] == ("fly" if "°" in name else "stop")
+        assert rest[4] in ("linear", "rbf")
         h, m, s = (int(x) for x in rest[1].split(":"))
         assert 75 <= 3600 * h + 60 * m + s <= 90
     best_stop = min(errors[n] for n in rows if "°" not in n)
