@@ -125,10 +125,11 @@ def per_hour(row: dict[str, Any]) -> float:
 
 
 def describe_row(row: dict[str, Any]) -> str:
+    method = f", {row['method']}" if row.get("method") else ""
     if row["motion"] == "fly":
         kind = "θh lines" if row.get("segment") == "theta_h_line" else "detector arcs"
-        return f"{kind} {row['blur_deg']:g}° {row['rate_hz']:g} Hz"
-    return f"{row['parametrization']} {row['sampling']} {1000 * row['exposure_s']:g} ms"
+        return f"{kind} {row['blur_deg']:g}° {row['rate_hz']:g} Hz{method}"
+    return f"{row['parametrization']} {row['sampling']} {1000 * row['exposure_s']:g} ms{method}"
 
 
 def best(rows: Sequence[dict[str, Any]], metric: str = "log_rmse") -> dict[str, Any] | None:
@@ -162,29 +163,33 @@ def samples_per_hour(trade: list[dict[str, Any]], in_plane: list[dict[str, Any]]
     print(
         "Samples measured per hour of simulated instrument time: every stop-and-go row at "
         "10 ms and every fly row (100 readings a second, 10 ms each), at each budget; the "
-        "median over the rows (scenes, parametrizations, strategies, blur budgets). A fly "
-        "plan keeps the readings its thinning selects (the samples, uniform in the plan's "
-        "coordinates); the detector streams more: streamed /h counts them all.\n"
+        "median over the rows (scenes, parametrizations, strategies, blur budgets, "
+        "methods), per kind of fly plan. A detector-arc plan keeps the readings its thinning "
+        "selects (the samples, uniform in the plan's coordinates), a θh-line plan those at "
+        "least half the blur budget apart along θh; the detector streams more: streamed /h "
+        "counts them all.\n"
     )
     print(
-        "| rig | budget (min) | stop-and-go /h | rows | fly samples /h | × | fly streamed /h "
-        "| × | fly rows |"
+        "| rig | budget (min) | stop-and-go /h | rows | fly | fly samples /h | × | "
+        "fly streamed /h | × | fly rows |"
     )
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|")
+    kinds = {"detector_arc": "detector arcs", "theta_h_line": "θh lines"}
     for rig, name, rows in (("arch", TRADE, trade), ("in-plane", IN_PLANE, in_plane)):
         for minutes in sorted({r["minutes"] for r in rows}):
             mine = [r for r in rows if r["minutes"] == minutes]
             stop = [per_hour(r) for r in mine if r["motion"] == "stop" and r["exposure_s"] == 0.01]
-            flies = [r for r in mine if r["motion"] == "fly"]
-            if not stop or not flies:
-                continue
-            s = statistics.median(stop)
-            f = statistics.median(per_hour(r) for r in flies)
-            g = statistics.median(3600.0 * streamed(r, name) / r["instrument_s"] for r in flies)
-            print(
-                f"| {rig} | {minutes:g} | {s:,.0f} | {len(stop)} | {f:,.0f} | {f / s:.1f} | "
-                f"{g:,.0f} | {g / s:.1f} | {len(flies)} |"
-            )
+            for segment, kind in kinds.items():
+                flies = [r for r in mine if r["motion"] == "fly" and r["segment"] == segment]
+                if not stop or not flies:
+                    continue
+                s = statistics.median(stop)
+                f = statistics.median(per_hour(r) for r in flies)
+                g = statistics.median(3600.0 * streamed(r, name) / r["instrument_s"] for r in flies)
+                print(
+                    f"| {rig} | {minutes:g} | {s:,.0f} | {len(stop)} | {kind} | {f:,.0f} | "
+                    f"{f / s:.1f} | {g:,.0f} | {g / s:.1f} | {len(flies)} |"
+                )
 
 
 def equal_time(trade: list[dict[str, Any]]) -> None:

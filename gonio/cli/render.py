@@ -199,10 +199,12 @@ def choice_reason(choice: Choice) -> str:
     fly = _best_of(choice.predictions)
     if fly is None or fly.log_rmse is None:
         return f"predicted log-RMSE {chosen.log_rmse:.3g}; no fly plan fits"
+    lowest = "" if fly.log_rmse < chosen.log_rmse else "the lowest "
     return (
-        f"the lowest predicted log-RMSE, {chosen.log_rmse:.3g}; the best fly plan "
+        f"{lowest}predicted log-RMSE {chosen.log_rmse:.3g}; the best fly plan "
         f"({fly.name}) is predicted {fly.log_rmse:.3g}, and a fly plan is chosen only "
-        "when predicted lower than every stop-and-go one"
+        f"when predicted at least {choice.margin:g}× lower than every stop-and-go one (the "
+        "prediction knows no noise, blur or jitter)"
     )
 
 

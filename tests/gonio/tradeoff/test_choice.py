@@ -19,6 +19,7 @@ from gonio.reconstruct.truth import Truth
 from gonio.rig.model import Rig
 from gonio.tradeoff.choice import (
     CANDIDATES,
+    MARGIN,
     METHODS,
     Choice,
     Fitted,
@@ -157,16 +158,18 @@ def test_the_rule_never_prefers_a_fly_plan_predicted_worse(
         assert chosen is None
         return
     assert chosen is not None
-    assert errors[chosen] == min(usable)
     stop = best_stop(errors, motions)
     if stop is not None:
         stop_error = errors[stop]
         assert stop_error is not None and motions[stop] == STOP
-        assert motions[chosen] == STOP or errors[chosen] < stop_error  # type: ignore[operator]
+        assert motions[chosen] == STOP or errors[chosen] * MARGIN <= stop_error  # type: ignore[operator]
+    else:
+        assert errors[chosen] == min(usable)
 
 
-def test_ties_go_to_stop_and_go() -> None:
+def test_a_fly_plan_needs_the_margin() -> None:
     assert pick([0.02, 0.02], [FLY, STOP]) == 1
-    assert pick([0.019, 0.02], [FLY, STOP]) == 0
+    assert pick([0.019, 0.02], [FLY, STOP]) == 1  # better, not by the margin
+    assert pick([0.02 / MARGIN, 0.02], [FLY, STOP]) == 0
     assert pick([None, math.nan, 0.3], [STOP, STOP, FLY]) == 2
     assert pick([None], [STOP]) is None and best_stop([0.1], [FLY]) is None
