@@ -75,6 +75,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bus_retries.py
 	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/trajectory_bus.py
+	$(BIN)/python benchmarks/fly_rehearsal.py --runs 3
 	$(BIN)/python benchmarks/fly_blur.py
 	$(BIN)/python benchmarks/stream.py
 	$(BIN)/python benchmarks/handoff.py --load 3

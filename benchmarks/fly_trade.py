@@ -17,7 +17,9 @@ gold and the matte scene with motion blur and timestamp jitter modelled
 - configs/sweeps/fly_trade_in_plane.yaml: the same at 5 minutes on the in-plane rig
   (matte scene), for the samples per hour;
 - configs/sweeps/fly_trade_why.yaml: uniform stop-and-go plans of 4 000 and 16 000
-  targets with no time budget, and the 5-minute fly plan with no effect modelled.
+  targets with no time budget, and the 5-minute fly plan with no effect modelled;
+- the quick plan (configs/plans/quick.yaml) against the quick plan measured while moving
+  (configs/plans/quick_fly.yaml: lines along θh), acquired once each.
 
 "Best" is the lowest log-RMSE over the axes swept for that motion. Samples per hour are
 the samples measured over the simulated instrument time (the engine's clock: moves,
@@ -64,10 +66,13 @@ from _machine import describe
 
 from gonio import progress as planning
 from gonio.analysis.measured import Measured
+from gonio.analysis.summary import figures
 from gonio.planner.blur import BLUR_K_DEG, blur_budget_deg
 from gonio.planner.builder import build
+from gonio.planner.files import load_plan
 from gonio.planner.schema import PlanSpec
 from gonio.reconstruct import testset
+from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import region_masks
 from gonio.rig.model import Rig
@@ -279,6 +284,65 @@ def why(trade: list[dict[str, Any]], extra: list[dict[str, Any]]) -> None:
             )
 
 
+def quick_plans(runs: Path, stored_only: bool) -> None:
+    """The quick plan against the quick plan measured while moving (module docstring);
+    each kept in ``runs/quick.json``."""
+    print("\n## The quick plan measured while moving\n")
+    print(
+        "configs/plans/quick.yaml (500 Sobol targets in the hybrid coordinates, 50 ms) "
+        "against configs/plans/quick_fly.yaml (its lines along θh, 1° blur budget, about "
+        "3 500 readings), each acquired once on the glossy gold with blur and jitter "
+        "(run seed 7), reconstructed and scored on every one of the 20 000 test pairs; × "
+        "is the stop-and-go plan's best log-RMSE over the fly plan's (the target: ≥ 2, "
+        "rbf or the lines method, with the stop-and-go plan given at least the fly "
+        "plan's instrument time).\n"
+    )
+    print("| plan | samples | instrument time | method | log-RMSE | mirror | coverage |")
+    print("|---|---:|---:|---|---:|---:|---:|")
+    cache_path = runs / "quick.json"
+    cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
+    rig = Rig.from_yaml(ROOT / "configs" / "rigs" / "arch.yaml")
+    tests = testset.draw(rig, isotropic=True, size=20_000, seed=14)
+    scene = load_scene(ROOT / "configs" / "scenes" / "glossy_metal_fly.yaml")
+    best: dict[str, float] = {}
+    for name, methods in (("quick", ("linear", "rbf")), ("quick_fly", ("rbf", "lines"))):
+        if name not in cache:
+            if stored_only:
+                print(f"| {name} | not run | | | | | |")
+                continue
+            path = ROOT / "configs" / "plans" / f"{name}.yaml"
+            spec, plan_rig = load_plan(path)
+            with planning.quiet():
+                plan = build(spec, plan_rig)
+            run = simulate_plan(plan, scene, 7).run
+            measured = Measured.from_run(run)
+            rows = []
+            for method in methods:
+                surface = reconstruction(measured, method, None, extrapolate="nearest")
+                scored = evaluate(surface, measured.scene_truth(), rig, isotropic=True,
+                                  test_set=tests)  # fmt: skip
+                rows.append([method, scored.regions["all"].scores.log_rmse,
+                             scored.regions["mirror"].scores.log_rmse,
+                             scored.regions["all"].coverage])  # fmt: skip
+            cache[name] = {"samples": len(run), "seconds": figures(run)["instrument_time_s"],
+                           "rows": rows}  # fmt: skip
+            cache_path.write_text(json.dumps(cache, indent=1))
+        got = cache[name]
+        for method, error, mirror, cover in got["rows"]:
+            best[name] = min(best.get(name, math.inf), error)
+            print(
+                f"| {name} | {got['samples']:,} | {got['seconds']:.0f} s | {method} | "
+                f"{error:.4f} | {mirror:.3g} | {cover:.2f} |"
+            )
+    if len(best) == 2:
+        ratio = best["quick"] / best["quick_fly"]
+        print(
+            f"\n× = {ratio:.1f} ({'met' if ratio >= 2 else 'not met'}: the fly plan's "
+            f"{cache['quick_fly']['seconds']:.0f} s against the stop-and-go plan's "
+            f"{cache['quick']['seconds']:.0f} s)"
+        )
+
+
 def blur_scene(alpha: float, smear: float | None) -> Scene:
     """The glossy gold with GGX width ``alpha``, no effect but motion blur when a smear
     is given (time nodes at most 0.05° or an eighth of the smear apart)."""
@@ -451,6 +515,7 @@ def main() -> None:
     samples_per_hour(trade, in_plane)
     equal_time(trade)
     why(trade, extra)
+    quick_plans(args.runs, args.stored_only)
     if not args.skip_blur:
         blur_study(args.blur_readings, args.img, args.runs, args.stored_only)
 

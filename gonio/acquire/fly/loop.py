@@ -81,6 +81,18 @@ class FlyContext:
     busy_until: Callable[[float], None]  # the run time the step in flight ends
 
 
+#: A sweep is redone when it kept fewer of its targets than this many short of them…
+SHORT_READINGS = 2
+#: …and this share of them: a reading or two lost at a sweep's ends, as a rehearsal's
+#: host timing loses every time, is not worth measuring the sweep again.
+SHORT_SHARE = 0.01
+
+
+def short_allowed(count: int) -> float:
+    """How many of a sweep's ``count`` targets may go unread without redoing it."""
+    return max(SHORT_READINGS, SHORT_SHARE * count)
+
+
 @dataclass(frozen=True)
 class FlyLoop:
     """Measures the sweeps of a fly plan, on the devices of ``context``, into its
@@ -167,7 +179,7 @@ class FlyLoop:
                 raise EndSession("aborted", f"sweep {k}: {exc}") from None
             d = derive(raw, c.axes, sweeps, c.plan.arrival_s, k)
             kept = len(d.samples.index)
-            if kept >= count or attempt == on_fault.retries:
+            if count - kept <= short_allowed(count) or attempt == on_fault.retries:
                 break
             # Fewer readings than the plan asks (a host stall, a lost stream): redone.
             data = {"short": True, "kept": kept, "count": count, "attempt": attempt + 1}

@@ -1,0 +1,99 @@
+"""Fly plans rehearsed: the share of their targets a rehearsal keeps at --speedup 5.
+
+`gonio acquire PLAN --rehearse --speedup 5` of configs/plans/fly_rehearsal.yaml (detector
+arcs) and of the same plan as lines along θh (`fly.segment: theta_h_line`, 1° blur
+budget, every axis following a trajectory) on the arch rig wired to hardware
+(configs/rigs/arch_serial.yaml): the real `DynamixelBus` on the Dynamixel emulator, the
+real `SerialDetector` on the simulated photometer streaming 100 readings a second, each
+on its own pty, the rehearsal's clock five times real time, on the glossy gold scene.
+Each plan is rehearsed --runs times in a child process; per run: the targets kept (of the
+plan's), the sweeps redone (kept fewer readings than asked: a host stall), the wall time,
+and the load average when it started. The machine's other work is its load: the figure
+that matters is the share kept on a loaded machine.
+Run: .venv/bin/python benchmarks/fly_rehearsal.py [--runs 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _report
+from _machine import describe
+
+from gonio.store import open_run
+
+ROOT = Path(__file__).resolve().parents[1]
+PLAN = ROOT / "configs" / "plans" / "fly_rehearsal.yaml"
+SCENE = ROOT / "configs" / "scenes" / "glossy_metal_fly.yaml"
+SPEEDUP = 5
+GONIO = Path(sys.executable).with_name("gonio")
+
+
+def lines_plan(folder: Path) -> Path:
+    """The rehearsal plan as lines along θh (1° blur budget)."""
+    out = folder / "fly_rehearsal_lines.yaml"
+    out.write_text(
+        PLAN.read_text()
+        .replace("rig: ../rigs/", f"rig: {PLAN.parent.parent / 'rigs'}/")
+        .replace("blur_deg: 0.5", "blur_deg: 1.0\n    segment: theta_h_line")
+    )
+    return out
+
+
+def rehearse(plan: Path, out: Path) -> dict[str, float]:
+    """One rehearsal of ``plan`` into ``out``: its figures."""
+    load = os.getloadavg()[0]
+    started = time.perf_counter()
+    result = subprocess.run(
+        [str(GONIO), "acquire", str(plan), "--scene", str(SCENE), "--rehearse", "--speedup",
+         str(SPEEDUP), "-o", str(out), "--overwrite", "-q"],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    wall = time.perf_counter() - started
+    if result.returncode != 0:
+        raise SystemExit(f"{plan.name}: gonio acquire failed: {result.stderr.strip()}")
+    run = open_run(out)
+    redone = sum(1 for s in run.sweeps if s.outcome == "abandoned" and s.data.get("short"))
+    return {
+        "kept": len(run), "targets": len(run.plan), "sweeps": len(run.plan.sweeps or ()),
+        "redone": redone, "wall": wall, "load": load,
+    }  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--runs", type=int, default=3)
+    args = parser.parse_args()
+    print(describe())
+    print(
+        "\n| plan | run | targets kept | of | share | sweeps | redone short | wall (s) "
+        "| load at start |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        plans = {"detector arcs, 0.5°": PLAN, "θh lines, 1°": lines_plan(folder)}
+        for name, plan in plans.items():
+            shares = []
+            for k in range(args.runs):
+                f = rehearse(plan, folder / f"run{k}.sqlite")
+                share = f["kept"] / f["targets"]
+                shares.append(share)
+                print(
+                    f"| {name} | {k + 1} | {f['kept']:.0f} | {f['targets']:.0f} | "
+                    f"{100 * share:.1f} % | {f['sweeps']:.0f} | {f['redone']:.0f} | "
+                    f"{f['wall']:.1f} | {f['load']:.2f} |",
+                    flush=True,
+                )
+            print(f"| {name} | least | | | {100 * min(shares):.1f} % | | | | |")
+
+
+if __name__ == "__main__":
+    _report.run(main, __file__, __doc__, title="Fly plans rehearsed")
