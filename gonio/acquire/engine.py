@@ -196,9 +196,15 @@ class Engine:
         it when due), then the closing calibration."""
         try:
             self._start(resuming=self.history is not None)
+            measuring = False
             if self._fly_loop is not None:
-                self._closing(self._fly_loop.run(todo))
-                return
+                assert self.plan.sweeps is not None
+                swept = self.plan.sweeps.swept  # a mixed plan's stop-and-go targets follow
+                measuring = self._fly_loop.run(todo[todo < swept])
+                todo = todo[todo >= swept]
+                if not todo.size:
+                    self._closing(measuring)
+                    return
             if self.devices.simulation is not None:
                 self.devices.simulation.expect(self.plan.angles[todo], todo)
             self.progress.start(self.plan, todo)
@@ -208,7 +214,7 @@ class Engine:
                 self.progress.advance(done + 1)
                 self.stops.raise_if_requested()
                 self._obey()
-            self._closing(bool(todo.size))
+            self._closing(measuring or bool(todo.size))
         finally:
             self.stops.disarm()  # a signal now must not cut the ending short
 

@@ -43,9 +43,10 @@ def render_summary(plan: Plan) -> str:
     if s.second_pass is not None:
         lines.append(f"  {'second pass':<26}{'':>9}   {s.second_pass}")
     if s.fly is not None:
-        paths = spec.sampling.fly_options().segment == "theta_h_line"
+        fly = spec.sampling.fly_options()
+        paths = fly.segment == "theta_h_line"
         return "\n".join(
-            [*lines, "", *fly_lines(s, paths), f"  {'ordering':<26}{ordering_line(s)}"]
+            [*lines, "", *fly_lines(s, paths, fly.fill), f"  {'ordering':<26}{ordering_line(s)}"]
         )
     lines += [
         "",
@@ -81,10 +82,11 @@ def render_summary(plan: Plan) -> str:
     return "\n".join(lines)
 
 
-def fly_lines(s: Summary, paths: bool = False) -> list[str]:
+def fly_lines(s: Summary, paths: bool = False, fill: int = 0) -> list[str]:
     """A fly plan's lines of the summary: its sweeps, their velocities, the predicted
     readings and duration against stop-and-go, and the coverage figure; ``paths``: its
-    sweeps are path lines along θh (every axis moving)."""
+    sweeps are path lines along θh (every axis moving), ``fill`` stop-and-go targets
+    after them (a mixed plan)."""
     f = s.fly
     assert f is not None
     per_hour = 3600.0 * s.kept / max(s.total_s, 1e-12)
@@ -104,7 +106,8 @@ def fly_lines(s: Summary, paths: bool = False) -> list[str]:
             f"ms each; {f.streamed} streamed, those at least half the budget apart along θh "
             "kept)",
             f"  {'predicted duration':<26}{hms(s.total_s):>9}   (on the lines "
-            f"{hms(f.cruise_s)}, moves + settle {hms(f.moves_s)})",
+            f"{hms(f.cruise_s)}, moves + settle {hms(f.moves_s)}"
+            + (f"; then {fill} stop-and-go targets where the lines leave gaps)" if fill else ")"),
         ]
     else:
         head = [

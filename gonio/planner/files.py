@@ -337,11 +337,11 @@ def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps
         np.any(count < 1)
         or np.any(arrays["streamed"] < count)
         or not np.array_equal(first, expected)
-        or count.sum() != targets
+        or count.sum() > targets
     ):
         raise ConfigError(
-            f"{path}:{line}: sweeps: first and count must split the {targets} targets into "
-            "consecutive segments"
+            f"{path}:{line}: sweeps: first and count must split the first of the {targets} "
+            "targets into consecutive segments"
         )
     extra: dict[str, Any] = {}
     if "path" in data:

@@ -194,7 +194,10 @@ class Sweeps:
     path_count]`` (rad), one every ``path_period_s`` from ``start`` (at rest, set-point
     0, due at ``cruise_at_s``) to ``stop`` (at rest); ``entry`` = ``start``, ``exit`` =
     ``stop``, ``velocity`` zero, and the stream's slot j integrates from ``cruise_at_s +
-    j · period_s`` along the path."""
+    j · period_s`` along the path.
+
+    The segments' targets are the plan's first ``count.sum()``; any after them are
+    stop-and-go targets measured after the last segment (a mixed plan)."""
 
     start: FloatArray  # (S, A) the run-up pose (at rest)
     entry: FloatArray  # (S, A) where the constant velocity begins
@@ -227,6 +230,11 @@ class Sweeps:
         path = np.array(self.path, dtype=np.float64).reshape(-1, axes)
         path.setflags(write=False)
         object.__setattr__(self, "path", path)
+
+    @property
+    def swept(self) -> int:
+        """How many of the plan's targets the segments read (the first ones)."""
+        return int(np.asarray(self.count).sum())
 
     @property
     def has_paths(self) -> bool:

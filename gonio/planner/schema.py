@@ -147,6 +147,13 @@ class FlySpec(Strict):
         "(θd, φd) (none: lines denser toward grazing θd, 1 / cos θd).",
         json_schema_extra=material_schema(nested=False),
     )  # checked by gonio.brdf.material
+    fill: int = Field(
+        0,
+        ge=0,
+        le=100_000,
+        description="theta_h_line only: stop-and-go targets measured after the lines where "
+        "they leave the largest gaps (a mixed plan; the plan's exposure applies to them).",
+    )
     blur_tolerance: float = Field(
         DEFAULT_TOLERANCE,
         gt=0,
@@ -169,6 +176,8 @@ class FlySpec(Strict):
             if self.segment != "theta_h_line":
                 raise field_error("material", "only theta_h_line lines take a material")
             self.model()
+        if self.fill and self.segment != "theta_h_line":
+            raise field_error("fill", "only theta_h_line lines are filled with stop-and-go targets")
         return self
 
     def model(self) -> brdf.BRDF | None:

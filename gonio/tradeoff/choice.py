@@ -3,7 +3,8 @@
 
 Every candidate (`CANDIDATES`: stop-and-go Sobol and warped targets in Rusinkiewicz's
 coordinates at the plan's own exposure, fly detector arcs, fly lines along θh at two
-blur budgets; and the plan as written when it is none of those) is fitted to the budget
+blur budgets, a mixed plan of θh lines and 50 stop-and-go targets where they leave gaps;
+and the plan as written when it is none of those) is fitted to the budget
 of predicted instrument time (`runner.fit_to_budget`) and its error predicted by one
 error model for all: the noise-free material guess sampled at the plan's pairs
 (``plan.wi``, ``plan.wo``), reconstructed by linear interpolation in the plan's
@@ -77,6 +78,7 @@ class Candidate:
     segment: str | None = None
     blur_deg: float | None = None
     as_written: bool = False
+    fill: int = 0  # stop-and-go targets after θh lines (a mixed plan)
 
     def spec(self, base: PlanSpec, target: int) -> PlanSpec:
         """``base`` with this candidate's parametrization and sampling of ``target``
@@ -102,7 +104,9 @@ class Candidate:
         data["sampling"] = sampling_fields(
             combination, target=target, seed=base.sampling.seed, warps=warps, adaptive={}
         )
-        if self.motion == FLY:
+        if self.fill:
+            data["sampling"]["fly"]["fill"] = self.fill  # measured at the plan's exposure
+        elif self.motion == FLY:
             data.pop("exposure")  # a fly plan reads at the detector's rate
         return PlanSpec.model_validate(data)
 
@@ -118,6 +122,7 @@ CANDIDATES: tuple[Candidate, ...] = (
     Candidate("detector arcs, 0.5°", FLY, segment="detector_arc", blur_deg=0.5),
     Candidate("θh lines, 0.5°", FLY, segment="theta_h_line", blur_deg=0.5),
     Candidate("θh lines, 1°", FLY, segment="theta_h_line", blur_deg=1.0),
+    Candidate("θh lines, 1°, 50 filled", FLY, segment="theta_h_line", blur_deg=1.0, fill=50),
 )
 
 

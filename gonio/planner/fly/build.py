@@ -159,11 +159,15 @@ def build_fly(
 @dataclass(frozen=True)
 class Readings:
     """A fly plan's targets in measuring order: their mid-integration poses (N, A) rad,
-    their integration starts (N,) s and their generation order (N,)."""
+    their integration starts (N,) s and their generation order (N,); ``exposure_s`` and
+    ``averages`` (N,) where some are stop-and-go targets (None: the fly integration,
+    once)."""
 
     angles: FloatArray
     arrival_s: FloatArray
     generated: np.ndarray
+    exposure_s: FloatArray | None = None
+    averages: np.ndarray | None = None
 
 
 def assemble(
@@ -180,7 +184,9 @@ def assemble(
     t_int, settle = fly.integration, rig.spec.settle_s
     angles, arrival_s = readings.angles, readings.arrival_s
     n_total = len(angles)
-    before = np.concatenate([[0.0], arrival_s[:-1] + t_int])
+    exposure = np.full(n_total, t_int) if readings.exposure_s is None else readings.exposure_s
+    averages = np.ones(n_total, dtype=np.int64) if readings.averages is None else readings.averages
+    before = np.concatenate([[0.0], (arrival_s + exposure * averages)[:-1]])
     wi, wo = rig.forward(angles)
     p = params.get(spec.parametrization)
     coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
@@ -195,7 +201,7 @@ def assemble(
         coverage_gap_uniform=cover.gap_uniform,
     )  # fmt: skip
     result = joint.ordering
-    dwell_s = n_total * t_int
+    dwell_s = n_total * t_int if readings.exposure_s is None else float((exposure * averages).sum())
     summary = Summary(
         requested=requested, invalid=0, refused=refused, kept=n_total,
         travel_s=total_s - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s,
@@ -206,7 +212,7 @@ def assemble(
     return Plan(
         spec=spec, rig=rig, coordinate_names=spec.coordinates(), coords=coords,
         generated=readings.generated, wi=wi, wo=wo, angles=angles,
-        exposure_s=np.full(n_total, t_int), averages=np.ones(n_total, dtype=np.int64),
+        exposure_s=exposure, averages=averages,
         travel_s=arrival_s - before, arrival_s=arrival_s, summary=summary,
         plan_text=spec_text(spec) if text is None else text, ordering=result, sweeps=sweeps,
     )  # fmt: skip

@@ -16,6 +16,11 @@ Timing model: a segment is a move at rest to its first set-point (trapezoidal,
 `TravelModel`), the rig's ``settle_s``, then the trajectory ((K − 1) set-point periods,
 rest to rest). The stop-and-go comparison measures the same readings at the same poses
 in the same order (a move, settle and one integration each).
+
+Fill (``fly.fill``, a mixed plan): that many stop-and-go targets after the last
+segment, where the lines leave the largest gaps (`fill_points`: greedy farthest points of
+the coverage reference from the readings and from each other), ordered nearest first
+from the last segment's end, each a move, the settle and the plan's exposure.
 """
 
 from __future__ import annotations
@@ -24,13 +29,14 @@ import math
 import time
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from gonio.config import ConfigError
-from gonio.planner import sampling
+from gonio.planner import placement, sampling
 from gonio.planner.adaptive import Density, error_indicator, measure_density
 from gonio.planner.fly.build import Readings, assemble, check_integration, order_segments
 from gonio.planner.fly.coverage import reference
-from gonio.planner.fly.lines import Laid
+from gonio.planner.fly.lines import Laid, box, plan_coords
 from gonio.planner.fly.paths import (
     PathSegment,
     checked_trajectory,
@@ -39,6 +45,7 @@ from gonio.planner.fly.paths import (
     rig_setpoint_period,
 )
 from gonio.planner.model import Plan, Sweeps
+from gonio.planner.ordering import nearest_neighbour
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
 from gonio.rig.model import Rig
@@ -223,10 +230,55 @@ def build_paths(
         "ramps_s": 0.0, "moves_s": moves_s,
     }  # fmt: skip
     angles = np.concatenate(mids)
+    ref = reference(spec, rig)
     readings = Readings(angles, np.concatenate(arrival), np.arange(len(angles)))
     refused = {**refused, CLOSE: int(sum(streamed)) - len(angles)}
+    if fly.fill:
+        readings, t = filled(spec, rig, readings, ref, here, t)
     return assemble(
         spec, rig, where, text, home, readings, sweeps, figures, total_s=t,
-        requested=laid_readings, refused=refused, ordering_s=ordering_s, joint=joint,
-        ref=reference(spec, rig),
+        requested=laid_readings + fly.fill, refused=refused, ordering_s=ordering_s,
+        joint=joint, ref=ref,
     )  # fmt: skip
+
+
+def fill_points(readings: FloatArray, ref: FloatArray, count: int) -> FloatArray:
+    """``count`` of the reference points ``ref`` (unit box, reachable) farthest from the
+    lines' ``readings`` (unit box) and from each other, farthest first (greedy)."""
+    gap = cKDTree(readings).query(ref)[0]
+    chosen = np.empty(min(count, len(ref)), dtype=np.int64)
+    for n in range(len(chosen)):  # a loop per fill target: each depends on the last
+        k = int(np.argmax(gap))
+        chosen[n] = k
+        gap = np.minimum(gap, np.linalg.norm(ref - ref[k], axis=1))
+    return np.asarray(ref[chosen], dtype=np.float64)
+
+
+def filled(
+    spec: PlanSpec, rig: Rig, readings: Readings, ref: FloatArray, here: FloatArray, t: float
+) -> tuple[Readings, float]:
+    """``readings`` followed by ``fly.fill`` stop-and-go targets where the lines leave the
+    largest gaps (`fill_points`), measured after the last sweep, nearest first (a move,
+    settle, and the plan's exposure each); the time (s) they end at."""
+    bounds = box(spec)
+    unit = (plan_coords(spec, rig, readings.angles) - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
+    points = fill_points(unit, ref, spec.sampling.fly_options().fill)
+    coords = bounds[:, 0] + points * (bounds[:, 1] - bounds[:, 0])
+    _, wi, wo = placement.directions(spec, coords)
+    solution = rig.solve(wi, wo, isotropic=spec.isotropic)
+    poses = solution.angles[solution.ok]
+    poses = poses[nearest_neighbour(rig.travel, poses, here)]
+    previous = np.vstack([here[None, :], poses[:-1]])
+    seconds, averages = spec.exposure.seconds, spec.exposure.averages
+    moves = rig.travel.time(previous, poses) + rig.spec.settle_s
+    dwell = seconds * averages
+    arrival = t + np.cumsum(moves) + dwell * np.arange(len(poses))
+    n, m = len(readings.angles), len(poses)
+    fly_exposure = np.full(n, spec.sampling.fly_options().integration)
+    out = Readings(
+        np.vstack([readings.angles, poses]), np.concatenate([readings.arrival_s, arrival]),
+        np.arange(n + m), np.concatenate([fly_exposure, np.full(m, seconds)]),
+        np.concatenate([np.ones(n, dtype=np.int64), np.full(m, averages, dtype=np.int64)]),
+    )  # fmt: skip
+    end = float(arrival[-1] + dwell) if m else t
+    return out, end

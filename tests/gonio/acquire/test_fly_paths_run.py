@@ -137,3 +137,42 @@ def test_kill_9_mid_path_sweep_resumes_to_the_same_samples(
     child = acquire_in_child(lambda progress: session.resume(path, progress=progress))
     assert not child.killed and child.last == "done completed", child.last
     assert_same_samples(open_run(path), run)
+
+
+def mixed_files(folder: Path) -> RunFiles:
+    lines = {"segment": "theta_h_line", "rate_hz": 100, "integration_s": 0.01,
+             "blur_deg": 1.0, "fill": 30}  # fmt: skip
+    return fly_files(folder, target=500, seed=3, fly=lines)
+
+
+@pytest.mark.usefixtures("rigs_parsed_once")
+def test_a_mixed_plan_reads_its_lines_then_its_fill_and_resumes_bit_for_bit(
+    tmp_path: Path,
+) -> None:
+    files = mixed_files(tmp_path)
+    whole = tmp_path / "whole.sqlite"
+    result = files.start(whole)
+    assert result.report.outcome == "completed", result.report.message
+    run = open_run(whole)
+    sweeps = run.plan.sweeps
+    assert sweeps is not None and sweeps.swept == len(run.plan) - 30
+    assert len(run) == len(run.plan) and not len(run.skipped)
+    assert [s.outcome for s in run.sweeps] == ["measured"] * len(sweeps)
+    # the fill: stop-and-go targets after the lines, at the plan's exposure, at rest
+    fill = run.target >= sweeps.swept
+    assert fill.sum() == 30
+    exposure = run.samples["ended_s"][fill] - run.samples["started_s"][fill]
+    np.testing.assert_allclose(exposure, run.plan.exposure_s[sweeps.swept :], rtol=0, atol=1e-9)
+    gap = np.abs(run.angles("read_back") - run.angles("commanded"))[fill]
+    assert gap.max() < np.radians(0.1)  # at rest: an encoder tick (the scene's position_error)
+    # killed in the fill (after every sweep and five targets), resumed: the same samples
+    path = tmp_path / "killed.sqlite"
+    child = acquire_in_child(
+        lambda progress: files.start(path, progress=progress),
+        kill_after=len(sweeps) + 5, hold=True,
+    )  # fmt: skip
+    assert child.killed and integrity(path) == "ok"
+    assert sweeps.swept < len(open_run(path)) < len(run.plan)
+    child = acquire_in_child(lambda progress: session.resume(path, progress=progress))
+    assert child.last == "done completed", child.last
+    assert_same_samples(open_run(path), run)

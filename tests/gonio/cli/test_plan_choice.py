@@ -34,12 +34,12 @@ def test_choice_on_glossy_gold(tmp_path: Path, run_gonio: Gonio) -> None:
     assert lines[3].split() == ["candidate", "motion", "time", "samples", "log-RMSE", "method",
                                 "coverage", "gap"]  # fmt: skip
     rows = {}
-    for line in lines[4:10]:
+    for line in lines[4:11]:
         name, rest = line[2:36].strip(), line[36:].split()
         rows[name] = rest
     assert list(rows) == [
         "sobol, rusinkiewicz", "warped, rusinkiewicz", "detector arcs, 0.5°", "θh lines, 0.5°",
-        "θh lines, 1°", "as written: sobol, hybrid",
+        "θh lines, 1°", "θh lines, 1°, 50 filled", "as written: sobol, hybrid",
     ]  # fmt: skip
     chosen = [name for name, rest in rows.items() if rest[-1] == "chosen"]
     assert len(chosen) == 1 and chosen[0].startswith("θh lines")

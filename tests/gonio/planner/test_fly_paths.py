@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
+from scipy.spatial import cKDTree
 
 from drivers.trajectory import check_trajectory
 from gonio import params
@@ -192,3 +193,30 @@ def test_a_short_segment_takes_a_finite_time() -> None:
     two = PathSegment(seg.line, seg.theta_d, seg.phi_d, seg.theta_h[:2], seg.poses[:2])
     t = time_law(rig, two, math.radians(1.0), 0.01)
     assert np.all(np.isfinite(t)) and 0 < t[-1] < 1.0
+
+
+def test_a_mixed_plan_fills_the_gaps_the_lines_leave(tmp_path: Any) -> None:
+    rig = arch()
+    lines_only = build(path_spec(target=300), rig)
+    mixed = build(path_spec(target=300, fill=40), rig)
+    sweeps = mixed.sweeps
+    assert sweeps is not None and sweeps.swept == len(lines_only) == len(mixed) - 40
+    np.testing.assert_array_equal(mixed.angles[: sweeps.swept], lines_only.angles)
+    fill = slice(sweeps.swept, None)
+    assert np.all(mixed.exposure_s[fill] == mixed.spec.exposure.seconds)
+    assert np.all(np.diff(mixed.arrival_s) > 0)
+    # each fill target is farther from the lines' readings than the lines' own spacing
+    bounds = np.array(RUS.iso_bounds)
+    unit = (mixed.coords - bounds[:, 0]) / (bounds[:, 1] - bounds[:, 0])
+    tree = cKDTree(unit[: sweeps.swept])
+    assert np.all(
+        tree.query(unit[fill])[0] > np.median(tree.query(unit[: sweeps.swept], k=2)[0][:, 1])
+    )
+    assert mixed.summary.total_s > lines_only.summary.total_s
+    write_plan(mixed, tmp_path / "m.csv")
+    assert read_plan(tmp_path / "m.csv") == mixed
+
+
+def test_fill_is_for_theta_h_lines_only() -> None:
+    with pytest.raises(ValueError, match="only theta_h_line lines are filled"):
+        path_spec(segment="detector_arc", fill=10)
