@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import TracebackType
@@ -428,7 +427,10 @@ class DynamixelBus(Condition, Resource):
             self._wait_settled(timeout_s)
 
     def _wait_settled(self, timeout_s: float) -> None:
-        deadline = time.monotonic() + timeout_s
+        # On the motion's clock, as the polls are paced: a rehearsal's scaled time, a
+        # test's manual one (on the host's clock, a fast host polled a manual clock past
+        # the motion's end before the timeout).
+        deadline = self.clock.now() + timeout_s
         while True:
             state = self._state()
             pending = {
@@ -438,7 +440,7 @@ class DynamixelBus(Condition, Resource):
             }
             if not pending:
                 return
-            if time.monotonic() >= deadline:
+            if self.clock.now() >= deadline:
                 detail = ", ".join(
                     f"{n} {'moving' if m else 'stopped'} {abs(d)} ticks from its goal"
                     for n, (m, d) in pending.items()

@@ -17,7 +17,6 @@ from types import SimpleNamespace
 import pytest
 from dynamixel_sdk import port_handler
 
-import drivers.dynamixel.bus as bus_module
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK, item
@@ -128,12 +127,12 @@ def test_a_settle_timeout_is_raised_even_when_a_motor_faults_as_it_is_held(
     clock: ManualClock,
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """The virtual clock stands still, so the axes never settle; the overload appears
+    """The bus's clock stands still, so the axes never settle; the overload appears
     between the last poll and the hold (injected by the deadline check itself)."""
     emu, bus = virtual_bus()
     calls = []
 
-    def monotonic() -> float:
+    def now() -> float:
         calls.append(1)
         if len(calls) == 2:  # the deadline check after the first poll
             emu.inject(Fault.OVERLOAD, motor_id=2)
@@ -145,7 +144,7 @@ def test_a_settle_timeout_is_raised_even_when_a_motor_faults_as_it_is_held(
         bus.positions()
         clock.advance(0.05)
         with monkeypatch.context() as patch:
-            patch.setattr(bus_module, "time", SimpleNamespace(monotonic=monotonic, sleep=None))
+            patch.setattr(bus, "clock", SimpleNamespace(now=now, sleep=lambda s: None))
             with pytest.raises(MotionTimeout, match="holding them"):
                 bus.wait_settled(1.0)
         bus.health()  # a read (motor 2's alert does not raise here): the hold was served
