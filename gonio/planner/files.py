@@ -42,15 +42,13 @@ from gonio.config import ConfigError, describe, line_of, load, read_bytes, read_
 from gonio.output import reserve_output
 from gonio.planner.builder import build
 from gonio.planner.model import (
-    PATH_ARRAYS,
-    SWEEP_ARRAYS,
     Plan,
     Summary,
-    Sweeps,
     content_hash,
     sha256,
 )
 from gonio.planner.schema import PlanSpec
+from gonio.planner.sweeps_header import parse_sweeps, sweeps_header
 from gonio.rig.model import Rig
 
 
@@ -165,19 +163,7 @@ def plan_bytes(plan: Plan) -> bytes:
         "summary": summary,
     }
     if plan.sweeps is not None:
-        w = plan.sweeps
-        sweeps: dict[str, Any] = {
-            **{name: getattr(w, name).tolist() for name in SWEEP_ARRAYS},
-            "period_s": w.period_s,
-            "integration_s": w.integration_s,
-        }
-        header["sweeps"] = sweeps
-        if w.has_paths:  # an axis-sweep plan's bytes as before path segments existed
-            sweeps |= {
-                **{name: getattr(w, name).tolist() for name in PATH_ARRAYS},
-                "path": w.path.tolist(),
-                "path_period_s": w.path_period_s,
-            }
+        header["sweeps"] = sweeps_header(plan.sweeps)
     lines = [MAGIC, *(f"# {key}: {_json(header[key])}" for key in KEYS[:-1] if key in header)]
     before = ("\n".join(lines) + "\n").encode("utf-8")
     hashes = {
@@ -297,88 +283,6 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
     return summary
 
 
-def _sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> Sweeps:
-    """A fly plan's segments from the header's JSON, every field checked."""
-    fields = [*SWEEP_ARRAYS, "period_s", "integration_s"]
-    if isinstance(data, dict) and "streamed" not in data and "count" in data:
-        data = {**data, "streamed": data["count"]}  # written before the thinning
-    paths = [*PATH_ARRAYS, "path", "path_period_s"]
-    if isinstance(data, dict) and "path" in data:
-        fields += paths
-    if not isinstance(data, dict) or sorted(data) != sorted(fields):
-        raise ConfigError(f"{path}:{line}: sweeps: expected exactly {', '.join(fields)}")
-    arrays: dict[str, Any] = {}
-    for name, dtype in {**SWEEP_ARRAYS, **(PATH_ARRAYS if "path" in data else {})}.items():
-        try:
-            value = np.array(data[name], dtype=dtype)
-        except (TypeError, ValueError, OverflowError):
-            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected numbers") from None
-        rows = ("first", "count", "cruise_at_s", "streamed", *PATH_ARRAYS)
-        shape = (len(data["first"]),) if name in rows else None
-        wanted = shape or (len(data["first"]), axes)
-        if value.shape != wanted or (
-            dtype is np.int64
-            and not all(isinstance(x, int) and not isinstance(x, bool) for x in data[name])
-        ):
-            raise ConfigError(
-                f"{path}:{line}: sweeps.{name}: expected {'×'.join(map(str, wanted))} "
-                f"{'integers' if dtype is np.int64 else 'numbers'}"
-            )
-        if dtype is np.float64 and not np.all(np.isfinite(value)):
-            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected finite numbers")
-        arrays[name] = value
-    for name in ("period_s", "integration_s"):
-        x = data[name]
-        if not isinstance(x, float | int) or isinstance(x, bool) or not 0 < x < math.inf:
-            raise ConfigError(f"{path}:{line}: sweeps.{name}: expected a positive number")
-    count, first = arrays["count"], arrays["first"]
-    expected = np.concatenate([[0], np.cumsum(count)[:-1]])
-    if (
-        np.any(count < 1)
-        or np.any(arrays["streamed"] < count)
-        or not np.array_equal(first, expected)
-        or count.sum() > targets
-    ):
-        raise ConfigError(
-            f"{path}:{line}: sweeps: first and count must split the first of the {targets} "
-            "targets into consecutive segments"
-        )
-    extra: dict[str, Any] = {}
-    if "path" in data:
-        extra = _path_fields(path, data, line, axes, arrays)
-    return Sweeps(
-        **arrays, period_s=float(data["period_s"]), integration_s=float(data["integration_s"]),
-        **extra,
-    )  # fmt: skip
-
-
-def _path_fields(
-    path: Path, data: dict[str, Any], line: int, axes: int, arrays: dict[str, np.ndarray]
-) -> dict[str, Any]:
-    """The path segments' set-points of a fly plan's header, every field checked."""
-    try:
-        points = np.array(data["path"], dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        raise ConfigError(f"{path}:{line}: sweeps.path: expected numbers") from None
-    if points.ndim != 2 or points.shape[1:] != (axes,) or not np.all(np.isfinite(points)):
-        raise ConfigError(f"{path}:{line}: sweeps.path: expected rows of {axes} finite numbers")
-    first, count = arrays["path_first"], arrays["path_count"]
-    if (
-        np.any(count < 0)
-        or np.any(first < 0)
-        or np.any(first + count > len(points))
-        or (np.any((count > 0) & (count < 2)))
-    ):
-        raise ConfigError(
-            f"{path}:{line}: sweeps.path_first, path_count: expected runs of at least 2 "
-            f"set-points inside the {len(points)} of sweeps.path"
-        )
-    period = data["path_period_s"]
-    if not isinstance(period, float | int) or isinstance(period, bool) or not 0 < period < math.inf:
-        raise ConfigError(f"{path}:{line}: sweeps.path_period_s: expected a positive number")
-    return {"path": points, "path_period_s": float(period)}
-
-
 def _rows(path: Path, text: str, names: list[str], first_line: int) -> list[np.ndarray]:
     """The CSV's columns as arrays (int64 or float64), every value checked."""
     reader = csv.reader(io.StringIO(text))
@@ -483,7 +387,7 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
     exposure_s, averages, travel_s, arrival_s = cols
     sweeps = None
     if "sweeps" in header:
-        sweeps = _sweeps(path, header["sweeps"], line["sweeps"], len(plan_rig.axes), n)
+        sweeps = parse_sweeps(path, header["sweeps"], line["sweeps"], len(plan_rig.axes), n)
     if (sweeps is None) != (spec.sampling.strategy != "fly"):
         raise ConfigError(f"{path}: sweeps: a fly plan stores its sweeps, a stop-and-go plan none")
     return Plan(
