@@ -6,8 +6,8 @@ and journals every raw reading. Backends are built and sessions run by
 `gonio.workflows`; what is derived from the readings is `gonio.analysis`'s.
 """
 
-from gonio.acquire.ending import Outcome
-from gonio.acquire.engine import Engine, Report
+from gonio.acquire.ending import Outcome, Report
+from gonio.acquire.engine import Engine
 from gonio.acquire.measure import TargetReading, measure_target
 from gonio.acquire.progress import Observer, Unobserved
 from gonio.acquire.recovery import MotorRecovery

@@ -53,13 +53,13 @@ from drivers.errors import (
 )
 from drivers.values import Reading
 from gonio.acquire.control import ControlRequests, Request, StopRequested
-from gonio.acquire.ending import EndSession, Outcome
+from gonio.acquire.ending import EndSession, Outcome, Report, fault_data
 from gonio.acquire.fly import FlyContext, FlyLoop
 from gonio.acquire.health import assess
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
 from gonio.acquire.recovery import MotorRecovery
-from gonio.acquire.reference import Stage, read_standard
+from gonio.acquire.reference import Stage, calibration_data, read_standard
 from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
@@ -72,17 +72,6 @@ from gonio.rig.model import Rig
 from gonio.store.journal import Journal, JournalError, dumps
 from gonio.store.read import Run
 from gonio.store.schema import commanded, coordinate, read_back
-
-
-@dataclass
-class Report:
-    """How a session of a run ended."""
-
-    outcome: Outcome
-    measured: int  # targets measured in this session
-    skipped: int  # targets skipped in this session
-    message: str = ""
-
 
 #: What ends a session early: each is journaled (`Engine._ending`), the session ended.
 _ENDINGS = (RunInterrupted, DriverError, EndSession, GonioError)
@@ -157,7 +146,7 @@ class Engine:
             axes=self.axes, move_timeout_s=self.move_timeout_s, recovery=self._recovery,
             between_targets=self._between_targets, obey=self._obey,
             within_limits=self._within_limits, skip=self._skip, hold_all=self._hold_all,
-            event=self._event, sim_state=self._sim, fault_data=self._fault_data,
+            event=self._event, sim_state=self._sim,
             write_sample=self._write_sample, in_flight=in_flight, busy_until=busy_until,
         )  # fmt: skip
 
@@ -289,10 +278,10 @@ class Engine:
             self._event("pause", {**data, **state})
             return "interrupted", f"stopped by {exc.args[0]}"
         if isinstance(exc, MotorFault | MotionTimeout):
-            self._event("fault", {**self._fault_data(exc), **self._sim()}, target=self._current)
+            self._event("fault", {**fault_data(exc), **self._sim()}, target=self._current)
             return "fault", str(exc)
         if isinstance(exc, DriverError):  # outside a target's retries: a calibration, the light
-            self._event("fault", {**self._fault_data(exc), **self._sim()})
+            self._event("fault", {**fault_data(exc), **self._sim()})
             return "fault", str(exc)
         if isinstance(exc, EndSession):
             return exc.outcome, str(exc)
@@ -318,15 +307,6 @@ class Engine:
         simulation = self.devices.simulation
         state = None if simulation is None else simulation.snapshot()
         return {} if state is None else {"sim_state": state}
-
-    @staticmethod
-    def _fault_data(exc: DriverError) -> dict[str, Any]:
-        data: dict[str, Any] = {"error": type(exc).__name__, "message": str(exc)}
-        if isinstance(exc, MotorFault):
-            data.update(motor_id=exc.motor_id, axis=exc.axis, flags=list(exc.flags))
-        if isinstance(exc, CommError):
-            data.update(port=exc.port, motor_id=exc.motor_id)
-        return data
 
     # -- one target ----------------------------------------------------------------------
     def _within_limits(self, pose: np.ndarray) -> str | None:
@@ -367,7 +347,7 @@ class Engine:
                 return
             except (CommError, DetectorError) as exc:
                 last = attempt == on_fault.retries
-                data = {**self._fault_data(exc), "attempt": attempt + 1, **self._sim()}
+                data = {**fault_data(exc), "attempt": attempt + 1, **self._sim()}
                 if not last:
                     self._event("retry", data, target=i)
                     continue
@@ -525,35 +505,17 @@ class Engine:
                 if attempt == retries:
                     raise
                 self._hold_all()
-                failed = {**self._fault_data(exc), "attempt": attempt + 1, "calibration": why}
+                failed = {**fault_data(exc), "attempt": attempt + 1, "calibration": why}
                 self._event("retry", {**failed, **self._sim()})
-        back = [read.reference.read_back[a] for a in self.axes]
-        reference = self._reading_data(read.reference.reading, read.exposure_s)
-        wi, wo = self.rig.forward(np.array(back))
-        data: dict[str, Any] = {
-            "why": why,
-            "k": calibrations.k,
-            "count": self.state.count,
-            "albedo": self.rig.spec.reference.albedo,
-            "source_kind": self.rig.source_kind,
-            "wi": wi.tolist(),
-            "wo": wo.tolist(),
-            "pose_rad": back,
-            "unit": reading_unit(detector),
-            "reference": {**reference, **self._watch.reference(read.reference.reading)},
-            "dark": None if read.dark is None else self._reading_data(read.dark, read.exposure_s),
-            **self._sim(),
-        }
+        data = calibration_data(
+            read, self.rig, why, calibrations.k, self.state.count, reading_unit(detector),
+            self.time.offset,
+        )  # fmt: skip
+        data["reference"] |= self._watch.reference(read.reference.reading)
+        data |= self._sim()
         if read.dark is None:
             data["dark_reason"] = "detector" if subtracted else "plan"
         self._event("calibration", data)
         for kind, event in self._watch.events(None):
             self._event(kind, event)
         calibrations.done(self.state.count, self.time.now(), read.exposure_s)
-
-    def _reading_data(self, reading: Reading, exposure: float) -> dict[str, Any]:
-        fields = reading_fields(reading, exposure, self.time.offset)
-        data = {"value": reading.value, "n": reading.n, "saturated": reading.saturated, **fields}
-        if reading.phase_deg is not None:
-            data["phase_deg"] = reading.phase_deg
-        return data

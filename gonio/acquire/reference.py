@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from drivers.base import StageTarget, reading_unit
 from drivers.devices import Devices
 from drivers.values import Reading
 from gonio import radiometry
-from gonio.acquire.measure import TargetReading, measure_target
+from gonio.acquire.measure import TargetReading, measure_target, reading_fields
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError
 from gonio.rig.model import Reason, Rig
@@ -192,3 +192,37 @@ def read_standard(
     finally:
         stage.show("sample")
     return StandardReadings(reference, dark_reading, exposure_s)
+
+
+def reading_data(reading: Reading, exposure_s: float, offset_s: float) -> dict[str, Any]:
+    """What a calibration event keeps of a reading: its value, count and saturation, the
+    journal's fields (`reading_fields`) and a lock-in's phase."""
+    fields = reading_fields(reading, exposure_s, offset_s)
+    data = {"value": reading.value, "n": reading.n, "saturated": reading.saturated, **fields}
+    if reading.phase_deg is not None:
+        data["phase_deg"] = reading.phase_deg
+    return data
+
+
+def calibration_data(
+    read: StandardReadings, rig: Rig, why: str, k: int, count: int, unit: str, offset_s: float
+) -> dict[str, Any]:
+    """The ``calibration`` event of ``read`` (calibration ``k``, after ``count`` samples,
+    for ``why``): the pair the reference was read at (from its read-back angles), the
+    reference and dark readings (`reading_data`), and why no dark was read."""
+    back = [read.reference.read_back[a] for a in rig.axes]
+    wi, wo = rig.forward(np.array(back))
+    data: dict[str, Any] = {
+        "why": why,
+        "k": k,
+        "count": count,
+        "albedo": rig.spec.reference.albedo,
+        "source_kind": rig.source_kind,
+        "wi": wi.tolist(),
+        "wo": wo.tolist(),
+        "pose_rad": back,
+        "unit": unit,
+        "reference": reading_data(read.reference.reading, read.exposure_s, offset_s),
+        "dark": None if read.dark is None else reading_data(read.dark, read.exposure_s, offset_s),
+    }
+    return data

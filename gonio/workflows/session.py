@@ -24,7 +24,8 @@ import numpy as np
 
 from drivers.errors import DriverError
 from gonio import __version__
-from gonio.acquire.engine import Engine, Report
+from gonio.acquire.ending import Report
+from gonio.acquire.engine import Engine
 from gonio.acquire.progress import Observer, Unobserved
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests

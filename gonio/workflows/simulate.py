@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.acquire.engine import Report
+from gonio.acquire.ending import Report
 from gonio.acquire.measure import measure_target
 from gonio.acquire.progress import Observer
 from gonio.analysis.calibrated import Calibrated, calibrate

@@ -23,7 +23,7 @@ import numpy as np
 from drivers.devices import Devices
 from drivers.errors import CommError, DetectorError, DriverError, MotionTimeout, MotorFault
 from drivers.stream import StreamReading
-from gonio.acquire.ending import EndSession
+from gonio.acquire.ending import EndSession, fault_data
 from gonio.acquire.fly.merge import Derived, RawSweep, derive
 from gonio.acquire.fly.run import run_sweep
 from gonio.acquire.progress import Observer
@@ -75,7 +75,6 @@ class FlyContext:
     hold_all: Callable[[], None]  # tell every axis to hold
     event: EventWriter
     sim_state: Callable[[], dict[str, Any]]  # ``{"sim_state": …}`` on a simulated backend
-    fault_data: Callable[[DriverError], dict[str, Any]]  # a driver error as event data
     write_sample: SampleWriter
     in_flight: Callable[[int], None]  # the target in flight (a motor fault names it)
     busy_until: Callable[[float], None]  # the run time the step in flight ends
@@ -160,7 +159,7 @@ class FlyLoop:
                 )  # fmt: skip
             except DriverError as exc:
                 c.hold_all()
-                data = {**c.fault_data(exc), "attempt": attempt + 1}
+                data = {**fault_data(exc), "attempt": attempt + 1}
                 with c.journal.transaction():
                     c.journal.sweep(k, "abandoned", began, c.time.now(), data, [], [])
                 if isinstance(exc, MotorFault | MotionTimeout) or not isinstance(

@@ -18,7 +18,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from drivers.dynamixel.axis import AxisConfig
-from gonio.acquire.engine import Engine, Report
+from gonio.acquire.ending import Report
+from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source
 from gonio.planner.model import ARRAYS, Plan

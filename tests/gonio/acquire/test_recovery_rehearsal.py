@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.engine import Engine, Report
+from gonio.acquire.ending import Report
+from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source, plan_bytes
 from gonio.planner.model import Plan
