@@ -55,7 +55,7 @@ from drivers.values import Reading
 from gonio.acquire.control import ControlRequests, Request, StopRequested
 from gonio.acquire.ending import EndSession, Outcome, Report, fault_data
 from gonio.acquire.fly import FlyContext, FlyLoop
-from gonio.acquire.health import assess
+from gonio.acquire.health_check import HealthChecks
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
 from gonio.acquire.progress import Observer, Unobserved
 from gonio.acquire.recovery import MotorRecovery
@@ -63,7 +63,7 @@ from gonio.acquire.reference import Stage, calibration_data, read_standard
 from gonio.acquire.runtime import RunTime, utc_now
 from gonio.acquire.signals import RunInterrupted, StopRequests
 from gonio.acquire.state import RunState, initial_state, latest_snapshot
-from gonio.acquire.suspenders import Step, Suspender, Suspension, health_suspenders
+from gonio.acquire.suspenders import Suspender, health_suspenders
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
@@ -112,6 +112,7 @@ class Engine:
     _watch: ReadingWatch = field(init=False)  # range changes and phase drift to journal
     _recovery: MotorRecovery = field(init=False)  # the plan's on_fault.motor
     _fly_loop: FlyLoop | None = field(init=False, default=None)  # a fly plan's loop
+    _health: HealthChecks = field(init=False)  # the motors' health, pausing the run
 
     def __post_init__(self) -> None:
         self.spec = self.plan.spec.acquisition
@@ -125,6 +126,10 @@ class Engine:
         self._recovery = MotorRecovery.of(
             self.spec.on_fault.motor, self.devices, self.rig, self.spec.health.poll_s,
             self._event, self.history, self.stops.raise_if_requested,
+        )  # fmt: skip
+        self._health = HealthChecks(
+            self.devices, self.spec.health, self.suspenders, self.time, self.state,
+            self._recovery, self.stops, self._event, self._sim, self._hold_all,
         )  # fmt: skip
         if self.control is None:
             self.control = ControlRequests(self.journal.path)
@@ -219,7 +224,7 @@ class Engine:
         # A restored simulation keeps the uninterrupted run's schedule of health checks,
         # unless it stopped in a pause (then it goes on checking).
         if not restored or self.state.unhealthy:
-            self._check_health()
+            self._health.check()
         why = self.state.calibrations.opening(resuming=resuming, on_resume=self.calibrate_on_resume)
         if why is not None:
             self._calibrate(why)
@@ -260,7 +265,7 @@ class Engine:
 
     def _between_targets(self) -> None:
         if self.state.health_due.due(self.state.count, self.time.now()):
-            self._check_health()
+            self._health.check()
         if self.state.calibrations.due(self.state.count, self.time.now()):
             self._calibrate("scheduled")
 
@@ -440,41 +445,6 @@ class Engine:
         self.journal.sample(row)
         self.state.count += 1
         self._report.measured += 1
-
-    # -- health --------------------------------------------------------------------------
-    def _check_health(self) -> None:
-        """Read every motor's health; while a suspender trips, hold the axes and read
-        again every ``poll_s`` until none does (`Suspension`)."""
-        spec = self.spec.health
-        suspension = Suspension(self.time.now(), spec.pause_timeout_minutes)
-        while True:
-            step = suspension.consult(self._read_health())
-            if step is Step.GO:
-                return
-            if step is Step.RESUME:
-                paused_s = suspension.paused_s(self.time.now())
-                self._event("resume", {"reason": "health", "paused_s": paused_s, **self._sim()})
-                return
-            if step is Step.PAUSE:
-                self._hold_all()
-                problems = suspension.problems
-                self._event("pause", {"reason": "health", "problems": problems, **self._sim()})
-            if suspension.expired(self.time.now()):
-                raise EndSession("paused", suspension.reason())
-            self.stops.raise_if_requested()
-            self.devices.clock.sleep(spec.poll_s)
-
-    def _read_health(self) -> list[str]:
-        """Read every motor's health and journal it; what trips the suspenders (`EndSession`
-        if a motor reports a hardware error)."""
-        found = assess(self.devices.bus.health(), self.suspenders)
-        self._event("health", {**found.data(self.state.count), **self._sim()})
-        self.state.health_due.done(self.state.count, self.time.now())
-        self.state.temperatures = dumps(found.temperatures_c)
-        if found.flags and not self._recovery.flagged(found.flags):
-            axis, flags = next(iter(found.flags.items()))
-            raise EndSession("fault", f"axis {axis!r} reports a hardware error: {', '.join(flags)}")
-        return found.problems
 
     # -- calibration ---------------------------------------------------------------------
     def _calibrate(self, why: str) -> None:
