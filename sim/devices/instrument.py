@@ -112,8 +112,8 @@ class SimulatedInstrument(Resource):
             "sample": sample,
             "moves": self.bus.moves_of(sample),
             "draws": self.detector.draws_of(sample),
-            "overheat": self.bus.overheat,
-            "supply_sag": self.bus.supply_sag,
+            "overheat": self.bus.faults.overheat,
+            "supply_sag": self.bus.faults.supply_sag,
         }
 
     def restore(self, state: Any) -> None:
@@ -139,5 +139,5 @@ class SimulatedInstrument(Resource):
         self.bus.restore(motors)
         self.bus.set_moves(sample, moves)
         self.detector.set_draws(sample, draws)
-        self.bus.set_overheat(overheat)
-        self.bus.set_supply_sag(sag)
+        self.bus.faults.overheat = overheat
+        self.bus.faults.supply_sag = sag

@@ -89,7 +89,8 @@ class SimMotorBus(Resource):
         streams = streams or streams_module.Streams(0)
         self._names = rig.axes
         motor_ids = {a.name: a.motor_id for a in rig.bus_axes()}
-        self._faults = MotorFaults(faults or FaultInjector((), streams), self._names, motor_ids)
+        #: The injected faults and the health they leave (overheat, supply sag in force).
+        self.faults = MotorFaults(faults or FaultInjector((), streams), self._names, motor_ids)
         self._index = {n: i for i, n in enumerate(self._names)}
         self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
         self._v, self._a = rig.velocity, rig.acceleration
@@ -166,7 +167,7 @@ class SimMotorBus(Resource):
             goal[i] = value
         if not self._torque:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
-        self._faults.check_clear()
+        self.faults.check_clear()
         return goal
 
     def velocity_limits(self) -> dict[str, float]:
@@ -219,7 +220,7 @@ class SimMotorBus(Resource):
         repeatability error for the axes that ``moved`` (backlash from ``_direction``)."""
         k = self._moves.get(self._sample, 0)
         self._moves[self._sample] = k + 1
-        self._faults.arm(self._sample, k, self._t0)
+        self.faults.arm(self._sample, k, self._t0)
         if self._model is not None:
             axes = len(moved)
             draw = self._model.repeatability_draw(np.array([self._sample]), axes, start=k * axes)[0]
@@ -261,7 +262,7 @@ class SimMotorBus(Resource):
         check_trajectory(trajectory, self.limits(), self.velocity_limits(), top_a)
         if not self._torque:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing moved")
-        self._faults.check_clear()
+        self.faults.check_clear()
         goals = self._path_goals(trajectory)
         started = self.clock.now()
         period = trajectory.period_s
@@ -315,8 +316,8 @@ class SimMotorBus(Resource):
         ``timeout_s`` and raise `MotionTimeout`. An injected fault strikes half-way
         through the move: every axis is held, then the fault is raised."""
         self._check_open()
-        if self._faults.pending is not None:
-            self._strike(self._faults.pending, timeout_s)
+        if self.faults.pending is not None:
+            self._strike(self.faults.pending, timeout_s)
         remaining = self._end - self.clock.now()
         if remaining > timeout_s:
             self.clock.advance(timeout_s)
@@ -330,7 +331,7 @@ class SimMotorBus(Resource):
 
     def _strike(self, rule: FaultRule, timeout_s: float) -> None:
         """Raise the injected fault ``rule`` of the present move, holding every axis."""
-        self._faults.disarm()
+        self.faults.disarm()
         now = self.clock.now()
         if rule.kind == "motion_timeout":
             self.clock.advance(timeout_s)
@@ -342,7 +343,7 @@ class SimMotorBus(Resource):
         if self._end > now:
             self.clock.advance_to(now + 0.5 * (self._end - now))
         self._hold()
-        raise self._faults.strike(rule, self._sample, self.clock.now())
+        raise self.faults.strike(rule, self._sample, self.clock.now())
 
     def positions(self) -> dict[str, float]:
         """The encoder's reading of each axis (rad)."""
@@ -357,13 +358,13 @@ class SimMotorBus(Resource):
         self._check_open()
         request_s = self.clock.now()
         self.clock.advance(0.5 * self.poll_s)
-        rule = self._faults.pending
+        rule = self.faults.pending
         halfway = self.clock.now() >= 0.5 * (self._t0 + self._end)
         if rule is not None and rule.kind != "motion_timeout" and halfway:
-            self._faults.disarm()
+            self.faults.disarm()
             self.clock.advance(0.5 * self.poll_s)
             self._hold()
-            raise self._faults.strike(rule, self._sample, self.clock.now())
+            raise self.faults.strike(rule, self._sample, self.clock.now())
         here = self._present_encoder()
         if self._model is not None:
             here = self._model.quantize(here)
@@ -415,24 +416,6 @@ class SimMotorBus(Resource):
         """Continue ``sample`` after ``moves`` moves (a resumed run)."""
         self._moves[sample] = moves
 
-    @property
-    def overheat(self) -> tuple[str, float, float] | None:
-        """An injected overheat in force: (axis, °C, until when on the clock), or None."""
-        return self._faults.overheat
-
-    def set_overheat(self, hot: tuple[str, float, float] | None) -> None:
-        """Continue an overheat (a resumed run)."""
-        self._faults.overheat = hot
-
-    @property
-    def supply_sag(self) -> tuple[float, float] | None:
-        """An injected supply sag in force: (V, until when on the clock), or None."""
-        return self._faults.supply_sag
-
-    def set_supply_sag(self, sag: tuple[float, float] | None) -> None:
-        """Continue a supply sag (a resumed run)."""
-        self._faults.supply_sag = sag
-
     def restore(self, state: MotorState) -> None:
         """Put the motors, at rest, in a `snapshot`'s state."""
         here = np.array(state.encoder, dtype=np.float64)
@@ -457,7 +440,7 @@ class SimMotorBus(Resource):
         self._start, self._goal, self._t0 = here, here, self.clock.now()
         self._end = self._t0
         self._path = None
-        self._faults.disarm()
+        self.faults.disarm()
 
     def torque(self, on: bool) -> None:
         self._check_open()
@@ -469,17 +452,17 @@ class SimMotorBus(Resource):
         """Temperatures (an injected overheat's axis: its temperature until it has cooled,
         else 35 °C), 12 V, the latched flags; the load is not modelled (None)."""
         self._check_open()
-        return self._faults.health(self.clock.now())
+        return self.faults.health(self.clock.now())
 
     def reboot(self, axes: tuple[str, ...] | None = None) -> tuple[str, ...]:
         """Clear the latched faults (of ``axes``, or every faulted axis), holding; the
         axes rebooted."""
         self._check_open()
-        names = tuple(self._faults.latched) if axes is None else tuple(axes)
+        names = tuple(self.faults.latched) if axes is None else tuple(axes)
         for name in names:
             if name not in self._index:
                 raise DriverError(f"unknown axis {name!r}; the axes are {', '.join(self._names)}")
-            self._faults.clear(name)
+            self.faults.clear(name)
         self._hold()
         return names
 
@@ -494,7 +477,7 @@ class SimMotorBus(Resource):
         self._hold()
         i = self._index[axis]
         held = float(self._goal[i])
-        shift = self._faults.recover(axis, self.clock.now())
+        shift = self.faults.recover(axis, self.clock.now())
         if shift:  # the encoder jumps, the joint stays: true = encoder + error
             self._goal = self._goal.copy()
             self._goal[i] += shift
