@@ -139,3 +139,20 @@ class AxisConfig:
 
     def contains(self, angle_rad: float) -> bool:
         return math.isfinite(angle_rad) and self.min_rad <= angle_rad <= self.max_rad
+
+    def clamp_ticks(self, ticks: int) -> int:
+        """``ticks`` clamped to the axis's limits in motor ticks (in position mode also the
+        motor's own Min/Max Position Limit, beyond which it would refuse the goal)."""
+        low, high = self.tick_limits()
+        return min(max(ticks, low), high)
+
+    def goal_ticks(self, angle_rad: float) -> int:
+        """The goal register of ``angle_rad`` (`clamp_ticks`); `LimitError` outside the
+        axis's limits or not finite (nothing is sent)."""
+        if not self.contains(float(angle_rad)):
+            raise LimitError(
+                f"axis {self.name!r}: target {angle_rad!r} rad ({math.degrees(angle_rad):.3f}°) "
+                f"is outside its limits [{self.min_rad:.6f}, {self.max_rad:.6f}] rad; "
+                "nothing was sent"
+            )
+        return self.clamp_ticks(self.to_ticks(float(angle_rad)))

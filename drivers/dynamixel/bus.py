@@ -37,7 +37,6 @@ off (and read back off) before it, so opening a configured bus never drops an ar
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import TracebackType
@@ -59,7 +58,6 @@ from drivers.errors import (
     CommError,
     DeviceClosed,
     DriverError,
-    LimitError,
     MotionTimeout,
     TorqueOff,
 )
@@ -289,17 +287,7 @@ class DynamixelBus(Condition, Resource):
 
     def _goal_ticks(self, targets: Mapping[str, float]) -> dict[str, int]:
         """Goal registers of ``targets`` (rad); `LimitError` / `DriverError` first."""
-        goals: dict[str, int] = {}
-        for name, angle in targets.items():
-            axis = self._axis(name)
-            if not axis.contains(float(angle)):
-                raise LimitError(
-                    f"axis {name!r}: target {angle!r} rad ({math.degrees(angle):.3f}°) is "
-                    f"outside its limits [{axis.min_rad:.6f}, {axis.max_rad:.6f}] rad; "
-                    "nothing was sent"
-                )
-            goals[name] = _within(axis, axis.to_ticks(float(angle)))
-        return goals
+        return {name: self._axis(name).goal_ticks(angle) for name, angle in targets.items()}
 
     def velocity_limits(self) -> dict[str, float]:
         """Each axis's configured profile velocity (rad/s): the fastest a sweep may ask."""
@@ -477,7 +465,7 @@ class DynamixelBus(Condition, Resource):
                     present[axis.name] = self._link.read(axis.motor_id, _PRESENT.name, alerts=False)
                 except DriverError as exc:
                     missing[axis.name] = exc
-        goals = {name: _within(self._axes[name], ticks) for name, ticks in present.items()}
+        goals = {name: self._axes[name].clamp_ticks(ticks) for name, ticks in present.items()}
         if goals:
             self._link.sync_write(
                 "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
@@ -502,10 +490,3 @@ class DynamixelBus(Condition, Resource):
         self._torque_on = False  # until the motors have been told
         self._link.sync_write("torque_enable", dict.fromkeys(ids, 1 if on else 0))
         self._torque_on = bool(on)
-
-
-def _within(axis: AxisConfig, ticks: int) -> int:
-    """``ticks`` clamped to the axis's limits in motor ticks (in position mode also the
-    motor's own Min/Max Position Limit, beyond which it would refuse the goal)."""
-    low, high = axis.tick_limits()
-    return min(max(ticks, low), high)

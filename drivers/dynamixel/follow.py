@@ -180,7 +180,7 @@ class SetpointPlan:
         """`DriverError` unless every axis of ``state`` ({axis: (moving, present ticks)})
         is at rest, the trajectory's within ``tolerance`` ticks of set-point 0."""
         start = {
-            a.name: min(max(a.to_ticks(float(x)), a.tick_limits()[0]), a.tick_limits()[1])
+            a.name: a.clamp_ticks(a.to_ticks(float(x)))
             for a, x in zip(self.axes, self.trajectory.goals[0], strict=True)
         }
         off = [
