@@ -45,10 +45,12 @@ from gonio.types import FloatArray
 
 def order_segments(
     spec: PlanSpec, rig: Rig, laid: Laid, home: FloatArray
-) -> tuple[np.ndarray, np.ndarray, Joint]:
-    """(order (S,), reversed (S,) in that order, the `Joint` result): the existing
-    ordering on the segments' two commanded end poses, then each segment's direction
-    chosen exactly along the order (the move from one's end to the next one's start)."""
+) -> tuple[np.ndarray, np.ndarray, Joint, float]:
+    """(order (S,), reversed (S,) in that order, the `Joint` result, the wall time it
+    took, s): the existing ordering on the segments' two commanded end poses, then each
+    segment's direction chosen exactly along the order (the move from one's end to the
+    next one's start)."""
+    started = time.perf_counter()
     start, stop = np.array(laid.start), np.array(laid.stop)
     n, axes = start.shape
     cand = np.stack([start, stop], axis=1)
@@ -69,7 +71,7 @@ def order_segments(
 
     chosen, _ = choose(both, usable, np.concatenate([home, home]), between)
     reversed_ = ~np.all(chosen[:, :axes] == start[order], axis=1)
-    return order, reversed_, joint
+    return order, reversed_, joint, time.perf_counter() - started
 
 
 def check_integration(spec: PlanSpec, rig: Rig, where: str) -> None:
@@ -100,9 +102,7 @@ def build_fly(
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)
     ref = reference(spec, rig)
     laid = lay_out_thinned(spec, rig, where, ref)
-    started = time.perf_counter()
-    order, reversed_, joint = order_segments(spec, rig, laid, home)
-    ordering_s = time.perf_counter() - started
+    order, reversed_, joint, ordering_s = order_segments(spec, rig, laid, home)
     counts = np.array([len(m) for m in laid.mids], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
     t_int, period, settle = fly.integration, fly.period_s, rig.spec.settle_s

@@ -26,11 +26,11 @@ from the last segment's end, each a move, the settle and the plan's exposure.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from drivers.trajectory import Trajectory
 from gonio.config import ConfigError
 from gonio.planner import placement, sampling
 from gonio.planner.adaptive import Density, error_indicator, measure_density
@@ -38,6 +38,8 @@ from gonio.planner.fly.build import Readings, assemble, check_integration, order
 from gonio.planner.fly.coverage import reference
 from gonio.planner.fly.lines import Laid, box, plan_coords
 from gonio.planner.fly.paths import (
+    DYNAMICS,
+    PathReadings,
     PathSegment,
     checked_trajectory,
     line_segments,
@@ -51,6 +53,8 @@ from gonio.rig.constraints import separation
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 
+#: A segment's forward trajectory, its θh per set-point and its readings.
+Forward = tuple[Trajectory, FloatArray, PathReadings]
 #: Lines drawn per batch (a power of two for Sobol).
 LINE_BATCH = 32
 #: Lines drawn at most before a plan is refused for reaching too few readings.
@@ -109,8 +113,9 @@ def _min_step(blur_rad: float) -> float:
 
 def lay_out_paths(
     spec: PlanSpec, rig: Rig, where: str, period_s: float
-) -> tuple[list[PathSegment], int, int, dict[str, int]]:
-    """(segments, lines, readings laid, refusals): lines drawn until their readings
+) -> tuple[list[PathSegment], list[Forward], int, int, dict[str, int]]:
+    """(segments, each one's forward trajectory, θh and readings, lines, readings laid,
+    refusals): lines drawn until their readings
     reach ``sampling.target``."""
     target = spec.sampling.target
     if target is None:
@@ -125,6 +130,7 @@ def lay_out_paths(
     density = line_density(spec, rig)
     stream = sampling.Sequence("sobol", 3, spec.sampling.seed)
     segments: list[PathSegment] = []
+    forward: list[Forward] = []
     refused: dict[str, int] = {}
     readings = lines = drawn = 0
     while readings < target:
@@ -143,18 +149,19 @@ def lay_out_paths(
             for seg in laid:
                 out = checked_trajectory(rig, seg, blur, fly.integration, period_s, False)
                 if out is None:
-                    refused["dynamics"] = refused.get("dynamics", 0) + len(seg.theta_h)
+                    refused[DYNAMICS] = refused.get(DYNAMICS, 0) + len(seg.theta_h)
                     continue
                 trajectory, _, theta = out
                 got = path_readings(trajectory, theta, fly.rate_hz, fly.integration,
                                     _min_step(blur))  # fmt: skip
                 segments.append(seg)
+                forward.append((trajectory, theta, got))
                 readings += len(got.slots)
                 kept_any = True
             lines += int(kept_any)
             if readings >= target:
                 break
-    return segments, lines, readings, refused
+    return segments, forward, lines, readings, refused
 
 
 def build_paths(
@@ -174,11 +181,9 @@ def build_paths(
     blur = math.radians(fly.blur)
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)
     period_s = rig_setpoint_period(rig)
-    segments, lines, laid_readings, refused = lay_out_paths(spec, rig, where, period_s)
+    segments, forward, lines, laid_readings, refused = lay_out_paths(spec, rig, where, period_s)
     ends = Laid(start=[s.poses[0] for s in segments], stop=[s.poses[-1] for s in segments])
-    started = time.perf_counter()
-    order, reversed_, joint = order_segments(spec, rig, ends, home)
-    ordering_s = time.perf_counter() - started
+    order, reversed_, joint, ordering_s = order_segments(spec, rig, ends, home)
     t_int, period, settle = fly.integration, fly.period_s, rig.spec.settle_s
     rows: dict[str, list[FloatArray]] = {"start": [], "stop": []}
     path_rows, path_first, path_count = [], [], []
@@ -187,11 +192,14 @@ def build_paths(
     moves_s = cruise_s = 0.0
     smear_max, speeds = 0.0, []
     for s, back in zip(order.tolist(), reversed_.tolist(), strict=True):
-        out = checked_trajectory(rig, segments[s], blur, t_int, period_s, bool(back))
-        if out is None:  # the forward law passed; the backward one is its mirror
-            raise AssertionError("a segment's reversed trajectory failed the rig's checks")
-        trajectory, _, theta = out
-        got = path_readings(trajectory, theta, fly.rate_hz, t_int, _min_step(blur))
+        if back:
+            out = checked_trajectory(rig, segments[s], blur, t_int, period_s, True)
+            if out is None:  # the forward law passed; the backward one is its mirror
+                raise AssertionError("a segment's reversed trajectory failed the rig's checks")
+            trajectory, _, theta = out
+            got = path_readings(trajectory, theta, fly.rate_hz, t_int, _min_step(blur))
+        else:
+            trajectory, theta, got = forward[s]
         goals = trajectory.goals
         move = float(rig.travel.time(here, goals[0])) + settle
         t += move
