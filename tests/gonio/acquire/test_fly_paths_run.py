@@ -96,7 +96,8 @@ def test_evaluate_and_export_read_the_run(run: Run, run_gonio: Any, tmp_path: Pa
         assert "log-RMSE" in result.stdout
     out = tmp_path / "run.h5"
     result = run_gonio("export", str(run.path), "--format", "hdf5", "-o", str(out), "-q")
-    assert result.returncode == 0, result.stderr and out.stat().st_size > 0
+    assert result.returncode == 0, result.stderr
+    assert out.stat().st_size > 0
 
 
 def slower(devices: Devices, *args: Any, **kwargs: Any) -> Any:
