@@ -170,15 +170,17 @@ def test_the_simulated_photometer_reads_its_signal_at_each_window_middle() -> No
 
     with SerialPhotometer(signal) as dev, streaming_detector(dev) as det:
         det.start_stream(50, 0.01)
-        readings = collect(det, 0.2) + det.stop_stream()
+        readings = collect(det, 0.5) + det.stop_stream()
         ends = dev.stream_ends
-    assert readings and len(calls) >= len(ends)
-    late = sorted(c - (e - 0.005) for c, e in zip(calls, ends, strict=False))
-    # read before the line is sent (a loaded host may run the device's thread a window
-    # late now and then: nine in ten, and the median on time)
-    early = sum(c < e for c, e in zip(calls, ends, strict=False))
-    assert early >= 0.9 * min(len(calls), len(ends))
-    assert abs(late[len(late) // 2]) < 0.002
+    n = min(len(calls), len(ends), len(readings))
+    assert n >= 10
+    late = [c - (e - 0.005) for c, e in zip(calls[:n], ends[:n], strict=True)]
+    # never before the middle; a loaded host may run the device's thread late, so the
+    # bound on time is the best window's, and every window is read before its line left
+    assert min(late) > -1e-3
+    assert min(late) < 2.5e-3
+    received = [r.received_s for r in readings[:n]]
+    assert all(s is not None and c < s for c, s in zip(calls[:n], received, strict=True))
 
 
 def test_a_device_that_starts_on_the_command_is_stamped_from_it(
