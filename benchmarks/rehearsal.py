@@ -15,12 +15,27 @@ theoretical minimum of one step: a SYNC_WRITE of the 4 goals, one poll that find
 axes settled and one that reads them back (benchmarks/bus.py's hold step + poll). The
 emulator times the bytes on the wire at 57 600 and 1 000 000 baud (as benchmarks/bus.py),
 or answers at once ("no wire time": the software alone). Prints a markdown table.
-Run: .venv/bin/python benchmarks/rehearsal.py [--runs N]
+
+Then the prediction against the instrument: the same plan rehearsed at real speed
+(`--speedup 1`), the emulator timing every byte, at each baud rate; the run's instrument
+time from the end of the first sample's reading to the end of the last's (the journal's
+stamps: the calibrations left out) against the plan's predicted duration of those steps
+(`gonio plan`'s: the moves at the rates the motors' profile registers hold, settle,
+exposure and the bus's wire time of each step, `Rig.bus_time`). A rehearsal's clock
+counts the host's own time too (instrument time = predicted + calibrations + speedup ×
+host time, docs/explanations/acquisition.md), which is taken out: per sample, the wall
+time above the wire time at 10⁶ × real time (as in the first table), measured just
+before and just after each run at real speed (the machine's load drifts; the mean of
+the two), times the steps. Medians of the runs, and the range of the differences. Also
+the prediction before the bus and the rounding were counted (the rig file's rates, no
+bus). Target: the prediction within 2 % of the instrument time less the host's.
+Run: .venv/bin/python benchmarks/rehearsal.py [--runs N] [--real-runs N]
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import statistics
 import sys
 import tempfile
@@ -36,11 +51,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
+from drivers.dynamixel.wire import DEFAULT_RETURN_DELAY_S, step_seconds
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source, plan_bytes
 from gonio.planner.model import Plan
-from gonio.store.journal import Journal
+from gonio.rig.travel import TravelModel
+from gonio.store import Journal, open_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.scene import load_scene
 
@@ -49,18 +66,15 @@ PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"
 RIG = ROOT / "configs" / "rigs" / "arch_serial.yaml"
 SCENE = load_scene(ROOT / "configs" / "scenes" / "matte.yaml")
 SPEEDUP = 1e6
-RETURN_DELAY_S = 250 * 2e-6  # the motors' default Return Delay Time
 AXES = 4
-#: Bytes on the line of one SYNC_WRITE of 4 goals (header 4, ID, LEN 2, INST, address 2,
-#: length 2, 4 × (ID + 4 bytes), CRC 2) and of one poll (benchmarks/bus.py: 18 + 4 × 25).
-SYNC_WRITE_BYTES = 4 + 1 + 2 + 1 + 2 + 2 + AXES * 5 + 2
-POLL_BYTES = 118
+BAUDS = (57_600, 1_000_000)
 
 
 def minimum_ms(baud: int) -> float:
-    """One step's theoretical minimum: a SYNC_WRITE and two polls (ms)."""
-    wire = (SYNC_WRITE_BYTES + 2 * POLL_BYTES) * 10 / baud
-    return (wire + 2 * AXES * RETURN_DELAY_S) * 1e3
+    """One step's theoretical minimum: a SYNC_WRITE of the goals and two polls, one that
+    finds the axes settled and the read back (ms; `step_seconds` of a step that does not
+    move)."""
+    return float(step_seconds(AXES, baud, 0.0)) * 1e3
 
 
 def plan_at(baud: int, folder: Path) -> Plan:
@@ -127,9 +141,13 @@ class Window:
         pass
 
 
-def run_once(plan: Plan, folder: Path, wire_time: bool) -> dict[str, float]:
+def run_once(
+    plan: Plan, folder: Path, wire_time: bool, speedup: float = SPEEDUP
+) -> dict[str, float]:
+    """One rehearsal of ``plan``: the figures of the window from the first sample to the
+    last, per sample, and the instrument time over it (s, the journal's stamps)."""
     rig = plan.rig
-    with rehearsal_devices(rig, SCENE, None, SPEEDUP, wire_time=wire_time) as (devices, clock):
+    with rehearsal_devices(rig, SCENE, None, speedup, wire_time=wire_time) as (devices, clock):
         side: Any = devices.simulation
         motors, photometer, journal_timer = Timer(), Timer(), Timer()
         bus: Any = devices.bus
@@ -147,10 +165,12 @@ def run_once(plan: Plan, folder: Path, wire_time: bool) -> dict[str, float]:
             report = engine.run()
         if report.outcome != "completed":
             raise SystemExit(f"the rehearsal ended early: {report.message}")
+    ended = np.sort(open_run(path).samples["ended_s"])
     n, stats = window.samples, window.stats
     baud = rig.spec.bus.baud
     traffic = stats.bytes_in + stats.bytes_out
     return {
+        "instrument_s": float(ended[-1] - ended[0]),
         "wall_ms": (window.t1 - window.t0) / n * 1e3,
         "motors_ms": motors.spent / n * 1e3,
         "photometer_ms": photometer.spent / n * 1e3,
@@ -159,7 +179,11 @@ def run_once(plan: Plan, folder: Path, wire_time: bool) -> dict[str, float]:
         "polls": stats.instructions["SYNC_READ"] / n,
         "writes": stats.instructions["SYNC_WRITE"] / n,
         **(
-            {"wire_ms": (traffic * 10 / baud + stats.packets_out * RETURN_DELAY_S) / n * 1e3}
+            {
+                "wire_ms": (traffic * 10 / baud + stats.packets_out * DEFAULT_RETURN_DELAY_S)
+                / n
+                * 1e3
+            }
             if wire_time
             else {}
         ),
@@ -179,9 +203,61 @@ def measure(baud: int, wire_time: bool, runs: int) -> dict[str, float]:
     return row
 
 
+def predicted(plan: Plan) -> dict[str, float]:
+    """The plan's predicted time (s) of the steps after its first target (those between
+    the first sample and the last): moves, settle + exposure, the bus; and the moves at
+    the rig file's rates, as predicted before the registers and the bus were counted."""
+    rig = plan.rig
+    dwell = rig.spec.settle_s + plan.exposure_s * plan.averages
+    bus = rig.bus_time(plan.travel_s)
+    configured = TravelModel(rig.velocity, rig.acceleration).time(plan.angles[:-1], plan.angles[1:])
+    return {
+        "predicted_s": float((plan.travel_s + dwell + bus)[1:].sum()),
+        "bus_s": float(bus[1:].sum()),
+        "before_s": float((configured + dwell[1:]).sum()),
+    }
+
+
+def host_ms(plan: Plan, folder: Path) -> float:
+    """The host's own time a sample (ms): the wall time above the wire time of one
+    rehearsal at 10⁶ × real time with wire time."""
+    fast = run_once(plan, folder, True)
+    return fast["wall_ms"] - fast["wire_ms"]
+
+
+def at_real_speed(baud: int, runs: int) -> dict[str, float]:
+    """``runs`` rehearsals at real speed with wire time, each less the host's time (the
+    mean of `host_ms` just before and just after it), against the plan's prediction."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        plan = plan_at(baud, folder)
+        host = [host_ms(plan, folder)]
+        instrument = []
+        for _ in range(runs):
+            instrument.append(run_once(plan, folder, True, speedup=1.0)["instrument_s"])
+            host.append(host_ms(plan, folder))
+    steps = len(plan) - 1
+    hosts = [0.5e-3 * (a + b) * steps for a, b in itertools.pairwise(host)]
+    less = [i - h for i, h in zip(instrument, hosts, strict=True)]
+    row = {"steps": steps, **predicted(plan)}
+    errors = [100.0 * (row["predicted_s"] / x - 1.0) for x in less]
+    row |= {
+        "instrument_s": statistics.median(instrument),
+        "host_s": statistics.median(hosts),
+        "less_host_s": statistics.median(less),
+        "error": statistics.median(errors),
+        "error_low": min(errors),
+        "error_high": max(errors),
+        "error_raw": statistics.median(100.0 * (row["predicted_s"] / i - 1.0) for i in instrument),
+        "error_before": statistics.median(100.0 * (row["before_s"] / x - 1.0) for x in less),
+    }
+    return row
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--real-runs", type=int, default=3, help="runs at real speed (each ~1 min)")
     args = ap.parse_args()
     columns = {
         "57 600 baud": measure(57_600, True, args.runs),
@@ -211,6 +287,30 @@ def main() -> None:
     for label, key, fmt in lines:
         cells = [format(c[key], fmt) if key in c else "—" for c in columns.values()]
         print(f"| {label} | " + " | ".join(cells) + " |")
+    real = {baud: at_real_speed(baud, args.real_runs) for baud in BAUDS}
+    steps = next(iter(real.values()))["steps"]
+    print(
+        f"\nat real speed (--speedup 1), wire time on, median of {args.real_runs} runs: the "
+        f"{steps:.0f} steps from the first sample's reading to the last's\n"
+    )
+    print("| at real speed | " + " | ".join(f"{b:,} baud".replace(",", " ") for b in BAUDS) + " |")
+    print("| --- |" + " ---: |" * len(BAUDS))
+    rows = [
+        ("instrument time, s", "instrument_s", ".3f"),
+        ("host time (wall − wire time a sample at 10⁶ × real time, × steps), s", "host_s", ".3f"),
+        ("instrument time less host time, s", "less_host_s", ".3f"),
+        ("predicted (registers' rates, settle, exposure, bus), s", "predicted_s", ".3f"),
+        ("of which the bus's wire time, s", "bus_s", ".3f"),
+        ("predicted / (instrument − host) − 1, %", "error", "+.2f"),
+        ("predicted / instrument − 1 (host time left in), %", "error_raw", "+.2f"),
+        ("predicted before (rig file's rates, no bus), s", "before_s", ".3f"),
+        ("before / (instrument − host) − 1, %", "error_before", "+.2f"),
+    ]
+    for label, key, fmt in rows:
+        print(f"| {label} | " + " | ".join(format(real[b][key], fmt) for b in BAUDS) + " |")
+        if key == "error":
+            cells = [f"{real[b]['error_low']:+.2f} … {real[b]['error_high']:+.2f}" for b in BAUDS]
+            print("| its range over the runs, % | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ ticks · 2π/4096. ``gear_ratio`` is motor revolutions per axis revolution; ``mo
 ``firmware``, when given, are what the motor must answer with
 (`drivers.dynamixel.hygiene`). Profile velocity and acceleration are given for the
 axis (rad/s, rad/s²) and converted to the motor's register units (0.229 rev/min,
-214.577 rev/min²).
+214.577 rev/min²), rounded to the nearest step: the rates the motor runs are
+`AxisConfig.profile_rates`, not the configured ones.
 """
 
 from __future__ import annotations
@@ -119,6 +120,16 @@ class AxisConfig:
         return (
             min(high_v, max(1, round(velocity))),
             min(high_a, max(1, round(acceleration))),
+        )
+
+    def profile_rates(self) -> tuple[float, float]:
+        """(velocity rad/s, acceleration rad/s²) of the axis under its `profile_registers`:
+        what the motor runs, each rate rounded to the nearest register step (90 °/s² on a
+        direct axis is 4 × 214.577 rev/min², 85.8 °/s²)."""
+        velocity, acceleration = self.profile_registers()
+        return (
+            velocity * RAD_S_PER_VELOCITY_UNIT / self.gear_ratio,
+            acceleration * RAD_S2_PER_ACCELERATION_UNIT / self.gear_ratio,
         )
 
     def rate_registers(self, velocity: float, acceleration: float) -> tuple[int, int]:

@@ -53,6 +53,7 @@ from drivers.dynamixel.control_table import (
 )
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
 from drivers.errors import (
     MOTION_FAULTS,
     CommError,
@@ -90,7 +91,7 @@ class DynamixelBus(Condition, Resource):
         retries: int = 3,
         latency_ms: float | None = None,
         settle_ticks: int = 2,
-        poll_interval_s: float = 0.002,
+        poll_interval_s: float = SETTLE_POLL_INTERVAL_S,
         configure: bool = True,
         reboot_timeout_s: float = 2.0,
         clock: Clock | None = None,

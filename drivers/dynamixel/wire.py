@@ -3,11 +3,19 @@
 Each byte is 10 bits on the line (start, 8 data, stop). A motor answers after its
 Return Delay Time (factory default 250 × 2 µs = 500 µs). Counts are unstuffed: a poll's
 bytes cannot form FF FF FD except in rare position values, which add one byte each.
+
+`step_seconds` is the bus's part of one stop-and-go step of `DynamixelBus` (goal write,
+settle polls, read back), the budget the planner adds to each target's predicted time.
+Wire time and return delays only: a USB adapter adds its latency timer to each status
+it hands on (docs/how-to/bring-up-motors.md), the host its own time.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 #: Bits on the line per byte: start, 8 data, stop.
 BITS_PER_BYTE = 10
@@ -15,6 +23,13 @@ BITS_PER_BYTE = 10
 DEFAULT_RETURN_DELAY_S = 250 * 2e-6
 #: Data bytes of Present Position (one poll of one motor during a sweep).
 PRESENT_POSITION_BYTES = 4
+#: Data bytes of Moving … Present Position (addresses 122-135 of the X series): what
+#: `DynamixelBus.wait_settled` polls and `DynamixelBus.positions` reads back.
+STATE_BYTES = 14
+#: Data bytes of Goal Position (one motor's part of the SYNC_WRITE of goals).
+GOAL_BYTES = 4
+#: The pause between two polls of `DynamixelBus.wait_settled` (s, on the motion's clock).
+SETTLE_POLL_INTERVAL_S = 0.002
 
 
 def sync_read_bytes(motors: int) -> int:
@@ -74,3 +89,28 @@ def setpoint_period(motors: int, baud: int) -> float:
     period over `SETPOINT_DUTY`, at least `MIN_SETPOINT_PERIOD_S`, rounded up to 1 ms."""
     wire = setpoint_seconds(motors, baud) / SETPOINT_DUTY
     return max(MIN_SETPOINT_PERIOD_S, math.ceil(wire * 1000.0 - 1e-9) / 1000.0)
+
+
+def step_seconds(
+    motors: int,
+    baud: int,
+    moves: ArrayLike,
+    *,
+    poll_interval_s: float = SETTLE_POLL_INTERVAL_S,
+    return_delay_s: float = DEFAULT_RETURN_DELAY_S,
+) -> NDArray[np.float64]:
+    """The bus's time (s) in each stop-and-go step of ``motors`` at ``baud`` beyond the
+    motion itself, for steps whose moves take ``moves`` s (any shape; 0: no motion).
+
+    The SYNC_WRITE of the goals (the motors start once it has crossed the line), the
+    wait of `DynamixelBus.wait_settled` past the motion's end, and the read back (one
+    poll of `STATE_BYTES`, ``state``). The settle polls follow one another every
+    ``state`` + ``poll_interval_s``; the motion ends anywhere in one of these periods, so
+    the poll that finds the axes settled ends on average half a period plus one poll
+    after it (one poll alone when nothing moves). Wire time and return delays only.
+    """
+    goals = sync_write_bytes(motors, GOAL_BYTES) * BITS_PER_BYTE / baud
+    state = poll_seconds(motors, baud, STATE_BYTES, return_delay_s)
+    moving = np.asarray(moves, dtype=np.float64) > 0.0
+    late = np.where(moving, 0.5 * (state + poll_interval_s), 0.0)
+    return np.asarray(goals + state + late + state, dtype=np.float64)

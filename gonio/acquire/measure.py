@@ -4,8 +4,9 @@ motion stopped, wait the rig's settle dwell, read the positions back, measure.
 
 The settle dwell is waited here, on the devices' clock, exactly once per target: the
 planner's predicted time (`gonio.planner.builder`) counts it the same way (travel + settle
-+ exposure × averages). A simulated backend is told which sample comes next (its random
-streams and injected faults) through `drivers.base.Simulated`, when it offers it.
++ exposure × averages, and the bus's part of the step on a Dynamixel rig). A simulated
+backend is told which sample comes next (its random streams and injected faults)
+through `drivers.base.Simulated`, when it offers it.
 """
 
 from __future__ import annotations

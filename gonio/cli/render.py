@@ -48,10 +48,12 @@ def render_summary(plan: Plan) -> str:
         return "\n".join(
             [*lines, "", *fly_lines(s, paths, fly.fill), f"  {'ordering':<26}{ordering_line(s)}"]
         )
+    bus = f", bus {hms(s.bus_s)}" if s.timing == "dynamixel" else ""
     lines += [
         "",
         f"  {'predicted duration':<26}{hms(s.total_s):>9}   (moves {hms(s.travel_s)}, "
-        f"settle + exposure {hms(s.dwell_s)})",
+        f"settle + exposure {hms(s.dwell_s)}{bus})",
+        f"  {'timed with':<26}{timing_line(plan)}",
     ]
     if s.naive_total_s is not None:
         lines.append(
@@ -67,7 +69,7 @@ def render_summary(plan: Plan) -> str:
         )
     if s.mst_travel_s is not None:
         lines.append(
-            f"  {'lower bound (MST)':<26}{hms(s.mst_travel_s + s.dwell_s):>9}   "
+            f"  {'lower bound (MST)':<26}{hms(s.mst_travel_s + s.dwell_s + s.bus_s):>9}   "
             f"(ordered / bound = {s.travel_s / max(s.mst_travel_s, 1e-12):.3f} in moves)"
         )
     if _dark_subtracted(plan) and spec.acquisition.calibration.dark:
@@ -80,6 +82,21 @@ def render_summary(plan: Plan) -> str:
         f"  {'ordering took':<26}{s.ordering_s:>8.1f}s",
     ]
     return "\n".join(lines)
+
+
+def timing_line(plan: Plan) -> str:
+    """What a stop-and-go plan's times were predicted with (`Summary.timing`): the rig
+    file's rates, or the rates the Dynamixel motors' profile registers hold and the
+    bus's wire time a target (goals, settle polls, read back)."""
+    s = plan.summary
+    if s.timing == "rig":
+        return "the rig file's velocities and accelerations (simulated motors, no bus)"
+    baud = f"{plan.rig.spec.bus.baud:,}".replace(",", " ")
+    per_target = 1e3 * s.bus_s / max(s.kept, 1)
+    return (
+        f"the motors' register-rounded profiles and the bus at {baud} baud "
+        f"({per_target:.1f} ms a target)"
+    )
 
 
 def fly_lines(s: Summary, paths: bool = False, fill: int = 0) -> list[str]:

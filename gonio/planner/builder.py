@@ -4,7 +4,9 @@ Points are placed uniformly in the parametrization's coordinate box (or its isot
 reduction, `gonio.planner.placement`), kept where the coordinates are valid and the rig
 can reach the pair (`solve`), mapped to joint angles, ordered for the motors
 (`order_targets`), and timed with each axis's trapezoidal profile plus settle and
-exposure (`timing`). Nothing here moves a motor.
+exposure (`timing`): at the rates the motors run and with the bus's wire time on a
+Dynamixel rig (`Rig.motion_rates`, `Rig.bus_time`), the rig file's rates alone for
+simulated motors. Nothing here moves a motor.
 """
 
 from __future__ import annotations
@@ -138,20 +140,36 @@ def lower_bounds(rig: Rig, solved: Solved, ordered: Ordered, home: FloatArray) -
     }
 
 
-def timing(
-    spec: PlanSpec, rig: Rig, wi: FloatArray, wo: FloatArray, travel: FloatArray
-) -> tuple[FloatArray, np.ndarray, FloatArray, FloatArray]:
-    """(exposure s, averages, dwell s, arrival s) of each target measuring the pairs
-    ``wi``, ``wo`` after moves of ``travel`` s: dwell is settle + exposure × averages,
-    arrival the moves and the dwells before each target."""
+@dataclass(frozen=True)
+class Timing:
+    """Each target's times (s, measuring order) and its averages: the exposures, the
+    dwell (settle + exposure × averages), the bus's part of the step (`Rig.bus_time`),
+    and the arrival (the moves up to it, the dwells and bus times before it)."""
+
+    exposure: FloatArray
+    averages: np.ndarray
+    dwell: FloatArray
+    bus: FloatArray
+    arrival: FloatArray
+
+
+def timing(spec: PlanSpec, rig: Rig, wi: FloatArray, wo: FloatArray, travel: FloatArray) -> Timing:
+    """The `Timing` of targets measuring the pairs ``wi``, ``wo`` after moves of
+    ``travel`` s."""
     exposure, averages = exposures(spec.exposure, wi, wo, rig.source_kind)
     dwell = rig.spec.settle_s + exposure * averages
-    arrival = np.cumsum(travel) + np.concatenate([[0.0], np.cumsum(dwell)[:-1]])
-    return exposure, averages, dwell, arrival
+    bus = rig.bus_time(travel)
+    arrival = np.cumsum(travel) + np.concatenate([[0.0], np.cumsum(dwell + bus)[:-1]])
+    return Timing(exposure, averages, dwell, bus, arrival)
 
 
 def summarize(
-    spec: PlanSpec, solved: Solved, ordered: Ordered, dwell: FloatArray, figures: dict[str, Any]
+    spec: PlanSpec,
+    rig: Rig,
+    solved: Solved,
+    ordered: Ordered,
+    times: Timing,
+    figures: dict[str, Any],
 ) -> Summary:
     """The counts and times of the plan (``figures``: `lower_bounds`, or none)."""
     result = ordered.ordering
@@ -161,7 +179,9 @@ def summarize(
         refused=solved.refused,
         kept=int(solved.kept.size),
         travel_s=float(ordered.travel.sum()),
-        dwell_s=float(dwell.sum()),
+        dwell_s=float(times.dwell.sum()),
+        bus_s=float(times.bus.sum()),
+        timing="dynamixel" if rig.on_dynamixel else "rig",
         ordering_s=ordered.ordering_s,
         moves=result.moves,
         max_moves=ordered.max_moves,
@@ -210,7 +230,7 @@ def build(
     chosen = solved.sel[ordered.given[ordered.order]]
     order = np.searchsorted(solved.sel, chosen)  # positions in generation order
     wi, wo = rig.forward(ordered.angles)  # the pair the chosen pose measures
-    exposure, averages, dwell, arrival = timing(spec, rig, wi, wo, ordered.travel)
+    times = timing(spec, rig, wi, wo, ordered.travel)
     return Plan(
         spec=spec,
         rig=rig,
@@ -220,11 +240,11 @@ def build(
         wi=wi,
         wo=wo,
         angles=ordered.angles,
-        exposure_s=exposure,
-        averages=averages,
+        exposure_s=times.exposure,
+        averages=times.averages,
         travel_s=ordered.travel,
-        arrival_s=arrival,
-        summary=summarize(spec, solved, ordered, dwell, figures),
+        arrival_s=times.arrival,
+        summary=summarize(spec, rig, solved, ordered, times, figures),
         plan_text=spec_text(spec) if text is None else text,
         ordering=ordered.ordering,
     )

@@ -155,6 +155,8 @@ def plan_bytes(plan: Plan) -> bytes:
         del summary["fly"]  # a stop-and-go plan's bytes as before fly plans existed
     else:
         summary["fly"] = dataclasses.asdict(s.fly)
+    if s.timing == "rig" and s.bus_s == 0.0:
+        del summary["bus_s"], summary["timing"]  # bytes as before the bus was counted
     header = {
         "spec": plan.spec.model_dump(mode="json"),
         "plan_text": plan.plan_text.decode("utf-8"),
@@ -270,6 +272,8 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
         data = {**data, "second_pass": None}  # stored before the field existed
     if isinstance(data, dict) and "fly" not in data:
         data = {**data, "fly": None}  # a stop-and-go plan
+    if isinstance(data, dict) and "timing" not in data and "bus_s" not in data:
+        data = {**data, "bus_s": 0.0, "timing": "rig"}  # the rig file's rates, no bus
     if not isinstance(data, dict) or set(data) != fields:
         got = set(data) if isinstance(data, dict) else set()
         detail = ", ".join(sorted(fields ^ got)) or type(data).__name__

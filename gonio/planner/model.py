@@ -12,6 +12,7 @@ import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Literal
 
 import numpy as np
 
@@ -81,6 +82,13 @@ class FlyFigures:
     coverage_gap_uniform: float = 0.0  # the same of the uniform stop-and-go plan
 
 
+#: The model a plan's times were predicted with: ``rig``, the rig file's velocities and
+#: accelerations and no bus (simulated motors, and every plan stored before the field
+#: existed); ``dynamixel``, the rates the motors' profile registers hold and the bus's
+#: wire time at the rig's baud rate (`Rig.motion_rates`, `Rig.bus_time`).
+TimingModel = Literal["rig", "dynamixel"]
+
+
 @dataclass(frozen=True)
 class Summary:
     """Counts and times of a plan. Times in seconds; the generation-order and MST
@@ -111,6 +119,8 @@ class Summary:
     # An adaptive plan's second pass: how it was placed and why (`gonio.planner.choice`).
     second_pass: str | None = None
     fly: FlyFigures | None = None  # a fly plan's figures
+    bus_s: float = 0.0  # the motor bus's part of the steps, summed (`Rig.bus_time`)
+    timing: TimingModel = "rig"  # the model of the times (`TimingModel`)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "refused", MappingProxyType(dict(self.refused)))
@@ -122,17 +132,20 @@ class Summary:
 
     @property
     def total_s(self) -> float:
-        return self.travel_s + self.dwell_s
+        """The predicted duration: moves, dwells and the bus's part of the steps."""
+        return self.travel_s + self.dwell_s + self.bus_s
 
     @property
     def naive_total_s(self) -> float | None:
-        return None if self.naive_travel_s is None else self.naive_travel_s + self.dwell_s
+        if self.naive_travel_s is None:
+            return None
+        return self.naive_travel_s + self.dwell_s + self.bus_s
 
     @property
     def lower_bound_s(self) -> float | None:
         if self.lower_bound_travel_s is None:
             return None
-        return self.lower_bound_travel_s + self.dwell_s
+        return self.lower_bound_travel_s + self.dwell_s + self.bus_s
 
 
 #: The array fields of a `Plan` and their dtypes.

@@ -137,11 +137,12 @@ def draw_points(
 def joined(first: Plan, second: Plan) -> Plan:
     """One plan measuring ``first``'s targets, then ``second``'s (planned to leave from
     the first's last pose): arrays concatenated, the second's arrival times after the
-    first's last dwell, its generation indices after the first's points, counts and
-    times summed."""
+    first's last dwell (and its bus time), its generation indices after the first's
+    points, counts and times summed."""
     a, b = first.summary, second.summary
     dwell_last = first.rig.spec.settle_s + float(first.exposure_s[-1] * first.averages[-1])
-    end = float(first.arrival_s[-1]) + dwell_last
+    bus_last = float(first.rig.bus_time(first.travel_s[-1])) if a.timing == "dynamixel" else 0.0
+    end = float(first.arrival_s[-1]) + dwell_last + bus_last
     summary = replace(
         b,
         requested=a.requested + b.requested,
@@ -150,6 +151,7 @@ def joined(first: Plan, second: Plan) -> Plan:
         kept=a.kept + b.kept,
         travel_s=a.travel_s + b.travel_s,
         dwell_s=a.dwell_s + b.dwell_s,
+        bus_s=a.bus_s + b.bus_s,
         ordering_s=a.ordering_s + b.ordering_s,
         moves=a.moves + b.moves,
         max_moves=a.max_moves + b.max_moves,

@@ -20,6 +20,7 @@ from typing import Literal
 import numpy as np
 
 from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel.wire import step_seconds
 from drivers.serial_detector import SerialDetectorConfig
 from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
@@ -27,7 +28,7 @@ from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
 from gonio.rig.travel import TravelModel
-from gonio.types import BoolArray, FloatArray
+from gonio.types import ArrayLike, BoolArray, FloatArray
 
 
 class Reason(IntEnum):
@@ -98,9 +99,12 @@ class Rig:
         self.axes: tuple[str, ...] = tuple(spec.axes)
         a = list(spec.axes.values())
         self.limits = np.radians([[s.min_deg, s.max_deg] for s in a])
+        #: The rig file's velocities (rad/s) and accelerations (rad/s²): each axis's limits.
         self.velocity = np.radians([s.max_velocity_deg_s for s in a])
         self.acceleration = np.radians([s.max_acceleration_deg_s2 for s in a])
-        self.travel = TravelModel(self.velocity, self.acceleration)
+        self.motor_axes = self._motor_axes()
+        #: The time a move takes at the rates the motors run (`motion_rates`).
+        self.travel = TravelModel(*self.motion_rates())
         self.home = np.clip(np.zeros(len(a)), self.limits[:, 0], self.limits[:, 1])
         c = spec.constraints
         self.theta_max = math.radians(c.theta_max_deg)
@@ -124,7 +128,6 @@ class Rig:
             for chain in ("light", "detector", "sample")
         }
         self._pointing = {c: np.asarray(getattr(spec, c).pointing) for c in ("light", "detector")}
-        self.motor_axes = self._motor_axes()
         self._check_something_reachable()
 
     @classmethod
@@ -365,6 +368,31 @@ class Rig:
         return interface.config()  # checked when the rig was read
 
     # -- motors ------------------------------------------------------------------------
+    @property
+    def on_dynamixel(self) -> bool:
+        """The motors are Dynamixel servos on a bus (``bus.kind: dynamixel``)."""
+        return self.spec.bus.kind == "dynamixel"
+
+    def motion_rates(self) -> tuple[FloatArray, FloatArray]:
+        """(velocity rad/s, acceleration rad/s²) per axis of the profiles the motors run:
+        on a Dynamixel bus the profile registers' (each rate rounded to a register step,
+        `AxisConfig.profile_rates`: 90 °/s² runs as 85.8 °/s² on a direct axis), else
+        the rig file's (what the simulated motors take)."""
+        if not self.on_dynamixel:
+            return self.velocity, self.acceleration
+        rates = np.array([axis.profile_rates() for axis in self.motor_axes], dtype=np.float64)
+        return rates[:, 0].copy(), rates[:, 1].copy()
+
+    def bus_time(self, travel: ArrayLike) -> FloatArray:
+        """The time (s) the motor bus adds to each stop-and-go step whose move takes
+        ``travel`` s (any shape): on a Dynamixel bus its wire time at ``bus.baud``
+        (`drivers.dynamixel.wire.step_seconds`: the goals, the settle polls, the read
+        back); 0 for simulated motors."""
+        moves = np.asarray(travel, dtype=np.float64)
+        if not self.on_dynamixel:
+            return np.zeros_like(moves)
+        return step_seconds(len(self.axes), self.spec.bus.baud, moves)
+
     def bus_axes(self) -> list[AxisConfig]:
         """The axes as `drivers.dynamixel.axis.AxisConfig` for a `DynamixelBus`."""
         return list(self.motor_axes)

@@ -2,7 +2,8 @@
 
 Implements `drivers.base.MotorBus` (every rule of the contract). Nothing sleeps:
 `wait_settled` advances the clock to the end of the slowest axis's trapezoidal profile
-(the rig file's velocity and acceleration; `gonio.rig.travel`), so a simulated run
+(at the rates the rig's motors run, `Rig.motion_rates`: the rig file's, each rounded to a
+register step on a Dynamixel rig; `gonio.rig.travel`), so a simulated run
 reports the hours the real rig would take in the seconds it computes. The rig's settle
 dwell is the caller's to wait, as on hardware. Faults are injected from the scene's
 ``faults:`` rules (`sim.faults`) for the sample named by `begin_sample`; their state and
@@ -93,8 +94,9 @@ class SimMotorBus(Resource):
         self.faults = MotorFaults(faults or FaultInjector((), streams), self._names, motor_ids)
         self._index = {n: i for i, n in enumerate(self._names)}
         self._lo, self._hi = rig.limits[:, 0], rig.limits[:, 1]
-        self._v, self._a = rig.velocity, rig.acceleration
-        self._move_v, self._move_a = self._v, self._a  # the present move's profile
+        self._v, self._a = rig.velocity, rig.acceleration  # the limits of a sweep's rates
+        self._run_v, self._run_a = rig.travel.velocity, rig.travel.acceleration  # a move's
+        self._move_v, self._move_a = self._run_v, self._run_a  # the present move's profile
         if poll_s is None:
             poll_s = poll_seconds(len(self._names), rig.spec.bus.baud)
         #: Virtual seconds one `poll_positions` takes.
@@ -207,7 +209,7 @@ class SimMotorBus(Resource):
         self._direction = np.where(moved, step, self._direction)
         self._start, self._goal, self._t0 = here, goal, self.clock.now()
         if v is None or a is None:
-            self._move_v, self._move_a = self._v, self._a
+            self._move_v, self._move_a = self._run_v, self._run_a
             self._end = self._t0 + self._travel(here.tolist(), goal.tolist())
         else:
             self._move_v, self._move_a = v, a

@@ -156,3 +156,25 @@ def test_profile_registers_convert_rad_per_second() -> None:
     assert acc == round(20.0 / (214.577 * 2 * math.pi / 3600))
     tiny = axis(profile_velocity_rad_s=1e-9, profile_acceleration_rad_s2=1e-9)
     assert tiny.profile_registers() == (1, 1)
+
+
+def test_profile_rates_are_the_registers_steps_at_the_axis() -> None:
+    """The rates a motor runs: 45 °/s and 90 °/s² on a direct axis are 33 × 0.229 rev/min
+    (45.34 °/s) and 4 × 214.577 rev/min² (85.83 °/s²); through a 2:1 gear, 40 °/s and
+    60 °/s² are 58 and 6 steps of the motor, halved at the axis."""
+    direct = axis(
+        profile_velocity_rad_s=math.radians(45), profile_acceleration_rad_s2=math.radians(90)
+    )
+    v, a = direct.profile_rates()
+    assert math.degrees(v) == pytest.approx(33 * 0.229 * 360 / 60, rel=1e-12)
+    assert math.degrees(a) == pytest.approx(4 * 214.577 * 360 / 3600, rel=1e-12)
+    assert math.degrees(a) == pytest.approx(85.83, abs=0.005)
+    geared = axis(
+        profile_velocity_rad_s=math.radians(40),
+        profile_acceleration_rad_s2=math.radians(60),
+        gear_ratio=2.0,
+        mode="extended_position",
+    )
+    v, a = geared.profile_rates()
+    assert math.degrees(v) == pytest.approx(58 * 0.229 * 360 / 60 / 2, rel=1e-12)
+    assert math.degrees(a) == pytest.approx(6 * 214.577 * 360 / 3600 / 2, rel=1e-12)

@@ -17,6 +17,7 @@ from pathlib import Path
 import dynamixel_sdk as sdk
 import pytest
 
+from drivers.dynamixel import wire
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import RAD_PER_TICK
@@ -217,6 +218,31 @@ def test_move_settle_and_read_back(bus_on: Callable[..., tuple[DxlEmulator, Dyna
     for name, target in targets.items():
         assert abs(got[name] - target) <= 0.5 * RAD_PER_TICK + 1e-12
     assert emu.stats.instructions.get("SYNC_READ", 0) >= 1
+
+
+def test_a_hold_step_sends_what_the_step_budget_counts(
+    bus_on: Callable[..., tuple[DxlEmulator, DynamixelBus]],
+) -> None:
+    """A step that does not move (goal = present position): one SYNC_WRITE of the goals,
+    the poll that finds the axes settled and the read back, byte for byte what
+    `wire.step_seconds` times for a step without motion."""
+    emu, bus = bus_on()
+    with bus:
+        here = bus.positions()  # a read: everything open sent has been served
+        emu.reset_stats()
+        bus.move_to(here)
+        bus.wait_settled(timeout_s=3.0)
+        bus.positions()
+        stats = emu.stats
+    motors, baud = 3, 57_600
+    assert stats.instructions == {"SYNC_WRITE": 1, "SYNC_READ": 2}
+    assert stats.bytes_in == wire.sync_write_bytes(motors, wire.GOAL_BYTES) + 2 * (
+        wire.sync_read_bytes(motors)
+    )
+    assert stats.bytes_out == 2 * motors * wire.status_bytes(wire.STATE_BYTES)
+    on_the_line = (stats.bytes_in + stats.bytes_out) * wire.BITS_PER_BYTE / baud
+    delays = stats.packets_out * wire.DEFAULT_RETURN_DELAY_S
+    assert wire.step_seconds(motors, baud, 0.0) == pytest.approx(on_the_line + delays, rel=1e-12)
 
 
 def test_targets_outside_limits_are_refused_before_any_byte(
