@@ -77,17 +77,12 @@ class Linear(Interpolant):
         self.table = np.asarray(table, dtype=np.float64)
         self.tri = Delaunay(points)
         #: (S, d + 1, d): the layout of scipy's ``Delaunay.transform``, computed here.
-        self.transform = barycentric_transforms(self.tri.points, self.tri.simplices)
+        self.transform, regular = transforms_and_regularity(self.tri.points, self.tri.simplices)
         #: (S,): simplices with no barycentric coordinates (`FLAT_SIMPLEX`).
         self.flat = np.isnan(self.transform[:, 0, 0])
         #: (P,): the most regular simplex each point is a vertex of (−1: none), where
         #: a walk from that point starts (a sliver's coordinates steer it badly).
-        self.start = most_regular(self.tri.points, self.tri.simplices)
-        #: (S, d + 1): across face j of simplex s, the face of ``neighbors[s, j]``
-        #: across which s lies (0 where there is no neighbour).
-        neighbors = self.tri.neighbors
-        back = neighbors[np.maximum(neighbors, 0)] == np.arange(len(neighbors))[:, None, None]
-        self.back = np.argmax(back, axis=2)
+        self.start = most_regular(self.tri.simplices, regular, len(self.tri.points))
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
         simplex = self.locate(x, nearest)
@@ -159,8 +154,10 @@ class Linear(Interpolant):
         for j in range(faces):  # a short loop over the d + 1 faces
             n = self.tri.neighbors[s, j]
             usable = (n >= 0) & ~self.flat[np.maximum(n, 0)]
-            c = self._barycentric(x, np.where(usable, n, 0))
-            beyond = c[rows, self.back[s, j]] > 0.0
+            n = np.where(usable, n, 0)
+            c = self._barycentric(x, n)
+            far = np.argmax(self.tri.neighbors[n] == s[:, None], axis=1)  # n's face toward s
+            beyond = c[rows, far] > 0.0
             depth[:, j] = np.where(usable & beyond, np.min(c, axis=1), -np.inf)
         k = np.asarray(np.argmax(depth, axis=1), dtype=np.intp)
         k[np.isneginf(depth[rows, k])] = FLAT_TURNS[step % len(FLAT_TURNS)] % faces
@@ -228,45 +225,43 @@ def barycentric_transforms(points: FloatArray, simplices: np.ndarray) -> FloatAr
     of scipy's ``Delaunay.transform`` (S, d + 1, d): T⁻¹ in the first d rows and the
     last vertex r in the last, with T c = x − r (c the first d coordinates, the last is
     1 − Σ c); NaN for flat simplices (|det T| ≤ `FLAT_SIMPLEX` × Hadamard's bound)."""
+    return transforms_and_regularity(points, simplices)[0]
+
+
+def transforms_and_regularity(
+    points: FloatArray, simplices: np.ndarray
+) -> tuple[FloatArray, FloatArray]:
+    """`barycentric_transforms` and each simplex's regularity (S,), from one determinant:
+    |det T| over Hadamard's bound (the product of T's column lengths), 1 for edges at
+    right angles, 0 for a flat simplex, small for a sliver."""
     v = points[simplices]  # (S, d + 1, d)
     d = v.shape[2]
     r = v[:, d, :]
     t = np.transpose(v[:, :d, :] - r[:, None, :], (0, 2, 1))  # columns v_j − r
-    det = np.linalg.det(t)
+    det = np.abs(np.linalg.det(t))
     bound = np.prod(np.linalg.norm(t, axis=1), axis=1)
-    flat = ~(np.abs(det) > FLAT_SIMPLEX * bound)
+    flat = ~(det > FLAT_SIMPLEX * bound)
     t[flat] = np.eye(d)
     inv = np.linalg.inv(t)
     inv[flat] = np.nan
     out = np.empty((len(v), d + 1, d))
     out[:, :d, :] = inv
     out[:, d, :] = np.where(flat[:, None], np.nan, r)
-    return out
+    regular: FloatArray = np.divide(det, bound, out=np.zeros(len(v)), where=bound > 0)
+    return out, regular
 
 
-def regularity(points: FloatArray, simplices: np.ndarray) -> FloatArray:
-    """|det T| over Hadamard's bound (the product of T's column lengths) of each simplex
-    (S,) of points (P, d), T's columns its edges from its last vertex: 1 for edges at
-    right angles, 0 for a flat simplex, small for a sliver."""
-    v = points[simplices]  # (S, d + 1, d)
-    d = v.shape[2]
-    t = v[:, :d, :] - v[:, d : d + 1, :]  # rows v_j − r: the same det and lengths
-    bound = np.prod(np.linalg.norm(t, axis=2), axis=1)
-    det = np.abs(np.linalg.det(t))
-    out: FloatArray = np.divide(det, bound, out=np.zeros(len(v)), where=bound > 0)
-    return out
-
-
-def most_regular(points: FloatArray, simplices: np.ndarray) -> np.ndarray:
-    """For each point (P,), the most regular (`regularity`) of the simplices (S, d + 1)
-    it is a vertex of; −1 for a point in none."""
-    quality = regularity(points, simplices)
-    vertex = simplices.ravel()
-    simplex = np.repeat(np.arange(len(simplices)), simplices.shape[1])
-    order = np.lexsort((quality[simplex], vertex))  # by point, then by regularity
-    best = np.full(len(points), -1, dtype=np.intp)
-    best[vertex[order]] = simplex[order]  # the last, most regular, is the one kept
-    return best
+def most_regular(simplices: np.ndarray, regular: FloatArray, points: int) -> np.ndarray:
+    """For each of ``points`` points (P,), the most regular of the simplices (S, d + 1)
+    it is a vertex of, by their regularity ``regular`` (S,) (`transforms_and_regularity`)
+    to 9 decimals (congruent simplices, a grid's, tie whatever the rounding of their
+    determinants) and of equals the last; −1 for a point in none."""
+    order = np.argsort(np.round(regular, 9), kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    best = np.full(points, -1, dtype=np.int64)
+    np.maximum.at(best, simplices.ravel(), np.repeat(rank, simplices.shape[1]))
+    return np.where(best >= 0, order[np.maximum(best, 0)], -1).astype(np.intp)
 
 
 class Rbf(Interpolant):

@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 from scipy.spatial import Delaunay
 
-from gonio.reconstruct.interpolants import Linear, Rbf, barycentric_transforms, most_regular
+from gonio.reconstruct.interpolants import (
+    Linear,
+    Rbf,
+    barycentric_transforms,
+    most_regular,
+    transforms_and_regularity,
+)
 
 
 @pytest.mark.parametrize("d", [3, 4])
@@ -116,9 +122,11 @@ def test_outside_marks_only_queries_the_search_finds_in_no_simplex(d: int) -> No
 def test_a_walk_starts_from_the_most_regular_simplex_of_each_point() -> None:
     points = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [3.0, 0.0]])
     simplices = np.array([[0, 1, 2], [1, 2, 3], [1, 3, 4]])
-    # Regularities: 1/√2, 1 and 2/(1·√5): point 1 is in all three, 3 in two, 4 in one.
-    np.testing.assert_array_equal(most_regular(points, simplices), [0, 1, 1, 1, 2])
-    np.testing.assert_array_equal(most_regular(points, simplices[:1]), [0, 0, 0, -1, -1])
+    _, regular = transforms_and_regularity(points, simplices)
+    np.testing.assert_allclose(regular, [1 / np.sqrt(2), 1.0, 1 / np.sqrt(5)], rtol=1e-15)
+    # Point 1 is in all three simplices, 3 in two, 4 in one.
+    np.testing.assert_array_equal(most_regular(simplices, regular, 5), [0, 1, 1, 1, 2])
+    np.testing.assert_array_equal(most_regular(simplices[:1], regular[:1], 5), [0, 0, 0, -1, -1])
 
 
 def test_batched_barycentric_transforms_match_scipys() -> None:
