@@ -7,9 +7,11 @@ A caller that can predict the time left passes ``left_s`` (the time left after `
 steps, in wall seconds): the acquisition passes the planner's prediction scaled by the
 pace measured so far; without it the bar shows tqdm's own rate-based estimate.
 
-Planning runs deep inside library code, so its stages are shown through a context
-variable instead of an argument: `stage` opens a bar (on a terminal, once the stage has
-lasted ``delay_s``), `quiet` hides them and `shown_on` chooses the stream.
+Planning and exports run deep inside library code, so their stages are shown through a
+context variable instead of an argument: `stage` opens a bar (on a terminal, once the
+stage has lasted ``delay_s``), `step` a line naming a stage without counts (one call
+into compiled code: a triangulation, a factorization), `quiet` hides them and
+`shown_on` chooses the stream and the delay.
 """
 
 from __future__ import annotations
@@ -122,11 +124,13 @@ class Bar:
         delay_s: float = 0.0,
         leave: bool = True,
         unit_scale: bool = False,
+        counted: bool = True,
     ) -> None:
         self.stream = stream or sys.stderr
         self.delay_s = delay_s
         self.leave = leave
         self.unit_scale = unit_scale  # counts shown as 1.2k, 3.4M
+        self.counted = counted  # False: the label alone (a step that cannot count)
         self._bar: tqdm[Any] | None = None
         self._left: TimeLeft | None = None
 
@@ -134,7 +138,7 @@ class Bar:
         self, total: int | None, label: str, *, unit: str = "target", left_s: TimeLeft | None = None
     ) -> None:
         self._left = left_s
-        fmt = None
+        fmt = None if self.counted else "{desc} …"
         if left_s is not None:
             fmt = (
                 "{desc} {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
@@ -204,17 +208,31 @@ def shown_on(stream: IO[str], delay_s: float = DELAY_S) -> AbstractContextManage
     return _using(_Display(True, stream, delay_s))
 
 
+def stage(
+    description: str, total: int | None, unit: str = "target", *, work: str = "planning"
+) -> AbstractContextManager[Progress]:
+    """A stage of ``total`` steps (None: unknown) of ``work`` (planning, export), shown as
+    configured by `quiet` / `shown_on` (default: standard error, after `DELAY_S`)."""
+    return _stage(f"{work}: {description}", total, unit, counted=True)
+
+
+def step(description: str, *, work: str) -> AbstractContextManager[Progress]:
+    """A stage of ``work`` that cannot count its progress (one call into compiled code),
+    shown by its description alone while it runs, as configured by `quiet` /
+    `shown_on`: a bar appears when a step advances, so only a display without delay
+    (``shown_on(stream, delay_s=0)``) shows it."""
+    return _stage(f"{work}: {description}", None, "step", counted=False)
+
+
 @contextmanager
-def stage(description: str, total: int | None, unit: str = "target") -> Iterator[Progress]:
-    """A stage of ``total`` steps (None: unknown), shown as configured by `quiet` /
-    `shown_on` (default: standard error, after `DELAY_S`)."""
+def _stage(label: str, total: int | None, unit: str, *, counted: bool) -> Iterator[Progress]:
     display = _display.get() or _Display()
     shown: Progress = (
-        Bar(display.stream, delay_s=display.delay_s, leave=False, unit_scale=True)
+        Bar(display.stream, delay_s=display.delay_s, leave=False, unit_scale=True, counted=counted)
         if display.shown
         else Quiet()
     )
-    shown.start(total, f"planning: {description}", unit=unit)
+    shown.start(total, label, unit=unit)
     try:
         yield shown
     finally:

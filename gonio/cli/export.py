@@ -5,6 +5,7 @@ docs/reference/formats.md."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from gonio.reconstruct.methods import DEFAULT_METHOD, names
@@ -63,12 +64,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--inner", type=int, default=2, help="factored: inner terms K per outer term (default 2)"
     )
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress display; print nothing on success"
+    )
     p.set_defaults(func=cmd_export)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from gonio import params
+    from gonio import params, progress
     from gonio.errors import GonioError
     from gonio.export import Options, export
     from gonio.reconstruct import methods
@@ -88,7 +91,11 @@ def cmd_export(args: argparse.Namespace) -> int:
         rgl_color=args.rgl_color,
         method=args.method,
     )
-    summary = export(args.run, args.format, args.output, options)
+    # Each long step is named on a terminal as it starts (no delay: a step that runs in
+    # compiled code cannot advance a bar to make it appear later).
+    shown = progress.quiet() if args.quiet else progress.shown_on(sys.stderr, delay_s=0.0)
+    with shown:
+        summary = export(args.run, args.format, args.output, options)
     if not args.quiet:
         print(summary)
     return 0

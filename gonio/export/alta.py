@@ -34,6 +34,7 @@ import numpy as np
 from gonio import params
 from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
+from gonio.export.steps import step
 from gonio.output import PendingOutput
 from gonio.store.read import Run
 from gonio.types import FloatArray
@@ -82,7 +83,8 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     param = options.alta_param
     if param not in PARAMETRIZATIONS:
         raise GonioError(f"--alta-param {param}: expected one of {', '.join(PARAMETRIZATIONS)}")
-    measured = Measured.from_run(run)
+    with step("reading and calibrating the run"):
+        measured = Measured.from_run(run)
     if measured.is_rgb:  # pragma: no cover (a run is one band)
         raise GonioError(f"{run.path}: ALTA's confidence intervals cover one output only")
     coords = PARAMETRIZATIONS[param][1](measured.wi, measured.wo)
@@ -91,6 +93,6 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
         f"{len(measured)} samples, band {measured.band}",
         "dt = the sample's 1-sigma uncertainty (symmetric interval f - dt .. f + dt)",
     ]
-    text = to_text(coords, measured.f, measured.sigma, param, comments)
-    out.write_bytes(text.encode())
+    with step(f"writing {len(measured):,} samples"):
+        out.write_bytes(to_text(coords, measured.f, measured.sigma, param, comments).encode())
     return f"wrote {len(measured)} samples to {out.path} (ALTA {PARAMETRIZATIONS[param][0]}, #VS 1)"

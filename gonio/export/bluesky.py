@@ -23,6 +23,7 @@ import numpy as np
 
 from gonio.errors import GonioError
 from gonio.export.columns import Column, sample_columns
+from gonio.export.steps import step
 from gonio.output import PendingOutput
 from gonio.store.read import Run
 
@@ -167,7 +168,9 @@ def to_text(docs: list[tuple[str, dict[str, Any]]]) -> str:
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    docs = documents(run)
-    out.write_bytes(to_text(docs).encode())
+    with step(f"building the documents of {len(run):,} samples"):
+        docs = documents(run)
+    with step(f"writing {len(docs):,} documents"):
+        out.write_bytes(to_text(docs).encode())
     events = sum(1 for name, _ in docs if name == "event")
     return f"wrote {len(docs)} documents ({events} events) to {out.path} (bluesky JSON lines)"

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio.export.columns import Column, sample_columns
+from gonio.export.steps import step
 from gonio.output import PendingOutput
 from gonio.store.read import Run
 
@@ -43,6 +44,7 @@ def to_text(columns: list[Column]) -> str:
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    columns = sample_columns(run)
-    out.write_bytes(to_text(columns).encode())
+    with step(f"writing {len(run):,} samples"):
+        columns = sample_columns(run)
+        out.write_bytes(to_text(columns).encode())
     return f"wrote {len(run)} samples × {len(columns)} columns to {out.path} (csv)"

@@ -28,12 +28,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gonio.analysis.measured import Measured
 from gonio.brdf import factored_file as ff
 from gonio.errors import GonioError
+from gonio.export.steps import evaluated, reconstructed, step
 from gonio.output import PendingOutput, reserve_output
 from gonio.params.cases import direction
-from gonio.reconstruct.methods import reconstruction
 from gonio.store.read import Run
 from gonio.types import Evaluable, FloatArray
 
@@ -78,7 +77,7 @@ def table(model: Evaluable, res: Resolution) -> FloatArray:
     wi = 2.0 * d * h - wo
     wo = np.broadcast_to(wo, wi.shape)
     lit = wi[..., 2] > 0.0
-    values = np.asarray(model.eval(wi[lit], wo[lit]), dtype=np.float64)
+    values, _ = evaluated(model, wi[lit], wo[lit], "evaluating the table to factor")
     cos_i = wi[lit][:, 2]
     rgb = values.ndim == 2
     out = np.zeros(lit.shape + values.shape[1:], dtype=np.float64)
@@ -144,7 +143,8 @@ def factorize(
     rgb = y.ndim == 5
     rows, cols = res.theta_out * res.phi_out, res.theta_p * res.phi_p
     intensity = (y.mean(axis=-1) if rgb else y).reshape(rows, cols)
-    F, G = _nmf(intensity, outer, seed, max_iter)
+    with step(f"factorizing: {outer} outer terms, {inner} inner terms each"):
+        F, G = _nmf(intensity, outer, seed, max_iter)
     dz = ff.cell_dz(res.theta_p)
     dphi = ff.TWO_PI / res.phi_p
     G3 = G.reshape(outer, res.theta_p, res.phi_p)
@@ -153,7 +153,8 @@ def factorize(
     F, G3 = F * scale, G3 / scale[:, None, None]
     u, v = np.empty((outer, inner, res.theta_p)), np.empty((outer, inner, res.phi_p))
     for j in range(outer):  # J small factorizations, not a loop over samples
-        uj, vj = _nmf(G3[j], inner, seed, max_iter)
+        with step(f"factorizing outer term {j + 1} of {outer}"):
+            uj, vj = _nmf(G3[j], inner, seed, max_iter)
         norm = dz @ uj
         norm = np.where(norm > 0.0, norm, 1.0)
         u[j], v[j] = (uj / norm).T, vj * norm[:, None]
@@ -214,12 +215,11 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     into ``out`` and its CDF file beside it (``out`` + ``.cdf``)."""
     cdf_path = out.path.with_name(out.path.name + ff.CDF_SUFFIX)
     with reserve_output(cdf_path, "factored CDF file") as cdfs:
-        surface = reconstruction(
-            Measured.from_run(run), options.method, None, extrapolate="nearest"
-        )
+        _, surface = reconstructed(run, options.method, extrapolate="nearest")
         result = factorize(surface, options.outer, options.inner, seed=0)
-        out.write_bytes(ff.format_factors(result.tables).encode("utf-8"))
-        cdfs.write_bytes(ff.format_cdfs(result.tables).encode("utf-8"))
+        with step("writing"):
+            out.write_bytes(ff.format_factors(result.tables).encode("utf-8"))
+            cdfs.write_bytes(ff.format_cdfs(result.tables).encode("utf-8"))
     return (
         f"wrote {out.path} and {cdf_path} (factored, J = {options.outer}, K = "
         f"{options.inner}): relative error {result.error:.3g} of the {options.method} "

@@ -31,14 +31,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gonio import __version__, params
-from gonio.analysis.measured import Measured
 from gonio.errors import GonioError
 from gonio.export.columns import coordinate_unit, sample_columns
+from gonio.export.steps import evaluated, reconstructed, step
 from gonio.output import PendingOutput
 from gonio.planner.files import plan_bytes
 from gonio.planner.model import ARRAYS
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import Evaluable, FloatArray
 
@@ -147,7 +145,7 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
     coords = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
     ok = p.valid_iso(coords)
     wi, wo = p.inverse_iso(np.where(ok[..., None], coords, [a[0] for a in axes]))
-    values, supported = values_and_support(model, wi, wo)
+    values, supported = evaluated(model, wi, wo, f"evaluating the {parametrization} grid")
     mask = ok[..., None] if values.ndim == ok.ndim + 1 else ok
     group = h5.create_group("reconstruction")
     group.attrs.update(
@@ -185,12 +183,13 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     _h5py()
     if options.grid is not None:
         grid = options.grid
-        surface = reconstruction(Measured.from_run(run), options.method, grid)
+        _, surface = reconstructed(run, options.method, grid)
         out.write_with(lambda path: write(path, run, surface, grid, options.grid_points))
         return (
             f"wrote {len(run)} samples, {len(run.events)} events, the plan and the "
             f"{options.method} reconstruction on a {options.grid_points}-point {grid} grid "
             f"to {out.path} (hdf5)"
         )
-    out.write_with(lambda path: write(path, run))
+    with step(f"writing {len(run):,} samples"):
+        out.write_with(lambda path: write(path, run))
     return f"wrote {len(run)} samples, {len(run.events)} events and the plan to {out.path} (hdf5)"

@@ -22,12 +22,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
-from gonio.analysis.measured import Measured
 from gonio.brdf import merl
 from gonio.errors import GonioError
+from gonio.export.steps import evaluated, reconstructed, step
 from gonio.output import PendingOutput
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import BoolArray, FloatArray, Surface
 
@@ -60,8 +58,9 @@ def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
 
 def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     """The reconstruction evaluated at every bin (see the module docstring)."""
-    wi, wo, ok = representative_pairs()
-    got, supported_at = values_and_support(reconstruction, wi[ok], wo[ok])
+    with step("the bins' direction pairs"):
+        wi, wo, ok = representative_pairs()
+    got, supported_at = evaluated(reconstruction, wi[ok], wo[ok], "filling the MERL table")
     supported = np.zeros(ok.shape, dtype=bool)
     supported[ok] = True if supported_at is None else supported_at
     if got.shape == (int(ok.sum()),):
@@ -88,7 +87,8 @@ def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
 def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = False) -> str:
     """Fill the table and write it to ``out``; the one-line summary."""
     table = fill(reconstruction, extrapolate=extrapolate)
-    out.write_bytes(merl.to_bytes(table.values, table.missing))
+    with step(f"writing {merl.FILE_SIZE / 1e6:.0f} MB"):
+        out.write_bytes(merl.to_bytes(table.values, table.missing))
     written = merl.BINS - int(np.count_nonzero(table.missing))
     what = (
         f"{table.extrapolated} extrapolated"
@@ -103,7 +103,5 @@ def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = Fa
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     extrapolate = options.merl_fill == "extrapolate"
-    surface = reconstruction(
-        Measured.from_run(run), options.method, None, extrapolate="nearest" if extrapolate else None
-    )
+    _, surface = reconstructed(run, options.method, extrapolate="nearest" if extrapolate else None)
     return write(out, surface, extrapolate=extrapolate)

@@ -44,14 +44,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gonio.analysis.measured import Measured
 from gonio.brdf import rgl, tensor_file
 from gonio.brdf.marginal import Marginal2D, Table
 from gonio.errors import GonioError
+from gonio.export.steps import evaluated, reconstructed, step
 from gonio.output import PendingOutput
 from gonio.radiometry.bands import LUMINANCE
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
 from gonio.types import FloatArray, Surface
 
@@ -119,10 +117,8 @@ class _Counter:
     def __init__(self, surface: Surface) -> None:
         self.surface, self.pairs, self.unsupported, self.bad = surface, 0, 0, 0
 
-    def __call__(self, wi: FloatArray, wo: FloatArray) -> FloatArray:
-        f, ok = values_and_support(self.surface, wi.reshape(-1, 3), wo.reshape(-1, 3))
-        f = np.asarray(f, dtype=np.float64)
-        f = f.reshape(*wi.shape[:-1], *f.shape[1:])
+    def __call__(self, wi: FloatArray, wo: FloatArray, description: str) -> FloatArray:
+        f, ok = evaluated(self.surface, wi, wo, description)
         self.pairs += wi[..., 0].size
         self.unsupported += 0 if ok is None else int(np.count_nonzero(~ok))
         finite = np.isfinite(f)
@@ -173,7 +169,7 @@ def fields(
     u_fine = np.linspace(0.0, 1.0, NDF_NODES)
     theta_m = u_fine**2 * (np.pi / 2)
     w = direction(np.minimum(theta_m, np.radians(89.5)), 0.0)
-    retro = _grey(f(w, w))
+    retro = _grey(f(w, w, "evaluating the retro-reflection"))
     if not np.max(retro) > 0:
         raise GonioError("the reconstruction's retro-reflection is 0 everywhere: no NDF")
     d = power_iteration(retro, theta_m)
@@ -219,7 +215,7 @@ def fields(
     u_half = np.stack([rgl.theta_to_u(th), uy_m - np.floor(uy_m)], -1)
     u_wi = np.stack([rgl.theta_to_u(t32), np.full(t32.shape, 0.5)], -1)
     scale = wo[..., 2] * 4 * sigma_t.eval(u_wi) / np.maximum(ndf_t.eval(u_half), 1e-30)
-    values = f(wi, wo)
+    values = f(wi, wo, "evaluating the tabulated values")
     channels = 3 if values.ndim == 4 else 1
     if channels == 1:
         values = values[..., None]
@@ -271,8 +267,9 @@ def write(
         theta_nodes=theta_nodes,
         samples=samples,
     )
-    data = tensor_file.to_bytes(table)
-    out.write_bytes(data)
+    with step("writing"):
+        data = tensor_file.to_bytes(table)
+        out.write_bytes(data)
     kind = f"{len(WAVELENGTHS)} wavelengths" if "spectra" in table else "RGB"
     n = np.shape(table["luminance"])
     return (
@@ -284,8 +281,7 @@ def write(
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    measured = Measured.from_run(run)
-    surface = reconstruction(measured, options.method, None, extrapolate="nearest")
+    measured, surface = reconstructed(run, options.method, extrapolate="nearest")
     text = f"gonio export of {run.path.name}: {options.method} reconstruction, "
     text += f"{measured.band} band"
     return write(out, surface, band=measured.band, color=options.rgl_color, description=text)

@@ -15,10 +15,11 @@ The grid interpolant lives in `gonio.reconstruct.grid`.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import RBFInterpolator
-from scipy.spatial import Delaunay
+from scipy.spatial import ConvexHull, Delaunay
 
 from gonio.errors import GonioError
 from gonio.types import BoolArray, FloatArray
@@ -30,8 +31,13 @@ FLAT_SIMPLEX = 1e-10
 INSIDE = 100 * float(np.finfo(np.float64).eps)
 #: ... and down to −`BROAD` for a query that would leave the hull (scipy's eps_broad).
 BROAD = float(np.sqrt(INSIDE))
-#: Steps of the vectorized walk before the remaining queries are searched for.
+#: Steps of the vectorized walk before the queries still walking are judged by the
+#: hull's facets (`Linear.outside`) and the rest searched for (`Linear.search`).
 MAX_STEPS = 64
+#: The face a walk leaves a flat simplex by, step by step, when no face is on the
+#: query's side (`Linear._leave_flat`): fixed random turns, the same for every query
+#: (its answer does not depend on its batch) and out of step with any short cycle.
+FLAT_TURNS = np.random.default_rng(0).integers(0, 1 << 16, MAX_STEPS)
 #: Queries × simplices whose coordinates that search holds at once, one axis at a time.
 SEARCH_BLOCK = 1 << 16
 #: Neighbours of each query the ``rbf`` method solves with (scipy's ``neighbors``).
@@ -59,18 +65,24 @@ class Linear(Interpolant):
     4-D; here one batched inverse, `barycentric_transforms`, from the triangulation's
     public ``points`` and ``simplices``), and its walk starts from the previous query's
     simplex and falls back to a search of every simplex when it meets a flat one
-    (exact seam copies made cocircular points, hence flat simplices): 4.5 s per
-    100 000 queries. Here all queries walk at once, each from a simplex of its nearest
-    sample (a step or two), leaving a flat simplex across a face chosen by turns;
-    the rare query not arrived after `MAX_STEPS` is searched for in every simplex
-    (`search`).
+    (exact seam copies and grids make cospherical points, hence flat simplices): 4.5 s
+    per 100 000 queries. Here all queries walk at once (`locate`), each from the most
+    regular simplex of its nearest sample, and leave a flat simplex toward the side of
+    its hyperplane the query is on; a query not arrived after `MAX_STEPS` is outside
+    the hull if it lies beyond a facet of it (`outside`), else searched for in every
+    simplex (`search`).
     """
 
     def __init__(self, points: FloatArray, table: FloatArray) -> None:
         self.table = np.asarray(table, dtype=np.float64)
         self.tri = Delaunay(points)
         #: (S, d + 1, d): the layout of scipy's ``Delaunay.transform``, computed here.
-        self.transform = barycentric_transforms(self.tri.points, self.tri.simplices)
+        self.transform, regular = transforms_and_regularity(self.tri.points, self.tri.simplices)
+        #: (S,): simplices with no barycentric coordinates (`FLAT_SIMPLEX`).
+        self.flat = np.isnan(self.transform[:, 0, 0])
+        #: (P,): the most regular simplex each point is a vertex of (−1: none), where
+        #: a walk from that point starts (a sliver's coordinates steer it badly).
+        self.start = most_regular(self.tri.simplices, regular, len(self.tri.points))
 
     def __call__(self, x: FloatArray, nearest: np.ndarray) -> tuple[FloatArray, BoolArray]:
         simplex = self.locate(x, nearest)
@@ -93,20 +105,23 @@ class Linear(Interpolant):
 
     def locate(self, x: FloatArray, nearest: np.ndarray) -> np.ndarray:
         """The simplex containing each query (−1 outside the hull), by a visibility walk
-        from a simplex of its nearest point: step across the face opposite the most
-        negative barycentric coordinate until none is negative (inside) or that face
-        is on the hull (outside: the hull is convex). A query still walking after
-        `MAX_STEPS` is left to `search`."""
-        start = self.tri.vertex_to_simplex[nearest]
+        from the most regular simplex of its nearest point: step across the face
+        opposite the most negative barycentric coordinate until none is negative
+        (inside) or that face is on the hull (outside: the hull is convex); out of a
+        flat simplex as `_leave_flat` chooses. A query still walking after `MAX_STEPS`
+        (a walk among slivers and flat simplices may circle) is outside if `outside`
+        says so, else left to `search`. Each query walks on its own: its batch does not
+        change where it arrives."""
+        start = self.start[nearest]
         s = np.where(start >= 0, start, 0)
         found = np.full(len(x), -1, dtype=np.intp)
         active = np.arange(len(x))
         for step in range(MAX_STEPS):
             c = self._barycentric(x[active], s[active])
-            flat = np.isnan(c[:, 0])
-            k = np.argmin(np.where(np.isnan(c), np.inf, c), axis=1)
-            # A flat simplex has no coordinates: leave it across a face chosen by turns.
-            k[flat] = (step + active[flat]) % c.shape[1]
+            flat = self.flat[s[active]]
+            k = np.argmin(np.where(flat[:, None], np.inf, c), axis=1)
+            if flat.any():
+                k[flat] = self._leave_flat(x[active[flat]], s[active[flat]], step)
             lowest = c[np.arange(len(active)), k]
             after = self.tri.neighbors[s[active], k]
             # At the hull a query may lean out by rounding (a sliver's coordinates carry
@@ -114,22 +129,64 @@ class Linear(Interpolant):
             inside = ~flat & ((lowest >= -INSIDE) | ((after < 0) & (lowest >= -BROAD)))
             found[active[inside]] = s[active[inside]]
             onward = ~inside & (after >= 0)
-            onward[flat & (after < 0)] = True  # keep it: the next turn picks another face
+            onward[flat & (after < 0)] = True  # keep it: the next step picks another face
             after = np.where(after >= 0, after, s[active])
             s[active[onward]] = after[onward]
             active = active[onward]
             if len(active) == 0:
                 break
         if len(active):
+            active = active[~self.outside(x[active])]
+        if len(active):
             found[active] = self.search(x[active])
         return found
+
+    def _leave_flat(self, x: FloatArray, s: np.ndarray, step: int) -> np.ndarray:
+        """The face to leave each flat simplex s (M,) by, for queries x (M, d): of the
+        faces whose neighbour (not flat) lies on the query's side of the flat simplex's
+        hyperplane (the query's coordinate at that neighbour's far vertex is positive),
+        the one into the neighbour that holds the query deepest (largest lowest
+        coordinate). Without one (a query in that hyperplane; neighbours flat or beyond
+        the hull), the face `FLAT_TURNS` gives this step, the same for every query."""
+        rows = np.arange(len(s))
+        faces = self.tri.neighbors.shape[1]
+        depth = np.full((len(s), faces), -np.inf)
+        for j in range(faces):  # a short loop over the d + 1 faces
+            n = self.tri.neighbors[s, j]
+            usable = (n >= 0) & ~self.flat[np.maximum(n, 0)]
+            n = np.where(usable, n, 0)
+            c = self._barycentric(x, n)
+            far = np.argmax(self.tri.neighbors[n] == s[:, None], axis=1)  # n's face toward s
+            beyond = c[rows, far] > 0.0
+            depth[:, j] = np.where(usable & beyond, np.min(c, axis=1), -np.inf)
+        k = np.asarray(np.argmax(depth, axis=1), dtype=np.intp)
+        k[np.isneginf(depth[rows, k])] = FLAT_TURNS[step % len(FLAT_TURNS)] % faces
+        return k
+
+    @cached_property
+    def hull(self) -> FloatArray:
+        """(F, d + 1): the facets of the points' convex hull, as scipy's public
+        ``ConvexHull.equations`` (unit outward normal n and offset b, n·x + b > 0
+        beyond the facet)."""
+        return np.asarray(ConvexHull(self.tri.points).equations, dtype=np.float64)
+
+    def outside(self, x: FloatArray) -> BoolArray:
+        """True for queries (M, d) farther beyond a facet of the hull than
+        d · `BROAD` times the diagonal of the points' bounding box: no simplex holds
+        them within the walk's tolerances (a query whose coordinates in a simplex are
+        all at least −`BROAD` lies within d · `BROAD` times its diameter of it), so
+        `search` would not find one."""
+        d = x.shape[1]
+        diagonal = float(np.linalg.norm(self.tri.max_bound - self.tri.min_bound))
+        beyond = x @ self.hull[:, :d].T + self.hull[:, d]
+        return np.asarray(np.max(beyond, axis=1) > d * BROAD * diagonal, dtype=np.bool_)
 
     def search(self, x: FloatArray) -> np.ndarray:
         """The simplex each query (M, d) is deepest in, among every simplex (−1 outside
         the hull): the one whose lowest barycentric coordinate is largest, taken if that
         coordinate is at least −`INSIDE`, or −`BROAD` across a face on the hull or shared
         with a flat simplex (the walk's tolerances). Flat simplices contain nothing.
-        Costs M × S coordinates: for the few queries the walk leaves."""
+        Costs M × S coordinates: for the few queries the walk leaves inside the hull."""
         nsimplex, d = self.transform.shape[0], self.transform.shape[2]
         flat = np.isnan(self.transform[:, 0, 0])
         inverse = np.where(flat[:, None, None], 0.0, self.transform[:, :d, :])  # (S, d, d)
@@ -168,20 +225,43 @@ def barycentric_transforms(points: FloatArray, simplices: np.ndarray) -> FloatAr
     of scipy's ``Delaunay.transform`` (S, d + 1, d): T⁻¹ in the first d rows and the
     last vertex r in the last, with T c = x − r (c the first d coordinates, the last is
     1 − Σ c); NaN for flat simplices (|det T| ≤ `FLAT_SIMPLEX` × Hadamard's bound)."""
+    return transforms_and_regularity(points, simplices)[0]
+
+
+def transforms_and_regularity(
+    points: FloatArray, simplices: np.ndarray
+) -> tuple[FloatArray, FloatArray]:
+    """`barycentric_transforms` and each simplex's regularity (S,), from one determinant:
+    |det T| over Hadamard's bound (the product of T's column lengths), 1 for edges at
+    right angles, 0 for a flat simplex, small for a sliver."""
     v = points[simplices]  # (S, d + 1, d)
     d = v.shape[2]
     r = v[:, d, :]
     t = np.transpose(v[:, :d, :] - r[:, None, :], (0, 2, 1))  # columns v_j − r
-    det = np.linalg.det(t)
+    det = np.abs(np.linalg.det(t))
     bound = np.prod(np.linalg.norm(t, axis=1), axis=1)
-    flat = ~(np.abs(det) > FLAT_SIMPLEX * bound)
+    flat = ~(det > FLAT_SIMPLEX * bound)
     t[flat] = np.eye(d)
     inv = np.linalg.inv(t)
     inv[flat] = np.nan
     out = np.empty((len(v), d + 1, d))
     out[:, :d, :] = inv
     out[:, d, :] = np.where(flat[:, None], np.nan, r)
-    return out
+    regular: FloatArray = np.divide(det, bound, out=np.zeros(len(v)), where=bound > 0)
+    return out, regular
+
+
+def most_regular(simplices: np.ndarray, regular: FloatArray, points: int) -> np.ndarray:
+    """For each of ``points`` points (P,), the most regular of the simplices (S, d + 1)
+    it is a vertex of, by their regularity ``regular`` (S,) (`transforms_and_regularity`)
+    to 9 decimals (congruent simplices, a grid's, tie whatever the rounding of their
+    determinants) and of equals the last; −1 for a point in none."""
+    order = np.argsort(np.round(regular, 9), kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    best = np.full(points, -1, dtype=np.int64)
+    np.maximum.at(best, simplices.ravel(), np.repeat(rank, simplices.shape[1]))
+    return np.where(best >= 0, order[np.maximum(best, 0)], -1).astype(np.intp)
 
 
 class Rbf(Interpolant):

@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 from scipy.spatial import Delaunay
 
-from gonio.reconstruct.interpolants import Linear, Rbf, barycentric_transforms
+from gonio.reconstruct.interpolants import (
+    Linear,
+    Rbf,
+    barycentric_transforms,
+    most_regular,
+    transforms_and_regularity,
+)
 
 
 @pytest.mark.parametrize("d", [3, 4])
@@ -48,6 +54,79 @@ def test_the_walk_finds_the_simplex_scipy_finds_even_among_flat_simplices() -> N
         c = linear._barycentric(queries[other], s)
         assert (c >= -1e-9).all()
     assert same.mean() > 0.99
+
+
+def _grid_and_seam_copies() -> np.ndarray:
+    """Cell centres of a 10³ grid and their mirror images across z = 0 near it (the seam
+    copies of a grid run): cospherical points, flat simplices and slivers everywhere."""
+    g = (np.arange(10) + 0.5) / 10
+    grid = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    return np.concatenate([grid, grid[grid[:, 2] < 0.2] * [1, 1, -1]])
+
+
+def test_the_walk_arrives_among_a_grids_flat_simplices_and_searches_nothing(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Inside the hull every query arrives (on the grid's planes too, where the flat
+    simplices are), outside it the walk or the hull's facets say so: no query is left to
+    the search over every simplex. The answers are scipy's (a query on a flat
+    simplex's plane may take the other side's simplex: both hold it)."""
+    points = _grid_and_seam_copies()
+    linear = Linear(points, points[:, :1])
+    assert linear.flat.mean() > 0.1
+
+    def refuse(x: np.ndarray) -> np.ndarray:
+        raise AssertionError(f"{len(x)} queries left to the search")
+
+    monkeypatch.setattr(linear, "search", refuse)
+    rng = np.random.default_rng(4)
+    queries = rng.uniform(-0.3, 1.3, (4000, 3))
+    queries[:1500, rng.integers(0, 3)] = (rng.integers(0, 10, 1500) + 0.5) / 10
+    nearest = np.argmin(((queries[:, None, :] - points[None]) ** 2).sum(-1), axis=1)
+    found = linear.locate(queries, nearest)
+    reference = Delaunay(points).find_simplex(queries)
+    np.testing.assert_array_equal(found < 0, reference < 0)
+    inside = found >= 0
+    assert 0.2 < inside.mean() < 0.8
+    assert (linear._barycentric(queries[inside], found[inside]) >= -1e-12).all()
+
+
+def test_a_querys_simplex_does_not_depend_on_its_batch() -> None:
+    points = _grid_and_seam_copies()
+    linear = Linear(points, points[:, :1])
+    rng = np.random.default_rng(5)
+    queries = rng.uniform(-0.1, 1.1, (3000, 3))
+    queries[:1000, 0] = (rng.integers(0, 10, 1000) + 0.5) / 10  # on the grid's planes
+    nearest = np.argmin(((queries[:, None, :] - points[None]) ** 2).sum(-1), axis=1)
+    found = linear.locate(queries, nearest)
+    order = rng.permutation(len(queries))
+    np.testing.assert_array_equal(linear.locate(queries[order], nearest[order]), found[order])
+    np.testing.assert_array_equal(linear.locate(queries[:7], nearest[:7]), found[:7])
+
+
+@pytest.mark.parametrize("d", [2, 3, 4])
+def test_outside_marks_only_queries_the_search_finds_in_no_simplex(d: int) -> None:
+    rng = np.random.default_rng(30 + d)
+    points = rng.random((150, d))
+    linear = Linear(points, points[:, :1])
+    # Around the hull: just inside, on and just beyond its facets, and far beyond.
+    corners = points[linear.tri.convex_hull[rng.integers(0, len(linear.tri.convex_hull), 600)]]
+    on_facets = np.einsum("mv,mvj->mj", rng.dirichlet(np.ones(d), 600), corners)
+    centre = points.mean(axis=0)
+    queries = centre + (on_facets - centre) * rng.choice([1 - 1e-9, 1.0, 1 + 1e-9, 1.5], (600, 1))
+    outside = linear.outside(queries)
+    assert 0.2 < outside.mean() < 0.3  # the far ones
+    assert (linear.search(queries[outside]) < 0).all()
+
+
+def test_a_walk_starts_from_the_most_regular_simplex_of_each_point() -> None:
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [3.0, 0.0]])
+    simplices = np.array([[0, 1, 2], [1, 2, 3], [1, 3, 4]])
+    _, regular = transforms_and_regularity(points, simplices)
+    np.testing.assert_allclose(regular, [1 / np.sqrt(2), 1.0, 1 / np.sqrt(5)], rtol=1e-15)
+    # Point 1 is in all three simplices, 3 in two, 4 in one.
+    np.testing.assert_array_equal(most_regular(simplices, regular, 5), [0, 1, 1, 1, 2])
+    np.testing.assert_array_equal(most_regular(simplices[:1], regular[:1], 5), [0, 0, 0, -1, -1])
 
 
 def test_batched_barycentric_transforms_match_scipys() -> None:

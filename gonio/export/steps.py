@@ -1,0 +1,63 @@
+"""The long steps of an export, each shown while it runs (`gonio.progress`: on a terminal,
+unless quiet): reading and calibrating the run, reconstructing it, evaluating the
+reconstruction at many pairs (`BLOCK` pairs at a time, the bar advancing with each
+block), factorizing, building documents, writing.
+"""
+
+from __future__ import annotations
+
+from contextlib import AbstractContextManager
+
+import numpy as np
+
+from gonio import progress
+from gonio.analysis.measured import Measured
+from gonio.reconstruct.methods import reconstruction
+from gonio.reconstruct.result import values_and_support
+from gonio.store.read import Run
+from gonio.types import BoolArray, Evaluable, FloatArray, Surface
+
+#: Pairs evaluated at once by `evaluated`: each block advances its bar.
+BLOCK = 1 << 16
+
+
+def step(description: str) -> AbstractContextManager[progress.Progress]:
+    """An export step that cannot count (one call into compiled code), named while it runs."""
+    return progress.step(description, work="export")
+
+
+def reconstructed(
+    run: Run, method: str, parametrization: str | None = None, *, extrapolate: str | None = None
+) -> tuple[Measured, Surface]:
+    """The run's calibrated samples and their reconstruction by ``method``
+    (`gonio.reconstruct.methods.reconstruction`), each step shown."""
+    with step("reading and calibrating the run"):
+        measured = Measured.from_run(run)
+    with step(f"reconstructing ({method}) from {len(measured):,} samples"):
+        surface = reconstruction(measured, method, parametrization, extrapolate=extrapolate)
+    return measured, surface
+
+
+def evaluated(
+    surface: Evaluable, wi: FloatArray, wo: FloatArray, description: str
+) -> tuple[FloatArray, BoolArray | None]:
+    """`gonio.reconstruct.result.values_and_support` of ``surface`` at the pairs (..., 3)
+    (broadcast against each other), `BLOCK` pairs at a time, shown as ``description``
+    with a bar of pairs: values (...) plus a trailing 3 for RGB, and where the surface
+    has data (None when it does not say). Each pair's value is the one an evaluation
+    of all of them at once gives."""
+    a, b = np.broadcast_arrays(np.asarray(wi, dtype=np.float64), np.asarray(wo, dtype=np.float64))
+    lead = a.shape[:-1]
+    a, b = a.reshape(-1, 3), b.reshape(-1, 3)
+    values: list[FloatArray] = []
+    support: list[BoolArray | None] = []
+    with progress.stage(description, len(a), unit="pair", work="export") as shown:
+        for start in range(0, max(len(a), 1), BLOCK):
+            f, ok = values_and_support(surface, a[start : start + BLOCK], b[start : start + BLOCK])
+            values.append(np.asarray(f, dtype=np.float64))
+            support.append(ok)
+            shown.advance(len(values[-1]))
+    f = np.concatenate(values).reshape(*lead, *values[0].shape[1:])
+    if any(ok is None for ok in support):
+        return f, None
+    return f, np.concatenate([ok for ok in support if ok is not None]).reshape(lead)
