@@ -105,8 +105,9 @@ class Linear(Interpolant):
             c = self._barycentric(x[active], s[active])
             flat = np.isnan(c[:, 0])
             k = np.argmin(np.where(np.isnan(c), np.inf, c), axis=1)
-            # A flat simplex has no coordinates: leave it across a face chosen by turns.
-            k[flat] = (step + active[flat]) % c.shape[1]
+            # A flat simplex has no coordinates: leave it across a face chosen by turns
+            # of the step and the simplex (a query's path is its own, whatever its batch).
+            k[flat] = (step + s[active[flat]]) % c.shape[1]
             lowest = c[np.arange(len(active)), k]
             after = self.tri.neighbors[s[active], k]
             # At the hull a query may lean out by rounding (a sliver's coordinates carry

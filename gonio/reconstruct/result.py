@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gonio.blocks import blockwise
 from gonio.directions import as_direction_pair
 from gonio.reconstruct.coordinates import Space
 from gonio.reconstruct.domain import Domain
@@ -23,6 +24,9 @@ from gonio.types import ArrayLike, BoolArray, BrdfEval, Evaluable, FloatArray
 
 #: Samples averaged by the nearest fill (`Reconstruction._nearby`).
 FILL_NEIGHBOURS = 8
+#: Pairs evaluated at once (`gonio.blocks.blockwise`): the cost per pair is flat from
+#: a few thousand pairs to millions (each pair's value is its own: the same answer).
+EVALUATION_BLOCK = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -84,7 +88,8 @@ class Reconstruction:
         ok = np.zeros(len(wi2), dtype=np.bool_)
         rows = np.flatnonzero((wi2[:, 2] >= 0.0) & (wo2[:, 2] >= 0.0))
         if len(rows):
-            f[rows], sigma[rows], ok[rows] = self._above(wi2[rows], wo2[rows])
+            above = blockwise(self._above, wi2[rows], wo2[rows], size=EVALUATION_BLOCK)
+            f[rows], sigma[rows], ok[rows] = above
         shape = lead + ((3,) if self.is_rgb else ())
         return f.reshape(shape), sigma.reshape(shape), ok.reshape(lead)
 
