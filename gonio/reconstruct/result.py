@@ -82,16 +82,22 @@ class Reconstruction:
         """(f, σ, supported) at once."""
         a, b = as_direction_pair(wi, wo)
         lead = a.shape[:-1]
-        wi2, wo2 = a.reshape(-1, 3), b.reshape(-1, 3)
-        f = np.zeros((len(wi2), self.channels))
-        sigma = np.zeros_like(f)
-        ok = np.zeros(len(wi2), dtype=np.bool_)
-        rows = np.flatnonzero((wi2[:, 2] >= 0.0) & (wo2[:, 2] >= 0.0))
-        if len(rows):
-            above = blockwise(self._above, wi2[rows], wo2[rows], size=EVALUATION_BLOCK)
-            f[rows], sigma[rows], ok[rows] = above
+        pairs = (a.reshape(-1, 3), b.reshape(-1, 3))
+        f, sigma, ok = blockwise(self._block, *pairs, size=EVALUATION_BLOCK)
         shape = lead + ((3,) if self.is_rgb else ())
         return f.reshape(shape), sigma.reshape(shape), ok.reshape(lead)
+
+    def _block(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
+        """`evaluate` of pairs (M, 3): 0 (and unsupported) below the horizon."""
+        rows = np.flatnonzero((wi[:, 2] >= 0.0) & (wo[:, 2] >= 0.0))
+        if len(rows) == len(wi):
+            return self._above(wi, wo)
+        f = np.zeros((len(wi), self.channels))
+        sigma = np.zeros_like(f)
+        ok = np.zeros(len(wi), dtype=np.bool_)
+        if len(rows):
+            f[rows], sigma[rows], ok[rows] = self._above(wi[rows], wo[rows])
+        return f, sigma, ok
 
     def _above(self, wi: FloatArray, wo: FloatArray) -> tuple[FloatArray, FloatArray, BoolArray]:
         x = self.space.scaled(wi, wo)
