@@ -108,15 +108,19 @@ class Reconstruction:
         near = near[np.argsort(nearest[near], kind="stable")]
         columns = np.full((len(x), 2 * self.channels), np.nan)
         ok = np.zeros(len(x), dtype=np.bool_)
-        columns[near], ok[near] = self._blended(x[near], nearest[near], 0)
-        ok[ok] = self.domain.reachable(wi[ok], wo[ok])
+        # (np.take and np.compress gather rows several times faster than indexing.)
+        columns[near], ok[near] = self._blended(np.take(x, near, axis=0), nearest[near], 0)
+        ok[ok] = self.domain.reachable(np.compress(ok, wi, axis=0), np.compress(ok, wo, axis=0))
 
         c = self.channels
         f = np.full((len(x), c), np.nan)
         sigma = np.full((len(x), c), np.nan)
-        g = columns[ok, :c]
-        f[ok] = self.codec.decode(g, wi[ok], wo[ok])
-        sigma[ok] = self.codec.gain(g, wi[ok], wo[ok]) * np.abs(columns[ok, c:])
+        wi_ok, wo_ok = np.compress(ok, wi, axis=0), np.compress(ok, wo, axis=0)
+        g = np.compress(ok, columns[:, :c], axis=0)
+        f[ok] = self.codec.decode(g, wi_ok, wo_ok)
+        sigma[ok] = self.codec.gain(g, wi_ok, wo_ok) * np.abs(
+            np.compress(ok, columns[:, c:], axis=0)
+        )
         out = ~ok
         if self.extrapolate == "nearest":
             f[out] = self._nearby(x[out])
