@@ -156,7 +156,7 @@ def scaling(rig: Rig, f: BrdfEval, samples: int, sizes: Sequence[int]) -> None:
         "isotropic hybrid)\n"
     )
     print(
-        "| pairs | gonio (pairs/s) | gonio per CPU second | scipy LinearNDInterpolator "
+        "| pairs | gonio (pairs/s) | gonio (pairs per CPU second) | scipy LinearNDInterpolator "
         f"(pairs/s) | gonio / scipy | gonio / goal ({GOAL:,}) |"
     )
     print("| ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -178,9 +178,8 @@ def scaling(rig: Rig, f: BrdfEval, samples: int, sizes: Sequence[int]) -> None:
         )
     low, high = min(sizes), max(sizes)
     print(
-        f"\nAt {high:,} pairs gonio evaluates {rates[high] / rates[low]:.2f} times as many "
-        f"pairs per second as at {low:,}, {rates[high] / GOAL:.0%} of the goal of "
-        f"{GOAL:,} pairs/s."
+        f"\nAt {high:,} pairs the evaluation runs at {rates[high] / rates[low]:.2f} times its "
+        f"rate at {low:,} pairs, {rates[high] / GOAL:.0%} of the goal of {GOAL:,} pairs/s."
     )
     breakdown(r, rig, queries[0][:high], queries[1][:high])
 
