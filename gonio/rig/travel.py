@@ -32,8 +32,10 @@ class TravelModel:
     def __post_init__(self) -> None:
         v = np.asarray(self.velocity, dtype=np.float64)
         a = np.asarray(self.acceleration, dtype=np.float64)
-        if v.shape != a.shape or v.ndim != 1 or np.any(v <= 0) or np.any(a <= 0):
-            raise ValueError("velocity and acceleration must be positive, one per axis")
+        if v.shape != a.shape or v.ndim != 1 or not v.size or np.any(v <= 0) or np.any(a <= 0):
+            raise ValueError(
+                "velocity and acceleration must be positive, one per axis (one axis at least)"
+            )
         object.__setattr__(self, "velocity", v)
         object.__setattr__(self, "acceleration", a)
 
@@ -52,7 +54,7 @@ class TravelModel:
             d = np.abs(end[..., j] - start[..., j])
             t = np.where(d < knee[j], 2.0 * np.sqrt(d / a), d / v + ramp[j])
             worst = t if worst is None else np.maximum(worst, t)
-        assert worst is not None  # one axis at least (__post_init__)
+        assert worst is not None  # one axis at least (__post_init__ says so)
         return np.asarray(worst, dtype=np.float64)
 
     def reach(self, t: float | FloatArray) -> FloatArray:
