@@ -45,9 +45,9 @@ class WithoutViewRefusal(Rig):
         reasons = super()._reasons(wi, wo, limits_ok, usable)
         view = reasons == Reason.VIEW_OFF_SAMPLE
         later = np.where(
-            ~limits_ok.any(axis=1),
+            ~limits_ok.any(axis=0),
             Reason.AXIS_LIMIT,
-            np.where(~usable.any(axis=1), Reason.COLLISION, Reason.OK),
+            np.where(~usable.any(axis=0), Reason.COLLISION, Reason.OK),
         )
         reasons[view] = later[view]
         return reasons

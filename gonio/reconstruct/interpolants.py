@@ -89,13 +89,15 @@ class Linear(Interpolant):
         defined = simplex >= 0
         s = np.where(defined, simplex, 0)
         weights = self._barycentric(x, s)
-        corners = self.table[self.tri.simplices[s]]  # (M, d + 1, K)
-        out = np.einsum("mv,mvk->mk", weights, corners)
+        corners = np.take(self.table, np.take(self.tri.simplices, s, axis=0), axis=0)
+        out = np.einsum("mv,mvk->mk", weights, corners)  # corners (M, d + 1, K)
         return np.where(defined[:, None], out, np.nan), np.asarray(defined, dtype=np.bool_)
 
     def _barycentric(self, x: FloatArray, s: np.ndarray) -> FloatArray:
         d = x.shape[1]
-        t = self.transform[s]
+        # take copies whole rows, several times faster than transform[s] (which copies
+        # the (d + 1) × d values one at a time): so below for every gather of rows.
+        t = np.take(self.transform, s, axis=0)
         c = np.empty((len(s), d + 1))
         c[:, :d] = np.einsum("mij,mj->mi", t[:, :d, :], x - t[:, d, :])
         c[:, d] = 1.0
@@ -111,28 +113,38 @@ class Linear(Interpolant):
         flat simplex as `_leave_flat` chooses. A query still walking after `MAX_STEPS`
         (a walk among slivers and flat simplices may circle) is outside if `outside`
         says so, else left to `search`. Each query walks on its own: its batch does not
-        change where it arrives."""
+        change where it arrives. The walking queries are kept packed (their points,
+        simplices and rows), the arrived ones dropped at each step."""
         start = self.start[nearest]
-        s = np.where(start >= 0, start, 0)
+        s = np.where(start >= 0, start, 0)  # the simplex of each walking query
         found = np.full(len(x), -1, dtype=np.intp)
-        active = np.arange(len(x))
+        active = np.arange(len(x))  # the rows of the walking queries
+        walking = x
+        faces = self.tri.neighbors.shape[1]
+        neighbors = self.tri.neighbors.ravel()
         for step in range(MAX_STEPS):
-            c = self._barycentric(x[active], s[active])
-            flat = self.flat[s[active]]
-            k = np.argmin(np.where(flat[:, None], np.inf, c), axis=1)
+            c = self._barycentric(walking, s)
+            flat = np.take(self.flat, s)
+            # The lowest coordinate and the first axis holding it (np.argmin's), column
+            # by column (a reduction over a 4-long axis is slow). A flat simplex's row
+            # is NaN throughout (it has no coordinates).
+            k = np.zeros(len(s), dtype=np.intp)
+            lowest = c[:, 0]
+            for axis in range(1, faces):
+                k = np.where(c[:, axis] < lowest, axis, k)
+                lowest = np.minimum(lowest, c[:, axis])
             if flat.any():
-                k[flat] = self._leave_flat(x[active[flat]], s[active[flat]], step)
-            lowest = c[np.arange(len(active)), k]
-            after = self.tri.neighbors[s[active], k]
+                k[flat] = self._leave_flat(walking[flat], s[flat], step)
+            after = np.take(neighbors, s * faces + k)
             # At the hull a query may lean out by rounding (a sliver's coordinates carry
-            # more): scipy's broad tolerance then decides.
+            # more): scipy's broad tolerance then decides. NaN (flat) is never inside.
             inside = ~flat & ((lowest >= -INSIDE) | ((after < 0) & (lowest >= -BROAD)))
-            found[active[inside]] = s[active[inside]]
+            found[active[inside]] = s[inside]
             onward = ~inside & (after >= 0)
-            onward[flat & (after < 0)] = True  # keep it: the next step picks another face
-            after = np.where(after >= 0, after, s[active])
-            s[active[onward]] = after[onward]
-            active = active[onward]
+            onward |= flat & (after < 0)  # keep it: the next step picks another face
+            s = np.compress(onward, np.where(after >= 0, after, s))
+            walking = np.compress(onward, walking, axis=0)
+            active = np.compress(onward, active)
             if len(active) == 0:
                 break
         if len(active):

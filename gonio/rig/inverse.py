@@ -1,9 +1,12 @@
 """Closed-form inverse kinematics of the shipped rig types.
 
 Each function takes sample-frame directions ``wi``, ``wo`` (N, 3) and returns every
-joint-angle solution, {axis name: (N, K)} with the same K candidates for all pairs
-(before limits are applied). Conventions (the rig files use them; `gonio.rig.model`
-checks the chains):
+joint-angle solution, {axis name: (K, N)} with the same K candidates for all pairs
+(before limits are applied), candidate-major: each candidate's angles for all pairs
+are one contiguous row, so that the limits, keep-out boxes and travel times of
+`gonio.rig.model` run over long rows (on pairs × K × axes with the axes last, every
+numpy call loops over 4 values at a time, tens of times slower per value).
+Conventions (the rig files use them; `gonio.rig.model` checks the chains):
 
 arch
     light_elevation θL about lab y: d_L = R_y(θL) z = (sin θL, 0, cos θL);
@@ -46,15 +49,16 @@ def _wrap(angle: FloatArray) -> FloatArray:
 def arch(wi: FloatArray, wo: FloatArray) -> Solutions:
     ti, pi_ = _polar(wi)
     to, po = _polar(wo)
-    psi = np.stack([-pi_, np.pi - pi_, -pi_, np.pi - pi_], axis=1)
-    light = np.stack([ti, -ti, ti, -ti], axis=1)
-    elevation = np.stack([to, to, -to, -to], axis=1)
-    azimuth = po[:, None] + psi + np.array([0.0, 0.0, np.pi, np.pi])
+    psi = np.stack([-pi_, np.pi - pi_, -pi_, np.pi - pi_])
+    light = np.stack([ti, -ti, ti, -ti])
+    elevation = np.stack([to, to, -to, -to])
+    azimuth = po + psi + np.array([0.0, 0.0, np.pi, np.pi])[:, None]
+    wrapped = _wrap(psi[:2])  # the last two solutions turn the sample as the first two
     return {
         "light_elevation": light,
         "detector_azimuth": _wrap(azimuth),
         "detector_elevation": elevation,
-        "sample_rotation": _wrap(psi),
+        "sample_rotation": np.concatenate([wrapped, wrapped]),
     }
 
 
@@ -93,7 +97,7 @@ def in_plane(wi: FloatArray, wo: FloatArray) -> Solutions:
             out[name].append(np.arctan2(x, z))
         out["sample_tilt"].append(tau)
         out["sample_rotation"].append(psi)
-    return {k: np.stack(v, axis=1) for k, v in out.items()}
+    return {k: np.stack(v) for k, v in out.items()}
 
 
 SOLVERS = {"arch": arch, "in_plane": in_plane}

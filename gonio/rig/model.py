@@ -22,6 +22,7 @@ import numpy as np
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.wire import step_seconds
 from drivers.serial_detector import SerialDetectorConfig
+from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
 from gonio.rig.instrument import SerialInterfaceSpec
@@ -65,6 +66,13 @@ _EXPECTED_CHAINS = {
 
 #: Direction pairs probed when a rig is loaded, to refuse a rig that can measure nothing.
 PROBE_PAIRS = 4096
+#: An axis whose range is narrower than a turn by more than this (rad) holds at most one
+#: of an angle's representatives a turn apart, whatever the rounding of their sums.
+_TURN_MARGIN = 1e-9
+
+
+#: `Solution`'s fields in order, as one block of pairs gives them (`Rig._solve`).
+_Solved = tuple[FloatArray, FloatArray, FloatArray, np.ndarray, FloatArray, BoolArray]
 
 
 @dataclass(frozen=True)
@@ -200,39 +208,83 @@ class Rig:
         that the move nearest the previous pose can use the whole range. With
         ``isotropic`` the sample rotation stays home (see `solve`).
         """
-        solved = inverse.SOLVERS[self.spec.type](wi, wo)
-        raw = np.stack([solved[n] for n in self.axes], axis=-1)
-        lo, hi = self.limits[:, 0], self.limits[:, 1]
-        centre = 0.5 * (lo + hi)
-        best = raw.copy()
-        best_gap = np.full(raw.shape, np.inf)
-        for turns in (-1, 0, 1):
-            shifted = raw + 2.0 * np.pi * turns
-            inside = (shifted >= lo) & (shifted <= hi)
-            gap = np.where(inside, np.abs(shifted - centre), np.inf)
-            take = gap < best_gap
-            best = np.where(take, shifted, best)
-            best_gap = np.where(take, gap, best_gap)
-        variants = [best]
-        for j in np.flatnonzero(hi - lo >= 2.0 * np.pi):
-            if isotropic and j == self._rotation_index:
-                continue
-            widened = []
-            for v in variants:
-                for turns in (-1, 0, 1):
-                    w = v.copy()
-                    w[..., j] = raw[..., j] + 2.0 * np.pi * turns
-                    widened.append(w)
-            variants = widened
-        cand = np.concatenate(variants, axis=1)
-        if isotropic:
-            cand[..., self._rotation_index] = self.home[self._rotation_index]
-        psi = np.tile(raw[..., self._rotation_index], (1, len(variants)))
-        return np.asarray(cand, dtype=np.float64), np.asarray(psi, dtype=np.float64)
+        wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
+        wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
+        columns, psi = self._columns(wi, wo, isotropic)
+        return np.ascontiguousarray(columns.transpose(2, 1, 0)), np.ascontiguousarray(psi.T)
 
-    def _within_limits(self, angles: FloatArray) -> BoolArray:
+    def _columns(
+        self, wi: FloatArray, wo: FloatArray, isotropic: bool
+    ) -> tuple[FloatArray, FloatArray]:
+        """`candidates` axis-major: the angles (A, K', N) and ψ (K', N).
+
+        Each axis's angle of each candidate for all pairs is one contiguous row, so every
+        test below (limits, keep-out boxes, travel times, the reasons' "any candidate")
+        loops over long rows; in the (N, K', A) layout each numpy call looped over A
+        values at a time, 20 to 50 times slower per value. Candidate k' = v K + k is
+        solution k of the solver in variant v, the variants being the turns (−1, 0, +1)
+        of each extended axis in turn, the last one varying fastest.
+        """
+        solved = inverse.SOLVERS[self.spec.type](wi, wo)
+        rotation = self._rotation_index
         lo, hi = self.limits[:, 0], self.limits[:, 1]
-        return np.asarray(np.all((angles >= lo) & (angles <= hi), axis=-1), dtype=np.bool_)
+        extended = [
+            int(j)
+            for j in np.flatnonzero(hi - lo >= 2.0 * np.pi)
+            if not (isotropic and j == rotation)
+        ]
+        variants = 3 ** len(extended)
+        raw_rotation = solved[self.axes[rotation]]
+        count, n = raw_rotation.shape
+        out = np.empty((len(self.axes), variants, count, n))
+        for j, name in enumerate(self.axes):
+            raw = solved[name]
+            if j in extended:
+                every = 3 ** (len(extended) - 1 - extended.index(j))
+                for v in range(variants):
+                    turns = (v // every) % 3 - 1
+                    np.add(raw, 2.0 * np.pi * turns, out=out[j, v])
+            elif isotropic and j == rotation:
+                out[j] = self.home[rotation]
+            else:
+                out[j] = self._representative(raw, j)
+        psi = np.broadcast_to(raw_rotation, (variants, count, n)).reshape(variants * count, n)
+        return out.reshape(len(self.axes), variants * count, n), psi
+
+    def _representative(self, raw: FloatArray, j: int) -> FloatArray:
+        """Angles ``raw`` of axis ``j`` moved by a whole turn into its range: of raw − 2π,
+        raw and raw + 2π, the one inside the range nearest its centre (the first of
+        equals); raw itself where none is inside. A turn that puts no angle inside is
+        skipped (float addition is monotone: the shifted extremes say so exactly)."""
+        lo, hi = self.limits[j, 0], self.limits[j, 1]
+        centre = 0.5 * (lo + hi)
+        low, high = np.min(raw, initial=np.inf), np.max(raw, initial=-np.inf)
+        turns = [
+            t for t in (-1, 0, 1) if not (high + 2.0 * np.pi * t < lo or low + 2.0 * np.pi * t > hi)
+        ]
+        best = raw
+        # Narrower than a turn (with room for rounding): at most one turn is inside.
+        single = len(turns) == 1 or hi - lo < 2.0 * np.pi - _TURN_MARGIN
+        best_gap = None if single else np.full(raw.shape, np.inf)
+        for t in turns:
+            shifted = raw + 2.0 * np.pi * t
+            take = shifted >= lo
+            take &= shifted <= hi
+            if best_gap is not None:
+                gap = np.where(take, np.abs(shifted - centre), np.inf)
+                take = gap < best_gap
+                np.copyto(best_gap, gap, where=take)
+            best = np.where(take, shifted, best)
+        return best
+
+    def _inside_limits(self, columns: FloatArray) -> BoolArray:
+        """True where every axis's angle is inside its limits, for angles given by axis
+        (A, ...): ``columns[j]`` the angles of axis j."""
+        ok = np.ones(np.shape(columns[0]), dtype=np.bool_)
+        for j in range(len(self.axes)):
+            ok &= columns[j] >= self.limits[j, 0]
+            ok &= columns[j] <= self.limits[j, 1]
+        return ok
 
     def _collides(self, angles: FloatArray) -> BoolArray:
         hit = np.zeros(angles.shape[:-1], dtype=np.bool_)
@@ -252,38 +304,60 @@ class Rig:
         isotropic: bool = False,
         previous: FloatArray | None = None,
     ) -> Solution:
-        """Joint angles and refusal reasons for pairs (N, 3); see the module docstring."""
+        """Joint angles and refusal reasons for pairs (N, 3); see the module docstring.
+
+        ``previous``: the pose (A,) the move starts from (default: home). Pairs are
+        solved in blocks of `BLOCK` (`gonio.blocks`): the same answer at a flat cost per
+        pair.
+        """
         wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
+        start = self.home if previous is None else np.asarray(previous, dtype=np.float64)
+
+        def block(wi: FloatArray, wo: FloatArray) -> _Solved:
+            return self._solve(wi, wo, isotropic, start)
+
+        angles, measured_wi, measured_wo, reasons, cand, usable = blockwise(block, wi, wo)
+        return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
+
+    def _solve(self, wi: FloatArray, wo: FloatArray, isotropic: bool, start: FloatArray) -> _Solved:
+        """`solve` of one block: (angles, ωi and ωo measured, reasons, candidates, usable)."""
         # Isotropic: the pair may turn about the normal, so the rotation stage stays home
         # and the turned pair is measured instead (ω' = R_z(ψ) ω for the candidate's ψ).
-        cand, psi = self.candidates(wi, wo, isotropic=isotropic)
-        limits_ok = self._within_limits(cand)
-        usable = limits_ok & ~self._collides(cand)
-        start = self.home if previous is None else np.asarray(previous, dtype=np.float64)
-        cost = np.where(usable, self.travel_time(start, cand), np.inf)
-        pick = np.argmin(cost, axis=1)
+        columns, psi = self._columns(wi, wo, isotropic)
+        angles_last = np.moveaxis(columns, 0, -1)  # (K', N, A), a view
+        limits_ok = self._inside_limits(columns)
+        usable = limits_ok & ~self._collides(angles_last)
+        cost = np.where(usable, self.travel_time(start, angles_last), np.inf)
+        pick = np.argmin(cost, axis=0)
         rows = np.arange(len(wi))
-        angles = cand[rows, pick]
+        angles = np.ascontiguousarray(columns[:, pick, rows].T)
         reasons = self._reasons(wi, wo, limits_ok, usable)
 
         measured_wi, measured_wo = wi, wo
         if isotropic:
-            turn = psi[rows, pick] - self.home[self._rotation_index]
+            turn = psi[pick, rows] - self.home[self._rotation_index]
             measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
-        return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
+        candidates = np.ascontiguousarray(columns.transpose(2, 1, 0))
+        return angles, measured_wi, measured_wo, reasons, candidates, usable.T.copy()
 
     def reachable(
         self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False
     ) -> tuple[BoolArray, np.ndarray]:
         """(mask, reasons) for pairs (N, 3): True where the rig can measure the pair (the
-        reasons of `solve`, without choosing a pose)."""
+        reasons of `solve`, without choosing a pose). Pairs are checked in blocks of
+        `BLOCK` (`gonio.blocks`): the same answer at a flat cost per pair."""
         wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
-        cand, _ = self.candidates(wi, wo, isotropic=isotropic)
-        limits_ok = self._within_limits(cand)
-        reasons = self._reasons(wi, wo, limits_ok, limits_ok & ~self._collides(cand))
-        return reasons == Reason.OK, reasons
+
+        def block(wi: FloatArray, wo: FloatArray) -> tuple[BoolArray, np.ndarray]:
+            columns, _ = self._columns(wi, wo, isotropic)
+            limits_ok = self._inside_limits(columns)
+            usable = limits_ok & ~self._collides(np.moveaxis(columns, 0, -1))
+            reasons = self._reasons(wi, wo, limits_ok, usable)
+            return reasons == Reason.OK, reasons
+
+        return blockwise(block, wi, wo)
 
     def pose_reasons(self, angles: FloatArray) -> tuple[np.ndarray, BoolArray]:
         """(reasons (N,), commandable (N,)) of given joint angles (N, A): why the pair
@@ -292,16 +366,16 @@ class Rig:
         outside every keep-out box)."""
         angles = np.asarray(angles, dtype=np.float64).reshape(-1, len(self.axes))
         wi, wo = self.forward(angles)
-        limits_ok = self._within_limits(angles)
+        limits_ok = self._inside_limits(angles.T)
         commandable = limits_ok & ~self._collides(angles)
-        reasons = self._reasons(wi, wo, limits_ok[:, None], commandable[:, None])
+        reasons = self._reasons(wi, wo, limits_ok[None, :], commandable[None, :])
         return reasons, commandable
 
     def _reasons(
         self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
     ) -> np.ndarray:
         """Why each pair (N, 3) is refused (`Reason`; OK where it is not), given which of
-        its candidates (N, K) are within the limits and which are also collision-free."""
+        its candidates (K, N) are within the limits and which are also collision-free."""
         reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
         theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
         c = self.spec.constraints
@@ -325,8 +399,8 @@ class Rig:
             (Reason.BLIND_SPOT, constraints.separation(wi, wo) < self.min_separation),
             (Reason.FOOTPRINT, footprint),
             (Reason.VIEW_OFF_SAMPLE, off_sample),
-            (Reason.AXIS_LIMIT, ~limits_ok.any(axis=1)),
-            (Reason.COLLISION, ~usable.any(axis=1)),
+            (Reason.AXIS_LIMIT, ~limits_ok.any(axis=0)),
+            (Reason.COLLISION, ~usable.any(axis=0)),
         ]
         for reason, refused in reversed(checks):  # the first check that fails wins
             reasons[refused] = reason

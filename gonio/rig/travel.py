@@ -32,17 +32,30 @@ class TravelModel:
     def __post_init__(self) -> None:
         v = np.asarray(self.velocity, dtype=np.float64)
         a = np.asarray(self.acceleration, dtype=np.float64)
-        if v.shape != a.shape or v.ndim != 1 or np.any(v <= 0) or np.any(a <= 0):
-            raise ValueError("velocity and acceleration must be positive, one per axis")
+        if v.shape != a.shape or v.ndim != 1 or not v.size or np.any(v <= 0) or np.any(a <= 0):
+            raise ValueError(
+                "velocity and acceleration must be positive, one per axis (one axis at least)"
+            )
         object.__setattr__(self, "velocity", v)
         object.__setattr__(self, "acceleration", a)
 
     def time(self, p: ArrayLike, q: ArrayLike) -> FloatArray:
-        """Move time (s) from poses p to q (..., A), broadcast over leading axes."""
-        d = np.abs(np.asarray(q, dtype=np.float64) - np.asarray(p, dtype=np.float64))
-        v, a = self.velocity, self.acceleration
-        t = np.where(d < v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
-        return np.asarray(np.max(t, axis=-1), dtype=np.float64)
+        """Move time (s) from poses p to q (..., A), broadcast over leading axes.
+
+        Computed axis by axis (each a long row, where the poses' short last axis would
+        make every numpy call loop over A values), the slowest axis kept.
+        """
+        start = np.asarray(p, dtype=np.float64)
+        end = np.asarray(q, dtype=np.float64)
+        v_all, a_all = self.velocity, self.acceleration
+        knee, ramp = v_all * v_all / a_all, v_all / a_all
+        worst: FloatArray | None = None
+        for j, (v, a) in enumerate(zip(v_all, a_all, strict=True)):
+            d = np.abs(end[..., j] - start[..., j])
+            t = np.where(d < knee[j], 2.0 * np.sqrt(d / a), d / v + ramp[j])
+            worst = t if worst is None else np.maximum(worst, t)
+        assert worst is not None  # one axis at least (__post_init__ says so)
+        return np.asarray(worst, dtype=np.float64)
 
     def reach(self, t: float | FloatArray) -> FloatArray:
         """Per-axis largest |Δθ| (rad) covered within t seconds: t(p, q) ≤ t exactly when
