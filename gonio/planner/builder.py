@@ -20,7 +20,14 @@ from gonio.planner import fly, lkh, placement, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.model import Plan, Summary
-from gonio.planner.ordering import Method, Ordering, default_kicks, default_moves, order_jointly
+from gonio.planner.ordering import (
+    Method,
+    Ordering,
+    compile_kernels,
+    default_kicks,
+    default_moves,
+    order_jointly,
+)
 from gonio.planner.placement import directions, place, too_many
 from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
@@ -100,6 +107,7 @@ def order_targets(
         method = "auto"
     budget = default_moves(sel.size) if spec.max_moves is None else spec.max_moves
     kicks = default_kicks(sel.size) if spec.kicks is None else spec.kicks
+    compile_kernels()  # a first run's compilation is not the ordering's time
     started = time.perf_counter()
     cand, usable = solution.candidates[sel][given], solution.usable[sel][given]
     joint = order_jointly(
