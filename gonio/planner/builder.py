@@ -10,7 +10,7 @@ exposure (`timing`). Nothing here moves a motor.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -33,6 +33,9 @@ from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray
+
+#: Pairs the rig solves at a time.
+SOLVE_CHUNK = 32_768
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,7 @@ def solve(
     """The inverse kinematics of the points, the reachable ones kept (`ConfigError` if
     there are more than `placement.MAX_TARGETS` or none)."""
     valid, wi, wo = directions(spec, coords)
-    solution: Solution = rig.solve(wi, wo, isotropic=spec.isotropic)
+    solution = _solve(rig, wi, wo, spec.isotropic)
     reasons = np.full(len(coords), -1, dtype=np.int8)  # -1: outside the domain
     reasons[valid] = solution.reasons
     refused = {r.label: int(np.count_nonzero(reasons == r)) for r in Reason if r != Reason.OK}
@@ -85,6 +88,20 @@ def solve(
         )
     in_valid = np.cumsum(valid) - 1  # index into the valid subset
     return Solved(coords, shape, valid, refused, kept, in_valid[kept], solution)
+
+
+def _solve(rig: Rig, wi: FloatArray, wo: FloatArray, isotropic: bool) -> Solution:
+    """`Rig.solve` of the pairs (N, 3), `SOLVE_CHUNK` at a time (its temporaries are many
+    times its result)."""
+    if len(wi) <= SOLVE_CHUNK:
+        return rig.solve(wi, wo, isotropic=isotropic)
+    parts = [
+        rig.solve(wi[lo : lo + SOLVE_CHUNK], wo[lo : lo + SOLVE_CHUNK], isotropic=isotropic)
+        for lo in range(0, len(wi), SOLVE_CHUNK)
+    ]
+    return Solution(
+        *(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(Solution))
+    )
 
 
 def order_targets(

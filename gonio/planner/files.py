@@ -106,6 +106,8 @@ OPTIONAL = frozenset({"sweeps"})
 HASHES = ("plan_sha256", "rig_sha256", "content", "file_sha256")
 #: Integer columns (every other column is a float64 written with repr).
 INTEGER = frozenset({"index", "generated", "averages"})
+#: Targets turned into text at a time (the cells of a block as strings, not the plan's).
+ROWS = 4096
 
 _SUMMARY = TypeAdapter(Summary)
 
@@ -136,15 +138,21 @@ def _json(value: Any) -> str:
 def plan_bytes(plan: Plan) -> bytes:
     """``plan`` in the stored format (module docstring), as the file's bytes."""
     names = columns(plan.coordinate_names, plan.rig.axes)
+    table = _table(plan)
     body = io.StringIO()
     out = csv.writer(body, lineterminator="\n")
     out.writerow(names)
-    cells = [
-        [str(v) for v in c.tolist()] if name in INTEGER else [repr(v) for v in c.tolist()]
-        for name, c in zip(names, _table(plan), strict=True)
-    ]
-    out.writerows(zip(*cells, strict=True))
-    targets = body.getvalue().encode("utf-8")
+    parts = []
+    for lo in range(0, len(plan), ROWS):  # a block of rows at a time: the text of a block
+        cells = [
+            [(str if name in INTEGER else repr)(v) for v in c[lo : lo + ROWS].tolist()]
+            for name, c in zip(names, table, strict=True)
+        ]
+        out.writerows(zip(*cells, strict=True))
+        parts.append(body.getvalue().encode("utf-8"))
+        body.seek(0)
+        body.truncate()
+    targets = b"".join([*parts, body.getvalue().encode("utf-8")])
     s = plan.summary
     summary = {
         **{f.name: getattr(s, f.name) for f in dataclasses.fields(s)},
