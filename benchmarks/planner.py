@@ -80,7 +80,8 @@ def shipped(use_lkh: bool) -> None:
             plan = build(spec, Rig.from_yaml(rig_path), bounds=True)
             s = plan.summary
             assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
-            assert s.naive_travel_s is not None and s.bound_wall_s is not None
+            assert s.naive_travel_s is not None and plan.bound_wall_s is not None
+            assert plan.ordering_s is not None
             ref = lkh_figures(plan) if use_lkh else None
             lk = "—" if ref is None else hms(ref[0])
             ratio = "—" if ref is None else f"{s.travel_s / ref[0]:.4f}"
@@ -90,8 +91,8 @@ def shipped(use_lkh: bool) -> None:
                 f"| {hms(s.lower_bound_travel_s)} | {s.travel_s / s.lower_bound_travel_s:.4f} "
                 f"| {lk} | {ratio} | {s.travel_s / s.mst_travel_s:.3f} "
                 f"| {s.naive_travel_s / s.travel_s:.1f} "
-                f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} | {s.ordering_s:.1f} "
-                f"| {s.bound_wall_s:.1f} | {wall} |",
+                f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} | {plan.ordering_s:.1f} "
+                f"| {plan.bound_wall_s:.1f} | {wall} |",
                 flush=True,
             )
 
@@ -122,11 +123,11 @@ def trade() -> None:
             s = plan.summary
             if bound is None:
                 bound = s.lower_bound_travel_s
-            assert bound is not None
+            assert bound is not None and plan.ordering_s is not None
             default = " (default)" if kicks == default_kicks(n) else ""
             print(
                 f"| {rig_name} | isotropic_hybrid | {len(plan):,} | {s.kicks:,}{default} "
-                f"| {hms(s.travel_s)} | {s.travel_s / bound:.4f} | {s.ordering_s:.1f} |",
+                f"| {hms(s.travel_s)} | {s.travel_s / bound:.4f} | {plan.ordering_s:.1f} |",
                 flush=True,
             )
 
@@ -144,7 +145,8 @@ def large(sizes: list[int]) -> None:
                 plan = build(sobol_spec(n, isotropic), rig, bounds=True)
                 s = plan.summary
                 assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
-                assert s.naive_travel_s is not None and s.bound_wall_s is not None
+                assert s.naive_travel_s is not None and plan.bound_wall_s is not None
+                assert plan.ordering_s is not None
                 kind = "isotropic" if isotropic else "anisotropic"
                 print(
                     f"| {rig_name} | {kind} | {len(plan):,} | {hms(s.naive_travel_s)} "
@@ -153,7 +155,7 @@ def large(sizes: list[int]) -> None:
                     f"| {s.travel_s / s.lower_bound_travel_s:.4f} "
                     f"| {s.travel_s / s.mst_travel_s:.3f} "
                     f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} "
-                    f"| {s.ordering_s:.1f} | {s.bound_wall_s:.1f} |",
+                    f"| {plan.ordering_s:.1f} | {plan.bound_wall_s:.1f} |",
                     flush=True,
                 )
 

@@ -110,6 +110,9 @@ INTEGER = frozenset({"index", "generated", "averages"})
 ROWS = 4096
 
 _SUMMARY = TypeAdapter(Summary)
+#: Wall times that older stored plans kept in their summary (figures of the machine and
+#: its load; a stored plan is now the same bytes on any machine): read and dropped.
+WALL_TIMES = frozenset({"ordering_s", "bound_wall_s"})
 
 
 def columns(coordinate_names: tuple[str, ...], axes: tuple[str, ...]) -> list[str]:
@@ -278,6 +281,8 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
         data = {**data, "second_pass": None}  # stored before the field existed
     if isinstance(data, dict) and "fly" not in data:
         data = {**data, "fly": None}  # a stop-and-go plan
+    if isinstance(data, dict) and WALL_TIMES & set(data):  # stored before they left it
+        data = {k: v for k, v in data.items() if k not in WALL_TIMES}
     if not isinstance(data, dict) or set(data) != fields:
         got = set(data) if isinstance(data, dict) else set()
         detail = ", ".join(sorted(fields ^ got)) or type(data).__name__

@@ -150,7 +150,6 @@ def joined(first: Plan, second: Plan) -> Plan:
         kept=a.kept + b.kept,
         travel_s=a.travel_s + b.travel_s,
         dwell_s=a.dwell_s + b.dwell_s,
-        ordering_s=a.ordering_s + b.ordering_s,
         moves=a.moves + b.moves,
         max_moves=a.max_moves + b.max_moves,
         kicks=a.kicks + b.kicks,
@@ -171,4 +170,7 @@ def joined(first: Plan, second: Plan) -> Plan:
         arrival_s=np.concatenate([first.arrival_s, second.arrival_s + end]),
         summary=summary,
         ordering=None,
+        ordering_s=None
+        if first.ordering_s is None or second.ordering_s is None
+        else first.ordering_s + second.ordering_s,
     )
