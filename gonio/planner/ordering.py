@@ -4,12 +4,17 @@ with each target's inverse-kinematics solution chosen along the way.
 The cost of a move is the rig's travel time (`gonio.rig.travel.TravelModel`, a metric on
 joint space). The path starts at the given pose and ends anywhere.
 
-- Construction: the given order (a serpentine over a grid) or nearest neighbour.
+- Construction: the given order (a serpentine over a grid) or nearest neighbour
+  (`gonio.planner.nearest`, exact).
+- Neighbour lists: each node's `NEIGHBOURS` nearest others by travel time, exactly,
+  equal times in index order (`gonio.planner.nearest.nearest_others`).
 - Improvement (`gonio.planner.search`): a 2-opt/Or-opt descent over neighbour lists,
   then iterated local search (seeded double-bridge kicks, each kept only if the path got
   shorter). Budgets are counts (improving moves of the descent, `default_moves`; kicks,
-  `default_kicks`), so a plan is the same on any machine; a wall-clock cap stays as a
-  safety net, and when it binds the result says so.
+  `default_kicks`), so a plan is the same on any machine, however busy; a wall-clock cap
+  stays as a safety net, read between slices of counted work, and when it binds the
+  result says so. The loops are compiled (`gonio.planner.jit`), before any clock starts
+  (`compile_kernels`).
 - Branches (`order_jointly`): the order is first improved on the relaxed any-branch time
   (`gonio.planner.poses.Relaxed`: between two targets, the shortest move between any of
   their usable solutions), then the exact choice of solutions along it (Viterbi,
@@ -64,7 +69,8 @@ NEIGHBOURS = 10
 MOVES_PER_TARGET = 10
 MOVES_EXTRA = 100
 #: The default budget of kicks of the iterated local search: 3 per 2 targets, at most
-#: `MAX_KICKS` (a kick and its repair take about 1 ms: benchmarks/planner.py, the trade measured).
+#: `MAX_KICKS` (a kick and its repair take 0.1–0.3 ms compiled, the longer on the longer
+#: paths: benchmarks/planner.py, the trade measured).
 KICKS_PER_TWO_TARGETS = 3
 MAX_KICKS = 15_000
 #: Rounds of "improve on the chosen poses, choose again" after the relaxed order; the

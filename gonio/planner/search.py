@@ -160,7 +160,9 @@ def descend(
     m = path.metric
     show = (Quiet() if shown is None else shown).advance
     moves, gained = 0, 0.0
-    while True:
+    while True:  # the clock read before each slice of work, as the budget
+        if ends[1] > 0 and moves < max_moves and time.perf_counter() > deadline:
+            return moves, gained, "time cap"
         applied, won, visits, status = _descend(
             m.poses, m.count, m.axes, neighbours.nodes, neighbours.times, path.nodes,
             path.pos, path.dirty, queue, ends, queued, min(max_moves - moves, 1 << 62), SLICE,
@@ -172,8 +174,6 @@ def descend(
             return moves, gained, "converged"
         if status == _BUDGET:
             return moves, gained, "move budget"
-        if time.perf_counter() > deadline:
-            return moves, gained, "time cap"
 
 
 def iterate(
