@@ -65,7 +65,7 @@ test: lint docs pytest
 # Every benchmark, one after another, each writing its page docs/results/<script>.md (and
 # docs/results/index.md) with the command, the machine, the date, the load and the wall
 # time, besides printing it (`--no-page`: print only). Fast ones first; about 45 min on
-# the 2-core machine, of which planner.py takes 22 (LKH-3's tours, plans of a million).
+# the 2-core machine, of which planner.py takes about 25 (LKH-3's tours, a plan of a million).
 bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py --repeat 11
 	$(BIN)/python benchmarks/extremes.py --near-horizon 4000

@@ -1,7 +1,7 @@
 """Ordering the planner's targets: how close to LKH-3 and to the lower bound, how much
 faster than generation order, and how long it takes.
 
-Three tables (moves only: settle and exposure do not depend on the order):
+Four tables (moves only: settle and exposure do not depend on the order):
 
 1. ``shipped``: every shipped plan on every shipped rig through the real planner
    (`gonio.planner.build`, ``bounds=True``, default budgets): the ordered moves
@@ -14,13 +14,17 @@ Three tables (moves only: settle and exposure do not depend on the order):
    per rig (0 kicks is the descent alone).
 3. ``large``: 5 000 and 50 000 Sobol targets uniform in the hybrid coordinates, both
    rigs, isotropic and anisotropic, default budgets (targets: ≤ 15 s and ≤ 60 s).
-4. ``memory``: the peak resident memory, CPU and wall time of `gonio plan` on Sobol plans
-   of 50 000, 500 000 and 1 000 000 targets (the cap, `placement.MAX_TARGETS`) on the
-   arch rig, each in its own process, the search capped at 60 s; and how fast a plan
-   over the cap is refused.
+4. ``memory``: `gonio plan -o` end to end on Sobol plans of 1 000 to 1 000 000 targets
+   (the cap, `placement.MAX_TARGETS`) on the arch rig, each in its own process, default
+   budgets, the time cap raised to 900 s (a safety stop, not a budget: the order is
+   the same on any machine unless it binds): its peak resident memory, the growth per
+   target over the smallest plan (the target: ≤ 2 KB), CPU and wall time, the predicted
+   moves and how the search ended; and how fast a plan over the cap is refused. The
+   search's loops are compiled (numba) and loaded from the disk: a plan's first run
+   after an install also compiles them (some seconds, not in these figures).
 
 Run: .venv/bin/python benchmarks/planner.py [--tables shipped,trade,large,memory]
-[--sizes 5000,50000] [--memory-sizes 50000,500000,1000000] [--no-lkh]
+[--sizes 5000,50000] [--memory-sizes 1000,10000,100000,1000000] [--no-lkh]
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ import _report
 from _machine import describe
 
 from gonio.planner import Plan, build, lkh, load_plan
-from gonio.planner.ordering import default_kicks
+from gonio.planner.ordering import compile_kernels, default_kicks
 from gonio.planner.schema import PlanSpec
 from gonio.planner.search import path_time
 from gonio.progress import hms
@@ -80,7 +84,8 @@ def shipped(use_lkh: bool) -> None:
             plan = build(spec, Rig.from_yaml(rig_path), bounds=True)
             s = plan.summary
             assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
-            assert s.naive_travel_s is not None and s.bound_wall_s is not None
+            assert s.naive_travel_s is not None and plan.bound_wall_s is not None
+            assert plan.ordering_s is not None
             ref = lkh_figures(plan) if use_lkh else None
             lk = "—" if ref is None else hms(ref[0])
             ratio = "—" if ref is None else f"{s.travel_s / ref[0]:.4f}"
@@ -90,8 +95,8 @@ def shipped(use_lkh: bool) -> None:
                 f"| {hms(s.lower_bound_travel_s)} | {s.travel_s / s.lower_bound_travel_s:.4f} "
                 f"| {lk} | {ratio} | {s.travel_s / s.mst_travel_s:.3f} "
                 f"| {s.naive_travel_s / s.travel_s:.1f} "
-                f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} | {s.ordering_s:.1f} "
-                f"| {s.bound_wall_s:.1f} | {wall} |",
+                f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} | {plan.ordering_s:.1f} "
+                f"| {plan.bound_wall_s:.1f} | {wall} |",
                 flush=True,
             )
 
@@ -122,11 +127,11 @@ def trade() -> None:
             s = plan.summary
             if bound is None:
                 bound = s.lower_bound_travel_s
-            assert bound is not None
+            assert bound is not None and plan.ordering_s is not None
             default = " (default)" if kicks == default_kicks(n) else ""
             print(
                 f"| {rig_name} | isotropic_hybrid | {len(plan):,} | {s.kicks:,}{default} "
-                f"| {hms(s.travel_s)} | {s.travel_s / bound:.4f} | {s.ordering_s:.1f} |",
+                f"| {hms(s.travel_s)} | {s.travel_s / bound:.4f} | {plan.ordering_s:.1f} |",
                 flush=True,
             )
 
@@ -144,7 +149,8 @@ def large(sizes: list[int]) -> None:
                 plan = build(sobol_spec(n, isotropic), rig, bounds=True)
                 s = plan.summary
                 assert s.lower_bound_travel_s is not None and s.mst_travel_s is not None
-                assert s.naive_travel_s is not None and s.bound_wall_s is not None
+                assert s.naive_travel_s is not None and plan.bound_wall_s is not None
+                assert plan.ordering_s is not None
                 kind = "isotropic" if isotropic else "anisotropic"
                 print(
                     f"| {rig_name} | {kind} | {len(plan):,} | {hms(s.naive_travel_s)} "
@@ -153,20 +159,19 @@ def large(sizes: list[int]) -> None:
                     f"| {s.travel_s / s.lower_bound_travel_s:.4f} "
                     f"| {s.travel_s / s.mst_travel_s:.3f} "
                     f"| {s.kicks:,} ({s.kicks_kept:,}){FLAG[s.stopped]} "
-                    f"| {s.ordering_s:.1f} | {s.bound_wall_s:.1f} |",
+                    f"| {plan.ordering_s:.1f} | {plan.bound_wall_s:.1f} |",
                     flush=True,
                 )
 
 
-#: One plan in a child process: prints its peak RSS (KiB), CPU and wall seconds as JSON.
-#: One `gonio plan` in a process of its own. Its peak memory is VmHWM, the high-water mark
-#: of this process's own memory: ru_maxrss keeps, across exec, the peak of the process that
-#: forked it (this benchmark, large after the `large` table), so it would report that.
+#: One `gonio plan -o` in a process of its own: prints its exit code, peak RSS (KiB) and
+#: CPU seconds as JSON. Its peak memory is VmHWM, the high-water mark of this process's
+#: own memory: ru_maxrss keeps, across exec, the peak of the process that forked it (this
+#: benchmark, large after the `large` table), so it would report that.
 _CHILD = """
-import json, resource, sys, time
+import json, resource, sys
 from gonio.cli import main
-started = time.perf_counter()
-code = main(["plan", sys.argv[1]])
+code = main(["plan", sys.argv[1], "-o", sys.argv[2]])
 usage = resource.getrusage(resource.RUSAGE_SELF)
 peak = usage.ru_maxrss
 try:
@@ -175,36 +180,50 @@ try:
 except (OSError, StopIteration):
     pass
 print(json.dumps({"code": code, "rss_kib": peak, "cpu_s": usage.ru_utime +
-    usage.ru_stime, "wall_s": time.perf_counter() - started}), file=sys.stderr)
+    usage.ru_stime}), file=sys.stderr)
 """
 
 
 def memory(sizes: list[int]) -> None:
-    print("| targets | peak memory | per target | CPU | wall | search |")
-    print("|---:|---:|---:|---:|---:|---|")
+    print("| targets | peak memory | growth per target | CPU | wall | moves (predicted) | search |")
+    print("|---:|---:|---:|---:|---:|---:|---|")
+    smallest: tuple[int, int] | None = None  # (targets, peak bytes)
+    compile_kernels()  # compiled (or loaded) here: the children load them from the disk
     with tempfile.TemporaryDirectory() as folder:
         for n in [*sizes, 4_000_000]:
             path = Path(folder) / f"plan{n}.yaml"
             path.write_text(
                 f"name: memory\nrig: {RIGS['arch']}\nsampling: {{strategy: sobol, target: {n}, "
-                "seed: 7}\nexposure: {seconds: 0.05}\ntime_budget_s: 60\n"
+                "seed: 7}\nexposure: {seconds: 0.05}\ntime_budget_s: 900\n"
             )
+            stored = Path(folder) / f"plan{n}.csv"
+            started = time.perf_counter()
             child = subprocess.run(
-                [sys.executable, "-c", _CHILD, str(path)], capture_output=True, text=True
-            )
+                [sys.executable, "-c", _CHILD, str(path), str(stored)],
+                capture_output=True, text=True,
+            )  # fmt: skip
             figures = json.loads(child.stderr.strip().splitlines()[-1])
+            figures["wall_s"] = time.perf_counter() - started  # the process's, end to end
             if figures["code"] != 0:
                 refusal = child.stderr.strip().splitlines()[0]
-                print(f"| {n:,} | refused in {figures['wall_s']:.2f} s: {refusal} | | | | |")
+                print(f"| {n:,} | refused in {figures['wall_s']:.2f} s: {refusal} | | | | | |")
                 continue
             rss = figures["rss_kib"] * 1024
+            stored.unlink()
+            smallest = smallest or (n, rss)
+            per = (rss - smallest[1]) / max(n - smallest[0], 1)
+            growth = "—" if n == smallest[0] else f"{per:,.0f} B"
             search = next(
                 (line.split(None, 1)[1] for line in child.stdout.splitlines()
                  if line.strip().startswith("ordering ")), "?"
             )  # fmt: skip
+            moves = next(
+                (line.split("moves ", 1)[1].split(",")[0] for line in child.stdout.splitlines()
+                 if "predicted duration" in line), "?"
+            )  # fmt: skip
             print(
-                f"| {n:,} | {rss / 2**30:.2f} GiB | {rss / n / 1024:.1f} KiB "
-                f"| {figures['cpu_s']:.0f} s | {figures['wall_s']:.0f} s | {search.strip()} |",
+                f"| {n:,} | {rss / 2**20:,.0f} MiB | {growth} | {figures['cpu_s']:.1f} s "
+                f"| {figures['wall_s']:.1f} s | {moves} | {search.strip()} |",
                 flush=True,
             )
 
@@ -212,7 +231,7 @@ def memory(sizes: list[int]) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--tables", default="shipped,trade,large,memory")
-    parser.add_argument("--memory-sizes", default="50000,500000,1000000")
+    parser.add_argument("--memory-sizes", default="1000,10000,100000,1000000")
     parser.add_argument("--sizes", default="5000,50000")
     parser.add_argument("--no-lkh", action="store_true")
     args = parser.parse_args()

@@ -213,7 +213,7 @@ def held_karp_bound(
     flat, owner = relaxed.flat()
     if relaxed.n == 0:
         return Bounds(0.0, 0.0, True, 0)
-    nbr, times = relaxed.neighbour_lists(neighbours, typical_move(relaxed.model, flat))
+    nbr, times = relaxed.neighbour_lists(neighbours)
     u = np.repeat(np.arange(len(nbr)), nbr.shape[1])
     v, t = nbr.reshape(-1), times.reshape(-1)
     keep = v >= 0

@@ -12,7 +12,7 @@ simulated motors. Nothing here moves a motor.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -22,12 +22,22 @@ from gonio.planner import fly, lkh, placement, poses, sampling
 from gonio.planner.bounds import held_karp_bound
 from gonio.planner.exposure import check_detector, exposures
 from gonio.planner.model import Plan, Summary
-from gonio.planner.ordering import Method, Ordering, default_kicks, default_moves, order_jointly
+from gonio.planner.ordering import (
+    Method,
+    Ordering,
+    compile_kernels,
+    default_kicks,
+    default_moves,
+    order_jointly,
+)
 from gonio.planner.placement import directions, place, too_many
 from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.types import FloatArray
+
+#: Pairs the rig solves at a time.
+SOLVE_CHUNK = 32_768
 
 
 @dataclass(frozen=True)
@@ -65,7 +75,7 @@ def solve(
     """The inverse kinematics of the points, the reachable ones kept (`ConfigError` if
     there are more than `placement.MAX_TARGETS` or none)."""
     valid, wi, wo = directions(spec, coords)
-    solution: Solution = rig.solve(wi, wo, isotropic=spec.isotropic)
+    solution = _solve(rig, wi, wo, spec.isotropic)
     reasons = np.full(len(coords), -1, dtype=np.int8)  # -1: outside the domain
     reasons[valid] = solution.reasons
     refused = {r.label: int(np.count_nonzero(reasons == r)) for r in Reason if r != Reason.OK}
@@ -80,6 +90,20 @@ def solve(
         )
     in_valid = np.cumsum(valid) - 1  # index into the valid subset
     return Solved(coords, shape, valid, refused, kept, in_valid[kept], solution)
+
+
+def _solve(rig: Rig, wi: FloatArray, wo: FloatArray, isotropic: bool) -> Solution:
+    """`Rig.solve` of the pairs (N, 3), `SOLVE_CHUNK` at a time (its temporaries are many
+    times its result)."""
+    if len(wi) <= SOLVE_CHUNK:
+        return rig.solve(wi, wo, isotropic=isotropic)
+    parts = [
+        rig.solve(wi[lo : lo + SOLVE_CHUNK], wo[lo : lo + SOLVE_CHUNK], isotropic=isotropic)
+        for lo in range(0, len(wi), SOLVE_CHUNK)
+    ]
+    return Solution(
+        *(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(Solution))
+    )
 
 
 def order_targets(
@@ -102,6 +126,7 @@ def order_targets(
         method = "auto"
     budget = default_moves(sel.size) if spec.max_moves is None else spec.max_moves
     kicks = default_kicks(sel.size) if spec.kicks is None else spec.kicks
+    compile_kernels()  # a first run's compilation is not the ordering's time
     started = time.perf_counter()
     cand, usable = solution.candidates[sel][given], solution.usable[sel][given]
     joint = order_jointly(
@@ -123,16 +148,13 @@ def lower_bounds(rig: Rig, solved: Solved, ordered: Ordered, home: FloatArray) -
     """The summary's figures to compare against (s): bounds on every order with every
     choice of solutions (the relaxed time), and generation order with the exact choice
     of solutions along it."""
-    started = time.perf_counter()
     relaxed = Relaxed.of(rig.travel, ordered.candidates, ordered.usable, home)
     b = held_karp_bound(relaxed, float(ordered.travel.sum()))
-    wall_s = time.perf_counter() - started
     sel = solved.sel
     _, naive = poses.choose(
         solved.solution.candidates[sel], solved.solution.usable[sel], home, rig.travel_time
     )
     return {
-        "bound_wall_s": wall_s,
         "naive_travel_s": float(naive.sum()),
         "lower_bound_travel_s": b.held_karp_s,
         "mst_travel_s": b.mst_s,
@@ -182,7 +204,6 @@ def summarize(
         dwell_s=float(times.dwell.sum()),
         bus_s=float(times.bus.sum()),
         timing="dynamixel" if rig.on_dynamixel else "rig",
-        ordering_s=ordered.ordering_s,
         moves=result.moves,
         max_moves=ordered.max_moves,
         kicks=result.kicks,
@@ -226,7 +247,9 @@ def build(
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)
     solved = solve(spec, rig, where, coords, shape)
     ordered = order_targets(spec, rig, where, solved, home)
+    started = time.perf_counter()
     figures = lower_bounds(rig, solved, ordered, home) if bounds else {}
+    bound_wall_s = time.perf_counter() - started if bounds else None
     chosen = solved.sel[ordered.given[ordered.order]]
     order = np.searchsorted(solved.sel, chosen)  # positions in generation order
     wi, wo = rig.forward(ordered.angles)  # the pair the chosen pose measures
@@ -247,4 +270,6 @@ def build(
         summary=summarize(spec, rig, solved, ordered, times, figures),
         plan_text=spec_text(spec) if text is None else text,
         ordering=ordered.ordering,
+        ordering_s=ordered.ordering_s,
+        bound_wall_s=bound_wall_s,
     )

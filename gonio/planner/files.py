@@ -106,8 +106,13 @@ OPTIONAL = frozenset({"sweeps"})
 HASHES = ("plan_sha256", "rig_sha256", "content", "file_sha256")
 #: Integer columns (every other column is a float64 written with repr).
 INTEGER = frozenset({"index", "generated", "averages"})
+#: Targets turned into text at a time (the cells of a block as strings, not the plan's).
+ROWS = 4096
 
 _SUMMARY = TypeAdapter(Summary)
+#: Wall times that older stored plans kept in their summary (figures of the machine and
+#: its load; a stored plan is now the same bytes on any machine): read and dropped.
+WALL_TIMES = frozenset({"ordering_s", "bound_wall_s"})
 
 
 def columns(coordinate_names: tuple[str, ...], axes: tuple[str, ...]) -> list[str]:
@@ -136,15 +141,21 @@ def _json(value: Any) -> str:
 def plan_bytes(plan: Plan) -> bytes:
     """``plan`` in the stored format (module docstring), as the file's bytes."""
     names = columns(plan.coordinate_names, plan.rig.axes)
+    table = _table(plan)
     body = io.StringIO()
     out = csv.writer(body, lineterminator="\n")
     out.writerow(names)
-    cells = [
-        [str(v) for v in c.tolist()] if name in INTEGER else [repr(v) for v in c.tolist()]
-        for name, c in zip(names, _table(plan), strict=True)
-    ]
-    out.writerows(zip(*cells, strict=True))
-    targets = body.getvalue().encode("utf-8")
+    parts = []
+    for lo in range(0, len(plan), ROWS):  # a block of rows at a time: the text of a block
+        cells = [
+            [(str if name in INTEGER else repr)(v) for v in c[lo : lo + ROWS].tolist()]
+            for name, c in zip(names, table, strict=True)
+        ]
+        out.writerows(zip(*cells, strict=True))
+        parts.append(body.getvalue().encode("utf-8"))
+        body.seek(0)
+        body.truncate()
+    targets = b"".join([*parts, body.getvalue().encode("utf-8")])
     s = plan.summary
     summary = {
         **{f.name: getattr(s, f.name) for f in dataclasses.fields(s)},
@@ -274,6 +285,8 @@ def _summary(path: Path, data: Any, line: int) -> Summary:
         data = {**data, "fly": None}  # a stop-and-go plan
     if isinstance(data, dict) and "timing" not in data and "bus_s" not in data:
         data = {**data, "bus_s": 0.0, "timing": "rig"}  # the rig file's rates, no bus
+    if isinstance(data, dict) and WALL_TIMES & set(data):  # stored before they left it
+        data = {k: v for k, v in data.items() if k not in WALL_TIMES}
     if not isinstance(data, dict) or set(data) != fields:
         got = set(data) if isinstance(data, dict) else set()
         detail = ", ".join(sorted(fields ^ got)) or type(data).__name__

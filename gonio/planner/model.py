@@ -100,7 +100,6 @@ class Summary:
     kept: int
     travel_s: float  # ordered, moves only
     dwell_s: float  # settle + exposure × averages, summed
-    ordering_s: float  # time spent ordering (wall clock)
     moves: int = 0  # improving moves of the ordering's descents
     max_moves: int = 0  # the budget of improving moves
     kicks: int = 0  # kicks of the iterated local search tried
@@ -115,7 +114,6 @@ class Summary:
     lower_bound_travel_s: float | None = None  # Held–Karp 1-tree (`gonio.planner.bounds`)
     mst_travel_s: float | None = None  # the minimum spanning tree (cheaper, looser)
     lower_bound_exact: bool | None = None  # False: memory forced a weaker MST somewhere
-    bound_wall_s: float | None = None  # time spent on the lower bounds (wall clock)
     # An adaptive plan's second pass: how it was placed and why (`gonio.planner.choice`).
     second_pass: str | None = None
     fly: FlyFigures | None = None  # a fly plan's figures
@@ -285,7 +283,8 @@ class Plan:
     Frozen: every array is a private read-only copy (change a plan with
     `dataclasses.replace`, which makes a new one). ``==`` is "the same stored plan":
     spec, plan and rig texts, coordinate names and summary equal, every array identical
-    bit for bit; ``ordering`` (the search's diagnostics, not stored) is left out.
+    bit for bit; ``ordering`` (the search's diagnostics) and the wall times (figures of
+    the machine and its load) are not stored and left out.
     """
 
     spec: PlanSpec
@@ -303,6 +302,8 @@ class Plan:
     summary: Summary
     plan_text: bytes  # the plan file's bytes (for a spec made in code: `spec_text`)
     ordering: Ordering | None = None  # the search's figures (constructed length, …)
+    ordering_s: float | None = None  # wall time spent ordering (None: read back)
+    bound_wall_s: float | None = None  # wall time spent on the lower bounds (bounds only)
     sweeps: Sweeps | None = None  # a fly plan's segments (None: stop-and-go)
 
     def __post_init__(self) -> None:

@@ -4,12 +4,17 @@ with each target's inverse-kinematics solution chosen along the way.
 The cost of a move is the rig's travel time (`gonio.rig.travel.TravelModel`, a metric on
 joint space). The path starts at the given pose and ends anywhere.
 
-- Construction: the given order (a serpentine over a grid) or nearest neighbour.
+- Construction: the given order (a serpentine over a grid) or nearest neighbour
+  (`gonio.planner.nearest`, exact).
+- Neighbour lists: each node's `NEIGHBOURS` nearest others by travel time, exactly,
+  equal times in index order (`gonio.planner.nearest.nearest_others`).
 - Improvement (`gonio.planner.search`): a 2-opt/Or-opt descent over neighbour lists,
   then iterated local search (seeded double-bridge kicks, each kept only if the path got
   shorter). Budgets are counts (improving moves of the descent, `default_moves`; kicks,
-  `default_kicks`), so a plan is the same on any machine; a wall-clock cap stays as a
-  safety net, and when it binds the result says so.
+  `default_kicks`), so a plan is the same on any machine, however busy; a wall-clock cap
+  stays as a safety net, read between slices of counted work, and when it binds the
+  result says so. The loops are compiled (`gonio.planner.jit`), before any clock starts
+  (`compile_kernels`).
 - Branches (`order_jointly`): the order is first improved on the relaxed any-branch time
   (`gonio.planner.poses.Relaxed`: between two targets, the shortest move between any of
   their usable solutions), then the exact choice of solutions along it (Viterbi,
@@ -20,19 +25,19 @@ joint space). The path starts at the given pose and ends anywhere.
 
 from __future__ import annotations
 
-import math
+import functools
 import time
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from gonio import progress
 from gonio.planner import search
-from gonio.planner.bounds import MAX_PAIRS, mst_bound, typical_move
+from gonio.planner.bounds import MAX_PAIRS, mst_bound
+from gonio.planner.nearest import nearest_neighbour, nearest_others
 from gonio.planner.poses import Relaxed, choose
-from gonio.planner.search import EPSILON, Path, Stop, path_time
+from gonio.planner.search import EPSILON, Metric, Path, Stop, path_time
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 
@@ -42,6 +47,7 @@ __all__ = [
     "Joint",
     "Ordering",
     "Stop",
+    "compile_kernels",
     "default_kicks",
     "default_moves",
     "mst_lower_bound",
@@ -63,7 +69,8 @@ NEIGHBOURS = 10
 MOVES_PER_TARGET = 10
 MOVES_EXTRA = 100
 #: The default budget of kicks of the iterated local search: 3 per 2 targets, at most
-#: `MAX_KICKS` (a kick and its repair take about 1 ms: benchmarks/planner.py, the trade measured).
+#: `MAX_KICKS` (a kick and its repair take 0.1–0.3 ms compiled, the longer on the longer
+#: paths: benchmarks/planner.py, the trade measured).
 KICKS_PER_TWO_TARGETS = 3
 MAX_KICKS = 15_000
 #: Rounds of "improve on the chosen poses, choose again" after the relaxed order; the
@@ -106,92 +113,31 @@ class Ordering:
     max_kicks: int = 0  # the budget of kicks
 
 
-def _scaled(model: TravelModel, points: FloatArray, t: float) -> FloatArray:
-    """Coordinates where the Chebyshev distance ≤ 1 is exactly a move of ≤ t seconds."""
-    return np.asarray(points / np.maximum(model.reach(t), 1e-300), dtype=np.float64)
-
-
 def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarray:
-    """(N, k') indices of each point's nearest others by travel time, nearest first,
-    equal times in index order (candidates from a k-d tree in a proxy metric, ranked by
-    the exact time)."""
-    n = len(points)
-    k = min(k, n - 1)
-    if k <= 0:
-        return np.zeros((n, 0), dtype=np.int64)
-    scaled = _scaled(model, points, typical_move(model, points))
-    tree = cKDTree(scaled)
-    _, idx = tree.query(scaled, k=min(2 * k + 1, n), p=np.inf)
-    idx = np.asarray(idx, dtype=np.int64)
-    t = model.time(points[:, None, :], points[idx])
-    t[idx == np.arange(n)[:, None]] = np.inf  # not itself
-    # Nearest first, equal times in index order (whatever order the tree returned them).
-    by_index = np.argsort(idx, axis=1, kind="stable")
-    rank = np.take_along_axis(
-        by_index, np.argsort(np.take_along_axis(t, by_index, axis=1), axis=1, kind="stable"), 1
-    )[:, :k]
-    return np.asarray(np.take_along_axis(idx, rank, axis=1), dtype=np.int64)
+    """(N, k') indices of each point's k' = min(k, N − 1) nearest others by travel time,
+    nearest first, equal times in index order (exact: `gonio.planner.nearest`)."""
+    return nearest_others(model, points, np.arange(len(points)), k)[0]
 
 
-def nearest_neighbour(model: TravelModel, points: FloatArray, start: FloatArray) -> np.ndarray:
-    """Greedy order: from the start, to the nearest unvisited target by travel time among
-    the few nearest in a proxy metric (a k-d tree, rebuilt as targets run out): nearly
-    always the true nearest, and the local search mends the rest."""
-    n = len(points)
-    order = np.empty(n, dtype=np.int64)
-    if n == 0:
-        return order
-    time_of = model.scalar()
-    scale = model.reach(typical_move(model, points))
-    scale = np.maximum(scale, 1e-300)
-    rows = points.tolist()
-    visited = np.zeros(n, dtype=np.bool_)
-    remaining = np.arange(n)
-    tree = cKDTree(points / scale)
-    here = np.asarray(start, dtype=np.float64)
-    here_row = here.tolist()
-    with progress.stage("nearest-neighbour construction", n) as shown:
-        for step in range(n):
-            if step & 4095 == 4095:
-                shown.advance(4096)
-            if len(remaining) > 64 and (n - step) * 4 < len(remaining):  # mostly visited
-                remaining = np.flatnonzero(~visited)
-                tree = cKDTree(points[remaining] / scale)
-            k = 8
-            best, best_t = -1, math.inf
-            while best < 0:
-                k = min(k, len(remaining))
-                _, found = tree.query(here / scale, k=k, p=np.inf)
-                for j in np.atleast_1d(found).tolist():
-                    c = int(remaining[j])
-                    if not visited[c]:
-                        t = time_of(here_row, rows[c])
-                        if t < best_t:
-                            best, best_t = c, t
-                k *= 4
-            order[step] = best
-            visited[best] = True
-            here, here_row = points[best], rows[best]
-    return order
-
-
-def _lists(neighbours: np.ndarray, times: FloatArray) -> search.Neighbours:
-    """Neighbour lists (N, k) with their move times (N, k) as Python lists of (node,
-    time), padding (−1) dropped."""
-    return [
-        [(c, t) for c, t in zip(row, trow, strict=True) if c >= 0]
-        for row, trow in zip(neighbours.tolist(), times.tolist(), strict=True)
-    ]
+@functools.cache
+def compile_kernels() -> None:
+    """Compile the search's kernels (`gonio.planner.jit`; on the first run after an
+    install, some seconds; later, loaded from the disk) by ordering a toy path, so that
+    no clock of a search counts it."""
+    with progress.stage("compiling the search (first run only)", None, unit="step"):
+        model = TravelModel(np.ones(2), np.ones(2))
+        toy = np.array([[0.0, 0.0], [3.0, 0.0], [1.0, 0.0], [2.0, 1.0], [0.0, 2.0]])
+        candidates = np.stack([toy, -toy], axis=1)
+        usable = np.ones((len(toy), 2), dtype=np.bool_)
+        _order_jointly(model, candidates, usable, toy, np.zeros(2), kicks=8)
 
 
 def _fixed_neighbours(model: TravelModel, points: FloatArray) -> search.Neighbours:
-    nbr = neighbour_lists(model, points, NEIGHBOURS)
-    return _lists(nbr, model.time(points[:, None, :], points[nbr]))
+    return search.Neighbours.of(*nearest_others(model, points, np.arange(len(points)), NEIGHBOURS))
 
 
 def _relaxed_neighbours(relaxed: Relaxed) -> search.Neighbours:
-    scale = typical_move(relaxed.model, relaxed.flat()[0])
-    return _lists(*relaxed.neighbour_lists(NEIGHBOURS, scale))
+    return search.Neighbours.of(*relaxed.neighbour_lists(NEIGHBOURS))
 
 
 @dataclass(frozen=True)
@@ -222,7 +168,7 @@ def _improve(
     """A descent from every target, then ``kicks`` kicks (none if the descent did not
     converge)."""
     with progress.stage("improving the order", None, unit="visit") as shown:
-        moves, _, stopped = search.descend(path, neighbours, max_moves, deadline, None, shown)
+        moves, _, stopped = search.descend(path, neighbours, max_moves, deadline, shown)
         if stopped != "converged" or kicks <= 0:
             return _Effort(moves, 0, 0, stopped)
         tried, kept, _, ended = search.iterate(path, neighbours, kicks, rng, deadline, shown)
@@ -238,12 +184,6 @@ def _construct(
         if method == "nearest" or path_time(model, start, targets[greedy]) < given_s:
             order = greedy
     return order
-
-
-def _fixed_cost(model: TravelModel, points: FloatArray, start: FloatArray) -> search.Cost:
-    time_of = model.scalar()
-    rows = [*points.tolist(), np.asarray(start, dtype=np.float64).tolist()]
-    return lambda u, v: time_of(rows[u], rows[v])
 
 
 def order_targets(
@@ -274,6 +214,7 @@ def order_targets(
     n = len(targets)
     budget = default_moves(n) if max_moves is None else max_moves
     kick_budget = default_kicks(n) if kicks is None else kicks
+    compile_kernels()  # before the clock starts: the first run compiles for a while
     started = time.perf_counter()
     deadline = started + time_budget_s
     given_s = path_time(model, start, targets)
@@ -283,7 +224,7 @@ def order_targets(
     constructed_s = path_time(model, start, targets[order])
     everything = np.vstack([targets, start[None, :]])  # node n is the start
     neighbours = _fixed_neighbours(model, everything)
-    path = Path(n, order, _fixed_cost(model, targets, start))
+    path = Path(order, Metric.of(model, everything))
     rng = np.random.default_rng(seed)
     effort = _improve(path, neighbours, budget, kick_budget, rng, deadline)
     order = path.order()
@@ -334,6 +275,26 @@ def order_jointly(
     again; further rounds (descents only, at most `ROUNDS` in all) while the path
     shortens. Returned poses are always usable candidates.
     """
+    compile_kernels()
+    return _order_jointly(
+        model, candidates, usable, nearest, start, method=method, max_moves=max_moves,
+        kicks=kicks, seed=seed, time_budget_s=time_budget_s,
+    )  # fmt: skip
+
+
+def _order_jointly(
+    model: TravelModel,
+    candidates: FloatArray,
+    usable: BoolArray,
+    nearest: FloatArray,
+    start: FloatArray,
+    *,
+    method: Method = "auto",
+    max_moves: int | None = None,
+    kicks: int | None = None,
+    seed: int = 0,
+    time_budget_s: float = 120.0,
+) -> Joint:
     nearest = np.asarray(nearest, dtype=np.float64)
     start = np.asarray(start, dtype=np.float64)
     n = len(nearest)
@@ -353,7 +314,7 @@ def order_jointly(
     choice = bool((relaxed.usable.sum(axis=1) > 1).any())
     if choice:
         neighbours = _relaxed_neighbours(relaxed)
-        path = Path(n, order, relaxed.scalar())
+        path = Path(order, Metric.of(model, relaxed.poses, relaxed.usable.sum(axis=1)))
         share = int(kick_budget * RELAXED_SHARE)
         effort = _improve(path, neighbours, budget, share, rng, deadline)
         order = path.order()
@@ -365,7 +326,7 @@ def order_jointly(
         before = float(travel.sum())
         everything = np.vstack([angles, start[None, :]])
         neighbours = _fixed_neighbours(model, everything)
-        path = Path(n, np.arange(n), _fixed_cost(model, angles, start))
+        path = Path(np.arange(n), Metric.of(model, everything))
         left = 0
         if rounds <= KICK_ROUNDS:  # the rest of the kicks, shared
             left = (kick_budget - effort.kicks) // (KICK_ROUNDS - rounds + 1)

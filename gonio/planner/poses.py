@@ -14,20 +14,20 @@ a turn either way), the best path depends on the order and on the solutions toge
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from gonio import progress
+from gonio.planner.jit import compiled
+from gonio.planner.nearest import nearest_others
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 TravelTime = Callable[[FloatArray, FloatArray], FloatArray]
 #: Pose pairs the vectorized relaxed time handles at once (memory: × K² × A floats).
-CHUNK = 20_000
+CHUNK = 4096
 
 
 @dataclass(frozen=True)
@@ -75,60 +75,17 @@ class Relaxed:
             out[lo : lo + CHUNK] = np.where(ok, t, np.inf).min(axis=(1, 2))
         return out
 
-    def scalar(self) -> Callable[[int, int], float]:
-        """The relaxed time of two nodes as a Python float (for the local search)."""
-        time_of = self.model.scalar()
-        lists = [
-            [p for p, ok in zip(row, oks, strict=True) if ok]
-            for row, oks in zip(self.poses.tolist(), self.usable.tolist(), strict=True)
-        ]
-
-        def cost(u: int, v: int) -> float:
-            best = math.inf
-            for p in lists[u]:
-                for q in lists[v]:
-                    t = time_of(p, q)
-                    if t < best:
-                        best = t
-            return best
-
-        return cost
-
     def flat(self) -> tuple[FloatArray, np.ndarray]:
         """(every usable pose (P, A), the node each belongs to (P,))."""
         node, slot = np.nonzero(self.usable)
         return self.poses[node, slot], node
 
-    def neighbour_lists(self, k: int, scale: float) -> tuple[np.ndarray, FloatArray]:
+    def neighbour_lists(self, k: int) -> tuple[np.ndarray, FloatArray]:
         """(indices (N + 1, k), relaxed times (N + 1, k)): each node's nearest others in
         relaxed time, nearest first, equal times in index order (−1 and inf pad a short
-        row). Candidates: the k + 1 + K nearest poses of each of a node's poses in a k-d
-        tree (Chebyshev in coordinates scaled by each axis's reach in ``scale`` seconds),
-        ranked by the exact relaxed time."""
-        m = len(self.poses)
-        k = min(k, m - 1)
-        if k <= 0:
-            return np.zeros((m, 0), dtype=np.int64), np.zeros((m, 0))
+        row; exact: `gonio.planner.nearest.nearest_others` over the usable poses)."""
         flat, owner = self.flat()
-        scaled = flat / np.maximum(self.model.reach(scale), 1e-300)
-        q = min(k + 1 + int(self.usable.sum(axis=1).max()), len(flat))
-        _, idx = cKDTree(scaled).query(scaled, k=q, p=np.inf)
-        u = np.repeat(owner, q)
-        v = owner[np.asarray(idx, dtype=np.int64).reshape(-1)]
-        keep = u != v
-        pair = np.unique(u[keep] * m + v[keep])  # sorted by u, then v
-        u, v = pair // m, pair % m
-        t = self.times(u, v)
-        by = np.lexsort((v, t, u))  # by node, then time, then index
-        u, v, t = u[by], v[by], t[by]
-        first = np.searchsorted(u, np.arange(m))
-        rank = np.arange(len(u)) - first[u]
-        out = np.full((m, k), -1, dtype=np.int64)
-        times = np.full((m, k), np.inf)
-        take = rank < k
-        out[u[take], rank[take]] = v[take]
-        times[u[take], rank[take]] = t[take]
-        return out, times
+        return nearest_others(self.model, flat, owner, k)
 
 
 def choose(
@@ -140,7 +97,7 @@ def choose(
     Only usable candidates are ever returned. The moves between consecutive targets'
     candidates are computed `CHUNK` targets at a time (CHUNK, K′, K′) over the K′ usable
     slots packed first (memory: O(N · K′) for the back pointers, whatever N); the
-    recursion (each choice depends on the one before) runs over Python floats.
+    recursion (each choice depends on the one before) is compiled.
     """
     n = len(candidates)
     if n == 0:
@@ -149,9 +106,8 @@ def choose(
     slots = np.argsort(~usable, axis=1, kind="stable")[:, :k]  # usable ones first
     packed = np.take_along_axis(candidates, slots[:, :, None], axis=1)
     ok = np.take_along_axis(usable, slots, axis=1)
-    cost = np.where(ok[0], travel(start, packed[0]), np.inf).tolist()
+    cost = np.where(ok[0], travel(start, packed[0]), np.inf)
     back = np.zeros((max(n - 1, 0), k), dtype=np.int64)  # best slot of i given i + 1's
-    span = range(k)
     with progress.stage("choosing the poses", n) as shown:
         for lo in range(0, n - 1, CHUNK):
             hi = min(lo + CHUNK, n - 1)
@@ -159,32 +115,43 @@ def choose(
                 ok[lo:hi, :, None] & ok[lo + 1 : hi + 1, None, :],
                 travel(packed[lo:hi, :, None, :], packed[lo + 1 : hi + 1, None, :, :]),
                 np.inf,
-            ).tolist()  # (chunk, K′, K′): from slot a of target i to slot b of target i + 1
-            best_from = []
-            for step in steps:
-                new = []
-                row = []
-                for b in span:
-                    best, arg = math.inf, 0
-                    for a in span:
-                        t = cost[a] + step[a][b]
-                        if t < best:
-                            best, arg = t, a
-                    new.append(best)
-                    row.append(arg)
-                best_from.append(row)
-                cost = new
-            back[lo:hi] = best_from
+            )  # (chunk, K′, K′): from slot a of target i to slot b of target i + 1
+            _forward(np.ascontiguousarray(steps, dtype=np.float64), cost, back[lo:hi])
             shown.advance(hi - lo)
-    chosen = np.empty(n, dtype=np.int64)
-    last = min(span, key=lambda b: cost[b])
-    chosen[n - 1] = last
-    pointer = back.item
-    for i in range(n - 2, -1, -1):
-        last = pointer(i, last)
-        chosen[i] = last
+    chosen = _backward(back, int(np.argmin(cost)))
     angles = packed[np.arange(n), chosen]
     previous = np.vstack([start[None, :], angles[:-1]])
     return np.asarray(angles, dtype=np.float64), np.asarray(
         travel(previous, angles), dtype=np.float64
     )
+
+
+@compiled
+def _forward(steps: FloatArray, cost: FloatArray, back: np.ndarray) -> None:
+    """Viterbi's forward pass over ``steps`` (C, K, K): ``cost`` (K,) the least travel
+    to each slot of the current target, updated in place; ``back`` (C, K) the best slot
+    before each (the first of equal ones)."""
+    k = len(cost)
+    new = np.empty(k)
+    for s in range(len(steps)):
+        for b in range(k):
+            best, arg = np.inf, 0
+            for a in range(k):
+                t = cost[a] + steps[s, a, b]
+                if t < best:
+                    best, arg = t, a
+            new[b] = best
+            back[s, b] = arg
+        cost[:] = new
+
+
+@compiled
+def _backward(back: np.ndarray, last: int) -> np.ndarray:
+    """The slots chosen, from the last target's ``last`` back through ``back``."""
+    n = len(back) + 1
+    chosen = np.empty(n, dtype=np.int64)
+    chosen[n - 1] = last
+    for i in range(n - 2, -1, -1):
+        last = back[i, last]
+        chosen[i] = last
+    return chosen

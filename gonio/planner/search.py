@@ -1,9 +1,12 @@
-"""Local search on an open path: 2-opt and Or-opt descent, and iterated local search.
+"""Local search on an open path: 2-opt and Or-opt descent, and iterated local search,
+compiled (numba).
 
 The path starts at a fixed node S and ends at a free end E (every move into E costs
-nothing), so it is an open path from S. Costs come from a function of two node ids
-(`Cost`): the travel time between fixed poses, or the relaxed any-branch time
-(`gonio.planner.poses.Relaxed`).
+nothing), so it is an open path from S. Move times come from a `Metric`: each node's
+poses, the time between two nodes the shortest move between any of theirs (one pose a
+node: the travel time between fixed poses; several: the relaxed any-branch time,
+`gonio.planner.poses.Relaxed`), each axis on its trapezoidal profile
+(`gonio.rig.travel.TravelModel`, the same arithmetic, bit for bit).
 
 - `descend`: 2-opt and Or-opt (segments of 1 to 3, either orientation) from each node
   in a queue, over neighbour lists, first improvement, don't-look bits; until no move
@@ -11,32 +14,35 @@ nothing), so it is an open path from S. Costs come from a function of two node i
 - `iterate`: kicks, each a double bridge within a window of the path (two adjacent
   segments of random lengths ≤ `KICK_SPAN` swapped), followed by a descent from the six
   nodes it touched; kept if the path got shorter by more than `EPSILON`, otherwise
-  undone exactly (a journal of the blocks written). Kicks are drawn from a seeded
-  `numpy.random.Generator`, so a seed and a kick budget give the same path anywhere.
+  undone exactly (the positions written since the last kept state restored from a copy).
+  Kicks are drawn from a seeded `numpy.random.Generator`, so a seed and a kick budget
+  give the same path anywhere.
 
-The search is sequential by nature (each move changes the next one's costs), so it runs
-as a Python loop with scalar costs; the path lives in numpy arrays (block writes).
+The search is sequential by nature (each move changes the next one's costs): it runs as
+compiled loops over the path's arrays. The work is counted (improving moves, node
+visits, kicks), never timed inside: the compiled loops return every `SLICE` node visits
+or `KICK_BATCH` kicks, and only there is the deadline read, a safety stop whose
+binding is reported ("time cap"). Whatever the machine's load, a result that did not
+stop on the deadline is the same.
 """
 
 from __future__ import annotations
 
-import itertools
+import math
 import time
-from collections import deque
-from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+import numpy.typing as npt
 
+from gonio.planner.jit import compiled
 from gonio.progress import Progress, Quiet
 from gonio.rig.travel import TravelModel
-from gonio.types import FloatArray
+from gonio.types import BoolArray, FloatArray
 
-#: Cost of moving from one node to another (s); node ids are the targets 0..n-1 and the
-#: start n (the free end is handled by the path).
-Cost = Callable[[int, int], float]
-#: Each node's neighbours, nearest first, with the move time to each: [(node, s), …].
-Neighbours = list[list[tuple[int, float]]]
+Ints = npt.NDArray[np.int64]
+
 #: Why a search stopped (only the last depends on the machine).
 Stop = Literal["converged", "move budget", "time cap"]
 
@@ -44,8 +50,10 @@ Stop = Literal["converged", "move budget", "time cap"]
 EPSILON = 1e-9
 #: The longest segment a kick moves (targets).
 KICK_SPAN = 30
-#: Move times remembered (pairs) before the memo starts again.
-CACHE = 2_000_000
+#: Node visits of a descent between two readings of the clock.
+SLICE = 1 << 14
+#: Kicks between two readings of the clock.
+KICK_BATCH = 64
 
 
 def path_time(model: TravelModel, start: FloatArray, targets: FloatArray) -> float:
@@ -56,36 +64,66 @@ def path_time(model: TravelModel, start: FloatArray, targets: FloatArray) -> flo
     return float(model.time(previous, targets).sum())
 
 
+@dataclass(frozen=True)
+class Metric:
+    """Move times between nodes as arrays for compiled code: node u's poses are
+    ``poses[u, :count[u]]`` ((M, K, A) rad, ``count`` (M,) ≥ 1), the time between two
+    nodes the shortest move between any of their poses; ``axes`` (4, A) each axis's
+    velocity, acceleration, v²/a and v/a (`TravelModel.time`'s terms)."""
+
+    poses: FloatArray
+    count: np.ndarray
+    axes: FloatArray
+
+    @classmethod
+    def of(cls, model: TravelModel, poses: FloatArray, count: np.ndarray | None = None) -> Metric:
+        """From poses (M, A) (one a node) or (M, K, A) with ``count`` (M,) usable ones
+        packed first."""
+        p = np.asarray(poses, dtype=np.float64)
+        if p.ndim == 2:
+            p = p[:, None, :]
+        c = np.ones(len(p), np.int64) if count is None else np.asarray(count, np.int64)
+        v, a = model.velocity, model.acceleration
+        axes = np.ascontiguousarray(np.stack([v, a, v * v / a, v / a]), dtype=np.float64)
+        return cls(np.ascontiguousarray(p), np.ascontiguousarray(c), axes)
+
+    def times(self, u: np.ndarray, v: np.ndarray) -> FloatArray:
+        """Move times (s) between nodes ``u`` and ``v`` (P,) (the compiled cost)."""
+        u = np.ascontiguousarray(u, dtype=np.int64)
+        v = np.ascontiguousarray(v, dtype=np.int64)
+        return np.asarray(_times(self.poses, self.count, self.axes, u, v), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Neighbours:
+    """Each node's nearest others, nearest first (``nodes`` (M, k), −1 pads a short
+    row) with the move time to each (``times`` (M, k) s)."""
+
+    nodes: np.ndarray
+    times: FloatArray
+
+    @classmethod
+    def of(cls, nodes: np.ndarray, times: FloatArray) -> Neighbours:
+        return cls(
+            np.ascontiguousarray(nodes, dtype=np.int64),
+            np.ascontiguousarray(times, dtype=np.float64),
+        )
+
+
 class Path:
     """An open path: node S (the start, id n) first, node E (id n + 1, a free end) last,
-    targets 0..n-1 in between. ``cost(u, v)`` is the move time; moves into or out of E
-    cost nothing."""
+    targets 0..n-1 in between, with the `Metric` of the targets and the start (n + 1
+    nodes). ``nodes`` (n + 2,) the path, ``pos`` (n + 2,) each node's position."""
 
-    def __init__(self, n: int, order: np.ndarray, cost: Cost):
-        self.n = n
+    def __init__(self, order: np.ndarray, metric: Metric):
+        n = len(order)
+        self.n, self.metric = n, metric
         self.S, self.E = n, n + 1
         self.nodes = np.concatenate([[self.S], order, [self.E]]).astype(np.int64)
         self.pos = np.empty(n + 2, dtype=np.int64)
         self.pos[self.nodes] = np.arange(n + 2)
-        end, width = self.E, n + 2
-        #: Blocks written since the journal was opened: (first position, old nodes).
-        self.journal: list[tuple[int, np.ndarray]] | None = None
-        memo: dict[int, float] = {}
-
-        def edge(u: int, v: int) -> float:
-            # The metric is symmetric: one entry per unordered pair, computed once
-            # (cleared when full: the local search revisits the same few pairs).
-            if u == end or v == end:
-                return 0.0
-            key = u * width + v if u < v else v * width + u
-            t = memo.get(key)
-            if t is None:
-                if len(memo) >= CACHE:
-                    memo.clear()
-                t = memo[key] = cost(u, v)
-            return t
-
-        self.cost = edge
+        #: The first and last positions written since the last kept state ([1, 0]: none).
+        self.dirty = np.array([1, 0], dtype=np.int64)
 
     def order(self) -> np.ndarray:
         """The targets in visiting order (a copy)."""
@@ -93,38 +131,7 @@ class Path:
 
     def length(self) -> float:
         """The path's time (s), summed in order."""
-        nodes = self.nodes.tolist()
-        return float(sum(self.cost(u, v) for u, v in itertools.pairwise(nodes)))
-
-    def _write(self, lo: int, block: np.ndarray) -> None:
-        if self.journal is not None:
-            self.journal.append((lo, self.nodes[lo : lo + len(block)].copy()))
-        self.nodes[lo : lo + len(block)] = block
-        self.pos[block] = np.arange(lo, lo + len(block))
-
-    def undo(self) -> None:
-        """Restore the path as it was when the journal was opened."""
-        assert self.journal is not None
-        for lo, old in reversed(self.journal):
-            self.nodes[lo : lo + len(old)] = old
-            self.pos[old] = np.arange(lo, lo + len(old))
-        self.journal = []
-
-    def reverse(self, lo: int, hi: int) -> None:
-        """Reverse the nodes at positions lo..hi (inclusive)."""
-        self._write(lo, self.nodes[lo : hi + 1][::-1].copy())
-
-    def move_segment(self, i: int, length: int, after: int, flip: bool) -> None:
-        """Move the nodes at positions i..i+length-1 to follow the node now at position
-        ``after`` (outside the segment), reversed if ``flip``."""
-        nodes = self.nodes
-        segment = nodes[i : i + length].copy()
-        if flip:
-            segment = segment[::-1]
-        if after < i:  # the segment moves back: the nodes in between shift forward
-            self._write(after + 1, np.concatenate([segment, nodes[after + 1 : i]]))
-        else:  # the segment moves forward
-            self._write(i, np.concatenate([nodes[i + length : after + 1], segment]))
+        return float(self.metric.times(self.nodes[:-2], self.nodes[1:-1]).sum())
 
 
 def descend(
@@ -132,136 +139,41 @@ def descend(
     neighbours: Neighbours,
     max_moves: int,
     deadline: float,
-    queue_from: Iterable[int] | None = None,
     shown: Progress | None = None,
 ) -> tuple[int, float, Stop]:
-    """2-opt and Or-opt moves from each queued node (default: every target in index
-    order), until none improves, ``max_moves`` have been applied or ``deadline``
-    (`time.perf_counter`) has passed. Returns (moves applied, time gained (s), why it
-    stopped).
+    """2-opt and Or-opt moves from every target (queued in index order) until none
+    improves, ``max_moves`` have been applied or ``deadline`` (`time.perf_counter`) has
+    passed (read every `SLICE` node visits). Returns (moves applied, time gained (s), why
+    it stopped).
 
     Deterministic but for the deadline: neighbours are visited nearest first, the first
     improving move found is applied, a move wakes the nodes at its ends. Each node visit
     costs a bounded number of cost evaluations, so ``max_moves`` bounds the work too.
     ``shown`` counts the node visits (`gonio.progress`).
     """
-    cost, pos, nodes = path.cost, path.pos, path.nodes
-    at, node = pos.item, nodes.item  # Python ints, faster than int(array[i])
-    S, E, n = path.S, path.E, path.n
-    nbr = neighbours
-    queue = deque(range(n) if queue_from is None else (u for u in queue_from if u < n))
+    n = path.n
+    queue = np.empty(n + 2, dtype=np.int64)
+    queue[:n] = np.arange(n)
+    ends = np.array([0, n], dtype=np.int64)  # head, count
     queued = np.zeros(n + 2, dtype=np.bool_)
-    queued[list(queue)] = True
-    queued[[S, E]] = True  # the ends never enter the queue
-    moves, gained, visits = 0, 0.0, 0
+    queued[:] = True  # every target queued; S and E never enter the queue
+    m = path.metric
     show = (Quiet() if shown is None else shown).advance
-
-    def wake(*nodes_: int) -> None:
-        for u in nodes_:
-            if not queued[u]:
-                queued[u] = True
-                queue.append(u)
-
-    def two_opt(a: int) -> float:
-        i = at(a)
-        # Successor side: drop (a, a+), (c, c+); add (a, c), (a+, c+).
-        b = node(i + 1)
-        d_ab = cost(a, b)
-        for c, t_ac in nbr[a]:
-            g1 = d_ab - t_ac
-            if g1 <= EPSILON:
-                break
-            if c == b:  # (c is never E: E is in no neighbour list)
-                continue
-            j = at(c)
-            d = node(j + 1)
-            if d == a:
-                continue
-            gain = g1 + cost(c, d) - cost(b, d)
-            if gain > EPSILON:
-                lo, hi = (i + 1, j) if j > i else (j + 1, i)
-                path.reverse(lo, hi)
-                wake(a, b, c, d)
-                return gain
-        # Predecessor side: drop (a-, a), (c-, c); add (a, c), (a-, c-).
-        b = node(i - 1)
-        d_ab = cost(b, a)
-        for c, t_ac in nbr[a]:
-            g1 = d_ab - t_ac
-            if g1 <= EPSILON:
-                break
-            j = at(c)
-            if c == b or j == 0:
-                continue
-            d = node(j - 1)
-            if d == a:
-                continue
-            gain = g1 + cost(d, c) - cost(b, d)
-            if gain > EPSILON:
-                lo, hi = (i, j - 1) if j > i else (j, i - 1)
-                path.reverse(lo, hi)
-                wake(a, b, c, d)
-                return gain
-        return 0.0
-
-    def or_opt(a: int) -> float:
-        i0 = at(a)
-        for length in (1, 2, 3):
-            for i in (i0, i0 - length + 1):  # segments starting or ending at a
-                if i < 1 or i + length > n + 1 or (length == 1 and i != i0):
-                    continue
-                segment = nodes[i : i + length].tolist()
-                first, last = segment[0], segment[-1]
-                p, q = node(i - 1), node(i + length)
-                removed = cost(p, first) + cost(last, q) - cost(p, q)
-                if removed <= EPSILON:
-                    continue
-                for end in (first, last):
-                    for c, t_ec in nbr[end]:
-                        g1 = removed - t_ec
-                        if g1 <= EPSILON:
-                            break
-                        j = at(c)
-                        if i <= j < i + length:
-                            continue
-                        # Insert between c and its successor, then its predecessor.
-                        for x, y, after in (
-                            (c, node(j + 1) if j <= n else -1, j),
-                            (node(j - 1) if j >= 1 else -1, c, j - 1),
-                        ):
-                            if x < 0 or y < 0:  # S first and E last: never between
-                                continue
-                            if i <= at(x) < i + length or i <= at(y) < i + length:
-                                continue
-                            # `end` sits next to c; the other end goes to the other side.
-                            head, tail = (end, first if end == last else last)
-                            if x == c:
-                                added = cost(x, head) + cost(tail, y) - cost(x, y)
-                                flip = head != first
-                            else:
-                                added = cost(x, tail) + cost(head, y) - cost(x, y)
-                                flip = tail != first
-                            if removed - added > EPSILON:
-                                path.move_segment(i, length, after, flip)
-                                wake(p, q, x, y, *segment)
-                                return removed - added
-        return 0.0
-
-    while queue:
-        if moves >= max_moves:
-            return moves, gained, "move budget"
-        if time.perf_counter() > deadline:
+    moves, gained = 0, 0.0
+    while True:  # the clock read before each slice of work, as the budget
+        if ends[1] > 0 and moves < max_moves and time.perf_counter() > deadline:
             return moves, gained, "time cap"
-        a = queue.popleft()
-        queued[a] = False
-        visits += 1
-        if visits & 4095 == 0:
-            show(4096)
-        gain = two_opt(a) or or_opt(a)
-        if gain > 0.0:
-            moves += 1
-            gained += gain
-    return moves, gained, "converged"
+        applied, won, visits, status = _descend(
+            m.poses, m.count, m.axes, neighbours.nodes, neighbours.times, path.nodes,
+            path.pos, path.dirty, queue, ends, queued, min(max_moves - moves, 1 << 62), SLICE,
+        )  # fmt: skip
+        moves += applied
+        gained += won
+        show(visits)
+        if status == _CONVERGED:
+            return moves, gained, "converged"
+        if status == _BUDGET:
+            return moves, gained, "move budget"
 
 
 def iterate(
@@ -274,40 +186,381 @@ def iterate(
 ) -> tuple[int, int, float, Stop]:
     """Up to ``kicks`` kicks, each followed by a descent from the nodes it touched and
     undone unless the path got shorter. Returns (kicks tried, kicks kept, time gained
-    (s), why it stopped: "move budget" when the kicks ran out, or "time cap").
+    (s), why it stopped: "move budget" when the kicks ran out, or "time cap", the
+    deadline read every `KICK_BATCH` kicks).
 
     A kick swaps two adjacent segments B, C of lengths in 1..`KICK_SPAN` (A B C D →
     A C B D: a double bridge, the move 2-opt and Or-opt cannot undo in one step). The
-    descent after a kick may apply any number of moves; each is one pass of `descend`.
+    descent after a kick may apply any number of moves. The path must have no improving
+    move pending (after `descend` converged).
     """
     n = path.n
     if n < 3:
         return 0, 0, 0.0, "converged"
-    cost, nodes = path.cost, path.nodes
-    node = nodes.item
     span = min(KICK_SPAN, max(1, (n - 1) // 2))
     draws = rng.integers(0, 2**62, size=(kicks, 3))
+    m = path.metric
+    queue = np.empty(n + 16, dtype=np.int64)
+    queued = np.zeros(n + 2, dtype=np.bool_)
+    queued[n:] = True  # S and E never enter the queue
+    backup = path.nodes.copy()
+    path.dirty[:] = (1, 0)
+    show = (Quiet() if shown is None else shown).advance
     kept, gained = 0, 0.0
-    for k in range(kicks):
+    for lo in range(0, kicks, KICK_BATCH):
         if time.perf_counter() > deadline:
-            return k, kept, gained, "time cap"
-        r0, r1, r2 = draws[k].tolist()
-        lb, lc = 1 + r1 % span, 1 + r2 % span
-        i = 1 + r0 % (n - lb - lc + 1)  # B = i..i+lb-1, C = then lc nodes; E stays last
+            return lo, kept, gained, "time cap"
+        batch = np.ascontiguousarray(draws[lo : lo + KICK_BATCH])
+        won_kicks, won, visits = _kicks(
+            m.poses, m.count, m.axes, neighbours.nodes, neighbours.times, path.nodes,
+            path.pos, path.dirty, backup, queue, queued, batch, span,
+        )  # fmt: skip
+        kept += won_kicks
+        gained += won
+        show(visits)
+    return kicks, kept, gained, "move budget"
+
+
+# The compiled kernels. Node ids: targets 0..n-1, S = n, E = n + 1; the metric has
+# n + 1 rows (E has none: every move into or out of it costs nothing).
+
+_CONVERGED, _BUDGET, _SLICED = 0, 1, 2
+
+
+@compiled
+def axis_time(axes: FloatArray, j: int, d: float) -> float:
+    """Axis j's time (s) to move d ≥ 0 rad, ``axes`` a `Metric`'s: 2 √(d / a) short of
+    the cruise speed, d / v + v / a past it (`TravelModel.time`, bit for bit)."""
+    if d < axes[2, j]:
+        return 2.0 * math.sqrt(d / axes[1, j])
+    return float(d / axes[0, j] + axes[3, j])
+
+
+@compiled
+def _cost(poses: FloatArray, count: Ints, axes: FloatArray, u: int, v: int) -> float:
+    """The move time between nodes u and v (0 at E)."""
+    m = poses.shape[0]
+    if u >= m or v >= m:
+        return 0.0
+    best = np.inf
+    for p in range(count[u]):
+        for q in range(count[v]):
+            worst = 0.0
+            for j in range(poses.shape[2]):
+                x, y = poses[u, p, j], poses[v, q, j]
+                t = axis_time(axes, j, x - y if x > y else y - x)
+                if t > worst:
+                    worst = t
+            if worst < best:
+                best = worst
+    return best
+
+
+@compiled
+def _times(poses: FloatArray, count: Ints, axes: FloatArray, u: Ints, v: Ints) -> FloatArray:
+    out = np.empty(len(u))
+    for i in range(len(u)):
+        out[i] = _cost(poses, count, axes, u[i], v[i])
+    return out
+
+
+@compiled
+def _write(nodes: Ints, pos: Ints, dirty: Ints, lo: int, block: Ints) -> None:
+    """Write ``block`` at positions lo.. and mark them dirty."""
+    for k in range(len(block)):
+        nodes[lo + k] = block[k]
+        pos[block[k]] = lo + k
+    hi = lo + len(block) - 1
+    if dirty[1] < dirty[0]:
+        dirty[0], dirty[1] = lo, hi
+    else:
+        dirty[0] = min(dirty[0], lo)
+        dirty[1] = max(dirty[1], hi)
+
+
+@compiled
+def _reverse(nodes: Ints, pos: Ints, dirty: Ints, lo: int, hi: int) -> None:
+    _write(nodes, pos, dirty, lo, nodes[lo : hi + 1][::-1].copy())
+
+
+@compiled
+def _move_segment(
+    nodes: Ints, pos: Ints, dirty: Ints, i: int, length: int, after: int, flip: bool
+) -> None:
+    """Move the nodes at positions i..i+length-1 to follow the node now at position
+    ``after`` (outside the segment), reversed if ``flip``."""
+    segment = nodes[i : i + length].copy()
+    if flip:
+        segment = segment[::-1].copy()
+    if after < i:  # the segment moves back: the nodes in between shift forward
+        block = np.concatenate((segment, nodes[after + 1 : i]))
+        _write(nodes, pos, dirty, after + 1, block)
+    else:  # the segment moves forward
+        block = np.concatenate((nodes[i + length : after + 1], segment))
+        _write(nodes, pos, dirty, i, block)
+
+
+@compiled
+def _wake(queue: Ints, ends: Ints, queued: BoolArray, u: int) -> None:
+    if not queued[u]:
+        queued[u] = True
+        queue[(ends[0] + ends[1]) % len(queue)] = u
+        ends[1] += 1
+
+
+@compiled
+def _two_opt(
+    poses: FloatArray,
+    count: Ints,
+    axes: FloatArray,
+    nbr: Ints,
+    nbr_t: FloatArray,
+    nodes: Ints,
+    pos: Ints,
+    dirty: Ints,
+    queue: Ints,
+    ends: Ints,
+    queued: BoolArray,
+    a: int,
+) -> float:
+    i = pos[a]
+    # Successor side: drop (a, a+), (c, c+); add (a, c), (a+, c+).
+    b = nodes[i + 1]
+    d_ab = _cost(poses, count, axes, a, b)
+    for k in range(nbr.shape[1]):
+        c = nbr[a, k]
+        if c < 0:
+            break
+        g1 = d_ab - nbr_t[a, k]
+        if g1 <= EPSILON:
+            break
+        if c == b:  # (c is never E: E is in no neighbour list)
+            continue
+        j = pos[c]
+        d = nodes[j + 1]
+        if d == a:
+            continue
+        gain = g1 + _cost(poses, count, axes, c, d) - _cost(poses, count, axes, b, d)
+        if gain > EPSILON:
+            if j > i:
+                _reverse(nodes, pos, dirty, i + 1, j)
+            else:
+                _reverse(nodes, pos, dirty, j + 1, i)
+            for w in (a, b, c, d):
+                _wake(queue, ends, queued, w)
+            return float(gain)
+    # Predecessor side: drop (a-, a), (c-, c); add (a, c), (a-, c-).
+    b = nodes[i - 1]
+    d_ab = _cost(poses, count, axes, b, a)
+    for k in range(nbr.shape[1]):
+        c = nbr[a, k]
+        if c < 0:
+            break
+        g1 = d_ab - nbr_t[a, k]
+        if g1 <= EPSILON:
+            break
+        j = pos[c]
+        if c == b or j == 0:
+            continue
+        d = nodes[j - 1]
+        if d == a:
+            continue
+        gain = g1 + _cost(poses, count, axes, d, c) - _cost(poses, count, axes, b, d)
+        if gain > EPSILON:
+            if j > i:
+                _reverse(nodes, pos, dirty, i, j - 1)
+            else:
+                _reverse(nodes, pos, dirty, j, i - 1)
+            for w in (a, b, c, d):
+                _wake(queue, ends, queued, w)
+            return float(gain)
+    return 0.0
+
+
+@compiled
+def _or_opt(
+    poses: FloatArray,
+    count: Ints,
+    axes: FloatArray,
+    nbr: Ints,
+    nbr_t: FloatArray,
+    nodes: Ints,
+    pos: Ints,
+    dirty: Ints,
+    queue: Ints,
+    ends: Ints,
+    queued: BoolArray,
+    a: int,
+) -> float:
+    n = len(nodes) - 2
+    i0 = pos[a]
+    for length in range(1, 4):
+        for side in range(2 if length > 1 else 1):  # segments starting or ending at a
+            i = i0 if side == 0 else i0 - length + 1
+            if i < 1 or i + length > n + 1:
+                continue
+            first, last = nodes[i], nodes[i + length - 1]
+            p, q = nodes[i - 1], nodes[i + length]
+            removed = (
+                _cost(poses, count, axes, p, first)
+                + _cost(poses, count, axes, last, q)
+                - _cost(poses, count, axes, p, q)
+            )
+            if removed <= EPSILON:
+                continue
+            for which in range(2 if length > 1 else 1):
+                end = first if which == 0 else last
+                head, tail = end, first if end == last else last
+                for k in range(nbr.shape[1]):
+                    c = nbr[end, k]
+                    if c < 0:
+                        break
+                    g1 = removed - nbr_t[end, k]
+                    if g1 <= EPSILON:
+                        break
+                    j = pos[c]
+                    if i <= j < i + length:
+                        continue
+                    # Insert between c and its successor, then its predecessor.
+                    for option in range(2):
+                        if option == 0:
+                            x, y, after = c, nodes[j + 1] if j <= n else -1, j
+                        else:
+                            x, y, after = nodes[j - 1] if j >= 1 else -1, c, j - 1
+                        if x < 0 or y < 0:  # S first and E last: never between
+                            continue
+                        if i <= pos[x] < i + length or i <= pos[y] < i + length:
+                            continue
+                        # `end` sits next to c; the other end goes to the other side.
+                        if option == 0:
+                            added = (
+                                _cost(poses, count, axes, x, head)
+                                + _cost(poses, count, axes, tail, y)
+                                - _cost(poses, count, axes, x, y)
+                            )
+                            flip = head != first
+                        else:
+                            added = (
+                                _cost(poses, count, axes, x, tail)
+                                + _cost(poses, count, axes, head, y)
+                                - _cost(poses, count, axes, x, y)
+                            )
+                            flip = tail != first
+                        if removed - added > EPSILON:
+                            segment = nodes[i : i + length].copy()
+                            _move_segment(nodes, pos, dirty, i, length, after, flip)
+                            for w in (p, q, x, y):
+                                _wake(queue, ends, queued, w)
+                            for w in segment:
+                                _wake(queue, ends, queued, w)
+                            return removed - added
+    return 0.0
+
+
+@compiled
+def _descend(
+    poses: FloatArray,
+    count: Ints,
+    axes: FloatArray,
+    nbr: Ints,
+    nbr_t: FloatArray,
+    nodes: Ints,
+    pos: Ints,
+    dirty: Ints,
+    queue: Ints,
+    ends: Ints,
+    queued: BoolArray,
+    max_moves: int,
+    max_visits: int,
+) -> tuple[int, float, int, int]:
+    """Visit queued nodes (a ring buffer: ``ends`` its head and length) until the queue
+    is empty (converged), ``max_moves`` improving moves were applied (the budget) or
+    ``max_visits`` nodes were visited (a slice). (moves, gained, visits, status)."""
+    moves, gained, visits = 0, 0.0, 0
+    size = len(queue)
+    while ends[1] > 0:
+        if moves >= max_moves:
+            return moves, gained, visits, _BUDGET
+        if visits >= max_visits:
+            return moves, gained, visits, _SLICED
+        a = queue[ends[0]]
+        ends[0] = (ends[0] + 1) % size
+        ends[1] -= 1
+        queued[a] = False
+        visits += 1
+        gain = _two_opt(poses, count, axes, nbr, nbr_t, nodes, pos, dirty, queue, ends, queued, a)
+        if gain == 0.0:
+            gain = _or_opt(
+                poses, count, axes, nbr, nbr_t, nodes, pos, dirty, queue, ends, queued, a
+            )
+        if gain > 0.0:
+            moves += 1
+            gained += gain
+    return moves, gained, visits, _CONVERGED
+
+
+@compiled
+def _kicks(
+    poses: FloatArray,
+    count: Ints,
+    axes: FloatArray,
+    nbr: Ints,
+    nbr_t: FloatArray,
+    nodes: Ints,
+    pos: Ints,
+    dirty: Ints,
+    backup: Ints,
+    queue: Ints,
+    queued: BoolArray,
+    draws: Ints,
+    span: int,
+) -> tuple[int, float, int]:
+    """The kicks of ``draws`` (K, 3), each kept or undone from ``backup`` (the path as
+    last kept). (kicks kept, gained, node visits)."""
+    n = len(nodes) - 2
+    kept, gained, visits = 0, 0.0, 0
+    ends = np.zeros(2, dtype=np.int64)
+    for k in range(len(draws)):
+        lb, lc = 1 + draws[k, 1] % span, 1 + draws[k, 2] % span
+        i = 1 + draws[k, 0] % (n - lb - lc + 1)  # B = i.., C = then lc nodes; E stays last
         j, m = i + lb, i + lb + lc
-        a, b0, b1 = node(i - 1), node(i), node(j - 1)
-        c0, c1, d = node(j), node(m - 1), node(m)
-        delta = cost(a, c0) + cost(c1, b0) + cost(b1, d) - cost(a, b0) - cost(b1, c0) - cost(c1, d)
-        path.journal = []
-        path._write(i, np.concatenate([nodes[j:m], nodes[i:j]]))
-        touched = (a, b0, b1, c0, c1, d)
-        _, won, stop = descend(path, neighbours, 1 << 62, deadline, touched, shown)
+        a, b0, b1 = nodes[i - 1], nodes[i], nodes[j - 1]
+        c0, c1, d = nodes[j], nodes[m - 1], nodes[m]
+        delta = (
+            _cost(poses, count, axes, a, c0)
+            + _cost(poses, count, axes, c1, b0)
+            + _cost(poses, count, axes, b1, d)
+            - _cost(poses, count, axes, a, b0)
+            - _cost(poses, count, axes, b1, c0)
+            - _cost(poses, count, axes, c1, d)
+        )
+        _write(nodes, pos, dirty, i, np.concatenate((nodes[j:m], nodes[i:j])))
+        # A descent from the six nodes touched, in this order (a node twice if B or C
+        # is one node long), the ends excluded.
+        ends[0], ends[1] = 0, 0
+        for u in (a, b0, b1, c0, c1, d):
+            if u < n:
+                queue[ends[1]] = u
+                ends[1] += 1
+                queued[u] = True
+        won = 0.0
+        while True:
+            _, step, seen, status = _descend(
+                poses, count, axes, nbr, nbr_t, nodes, pos, dirty, queue, ends, queued,
+                1 << 62, 1 << 62,
+            )  # fmt: skip
+            won += step
+            visits += seen
+            if status == _CONVERGED:
+                break
+        lo, hi = dirty[0], dirty[1]
         if won - delta > EPSILON:
             kept += 1
             gained += won - delta
+            backup[lo : hi + 1] = nodes[lo : hi + 1]
         else:
-            path.undo()
-        path.journal = None
-        if stop == "time cap":
-            return k + 1, kept, gained, "time cap"
-    return kicks, kept, gained, "move budget"
+            nodes[lo : hi + 1] = backup[lo : hi + 1]
+            for p in range(lo, hi + 1):
+                pos[nodes[p]] = p
+        dirty[0], dirty[1] = 1, 0
+    return kept, gained, visits

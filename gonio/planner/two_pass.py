@@ -152,7 +152,6 @@ def joined(first: Plan, second: Plan) -> Plan:
         travel_s=a.travel_s + b.travel_s,
         dwell_s=a.dwell_s + b.dwell_s,
         bus_s=a.bus_s + b.bus_s,
-        ordering_s=a.ordering_s + b.ordering_s,
         moves=a.moves + b.moves,
         max_moves=a.max_moves + b.max_moves,
         kicks=a.kicks + b.kicks,
@@ -173,4 +172,7 @@ def joined(first: Plan, second: Plan) -> Plan:
         arrival_s=np.concatenate([first.arrival_s, second.arrival_s + end]),
         summary=summary,
         ordering=None,
+        ordering_s=None
+        if first.ordering_s is None or second.ordering_s is None
+        else first.ordering_s + second.ordering_s,
     )

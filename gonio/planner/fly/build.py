@@ -204,7 +204,7 @@ def assemble(
     dwell_s = n_total * t_int if readings.exposure_s is None else float((exposure * averages).sum())
     summary = Summary(
         requested=requested, invalid=0, refused=refused, kept=n_total,
-        travel_s=total_s - dwell_s, dwell_s=dwell_s, ordering_s=ordering_s,
+        travel_s=total_s - dwell_s, dwell_s=dwell_s,
         moves=result.moves, max_moves=result.max_moves, kicks=result.kicks,
         kicks_kept=result.kicks_kept, max_kicks=result.max_kicks, stopped=result.stopped,
         time_cap_s=spec.time_budget_s, target=spec.sampling.target, fly=fly_figures,
@@ -215,4 +215,5 @@ def assemble(
         exposure_s=exposure, averages=averages,
         travel_s=arrival_s - before, arrival_s=arrival_s, summary=summary,
         plan_text=spec_text(spec) if text is None else text, ordering=result, sweeps=sweeps,
+        ordering_s=ordering_s,
     )  # fmt: skip

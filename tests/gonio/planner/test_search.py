@@ -1,5 +1,6 @@
-"""The local search: a kick that does not pay is undone exactly, kicks never lengthen
-the path, and the same seed gives the same path."""
+"""The local search: its compiled move time is the rig's, bit for bit; a kick that does
+not pay is undone exactly, kicks never lengthen the path, and the same seed gives the
+same path."""
 
 from __future__ import annotations
 
@@ -7,42 +8,54 @@ import numpy as np
 import pytest
 
 from gonio.planner import ordering, search
-from gonio.planner.search import Path, path_time
+from gonio.planner.search import Metric, Path, path_time
+from gonio.rig.model import Rig
 from gonio.rig.travel import TravelModel
 
 MODEL = TravelModel(np.array([1.0, 1.5, 2.0, 0.8]), np.array([4.0, 6.0, 3.0, 5.0]))
 
 
-def setup(n: int, seed: int) -> tuple[np.ndarray, search.Neighbours, search.Cost]:
+def setup(n: int, seed: int) -> tuple[np.ndarray, search.Neighbours, Metric]:
     points = np.random.default_rng(seed).uniform(-2.0, 2.0, (n, 4))
     everything = np.vstack([points, np.zeros((1, 4))])
-    return (
-        points,
-        ordering._fixed_neighbours(MODEL, everything),
-        ordering._fixed_cost(MODEL, points, np.zeros(4)),
-    )
+    return points, ordering._fixed_neighbours(MODEL, everything), Metric.of(MODEL, everything)
 
 
-def test_undo_restores_the_path_exactly() -> None:
-    _, neighbours, cost = setup(300, 0)
-    path = Path(300, np.random.default_rng(1).permutation(300), cost)
+@pytest.mark.parametrize("name", ["arch", "in_plane"])
+def test_compiled_time_is_the_travel_model_bit_for_bit(rigs: dict[str, Rig], name: str) -> None:
+    """Moves in every regime (axes short of the cruise speed, past it, still): the local
+    search's time is `TravelModel.time`'s, to the last bit."""
+    model = rigs[name].travel
+    rng = np.random.default_rng(1)
+    p = rng.uniform(-4, 4, (3000, 4))
+    q = p + rng.uniform(-1, 1, (3000, 4)) * 10.0 ** rng.uniform(-9, 0.6, (3000, 4))
+    q[::7, 2] = p[::7, 2]
+    metric = Metric.of(model, np.vstack([p, q]))
+    got = metric.times(np.arange(3000), np.arange(3000, 6000))
+    assert got.tobytes() == model.time(p, q).tobytes()
+
+
+def test_a_kick_that_does_not_pay_is_undone_exactly() -> None:
+    """On a converged path no kick is kept: every one is undone, the path as it was."""
+    _, neighbours, metric = setup(300, 0)
+    path = Path(np.random.default_rng(1).permutation(300), metric)
+    search.descend(path, neighbours, 10**9, float("inf"))
+    for _ in range(3):  # kicks until none pays
+        search.iterate(path, neighbours, 300, np.random.default_rng(5), float("inf"))
     nodes, pos = path.nodes.copy(), path.pos.copy()
-    path.journal = []
-    path.reverse(3, 250)
-    path.move_segment(10, 3, 200, True)
-    path.move_segment(150, 2, 20, False)
-    search.descend(path, neighbours, 50, float("inf"))
-    assert not np.array_equal(path.nodes, nodes)
-    path.undo()
+    tried, kept, gained, _ = search.iterate(
+        path, neighbours, 300, np.random.default_rng(5), float("inf")
+    )
+    assert tried == 300 and kept == 0 and gained == 0.0
     assert np.array_equal(path.nodes, nodes) and np.array_equal(path.pos, pos)
 
 
 def test_kicks_never_lengthen_the_path_and_are_reproducible() -> None:
-    points, neighbours, cost = setup(400, 2)
+    points, neighbours, metric = setup(400, 2)
     lengths = []
     orders = []
     for _ in range(2):
-        path = Path(400, np.arange(400), cost)
+        path = Path(np.arange(400), metric)
         search.descend(path, neighbours, 10**9, float("inf"))
         before = path.length()
         tried, kept, gained, stop = search.iterate(
@@ -54,6 +67,7 @@ def test_kicks_never_lengthen_the_path_and_are_reproducible() -> None:
         assert after < before
         assert after == pytest.approx(path_time(MODEL, np.zeros(4), points[path.order()]))
         assert sorted(path.order().tolist()) == list(range(400))
+        assert np.array_equal(path.pos[path.nodes], np.arange(402))
         lengths.append(after)
         orders.append(path.order())
     assert lengths[0] == lengths[1] and np.array_equal(orders[0], orders[1])
@@ -61,7 +75,7 @@ def test_kicks_never_lengthen_the_path_and_are_reproducible() -> None:
 
 def test_kicks_on_tiny_paths() -> None:
     for n in range(4):
-        _, neighbours, cost = setup(n, n)
-        path = Path(n, np.arange(n), cost)
+        _, neighbours, metric = setup(n, n)
+        path = Path(np.arange(n), metric)
         search.iterate(path, neighbours, 20, np.random.default_rng(0), float("inf"))
         assert sorted(path.order().tolist()) == list(range(n))

@@ -241,6 +241,22 @@ def drop_column(data: bytes, name: bytes) -> bytes:
     return b"\n".join(lines)
 
 
+def test_an_older_plan_with_wall_times_in_its_summary_reads(
+    tmp_path: Path, stored: tuple[Plan, bytes]
+) -> None:
+    """Plans stored before the wall times left the summary (figures of the machine, so
+    a stored plan is the same bytes on any machine) read back as the same plan."""
+    plan, data = stored
+    assert b'"ordering_s"' not in data and b'"bound_wall_s"' not in data
+    older = rehash(
+        data.replace(b'"dwell_s": ', b'"ordering_s": 0.3, "bound_wall_s": null, "dwell_s": ', 1)
+    )
+    path = tmp_path / "older.csv"
+    path.write_bytes(older)
+    again = read_plan(path)
+    assert again == plan and again.ordering_s is None
+
+
 BAD: list[tuple[str, Any, str]] = [
     ("empty", lambda d: b"", r":1: not a stored gonio plan: expected '# gonio-plan v1'"),
     ("yaml", lambda d: (PLANS / "quick.yaml").read_bytes(), r":1: not a stored gonio plan"),
