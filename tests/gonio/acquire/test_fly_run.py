@@ -181,7 +181,7 @@ def test_kill_9_mid_sweep_loses_at_most_that_sweep(
     rng = random.Random(0)
     sweeps = run.plan.sweeps
     assert sweeps is not None
-    for _ in range(3):
+    for _ in range(2):
         remove_run_file(path)
 
         def start(progress: PipeProgress) -> session.SessionResult:
