@@ -47,7 +47,10 @@ docs: $(VENV)/.installed-docs
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
 # by CPU-bound tests from the other two.
+# Byte-compiled first: where PYTHONDONTWRITEBYTECODE is set (as on this project's CI
+# machines) every process the tests start would compile the package's sources again.
 pytest: $(VENV)/.installed-test browser
+	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
 	$(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
 # The browser tests (tests/gonio/live/test_browser.py) drive Debian's Chromium: installed
