@@ -6,7 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 
-.PHONY: demo test lint docs pytest browser bench bench-studies clean
+.PHONY: demo test lint docs pytest warm browser bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,11 +47,17 @@ docs: $(VENV)/.installed-docs
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
 # by CPU-bound tests from the other two.
-# Byte-compiled first: where PYTHONDONTWRITEBYTECODE is set (as on this project's CI
-# machines) every process the tests start would compile the package's sources again.
-pytest: $(VENV)/.installed-test browser
-	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
+pytest: $(VENV)/.installed-test browser warm
 	$(BIN)/python -m pytest -q -n 3 --dist loadgroup
+
+# What every test process would otherwise redo: the sources byte-compiled (where
+# PYTHONDONTWRITEBYTECODE is set, as on the machines this project is built on, each
+# process the tests start compiled them again) and the planner's numba kernels compiled
+# into their on-disk cache (some seconds, once, not in each worker at the same time).
+warm: $(VENV)/.installed-test
+	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
+	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
+
 
 # The browser tests (tests/gonio/live/test_browser.py) drive Debian's Chromium: installed
 # here when missing and running as root (as CI does); elsewhere they skip, saying why
@@ -63,7 +69,10 @@ browser:
 			chromium >/dev/null; } || echo "could not install chromium"; \
 	fi
 
-test: lint docs pytest
+# The linters, the site and the warm-up side by side (once installed), then the suite.
+test: $(VENV)/.installed-test
+	@$(MAKE) --no-print-directory -j3 -O lint docs warm
+	@$(MAKE) --no-print-directory pytest
 
 # Every benchmark, one after another, each writing its page docs/results/<script>.md (and
 # docs/results/index.md) with the command, the machine, the date, the load and the wall
