@@ -71,6 +71,7 @@ browser:
 
 # The linters, the site and the warm-up side by side (once installed), then the suite.
 test: $(VENV)/.installed-test
+	@echo "checks: the linters, the site and the warm-up side by side"
 	@$(MAKE) --no-print-directory -j3 -O lint docs warm
 	@$(MAKE) --no-print-directory pytest
 
