@@ -118,7 +118,7 @@ def test_a_rehearsal_stamps_its_polls_on_the_runs_clock() -> None:
     runs on the rehearsal's sped-up clock, and stamps each poll on that same clock."""
     rig = Rig.from_yaml(CONFIGS / "rigs" / "arch_serial.yaml")
     scene = load_scene(CONFIGS / "scenes" / "matte.yaml")
-    with rehearsal_devices(rig, scene, None, 10.0, wire_time=True) as (devices, clock):
+    with rehearsal_devices(rig, scene, None, 5.0, wire_time=True) as (devices, clock):
         side = devices.simulation
         assert isinstance(side, RehearsalSide) and side.peers is not None
         motors = side.peers.emulator.motors
@@ -128,7 +128,7 @@ def test_a_rehearsal_stamps_its_polls_on_the_runs_clock() -> None:
             start = bus.positions()
             axis = rig.axes[0]
             goal = start[axis] + 0.3
-            speeds = bus.sweep({axis: goal}, {axis: 0.2 * bus.velocity_limits()[axis]})
+            speeds = bus.sweep({axis: goal}, {axis: 0.1 * bus.velocity_limits()[axis]})
             polls = [bus.poll_positions()]
             truth = []
             while True:
