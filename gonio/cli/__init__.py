@@ -19,7 +19,7 @@ import importlib
 import os
 import sys
 from collections.abc import Mapping, Sequence
-from typing import Any, NoReturn
+from typing import Any, NoReturn, TextIO, cast
 
 from drivers.errors import DriverError
 from gonio import __version__
@@ -91,6 +91,9 @@ EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 #: Exit code of a command whose reader closed the pipe (128 + SIGPIPE, as Unix tools).
 EXIT_BROKEN_PIPE = 141
+#: Exit code of a command whose standard output is closed or cannot be written (a full
+#: disk, /dev/full): sysexits' EX_IOERR.
+EXIT_NO_OUTPUT = 74
 
 #: Every command's exit codes (a command's own meanings are in its parser's `exit_codes`).
 EXIT_CODES: dict[int, str] = {
@@ -102,6 +105,8 @@ EXIT_CODES: dict[int, str] = {
     EXIT_INTERRUPTED: "interrupted by Ctrl-C, in one line on stderr",
     EXIT_BROKEN_PIPE: "the reader closed the pipe early (head -1 reading the output, say): "
     "the command stops quietly",
+    EXIT_NO_OUTPUT: "the standard output is closed or cannot be written (a full disk, "
+    "/dev/full), in one line on stderr",
 }
 
 
@@ -171,12 +176,68 @@ def _prog(args: argparse.Namespace) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if sys.stdout is None:  # started with its standard output closed (``>&-``)
+        print("gonio: error: the standard output is closed", file=sys.stderr)
+        return EXIT_NO_OUTPUT
+    given = sys.stdout
+    watched = _WatchedOutput(given)
+    sys.stdout = proxy = cast(TextIO, watched)
     try:
-        code = _run(argv)
-        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        try:
+            code = _run(argv)
+        finally:  # argparse's help exits: its text is flushed here too
+            sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
     except BrokenPipeError:
         return _broken_pipe()
+    except OSError as exc:
+        if exc is not watched.failed:  # another file's error
+            raise
+        return _no_output(exc)
+    except SystemExit:
+        if watched.failed is None:
+            raise
+        return _no_output(watched.failed)
+    finally:
+        if sys.stdout is proxy:
+            sys.stdout = given
+    if watched.failed is not None:  # an error a library kept to itself (argparse's help)
+        return _no_output(watched.failed)
     return code
+
+
+def _no_output(exc: OSError) -> int:
+    """The standard output could not be written: one line (nothing for a closed pipe)."""
+    if isinstance(exc, BrokenPipeError):
+        return _broken_pipe()
+    print(f"gonio: error: cannot write the standard output: {exc.strerror or exc}", file=sys.stderr)
+    _stdout_to_devnull()
+    return EXIT_NO_OUTPUT
+
+
+class _WatchedOutput:
+    """The standard output as given, keeping the error a write or flush to it raised
+    (so that error, and no other file's, is told as the output's)."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+        self.failed: OSError | None = None
+
+    def write(self, text: str) -> int:
+        try:
+            return self.stream.write(text)
+        except OSError as exc:
+            self.failed = exc
+            raise
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except OSError as exc:
+            self.failed = exc
+            raise
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.stream, name)
 
 
 def _run(argv: list[str]) -> int:
@@ -208,13 +269,18 @@ def _run(argv: list[str]) -> int:
 
 
 def _broken_pipe() -> int:
-    """The reader closed stdout: say nothing, and point stdout at /dev/null so that
-    Python's own flush at exit does not print "Exception ignored … BrokenPipeError"."""
+    """The reader closed stdout: say nothing (as Unix tools)."""
+    _stdout_to_devnull()
+    return EXIT_BROKEN_PIPE
+
+
+def _stdout_to_devnull() -> None:
+    """Point stdout at /dev/null so that Python's own flush at exit does not print
+    "Exception ignored …" about what is still in its buffer."""
     with contextlib.suppress(OSError, ValueError, AttributeError):
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
-    return EXIT_BROKEN_PIPE
 
 
 if __name__ == "__main__":  # pragma: no cover

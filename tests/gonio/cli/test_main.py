@@ -181,3 +181,31 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
         "-o", str(tmp_path / f"{long_name}.sqlite"),
     )  # fmt: skip
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "File name too long" in r.stderr
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["schema", "plan"], ["plan", "configs/plans/rehearsal.yaml"], ["demo"], ["--help"]],
+    ids=["schema", "plan", "demo", "help"],
+)
+def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None:
+    """``gonio … > /dev/full``: one line on stderr naming the standard output, exit 74
+    (sysexits' EX_IOERR), no traceback and no "Exception ignored" at exit."""
+    root = Path(__file__).resolve().parents[3]
+    with open("/dev/full", "w") as full:
+        r = subprocess.run(
+            [sys.executable, "-m", "gonio", *args], cwd=root, stdout=full,
+            stderr=subprocess.PIPE, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        )  # fmt: skip
+    assert r.returncode == 74, r.stderr
+    assert r.stderr == "gonio: error: cannot write the standard output: No space left on device\n"
+
+
+def test_a_closed_standard_output_is_one_line_and_exit_74() -> None:
+    root = Path(__file__).resolve().parents[3]
+    r = subprocess.run(
+        ["sh", "-c", f"'{sys.executable}' -m gonio schema plan >&-"],
+        cwd=root, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert r.returncode == 74, r.stderr
+    assert r.stderr == "gonio: error: the standard output is closed\n"
