@@ -19,7 +19,8 @@ import numpy.typing as npt
 
 from gonio import progress
 from gonio.planner.jit import compiled
-from gonio.planner.search import Metric, axis_time
+from gonio.planner.moves import axis_time
+from gonio.planner.search import Metric
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 

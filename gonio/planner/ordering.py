@@ -35,9 +35,10 @@ import numpy as np
 from gonio import progress
 from gonio.planner import search
 from gonio.planner.bounds import MAX_PAIRS, mst_bound
+from gonio.planner.moves import EPSILON
 from gonio.planner.nearest import nearest_neighbour, nearest_others
 from gonio.planner.poses import Relaxed, choose
-from gonio.planner.search import EPSILON, Metric, Path, Stop, path_time
+from gonio.planner.search import Metric, Path, Stop, path_time
 from gonio.rig.travel import TravelModel
 from gonio.types import BoolArray, FloatArray
 
