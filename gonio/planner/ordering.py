@@ -270,10 +270,10 @@ def order_jointly(
 
     ``candidates`` (N, K, A) with ``usable`` (N, K) (at least one per target);
     ``nearest`` (N, A) each target's solution nearest ``start``, on which the order is
-    constructed (``method`` as in `order_targets`). Where some target has a choice, half
-    the kicks go to the relaxed any-branch time; then solutions are chosen along the
-    order (Viterbi), the order is improved on them with the other half, and chosen
-    again; further rounds (descents only, at most `ROUNDS` in all) while the path
+    constructed (``method`` as in `order_targets`). Where some target has a choice,
+    `RELAXED_SHARE` of the kicks go to the relaxed any-branch time; then solutions are
+    chosen along the order (Viterbi), the order is improved on them with the rest, and
+    chosen again; further rounds (descents only, at most `ROUNDS` in all) while the path
     shortens. Returned poses are always usable candidates.
     """
     compile_kernels()
