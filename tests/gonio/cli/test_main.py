@@ -14,6 +14,9 @@ import gonio
 from gonio.cli import COMMANDS
 from tests.conftest import CliResult
 
+#: The repository (the commands run from it, as in the docs).
+ROOT = Path(__file__).resolve().parents[3]
+
 GONIO = Path(sys.executable).with_name("gonio")
 Gonio = Callable[..., CliResult]
 
@@ -93,9 +96,8 @@ def test_demo_prints_the_tables(run_gonio: Gonio) -> None:
 def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:
     """`gonio plan … | head -1` with the reader gone before the first line: no
     BrokenPipeError traceback and no "Exception ignored" at exit, exit code 141 (or 0)."""
-    root = Path(__file__).resolve().parents[3]
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gonio", *args], cwd=root, stdout=subprocess.PIPE,
+        [sys.executable, "-m", "gonio", *args], cwd=ROOT, stdout=subprocess.PIPE,
         stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
     )  # fmt: skip
     assert proc.stdout is not None and proc.stderr is not None
@@ -108,10 +110,9 @@ def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:
 
 def test_a_closed_pipe_in_a_real_shell_pipeline() -> None:
     """The same through ``| head -1``: the first line arrives, the rest is dropped."""
-    root = Path(__file__).resolve().parents[3]
     r = subprocess.run(
         ["sh", "-c", f"'{sys.executable}' -m gonio demo | head -1; exit $(( 0 ))"],
-        cwd=root, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        cwd=ROOT, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
     )  # fmt: skip
     assert r.stdout.startswith("Parametrizations on named direction pairs")
     assert len(r.stdout.splitlines()) == 1
@@ -174,7 +175,7 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
     # The path is shown cut in the middle (gonio.config.shown_path), its end kept.
     assert "rrr.yaml: cannot read the file: File name too long" in r.stderr
     assert len(r.stderr) < 600
-    quickstart = Path(__file__).resolve().parents[3] / "configs" / "plans" / "quickstart.yaml"
+    quickstart = ROOT / "configs" / "plans" / "quickstart.yaml"
     scene = quickstart.parents[1] / "scenes" / "matte.yaml"
     r = run_gonio(
         "acquire", str(quickstart), "--scene", str(scene),
@@ -191,10 +192,9 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
 def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None:
     """``gonio … > /dev/full``: one line on stderr naming the standard output, exit 74
     (sysexits' EX_IOERR), no traceback and no "Exception ignored" at exit."""
-    root = Path(__file__).resolve().parents[3]
     with open("/dev/full", "w") as full:
         r = subprocess.run(
-            [sys.executable, "-m", "gonio", *args], cwd=root, stdout=full,
+            [sys.executable, "-m", "gonio", *args], cwd=ROOT, stdout=full,
             stderr=subprocess.PIPE, text=True, timeout=60, stdin=subprocess.DEVNULL,
         )  # fmt: skip
     assert r.returncode == 74, r.stderr
@@ -202,10 +202,9 @@ def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None
 
 
 def test_a_closed_standard_output_is_one_line_and_exit_74() -> None:
-    root = Path(__file__).resolve().parents[3]
     r = subprocess.run(
         ["sh", "-c", f"'{sys.executable}' -m gonio schema plan >&-"],
-        cwd=root, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+        cwd=ROOT, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
     )  # fmt: skip
     assert r.returncode == 74, r.stderr
     assert r.stderr == "gonio: error: the standard output is closed\n"
