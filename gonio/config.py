@@ -70,8 +70,10 @@ class Strict(BaseModel):
         return data
 
 
-#: The longest duration a configuration may give (an exposure, a timeout), in seconds.
-MAX_SECONDS = 1e10
+#: The longest duration a configuration or an option may give (an exposure, a timeout), in
+#: seconds: about 31 years, and within what Python's clocks can wait (`time.sleep` and
+#: `select` take at most 2**63 ns, about 9.2e9 s, and raise `OverflowError` beyond).
+MAX_SECONDS = 1e9
 #: The largest magnitude of an integer a configuration may give (64 bits, signed).
 MAX_INTEGER = 2**63 - 1
 

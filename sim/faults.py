@@ -44,6 +44,7 @@ from pydantic import Field, field_validator, model_validator
 
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
+from gonio.rig.schema import JOINT_LIMIT_DEG
 from sim.physics.streams import FAULT, Streams
 
 FaultKind = Literal[
@@ -101,6 +102,8 @@ class FaultRule(Strict):
     )
     shift_deg: float = Field(
         0.0,
+        ge=-JOINT_LIMIT_DEG,
+        le=JOINT_LIMIT_DEG,
         description="motor_fault: how far the axis's encoder reading jumps when its motor is "
         "rebooted (°; a multi-turn motor that lost its turn count), 0: not at all.",
     )

@@ -32,6 +32,10 @@ from gonio.config import ConfigError, Strict, field_error, load
 from gonio.rig.model import Rig
 from sim.faults import FaultRule
 
+#: The most power a source may give (W/m² of a collimated beam, W/sr of a point source):
+#: a megawatt a square centimetre, beyond any laboratory source.
+MAX_SOURCE_POWER = 1e10
+
 
 class SourceSpec(Strict):
     """The source's power, of the kind the rig's light is (``light.kind``): the
@@ -41,10 +45,11 @@ class SourceSpec(Strict):
     irradiance_w_m2: float | None = Field(
         None,
         gt=0,
+        le=MAX_SOURCE_POWER,
         description="A collimated light's irradiance, perpendicular to the beam (W/m²).",
     )
     intensity_w_sr: float | None = Field(
-        None, gt=0, description="A point source's intensity (W/sr)."
+        None, gt=0, le=MAX_SOURCE_POWER, description="A point source's intensity (W/sr)."
     )
 
     @model_validator(mode="after")
@@ -69,6 +74,12 @@ class SourceSpec(Strict):
         return value
 
 
+#: The most electrons a count of the simulated sensor may name (a full well, a dark current
+#: per second, a read noise): 10¹⁸, a coulomb's tenth, far beyond any sensor, and counts
+#: whose squares (variances) stay finite.
+MAX_ELECTRONS = 1e18
+
+
 class DetectorSpec(Strict):
     """The simulated sensor behind the rig's detector optics: how light becomes a
     reading, and which colour band an RGB material is seen in. ``kind: adc`` (the
@@ -81,22 +92,28 @@ class DetectorSpec(Strict):
         "adc", description="adc: counts from an ADC; lockin: volts from a lock-in amplifier."
     )
     responsivity_a_w: float = Field(
-        gt=0, description="Photocurrent per radiant power reaching the sensor (A/W)."
+        gt=0,
+        le=1e8,
+        description="Photocurrent per radiant power reaching the sensor (A/W; a photodiode's "
+        "is below 1, a photomultiplier's up to 1e7).",
     )
     dark_current_e_s: float = Field(
         0.0,
         ge=0,
+        le=MAX_ELECTRONS,
         description="Thermal electrons per second (the dark_current effect; a lock-in rejects "
         "it, its shot noise stays).",
     )
     read_noise_e: float = Field(
         0.0,
         ge=0,
+        le=MAX_ELECTRONS,
         description="The amplifier's noise per reading (electrons rms; the read_noise effect).",
     )
     full_well_e: float | None = Field(
         None,
-        gt=0,
+        ge=1,
+        le=MAX_ELECTRONS,
         description="adc: electrons the sensor holds; it maps to the ADC's top code.",
     )
     adc_bits: int = Field(16, ge=1, le=32, description="adc: the ADC's resolution (bits).")
@@ -113,14 +130,23 @@ class DetectorSpec(Strict):
         24, description="lockin: the output filter's slope (dB/octave)."
     )
     sensitivity_v: float | None = Field(
-        None, gt=0, description="lockin: the full scale (V); a reading at or above overloads."
+        None,
+        gt=0,
+        le=1e3,
+        description="lockin: the full scale (V); a reading at or above overloads.",
     )
     transimpedance_v_a: float = Field(
-        1e6, gt=0, description="lockin: the current amplifier's gain before the lock-in (V/A)."
+        1e6,
+        gt=0,
+        le=1e13,
+        description="lockin: the current amplifier's gain before the lock-in (V/A).",
     )
     duty: float = Field(0.5, gt=0, lt=1, description="lockin: the chopper's open fraction.")
     phase_drift_deg_per_hour: float = Field(
-        0.0, description="lockin: how fast the reading's phase drifts (°/h)."
+        0.0,
+        ge=-3.6e6,
+        le=3.6e6,
+        description="lockin: how fast the reading's phase drifts (°/h; at most a turn a second).",
     )
 
     @model_validator(mode="after")
@@ -188,12 +214,20 @@ class SourceDriftSpec(Strict):
     """Source power × (1 + rate · t/3600 + amplitude · sin(2π t / period + phase)),
     t the run's virtual time (s)."""
 
-    rate_per_hour: float = Field(0.01, description="Relative change of the power per hour (1/h).")
+    rate_per_hour: float = Field(
+        0.01,
+        ge=-1,
+        le=1,
+        description="Relative change of the power per hour (1/h), in [-1, 1]: a source that "
+        "loses all of its power within the hour is a broken one.",
+    )
     amplitude: float = Field(
         0.0, ge=0, lt=1, description="Relative amplitude of the power's oscillation."
     )
     period_s: float = Field(600.0, gt=0, description="The oscillation's period (s).")
-    phase_deg: float = Field(0.0, description="The oscillation's phase at t = 0 (°).")
+    phase_deg: float = Field(
+        0.0, ge=-360, le=360, description="The oscillation's phase at t = 0 (°)."
+    )
 
 
 class ApertureSpec(Strict):
@@ -219,17 +253,22 @@ class PositionErrorSpec(Strict):
         description="Quantize each joint to its motor's ticks (4096 a turn, through the gear).",
     )
     backlash_deg: float = Field(
-        0.0, ge=0, description="Each joint's backlash (°): it lags half of it behind its last move."
+        0.0,
+        ge=0,
+        le=10,
+        description="Each joint's backlash (°): it lags half of it behind its last move.",
     )
     repeatability_deg: float = Field(
-        0.0, ge=0, description="A joint's error per move (°, Gaussian, 1σ)."
+        0.0, ge=0, le=10, description="A joint's error per move (°, Gaussian, 1σ)."
     )
 
 
 class StrayLightSpec(Strict):
     """A constant floor of radiant power (W) reaching the detector while the source is on."""
 
-    power_w: float = Field(ge=0, description="The stray radiant power on the detector (W).")
+    power_w: float = Field(
+        ge=0, le=MAX_SOURCE_POWER, description="The stray radiant power on the detector (W)."
+    )
 
 
 class MotionBlurSpec(Strict):

@@ -36,11 +36,26 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "-o", "--output", type=Path, metavar="MATERIAL.yaml",
         help="write the fitted model as a scene's material",
     )  # fmt: skip
-    p.add_argument("--starts", type=int, default=4, help="starting points tried (default 4)")
+    p.add_argument(
+        "--starts", type=_starts, default=4,
+        help=f"starting points tried, at most {MAX_STARTS} (default 4)",
+    )  # fmt: skip
     p.add_argument(
         "--seed", type=arguments.seed, default=0, help="seed of the jittered starts (default 0)"
     )
     p.set_defaults(func=cmd_fit)
+
+
+#: The most starting points: each is a full least-squares fit (a tenth of a second to a
+#: second), so more would run for hours and find nothing the first thousand did not.
+MAX_STARTS = 1000
+
+
+def _starts(text: str) -> int:
+    """A whole number of starting points, 1 to 1000.
+
+    The bound is `MAX_STARTS`."""
+    return arguments.count(text, "starting points", MAX_STARTS)
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
@@ -55,8 +70,6 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
     if len(args.runs) not in (1, 3):
         raise ConfigError(f"expected one run, or three (r, g, b bands); got {len(args.runs)}")
-    if args.starts < 1:
-        raise ConfigError(f"--starts {args.starts}: expected at least 1")
     family = parse(args.model)
     with contextlib.ExitStack() as outputs:
         pending = None

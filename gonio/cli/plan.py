@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 from pathlib import Path
 
 from gonio.cli.arguments import positive
@@ -58,8 +59,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )  # fmt: skip
     plan.add_argument(
         "--test-pairs", type=_pairs,
-        metavar="N", help="test pairs the --budget-min predictions are scored on "
-        "(default 5000)",
+        metavar="N", help="test pairs the --budget-min predictions are scored on, at most "
+        f"{MAX_TEST_PAIRS:,} (default 5000)",
     )  # fmt: skip
     plan.set_defaults(func=cmd_plan)
 
@@ -69,12 +70,22 @@ def _minutes(text: str) -> float:
     return positive(text, "a positive number of minutes")
 
 
+#: The most test pairs: every candidate plan's reconstruction is evaluated on each (about
+#: a second per candidate at 10⁶), and 32 bytes a pair are held for each candidate.
+MAX_TEST_PAIRS = 10**6
+
+
 def _pairs(text: str) -> int:
-    """A whole number of pairs, at least 1."""
-    value = positive(text, "a whole number of pairs, at least 1")
-    if value != int(value) or value < 1:
+    """A whole number of pairs, 1 to 1,000,000.
+
+    The bound is `MAX_TEST_PAIRS`."""
+    try:
+        value = float(text)  # 5e3 too
+    except ValueError:
+        value = math.nan
+    if not (1 <= value <= MAX_TEST_PAIRS and value == int(value)):
         raise argparse.ArgumentTypeError(
-            f"expected a whole number of pairs, at least 1, got {text!r}"
+            f"expected a whole number of pairs in [1, {MAX_TEST_PAIRS:,}], got {text!r}"
         )
     return int(value)
 

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gonio.config import ConfigError
 from gonio.output import reserve_output
 from gonio.plots.polar import DEFAULT_THETA_I_DEG
 from gonio.plots.slices import DEFAULT_ANGLES_DEG
@@ -81,6 +82,12 @@ def cmd_plot(args: argparse.Namespace) -> int:
     from gonio.plots import check_figure_format
 
     check_figure_format(args.output, "-o")
+    for flag, given, kind in (
+        ("--phi-k", args.phi_k, "slices"),
+        ("--theta-i", args.theta_i, "polar"),
+    ):
+        if given is not None and args.kind != kind:
+            raise ConfigError(f"{flag} applies to --kind {kind}, not to --kind {args.kind}")
     if args.phi_k is not None:
         from gonio.plots.slices import check_angles
 

@@ -25,6 +25,13 @@ from gonio.planner.blur import DEFAULT_TOLERANCE, blur_budget_of_width
 from gonio.planner.policies import AcquisitionSpec
 
 Strategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive"]
+#: The most improving moves a plan may allow its ordering: far more than a descent from
+#: 10⁶ targets applies (the default gives 10 a target), and still a count an int64 holds
+#: with room.
+MAX_MOVES = 10**9
+#: The most kicks a plan may ask for: at some 10⁵ kicks a second, about two minutes, the
+#: wall-time cap's default (time_budget_s).
+MAX_KICKS_GIVEN = 10**7
 #: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
 PlanStrategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive", "fly"]
 
@@ -34,7 +41,11 @@ class Warp(Strict):
     power > 1 puts more points near the lower bound (e.g. ‖h̄‖ = 0, the specular peak)."""
 
     power: float = Field(
-        gt=0, description="The exponent: > 1 denser near the lower bound, 1 uniform, < 1 sparser."
+        ge=0.1,
+        le=10,
+        description="The exponent, in [0.1, 10]: > 1 denser near the lower bound, 1 uniform, "
+        "< 1 sparser (beyond 10 a quarter of the points fall within 1e-6 of the bound and "
+        "repeat each other).",
     )
 
 
@@ -359,8 +370,10 @@ class PlanSpec(Strict):
     max_moves: int | None = Field(
         None,
         ge=0,
+        le=MAX_MOVES,
         description="Improving moves the ordering may apply, both passes together (none: 10 "
-        "per kept target + 100). A count, so the file orders the same on any machine.",
+        "per kept target + 100), at most 1e9. A count, so the file orders the same on any "
+        "machine.",
     )
     # Kicks of the iterated local search after the descents; None: 3 per 2 kept targets,
     # at most 15 000 (`gonio.planner.ordering.default_kicks`). A count too: the kicks
@@ -368,8 +381,9 @@ class PlanSpec(Strict):
     kicks: int | None = Field(
         None,
         ge=0,
+        le=MAX_KICKS_GIVEN,
         description="Kicks of the iterated local search after the descents (none: 3 per 2 "
-        "kept targets, at most 15 000), drawn from sampling.seed.",
+        "kept targets, at most 15 000), drawn from sampling.seed; at most 1e7.",
     )
     # "search": the iterated local search (seconds); "lkh": then LKH-3 on the chosen
     # poses through the optional `elkai` package (minutes, gigabytes past ~10 000

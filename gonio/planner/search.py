@@ -193,7 +193,6 @@ def iterate(
     if n < 3:
         return 0, 0, 0.0, "converged"
     span = min(KICK_SPAN, max(1, (n - 1) // 2))
-    draws = rng.integers(0, 2**62, size=(kicks, 3))
     m = path.metric
     queue = np.empty(n + 16, dtype=np.int64)
     queued = np.zeros(n + 2, dtype=np.bool_)
@@ -205,7 +204,9 @@ def iterate(
     for lo in range(0, kicks, KICK_BATCH):
         if time.perf_counter() > deadline:
             return lo, kept, gained, "time cap"
-        batch = np.ascontiguousarray(draws[lo : lo + KICK_BATCH])
+        # drawn a batch at a time (the same stream as all at once): memory stays flat
+        # whatever the budget of kicks
+        batch = rng.integers(0, 2**62, size=(min(KICK_BATCH, kicks - lo), 3))
         won_kicks, won, visits = _kicks(
             m.poses, m.count, m.axes, neighbours.nodes, neighbours.times, path.nodes,
             path.pos, path.dirty, backup, queue, queued, batch, span,

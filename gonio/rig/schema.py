@@ -12,12 +12,28 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from drivers.dynamixel.control_table import MODELS
+from drivers.dynamixel.control_table import BAUD_RATES, MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
 
-Vector = tuple[float, float, float]
+#: The largest magnitude of a vector's component: its square stays far from overflow.
+COMPONENT_LIMIT = 1e100
+Component = Annotated[float, Field(ge=-COMPONENT_LIMIT, le=COMPONENT_LIMIT)]
+Vector = tuple[Component, Component, Component]
+#: The largest joint angle in magnitude (°): the widest travel an X-series motor's
+#: extended position mode covers (±256 turns) through a gear ratio of 0.1.
+JOINT_LIMIT_DEG = 921_600.0
+#: Gear ratios (motor turns per joint turn) a rig can have: from a 1:100 step-up to a
+#: 10 000:1 reduction (a worm gear after a gearbox).
+GEAR_RATIO_RANGE = (0.01, 10_000.0)
+#: Joint speeds (°/s) and accelerations (°/s²) a trapezoidal move may use: the slowest
+#: turns a degree in about a quarter of an hour (a move's time and its square stay finite),
+#: the fastest is beyond any motor (an X-series at 1:100 step-up turns 1.4·10⁵ °/s).
+VELOCITY_RANGE_DEG_S = (1e-3, 1e6)
+ACCELERATION_RANGE_DEG_S2 = (1e-3, 1e8)
+#: Lengths on the sample (mm): a micrometre to 10 m, beyond any laboratory rig.
+LENGTH_RANGE_MM = (1e-3, 1e4)
 #: A vector's JSON Schema says what `AxisSpec` checks: not the zero vector.
 NonZero = Annotated[Vector, InSchema(**{"not": {"const": [0, 0, 0]}})]
 
@@ -32,15 +48,31 @@ class AxisSpec(Strict):
     axis: NonZero = Field(
         description="The rotation axis in the parent frame [x, y, z] (normalized when read)."
     )
-    min_deg: float = Field(description="The lowest joint angle (°; 0 = the home pose).")
-    max_deg: float = Field(description="The highest joint angle (°), above min_deg.")
+    min_deg: float = Field(
+        ge=-JOINT_LIMIT_DEG,
+        le=JOINT_LIMIT_DEG,
+        description="The lowest joint angle (°; 0 = the home pose).",
+    )
+    max_deg: float = Field(
+        ge=-JOINT_LIMIT_DEG,
+        le=JOINT_LIMIT_DEG,
+        description="The highest joint angle (°), above min_deg.",
+    )
     motor_id: int = Field(ge=0, le=252, description="The Dynamixel ID of the axis's motor.")
-    gear_ratio: float = Field(1.0, gt=0, description="Motor turns per joint turn.")
+    gear_ratio: float = Field(
+        1.0,
+        ge=GEAR_RATIO_RANGE[0],
+        le=GEAR_RATIO_RANGE[1],
+        description="Motor turns per joint turn.",
+    )
     direction: Literal[1, -1] = Field(
         1, description="+1 or −1: which way the joint turns when the motor angle grows."
     )
     zero_offset_deg: float = Field(
-        0.0, description="The joint angle at the motor's zero position (°)."
+        0.0,
+        ge=-JOINT_LIMIT_DEG,
+        le=JOINT_LIMIT_DEG,
+        description="The joint angle at the motor's zero position (°).",
     )
     mode: Literal["position", "extended_position"] = Field(
         "position",
@@ -48,10 +80,14 @@ class AxisSpec(Strict):
         "extended_position (multi-turn).",
     )
     max_velocity_deg_s: float = Field(
-        gt=0, description="The joint's top speed (°/s) of its trapezoidal moves."
+        ge=VELOCITY_RANGE_DEG_S[0],
+        le=VELOCITY_RANGE_DEG_S[1],
+        description="The joint's top speed (°/s) of its trapezoidal moves.",
     )
     max_acceleration_deg_s2: float = Field(
-        gt=0, description="The joint's acceleration and deceleration (°/s²)."
+        ge=ACCELERATION_RANGE_DEG_S2[0],
+        le=ACCELERATION_RANGE_DEG_S2[1],
+        description="The joint's acceleration and deceleration (°/s²).",
     )
     motor_model: (
         Annotated[str, InSchema(enum=list(MODELS.values()))]
@@ -116,11 +152,14 @@ class KinematicChainSpec(Strict):
     )
 
 
+JointDeg = Annotated[float, Field(ge=-JOINT_LIMIT_DEG, le=JOINT_LIMIT_DEG)]
+
+
 class CollisionSpec(Strict):
     """A keep-out box in joint space: a collision when every listed axis is in its range."""
 
     name: str = Field(description="What collides, as messages name it.")
-    ranges_deg: dict[str, tuple[float, float]] = Field(
+    ranges_deg: dict[str, tuple[JointDeg, JointDeg]] = Field(
         min_length=1, description="Per axis: [low, high] joint angles (°) of the box."
     )
 
@@ -144,14 +183,19 @@ class ConstraintSpec(Strict):
     #: The collimated beam's diameter (none for a point source, which floods the sample).
     beam_diameter_mm: float | None = Field(
         None,
-        gt=0,
+        ge=LENGTH_RANGE_MM[0],
+        le=LENGTH_RANGE_MM[1],
         description="The collimated beam's diameter (mm); required for light.kind: collimated, "
         "none for a point source (it floods the sample).",
     )
-    sample_diameter_mm: float = Field(gt=0, description="The sample's diameter (mm).")
+    sample_diameter_mm: float = Field(
+        ge=LENGTH_RANGE_MM[0], le=LENGTH_RANGE_MM[1], description="The sample's diameter (mm)."
+    )
     #: The diameter of the spot the detector sees, perpendicular to ωo.
     detector_fov_mm: float = Field(
-        gt=0, description="The diameter of the spot the detector sees, perpendicular to ωo (mm)."
+        ge=LENGTH_RANGE_MM[0],
+        le=LENGTH_RANGE_MM[1],
+        description="The diameter of the spot the detector sees, perpendicular to ωo (mm).",
     )
 
 
@@ -173,7 +217,9 @@ class BusSpec(Strict):
         description="simulated: virtual motors; dynamixel: X-series servos on port.",
     )
     port: str = Field("/dev/ttyUSB0", description="The motors' serial port (dynamixel).")
-    baud: int = Field(57_600, description="The motors' baud rate (dynamixel).")
+    baud: Annotated[int, InSchema(enum=list(BAUD_RATES.values()))] = Field(
+        57_600, description="The motors' baud rate (dynamixel): one the X series knows."
+    )
     retries: int = Field(
         3,
         ge=0,
@@ -181,6 +227,20 @@ class BusSpec(Strict):
         description="Extra attempts of a transaction whose status was lost or corrupt, "
         "before the run stops resumable (dynamixel; measured in docs/results/bus_retries.md).",
     )
+
+    @field_validator("baud")
+    @classmethod
+    def _known_baud(cls, v: int) -> int:
+        if v not in BAUD_RATES.values():
+            raise ValueError(
+                f"expected one of {', '.join(str(b) for b in BAUD_RATES.values())} (bit/s)"
+            )
+        return v
+
+
+#: The highest supply voltage a health limit may name (V): twice the 24 V of the highest
+#: rated Dynamixel; a motor reports at most 25.5 V.
+MAX_VOLTAGE_V = 48.0
 
 
 class HealthLimitsSpec(Strict):
@@ -195,12 +255,18 @@ class HealthLimitsSpec(Strict):
         65.0, gt=0, le=100, description="The highest internal temperature of a motor (°C)."
     )
     min_voltage_v: float = Field(
-        10.0, gt=0, description="The lowest input voltage (V), below max_voltage_v."
+        10.0,
+        gt=0,
+        le=MAX_VOLTAGE_V,
+        description="The lowest input voltage (V), below max_voltage_v.",
     )
-    max_voltage_v: float = Field(14.8, gt=0, description="The highest input voltage (V).")
+    max_voltage_v: float = Field(
+        14.8, gt=0, le=MAX_VOLTAGE_V, description="The highest input voltage (V)."
+    )
     position_tolerance_deg: float = Field(
         0.5,
         gt=0,
+        le=360,
         description="How far a rebooted motor's joint may read from where it held before the "
         "reboot (°); beyond it a recovering run stops.",
     )

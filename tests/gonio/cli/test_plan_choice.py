@@ -79,8 +79,15 @@ def test_choice_on_glossy_gold(tmp_path: Path, run_gonio: Gonio) -> None:
         (["--budget-min", "1", "--material", "scene"], "scene: expected a material guess"),
         (["--budget-min", "1", "--material", QUICK + ".x.yaml"], "cannot read it"),
         (["--budget-min", "1", "--material", "cook_torrance:alpha=-1"], "alpha"),
+        (
+            ["--budget-min", "1", "--material", GOLD, "--test-pairs", "1e12"],
+            "--test-pairs: expected a whole number of pairs in [1, 1,000,000], got '1e12'",
+        ),
     ],
-    ids=["no-material", "no-budget", "pairs-alone", "bounds", "scene", "missing", "bad-model"],
+    ids=[
+        *("no-material", "no-budget", "pairs-alone", "bounds", "scene", "missing", "bad-model"),
+        "pairs-beyond-memory",
+    ],
 )
 def test_mistakes_are_one_line_before_any_planning(
     run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, args: list[str], words: str
