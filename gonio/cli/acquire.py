@@ -69,12 +69,28 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "hardware needed)",
     )
     p.add_argument(
-        "--speedup", type=positive, default=50.0,
-        help="--rehearse: how many times faster than real time the emulated rig runs "
-        "(default 50)",
+        "--speedup", type=_speedup, default=50.0,
+        help="--rehearse: how many times faster than real time the emulated rig runs, 1 "
+        "to 1e6 (default 50)",
     )  # fmt: skip
     p.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=cmd_acquire)
+
+
+#: The fastest a rehearsal may run: beyond, a move of the emulated motors lasts less than
+#: a microsecond of real time and the rehearsal no longer exercises the drivers' waits.
+MAX_SPEEDUP = 1e6
+
+
+def _speedup(text: str) -> float:
+    """A speed-up of the emulated rig, 1 (real time) to 1e6.
+
+    Slower than real time would test nothing real time does not; the top is
+    `MAX_SPEEDUP`."""
+    value = positive(text, "a speed-up", MAX_SPEEDUP)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a speed-up of at least 1, got {text!r}")
+    return value
 
 
 def _resume_command(path: Path | None) -> str:

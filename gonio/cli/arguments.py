@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from gonio.config import MAX_SECONDS
+from gonio.config import MAX_INTEGER, MAX_SECONDS
 
 
 def positive(text: str, what: str = "a positive number", most: float = math.inf) -> float:
@@ -43,12 +43,23 @@ def count(text: str, what: str, most: int) -> int:
     return value
 
 
+def finite_degrees(text: str) -> float:
+    """A finite angle in degrees."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an angle in degrees, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite angle in degrees, got {text!r}")
+    return value
+
+
 def seed(text: str) -> int:
-    """A whole number ≥ 0 (a random seed)."""
+    """A whole number ≥ 0 below 2**63 (a random seed, as the run file stores it)."""
     try:
         value = int(text)
     except ValueError:
         value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 0, got {text!r}")
+    if not 0 <= value <= MAX_INTEGER:
+        raise argparse.ArgumentTypeError(f"expected a whole number ≥ 0 below 2**63, got {text!r}")
     return value

@@ -25,24 +25,13 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import FACTORY_BAUD, MODELS
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import CommError, DriverError
-from gonio.cli.arguments import positive_seconds
+from gonio.cli.arguments import finite_degrees, positive_seconds
 from gonio.config import ConfigError
 
 #: How long a bring-up move may take to settle by default (s).
 DEFAULT_TIMEOUT_S = 30.0
 #: Exit code of `set-id` when its question was not answered yes.
 EXIT_DECLINED = 1
-
-
-def finite_degrees(text: str) -> float:
-    """A finite angle in degrees."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an angle in degrees, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite angle in degrees, got {text!r}")
-    return value
 
 
 def motor_id(text: str) -> int:

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from gonio.cli.arguments import finite_degrees
 from gonio.config import ConfigError
 from gonio.output import reserve_output
 from gonio.plots.polar import DEFAULT_THETA_I_DEG
@@ -59,12 +60,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "YAML file, or another run file",
     )
     p.add_argument(
-        "--phi-k", type=float, nargs="+", metavar="DEG",
+        "--phi-k", type=finite_degrees, nargs="+", metavar="DEG",
         help="slices: the values of φk − φh (hybrid, orthographic) and φd (halfway/"
         f"difference) in degrees, in [0, 180) (default {_degrees(DEFAULT_ANGLES_DEG)})",
     )  # fmt: skip
     p.add_argument(
-        "--theta-i", type=float, nargs="+", metavar="DEG",
+        "--theta-i", type=finite_degrees, nargs="+", metavar="DEG",
         help=f"polar: the angles of incidence in degrees (default {_degrees(DEFAULT_THETA_I_DEG)})",
     )  # fmt: skip
     p.add_argument(

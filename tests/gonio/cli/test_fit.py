@@ -77,7 +77,7 @@ def test_three_band_runs_make_an_rgb_fit(runs, run_gonio):
         (["--model", "ggx:alpha"], "expected KEY=VALUE"),
         (["--model", "ggx", "--starts", "0"], "starting points in [1, 1,000], got '0'"),
         (["--model", "ggx", "--starts", "1000000000"], "in [1, 1,000], got '1000000000'"),
-        (["--model", "ggx", "--seed", "-1"], "--seed: expected a whole number ≥ 0, got '-1'"),
+        (["--model", "ggx", "--seed", "-1"], "--seed: expected a whole number ≥ 0 below 2**63"),
         (["EXTRA", "--model", "ggx"], "expected one run, or three"),
     ],
 )

@@ -151,7 +151,7 @@ def test_a_closed_pipe_in_process_returns_141(
         (["frobnicate"], "argument COMMAND: invalid choice: 'frobnicate'"),
         (
             ["simulate", "p.yaml", "--seed", "two"],
-            "simulate: argument --seed: expected a whole number ≥ 0, got 'two'",
+            "simulate: argument --seed: expected a whole number ≥ 0 below 2**63, got 'two'",
         ),
     ],
     ids=["missing", "unknown-option", "missing-action", "bad-type", "bad-command", "bad-int"],

@@ -130,7 +130,7 @@ def test_error_is_the_evaluations_test_set_by_region(
     [
         (["--kind", "slices", "--phi-k", "200"], "--phi-k 200: expected an angle in degrees"),
         (["--theta-i", "85"], "--theta-i 85: expected an angle in degrees in [0, 80]"),
-        (["--theta-i", "nan"], "--theta-i nan: expected an angle in degrees in [0, 80]"),
+        (["--theta-i", "nan"], "--theta-i: expected a finite angle in degrees, got 'nan'"),
         (["--kind", "slices", "--theta-i", "1e300"], "--theta-i applies to --kind polar, not"),
         (["--phi-k", "30"], "--phi-k applies to --kind slices, not to --kind polar"),
         (["--parametrization", "polar"], "unknown parametrization 'polar'"),
