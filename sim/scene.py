@@ -162,6 +162,12 @@ class DetectorSpec(Strict):
                 raise field_error(name, f"only for kind: {other} (this detector is {self.kind})")
         return self
 
+    @property
+    def streams(self) -> bool:
+        """Whether readings can be streamed while the axes move (fly plans): yes, unless a
+        lock-in (each reading waits its output filter's settle time)."""
+        return self.kind != "lockin"
+
 
 #: Scene fields that are facts of the instrument: where the rig file holds each.
 RIG_FIELDS = {

@@ -130,7 +130,8 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         files = preflight.Files(
             source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
         )
-        preflight.check_scene(files, source.rig, scene, rehearse=args.rehearse)
+        kind = preflight.check_scene(files, source.rig, scene, rehearse=args.rehearse)
+        preflight.refuse_fly_spec(source.spec, source.rig, kind, scene, args.scene)
         if args.output is not None:
             preflight.check_output(args.output, args.overwrite, files)
         with planning.quiet() if args.quiet else contextlib.nullcontext():

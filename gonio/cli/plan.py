@@ -14,6 +14,7 @@ from gonio.errors import GonioError
 from gonio.output import reserve_output
 from gonio.planner import Plan
 from gonio.planner.files import PlanSource, load_plan_source, plan_bytes
+from gonio.workflows.preflight import refuse_fly_detector
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -108,6 +109,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
             figure = outputs.enter_context(reserve_output(args.plot, "--plot", inputs=inputs))
         source = load_plan_source(args.plan, args.rig)
         if args.budget_min is None:
+            refuse_fly_detector(source.spec, source.rig)  # before planning, not after it
             plan = source.build(bounds=args.bounds)
         else:
             plan = _choose(args, source)

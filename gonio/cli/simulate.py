@@ -117,6 +117,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         preflight.check_output(args.output, args.overwrite)
     source = load_plan_source(args.plan, args.rig)
     scene, text = session.load_scene_file(args.scene, source.rig)
+    preflight.refuse_fly_spec(source.spec, source.rig, "simulated", scene, args.scene)
     if args.no_effects:
         scene = scene.with_effects([])
         from gonio.config import spec_text

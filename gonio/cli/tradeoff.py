@@ -7,10 +7,15 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
+from gonio.cli import EXIT_CODES
 from gonio.cli.arguments import positive
 from gonio.progress import Bar, hms
+
+#: The exit code of a sweep whose every combination failed (the results are written).
+EXIT_ALL_FAILED = 1
 
 
 def _jobs(text: str) -> int:
@@ -34,6 +39,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "against the scene. OUTDIR gets results.jsonl (one line per finished combination; a "
         "reused OUTDIR skips them), results.csv, report.md with the Pareto front of error "
         "against instrument time, and PNG figures.",
+        exit_codes={
+            **EXIT_CODES,
+            EXIT_ALL_FAILED: "every combination failed (one line on stderr: how many, and the "
+            "first reason; the results and report are written)",
+        },
     )
     p.add_argument("sweep", type=Path, help="the sweep file (YAML)")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
@@ -92,13 +102,23 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         f"ran {outcome.ran} combinations in {hms(outcome.wall_s)}{pace}; "
         f"{outcome.reused} were already in {args.output}"
     )
-    failed = sum(1 for r in outcome.rows if r.get("error"))
-    if failed:
-        print(f"{failed} combinations failed: their reasons are in report.md")
+    errors = [str(r["error"]) for r in outcome.rows if r.get("error")]
     if args.target_error is not None:
         for scene in sweep.scenes:
             plan = outcome.plans.get(scene.name)
             met = f"wrote {plan}" if plan else "no combination meets it"
             print(f"target {sweep.spec.metric} ≤ {args.target_error:g} on {scene.name}: {met}")
     print(f"wrote {len(outcome.files)} files into {args.output} (report.md, results.csv, figures)")
+    if errors and len(errors) == len(outcome.rows):
+        print(
+            f"gonio: all {len(errors)} combinations failed; the first: {errors[0]}",
+            file=sys.stderr,
+        )
+        return EXIT_ALL_FAILED
+    if errors:
+        print(
+            f"gonio: {len(errors)} of {len(outcome.rows)} combinations failed (their reasons "
+            f"are in report.md); the first: {errors[0]}",
+            file=sys.stderr,
+        )
     return 0

@@ -102,6 +102,30 @@ def material_model(material: dict[str, Any]) -> brdf.BRDF:
         raise field_error(f"material.{exc.param or 'name'}", str(exc)) from None
 
 
+#: The smallest blur budget (°) a fly plan may ask for: a reading's pose is known only to
+#: the quantization of its encoders, one tick / √12 (a 4096-tick encoder: 0.025°, 0.013°
+#: through a 2:1 gear; `gonio.rig.sensitivity`), so a smear far below that buys no
+#: accuracy, while the sweep's velocity (blur / integration) and the readings a line
+#: streams (its travel / smear) grow without bound as the budget shrinks. The rig's own
+#: floor (`gonio.planner.fly.limits.blur_floor_deg`) is checked before planning.
+MIN_BLUR_DEG = 0.01
+#: The smallest relative bias a blur budget may be fitted to: a bias of 1e-6 is the shot
+#: noise of a single reading of 10¹² photoelectrons (1 / √N), beyond the full well of any
+#: photometer (a 16-bit reading resolves 1.5e-5 of its range): no measurement could see
+#: a smaller one, and the budget (∝ √tolerance) would shrink toward zero for nothing.
+MIN_TOLERANCE = 1e-6
+#: The slowest stream a fly plan may ask for (readings a second): below one a second, a
+#: sweep at the axes' speeds (tens of °/s) passes tens of degrees between two readings,
+#: and the lines needed for the target grow as the readings per line shrink.
+MIN_RATE_HZ = 1.0
+#: The most readings a fly plan may ask for (``sampling.target``), and why.
+MAX_READINGS = 1_000_000
+WHY_MAX_READINGS = (
+    "planning takes about 0.25 ms and 1 KB per reading, and a million readings are hours "
+    "of instrument time at 100 Hz: split the acquisition into several plans"
+)
+
+
 class FlySpec(Strict):
     """The fly strategy (docs/reference/planner.md, "Fly plans"): readings taken while one
     axis sweeps at constant velocity, ``rate_hz`` readings a second, each integrating
@@ -121,7 +145,12 @@ class FlySpec(Strict):
         "axis following a streamed trajectory; isotropic plans).",
     )
     rate_hz: float = Field(
-        100.0, gt=0, le=10_000, description="Readings per second the detector streams."
+        100.0,
+        ge=MIN_RATE_HZ,
+        le=10_000,
+        description="Readings per second the detector streams; at least 1: slower, a sweep "
+        "at the axes' speeds passes tens of degrees between two readings (stop-and-go "
+        "measures as few, without the blur).",
     )
     integration_s: float | None = Field(
         None,
@@ -131,18 +160,21 @@ class FlySpec(Strict):
     )
     blur_deg: float | None = Field(
         None,
-        gt=0,
+        ge=MIN_BLUR_DEG,
         le=30,
         description="The most angular smear of one reading (degrees; none: the blur budget "
-        "of lobe_width_deg if given, else 0.5).",
+        "of lobe_width_deg if given, else 0.5); at least 0.01°, below which the encoders' "
+        "quantization (one tick / √12) hides the smear, and at least the rig's own "
+        "quantization of the axes that sweep.",
     )
     lobe_width_deg: float | None = Field(
         None,
-        gt=0,
+        ge=MIN_BLUR_DEG,
         le=180,
         description="The material's expected lobe width (degrees, full width); the blur "
         "budget is then the smear whose bias stays within blur_tolerance on such a lobe, "
-        "or lobe_fraction of it (not with blur_deg).",
+        "or lobe_fraction of it (not with blur_deg); the budget it gives is held to "
+        "blur_deg's bounds.",
     )
     lobe_fraction: float | None = Field(
         None,
@@ -167,10 +199,12 @@ class FlySpec(Strict):
     )
     blur_tolerance: float = Field(
         DEFAULT_TOLERANCE,
-        gt=0,
+        ge=MIN_TOLERANCE,
         le=0.05,
         description="The relative bias motion blur may leave on the lobe when the budget "
-        "comes from lobe_width_deg without lobe_fraction (0.005: 0.5 %).",
+        "comes from lobe_width_deg without lobe_fraction (0.005: 0.5 %); at least 1e-6, the "
+        "shot noise of one reading of 10¹² photoelectrons, more than any detector holds: "
+        "no measurement sees a smaller bias.",
     )
 
     @model_validator(mode="after")
@@ -189,6 +223,15 @@ class FlySpec(Strict):
             self.model()
         if self.fill and self.segment != "theta_h_line":
             raise field_error("fill", "only theta_h_line lines are filled with stop-and-go targets")
+        if self.lobe_width_deg is not None and self.blur < MIN_BLUR_DEG:
+            field = "blur_tolerance" if self.lobe_fraction is None else "lobe_fraction"
+            got = getattr(self, field)
+            raise field_error(
+                field,
+                f"expected a blur budget of at least {MIN_BLUR_DEG:g}° on the lobe of "
+                f"lobe_width_deg {self.lobe_width_deg:g}°, got {self.blur:.3g}° "
+                f"(got {field} {got:g}); a wider lobe or a larger {field}",
+            )
         return self
 
     def model(self) -> brdf.BRDF | None:
@@ -235,7 +278,10 @@ class SamplingSpec(Strict):
         "parametrization (grid and stratified only; instead of target).",
     )
     target: int | None = Field(
-        None, gt=0, description="Kept targets wanted, any strategy (instead of counts)."
+        None,
+        gt=0,
+        description="Kept targets wanted, any strategy (instead of counts); with strategy fly, "
+        f"the readings wanted, at most {MAX_READINGS:,} ({WHY_MAX_READINGS}).",
     )
     seed: int = Field(
         0,
@@ -263,6 +309,12 @@ class SamplingSpec(Strict):
             raise field_error("adaptive", f"options of the adaptive strategy, not {self.strategy}")
         if self.fly is not None and self.strategy != "fly":
             raise field_error("fly", f"options of the fly strategy, not {self.strategy}")
+        if self.strategy == "fly" and self.target is not None and self.target > MAX_READINGS:
+            raise field_error(
+                "target",
+                f"expected at most {MAX_READINGS:,} readings in a fly plan, got {self.target:,} "
+                f"({WHY_MAX_READINGS})",
+            )
         if self.strategy == "fly" and self.warps:
             raise field_error("warps", "the fly strategy lays out uniform sweeps (no warps)")
         if self.strategy == "adaptive":

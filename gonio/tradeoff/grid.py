@@ -27,7 +27,8 @@ from gonio.config import (
     read_yaml,
     spec_text,
 )
-from gonio.planner.schema import PlanSpec, Warp
+from gonio.planner.fly.limits import blur_floor_deg
+from gonio.planner.schema import FlySpec, PlanSpec, Warp
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import (
@@ -131,6 +132,8 @@ def load_sweep(path: str | Path) -> Sweep:
     rig_path = _named_file(path, spec.rig, ("rig",), refuse)
     rig = Rig.from_yaml(rig_path)
     _check_detector(spec, rig, refuse)
+    _check_fly(spec, rig, refuse)
+    _check_minutes(spec, rig, refuse)
     rigs = {}
     for k, scale in enumerate(spec.axes.velocity_scale):
         try:
@@ -242,12 +245,59 @@ def _check_detector(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
             )
 
 
+def _check_fly(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
+    """Refuse a blur budget below the rig's floor for a segment swept (the encoders'
+    quantization, `gonio.planner.fly.limits.blur_floor_deg`)."""
+    if FLY not in spec.axes.motion:
+        return
+    for segment in spec.axes.segment:
+        floor, axis = blur_floor_deg(rig, FlySpec(segment=segment))
+        for k, blur in enumerate(spec.axes.blur_deg):
+            if blur < floor:
+                raise refuse(
+                    ("axes", "blur_deg", k),
+                    f"expected at least {floor:.3g}° for {segment} (the quantization of "
+                    f"{axis}'s encoder, one tick / √12, in {rig.source}), got {blur:g}",
+                )
+
+
+def sample_s(spec: SweepSpec, rig: Rig) -> float:
+    """The shortest time one sample of the sweep's combinations takes (s): the rig's
+    settle, then the shortest exposure × averages (stop-and-go) or integration (fly,
+    1 / rate_hz)."""
+    reads = []
+    if STOP in spec.axes.motion:
+        reads.append(min(spec.axes.exposure_s) * min(spec.axes.averages))
+    if FLY in spec.axes.motion:
+        reads.append(1.0 / max(spec.axes.rate_hz))
+    return rig.spec.settle_s + min(reads)
+
+
+def _check_minutes(spec: SweepSpec, rig: Rig, refuse: Any) -> None:
+    """Refuse a time budget shorter than one sample (`sample_s`): no plan fits it."""
+    least = sample_s(spec, rig)
+    for k, minutes in enumerate(spec.axes.minutes):
+        if minutes is not None and 60.0 * minutes < least:
+            raise refuse(
+                ("axes", "minutes", k),
+                f"expected at least {least / 60.0:.3g} min, the time of one sample on this "
+                f"rig ({least:.3g} s: its settle_s and the shortest exposure), got {minutes:g}",
+            )
+
+
 def _scenes(spec: SweepSpec, path: Path, rig: Rig, refuse: Any) -> tuple[SceneFile, ...]:
     out: list[SceneFile] = []
     for k, name in enumerate(spec.scenes):
         scene_path = _named_file(path, name, ("scenes", k), refuse)
         text = read_bytes(scene_path)
         scene = load_scene(scene_path, rig, raw=text)
+        if FLY in spec.axes.motion and not scene.detector.streams:
+            raise refuse(
+                ("scenes", k),
+                f"{scene_path}: detector.kind: the simulated {scene.detector.kind} detector "
+                "cannot stream, and the sweep has fly combinations (axes.motion); expected "
+                "kind: adc, or motion: [stop]",
+            )
         if any(s.name == scene.name for s in out):
             raise refuse(
                 ("scenes", k), f"another scene of the sweep is named {excerpt(scene.name)}"

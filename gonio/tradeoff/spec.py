@@ -21,7 +21,14 @@ from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
 from gonio.planner.policies import AcquisitionSpec
-from gonio.planner.schema import AdaptiveSpec, PlanSpec, Strategy, Warp
+from gonio.planner.schema import (
+    MIN_BLUR_DEG,
+    MIN_RATE_HZ,
+    AdaptiveSpec,
+    PlanSpec,
+    Strategy,
+    Warp,
+)
 from gonio.reconstruct import methods
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.reconstruct.metrics import METRICS
@@ -40,6 +47,21 @@ FLY: Literal["fly"] = "fly"
 #: combination of the other motion takes None for them, and is run once).
 STOP_AXES = ("sampling", "exposure_s", "averages")
 FLY_AXES = ("blur_deg", "rate_hz", "segment")
+
+#: The longest instrument-time budget (minutes): a day, the longest acquisition one plan
+#: holds (longer is split into several plans); every combination under it is planned,
+#: simulated and scored, so a longer budget is hours of a sweep's CPU per combination.
+MAX_MINUTES = 1440.0
+#: The range of ``velocity_scale``: a hundredth to a hundred times the rig's speeds
+#: (slower, a simulated move of minutes per degree; faster, no servo of the kind).
+VELOCITY_SCALES = (0.01, 100.0)
+#: The most readings averaged per target a sweep may ask (each one is simulated).
+MAX_AVERAGES = 1000
+#: The bounds of the fly axes: those of a fly plan's fields (`gonio.planner.schema.FlySpec`).
+BLUR_RANGE = (MIN_BLUR_DEG, 30.0)
+RATE_RANGE = (MIN_RATE_HZ, 10_000.0)
+#: The longest exposure: a plan's (`gonio.planner.schema.ExposureSpec`).
+MAX_EXPOSURE_S = 3600.0
 
 #: The effects of a scene that a sweep may toggle: those `sim.scene.EffectsSpec` models.
 EFFECT_NAMES: tuple[str, ...] = tuple(EffectsSpec.model_fields)
@@ -108,24 +130,30 @@ class Axes(Strict):
         description="Kept targets asked for (a plan's sampling.target).",
         json_schema_extra=UNIQUE,
     )  # kept targets asked for (sampling.target)
-    exposure_s: list[Annotated[float, InSchema(exclusiveMinimum=0)]] = Field(
-        [0.05],
-        min_length=1,
-        description="Exposures (s), within the rig's detector.exposure_range_s.",
-        json_schema_extra=UNIQUE,
+    exposure_s: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=MAX_EXPOSURE_S)]] = (
+        Field(
+            [0.05],
+            min_length=1,
+            description="Exposures (s), within the rig's detector.exposure_range_s.",
+            json_schema_extra=UNIQUE,
+        )
     )
-    averages: list[Annotated[int, InSchema(minimum=1)]] = Field(
+    averages: list[Annotated[int, InSchema(minimum=1, maximum=MAX_AVERAGES)]] = Field(
         [1],
         min_length=1,
-        description="Readings averaged per target, at most the rig's detector.max_averages.",
+        description="Readings averaged per target, at most the rig's detector.max_averages "
+        f"and {MAX_AVERAGES} (each reading is simulated).",
         json_schema_extra=UNIQUE,
     )
     # Each axis's max velocity × v and max acceleration × v²: every move takes 1/v the time.
-    velocity_scale: list[Annotated[float, InSchema(exclusiveMinimum=0)]] = Field(
+    velocity_scale: list[
+        Annotated[float, InSchema(minimum=VELOCITY_SCALES[0], maximum=VELOCITY_SCALES[1])]
+    ] = Field(
         [1.0],
         min_length=1,
         description="Factors v on every axis's max velocity (× v) and acceleration (× v²): "
-        "each move takes 1/v the time.",
+        f"each move takes 1/v the time; {VELOCITY_SCALES[0]:g} to {VELOCITY_SCALES[1]:g} (a "
+        "hundredth to a hundred times the rig's speeds).",
         json_schema_extra=UNIQUE,
     )
     method: list[Annotated[str, InSchema(enum=list(methods.names()))]] = Field(
@@ -150,22 +178,28 @@ class Axes(Strict):
         "exposure_s and averages then do not apply, the fly axes do).",
         json_schema_extra=UNIQUE,
     )
-    minutes: list[Annotated[float, InSchema(exclusiveMinimum=0)] | None] = Field(
-        [None],
-        min_length=1,
-        description="Instrument-time budgets (minutes): the plan's target is fitted so its "
-        "predicted duration fits the budget (samples then does not apply); none: the "
-        "samples axis sets the target.",
-        json_schema_extra=UNIQUE,
+    minutes: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=MAX_MINUTES)] | None] = (
+        Field(
+            [None],
+            min_length=1,
+            description="Instrument-time budgets (minutes): the plan's target is fitted so its "
+            "predicted duration fits the budget (samples then does not apply); none: the "
+            "samples axis sets the target. At least one sample's time on the rig (its "
+            "settle_s and the shortest exposure or integration), at most a day (1440: the "
+            "longest acquisition one plan holds; each combination is simulated whole).",
+            json_schema_extra=UNIQUE,
+        )
     )
-    blur_deg: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=30)]] = Field(
-        [0.5],
-        min_length=1,
-        description="Fly only: the most angular smear of one reading (degrees), which sets "
-        "the sweep's velocity (a fly plan's sampling.fly.blur_deg).",
-        json_schema_extra=UNIQUE,
+    blur_deg: list[Annotated[float, InSchema(minimum=BLUR_RANGE[0], maximum=BLUR_RANGE[1])]] = (
+        Field(
+            [0.5],
+            min_length=1,
+            description="Fly only: the most angular smear of one reading (degrees), which sets "
+            "the sweep's velocity (a fly plan's sampling.fly.blur_deg, within its bounds).",
+            json_schema_extra=UNIQUE,
+        )
     )
-    rate_hz: list[Annotated[float, InSchema(exclusiveMinimum=0, maximum=10_000)]] = Field(
+    rate_hz: list[Annotated[float, InSchema(minimum=RATE_RANGE[0], maximum=RATE_RANGE[1])]] = Field(
         [100.0],
         min_length=1,
         description="Fly only: readings per second the detector streams, each integrating "
@@ -186,6 +220,11 @@ class Axes(Strict):
         for k, value in enumerate(values):
             if value < 1:
                 raise field_error(str(k), f"expected a positive count, got {value}")
+            if info.field_name == "averages" and value > MAX_AVERAGES:
+                raise field_error(
+                    str(k), f"expected at most {MAX_AVERAGES} averages (each reading is "
+                    f"simulated), got {value:,}",
+                )  # fmt: skip
             if info.field_name == "samples" and value > MAX_TARGETS:
                 raise field_error(
                     str(k), f"expected at most {MAX_TARGETS:,} targets, got {value:,} "
@@ -198,14 +237,17 @@ class Axes(Strict):
     def _positive_numbers(
         cls, values: list[float | None], info: ValidationInfo
     ) -> list[float | None]:
-        most = {"blur_deg": 30.0, "rate_hz": 10_000.0}.get(str(info.field_name))
+        least, most = _RANGES.get(str(info.field_name), (None, None))
+        why = _WHY.get(str(info.field_name), "")
         for k, value in enumerate(values):
             if value is None and info.field_name == "minutes":
                 continue
             if value is None or not value > 0:
                 raise field_error(str(k), f"expected a positive number, got {value}")
+            if least is not None and value < least:
+                raise field_error(str(k), f"expected at least {least:g}{why}, got {value:g}")
             if most is not None and value > most:
-                raise field_error(str(k), f"expected at most {most:g}, got {value:g}")
+                raise field_error(str(k), f"expected at most {most:g}{why}, got {value:g}")
         return values
 
     @model_validator(mode="after")
@@ -239,6 +281,23 @@ class Axes(Strict):
             if twice is not None:
                 raise field_error(f"{name}.{twice}", f"{excerpt(values[twice])} is given twice")
         return self
+
+
+#: The bounds of the numeric axes (None: no bound there; minutes have the rig's floor
+#: too, `gonio.tradeoff.grid.load_sweep`), and why.
+_RANGES: dict[str, tuple[float | None, float | None]] = {
+    "exposure_s": (None, MAX_EXPOSURE_S),
+    "velocity_scale": VELOCITY_SCALES,
+    "minutes": (None, MAX_MINUTES),
+    "blur_deg": BLUR_RANGE,
+    "rate_hz": RATE_RANGE,
+}
+_WHY = {
+    "minutes": " (a day: the longest acquisition one plan holds)",
+    "velocity_scale": " (a hundredth to a hundred times the rig's speeds)",
+    "blur_deg": " (below, the encoders' quantization hides the smear)",
+    "rate_hz": " (below one reading a second a sweep passes tens of degrees between two)",
+}
 
 
 def _label(value: Any) -> str:

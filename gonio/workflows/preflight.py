@@ -1,6 +1,7 @@
 """What is checked before a run creates or moves anything: the files it is made from
 (`Files`), the backend the rig chooses and the scene it needs (`check_scene`), the run
-file to create (`check_output`), a fly plan's backend (`refuse_fly`, with the stream
+file to create (`check_output`), a fly plan's backend (`refuse_fly_spec`, before
+planning, with the stream
 check of a hardware detector, `gonio.workflows.stream_check`) and the backend's
 devices (`preflight`, with the bus hygiene findings of `gonio.workflows.hygiene`).
 `dry_run` checks all of it, and that the devices answer, without moving.
@@ -22,6 +23,7 @@ from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.output import refuse_inputs
 from gonio.planner.model import Plan, content_hash, sha256
+from gonio.planner.schema import PlanSpec
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
 from gonio.workflows import backends, hygiene, stream_check
@@ -98,35 +100,58 @@ def check_output(path: Path | None, overwrite: bool, inputs: Files | None = None
         raise ConfigError(f"-o {path}: cannot write in {folder}: {exc.strerror or exc}") from None
 
 
-def refuse_fly(plan: Plan, kind: str) -> None:
-    """`ConfigError` for a fly plan on a backend that does not acquire them: hardware
+def refuse_fly(plan: Plan, kind: str, scene: Scene | None = None) -> None:
+    """`refuse_fly_spec` of a plan already made (a stored plan, resumed)."""
+    if plan.is_fly:
+        refuse_fly_spec(plan.spec, plan.rig, kind, scene)
+
+
+def refuse_fly_spec(
+    spec: PlanSpec, rig: Rig, kind: str, scene: Scene | None = None, scene_path: Path | None = None
+) -> None:
+    """`ConfigError` for a fly plan on a backend that cannot acquire it, before it is
+    planned: a simulated detector of a lock-in ``scene`` (it cannot stream), hardware
     whose serial detector has no passing stream check for its configuration and the
-    plan's rate (`gonio.workflows.stream_check.fly_refusal`), or a rehearsal whose
-    detector cannot stream (a PyMeasure instrument, a serial detector without a
-    ``stream`` section)."""
-    if not plan.is_fly or kind == "simulated":
+    plan's rate (`gonio.workflows.stream_check.fly_refusal`), or a rehearsal or hardware
+    whose detector cannot stream at all (`refuse_fly_detector`)."""
+    if spec.sampling.strategy != "fly":
         return
-    interface = plan.rig.spec.detector.interface
+    if scene is not None and kind != "hardware" and not scene.detector.streams:
+        raise ConfigError(
+            f"{scene_path or 'scene'}: detector.kind: plan {spec.name!r} is a fly plan and the "
+            f"simulated {scene.detector.kind} detector cannot stream; expected kind: adc, or a "
+            "stop-and-go plan"
+        )
+    if kind == "simulated":
+        return
+    interface = rig.spec.detector.interface
     if kind == "hardware":
         if isinstance(interface, SerialInterfaceSpec) and interface.stream is not None:
-            fly = plan.spec.sampling.fly
-            why = stream_check.fly_refusal(plan.rig, None if fly is None else fly.rate_hz)
+            fly = spec.sampling.fly
+            why = stream_check.fly_refusal(rig, None if fly is None else fly.rate_hz)
             if why is None:
                 return
-            raise ConfigError(f"plan {plan.spec.name!r} is a fly plan: {why}")
+            raise ConfigError(f"plan {spec.name!r} is a fly plan: {why}")
         raise ConfigError(
-            f"plan {plan.spec.name!r}: fly plans are acquired on the simulated and rehearsal "
+            f"plan {spec.name!r}: fly plans are acquired on the simulated and rehearsal "
             "backends only, and on hardware whose serial detector passed `gonio detector "
             "check-stream` (this run's detector is not one); use `gonio simulate`, `gonio "
             "acquire --rehearse`, or a stop-and-go plan"
         )
-    if interface.kind == "pymeasure" or (
-        isinstance(interface, SerialInterfaceSpec) and interface.stream is None
+    refuse_fly_detector(spec, rig)
+
+
+def refuse_fly_detector(spec: PlanSpec, rig: Rig) -> None:
+    """`ConfigError` for a fly plan on a rig whose detector cannot stream at all (a
+    PyMeasure instrument, a serial detector without a ``stream`` section)."""
+    interface = rig.spec.detector.interface
+    if spec.sampling.strategy == "fly" and (
+        interface.kind == "pymeasure"
+        or (isinstance(interface, SerialInterfaceSpec) and interface.stream is None)
     ):
-        where = plan.rig.source or "rig"
         raise ConfigError(
-            f"{where}: detector.interface: plan {plan.spec.name!r} is a fly plan and this "
-            f"{interface.kind} detector cannot stream; expected a serial detector with a "
+            f"{rig.source or 'rig'}: detector.interface: plan {spec.name!r} is a fly plan and "
+            f"this {interface.kind} detector cannot stream; expected a serial detector with a "
             "stream section, or kind: simulated"
         )
 

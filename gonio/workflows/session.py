@@ -174,7 +174,7 @@ def start(
     ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse, force_simulated=force_simulated)
-    refuse_fly(plan, kind)
+    refuse_fly(plan, kind, scene)
     if seed is None and scene is not None:
         seed = int(scene.seed)
     check_output(output, overwrite, files)

@@ -204,7 +204,7 @@ class SimDetector(Resource):
     @property
     def can_stream(self) -> bool:
         """Whether it streams (`drivers.stream.can_stream`): yes, unless a lock-in."""
-        return not self.lockin
+        return bool(self.scene.detector.streams)
 
     def open(self) -> None:
         self._open = True

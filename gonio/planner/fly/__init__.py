@@ -2,7 +2,8 @@
 
 Modules: `lines` (the segments, their velocity from the blur budget), `thin` (the
 streamed readings thinned to the target density), `coverage` (how the readings cover the
-reach), `build` (`build_fly`: the layout, its order and timing); path lines along θh
+reach), `build` (`build_fly`: the layout, its order and timing), `limits` (what a plan may ask
+of the rig and this machine, checked first); path lines along θh
 that every axis follows: `paths` (a line's segments, time law, trajectory and readings)
 and `path_plan` (`build_paths`: their layout, order and timing).
 """

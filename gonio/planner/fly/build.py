@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 
 from gonio import params
-from gonio.config import ConfigError, spec_text
+from gonio.config import spec_text
 from gonio.planner.fly.coverage import coverage, reference
+from gonio.planner.fly.limits import check_fly
 from gonio.planner.fly.lines import Laid
 from gonio.planner.fly.thin import THINNED, lay_out_thinned
 from gonio.planner.model import FlyFigures, Plan, Summary, Sweeps
@@ -74,17 +75,6 @@ def order_segments(
     return order, reversed_, joint, time.perf_counter() - started
 
 
-def check_integration(spec: PlanSpec, rig: Rig, where: str) -> None:
-    """`ConfigError` unless the detector accepts the integration time."""
-    lo, hi = rig.spec.detector.exposure_range_s
-    t = spec.sampling.fly_options().integration
-    if not lo <= t <= hi:
-        raise ConfigError(
-            f"{where}: sampling.fly.integration_s: {t:g} s is outside the detector's exposure "
-            f"range [{lo:g}, {hi:g}] s (the rig file's detector.exposure_range_s)"
-        )
-
-
 def build_fly(
     spec: PlanSpec,
     rig: Rig,
@@ -96,8 +86,10 @@ def build_fly(
     """The fly plan of ``spec`` on ``rig`` (module docstring): its readings as the
     plan's targets in measuring order (each at its mid-integration pose, ``arrival_s``
     its integration start, ``exposure_s`` the integration time) and its segments
-    (`Plan.sweeps`). `ConfigError` when the rig reaches too few readings."""
-    check_integration(spec, rig, where)
+    (`Plan.sweeps`). `ConfigError` when the rig reaches too few readings, or before
+    anything is laid out when the plan asks more than the rig or this machine allows
+    (`gonio.planner.fly.limits.check_fly`)."""
+    check_fly(spec, rig, where)
     fly = spec.sampling.fly_options()
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)
     ref = reference(spec, rig)

@@ -34,8 +34,9 @@ from drivers.trajectory import Trajectory
 from gonio.config import ConfigError
 from gonio.planner import placement, sampling
 from gonio.planner.adaptive import Density, error_indicator, measure_density
-from gonio.planner.fly.build import Readings, assemble, check_integration, order_segments
+from gonio.planner.fly.build import Readings, assemble, order_segments
 from gonio.planner.fly.coverage import reference
+from gonio.planner.fly.limits import check_fly
 from gonio.planner.fly.lines import Laid, box, plan_coords
 from gonio.planner.fly.paths import (
     DYNAMICS,
@@ -176,7 +177,7 @@ def build_paths(
     as the plan's targets in measuring order (each at its mid-integration pose,
     ``arrival_s`` its integration start) and its segments (`Plan.sweeps`, each with its
     trajectory). `ConfigError` when the rig reaches too few readings."""
-    check_integration(spec, rig, where)
+    check_fly(spec, rig, where)
     fly = spec.sampling.fly_options()
     blur = math.radians(fly.blur)
     home = rig.home if start is None else np.asarray(start, dtype=np.float64)

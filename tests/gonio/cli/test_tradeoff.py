@@ -3,6 +3,8 @@ exit code 2, before anything runs (a whole run is in tests/gonio/tradeoff)."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -10,7 +12,9 @@ import pytest
 
 from gonio.tradeoff.executors import CONNECT_TIMEOUT_S
 from tests.conftest import CliResult
-from tests.gonio.tradeoff.conftest import write_sweep
+from tests.gonio.tradeoff.conftest import SMALL, write_sweep
+
+GONIO = Path(sys.executable).with_name("gonio")
 
 
 @pytest.mark.parametrize(
@@ -80,3 +84,29 @@ def test_a_sample_count_no_plan_may_keep_is_refused_before_anything_runs(
     assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
     assert "axes.samples.1: expected at most 1,000,000 targets" in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_a_budget_beyond_a_day_is_refused_at_once_in_a_real_process(tmp_path: Path) -> None:
+    sweep = write_sweep(tmp_path, axes={**SMALL["axes"], "minutes": [1_000_000]})
+    r = subprocess.run(
+        [str(GONIO), "tradeoff", str(sweep), "-o", str(tmp_path / "out"), "-q"],
+        capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert r.returncode == 2 and r.stdout == "" and "Traceback" not in r.stderr
+    assert r.stderr.count("\n") == 1 and f"{sweep}:" in r.stderr
+    assert "axes.minutes.0: expected at most 1440" in r.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_sweep_whose_every_combination_failed_exits_1_saying_so(tmp_path: Path) -> None:
+    # 0.3 s: above one sample's time (0.25 s), below any plan's (a move to the target too)
+    axes = {**SMALL["axes"], "parametrization": ["rusinkiewicz"], "minutes": [0.005]}
+    sweep = write_sweep(tmp_path, axes=axes)
+    r = subprocess.run(
+        [str(GONIO), "tradeoff", str(sweep), "-o", str(tmp_path / "out"), "-q", "-j", "1"],
+        capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert r.stderr.count("\n") == 1, r.stderr
+    assert r.stderr.startswith("gonio: all 2 combinations failed; the first: combination ")
+    assert "no target of this plan fits 0.3 s of instrument time" in r.stderr

@@ -231,7 +231,7 @@ def test_the_shipped_fly_plan_plans_and_hardware_refuses_it(
     [
         ({"rate_hz": 100, "integration_s": 0.02}, "sampling.fly.integration_s", "at most"),
         ({"blur_deg": 1, "lobe_width_deg": 3}, "sampling.fly.blur_deg", "not both"),
-        ({"rate_hz": 0}, "sampling.fly.rate_hz", "greater than 0"),
+        ({"rate_hz": 0}, "sampling.fly.rate_hz", "greater than or equal to 1"),
         ({"segment": "diagonal"}, "sampling.fly.segment", "detector_arc"),
     ],
 )
