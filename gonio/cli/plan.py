@@ -14,6 +14,7 @@ from gonio.errors import GonioError
 from gonio.output import reserve_output
 from gonio.planner import Plan
 from gonio.planner.files import PlanSource, load_plan_source, plan_bytes
+from gonio.planner.schema import MAX_PLAN_MINUTES
 from gonio.workflows.preflight import refuse_fly_detector
 
 
@@ -67,8 +68,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def _minutes(text: str) -> float:
-    """A positive number of minutes."""
-    return positive(text, "a positive number of minutes")
+    """A positive number of minutes, at most 1440 (a day).
+
+    The bound is `gonio.planner.schema.MAX_PLAN_MINUTES`, the longest a plan is made for."""
+    return positive(text, "a positive number of minutes", MAX_PLAN_MINUTES)
 
 
 #: The most test pairs: every candidate plan's reconstruction is evaluated on each (about

@@ -10,7 +10,7 @@ import os
 import sys
 from pathlib import Path
 
-from gonio.cli import EXIT_CODES
+from gonio.cli import EXIT_CODES, arguments
 from gonio.cli.arguments import positive
 from gonio.progress import Bar, hms
 
@@ -18,15 +18,18 @@ from gonio.progress import Bar, hms
 EXIT_ALL_FAILED = 1
 
 
+#: The most local worker processes per CPU of this machine: each holds a plan, a
+#: simulated run and a reconstruction, so more only share the same CPUs and multiply the
+#: memory.
+JOBS_PER_CPU = 4
+
+
 def _jobs(text: str) -> int:
-    """A whole number ≥ 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}")
-    return value
+    """A whole number of processes, 1 to 4 per CPU of this machine.
+
+    The bound is `JOBS_PER_CPU` times `os.cpu_count`."""
+    most = JOBS_PER_CPU * (os.cpu_count() or 1)
+    return arguments.count(text, f"processes (this machine has {os.cpu_count()} CPUs)", most)
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:

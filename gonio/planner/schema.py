@@ -32,6 +32,9 @@ MAX_MOVES = 10**9
 #: The most kicks a plan may ask for: at some 10⁵ kicks a second, about two minutes, the
 #: wall-time cap's default (time_budget_s).
 MAX_KICKS_GIVEN = 10**7
+#: The longest instrument time one plan is made for (minutes): a day; a longer campaign
+#: is several plans (and runs), each resumable on its own.
+MAX_PLAN_MINUTES = 1440.0
 #: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
 PlanStrategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive", "fly"]
 

@@ -22,6 +22,9 @@ from gonio.config_schema import InSchema
 from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
 from gonio.planner.policies import AcquisitionSpec
 from gonio.planner.schema import (
+    MAX_KICKS_GIVEN,
+    MAX_MOVES,
+    MAX_PLAN_MINUTES,
     MIN_BLUR_DEG,
     MIN_RATE_HZ,
     AdaptiveSpec,
@@ -48,10 +51,10 @@ FLY: Literal["fly"] = "fly"
 STOP_AXES = ("sampling", "exposure_s", "averages")
 FLY_AXES = ("blur_deg", "rate_hz", "segment")
 
-#: The longest instrument-time budget (minutes): a day, the longest acquisition one plan
-#: holds (longer is split into several plans); every combination under it is planned,
-#: simulated and scored, so a longer budget is hours of a sweep's CPU per combination.
-MAX_MINUTES = 1440.0
+#: The longest instrument-time budget (minutes) of a combination: `MAX_PLAN_MINUTES`;
+#: every combination under it is planned, simulated and scored, so a longer budget is
+#: hours of a sweep's CPU per combination.
+MAX_MINUTES = MAX_PLAN_MINUTES
 #: The range of ``velocity_scale``: a hundredth to a hundred times the rig's speeds
 #: (slower, a simulated move of minutes per degree; faster, no servo of the kind).
 VELOCITY_SCALES = (0.01, 100.0)
@@ -325,8 +328,12 @@ def _check_effects(where: str, effects: Effects) -> None:
 class PlanSettings(Strict):
     """What every combination's plan shares (the plan file's fields of those names)."""
 
-    max_moves: int | None = Field(None, ge=0, description=_PLAN["max_moves"].description)
-    kicks: int | None = Field(None, ge=0, description=_PLAN["kicks"].description)
+    max_moves: int | None = Field(
+        None, ge=0, le=MAX_MOVES, description=_PLAN["max_moves"].description
+    )
+    kicks: int | None = Field(
+        None, ge=0, le=MAX_KICKS_GIVEN, description=_PLAN["kicks"].description
+    )
     ordering: Literal["search", "lkh"] = Field("search", description=_PLAN["ordering"].description)
     # Generous: a cap that binds makes the order depend on the machine's load.
     time_budget_s: float = Field(600.0, gt=0, description=_PLAN["time_budget_s"].description)

@@ -103,13 +103,13 @@ def test_mistakes_are_one_line_before_any_planning(
     assert words in r.stderr
 
 
-@pytest.mark.parametrize("value", ["0", "-1", "nan", "x"])
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "x", "1441"])
 def test_a_bad_budget_is_a_usage_error(run_gonio: Gonio, value: str) -> None:
     r = run_gonio("plan", QUICK, "--budget-min", value, "--material", GOLD)
     assert r.returncode == 2
     assert r.stderr == (
-        f"gonio: error: plan: argument --budget-min: expected a positive number of minutes, "
-        f"got {value!r} (see gonio plan --help)\n"
+        "gonio: error: plan: argument --budget-min: expected a positive number of minutes "
+        f"of at most 1440, got {value!r} (see gonio plan --help)\n"
     )
 
 

@@ -22,7 +22,8 @@ GONIO = Path(sys.executable).with_name("gonio")
     [
         (["--target-error", "0"], "--target-error: expected a positive number, got '0'"),
         (["--target-error", "nan"], "expected a positive number, got 'nan'"),
-        (["-j", "0"], "--jobs: expected a positive whole number, got '0'"),
+        (["-j", "0"], "--jobs: expected a whole number of processes (this machine has"),
+        (["-j", "100000"], "got '100000'"),
     ],
 )
 def test_a_bad_option_is_a_usage_error(
