@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from urllib.parse import quote
 
+from drivers.errors import DriverError
 from gonio import progress as planning
 from gonio.acquire import control
 from gonio.acquire import progress as progress_module
@@ -109,11 +110,11 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         if args.plan is not None or args.output is not None:
             raise ConfigError("--resume RUN continues RUN: give no plan file and no -o")
         path: Path | None = args.resume
-        _print_control(args.resume, args.quiet)
         try:
             outcome = session.resume(
                 args.resume, rig_path=args.rig, scene_path=args.scene, force=args.force,
                 retry_skipped=args.retry_skipped, progress=progress, argv=argv,
+                on_ready=lambda: _print_control(args.resume, args.quiet),
             )  # fmt: skip
         except RunInterrupted:
             return _interrupted(path)
@@ -147,15 +148,19 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             print("dry run: nothing moved, nothing written")
             return 0
         path = args.output
-        _print_control(args.output, args.quiet)
         try:
             outcome = session.start(
                 plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
                 seed=args.seed, rehearse=args.rehearse, speedup=args.speedup,
                 progress=progress, argv=argv,
+                on_ready=lambda: _print_control(args.output, args.quiet),
             )  # fmt: skip
         except RunInterrupted:
             return _interrupted(path)
+        except DriverError:
+            if not args.output.exists():  # the devices did not open: no run, no token
+                control.token_path(args.output).unlink(missing_ok=True)
+            raise
     print(run_table.render(outcome.run))
     report = outcome.report
     if report.outcome == "completed":
@@ -169,7 +174,8 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 def _print_control(path: Path, quiet: bool) -> None:
     """Issue the run's control token (beside it, owner-only) and print (unless
     ``quiet``) how to watch and control the run from a browser (the token in the URL's
-    fragment, never sent to a server: the page sends it in a header)."""
+    fragment, never sent to a server: the page sends it in a header); once every check
+    has passed (the session's ``on_ready``)."""
     try:
         token = control.issue_token(path)
     except OSError as exc:

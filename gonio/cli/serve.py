@@ -12,6 +12,8 @@ from pathlib import Path
 from gonio.acquire import control
 from gonio.brdf.family import parse
 from gonio.config import ConfigError
+from gonio.live import listen
+from gonio.live.model import LiveRun
 
 
 def port(text: str) -> int:
@@ -76,14 +78,12 @@ def cmd_serve(args: argparse.Namespace) -> int:
             "gonio serve needs Starlette and uvicorn: pip install 'gonio[live]'"
         ) from None
     path: Path = args.path
-    if not path.exists():
-        raise ConfigError(f"{path}: no such run file or folder")
-    if path.is_file() and path.suffix != ".sqlite":
-        raise ConfigError(f"{path}: expected a run file (.sqlite) or a folder")
+    _check_served(path)
     token = None
     if args.token_file is not None:
         token = _token_file(args.token_file)
-    loopback = server.is_loopback(args.host)
+    family, ip = listen.address(args.host)
+    loopback = server.is_loopback(ip)
     if not loopback and token is None and path.is_file():
         token = control.read_token(path)  # the run's own token gates the whole server
     parse(args.fit_model)  # an unknown family: one line before anything is served
@@ -94,18 +94,36 @@ def cmd_serve(args: argparse.Namespace) -> int:
         refit_every=args.refit_every,
         fit_model=args.fit_model,
     )
-    host = f"[{args.host}]" if ":" in args.host else args.host
-    url = f"http://{host}:{args.port}/"
-    if path.is_file():
-        url += f"run/{path.name}"
-    print(f"serving {path} at {url} (Ctrl-C to stop)", flush=True)
-    if not loopback:
-        print("every request needs the token (the page takes it as #token=… in its URL)")
-    uvicorn.run(
-        server.app(served), host=args.host, port=args.port, log_level="warning",
-        server_header=False, date_header=False,
-    )  # fmt: skip
+    sock = listen.listen(family, ip, args.port)
+    try:
+        name = args.host.strip().strip("[]")
+        url = f"http://{f'[{name}]' if ':' in name else name}:{args.port}/"
+        if path.is_file():
+            url += f"run/{path.name}"
+        print(f"serving {path} at {url} (Ctrl-C to stop)", flush=True)
+        if not loopback:
+            print("every request needs the token (the page takes it as #token=… in its URL)")
+        config = uvicorn.Config(
+            server.app(served), host=ip, port=args.port, log_level="warning",
+            server_header=False, date_header=False,
+        )  # fmt: skip
+        uvicorn.Server(config).run(sockets=[sock])
+    finally:
+        sock.close()
     return 0
+
+
+def _check_served(path: Path) -> None:
+    """`ConfigError` (one line) unless ``path`` is a folder or a readable run file, read
+    as the page reads it (`gonio.live.model.LiveRun`: the checks of
+    `gonio.store.open_run`), leaving nothing beside it. A folder may hold no run yet."""
+    if path.is_dir():
+        return
+    if not path.exists():
+        raise ConfigError(f"{path}: no such run file or folder")
+    if not path.is_file() or path.suffix != ".sqlite":
+        raise ConfigError(f"{path}: expected a run file (.sqlite) or a folder")
+    LiveRun(path).close()  # JournalError: one line naming the file
 
 
 def _token_file(path: Path) -> str:

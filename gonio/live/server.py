@@ -142,10 +142,15 @@ class Served:
         return path
 
     def names(self) -> list[str]:
-        """The run files under the served path (a folder and its subfolders, by name)."""
+        """The run files under the served path (a folder and its subfolders, by name;
+        not a link out of it, which `run_path` refuses)."""
         if self.root.is_file():
             return [self.root.name]
-        found = sorted(p for p in self.root.rglob("*.sqlite") if p.is_file())
+        found = sorted(
+            p
+            for p in self.root.rglob("*.sqlite")
+            if p.is_file() and p.resolve().is_relative_to(self.root)
+        )
         return [str(p.relative_to(self.root)) for p in found[:MAX_RUNS]]
 
     def name_of(self, path: Path) -> str:

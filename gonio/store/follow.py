@@ -11,7 +11,8 @@ sample committed since, and its stored plan (over `LAZY_PLAN_BYTES`) by its head
 once and its targets in another process (`gonio.store.plan_view`): a run of a million
 samples opens in seconds, not minutes (docs/results/live.md). `writer_holds` tells
 whether a ``gonio acquire`` holds the file's writer lock (nothing is locked or opened for
-writing to find out).
+writing to find out). A run nobody writes is read as it stands, with nothing made beside
+it, until a writer appears (`gonio.store.readonly`).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ import numpy as np
 from gonio.planner.files import parse_plan
 from gonio.store import checks
 from gonio.store.journal import JournalError, check_version
-from gonio.store.plan_view import PlanArrays, PlanInfo, connect, parse_in_background
+from gonio.store.plan_view import PlanArrays, PlanInfo, parse_in_background
 from gonio.store.read import (
     Event,
     Session,
@@ -48,6 +49,7 @@ from gonio.store.read import (
     sample_columns,
     session_of,
 )
+from gonio.store.readonly import connect, is_still, writer_holds
 from gonio.store.schema import samples_table
 
 #: The sample columns a follower reads (besides ``utc``, when the table has it).
@@ -72,22 +74,6 @@ def _epoch(utc: Any) -> float:
         return datetime.fromisoformat(utc).timestamp()
     except (TypeError, ValueError):
         return math.nan
-
-
-def writer_holds(path: Path) -> bool:
-    """Whether a process holds the run file's writer lock (``gonio acquire``'s flock),
-    read from ``/proc/locks`` (nothing is locked or opened for writing to find out).
-    Where that file is missing, False."""
-    try:
-        st = os.stat(path)
-        text = Path("/proc/locks").read_text()
-    except OSError:
-        return False
-    dev = f"{os.major(st.st_dev):02x}:{os.minor(st.st_dev):02x}:{st.st_ino}"
-    return any(
-        len(parts) > 5 and parts[1] == "FLOCK" and parts[5] == dev
-        for parts in (line.split() for line in text.splitlines())
-    )
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -136,16 +122,14 @@ class RunFollower:
     _load_next: bool = field(init=False, default=False)  # start the plan's loader
     _broken: str | None = field(init=False, default=None)  # why the plan cannot be read
     _identity: tuple[int, int] | None = field(init=False, default=None)
+    _still: bool = field(init=False, default=False)  # opened immutable: nobody wrote it
 
     def __post_init__(self) -> None:
         self.path = Path(self.path)
         if not self.path.is_file():
             raise JournalError(f"{self.path}: no such run file")
         self._identity = _identity(self.path)
-        try:
-            self._conn = connect(self.path)
-        except sqlite3.Error as exc:
-            raise JournalError(f"{self.path}: cannot open the run file: {exc}") from None
+        self._connect(is_still(self.path))
         try:
             with refusing(self.path):
                 check_version(self._conn, self.path)
@@ -154,6 +138,13 @@ class RunFollower:
         except BaseException:
             self._conn.close()
             raise
+
+    def _connect(self, still: bool) -> None:
+        try:
+            self._conn = connect(self.path, still=still, threads=True)
+        except sqlite3.Error as exc:
+            raise JournalError(f"{self.path}: cannot open the run file: {exc}") from None
+        self._still = still
 
     def close(self) -> None:
         self._conn.close()
@@ -172,6 +163,10 @@ class RunFollower:
             self._start_loader()
         self._poll_loader()
         writing = writer_holds(self.path)
+        if self._still and not is_still(self.path, writing=writing):  # a writer came
+            self._conn.close()
+            self._connect(still=False)
+            self._data_version = -1
         with refusing(self.path):
             changed = self._read()
         if changed or writing != self._writing:

@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from gonio.errors import GonioError
-from gonio.store import checks
+from gonio.store import checks, readonly
 from gonio.store.schema import ADDED_IN_2, samples_ddl, samples_table
 
 #: The layout version this gonio writes (and the newest it reads).
@@ -249,8 +249,9 @@ class Journal:
         lock = _lock(path)
         try:
             # Read-only first: a file that is not a gonio run (another program's database,
-            # zero bytes) is refused before anything is written to it (the WAL mode).
-            probe = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)
+            # zero bytes) is refused before anything is written to it (the WAL mode) or
+            # made beside it (the lock is ours: nobody else writes it).
+            probe = readonly.connect(path, still=readonly.is_still(path, writing=False))
             try:
                 check_version(probe, path)
             finally:

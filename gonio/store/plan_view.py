@@ -2,13 +2,12 @@
 alone (cheap even for a plan of a million targets), and `PlanArrays`, from its parsed
 targets. `parse_in_background` parses a large stored plan in another process and sends
 back its arrays and the run's measured targets (`gonio.store.follow.RunFollower` starts
-it); `connect` opens a run file read-only for either.
+it).
 """
 
 from __future__ import annotations
 
 import os
-import sqlite3
 from collections.abc import Sequence
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
@@ -21,7 +20,7 @@ from gonio.errors import GonioError
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
 from gonio.rig.model import Rig
-from gonio.store import checks, read
+from gonio.store import checks, readonly
 from gonio.store.read import check_plan, check_targets, decode_meta, refusing
 from gonio.types import FloatArray
 
@@ -110,13 +109,6 @@ class PlanArrays:
         )
 
 
-def connect(path: Path) -> sqlite3.Connection:
-    uri = f"{path.resolve().as_uri()}?mode=ro"
-    return sqlite3.connect(
-        uri, uri=True, isolation_level=None, check_same_thread=False, timeout=read.BUSY_TIMEOUT_S
-    )
-
-
 def parse_in_background(path: Path, out: Connection) -> None:
     """Send a large run's `PlanArrays` and its measured targets through ``out`` (or the
     one line why the plan cannot be read): the work of another process."""
@@ -124,7 +116,7 @@ def parse_in_background(path: Path, out: Connection) -> None:
     result: tuple[PlanArrays, np.ndarray] | str
     try:
         with refusing(path):
-            conn = connect(path)
+            conn = readonly.connect(path)
             try:
                 conn.execute("BEGIN")
                 meta = decode_meta(conn.execute("SELECT key, value FROM meta").fetchall())
@@ -145,4 +137,4 @@ def parse_in_background(path: Path, out: Connection) -> None:
     out.close()
 
 
-__all__: Sequence[str] = ("PlanArrays", "PlanInfo", "connect", "parse_in_background")
+__all__: Sequence[str] = ("PlanArrays", "PlanInfo", "parse_in_background")

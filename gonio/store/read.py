@@ -1,6 +1,7 @@
 """Reading a run journal: `open_run(path)` gives the metadata, the stored plan, the
 samples as numpy columns and the events, as one consistent snapshot, also of a run
-that is still being written (the file is opened read-only, in one read transaction).
+that is still being written (the file is opened read-only, in one read transaction,
+leaving nothing beside it: `gonio.store.readonly`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from gonio.config import ConfigError
 from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
-from gonio.store import checks
+from gonio.store import checks, readonly
 from gonio.store.journal import JournalError, check_version
 from gonio.store.schema import (
     ADDED_IN_2,
@@ -31,11 +32,6 @@ from gonio.store.schema import (
     samples_table,
 )
 from gonio.types import FloatArray
-
-#: Seconds a reader waits for a lock another process holds on the file (a writer that
-#: took it whole: ``PRAGMA locking_mode=EXCLUSIVE``, or a checkpoint) before giving up
-#: with one line; gonio's own writer never blocks readers (WAL mode).
-BUSY_TIMEOUT_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -163,7 +159,7 @@ def refusing(path: Path) -> Iterator[None]:
         if "locked" in str(exc) or "busy" in str(exc):
             raise JournalError(
                 f"{path}: another process holds the run file locked ({_one_line(exc)}, "
-                f"{BUSY_TIMEOUT_S:g} s waited); read it when that process is done"
+                f"{readonly.BUSY_TIMEOUT_S:g} s waited); read it when that process is done"
             ) from None
         raise JournalError(f"{path}: not a readable run file: {_one_line(exc)}") from None
     except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:  # a text stored damaged
@@ -339,9 +335,7 @@ def raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.nda
 
 
 def _raw_streams(run: Run, sweep_id: int) -> tuple[np.ndarray, FloatArray, np.ndarray]:
-    conn = sqlite3.connect(
-        f"{run.path.resolve().as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S
-    )
+    conn = readonly.connect(run.path)
     try:
         polls = conn.execute(
             "SELECT request_s, reply_s, positions FROM polls WHERE sweep_id = ? ORDER BY rowid",
@@ -438,12 +432,7 @@ def open_run(path: str | Path) -> Run:
     if not path.is_file():
         raise JournalError(f"{path}: no such run file")
     try:
-        conn = sqlite3.connect(
-            f"{path.resolve().as_uri()}?mode=ro",
-            uri=True,
-            isolation_level=None,
-            timeout=BUSY_TIMEOUT_S,
-        )
+        conn = readonly.connect(path)
     except sqlite3.Error as exc:
         raise JournalError(f"{path}: cannot open the run file: {exc}") from None
     try:

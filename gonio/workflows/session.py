@@ -5,7 +5,10 @@ moves, and runs the engine. `resume` reopens a run file, checks that the plan, r
 scene files it was made from are unchanged (by hash; ``force`` accepts a change and
 journals it), and measures exactly the targets still missing from the stored plan,
 which it never re-plans. What either checks first, and `dry_run`, which checks
-everything a run needs without moving: `gonio.workflows.preflight`.
+everything a run needs without moving: `gonio.workflows.preflight`. Either calls its
+``on_ready`` once every check has passed and the run file is open, before anything is
+measured: what a caller writes or prints about the run (its control token) comes after
+every refusal.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import os
 import platform
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
@@ -169,9 +173,12 @@ def start(
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     force_simulated: bool = False,
+    on_ready: Callable[[], None] | None = None,
 ) -> SessionResult:
     """Acquire ``plan`` into a new run file ``output`` (None: in memory);
-    ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`)."""
+    ``force_simulated``: the simulated backend whatever the rig's bus (`gonio simulate`);
+    ``on_ready``: called once the run file is created, before anything moves (if it
+    raises, the run file is removed)."""
     rig = plan.rig
     kind = check_scene(files, rig, scene, rehearse=rehearse, force_simulated=force_simulated)
     refuse_fly(plan, kind, scene)
@@ -198,6 +205,14 @@ def start(
             output, meta, stored, durable=backend.durable, overwrite=overwrite,
             max_page_count=max_page_count,
         ) as journal:  # fmt: skip
+            if on_ready is not None:
+                try:
+                    on_ready()
+                except BaseException:
+                    journal.close()
+                    if output is not None:
+                        remove_run_file(output)
+                    raise
             try:
                 return _run_engine(
                     journal, plan, backend, None, progress=progress or Unobserved(), argv=argv or []
@@ -279,8 +294,11 @@ def resume(
     argv: list[str] | None = None,
     max_page_count: int | None = None,
     speedup: float | None = None,
+    on_ready: Callable[[], None] | None = None,
 ) -> SessionResult:
-    """Measure what is missing from the run file at ``path`` (module docstring)."""
+    """Measure what is missing from the run file at ``path`` (module docstring);
+    ``on_ready``: called once every check has passed, before anything is written to the
+    run or moves."""
     journal = Journal.reopen(path, durable=False, max_page_count=max_page_count)
     try:
         run = read_run(journal.conn, path)
@@ -316,11 +334,13 @@ def resume(
         except GonioError:
             backend.close()
             raise
-        journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
-        if changed:
-            journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
-            journal.end_session(utc_now(), "forced")
         try:
+            if on_ready is not None:
+                on_ready()
+            journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
+            if changed:
+                journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
+                journal.end_session(utc_now(), "forced")
             return _run_engine(
                 journal, run.plan, backend, run, progress=progress or Unobserved(),
                 retry_skipped=retry_skipped, argv=argv or [],

@@ -34,7 +34,7 @@ import pytest
 import yaml
 
 from gonio.brdf import merl, tensor_file, utia
-from gonio.store import read
+from gonio.store import readonly
 from gonio.tradeoff import executors
 from tests.conftest import CONFIGS, CliResult
 from tests.gonio.test_config_fuzz import bounded
@@ -383,7 +383,7 @@ def held(original: Path, tmp_path: Path) -> Iterator[Path]:
 def test_a_run_locked_by_another_process_is_one_line_in_bounded_time(
     held: Path, tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, command: str
 ) -> None:
-    monkeypatch.setattr(read, "BUSY_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(readonly, "BUSY_TIMEOUT_S", 0.5)
     start = time.monotonic()
     result = run_gonio(*READERS[command](held, tmp_path))
     assert time.monotonic() - start < 5.0
