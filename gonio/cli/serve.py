@@ -11,9 +11,11 @@ from pathlib import Path
 
 from gonio.acquire import control
 from gonio.brdf.family import parse
+from gonio.cli import arguments
 from gonio.config import ConfigError
 from gonio.live import listen
 from gonio.live.model import LiveRun
+from gonio.planner.placement import MAX_TARGETS
 
 
 def port(text: str) -> int:
@@ -61,11 +63,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def _count(text: str) -> int:
-    """A number of samples, ≥ 1."""
-    value = int(text) if text.isdigit() else 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number of samples ≥ 1, got {text!r}")
-    return value
+    """A whole number of samples, 1 to 1,000,000.
+
+    The bound is `MAX_TARGETS`, the most a plan holds: a larger one would never refit."""
+    return arguments.count(text, "samples", MAX_TARGETS)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
