@@ -2,16 +2,15 @@
 a PyMeasure instrument class over PyVISA (a lock-in amplifier, an optical power meter,
 an electrometer, a multimeter; docs/how-to/lab-detectors.md). For the instruments of
 `drivers.pymeasure.PRESETS` only ``instrument`` and ``resource`` are needed; every
-other field overrides the preset. Checked without PyMeasure, and where it is installed
-(the ``instruments`` extra) also against the instrument class: every property named (a
-setting, the reading, the range, the status) must be one the class declares (read from
-the class, never from an instrument). Numbers are bounded by what an instrument takes
-(the module's constants say why).
+other field overrides the preset. Checked without importing PyMeasure (the rig loads
+no serial stack): every property named (a setting, the reading, the range, the status)
+of a preset's class must be one the class declares (`drivers.pymeasure.PROPERTIES`,
+read from the classes); another class's are checked when the detector opens. Numbers
+are bounded by what an instrument takes (the module's constants say why).
 """
 
 from __future__ import annotations
 
-import difflib
 import re
 from typing import Annotated, Any, Literal
 
@@ -19,9 +18,11 @@ from pydantic import Field, field_validator, model_validator
 
 from drivers.pymeasure import (
     PRESETS,
+    PROPERTIES,
     ExposureConfig,
     PyMeasureConfigError,
     PyMeasureDetectorConfig,
+    unknown_property,
 )
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
@@ -255,7 +256,10 @@ class PyMeasureInterfaceSpec(Strict):
     @model_validator(mode="after")
     def _driver_accepts(self) -> PyMeasureInterfaceSpec:
         config = self.config()
-        _known_properties(config)
+        known = PROPERTIES.get(config.instrument)
+        unknown = None if known is None else unknown_property(config, known)
+        if unknown is not None:
+            raise field_error(*unknown)
         return self
 
     def config(self) -> PyMeasureDetectorConfig:
@@ -287,31 +291,3 @@ def _exposure(values: dict[str, Any]) -> ExposureConfig:
     except PyMeasureConfigError as exc:
         field, _, message = str(exc).partition(" ")
         raise field_error(field, message) from None
-
-
-def _known_properties(config: PyMeasureDetectorConfig) -> None:
-    """A `field_error` at the first property ``config`` names that its instrument class
-    does not declare, with the nearest it does; nothing when PyMeasure is not installed
-    or the class cannot be loaded (opening the detector says so)."""
-    try:
-        # The `instruments` extra (PyMeasure, PyVISA): optional, checked only when present.
-        from drivers.pymeasure.boundary import load_class, properties
-    except ImportError:
-        return
-    try:
-        known = properties(load_class(config.instrument))
-    except LookupError:
-        return
-    named: list[tuple[str, str]] = [(f"settings.{n}", n) for n, _ in config.settings]
-    fields = ("range_property", "overload_property", "std_property", "phase_property")
-    named += [(f, getattr(config, f)) for f in fields if getattr(config, f) is not None]
-    if config.query is None:
-        named.append(("reading", config.reading))
-    if config.exposure.property is not None:
-        named.append(("exposure.property", config.exposure.property))
-    for where, name in named:
-        if name not in known:
-            near = difflib.get_close_matches(name, sorted(known), n=1)
-            hint = f"; did you mean {near[0]!r}?" if near else ""
-            short = config.instrument.rpartition(".")[2]
-            raise field_error(where, f"{short} has no property {name!r}{hint}")
