@@ -72,15 +72,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from gonio import params, progress
-    from gonio.errors import GonioError
-    from gonio.export import Options, export
+    from gonio.export import Options, check_options, export
     from gonio.reconstruct import methods
 
     if args.grid is not None:
         params.get(args.grid)  # an unknown name: one line, before any work
     methods.check(args.method)
-    if args.outer < 1 or args.inner < 1:
-        raise GonioError(f"--outer {args.outer} --inner {args.inner}: expected at least 1 each")
     options = Options(
         alta_param=args.alta_param,
         merl_fill=args.merl_fill,
@@ -91,6 +88,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         rgl_color=args.rgl_color,
         method=args.method,
     )
+    check_options(args.format, options)  # before any work: one line
     # Each long step is named on a terminal as it starts (no delay: a step that runs in
     # compiled code cannot advance a bar to make it appear later).
     shown = progress.quiet() if args.quiet else progress.shown_on(sys.stderr, delay_s=0.0)
