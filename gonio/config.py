@@ -58,12 +58,14 @@ class Strict(BaseModel):
                 if isinstance(item, bool):
                     if bool not in kinds and kinds & {int, float}:
                         raise field_error(where, f"expected a number, not yes/no (got {item})")
-                elif isinstance(item, int | float):
-                    if int in kinds and float not in kinds and abs(item) > MAX_INTEGER:
+                    continue
+                number = _as_number(item) if kinds & {int, float} else None
+                if number is not None:
+                    if int in kinds and float not in kinds and abs(number) > MAX_INTEGER:
                         raise field_error(
                             where, f"expected an integer below 2**63 (got {excerpt(item)})"
                         )
-                    if name.endswith("_s") and MAX_SECONDS < abs(item) < math.inf:
+                    if name.endswith("_s") and MAX_SECONDS < abs(number) < math.inf:
                         raise field_error(
                             where, f"expected at most {MAX_SECONDS:g} s (got {excerpt(item)})"
                         )
@@ -76,6 +78,25 @@ class Strict(BaseModel):
 MAX_SECONDS = 1e9
 #: The largest magnitude of an integer a configuration may give (64 bits, signed).
 MAX_INTEGER = 2**63 - 1
+
+
+def _as_number(item: Any) -> int | float | None:
+    """The number pydantic would read from a leaf: an int or a float as it is, a string
+    of a number as parsed (YAML 1.1 reads ``1e300``, without a dot, as text, and pydantic
+    then reads that text as the number), None for anything else."""
+    if isinstance(item, int | float) and not isinstance(item, bool):
+        return item
+    if isinstance(item, str):
+        text = item.strip().replace("_", "")
+        try:
+            return int(text)
+        except ValueError:
+            pass
+        try:
+            return float(text)
+        except (ValueError, OverflowError):
+            return None
+    return None
 
 
 def _leaves(path: str, value: Any, levels: int = 2) -> Iterator[tuple[str, Any]]:

@@ -60,6 +60,19 @@ def load_class(dotted: str) -> type[Instrument]:
     return cls
 
 
+def properties(cls: type[Instrument]) -> frozenset[str]:
+    """The public properties an instrument class declares (PyMeasure's
+    ``Instrument.control``, ``measurement`` and ``setting`` make class properties, as
+    does a plain ``@property``), its bases' included: what a rig file may name as a
+    setting or a reading. Read from the class, never from an instance."""
+    return frozenset(
+        name
+        for klass in cls.__mro__
+        for name, value in vars(klass).items()
+        if isinstance(value, property) and not name.startswith("_")
+    )
+
+
 def construct(cls: type[Instrument], adapter: Any, **kwargs: Any) -> Instrument:
     """``cls(adapter, **kwargs)`` — a resource string or a PyMeasure adapter — without
     PyMeasure's SCPI-unknown warning (the module docstring)."""

@@ -5,6 +5,7 @@ instruments (`PRESETS`)."""
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from collections.abc import Mapping
@@ -188,6 +189,29 @@ class PyMeasureDetectorConfig:
             raise PyMeasureConfigError(
                 f"phase_tolerance_deg must be in (0, 180] degrees, got {tolerance!r}"
             )
+
+
+def unknown_property(
+    config: PyMeasureDetectorConfig, known: frozenset[str]
+) -> tuple[str, str] | None:
+    """(field, message) of the first property ``config`` names (a setting, the reading,
+    the range, the status, the deviation, the phase, the exposure's) that is not in
+    ``known`` (the instrument class's, `drivers.pymeasure.boundary.properties`), the
+    message with the nearest known name; None when every one is known."""
+    named: list[tuple[str, str]] = [(f"settings.{n}", n) for n, _ in config.settings]
+    fields = ("range_property", "overload_property", "std_property", "phase_property")
+    named += [(f, getattr(config, f)) for f in fields if getattr(config, f) is not None]
+    if config.query is None:
+        named.append(("reading", config.reading))
+    if config.exposure.property is not None:
+        named.append(("exposure.property", config.exposure.property))
+    for where, name in named:
+        if name not in known:
+            near = difflib.get_close_matches(name, sorted(known), n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            short = config.instrument.rpartition(".")[2]
+            return where, f"{short} has no property {name!r}{hint}"
+    return None
 
 
 def settle_tau(slope_db_oct: int, fraction: float = 0.99) -> float:

@@ -25,7 +25,7 @@ from drivers.base import Clock, SystemClock
 from drivers.devices import Resource
 from drivers.errors import DetectorError, DeviceClosed
 from drivers.pymeasure import boundary
-from drivers.pymeasure.config import OVERFLOW, PyMeasureDetectorConfig
+from drivers.pymeasure.config import OVERFLOW, PyMeasureDetectorConfig, unknown_property
 from drivers.values import RangeChange, Reading
 
 log = logging.getLogger(__name__)
@@ -155,6 +155,9 @@ class PyMeasureDetector(Resource):
         self._instrument = instrument
         self._applied = None
         try:
+            unknown = unknown_property(cfg, boundary.properties(type(instrument)))
+            if unknown is not None:
+                raise self._error(f"{unknown[0]}: {unknown[1]}")
             with self._talking("setting it up"):
                 for name, value in cfg.settings:
                     setattr(instrument, name, value)

@@ -33,6 +33,30 @@ ParamValue: TypeAlias = float | tuple[float, float, float] | str
 #: the adaptive planner's density follows (`gonio.planner.adaptive`). Below it, values
 #: count linearly, not in log.
 LOG_FLOOR = 1e-2
+#: The largest value a measured-material file may give (sr⁻¹, and for its other
+#: densities: an NDF, a factor). The sharpest BRDF a tabulated file can hold is a mirror
+#: spread over its finest bin: about 1/(cos θ · Δω), and MERL's finest bin (θh below
+#: 0.011°) spans about 5·10⁻⁷ sr of outgoing directions, so about 2·10⁶ sr⁻¹ at normal
+#: incidence and 10⁸ at cos θ = 0.02 (the other formats' bins are coarser). Beyond this
+#: a value is no reflectance (it would return more than 10⁸ times the light over a
+#: steradian) but a damaged file; within it, any sum of values over samples and solid
+#: angles stays many orders from float64's range.
+MAX_FILE_VALUE = 1e8
+
+
+def beyond_bound(values: FloatArray) -> str | None:
+    """Why ``values`` (a material file's, NaN for missing ones) exceed
+    `MAX_FILE_VALUE` in magnitude, in a message's words ("value 1e+307 (12 such)"), or
+    None when none does."""
+    magnitude = np.abs(values)
+    over = magnitude > MAX_FILE_VALUE
+    if not over.any():
+        return None
+    worst = float(np.nanmax(np.where(over, magnitude, 0.0)))
+    return (
+        f"values up to {worst:.3g} ({int(over.sum())} beyond {MAX_FILE_VALUE:g}); expected "
+        f"at most {MAX_FILE_VALUE:g} (sr⁻¹: above any mirror tabulated on a file's grid)"
+    )
 
 
 class BRDF(ABC):

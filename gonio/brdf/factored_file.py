@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from gonio.brdf.base import beyond_bound
 from gonio.config import ConfigError
 from gonio.types import FloatArray
 
@@ -216,6 +217,9 @@ class _Lines:
                 raise self.error(f"{name}: expected {cols} numbers on row {r}") from None
             if not np.all(np.isfinite(out[r])) or np.any(out[r] < 0.0):
                 raise self.error(f"{name}: expected finite values ≥ 0")
+            absurd = beyond_bound(out[r])
+            if absurd is not None:
+                raise self.error(f"{name}: row {r}: {absurd}")
         if cdf and (np.any(np.diff(out[0]) < 0.0) or abs(out[0, -1] - 1.0) > 1e-9):
             raise self.error(f"{name}: expected a non-decreasing CDF ending at 1")
         return out

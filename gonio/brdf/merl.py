@@ -25,7 +25,7 @@ import numpy as np
 from scipy import ndimage
 
 from gonio import params
-from gonio.brdf.base import BRDF, read_path
+from gonio.brdf.base import BRDF, beyond_bound, read_path
 from gonio.brdf.geometry import Pair
 from gonio.errors import GonioError
 from gonio.types import FloatArray
@@ -117,6 +117,9 @@ def _read(path: str, _mtime_ns: int, size: int) -> FloatArray:
     scales = np.asarray(SCALES)[:, None, None, None]
     missing = np.any(~(stored >= 0.0), axis=0)  # negative, or NaN
     table = np.where(missing[None], np.nan, stored * scales)
+    absurd = beyond_bound(table)
+    if absurd is not None:
+        raise GonioError(f"{path}: MERL {absurd}")
     table.setflags(write=False)
     return table
 

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio.brdf import tensor_file
-from gonio.brdf.base import BRDF, read_path
+from gonio.brdf.base import BRDF, beyond_bound, read_path
 from gonio.brdf.geometry import Pair
 from gonio.brdf.marginal import Marginal2D, Table
 from gonio.errors import GonioError
@@ -163,6 +163,9 @@ def _read(path: str, _mtime_ns: int, _size: int) -> Material:
     for name in (*FLOAT_FIELDS, colour, *(("wavelengths",) if spectral else ())):
         _need(path, fields[name].dtype == f32, name, f"float32, got {fields[name].dtype}")
         _need(path, bool(np.all(np.isfinite(fields[name]))), name, "finite values (NaN or inf)")
+        absurd = beyond_bound(fields[name].astype(np.float64))
+        if absurd is not None:
+            raise GonioError(f"{path}: RGL field {name}: {absurd}")
     for name in ("description", "jacobian"):
         _need(path, fields[name].dtype == u8, name, f"uint8, got {fields[name].dtype}")
     theta, phi = fields["theta_i"], fields["phi_i"]

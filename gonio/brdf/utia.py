@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from gonio.brdf.base import BRDF, read_path
+from gonio.brdf.base import BRDF, beyond_bound, read_path
 from gonio.brdf.geometry import Pair
 from gonio.errors import GonioError
 from gonio.output import reserve_output
@@ -160,6 +160,9 @@ def _read(path: str, _mtime_ns: int, size: int, encoding: str) -> FloatArray:
             f"θv {tv * THETA_STEP_DEG:g}°, φv {pv * PHI_STEP_DEG:g}° "
             f"({int(bad.sum())} such); expected finite numbers"
         )
+    absurd = beyond_bound(stored)
+    if absurd is not None:
+        raise GonioError(f"{path}: UTIA {absurd}")
     table = np.maximum(stored, 0.0)
     if encoding == "srgb":
         table = SRGB_SCALE * srgb_decode(table / SRGB_DIVISOR)

@@ -32,7 +32,8 @@ EXIT_CODES = {
     "does not answer, is not the one the rig file expects or has settings the driver "
     "cannot work with (one line each)",
     EXIT_RESUMABLE: "the run ended early on a fault, a pause that did not clear or a full "
-    "disk (resumable with --resume)",
+    "disk (resumable with --resume), or measured nothing: every target skipped "
+    "(--resume --retry-skipped)",
     EXIT_INTERRUPTED: "stopped by Ctrl-C or SIGTERM (resumable with --resume)",
 }
 
@@ -163,9 +164,17 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             raise
     print(run_table.render(outcome.run))
     report = outcome.report
-    if report.outcome == "completed":
+    if report.outcome == "completed" and (len(outcome.run) or not len(outcome.run.plan)):
         print(f"wrote {len(outcome.run)} samples to {path}")
         return 0
+    if report.outcome == "completed":  # every target skipped: nothing measured
+        print(
+            f"gonio: the run measured nothing: all {len(outcome.run.plan)} targets were "
+            f"skipped after their faults; retry them with: {_resume_command(path)} "
+            "--retry-skipped",
+            file=sys.stderr,
+        )
+        return EXIT_RESUMABLE
     print(f"gonio: the run ended early: {report.message}", file=sys.stderr)
     print(f"resume with: {_resume_command(path)}", file=sys.stderr)
     return EXIT_RESUMABLE

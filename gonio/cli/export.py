@@ -12,7 +12,7 @@ from gonio.reconstruct.methods import DEFAULT_METHOD, names
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS, RGL_COLORS
+    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS, MIN_SUPPORTED, RGL_COLORS
 
     p = sub.add_parser(
         "export",
@@ -65,6 +65,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "--inner", type=int, default=2, help="factored: inner terms K per outer term (default 2)"
     )
     p.add_argument(
+        "--allow-sparse",
+        action="store_true",
+        help="merl, rgl, hdf5 --grid: write the grid even when the run's samples support "
+        f"less than {MIN_SUPPORTED * 100:.0f}%% of it (a warning on stderr gives the share); "
+        "without it such an export is refused",
+    )
+    p.add_argument(
         "-q", "--quiet", action="store_true", help="no progress display; print nothing on success"
     )
     p.set_defaults(func=cmd_export)
@@ -72,15 +79,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from gonio import params, progress
-    from gonio.errors import GonioError
-    from gonio.export import Options, export
+    from gonio.export import Options, check_options, export
     from gonio.reconstruct import methods
 
     if args.grid is not None:
         params.get(args.grid)  # an unknown name: one line, before any work
     methods.check(args.method)
-    if args.outer < 1 or args.inner < 1:
-        raise GonioError(f"--outer {args.outer} --inner {args.inner}: expected at least 1 each")
     options = Options(
         alta_param=args.alta_param,
         merl_fill=args.merl_fill,
@@ -90,12 +94,17 @@ def cmd_export(args: argparse.Namespace) -> int:
         inner=args.inner,
         rgl_color=args.rgl_color,
         method=args.method,
+        allow_sparse=args.allow_sparse,
     )
+    check_options(args.format, options)  # before any work: one line
     # Each long step is named on a terminal as it starts (no delay: a step that runs in
     # compiled code cannot advance a bar to make it appear later).
     shown = progress.quiet() if args.quiet else progress.shown_on(sys.stderr, delay_s=0.0)
     with shown:
         summary = export(args.run, args.format, args.output, options)
-    if not args.quiet:
-        print(summary)
+    for line in summary.splitlines():
+        if line.startswith("warning: "):
+            print(f"gonio: {line}", file=sys.stderr)
+        elif not args.quiet:
+            print(line)
     return 0

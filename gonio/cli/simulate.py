@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,11 +27,23 @@ from gonio.rig.constraints import footprint_ok, view_on_sample
 from gonio.workflows import preflight, session
 from gonio.workflows.simulate import Result, simulate_plan
 
+#: Exit code of a simulated run that measured nothing (every target failed or the run
+#: ended before the first).
+EXIT_NOTHING_MEASURED = 3
+#: What the command's exit codes mean (shown in its help and the CLI reference).
+EXIT_CODES = {
+    0: "the run measured at least one target (a run that ended early says so)",
+    2: "refused before anything ran: a bad file or option (one line)",
+    EXIT_NOTHING_MEASURED: "the run measured nothing: every target failed, or the run "
+    "ended before the first (one line saying why)",
+}
+
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
     p = sub.add_parser(
         "simulate",
         help=help_,
+        exit_codes=EXIT_CODES,
         description="Plan, then measure every target with the acquisition engine on the "
         "simulated backend (virtual motors and detector, the scene's material, noise and "
         "faults), calibrate with the reference standard, and report instrument time, wall "
@@ -139,4 +152,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(f"wrote {len(result.run)} samples to {args.output}")
     else:
         print("nothing written: give -o RUN.sqlite to keep the run file (read it with gonio info)")
+    if not len(result.run):
+        report = result.report
+        print(
+            f"gonio: the run measured nothing (outcome {report.outcome}, 0 of "
+            f"{len(plan)} targets): {report.message or 'every target was skipped'}",
+            file=sys.stderr,
+        )
+        return EXIT_NOTHING_MEASURED
     return 0

@@ -9,10 +9,12 @@ is one module with ``export_run(run, out, options) -> str``, imported only when 
 from __future__ import annotations
 
 import importlib
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from gonio.errors import UnknownNameError
+from gonio import params
+from gonio.errors import GonioError, UnknownNameError
 from gonio.output import reserve_output
 from gonio.store import open_run
 
@@ -60,6 +62,70 @@ class Options:
     inner: int = 2
     rgl_color: str = "spectral"
     method: str = "linear"
+    allow_sparse: bool = False
+
+
+#: The least share of a format's grid (its bins, pairs or nodes that have a direction
+#: pair) the run's samples must support (`gonio.reconstruct`'s support: within its
+#: distance of a sample) for the export to be written without ``allow_sparse``: below
+#: it, most of the file would be the reconstruction's extrapolation, not the run. The
+#: support is generous (one sample supports 23 % of the RGL pairs, 30 % of the MERL
+#: bins, 46 % of a hybrid grid; eight samples 28 % and 37 %; sixty well-spread samples
+#: 53 %, 57 % and 71 %, the RGL pairs capped near 55 % by the grazing angles no rig
+#: reaches), so the bound sits between a handful of samples and a few dozen.
+MIN_SUPPORTED = 0.4
+#: Bytes the HDF5 grid takes per node while it is evaluated: its coordinates, the two
+#: directions, the values of up to three channels and their masked copy, the support
+#: and validity masks (float64 each), with a margin for the evaluation's blocks.
+GRID_BYTES_PER_NODE = 8 * (3 + 6 + 3 + 3) + 2 + 64
+#: The factored format's table sizes (`gonio.export.factored.Resolution`'s defaults):
+#: outgoing θ × φ rows, half-vector θ × φ columns. The outer terms factor a rows ×
+#: columns matrix, so at most min(rows, columns) of them; the inner terms each a θ × φ
+#: matrix, so at most min(θ, φ).
+FACTORED_ROWS = 16 * 32
+FACTORED_COLUMNS = 32 * 64
+MAX_OUTER = min(FACTORED_ROWS, FACTORED_COLUMNS)
+MAX_INNER = min(32, 64)
+
+
+def memory_bytes() -> int:
+    """The machine's physical memory (bytes)."""
+    return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
+def check_options(name: str, options: Options) -> None:
+    """`GonioError` (one line) for an option of format ``name`` beyond what it means:
+    the HDF5 grid's points beyond the memory its evaluation would need, the factored
+    format's terms beyond the rank its tables allow."""
+    if name == "hdf5" and options.grid is not None:
+        points = options.grid_points
+        if points < 2:
+            raise GonioError(f"--grid-points {points}: expected at least 2")
+        dims = len(params.get(options.grid).iso_bounds)
+        need = points**dims * GRID_BYTES_PER_NODE
+        have = memory_bytes()
+        if need > have:
+            raise GonioError(
+                f"--grid-points {points}: a {dims}-dimensional grid of {points}^{dims} nodes "
+                f"needs about {_size(need)} of memory to evaluate; this machine has "
+                f"{_size(have)}"
+            )
+    if name == "factored" and not (
+        1 <= options.outer <= MAX_OUTER and 1 <= options.inner <= MAX_INNER
+    ):
+        raise GonioError(
+            f"--outer {options.outer} --inner {options.inner}: expected 1 to {MAX_OUTER} "
+            f"outer terms (the rank of the {FACTORED_ROWS} × {FACTORED_COLUMNS} table they "
+            f"factor) and 1 to {MAX_INNER} inner terms"
+        )
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{n:.0f} B"
+        n /= 1024
+    return f"{n:.3g} EiB"
 
 
 def names() -> list[str]:
@@ -76,6 +142,7 @@ def export(
         raise UnknownNameError(
             f"unknown export format {name!r}; expected one of {', '.join(FORMATS)}"
         )
+    check_options(name, options or Options())
     module = importlib.import_module(FORMATS[name][0])
     with reserve_output(out_path, "-o", inputs=[run_path]) as out:
         run = open_run(run_path)
@@ -83,4 +150,16 @@ def export(
     return summary
 
 
-__all__ = ["ALTA_PARAMS", "FORMATS", "MERL_FILLS", "RGL_COLORS", "Options", "export", "names"]
+__all__ = [
+    "ALTA_PARAMS",
+    "FORMATS",
+    "MAX_INNER",
+    "MAX_OUTER",
+    "MERL_FILLS",
+    "MIN_SUPPORTED",
+    "RGL_COLORS",
+    "Options",
+    "check_options",
+    "export",
+    "names",
+]

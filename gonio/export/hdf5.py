@@ -33,7 +33,7 @@ import numpy as np
 from gonio import __version__, params
 from gonio.errors import GonioError
 from gonio.export.columns import coordinate_unit, sample_columns
-from gonio.export.steps import evaluated, reconstructed, step
+from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
 from gonio.planner.files import plan_bytes
 from gonio.planner.model import ARRAYS
@@ -135,9 +135,12 @@ def grid_axes(parametrization: str, points: int) -> list[FloatArray]:
     return [lo + steps * (hi - lo) for lo, hi in bounds]
 
 
-def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> None:
+def write_grid(
+    h5: Any, model: Evaluable, parametrization: str, points: int, *, allow_sparse: bool = False
+) -> str:
     """``model`` evaluated on the regular grid of ``parametrization``'s isotropic
-    coordinates, into ``/reconstruction`` (see the module docstring)."""
+    coordinates, into ``/reconstruction`` (see the module docstring); a warning line
+    when the run supports too little of it and ``allow_sparse`` (`sparse_note`)."""
     if points < 2:
         raise GonioError(f"--grid-points {points}: expected at least 2")
     p = params.get(parametrization)
@@ -146,6 +149,11 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
     ok = p.valid_iso(coords)
     wi, wo = p.inverse_iso(np.where(ok[..., None], coords, [a[0] for a in axes]))
     values, supported = evaluated(model, wi, wo, f"evaluating the {parametrization} grid")
+    note = ""
+    if supported is not None:
+        paired = int(np.count_nonzero(ok))
+        held = int(np.count_nonzero(supported & ok))
+        note = sparse_note(held, paired, f"{parametrization} grid's nodes", allow=allow_sparse)
     mask = ok[..., None] if values.ndim == ok.ndim + 1 else ok
     group = h5.create_group("reconstruction")
     group.attrs.update(
@@ -161,6 +169,7 @@ def write_grid(h5: Any, model: Evaluable, parametrization: str, points: int) -> 
     group["values"].attrs["units"] = "sr^-1"
     if supported is not None:
         group.create_dataset("supported", data=supported & ok)
+    return note
 
 
 def write(
@@ -169,14 +178,17 @@ def write(
     model: Evaluable | None = None,
     parametrization: str = "hybrid",
     points: int = 32,
-) -> None:
+    *,
+    allow_sparse: bool = False,
+) -> str:
     """The HDF5 file of ``run`` at ``path``, with ``model`` (the run's reconstruction)
-    on the grid of ``parametrization`` when given."""
+    on the grid of ``parametrization`` when given; `write_grid`'s warning line."""
     h5py = _h5py()
     with h5py.File(path, "w") as h5:
         write_run(h5, run)
         if model is not None:
-            write_grid(h5, model, parametrization, points)
+            return write_grid(h5, model, parametrization, points, allow_sparse=allow_sparse)
+    return ""
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
@@ -184,12 +196,25 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     if options.grid is not None:
         grid = options.grid
         _, surface = reconstructed(run, options.method, grid)
-        out.write_with(lambda path: write(path, run, surface, grid, options.grid_points))
+        notes: list[str] = []
+
+        def write_to(path: Path) -> None:
+            notes.append(
+                write(
+                    path, run, surface, grid, options.grid_points, allow_sparse=options.allow_sparse
+                )
+            )
+
+        out.write_with(write_to)
         return (
             f"wrote {len(run)} samples, {len(run.events)} events, the plan and the "
             f"{options.method} reconstruction on a {options.grid_points}-point {grid} grid "
             f"to {out.path} (hdf5)"
-        )
+        ) + "".join(f"\n{n}" for n in notes if n)
+
+    def write_samples(path: Path) -> None:
+        write(path, run)
+
     with step(f"writing {len(run):,} samples"):
-        out.write_with(lambda path: write(path, run))
+        out.write_with(write_samples)
     return f"wrote {len(run)} samples, {len(run.events)} events and the plan to {out.path} (hdf5)"

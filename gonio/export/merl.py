@@ -24,7 +24,7 @@ import numpy as np
 from gonio import params
 from gonio.brdf import merl
 from gonio.errors import GonioError
-from gonio.export.steps import evaluated, reconstructed, step
+from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
 from gonio.store.read import Run
 from gonio.types import BoolArray, FloatArray, Surface
@@ -84,9 +84,18 @@ def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     )
 
 
-def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = False) -> str:
-    """Fill the table and write it to ``out``; the one-line summary."""
+def write(
+    out: PendingOutput,
+    reconstruction: Surface,
+    *,
+    extrapolate: bool = False,
+    allow_sparse: bool = False,
+) -> str:
+    """Fill the table and write it to ``out``; the one-line summary (and a warning line
+    for a sparse run written with ``allow_sparse``; `sparse_note`)."""
     table = fill(reconstruction, extrapolate=extrapolate)
+    paired = merl.BINS - table.no_pair
+    note = sparse_note(paired - table.unsupported, paired, "MERL bins", allow=allow_sparse)
     with step(f"writing {merl.FILE_SIZE / 1e6:.0f} MB"):
         out.write_bytes(merl.to_bytes(table.values, table.missing))
     written = merl.BINS - int(np.count_nonzero(table.missing))
@@ -98,10 +107,10 @@ def write(out: PendingOutput, reconstruction: Surface, *, extrapolate: bool = Fa
     return (
         f"wrote {out.path} (MERL, {merl.FILE_SIZE} bytes): {written} of {merl.BINS} bins, "
         f"{table.no_pair} without a direction pair, {what}"
-    )
+    ) + (f"\n{note}" if note else "")
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     extrapolate = options.merl_fill == "extrapolate"
     _, surface = reconstructed(run, options.method, extrapolate="nearest" if extrapolate else None)
-    return write(out, surface, extrapolate=extrapolate)
+    return write(out, surface, extrapolate=extrapolate, allow_sparse=options.allow_sparse)

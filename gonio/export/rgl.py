@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike
 from gonio.brdf import rgl, tensor_file
 from gonio.brdf.marginal import Marginal2D, Table
 from gonio.errors import GonioError
-from gonio.export.steps import evaluated, reconstructed, step
+from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
 from gonio.radiometry.bands import LUMINANCE
 from gonio.store.read import Run
@@ -257,8 +257,10 @@ def write(
     description: str = "",
     theta_nodes: int = THETA_I,
     samples: int = SAMPLES,
+    allow_sparse: bool = False,
 ) -> str:
-    """Compute the fields (`fields`) and write the file to ``out``; the one-line summary."""
+    """Compute the fields (`fields`) and write the file to ``out``; the one-line summary
+    (and a warning line for a sparse run written with ``allow_sparse``; `sparse_note`)."""
     table, counter = fields(
         surface,
         band=band,
@@ -267,6 +269,8 @@ def write(
         theta_nodes=theta_nodes,
         samples=samples,
     )
+    supported = counter.pairs - counter.unsupported
+    note = sparse_note(supported, counter.pairs, "RGL pairs", allow=allow_sparse)
     with step("writing"):
         data = tensor_file.to_bytes(table)
         out.write_bytes(data)
@@ -277,6 +281,7 @@ def write(
         f"elevations × {n[2]}×{n[3]} samples, {kind}; {counter.unsupported} of "
         f"{counter.pairs} pairs evaluated outside the measured support (extrapolated)"
         + (f", {counter.bad} non-finite values written 0" if counter.bad else "")
+        + (f"\n{note}" if note else "")
     )
 
 
@@ -284,4 +289,11 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     measured, surface = reconstructed(run, options.method, extrapolate="nearest")
     text = f"gonio export of {run.path.name}: {options.method} reconstruction, "
     text += f"{measured.band} band"
-    return write(out, surface, band=measured.band, color=options.rgl_color, description=text)
+    return write(
+        out,
+        surface,
+        band=measured.band,
+        color=options.rgl_color,
+        description=text,
+        allow_sparse=options.allow_sparse,
+    )

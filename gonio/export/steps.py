@@ -12,6 +12,8 @@ import numpy as np
 
 from gonio import progress
 from gonio.analysis.measured import Measured
+from gonio.errors import GonioError
+from gonio.export import MIN_SUPPORTED
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.result import values_and_support
 from gonio.store.read import Run
@@ -19,6 +21,25 @@ from gonio.types import BoolArray, Evaluable, FloatArray, Surface
 
 #: Pairs evaluated at once by `evaluated`: each block advances its bar.
 BLOCK = 1 << 16
+
+
+def sparse_note(supported: int, total: int, what: str, *, allow: bool) -> str:
+    """`GonioError` (one line) when the run's samples support less than
+    `MIN_SUPPORTED` of the ``total`` ``what`` of a grid, unless ``allow``: then the
+    warning line to print (``"warning: …"``); "" when enough is supported."""
+    share = supported / total if total else 0.0
+    if share >= MIN_SUPPORTED:
+        return ""
+    said = (
+        f"the run's samples support {share:.1%} of the {what} ({supported:,} of {total:,}); "
+        f"the rest would be the reconstruction's extrapolation"
+    )
+    if not allow:
+        raise GonioError(
+            f"{said}: expected at least {MIN_SUPPORTED:.0%} (measure more targets, or give "
+            "--allow-sparse to export anyway)"
+        )
+    return f"warning: {said} (below {MIN_SUPPORTED:.0%}; written as asked by --allow-sparse)"
 
 
 def step(description: str) -> AbstractContextManager[progress.Progress]:

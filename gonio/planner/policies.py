@@ -13,6 +13,21 @@ from pydantic import Field
 
 from gonio.config import Strict
 
+#: The longest interval a policy gives in minutes (a week): a calibration or a health
+#: check less often than that is none (``null``), and a pause longer than that is a run
+#: left unattended.
+MAX_MINUTES = 7 * 24 * 60.0
+#: The longest wait for a hot motor to cool (a day): a Dynamixel's housing cools with a
+#: time constant of minutes, so a motor still hot after a day is not cooling.
+MAX_COOL_DOWN_MINUTES = 24 * 60.0
+#: The most targets between two calibrations or health checks: more than a plan holds
+#: (`gonio.planner.placement.MAX_TARGETS`, a million).
+MAX_EVERY_SAMPLES = 1_000_000
+#: The shortest and the longest health poll while paused (s): more often than ten times
+#: a second only loads the bus (and a simulated clock would poll without end), less often
+#: than hourly leaves a cooled motor waiting.
+POLL_RANGE_S = (0.1, 3600.0)
+
 
 class CalibrationSpec(Strict):
     """When the reference standard is read: always at the start and at the end of a
@@ -22,11 +37,15 @@ class CalibrationSpec(Strict):
     (at least 2: their spread is what the uncertainty of every sample is scaled by)."""
 
     every_samples: int | None = Field(
-        None, ge=1, description="Read the standard again after this many targets (none: never)."
+        None,
+        ge=1,
+        le=MAX_EVERY_SAMPLES,
+        description="Read the standard again after this many targets (none: never).",
     )
     every_minutes: float | None = Field(
         None,
         gt=0,
+        le=MAX_MINUTES,
         description="Read the standard again after this much run time (min; none: never).",
     )
     dark: bool = Field(
@@ -56,6 +75,7 @@ class MotorFaultSpec(Strict):
     cool_down_minutes: float = Field(
         30.0,
         gt=0,
+        le=MAX_COOL_DOWN_MINUTES,
         description="recover: the longest wait for a hot motor to cool below the rig's "
         "health.max_temperature_c (min); then stop.",
     )
@@ -98,14 +118,28 @@ class HealthSpec(Strict):
     clears, or ends resumable after ``pause_timeout_minutes``."""
 
     every_samples: int | None = Field(
-        100, ge=1, description="Check after this many targets (none: not by count)."
+        100,
+        ge=1,
+        le=MAX_EVERY_SAMPLES,
+        description="Check after this many targets (none: not by count).",
     )
     every_minutes: float | None = Field(
-        5.0, gt=0, description="Check after this much run time (min; none: not by time)."
+        5.0,
+        gt=0,
+        le=MAX_MINUTES,
+        description="Check after this much run time (min; none: not by time).",
     )
-    poll_s: float = Field(10.0, gt=0, description="While paused, check again this often (s).")
+    poll_s: float = Field(
+        10.0,
+        ge=POLL_RANGE_S[0],
+        le=POLL_RANGE_S[1],
+        description="While paused, check again this often (s).",
+    )
     pause_timeout_minutes: float = Field(
-        30.0, gt=0, description="End the run resumable after a pause this long (min)."
+        30.0,
+        gt=0,
+        le=MAX_MINUTES,
+        description="End the run resumable after a pause this long (min).",
     )
 
 

@@ -49,6 +49,12 @@ class JournalError(GonioError):
     """The journal cannot be created, opened or written; the message is one line."""
 
 
+class UnjournaledValue(GonioError):
+    """A value the journal does not store (NaN, an infinity, a non-JSON value): a fault
+    of the value's maker, so the run ends ``aborted`` (its session ended in the journal)
+    rather than as a journal that cannot be written."""
+
+
 _EVENTS_SQL = """CREATE TABLE events (
     id INTEGER PRIMARY KEY AUTOINCREMENT,
     session INTEGER NOT NULL,
@@ -97,8 +103,38 @@ _SESSIONS_SQL = """CREATE TABLE sessions (
 
 
 def dumps(value: Any) -> str:
-    """JSON text of a journal value (no NaN: a journal never stores one)."""
-    return json.dumps(value, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    """JSON text of a journal value (no NaN nor infinity: a journal never stores one;
+    `UnjournaledValue` naming where in ``value`` one is)."""
+    try:
+        return json.dumps(value, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    except (ValueError, TypeError) as exc:
+        where, bad = _unjournaled(value, "")
+        shown = repr(bad)[:40]
+        raise UnjournaledValue(
+            f"cannot journal {where.lstrip('.') or 'a value'} = {shown}: the journal stores "
+            f"finite numbers, text, lists and mappings only ({exc})"
+        ) from None
+
+
+def _unjournaled(value: Any, where: str) -> tuple[str, Any]:
+    """(dotted path, value) of the first part of ``value`` JSON cannot hold exactly."""
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            found = _unjournaled(item, f"{where}.{key}")
+            if found[0]:
+                return found
+        return "", None
+    if isinstance(value, list | tuple):
+        for i, item in enumerate(value):
+            found = _unjournaled(item, f"{where}.{i}")
+            if found[0]:
+                return found
+        return "", None
+    if value is None or isinstance(value, str | bool | int):
+        return "", None
+    if isinstance(value, float) and value - value == 0:
+        return "", None
+    return where or ".", value
 
 
 def _lock(path: Path) -> int:

@@ -17,12 +17,12 @@ import pytest
 pytest.importorskip("pymeasure")
 
 from pymeasure.instruments.keithley import Keithley2000, Keithley6517B
-from pymeasure.instruments.srs import SR830, SR860
+from pymeasure.instruments.srs import SR510, SR830, SR860
 from pymeasure.instruments.thorlabs import ThorlabsPM100USB
 from pymeasure.test import expected_protocol
 
 from drivers.errors import DetectorError
-from drivers.pymeasure import SETTLE_TAU, boundary
+from drivers.pymeasure import PRESETS, PROPERTIES, SETTLE_TAU, boundary
 from drivers.pymeasure.config import settle_tau
 from drivers.pymeasure.detector import PyMeasureDetector, PyMeasureDetectorError
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
@@ -30,6 +30,7 @@ from sim.clock import ManualClock, ScaledClock
 from sim.visa_instruments import SR830 as EmulatedSR830
 from sim.visa_instruments import EmulatedInstrument
 from sim.visa_instruments import Keithley2000 as Emulated2000
+from tools import pymeasure_properties
 
 SENSOR = "S120C,12345678,01-Jan-2024,1,18,289"
 
@@ -204,6 +205,31 @@ def test_a_class_that_does_not_exist_is_one_line_at_open() -> None:
     ):
         det.open()
     assert not det.is_open
+
+
+def test_a_property_another_class_lacks_is_one_line_at_open_before_any_command() -> None:
+    spec = PyMeasureInterfaceSpec.model_validate({
+        "kind": "pymeasure", "instrument": "pymeasure.instruments.srs.SR510",
+        "resource": "GPIB0::8::INSTR", "reading": "output", "exposure": {"kind": "wait"},
+        "settings": {"sensitivty": 0.01},
+    })  # fmt: skip
+    with expected_protocol(SR510, []) as instrument:  # no command is written
+        det = PyMeasureDetector(spec.config(), connect=lambda _: instrument)
+        with pytest.raises(PyMeasureDetectorError) as caught:
+            det.open()
+    assert str(caught.value) == (
+        "GPIB0::8::INSTR: settings.sensitivty: SR510 has no property 'sensitivty'; "
+        "did you mean 'sensitivity'?"
+    )
+    assert not det.is_open
+
+
+def test_the_presets_properties_are_those_pymeasure_declares() -> None:
+    """drivers/pymeasure/properties.py (what the rig file is checked against without
+    PyMeasure) is what the installed PyMeasure's classes declare; when not, run
+    ``python -m tools.pymeasure_properties``."""
+    assert pymeasure_properties.PATH.read_text() == pymeasure_properties.text()
+    assert PROPERTIES.keys() == PRESETS.keys()
 
 
 # -- the emulated instruments misbehaving -------------------------------------------------

@@ -30,6 +30,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -438,6 +439,16 @@ def _merl_truncated(path: Path) -> None:
         f.truncate(merl.FILE_SIZE - 8)
 
 
+def _merl_absurd_values(path: Path) -> None:
+    """A well-formed MERL file whose values are finite but near float64's largest."""
+    values = np.full(3 * merl.BINS, 1e307)
+    path.write_bytes(struct.pack("<3i", *merl.SHAPE) + values.astype("<f8").tobytes())
+
+
+def _utia_absurd_values(path: Path) -> None:
+    path.write_bytes(np.full(utia.FILE_SIZE // 8, 1e306).astype("<f8").tobytes())
+
+
 def _utia_truncated(path: Path) -> None:
     with open(path, "wb") as f:
         f.truncate(utia.FILE_SIZE - 1)
@@ -479,7 +490,27 @@ MATERIALS: dict[str, tuple[str, str, Callable[[Path], None], str]] = {
     ),
     "MERL: truncated": ("merl", ".binary", _merl_truncated, "not a MERL BRDF file"),
     "MERL: zero bytes": ("merl", ".binary", lambda p: p.write_bytes(b""), "0 bytes"),
+    "MERL: values of 1e307": (
+        "merl",
+        ".binary",
+        _merl_absurd_values,
+        "MERL values up to 1.11e+304 (4374000 beyond 1e+08); expected at most 1e+08",
+    ),
     "UTIA: truncated": ("utia", ".bin", _utia_truncated, "not a UTIA BRDF file"),
+    "UTIA: values of 1e306": (
+        "utia",
+        ".bin",
+        _utia_absurd_values,
+        "UTIA values up to 1e+306 (248832 beyond 1e+08); expected at most 1e+08",
+    ),
+    "factored: values of 1e307": (
+        "factored",
+        ".txt",
+        lambda p: p.write_text(
+            _factored((1, 1, 1, 1, 1, 1, 1), rows=12).replace("1 1\n", "1e307\n")
+        ),
+        "F_0: row 0: values up to 1e+307",
+    ),
     "RGL: a shape of 2^40 × 2^40": (
         "rgl",
         ".bsdf",

@@ -8,6 +8,7 @@ a motor cools pauses the run, the target in flight measured on resume."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 from collections.abc import Callable
@@ -17,13 +18,18 @@ from typing import Any
 import numpy as np
 import pytest
 
+from gonio.acquire import recovery
 from gonio.acquire.recovery import describe, summaries
 from gonio.acquire.signals import RunInterrupted
+from gonio.config import ConfigError
+from gonio.planner.files import load_plan_source
+from gonio.store import UnjournaledValue
+from gonio.store.journal import dumps
 from gonio.store.read import Run, open_run
 from gonio.workflows import session
 from sim.clock import ManualClock
 from tests.conftest import CliResult
-from tests.support.acquire import RunFiles
+from tests.support.acquire import RunFiles, plan_yaml
 
 RECOVER = {"on_fault": {"motor": {"action": "recover", "max_recoveries": 2}}}
 
@@ -189,3 +195,55 @@ def test_an_electrical_shock_is_never_recovered(
     run = ended_by_fault(files, tmp_path / "run.sqlite", 5)
     assert [s for _, _, s in steps(run)] == ["diagnosed", "failed"]
     assert "never recovered unattended" in run.of_kind("recovery")[-1].data["reason"]
+
+
+@pytest.mark.parametrize(
+    ("policy", "expected"),
+    [
+        (
+            {"on_fault": {"motor": {"cool_down_minutes": "1e308"}}},
+            "on_fault.motor.cool_down_minutes",
+        ),
+        ({"on_fault": {"motor": {"cool_down_minutes": 1e308}}}, "on_fault.motor.cool_down_minutes"),
+        ({"health": {"pause_timeout_minutes": 1e300}}, "health.pause_timeout_minutes"),
+        ({"health": {"every_minutes": 1e300}}, "health.every_minutes"),
+        ({"health": {"poll_s": 1e-300}}, "health.poll_s"),
+        ({"health": {"every_samples": 10**15}}, "health.every_samples"),
+        ({"calibration": {"every_minutes": 1e300}}, "calibration.every_minutes"),
+        ({"calibration": {"every_samples": 10**15}}, "calibration.every_samples"),
+    ],
+)
+def test_an_absurd_policy_number_is_refused_at_load(
+    tmp_path: Path, policy: dict[str, Any], expected: str
+) -> None:
+    path = tmp_path / "plan.yaml"
+    path.write_text(plan_yaml(acquisition=policy))
+    with pytest.raises(ConfigError) as caught:
+        load_plan_source(path)
+    message = str(caught.value)
+    assert (
+        message.startswith(f"{path}:") and f": acquisition.{expected}: Input should be" in message
+    )
+    assert "\n" not in message
+
+
+def test_a_value_the_journal_cannot_store_ends_the_run_aborted_and_ended(
+    tmp_path: Path, run_files: Callable[..., RunFiles], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Defence in depth: an event value no configuration bound caught (an infinity) ends
+    the session ``aborted`` with a message naming it, never a run left not ended."""
+    files = run_files(12, acquisition=RECOVER, faults=[
+        {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
+    ])  # fmt: skip
+    monkeypatch.setattr(recovery, "_condition", lambda health: {"temperature_c": math.inf})
+    path = tmp_path / "run.sqlite"
+    outcome = files.start(path)
+    assert outcome.report.outcome == "aborted"
+    assert outcome.report.message.startswith("cannot journal temperature_c = inf: ")
+    assert open_run(path).sessions[-1].outcome == "aborted"
+
+
+def test_the_journal_refuses_a_non_finite_number_naming_where() -> None:
+    with pytest.raises(UnjournaledValue, match=r"cannot journal a\.1\.b = nan: "):
+        dumps({"a": [1.0, {"b": math.nan}]})
+    assert dumps({"a": [1e308, -0.0]}) == '{"a":[1e+308,-0.0]}'

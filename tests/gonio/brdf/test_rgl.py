@@ -221,6 +221,11 @@ def test_every_truncation_is_refused(tmp_path_factory, cut: int) -> None:
         ({"sigma": np.zeros((2, 5), np.float32)}, "field sigma: expected positive"),
         ({"vndf": np.zeros((1, 3, 6, 6), np.float32)}, "no slice of zero density"),
         ({"jacobian": np.ones(2, np.uint8)}, "field jacobian: expected shape [1]"),
+        (
+            {"rgb": np.full((1, 3, 3, 4, 4), 3e38, np.float32)},
+            "RGL field rgb: values up to 3e+38 (144 beyond 1e+08); expected at most 1e+08",
+        ),
+        ({"ndf": np.full((2, 5), -1e30, np.float32)}, "RGL field ndf: values up to 1e+30"),
     ],
 )
 def test_a_bad_field_is_one_line_naming_it(tmp_path: Path, change, words: str) -> None:

@@ -24,6 +24,7 @@ from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file
+from tests.support.process import gonio_process
 from tests.support.rigs import rig_with
 
 Gonio = Callable[..., CliResult]
@@ -199,3 +200,19 @@ def test_a_run_the_reference_saturates_names_that_cause(
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "the reference standard saturates the detector" in r.stderr
     assert "lower the source's power" in r.stderr
+
+
+def test_a_run_that_measured_nothing_does_not_exit_0(tmp_path: Path) -> None:
+    """A real process: the first target's axes never settle, the run ends with none
+    measured; exit 3 and one line on stderr saying why."""
+    spec = (CONFIGS / "scenes" / "matte.yaml").read_text().replace("../rigs/", f"{CONFIGS}/rigs/")
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(spec + "faults:\n  - {kind: motion_timeout, at: [0]}\n")
+    plan = plan_file(tmp_path, target=8)
+    result = gonio_process("simulate", str(plan), "--scene", str(scene), "-q")
+    assert result.returncode == 3, result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stderr.splitlines() == [
+        "gonio: the run measured nothing (outcome fault, 0 of 8 targets): axes did not settle "
+        "within 600 s (an axis is blocked: injected at sample 0); holding them"
+    ]

@@ -1,6 +1,7 @@
 """The rig file's ``detector.interface: {kind: pymeasure, ...}``: presets filled in,
-overrides taken, and each mistake one line naming the file and the field (checked
-without PyMeasure)."""
+overrides taken, and each mistake one line naming the file and the field: a number
+beyond what an instrument takes, and (PyMeasure being installed) a property the
+instrument class does not declare, with the nearest it does."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from gonio.config import ConfigError
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from tests.conftest import RIG_FILES
+from tests.support.process import refused
 
 RIGS = RIG_FILES["arch"].parent
 LOCKIN = yaml.safe_load((RIGS / "arch_lockin.yaml").read_text())
@@ -86,6 +88,54 @@ def test_fields_override_the_preset() -> None:
         ({"instrument": "mylab.Photometer"}, "reading", "no preset"),
         ({"reading": "not a name"}, "reading", "not a property name"),
         ({"timeout_s": 0}, "timeout_s", "greater than 0"),
+        ({"timeout_s": "1e300"}, "timeout_s", "expected at most 1e+10 s (got '1e300')"),
+        ({"timeout_s": 1e300}, "timeout_s", "expected at most 1e+10 s"),
+        ({"timeout_s": 7200}, "timeout_s", "less than or equal to 3600"),
+        ({"settings": {"filter_slpe": 24}}, "settings.filter_slpe", "did you mean 'filter_slope'"),
+        ({"settings": {"sensitivity": "1e300"}}, "settings.sensitivity", "from 1e-15 to 1e+09"),
+        ({"settings": {"sensitivity": -1e-300}}, "settings.sensitivity", "from 1e-15 to 1e+09"),
+        ({"reading": "magnitud"}, "reading", "SR830 has no property 'magnitud'; did you mean"),
+        ({"range_property": "sensitivty"}, "range_property", "did you mean 'sensitivity'"),
+        ({"baud_rate": 10**9}, "baud_rate", "less than or equal to 12000000"),
+        ({"baud_rate": 0}, "baud_rate", "greater than or equal to 50"),
+        ({"full_scale": 1e300}, "full_scale", "less than or equal to 1000000000"),
+        ({"overload_mask": 2**40}, "overload_mask", "less than or equal to 4294967295"),
+        (
+            {
+                "exposure": {
+                    "kind": "time_constant",
+                    "property": "time_constant",
+                    "settle_tau": 1e300,
+                }
+            },
+            "exposure.settle_tau",
+            "less than or equal to 100",
+        ),
+        (
+            {"exposure": {"kind": "time_constant", "property": "time_constnt"}},
+            "exposure.property",
+            "did you mean 'time_constant'",
+        ),
+        (
+            {"exposure": {"kind": "time_constant", "property": "time_constant", "values": [1e300]}},
+            "exposure.values.0",
+            "less than or equal to 1000000000",
+        ),
+        (
+            {"exposure": {"kind": "averaging", "command": "C {count}", "max_count": 10**12}},
+            "exposure.max_count",
+            "less than or equal to 10000000",
+        ),
+        (
+            {"exposure": {"kind": "nplc", "property": "x", "line_hz": 1e300}},
+            "exposure.line_hz",
+            "less than or equal to 400",
+        ),
+        (
+            {"exposure": {"kind": "nplc", "property": "x", "nplc_range": [0.01, 1e300]}},
+            "exposure.nplc_range.1",
+            "less than or equal to 1000",
+        ),
         ({"frobnicate": 1}, "frobnicate", "Extra inputs"),
     ],
 )
@@ -103,3 +153,15 @@ def test_a_mistake_is_one_line_naming_the_field(
     message = str(info.value)
     assert "\n" not in message and message.startswith(f"{path}:")
     assert f"detector.interface.{field}" in message and says in message, message
+
+
+def test_a_misspelled_setting_stops_gonio_plan_in_one_line(tmp_path: Path) -> None:
+    rig = tmp_path / "rig.yaml"
+    text = (RIGS / "arch_lockin.yaml").read_text()
+    rig.write_text(text.replace("{filter_slope: 24}", "{filter_slpe: 24}"))
+    line = refused(tmp_path, "plan", "configs/plans/quick.yaml", "--rig", str(rig), "-o",
+                   str(tmp_path / "plan.csv"))  # fmt: skip
+    assert line == (
+        f"gonio: error: {rig}:72: detector.interface.settings.filter_slpe: SR830 has no "
+        "property 'filter_slpe'; did you mean 'filter_slope'?"
+    )
