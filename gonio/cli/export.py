@@ -6,13 +6,44 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
+from gonio.cli import arguments
 from gonio.reconstruct.methods import DEFAULT_METHOD, names
+
+#: The most grid points per coordinate the option takes; the memory the grid needs
+#: bounds it further (`gonio.export.check_options`).
+MAX_GRID_POINTS = 10_000
+
+
+def _grid_points(text: str) -> int:
+    """A whole number of points, 1 to 10 000, within the memory.
+
+    The bound is `MAX_GRID_POINTS`; the grid's memory is checked before any work."""
+    return arguments.count(text, "grid points", MAX_GRID_POINTS)
+
+
+def _terms(most: int, what: str) -> Callable[[str], int]:
+    """The type of a count of a factorization's terms, 1 to ``most``."""
+
+    def terms(text: str) -> int:
+        return arguments.count(text, what, most)
+
+    terms.__doc__ = f"A whole number of {what}, 1 to {most}."
+    return terms
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    from gonio.export import ALTA_PARAMS, FORMATS, MERL_FILLS, MIN_SUPPORTED, RGL_COLORS
+    from gonio.export import (
+        ALTA_PARAMS,
+        FORMATS,
+        MAX_INNER,
+        MAX_OUTER,
+        MERL_FILLS,
+        MIN_SUPPORTED,
+        RGL_COLORS,
+    )
 
     p = sub.add_parser(
         "export",
@@ -52,7 +83,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "parametrization's isotropic coordinates",
     )
     p.add_argument(
-        "--grid-points", type=int, default=32, help="hdf5: grid points per coordinate (default 32)"
+        "--grid-points",
+        type=_grid_points,
+        default=32,
+        help="hdf5: grid points per coordinate, as many as the memory holds (default 32)",
     )
     p.add_argument(
         "--method",
@@ -60,10 +94,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="merl, rgl, factored, hdf5 --grid: the reconstruction tabulated "
         f"({', '.join(names())}; default {DEFAULT_METHOD})",
     )
-    p.add_argument("--outer", type=int, default=2, help="factored: outer terms J (default 2)")
     p.add_argument(
-        "--inner", type=int, default=2, help="factored: inner terms K per outer term (default 2)"
-    )
+        "--outer", type=_terms(MAX_OUTER, "outer terms"), default=2,
+        help="factored: outer terms J (default 2)",
+    )  # fmt: skip
+    p.add_argument(
+        "--inner", type=_terms(MAX_INNER, "inner terms"), default=2,
+        help="factored: inner terms K per outer term (default 2)",
+    )  # fmt: skip
     p.add_argument(
         "--allow-sparse",
         action="store_true",

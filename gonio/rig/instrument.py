@@ -34,6 +34,18 @@ from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 
+#: Lengths on the sample (mm): a micrometre to 10 m, beyond any laboratory rig.
+LENGTH_RANGE_MM = (1e-3, 1e4)
+#: A point source's distance from the sample (mm): a millimetre (nearer, a lamp is no
+#: point) to 100 m.
+DISTANCE_RANGE_MM = (1.0, 1e5)
+#: A streaming detector's rates (Hz): a reading every 100 s to 10⁵ a second, beyond what
+#: a serial line carries (12 Mbaud of 16-byte lines is 75 000 lines a second).
+STREAM_RATE_RANGE_HZ = (0.01, 1e5)
+#: The largest count a detector's full scale may name: 10¹⁸, within float64's exact
+#: integers' reach of a 64-bit counter.
+MAX_FULL_SCALE = 1e18
+
 #: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
 Command = Annotated[str, InSchema(pattern=r"\S")]
 
@@ -188,7 +200,8 @@ class LightSpec(Strict):
     )
     distance_mm: float | None = Field(
         None,
-        gt=0,
+        ge=DISTANCE_RANGE_MM[0],
+        le=DISTANCE_RANGE_MM[1],
         description="The point source's distance from the sample centre (mm); only with kind: "
         "point, and required then.",
     )
@@ -253,10 +266,16 @@ class SerialStreamSpec(Strict):
         "optional device_t (the device's time of the window's end), std, status, saturated.",
     )
     rate_hz: float = Field(
-        _stream_default("rate_hz"), gt=0, description="The rate used when none is asked (Hz)."
+        _stream_default("rate_hz"),
+        ge=STREAM_RATE_RANGE_HZ[0],
+        le=STREAM_RATE_RANGE_HZ[1],
+        description="The rate used when none is asked (Hz).",
     )
     max_rate_hz: float = Field(
-        _stream_default("max_rate_hz"), gt=0, description="The highest rate it streams at (Hz)."
+        _stream_default("max_rate_hz"),
+        ge=STREAM_RATE_RANGE_HZ[0],
+        le=STREAM_RATE_RANGE_HZ[1],
+        description="The highest rate it streams at (Hz).",
     )
     device_time_s: float = Field(
         _stream_default("device_time_s"),
@@ -322,6 +341,7 @@ class SerialInterfaceSpec(Strict):
     full_scale: float | None = Field(
         _driver_default("full_scale"),
         gt=0,
+        le=MAX_FULL_SCALE,
         description="Counts at or above which a reading is saturated (none: no such limit).",
     )
     reset_banner: str | None = Field(
@@ -468,7 +488,8 @@ class ReferenceSpec(Strict):
     )
     diameter_mm: float | None = Field(
         None,
-        gt=0,
+        ge=LENGTH_RANGE_MM[0],
+        le=LENGTH_RANGE_MM[1],
         description="The standard's diameter (mm; none: constraints.sample_diameter_mm, the "
         "standard read in the sample holder).",
     )

@@ -15,7 +15,7 @@ from pydantic import Field, field_validator, model_validator
 from drivers.dynamixel.control_table import BAUD_RATES, MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
-from gonio.rig.instrument import DetectorSpec, LightSpec, ReferenceSpec
+from gonio.rig.instrument import LENGTH_RANGE_MM, DetectorSpec, LightSpec, ReferenceSpec
 
 #: The largest magnitude of a vector's component: its square stays far from overflow.
 COMPONENT_LIMIT = 1e100
@@ -32,8 +32,6 @@ GEAR_RATIO_RANGE = (0.01, 10_000.0)
 #: the fastest is beyond any motor (an X-series at 1:100 step-up turns 1.4·10⁵ °/s).
 VELOCITY_RANGE_DEG_S = (1e-3, 1e6)
 ACCELERATION_RANGE_DEG_S2 = (1e-3, 1e8)
-#: Lengths on the sample (mm): a micrometre to 10 m, beyond any laboratory rig.
-LENGTH_RANGE_MM = (1e-3, 1e4)
 #: A vector's JSON Schema says what `AxisSpec` checks: not the zero vector.
 NonZero = Annotated[Vector, InSchema(**{"not": {"const": [0, 0, 0]}})]
 

@@ -53,8 +53,8 @@ def test_gonio_export_refuses_in_one_line_and_writes_nothing(
     line = refused(tmp_path, "export", str(run_file), "--format", "factored", "-o", str(out),
                    "--outer", "100000")  # fmt: skip
     assert line == (
-        f"gonio: error: --outer 100000 --inner 2: expected 1 to {MAX_OUTER} outer terms "
-        "(the rank of the 512 × 2048 table they factor) and 1 to 32 inner terms"
+        "gonio: error: export: argument --outer: expected a whole number of outer terms in "
+        f"[1, {MAX_OUTER}], got '100000' (see gonio export --help)"
     )
 
 
@@ -62,6 +62,9 @@ def test_in_process_hdf5_grid_refusal(
     run_file: Path, tmp_path: Path, run_gonio: Callable[..., CliResult]
 ) -> None:
     result = run_gonio("export", str(run_file), "--format", "hdf5", "--grid", "hybrid",
-                       "--grid-points", "100000", "-o", str(tmp_path / "out.h5"))  # fmt: skip
+                       "--grid-points", "5000", "-o", str(tmp_path / "out.h5"))  # fmt: skip
     assert result.returncode == 2 and len(result.stderr.strip().splitlines()) == 1
-    assert "needs about 165 PiB of memory" in result.stderr and listing(tmp_path) == []
+    assert "needs about 21.1 TiB of memory" in result.stderr and listing(tmp_path) == []
+    result = run_gonio("export", str(run_file), "--format", "hdf5", "--grid", "hybrid",
+                       "--grid-points", "100000", "-o", str(tmp_path / "out.h5"))  # fmt: skip
+    assert result.returncode == 2 and "points in [1, 10,000], got '100000'" in result.stderr
