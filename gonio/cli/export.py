@@ -105,9 +105,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--allow-sparse",
         action="store_true",
-        help="merl, rgl, hdf5 --grid: write the grid even when the run's samples support "
-        f"less than {MIN_SUPPORTED * 100:.0f}%% of it (a warning on stderr gives the share); "
-        "without it such an export is refused",
+        help="merl, rgl, factored, hdf5 --grid: write the grid even from fewer samples than "
+        f"one simplex, or when they support less than {MIN_SUPPORTED * 100:.0f}%% of it (a "
+        "warning on stderr gives the share); without it such an export is refused",
     )
     p.add_argument(
         "-q", "--quiet", action="store_true", help="no progress display; print nothing on success"

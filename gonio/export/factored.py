@@ -30,7 +30,7 @@ import numpy as np
 
 from gonio.brdf import factored_file as ff
 from gonio.errors import GonioError
-from gonio.export.steps import evaluated, reconstructed, step
+from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput, reserve_output
 from gonio.params.cases import direction
 from gonio.store.read import Run
@@ -71,18 +71,25 @@ class Factorization:
 
 def table(model: Evaluable, res: Resolution) -> FloatArray:
     """y = f cos θi on the bin centres: (θo, φo, θh, φh), plus (3,) if f is RGB."""
+    return supported_table(model, res)[0]
+
+
+def supported_table(model: Evaluable, res: Resolution) -> tuple[FloatArray, int | None, int]:
+    """`table`, the number of its lit bins (ωi above the horizon) the model's data
+    supports (None when the model does not say) and the number of lit bins."""
     wo = _centres(res.theta_out, res.phi_out)[:, :, None, None, :]
     h = _centres(res.theta_p, res.phi_p)[None, None, :, :, :]
     d = np.sum(wo * h, axis=-1, keepdims=True)
     wi = 2.0 * d * h - wo
     wo = np.broadcast_to(wo, wi.shape)
     lit = wi[..., 2] > 0.0
-    values, _ = evaluated(model, wi[lit], wo[lit], "evaluating the table to factor")
+    values, support = evaluated(model, wi[lit], wo[lit], "evaluating the table to factor")
     cos_i = wi[lit][:, 2]
     rgb = values.ndim == 2
     out = np.zeros(lit.shape + values.shape[1:], dtype=np.float64)
     out[lit] = values * (cos_i[:, None] if rgb else cos_i)
-    return out
+    supported = None if support is None else int(np.count_nonzero(support))
+    return out, supported, int(np.count_nonzero(lit))
 
 
 def _centres(n_theta: int, n_phi: int) -> FloatArray:
@@ -137,9 +144,20 @@ def factorize(
 ) -> Factorization:
     """The factored representation of ``model`` with J = ``outer``, K = ``inner``."""
     res = res or Resolution()
+    check_terms(outer, inner, res)
+    return factorize_table(table(model, res), outer, inner, res, seed=seed, max_iter=max_iter)
+
+
+def check_terms(outer: int, inner: int, res: Resolution) -> None:
+    """`GonioError` unless J ≥ 1 and 1 ≤ K ≤ the inner matrix's smaller side."""
     if outer < 1 or inner < 1 or inner > min(res.theta_p, res.phi_p):
         raise GonioError(f"factored: need J ≥ 1 and 1 ≤ K ≤ {min(res.theta_p, res.phi_p)}")
-    y = table(model, res)
+
+
+def factorize_table(
+    y: FloatArray, outer: int, inner: int, res: Resolution, *, seed: int = 0, max_iter: int = 500
+) -> Factorization:
+    """`factorize` of a `table` ``y`` already made."""
     rgb = y.ndim == 5
     rows, cols = res.theta_out * res.phi_out, res.theta_p * res.phi_p
     intensity = (y.mean(axis=-1) if rgb else y).reshape(rows, cols)
@@ -214,14 +232,21 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     sample outside the measured support: the factorization needs every bin) factored
     into ``out`` and its CDF file beside it (``out`` + ``.cdf``)."""
     cdf_path = out.path.with_name(out.path.name + ff.CDF_SUFFIX)
+    res = Resolution()
+    check_terms(options.outer, options.inner, res)
     with reserve_output(cdf_path, "factored CDF file") as cdfs:
-        _, surface = reconstructed(run, options.method, extrapolate="nearest")
-        result = factorize(surface, options.outer, options.inner, seed=0)
+        _, surface = reconstructed(
+            run, options.method, extrapolate="nearest", allow_sparse=options.allow_sparse
+        )
+        y, supported, lit = supported_table(surface, res)
+        note = sparse_note(lit if supported is None else supported, lit, "factored table's bins",
+                           allow=options.allow_sparse)  # fmt: skip
+        result = factorize_table(y, options.outer, options.inner, res, seed=0)
         with step("writing"):
             out.write_bytes(ff.format_factors(result.tables).encode("utf-8"))
             cdfs.write_bytes(ff.format_cdfs(result.tables).encode("utf-8"))
     return (
         f"wrote {out.path} and {cdf_path} (factored, J = {options.outer}, K = "
         f"{options.inner}): relative error {result.error:.3g} of the {options.method} "
-        "reconstruction"
+        "reconstruction" + (f"\n{note}" if note else "")
     )

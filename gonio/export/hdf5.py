@@ -195,7 +195,7 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     _h5py()
     if options.grid is not None:
         grid = options.grid
-        _, surface = reconstructed(run, options.method, grid)
+        _, surface = reconstructed(run, options.method, grid, allow_sparse=options.allow_sparse)
         notes: list[str] = []
 
         def write_to(path: Path) -> None:

@@ -112,5 +112,10 @@ def write(
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
     extrapolate = options.merl_fill == "extrapolate"
-    _, surface = reconstructed(run, options.method, extrapolate="nearest" if extrapolate else None)
+    _, surface = reconstructed(
+        run,
+        options.method,
+        extrapolate="nearest" if extrapolate else None,
+        allow_sparse=options.allow_sparse,
+    )
     return write(out, surface, extrapolate=extrapolate, allow_sparse=options.allow_sparse)

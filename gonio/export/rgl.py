@@ -286,7 +286,9 @@ def write(
 
 
 def export_run(run: Run, out: PendingOutput, options: Options) -> str:
-    measured, surface = reconstructed(run, options.method, extrapolate="nearest")
+    measured, surface = reconstructed(
+        run, options.method, extrapolate="nearest", allow_sparse=options.allow_sparse
+    )
     text = f"gonio export of {run.path.name}: {options.method} reconstruction, "
     text += f"{measured.band} band"
     return write(

@@ -48,12 +48,27 @@ def step(description: str) -> AbstractContextManager[progress.Progress]:
 
 
 def reconstructed(
-    run: Run, method: str, parametrization: str | None = None, *, extrapolate: str | None = None
+    run: Run,
+    method: str,
+    parametrization: str | None = None,
+    *,
+    extrapolate: str | None = None,
+    allow_sparse: bool = False,
 ) -> tuple[Measured, Surface]:
     """The run's calibrated samples and their reconstruction by ``method``
-    (`gonio.reconstruct.methods.reconstruction`), each step shown."""
+    (`gonio.reconstruct.methods.reconstruction`), each step shown; `GonioError` (one
+    line) for a run of fewer samples than one simplex of its coordinates holds (d + 1:
+    every value of a grid would be copied from a sample), unless ``allow_sparse``."""
     with step("reading and calibrating the run"):
         measured = Measured.from_run(run)
+    simplex = (3 if measured.isotropic else 4) + 1
+    if len(measured) < simplex and not allow_sparse:
+        raise GonioError(
+            f"the run has {len(measured)} calibrated sample{'s' * (len(measured) != 1)}: "
+            f"expected at least {simplex}, one simplex of its {simplex - 1} coordinates, "
+            "before a grid is filled from them (measure more targets, or give --allow-sparse "
+            "to export anyway)"
+        )
     with step(f"reconstructing ({method}) from {len(measured):,} samples"):
         surface = reconstruction(measured, method, parametrization, extrapolate=extrapolate)
     return measured, surface
