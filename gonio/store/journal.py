@@ -279,7 +279,8 @@ class Journal:
     @classmethod
     def reopen(cls, path: Path, *, durable: bool, max_page_count: int | None = None) -> Journal:
         """An existing run file, to append to (`JournalError` if it is missing, not a
-        gonio run, of a newer layout, or being written by another process)."""
+        gonio run, of a newer layout, or being written by another process); an older
+        layout is brought to this one by `upgrade`, once the caller's checks passed."""
         if not path.is_file():
             raise JournalError(f"{path}: no such run file")
         lock = _lock(path)
@@ -294,7 +295,6 @@ class Journal:
                 probe.close()
             conn = cls._connect(str(path), durable, max_page_count)
             check_version(conn, path)
-            _upgrade(conn)
             return cls(conn, path, lock)
         except (sqlite3.Error, GonioError) as exc:
             os.close(lock)
@@ -303,6 +303,17 @@ class Journal:
             raise JournalError(f"{path}: not a usable run file: {exc}") from None
 
     # -- writing ---------------------------------------------------------------------------
+    def upgrade(self) -> None:
+        """Bring a reopened run file of an older layout to this one (one transaction);
+        nothing when it is current. Called before the first write, so a resume refused
+        by its checks leaves the file as it was."""
+        try:
+            _upgrade(self.conn)
+        except sqlite3.Error as exc:
+            raise JournalError(
+                f"{self.path}: cannot bring the run file up to date: {exc}"
+            ) from None
+
     def _meta_text(self, key: str) -> str:
         row = self.conn.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
         if row is None:

@@ -337,6 +337,7 @@ def resume(
         try:
             if on_ready is not None:
                 on_ready()
+            journal.upgrade()
             journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
             if changed:
                 journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})

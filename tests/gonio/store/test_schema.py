@@ -5,12 +5,15 @@ columns dropped) is read and resumed."""
 
 from __future__ import annotations
 
+import contextlib
 import sqlite3
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from gonio import workflows
+from gonio.config import ConfigError
 from gonio.store import Journal, open_run
 from gonio.store.schema import samples_ddl, samples_table
 from tests.support.acquire import acquire, plan_file, scene_file
@@ -47,8 +50,8 @@ def test_the_ddl_made_from_the_table_is_schema_v2() -> None:
 
 
 def _as_version_1(path: Path) -> None:
-    """Turn a written run file into version 1's layout."""
-    with sqlite3.connect(path) as conn:
+    """Turn a written run file into version 1's layout (closed: its WAL folded in)."""
+    with contextlib.closing(sqlite3.connect(path)) as conn, conn:
         for table in ("stream", "polls", "sweeps"):
             conn.execute(f"DROP TABLE {table}")
         for column in ("smear_rad", "timing_rad"):
@@ -69,10 +72,25 @@ def test_a_version_1_run_is_read_and_resumed(tmp_path: Path) -> None:
     assert len(run) == 3 and run.sweeps == ()
     assert np.isnan(run.samples["smear_rad"]).all() and np.isnan(run.samples["timing_rad"]).all()
     np.testing.assert_array_equal(run.samples["counts"], expected.samples["counts"][:3])
-    with Journal.reopen(out, durable=False) as journal:  # resuming brings it to version 2
+    with Journal.reopen(out, durable=False) as journal:  # reopened as it is …
+        assert journal.conn.execute("PRAGMA user_version").fetchone()[0] == 1
+        journal.upgrade()  # … and brought to version 2 once a resume's checks passed
         assert journal.conn.execute("PRAGMA user_version").fetchone()[0] == 2
     run = open_run(out)
     assert run.meta["schema_version"] == 2 and len(run) == 3
+
+
+def test_a_refused_resume_of_a_version_1_run_leaves_it_as_it_was(tmp_path: Path) -> None:
+    out = tmp_path / "v1.sqlite"
+    scene = scene_file(tmp_path)
+    acquire(plan_file(tmp_path, target=3), scene, out)
+    _as_version_1(out)
+    before = out.read_bytes()
+    scene.write_text(scene.read_text(encoding="utf-8") + "\n# changed\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="the scene file changed since the run started"):
+        workflows.resume(out, scene_path=scene)
+    assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.yaml", "small.yaml", "v1.sqlite"]
 
 
 @pytest.fixture(scope="module")
