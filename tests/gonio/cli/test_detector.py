@@ -77,7 +77,7 @@ def test_a_conforming_photometer_passes_and_unlocks_hardware_fly(
 
     args = ["--rig", str(rig_path), "--rate", "100", "--duration", "0.6", "--starts", "3"]
     result = run_gonio("detector", "check-stream", *args, "--identify", "ID?")
-    assert result.returncode == 0, result.stderr
+    assert result.returncode == 0, result.stdout + result.stderr  # the verdict says which
     assert result.stderr == ""
     for name in REQUIREMENTS:
         assert f"pass  {name}" in result.stdout
