@@ -3,7 +3,8 @@ calibration events (docs/explanations/acquisition.md#calibration): each
 holds a reading of the reference
 standard and a dark reading; `calibration_series` gathers them and
 `gonio.radiometry.series.CalibrationSeries` inverts the samples (the formula and the
-noise model are there)."""
+noise model are there); a point source's spot fall-off is divided out where the
+instrument has it (`gonio.analysis.falloff`)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from gonio.analysis.falloff import spot_corrected
 from gonio.errors import GonioError
 from gonio.radiometry.series import CalibrationSeries, rounding_var
 from gonio.store.read import Event, Run
@@ -151,12 +153,15 @@ def _std(reading: dict[str, object]) -> float:
     return 0.0 if std is None else float(std)  # type: ignore[arg-type]
 
 
-def calibrate(run: Run) -> Calibrated:
-    """The run's BRDF values and uncertainties (`GonioError` without a calibration)."""
+def calibrate(run: Run, *, falloff: bool = True) -> Calibrated:
+    """The run's BRDF values and uncertainties (`GonioError` without a calibration);
+    ``falloff``: divide a point source's spot fall-off out where the instrument has it."""
     series = calibration_series(run.of_kind("calibration"))
     s = run.samples
     wi, wo = run.directions()
     t = 0.5 * (s["started_s"] + s["ended_s"])
     counts, std = readings(run)
     f, sigma = series.brdf(counts, std, s["n"], s["exposure_s"], wi, wo, t)
+    if falloff:
+        f, sigma = spot_corrected(run, series, f, sigma)
     return Calibrated(f, sigma, series)

@@ -1,6 +1,6 @@
 """What a simulated run's stored scene file says that analysis needs, read without the
 simulator: the material it measured and the band its detector saw it in (the truth a
-measurement is compared with)."""
+measurement is compared with), and the effects its simulation modelled."""
 
 from __future__ import annotations
 
@@ -34,6 +34,14 @@ def _band(data: dict[str, Any]) -> str:
 def scene_band(scene_text: str) -> str:
     """The band of the scene's simulated detector ("luminance" unless it names one)."""
     return _band(_data(scene_text))
+
+
+def scene_effects(scene_text: str) -> frozenset[str]:
+    """The names of the effects the scene's simulation models (a list or a mapping)."""
+    effects = _data(scene_text).get("effects")
+    if isinstance(effects, dict | list):
+        return frozenset(str(name) for name in effects)
+    return frozenset()
 
 
 def scene_truth(scene_text: str, scene_path: str | None, band: str | None = None) -> BrdfEval:

@@ -9,7 +9,8 @@ z = normal, pointing away from the surface: wi toward the light, wo toward the d
   `electrons` / `power_from_electrons`, `signal_rate`;
 * calibration (`calibration`): `ReferenceCalibration` against a Lambertian standard;
 * effects: `footprint_fraction` (collimated beam against sample and field of view),
-  `point_source_power` (spatial integration for a proximal point source),
+  `point_source_power` (spatial integration for a proximal point source) and its
+  ratio to the ideal chain `spot_ratio`,
   `aperture_integral` (angular integration over the aperture), combined in
   `detector_power`.
 
@@ -38,7 +39,7 @@ from gonio.radiometry.ideal import (
     source_kind,
     view_weight,
 )
-from gonio.radiometry.spatial import point_source_power
+from gonio.radiometry.spatial import point_source_power, spot_ratio
 
 __all__ = [
     "ELEMENTARY_CHARGE",
@@ -64,6 +65,7 @@ __all__ = [
     "seen_fits_sample",
     "signal_rate",
     "source_kind",
+    "spot_ratio",
     "view_weight",
     "weight_for",
 ]

@@ -27,7 +27,7 @@ import numpy as np
 from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic
-from gonio.radiometry.ideal import DetectorOptics, PointSource
+from gonio.radiometry.ideal import DetectorOptics, PointSource, radiant_power_checked
 from gonio.types import ArrayLike, BrdfEval, FloatArray
 
 #: Default quadrature order: (Gauss-Legendre nodes per azimuth piece, radial nodes).
@@ -121,3 +121,33 @@ def point_source_power(
     result = np.concatenate(out, axis=0) if out else np.zeros((0,))
     result = result * (source.intensity_w_sr * optics.aperture_sr)
     return np.asarray(result.reshape(lead + result.shape[1:]), dtype=np.float64)
+
+
+def _constant(wi: FloatArray, wo: FloatArray) -> FloatArray:
+    return np.ones(np.broadcast_shapes(wi.shape, wo.shape)[:-1])
+
+
+def spot_ratio(
+    source: PointSource,
+    optics: DetectorOptics,
+    sample_diameter_mm: float,
+    wi: ArrayLike,
+    wo: ArrayLike,
+    brdf_eval: BrdfEval | None = None,
+    *,
+    order: tuple[int, int] = DEFAULT_ORDER,
+) -> FloatArray:
+    """Φ / (f(wi, wo) · G): `point_source_power` over the ideal chain's power
+    (dimensionless), shape broadcast(wi, wo)[:-1] (+ (3,) for RGB).
+
+    ``brdf_eval`` None: a constant f, the geometry alone (the irradiance falling off as
+    cos θ(x)/|s − x|² across the seen part of the sample, and a view past its edge); with
+    a BRDF, also its variation over the spread of incidence across the spot. Tends to 1
+    quadratically in F/r with the view on the sample; NaN where the ideal power is 0.
+    """
+    f_eval = _constant if brdf_eval is None else brdf_eval
+    a, b = direction_pair(wi, wo)
+    ideal = radiant_power_checked(source, optics, f_eval(a, b), a, b)
+    power = point_source_power(source, optics, sample_diameter_mm, f_eval, a, b, order=order)
+    safe = np.where(ideal != 0.0, ideal, 1.0)
+    return np.asarray(np.where(ideal != 0.0, power / safe, np.nan), dtype=np.float64)
