@@ -5,7 +5,8 @@ constraints (``Reason``), the axes' travel-time model, and a rig's misalignment
 (`Alignment`, applied by the forward kinematics). See docs/reference/planner.md."""
 
 from gonio.rig.alignment import Alignment, Geometry
+from gonio.rig.alignment_spec import AlignmentSpec
 from gonio.rig.model import Reason, Rig, Solution
 from gonio.rig.travel import TravelModel
 
-__all__ = ["Alignment", "Geometry", "Reason", "Rig", "Solution", "TravelModel"]
+__all__ = ["Alignment", "AlignmentSpec", "Geometry", "Reason", "Rig", "Solution", "TravelModel"]
