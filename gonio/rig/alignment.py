@@ -128,6 +128,18 @@ class Alignment:
             for n in ("zero_offset", "tilt", "height_mm", "light_pointing", "detector_pointing")
         )
 
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        """The leading axes the parameters broadcast to (() for one alignment)."""
+        return np.broadcast_shapes(
+            self.zero_offset.shape[:-1],
+            self.tilt.shape,
+            self.tilt_azimuth.shape,
+            self.height_mm.shape,
+            self.light_pointing.shape[:-1],
+            self.detector_pointing.shape[:-1],
+        )
+
     def joints(self, angles: FloatArray) -> FloatArray:
         """True joint angles (..., A) of the rig file's ``angles`` (..., A): q + δ."""
         return np.asarray(np.asarray(angles, dtype=np.float64) + self.zero_offset)

@@ -193,9 +193,10 @@ class Rig:
     ) -> tuple[FloatArray, FloatArray]:
         """Sample-frame (ωi, ωo) of joint angles (..., A) (any chain, no closed form); with
         an ``alignment``, those the misaligned rig really measures at the angles the rig
-        file reads (`geometry`; none or `Alignment.none`: the rig file's, bit for bit)."""
+        file reads (`geometry`; none or `Alignment.none`: the rig file's, bit for bit; a
+        batch of alignments broadcasts against the angles' leading axes)."""
         angles = np.asarray(angles, dtype=np.float64)
-        if alignment is not None and not alignment.is_none:
+        if alignment is not None and not (alignment.is_none and alignment.batch_shape == ()):
             g = self.geometry(angles, alignment)
             return g.wi, g.wo
         sample = self._chain("sample", angles)

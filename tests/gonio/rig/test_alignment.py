@@ -160,8 +160,11 @@ def test_a_batch_of_alignments_is_each_alone(name: str, seed: int) -> None:
         light_pointing=np.stack([a.light_pointing for a in each])[:, None, :],
         detector_pointing=np.stack([a.detector_pointing for a in each])[:, None, :],
     )
+    assert batch.batch_shape == (3, 1)
     wi, wo = rig.forward(q, batch)
     assert wi.shape == wo.shape == (3, 8, 3)
+    zeros = Alignment(tilt=np.zeros((3, 1)))
+    assert zeros.is_none and rig.forward(q, zeros)[0].shape == (3, 8, 3)
     for k, alignment in enumerate(each):
         one = rig.forward(q, alignment)
         np.testing.assert_allclose(wi[k], one[0], rtol=0, atol=1e-15)
@@ -214,6 +217,17 @@ def test_a_height_shifts_spots_and_turns_only_a_point_sources_direction(
     turned = float(angle_between(lamp.wi, nominal[0]))
     assert abs(turned - abs(height) * math.sin(theta) / r) <= (height / r) ** 2 + 1e-14
     assert np.array_equal(lamp.wo, nominal[1])
+
+
+@given(st.floats(0.0, EPS), st.floats(-4.0, 4.0))
+@settings(max_examples=30, deadline=None)
+def test_the_tilt_rotation_takes_the_stage_axis_to_the_true_normal(
+    tilt: float, azimuth: float
+) -> None:
+    alignment = Alignment(tilt=tilt, tilt_azimuth=azimuth)
+    turned = alignment.tilt_rotation() @ np.array([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(turned, alignment.normal, rtol=0, atol=1e-15)
+    assert abs(float(np.arccos(np.clip(turned[2], -1.0, 1.0))) - tilt) < 1e-7
 
 
 def test_an_offset_for_an_axis_the_rig_has_not_is_refused() -> None:
