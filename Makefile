@@ -108,6 +108,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/factored.py
 	$(BIN)/python benchmarks/export.py
 	$(BIN)/python benchmarks/point_source.py
+	$(BIN)/python benchmarks/misalignment.py
 	$(BIN)/python benchmarks/utia.py
 	$(BIN)/python benchmarks/rgl.py
 	$(BIN)/python benchmarks/plots.py

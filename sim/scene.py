@@ -29,7 +29,7 @@ from pydantic import (
 
 from gonio.brdf.material import MaterialSpec
 from gonio.config import ConfigError, Strict, field_error, load
-from gonio.rig.model import Rig
+from gonio.rig import AlignmentSpec, Rig
 from sim.faults import FaultRule
 
 #: The most power a source may give (W/m² of a collimated beam, W/sr of a point source):
@@ -369,6 +369,12 @@ class EffectsSpec(Strict):
         None,
         description="A stream's reported stamps are late by a latency and jittered.",
     )
+    misalignment: AlignmentSpec | None = Field(
+        None,
+        description="The rig is not as its file says (zero offsets, the sample's tilt and "
+        "height, pointing errors): the optics see the true geometry, the engine records the "
+        "rig file's.",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -409,6 +415,7 @@ EffectName = Literal[
     "position_error",
     "motion_blur",
     "timestamp_jitter",
+    "misalignment",
 ]
 
 
@@ -487,6 +494,13 @@ class Scene(Strict):
         if mismatch is not None:
             field, expected = mismatch
             raise ConfigError(f"scene {self.name!r}: {field}: {expected}")
+        misalignment = self.effects.misalignment
+        unknown = [] if misalignment is None else misalignment.unknown_axes(rig.axes)
+        if unknown:
+            raise ConfigError(
+                f"scene {self.name!r}: effects.misalignment.zero_offset_deg: {unknown[0]!r} is "
+                f"not an axis of rig {rig.spec.name!r} ({', '.join(rig.axes)})"
+            )
         for k, rule in enumerate(self.faults):
             if rule.axis is not None and rule.axis not in rig.axes:
                 raise ConfigError(

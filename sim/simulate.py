@@ -98,9 +98,8 @@ def simulate(plan: Targets, scene: Scene, *, seed: int | None = None) -> SimRun:
     clock = np.cumsum(np.stack([travel, settle, busy], axis=1).ravel()).reshape(n, 3)
     settled, end = clock[:, 1], clock[:, 2]
 
-    wi, wo = rig.forward(true)
     chain = SceneOptics(scene, rig)
-    geometric = chain.geometric_power(wi, wo)
+    wi, wo, geometric = chain.at_poses(true)
     sensor_spec, sensor_effects = sensor_of(scene)
     value = np.empty(n)
     std = np.empty(n)
@@ -190,9 +189,9 @@ def simulate_standard(
     the caller has it. The mean counts, spread, count and saturation of each."""
     started = np.asarray(started_s, dtype=np.float64).reshape(-1)
     k = len(started)
-    wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
     chain = SceneOptics(scene, rig) if optics is None else optics
-    geometric = np.repeat(chain.geometric_power(wi, wo, target), k)
+    _, _, geometric = chain.at_poses(np.asarray(pose, dtype=np.float64)[None, :], target)
+    geometric = np.repeat(geometric, k)
     reading = float(_reading_s(scene, np.array([exposure_s]))[0])
     period = reading + rig.spec.detector.readout_s
     t_mid = started[:, None] + period * np.arange(averages)[None, :] + 0.5 * reading
@@ -220,9 +219,8 @@ def expected_rate(
     that instant, no rounding (the truth a calibration's rate estimates); ``optics`` as
     in `simulate_standard`."""
     t = np.asarray(t_s, dtype=np.float64)
-    wi, wo = rig.forward(np.asarray(pose, dtype=np.float64)[None, :])
     chain = SceneOptics(scene, rig) if optics is None else optics
-    geometric = chain.geometric_power(wi, wo, target)
+    _, _, geometric = chain.at_poses(np.asarray(pose, dtype=np.float64)[None, :], target)
     power = chain.power(np.repeat(geometric, t.size), t.reshape(-1, 1))
     electrons = chain.electrons(power, np.ones(t.size))[:, 0]
     if scene.detector.kind == "lockin":

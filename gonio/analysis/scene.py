@@ -1,9 +1,11 @@
 """What a simulated run's stored scene file says that analysis needs, read without the
-simulator: the material it measured and the band its detector saw it in (the truth a
-measurement is compared with), and the effects its simulation modelled."""
+simulator: the material it measured, the band its detector saw it in and the rig's
+true misalignment (the truth a measurement is compared with), and the effects its
+simulation modelled."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +16,7 @@ from gonio.brdf.material import MaterialSpec
 from gonio.config import ConfigError, describe, read_yaml
 from gonio.errors import GonioError
 from gonio.radiometry.bands import band_eval
+from gonio.rig import Alignment, AlignmentSpec
 from gonio.types import BrdfEval
 
 
@@ -29,6 +32,19 @@ def _band(data: dict[str, Any]) -> str:
     detector = data.get("detector")
     band = detector.get("band") if isinstance(detector, dict) else None
     return str(band) if band else "luminance"
+
+
+def scene_alignment(scene_text: str, axes: Sequence[str]) -> Alignment | None:
+    """The rig's true misalignment the scene's ``misalignment`` effect gives, for a rig
+    with ``axes`` (None: the rig is as its file says); `ConfigError` if it is not one."""
+    effects = _data(scene_text).get("effects")
+    if not isinstance(effects, dict) or "misalignment" not in effects:
+        return None
+    try:
+        spec = AlignmentSpec.model_validate(effects["misalignment"] or {})
+        return spec.alignment(axes)
+    except (ValidationError, ValueError) as exc:
+        raise ConfigError(f"scene (as stored in the run): effects.misalignment: {exc}") from None
 
 
 def scene_band(scene_text: str) -> str:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from gonio.analysis.calibrated import calibrate, is_level
-from gonio.analysis.scene import scene_truth
+from gonio.analysis.scene import scene_alignment, scene_truth
 from gonio.errors import GonioError
 from gonio.store.read import Run
 from gonio.types import FloatArray
@@ -111,11 +111,15 @@ def error_figures(
 
 def measured_pairs(run: Run) -> tuple[FloatArray, FloatArray]:
     """(ωi, ωo) the optics really saw: from the simulated backend's true joint angles
-    (its journaled state) when every sample has them, else from the read-back angles."""
+    (its journaled state) through the stored scene's ``misalignment`` when every sample
+    has them, else from the read-back angles."""
     states = run.samples["sim_state"]
     if len(states) and all(s is not None for s in states):
         true = np.array([json.loads(s)["true_rad"] for s in states], dtype=np.float64)
-        return run.plan.rig.forward(true)
+        text = run.meta.get("scene_text")
+        rig = run.plan.rig
+        alignment = None if text is None else scene_alignment(str(text), rig.axes)
+        return rig.forward(true, alignment)
     return run.directions()
 
 

@@ -25,6 +25,7 @@ from drivers.serial_detector import SerialDetectorConfig
 from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
+from gonio.rig.alignment import Alignment, Geometry, at_height
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
@@ -187,13 +188,45 @@ class Rig:
         columns, skews = self._chains[chain]
         return chain_rotation_of(skews, [angles[..., c] for c in columns])
 
-    def forward(self, angles: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Sample-frame (ωi, ωo) of joint angles (..., A) (any chain, no closed form)."""
+    def forward(
+        self, angles: FloatArray, alignment: Alignment | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """Sample-frame (ωi, ωo) of joint angles (..., A) (any chain, no closed form); with
+        an ``alignment``, those the misaligned rig really measures at the angles the rig
+        file reads (`geometry`; none or `Alignment.none`: the rig file's, bit for bit; a
+        batch of alignments broadcasts against the angles' leading axes)."""
         angles = np.asarray(angles, dtype=np.float64)
+        if alignment is not None and not (alignment.is_none and alignment.batch_shape == ()):
+            g = self.geometry(angles, alignment)
+            return g.wi, g.wo
         sample = self._chain("sample", angles)
         light = apply(self._chain("light", angles), self._pointing["light"])
         detector = apply(self._chain("detector", angles), self._pointing["detector"])
         return apply_transposed(sample, light), apply_transposed(sample, detector)
+
+    def geometry(self, angles: FloatArray, alignment: Alignment) -> Geometry:
+        """What the optics of the rig misaligned by ``alignment`` see at the joint angles
+        (..., A) the rig file reads: true (ωi, ωo), the spots' shifts and a point source's
+        distance (`gonio.rig.alignment`: the zero offsets through every chain, the tilt
+        after the sample chain, the pointing errors at the end of theirs, the height
+        last)."""
+        q = alignment.joints(np.asarray(angles, dtype=np.float64))
+        sample = self._chain("sample", q) @ alignment.tilt_rotation()
+        light = apply(
+            self._chain("light", q) @ alignment.pointing_rotation("light"), self._pointing["light"]
+        )
+        detector = apply(
+            self._chain("detector", q) @ alignment.pointing_rotation("detector"),
+            self._pointing["detector"],
+        )
+        light_spec = self.spec.light
+        distance = light_spec.distance_mm if light_spec.kind == "point" else None
+        return at_height(
+            apply_transposed(sample, light),
+            apply_transposed(sample, detector),
+            alignment.height_mm,
+            distance,
+        )
 
     def candidates(
         self, wi: FloatArray, wo: FloatArray, *, isotropic: bool = False

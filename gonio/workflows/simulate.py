@@ -164,7 +164,7 @@ def measure_targets(
     n = len(axes)
     true = np.array([[m.true[a] for a in axes] for m in rows if m.true], dtype=np.float64)
     true = true.reshape(-1, n)  # every row has its true pose: this backend is simulated
-    wi, wo = instrument.rig.forward(true)
+    wi, wo = instrument.detector.chain.pairs(true)  # through the scene's misalignment
     return SimRun(
         index=np.arange(start, stop, dtype=np.int64),
         commanded=plan.angles[start:stop],

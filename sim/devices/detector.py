@@ -356,8 +356,7 @@ class SimDetector(Resource):
             weights = np.concatenate([rules[n][1] for n in nodes.tolist()])
             owner = np.repeat(np.arange(len(middle)), nodes)
         self.stream_nodes += nodes.tolist()
-        wi, wo = self.rig.forward(self._poses(times))
-        geometric = self.chain.geometric_power(wi, wo, self._target)
+        _, _, geometric = self.chain.at_poses(self._poses(times), self._target)
         at_nodes = self.chain.power(geometric, times[:, None], light_on=self.light.is_on)[:, 0]
         if len(times) == len(middle):
             power = at_nodes[None, :]
@@ -399,8 +398,7 @@ class SimDetector(Resource):
         evaluating the chain for it alone. Only an exactly equal pose is a hit: anything
         else is computed as usual, so the readings do not depend on this."""
         poses = np.asarray(poses, dtype=np.float64).reshape(-1, len(self.rig.axes))
-        wi, wo = self.rig.forward(poses)
-        power = self.chain.geometric_power(wi, wo, "sample")
+        _, _, power = self.chain.at_poses(poses, "sample")
         self._prepared = dict(zip(map(tuple, poses.tolist()), power.tolist(), strict=True))
 
     def _pose_angles(self) -> tuple[float, ...]:
@@ -415,8 +413,7 @@ class SimDetector(Resource):
         if self._target == "sample" and angles in self._prepared:
             self.prepared_hits += 1
             return np.array([self._prepared[angles]])
-        wi, wo = self.rig.forward(np.array([angles], dtype=np.float64))
-        return self.chain.geometric_power(wi, wo, self._target)
+        return self.chain.at_poses(np.array([angles], dtype=np.float64), self._target)[2]
 
     def measure(self, exposure_s: float, averages: int = 1) -> Reading:
         """Expose ``averages`` times for ``exposure_s`` s each; the mean in counts."""

@@ -19,7 +19,11 @@ Effects, each computed only when the scene lists it:
   integral: exact, and slow — about 40 ms a pair at the default orders);
 - ``source_drift``: the source's power × (1 + rate·t/3600 + amplitude·sin(2πt/P + φ))
   at the middle of each exposure (never below 0);
-- ``stray_light``: + a constant power while the source is on (drifting with it).
+- ``stray_light``: + a constant power while the source is on (drifting with it);
+- ``misalignment``: the optics see the pairs of the true geometry at the rig file's
+  joint angles (`gonio.rig.Rig.geometry`, `at_poses`); a point source's irradiance
+  scales with its true distance (r / r')² (first order: the spatial integral keeps r);
+  the spots' shifts on the surface are not applied (the footprint stays centred).
 
 The sensor (`sim.physics.sensor`) turns the expected electrons into counts.
 """
@@ -68,6 +72,32 @@ class SceneOptics:
             "reference": band_eval(brdf.create("lambert", albedo=albedo), band),
         }
         self.effects = scene.effects
+        self.rig = rig
+        misalignment = scene.effects.misalignment
+        #: The rig's true misalignment (None: as its file says).
+        self.alignment = None if misalignment is None else misalignment.alignment(rig.axes)
+        self._distance_mm = rig.spec.light.distance_mm
+
+    def pairs(self, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(ωi, ωo) the optics see at true joint angles ``poses`` (..., A) as the rig file
+        reads them (through the scene's ``misalignment``)."""
+        return self.rig.forward(poses, self.alignment)
+
+    def at_poses(
+        self, poses: FloatArray, target: StageTarget = "sample"
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(ωi, ωo, power) at true joint angles ``poses`` (N, A) as the rig file reads
+        them: the pairs the optics see (through the scene's ``misalignment``) and the
+        radiant power there (W, (N,), `geometric_power`); a point source's irradiance
+        × (r / r')² when the sample's height moves it to r' (`gonio.rig.Geometry`)."""
+        if self.alignment is None:
+            wi, wo = self.rig.forward(poses)
+            return wi, wo, self.geometric_power(wi, wo, target)
+        g = self.rig.geometry(np.asarray(poses, dtype=np.float64), self.alignment)
+        power = self.geometric_power(g.wi, g.wo, target)
+        if g.light_distance_mm is not None and self._distance_mm is not None:
+            power = power * (self._distance_mm / g.light_distance_mm) ** 2
+        return g.wi, g.wo, power
 
     def geometric_power(
         self, wi: FloatArray, wo: FloatArray, target: StageTarget = "sample"
