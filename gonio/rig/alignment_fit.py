@@ -1,0 +1,200 @@
+"""The misalignment a mirror scan measures: `fit` finds the `Alignment` whose forward
+kinematics put each observed specular peak where a mirror reflects, by nonlinear least
+squares (scipy's), with its covariance, and says which parameters the scan cannot
+determine instead of setting them silently.
+
+An observation is a pose (joint angles as the rig file reads them) at which the detector
+saw the peak of a first-surface mirror seated as the sample, and the angular standard
+error of that location (rad). At the true geometry a mirror sends the light along its
+reflection about the true normal: in the true sample frame (`Rig.geometry`),
+ωo = (−ωi,x, −ωi,y, ωi,z). Each peak gives two residuals, (ωo + ωi)ₓ,ᵧ / σ: the two
+angles (rad, to first order) by which the true reflection misses the detector.
+
+Parameters (`PARAMETERS`): each axis's zero offset; the sample tilt as its two
+components (α cos β, α sin β), smooth through no tilt; the height; the light's and the
+detector's pointing errors (two angles each). Which combinations a scan determines:
+the singular values of the whitened Jacobian at no misalignment, a direction whose
+standard error would exceed `UNDETERMINED_RAD` (or `UNDETERMINED_MM`) being
+undetermined. The fit moves only along the determined combinations (an undetermined
+one stays at no error: the least-norm solution, so two parameters that act alike, such
+as an axis's zero offset and a pointing error about that axis, share what they do
+together). A parameter with more than `SHARE` of its unit vector outside them is
+reported as undetermined (no standard error), named with what would determine it
+(`HINTS`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from gonio.errors import GonioError
+from gonio.rig.alignment import Alignment
+from gonio.rig.model import Rig
+from gonio.types import FloatArray
+
+#: A parameter's standard error (rad) above which the scan does not determine it: a
+#: tenth of a degree, three times the accuracy an alignment is for.
+UNDETERMINED_RAD = math.radians(0.1)
+#: The same for the height (mm).
+UNDETERMINED_MM = 0.1
+#: The share of a parameter in an undetermined direction above which it is undetermined.
+SHARE = 1e-3
+
+
+def parameters(rig: Rig) -> tuple[str, ...]:
+    """The fitted parameters' names, in their order: ``zero_offset.<axis>`` per axis,
+    ``tilt_x``, ``tilt_y``, ``height_mm``, ``light_pointing_x``, ``light_pointing_y``,
+    ``detector_pointing_x``, ``detector_pointing_y``."""
+    return (
+        *(f"zero_offset.{name}" for name in rig.axes),
+        "tilt_x", "tilt_y", "height_mm",
+        "light_pointing_x", "light_pointing_y", "detector_pointing_x", "detector_pointing_y",
+    )  # fmt: skip
+
+
+#: What determines each kind of parameter when a scan does not (by name prefix).
+HINTS = {
+    "zero_offset": "peaks at more poses of that axis (light elevations, detector azimuths)",
+    "tilt": "the same light poses at three or more sample rotations",
+    "height_mm": "a point source, or a camera on the spot: with a collimated beam and a "
+    "distant detector the height moves no direction",
+    "light_pointing": "peaks over a wider range of light elevations",
+    "detector_pointing": "peaks over a wider range of detector azimuths",
+}
+
+
+def as_alignment(rig: Rig, p: FloatArray) -> Alignment:
+    """The `Alignment` of the parameter vector ``p`` (`parameters` order; rad, mm)."""
+    a = len(rig.axes)
+    tx, ty = p[a], p[a + 1]
+    return Alignment(
+        zero_offset=p[:a],
+        tilt=np.hypot(tx, ty),
+        tilt_azimuth=np.arctan2(ty, tx),
+        height_mm=p[a + 2],
+        light_pointing=p[a + 3 : a + 5],
+        detector_pointing=p[a + 5 : a + 7],
+    )
+
+
+def miss(rig: Rig, angles: FloatArray, alignment: Alignment) -> FloatArray:
+    """(M, 2): how far (rad, first order) the true mirror reflection misses the detector
+    at each pose (M, A): (ωo + ωi)ₓ,ᵧ in the true sample frame."""
+    g = rig.geometry(np.asarray(angles, dtype=np.float64), alignment)
+    return np.asarray((g.wo + g.wi)[..., :2], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class AlignmentFit:
+    """A fitted alignment: ``values`` and ``errors`` (standard errors; rad, mm; NaN where
+    undetermined) by `names`; ``determined`` per parameter; ``residuals_rad`` (M, 2) at
+    the solution; ``chi2`` and its degrees of freedom; ``hints`` per undetermined
+    parameter."""
+
+    names: tuple[str, ...]
+    values: FloatArray
+    errors: FloatArray
+    determined: np.ndarray
+    covariance: FloatArray
+    residuals_rad: FloatArray
+    chi2: float
+    dof: int
+    hints: dict[str, str]
+    alignment: Alignment
+
+    @property
+    def reduced_chi2(self) -> float:
+        return self.chi2 / self.dof if self.dof > 0 else math.nan
+
+
+def _scale(names: Sequence[str]) -> FloatArray:
+    """Each parameter's bound on its standard error (rad, or mm for the height)."""
+    return np.array([UNDETERMINED_MM if n == "height_mm" else UNDETERMINED_RAD for n in names])
+
+
+def fit(rig: Rig, angles: FloatArray, sigma_rad: FloatArray) -> AlignmentFit:
+    """The alignment the observed peaks at joint angles ``angles`` (M, A), each located
+    to ``sigma_rad`` (M,) (rad), say; see the module. `GonioError` (one line) when there
+    are fewer residuals than determined parameters, or no parameter is determined."""
+    angles = np.asarray(angles, dtype=np.float64)
+    sigma = np.broadcast_to(np.asarray(sigma_rad, dtype=np.float64), angles.shape[:1])
+    if angles.ndim != 2 or angles.shape[1] != len(rig.axes):
+        raise GonioError(f"alignment fit: expected peaks (M, {len(rig.axes)}) of joint angles")
+    if not (np.all(np.isfinite(angles)) and np.all(sigma > 0) and np.all(np.isfinite(sigma))):
+        raise GonioError("alignment fit: expected finite peaks with positive uncertainties")
+    names = parameters(rig)
+    n = len(names)
+
+    def residuals(p: FloatArray) -> FloatArray:
+        return (miss(rig, angles, as_alignment(rig, p)) / sigma[:, None]).ravel()
+
+    scale = _scale(names)
+    basis, determined = _directions(residuals, n, scale)
+    if not len(basis):
+        raise GonioError("alignment fit: the peaks determine no parameter; measure more poses")
+    if 2 * len(angles) <= len(basis):
+        raise GonioError(
+            f"alignment fit: {len(angles)} peaks give {2 * len(angles)} residuals for "
+            f"{len(basis)} determined combinations of parameters; expected more peaks"
+        )
+
+    def along(x: FloatArray) -> FloatArray:
+        return np.asarray(scale * (basis.T @ x), dtype=np.float64)
+
+    result = least_squares(lambda x: residuals(along(x)), np.zeros(len(basis)), method="lm")
+    values = along(result.x)
+    jac = np.asarray(result.jac, dtype=np.float64)
+    # p = diag(scale) Bᵀ x: the covariance of x carried to the parameters
+    carry = scale[:, None] * basis.T
+    covariance = carry @ np.linalg.pinv(jac.T @ jac) @ carry.T
+    errors = np.where(determined, np.sqrt(np.diag(covariance)), np.nan)
+    r = residuals(values)
+    hints = {
+        name: next(h for prefix, h in HINTS.items() if name.startswith(prefix))
+        for name, ok in zip(names, determined, strict=True)
+        if not ok
+    }
+    return AlignmentFit(
+        names=names,
+        values=values,
+        errors=errors,
+        determined=determined,
+        covariance=covariance,
+        residuals_rad=(r.reshape(-1, 2) * sigma[:, None]),
+        chi2=float(r @ r),
+        dof=len(r) - len(basis),
+        hints=hints,
+        alignment=as_alignment(rig, values),
+    )
+
+
+def _directions(
+    residuals: Callable[[FloatArray], FloatArray], n: int, scale: FloatArray
+) -> tuple[FloatArray, np.ndarray]:
+    """The combinations of parameters the whitened residuals determine, as rows (k, n)
+    in units of each parameter's ``scale`` (the right singular vectors of the Jacobian
+    at no misalignment, by central differences, whose standard error stays within the
+    scale), and which parameters lie within them (less than `SHARE` of their unit vector
+    outside)."""
+    step = 1e-6
+    columns = []
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = step * scale[i]
+        columns.append((residuals(e) - residuals(-e)) / (2 * step))
+    jac = np.stack(columns, axis=1)  # per unit of each parameter's scale
+    _, s, vt = np.linalg.svd(jac, full_matrices=True)
+    s = np.concatenate([s, np.zeros(n - len(s))])
+    strong = s >= 1.0
+    share_outside = np.sum(vt[~strong] ** 2, axis=0)
+    return np.asarray(vt[strong], dtype=np.float64), np.asarray(
+        share_outside <= SHARE, dtype=np.bool_
+    )
+
+
+__all__ = ["HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters"]
