@@ -16,6 +16,7 @@ import re
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.stats import theilslopes
 
 from drivers.serial_detector import SerialDetectorConfig, StreamTrace
 from gonio.types import FloatArray
@@ -238,9 +239,8 @@ def _steady(records: list[StreamRecord], unit: float, limits: Limits) -> Require
     period = records[0].period_s
     asked = records[0].trace.rate_hz
     spans = sum(float(r.received_s[-1] - r.received_s[0]) for r in lines)
-    gaps = sum(len(r.received_s) - 1 for r in lines)
-    achieved = gaps / spans if spans > 0 else math.nan
     timed = all(r.timed and bool(np.all(np.diff(r.device_t_s) > 0)) for r in lines)
+    achieved = _host_rate(lines, period, timed)
     intervals = np.concatenate([np.diff(r.clock() if timed else r.received_s) for r in lines])
     steps = np.maximum(np.rint(intervals / period), 1.0)
     if timed:
@@ -279,6 +279,26 @@ def _steady(records: list[StreamRecord], unit: float, limits: Limits) -> Require
     return Requirement("steady_rate", True, measured, figures)
 
 
+def _host_rate(lines: list[StreamRecord], period: float, timed: bool) -> float:
+    """The lines' rate on the host's clock (Hz): the median over the streams of the
+    Theil–Sen slope (Sen 1968) of each line's arrival against its window's slot (its
+    device-clock step from the first, or its count without timestamps), so that a few
+    lines a busy host read late do not move it as they move a first-to-last span."""
+    rates = []
+    for r in lines:
+        slots = (
+            np.concatenate(
+                [[0.0], np.cumsum(np.maximum(np.rint(np.diff(r.device_t_s) / period), 1))]
+            )
+            if timed
+            else np.arange(len(r.received_s), dtype=np.float64)
+        )
+        slope = float(theilslopes(r.received_s, slots)[0])
+        if slope > 0:
+            rates.append(1.0 / slope)
+    return float(np.median(rates)) if rates else math.nan
+
+
 def _timestamps(records: list[StreamRecord], has_group: bool, limits: Limits) -> Requirement:
     name = "timestamps"
     if not has_group:
@@ -299,7 +319,8 @@ def _timestamps(records: list[StreamRecord], has_group: bool, limits: Limits) ->
         ok = np.isfinite(t)
         if np.count_nonzero(ok) > 1 and t[ok][-1] > t[ok][0]:
             rates.append(1.0 / float(np.median(np.diff(t[ok]))))  # lost lines aside
-            ratios.append(float(t[ok][-1] - t[ok][0]) / float(h[ok][-1] - h[ok][0]))
+            # device seconds per host second, robust to lines a busy host read late
+            ratios.append(float(theilslopes(t[ok], h[ok])[0]))
     asked = records[0].trace.rate_hz
     rate = float(np.median(rates)) if rates else math.nan
     ratio = float(np.median(ratios)) if ratios else math.nan
