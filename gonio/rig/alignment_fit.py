@@ -173,6 +173,31 @@ def fit(rig: Rig, angles: FloatArray, sigma_rad: FloatArray) -> AlignmentFit:
     )
 
 
+def peak_offsets(offsets: FloatArray, values: FloatArray) -> FloatArray:
+    """Where each scan (rows of ``values`` (M, K), read at the ``offsets`` (K,) of one
+    joint, evenly spaced, rad) peaks, as an offset (M,): the vertex of the parabola
+    through the logarithm of the largest reading and its two neighbours (a Gaussian
+    peak's exact location), held within a step of the largest reading. A peak on the
+    scan's edge is refused (`GonioError`): the scan missed it."""
+    offsets = np.asarray(offsets, dtype=np.float64)
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 2 or values.shape[1] != len(offsets) or len(offsets) < 3:
+        raise GonioError("peak: expected scans (M, K) of three readings or more")
+    k = np.argmax(values, axis=1)
+    if np.any((k == 0) | (k == len(offsets) - 1)) or not np.all(values.max(axis=1) > 0):
+        raise GonioError("peak: a scan's largest reading is on its edge; widen the scan")
+    rows = np.arange(len(values))
+    a, b, c = (
+        np.log(np.maximum(values[rows, k + d], np.finfo(np.float64).tiny)) for d in (-1, 0, 1)
+    )
+    step = offsets[1] - offsets[0]
+    curvature = a - 2.0 * b + c
+    shift = np.where(
+        curvature < 0, 0.5 * step * (a - c) / np.where(curvature < 0, curvature, -1.0), 0.0
+    )
+    return np.asarray(offsets[k] + np.clip(shift, -step, step), dtype=np.float64)
+
+
 def _directions(
     residuals: Callable[[FloatArray], FloatArray], n: int, scale: FloatArray
 ) -> tuple[FloatArray, np.ndarray]:
@@ -197,4 +222,4 @@ def _directions(
     )
 
 
-__all__ = ["HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters"]
+__all__ = ["HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_offsets"]

@@ -1,0 +1,88 @@
+"""A mirror scan on the simulated rig, misaligned by the scene, fitted back
+(`gonio.rig.alignment_fit`): cross scans of the detector through each nominal specular
+pose locate the peaks the true geometry puts elsewhere, and the fit recovers every
+parameter the scan determines within 0.03° (the combinations that act alike as one)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gonio.errors import GonioError
+from gonio.rig.alignment_fit import fit, peak_offsets
+from gonio.rig.model import Rig
+from sim.scene import load_scene
+from sim.simulate import simulate
+from tests.conftest import CONFIGS
+from tests.sim.test_misalignment import Sweep, misaligned
+
+TRUTH = {
+    "zero_offset_deg": {
+        "light_elevation": 0.7, "detector_azimuth": -0.4, "detector_elevation": 0.5,
+        "sample_rotation": 0.3,
+    },
+    "tilt_deg": 0.5, "tilt_azimuth_deg": 40.0,
+    "light_pointing_deg": (0.3, -0.2), "detector_pointing_deg": (-0.25, 0.3),
+}  # fmt: skip
+#: Coarse then fine offsets (°) of the cross scans.
+SCANS = (
+    np.arange(-4.0, 4.0001, 0.1),
+    np.arange(-0.3, 0.3001, 0.005),
+    np.arange(-0.3, 0.3001, 0.005),
+)
+
+
+def nominal_poses(rig: Rig) -> np.ndarray:
+    """The rig file's specular poses of a mirror: 4 incidences × 4 azimuths, at three
+    stage rotations."""
+    theta = np.radians([20.0, 35.0, 50.0, 65.0])[:, None]
+    phi = np.radians([0.0, 90.0, 180.0, 270.0])[None, :]
+    wi = np.stack(np.broadcast_arrays(
+        np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)
+    ), axis=-1).reshape(-1, 3)  # fmt: skip
+    poses = []
+    for rotation in np.radians([0.0, 120.0, 240.0]):
+        c, s = math.cos(rotation), math.sin(rotation)
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        solution = rig.solve(wi @ turn.T, (wi * (-1.0, -1.0, 1.0)) @ turn.T)
+        poses.append(solution.angles[solution.ok])
+    return np.concatenate(poses)
+
+
+def test_a_simulated_mirror_scan_recovers_the_misalignment(tmp_path: Path) -> None:
+    rig = Rig.from_yaml(CONFIGS / "rigs" / "arch.yaml")
+    mirror = tmp_path / "mirror.yaml"  # a first-surface mirror: the glossy metal, sharper
+    text = (CONFIGS / "scenes" / "glossy_metal.yaml").read_text(encoding="utf-8")
+    mirror.write_text(text.replace("alpha: 0.05", "alpha: 0.005"), encoding="utf-8")
+    scene = misaligned(load_scene(mirror, rig), [], **TRUTH)
+    peaks = nominal_poses(rig)
+    for offsets in (np.radians(s) for s in SCANS):
+        for joint in (rig.axes.index("detector_elevation"), rig.axes.index("detector_azimuth")):
+            poses = np.repeat(peaks[:, None, :], len(offsets), axis=1)
+            poses[:, :, joint] += offsets
+            values = simulate(Sweep(rig, poses.reshape(-1, len(rig.axes))), scene).value
+            peaks[:, joint] += peak_offsets(offsets, values.reshape(len(peaks), -1))
+    result = fit(rig, peaks, math.radians(0.002))
+    d = dict(zip(result.names, np.degrees(result.values), strict=True))
+    zero = TRUTH["zero_offset_deg"]
+    assert d["zero_offset.detector_azimuth"] == pytest.approx(zero["detector_azimuth"], abs=0.03)
+    azimuth = math.radians(TRUTH["tilt_azimuth_deg"] + zero["sample_rotation"])  # as read
+    assert d["tilt_x"] == pytest.approx(0.5 * math.cos(azimuth), abs=0.03)
+    assert d["tilt_y"] == pytest.approx(0.5 * math.sin(azimuth), abs=0.03)
+    assert d["light_pointing_x"] == pytest.approx(0.3, abs=0.03)
+    light = d["zero_offset.light_elevation"] + d["light_pointing_y"]
+    detector = d["zero_offset.detector_elevation"] + d["detector_pointing_y"]
+    assert light == pytest.approx(0.7 - 0.2, abs=0.03)
+    assert detector == pytest.approx(0.5 + 0.3, abs=0.03)
+    assert "height_mm" in result.hints
+
+
+def test_a_scan_that_misses_its_peak_is_one_line() -> None:
+    offsets = np.radians(np.arange(-1.0, 1.0001, 0.1))
+    with pytest.raises(GonioError, match="on its edge; widen the scan"):
+        peak_offsets(offsets, np.exp(-((offsets[None, :] - 0.5) ** 2) / 1e-6))
+    center = peak_offsets(offsets, np.exp(-((offsets[None, :] - 0.0123) ** 2) / 1e-4))
+    assert center[0] == pytest.approx(0.0123, abs=1e-12)  # a Gaussian's vertex is exact
