@@ -21,8 +21,8 @@ through: the line's error, −S''·(t − t_k)(t_k+1 − t)/2, averages −S''Δ
 interval Δ and keeps its sign over half a period of the drift, so it adds up over a run
 instead of averaging out (`benchmarks/calibration.py` measures both).
 
-Uncertainty (1σ): the variance of C is the sample's own spread std²/n when it averaged n
-≥ 2 exposures, else the calibration's noise model var(C) = a + b·max(C − d·e, 0) per
+Uncertainty (1σ): the variance of C is the sample's own spread std²/n when it averaged
+n ≥ 2 exposures, else the calibration's noise model var(C) = a + b·max(C − d·e, 0) per
 exposure, with a the dark readings' variance and b the reference's excess variance per
 count (counting statistics: shot noise grows with the signal, read and dark noise do
 not). The reference and dark rates carry the variance of their means, (a + b·signal)/n
@@ -34,14 +34,14 @@ exposures: ν = 9, a spread of √(9/7) = 1.13; the scale's z-scores spread 1.18
 model's two points, a at no signal and a + b·S̄ at the references' mean signal S̄, are
 each multiplied by that factor of their own ν (`student_variance`: the standard
 uncertainty of a t-distributed quantity, JCGM 101:2008 6.4.9.4), so the z-scores of
-every value derived from the model have unit variance at every exposure count; with ν ≤
-2 a t has no finite variance and no σ is given (the plan asks for at least 4 exposures a
-reading, ν ≥ 3 from one calibration). These add in quadrature through the formula above.
-One error is not reduced by averaging: a dark reading in ADC codes whose noise is below
-a code is rounded the same way in every exposure and every calibration (`rounding_var`);
-it enters s and S(t) alike, so f carries it as (s − S)/(S s) times the dark rate's
-error. A detector that averages on its own and reports no spread gives no noise
-estimate: its readings count as exact there (docs/explanations/acquisition.md).
+every value derived from the model have unit variance at every exposure count; with
+ν ≤ 2 a t has no finite variance and no σ is given (the plan asks for at least 4
+exposures a reading, ν ≥ 3 from one calibration). These add in quadrature through the
+formula above. One error is not reduced by averaging: a dark reading in ADC codes whose
+noise is below a code is rounded the same way in every exposure and every calibration
+(`rounding_var`); it enters s and S(t) alike, so f carries it as (s − S)/(S s) times the
+dark rate's error. A detector that averages on its own and reports no spread gives no
+noise estimate: its readings count as exact there (docs/explanations/acquisition.md).
 """
 
 from __future__ import annotations
