@@ -13,8 +13,13 @@ target; "short" is 3 calibrations of 16 exposures 20 s apart, "long" 21 of 64; "
 is the brushed-metal scene's (2 %/h and 0.5 % over 15 min); "dark drawn" moves the dark
 level per seed by a uniform fraction of an ADC code (the rounding term's variance is
 the mean over where the level sits in its code; a scene's level sits at one place).
-Then what isolates each cause: the dark reading's rounding bias in the shipped scenes,
-and the straight line's error on a noise-free drifting run.
+Then the glossy scene at every exposure count a reading may have (the plan's 4 to 1000),
+calibrated 2 or 3 times: the noise model rests on ν = K·(n − 1) degrees of freedom and
+σ carries Student's factor ν/(ν − 2) on its variance (`gonio.analysis.calibrated`);
+printed beside it, the z-scores without that factor, whose spread it predicts as
+sqrt(ν/(ν − 2)) (the dark level drawn per seed, as in "dark drawn"). Then
+what isolates each cause: the dark reading's rounding bias in the shipped scenes, and
+the straight line's error on a noise-free drifting run.
 
 Run: .venv/bin/python benchmarks/calibration.py [--seeds 1000]
 """
@@ -67,9 +72,9 @@ CASES: list[tuple[str, str, bool, dict[str, Any]]] = [
         True,
         LONG | {"interval_s": 120.0, "dark_step": True},
     ),
-    ("glossy, 4 exposures a reading", "glossy_metal", False, {"averages": 4}),
-    ("glossy, 2 exposures a reading", "glossy_metal", False, {"averages": 2}),
 ]
+#: Exposures a calibration reading: from the plan schema's least (4) to its most (1000).
+EXPOSURES = (4, 5, 6, 8, 12, 16, 32, 64, 1000)
 
 
 def scene(name: str, drift: bool, *, effects: list[str] | None = None) -> Scene:
@@ -91,6 +96,30 @@ def spreads(rig: Rig, seeds: range) -> None:
             f"| {before['mean']:+.2f} | {before['std']:.2f} | {before['rms']:.2f} "
             f"| {np.median(r.sigma):.2g} |"
         )
+
+
+def exposure_counts(rig: Rig, seeds: range) -> None:
+    """The glossy scene at every exposure count, calibrated at the start and the end (2)
+    or 3 times, 20 s apart, its dark level drawn per seed: ν = K·(n − 1)."""
+    print()
+    print(
+        "| exposures | calibrations | ν | sqrt(ν/(ν−2)) | z mean | z std | z RMS "
+        "| without the factor: std | RMS |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    sc = scene("glossy_metal", False)
+    for n in EXPOSURES:
+        for k in (2, 3):
+            r = scale_errors(rig, sc, seeds, averages=n, calibrations=k, dark_step=True)
+            assert r.unexpanded is not None
+            now = r.spread()
+            bare = r.error / r.unexpanded
+            nu = k * (n - 1)
+            print(
+                f"| {n} | {k} | {nu} | {np.sqrt(nu / (nu - 2)):.3f} | {now['mean']:+.2f} "
+                f"| {now['std']:.2f} | {now['rms']:.2f} | {np.std(bare, ddof=1):.2f} "
+                f"| {np.sqrt(np.mean(bare**2)):.2f} |"
+            )
 
 
 def dark_bias(rig: Rig, seeds: range) -> None:
@@ -138,6 +167,7 @@ def main() -> None:
     rig = Rig.from_yaml(RIGS / "arch.yaml")
     start = time.process_time()
     spreads(rig, range(args.seeds))
+    exposure_counts(rig, range(args.seeds))
     dark_bias(rig, range(min(args.seeds, 200)))
     drift_line(rig)
     print(f"\nCPU {time.process_time() - start:.1f} s")

@@ -156,7 +156,7 @@ def rig_text(bus: str, detector: str, lamp: str) -> str:
 def plan_text(rig: Path, targets: int) -> str:
     return sobol_plan(
         "soak-rehearsal", rig, targets, {"seconds": 0.005, "averages": 1},
-        {"calibration": {"every_samples": 100, "averages": 2},
+        {"calibration": {"every_samples": 100, "averages": 4},
          "on_fault": {"retries": 2, "then": "skip"},
          "health": {"every_samples": 25}},
     )  # fmt: skip

@@ -17,7 +17,7 @@ import numpy as np
 
 from gonio.analysis.falloff import spot_corrected
 from gonio.errors import GonioError
-from gonio.radiometry.series import CalibrationSeries, rounding_var
+from gonio.radiometry.series import CalibrationSeries, rounding_var, student_variance
 from gonio.store.read import Event, Run
 from gonio.types import FloatArray
 
@@ -34,12 +34,14 @@ class Calibrated:
 def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     """The series of a run's calibration events (`GonioError` without one): the noise
     model a (the dark readings' variance per exposure) and b (the reference's excess
-    variance per count) pooled over them, each reading's variance from it, and the
-    error the darks' rounding leaves (`gonio.radiometry.series`)."""
+    variance per count) pooled over them and expanded for the degrees of freedom it is
+    estimated from (`noise_model`), each reading's variance from it, and the error the
+    darks' rounding leaves (`gonio.radiometry.series`)."""
     if not events:
         raise GonioError("the run has no calibration reading: no BRDF can be derived")
     t, dark, ref, a_s, b_s = [], [], [], [], []
     codes, dark_counts_, dark_spread, exposures, ns, dns = [], [], [], [], [], []
+    ref_dof, dark_dof = [], []
     for e in events:
         r, d = e.data["reference"], e.data["dark"]
         exposure = float(r["exposure_s"])
@@ -56,6 +58,8 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         ref.append(signal / exposure)
         a_s.append(dark_std**2)
         b_s.append(max(_std(r) ** 2 - dark_std**2, 0.0) / max(signal, 1e-300))
+        ref_dof.append(_dof(r, n))
+        dark_dof.append(0 if d is None else _dof(d, dn))
         codes.append(d is not None and not is_level(e.data) and _whole_codes(r) and _whole_codes(d))
         dark_counts_.append(dark_counts)
         dark_spread.append(dark_std)
@@ -66,13 +70,16 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     rate = np.array(ref)
     if np.any(rate <= 0):
         raise GonioError("a reference reading is not above its dark reading: no calibration")
-    noise_a, noise_b = float(np.mean(a_s)), float(np.mean(b_s))
     exposure_s = np.array(exposures)
-    dark_var = noise_a / np.array(dns) / exposure_s**2
-    ref_var = (noise_a + noise_b * rate * exposure_s) / np.array(ns) / exposure_s**2 + dark_var
-    rounding = _dark_rounding(
-        np.array(codes), np.array(dark_counts_), np.array(dark_spread), noise_b, exposure_s
+    model = noise_model(
+        np.array(a_s), np.array(b_s), np.array(ref_dof), np.array(dark_dof), rate * exposure_s
     )
+    dark_var = model.a / np.array(dns) / exposure_s**2
+    ref_var = (model.a + model.b * rate * exposure_s) / np.array(ns) / exposure_s**2 + dark_var
+    rounding = _dark_rounding(
+        np.array(codes), np.array(dark_counts_), np.array(dark_spread), model.b_estimate,
+        exposure_s,
+    )  # fmt: skip
     return CalibrationSeries(
         albedo=float(first["albedo"]),
         source_kind=str(first["source_kind"]),
@@ -83,10 +90,70 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
         dark_rate_var=dark_var,
         rate=rate,
         rate_var=ref_var,
-        noise_a=noise_a,
-        noise_b=noise_b,
+        noise_a=model.a,
+        noise_b=model.b,
         dark_rounding=rounding,
+        noise_dof=model.dof,
     )
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """The calibration's noise model var(C) = a + b·C per exposure (counts², C the
+    signal in counts), expanded for its degrees of freedom (`noise_model`): ``a``, ``b``
+    as the σ of every value uses them, ``b_estimate`` as pooled (the best estimate of
+    the noise itself), ``dof`` the references' ν (∞: no spread to estimate from)."""
+
+    a: float
+    b: float
+    b_estimate: float
+    dof: float
+
+
+def noise_model(
+    a: FloatArray, b: FloatArray, ref_dof: np.ndarray, dark_dof: np.ndarray, signal: FloatArray
+) -> NoiseModel:
+    """The noise model pooled over K calibrations: ``a`` (K,) each dark reading's
+    variance per exposure (counts²), ``b`` (K,) each reference's excess variance per
+    count of ``signal`` (K,, counts per exposure), ``ref_dof``/``dark_dof`` (K,) the
+    degrees of freedom of their spreads (n − 1; 0 where none was given).
+
+    Each estimate is the mean of the readings' variances weighted by their degrees of
+    freedom (a pooled variance, JCGM 100:2008 4.2.4 and H.3.6), so it rests on
+    ν = Σ (n_k − 1) of them: ν_d for a, ν_r for the references' variance a + b·S̄ at
+    their mean signal S̄. An error divided by a σ so estimated follows Student's t with
+    ν degrees of freedom, whose variance is ν/(ν − 2); each of the model's two points,
+    a and a + b·S̄, is multiplied by that factor of its own ν (`student_variance`), so
+    the z-scores have unit variance whatever the number of exposures, and b joins them.
+    The alternative, predicting the noise from the signal through a detector model,
+    needs the detector's gain and read noise, which the rig file does not declare.
+    `GonioError` where a variance rests on ν ≤ 2 (no finite variance: no σ)."""
+    a_pooled, b_pooled = _pooled(a, dark_dof), _pooled(b, ref_dof)
+    level = _pooled(signal, ref_dof) if ref_dof.sum() > 0 else float(np.mean(signal))
+    nu_d, nu_r = float(dark_dof.sum()), float(ref_dof.sum())
+    f_d = student_variance(nu_d) if a_pooled > 0 else 1.0
+    f_r = student_variance(nu_r) if a_pooled + b_pooled * level > 0 else 1.0
+    if math.isinf(f_d) or math.isinf(f_r):
+        nu, what = (nu_d, "dark") if math.isinf(f_d) else (nu_r, "reference")
+        raise GonioError(
+            f"the calibration's {len(signal)} {what} readings estimate their noise from "
+            f"{nu:g} degrees of freedom (n − 1 each, n their exposures): too few for a σ "
+            "(Student's t with ν ≤ 2 has no finite variance); take at least 4 exposures a "
+            "reading (acquisition.calibration.averages)"
+        )
+    expanded_b = max(f_r * b_pooled + (f_r - f_d) * a_pooled / level, 0.0)
+    return NoiseModel(f_d * a_pooled, expanded_b, b_pooled, nu_r if nu_r > 0 else math.inf)
+
+
+def _pooled(values: FloatArray, dof: np.ndarray) -> float:
+    """The mean of ``values`` weighted by their degrees of freedom (0 without any)."""
+    total = float(np.sum(dof))
+    return float(np.dot(dof, values) / total) if total > 0 else 0.0
+
+
+def _dof(reading: Mapping[str, Any], n: int) -> int:
+    """The degrees of freedom of a journaled reading's spread: n − 1, 0 without one."""
+    return n - 1 if reading.get("std") is not None else 0
 
 
 def is_level(calibration: Mapping[str, Any]) -> bool:
@@ -144,6 +211,8 @@ def _dark_rounding(
         spread >= 0.5, np.maximum(noise_b * dark, spread**2 - 1.0 / 12.0), noise_b * dark
     )
     noise = np.sqrt(np.maximum(noise2, 0.0))
+    if not np.any(codes):
+        return np.zeros(len(codes))
     return np.asarray(np.where(codes, np.sqrt(rounding_var(noise)) / exposure, 0.0), np.float64)
 
 

@@ -34,7 +34,9 @@ class CalibrationSpec(Strict):
     run, and again after ``every_samples`` targets or ``every_minutes`` of run time
     (whichever comes first; none: never in between). ``dark``: a dark reading (light
     off) with each reference reading. ``averages``: exposures per calibration reading
-    (at least 2: their spread is what the uncertainty of every sample is scaled by)."""
+    (at least 4: their spread estimates the noise model every sample's uncertainty comes
+    from, with n − 1 degrees of freedom a reading, and Student's t needs more than 2 in
+    all to give a finite σ, even from one calibration: `gonio.analysis.calibrated`)."""
 
     every_samples: int | None = Field(
         None,
@@ -51,7 +53,9 @@ class CalibrationSpec(Strict):
     dark: bool = Field(
         True, description="Take a dark reading (light off) with each reference reading."
     )
-    averages: int = Field(16, ge=2, le=1000, description="Exposures per calibration reading.")
+    averages: int = Field(
+        16, ge=4, le=1000, description="Exposures per calibration reading (at least 4)."
+    )
 
 
 class MotorFaultSpec(Strict):

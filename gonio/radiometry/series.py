@@ -26,14 +26,22 @@ n ≥ 2 exposures, else the calibration's noise model var(C) = a + b·max(C − 
 exposure, with a the dark readings' variance and b the reference's excess variance per
 count (counting statistics: shot noise grows with the signal, read and dark noise do
 not). The reference and dark rates carry the variance of their means, (a + b·signal)/n
-and a/n, from the same model pooled over the K calibrations (a reading's own spread of
-n exposures is itself uncertain: with n = 4 the scale's z-scores spread 1.22 instead of
-1, 1.18 pooled). These add in quadrature through the formula above. One error is not
-reduced by averaging: a dark reading in ADC codes whose noise is below a code is rounded
-the same way in every exposure and every calibration (`rounding_var`); it enters s and
-S(t) alike, so f carries it as (s − S)/(S s) times the dark rate's error. A detector
-that averages on its own and reports no spread gives no noise estimate: its readings
-count as exact there (docs/explanations/acquisition.md).
+and a/n, from the same model pooled over the K calibrations. That model is itself
+estimated, from the readings' spreads: from ν = Σ_k (n_k − 1) degrees of freedom (the
+references', and the darks' for a), so an error divided by its σ follows Student's t
+with ν degrees of freedom, whose variance is ν/(ν − 2), not 1 (3 calibrations of 4
+exposures: ν = 9, a spread of √(9/7) = 1.13; the scale's z-scores spread 1.18). The
+model's two points, a at no signal and a + b·S̄ at the references' mean signal S̄, are
+each multiplied by that factor of their own ν (`student_variance`: the standard
+uncertainty of a t-distributed quantity, JCGM 101:2008 6.4.9.4), so the z-scores of
+every value derived from the model have unit variance at every exposure count; with
+ν ≤ 2 a t has no finite variance and no σ is given (the plan asks for at least 4
+exposures a reading, ν ≥ 3 from one calibration). These add in quadrature through the
+formula above. One error is not reduced by averaging: a dark reading in ADC codes whose
+noise is below a code is rounded the same way in every exposure and every calibration
+(`rounding_var`); it enters s and S(t) alike, so f carries it as (s − S)/(S s) times the
+dark rate's error. A detector that averages on its own and reports no spread gives no
+noise estimate: its readings count as exact there (docs/explanations/acquisition.md).
 """
 
 from __future__ import annotations
@@ -98,6 +106,17 @@ def rounding_var(noise: ArrayLike) -> FloatArray:
     return np.asarray(terms.sum(axis=-1), dtype=np.float64)
 
 
+def student_variance(dof: float) -> float:
+    """ν/(ν − 2): the variance of Student's t with ``dof`` = ν degrees of freedom, the
+    factor by which a variance estimated from ν degrees of freedom is multiplied so that
+    an error divided by its square root has unit variance (JCGM 101:2008 6.4.9.4: the
+    standard uncertainty of a quantity whose spread is estimated from n readings, ν =
+    n − 1); 1 for ν = ∞ (a known variance), ∞ for ν ≤ 2 (no finite variance)."""
+    if dof <= 2:
+        return math.inf
+    return 1.0 if math.isinf(dof) else dof / (dof - 2.0)
+
+
 @dataclass(frozen=True)
 class CalibrationSeries:
     """The calibration readings of a run, in run time (see the module docstring)."""
@@ -111,11 +130,13 @@ class CalibrationSeries:
     dark_rate_var: FloatArray  # (K,) (counts/s)² of the mean
     rate: FloatArray  # (K,) dark-subtracted reference rate, counts/s
     rate_var: FloatArray  # (K,)
-    noise_a: float  # counts² per exposure (dark)
-    noise_b: float  # counts² per count of signal
+    noise_a: float  # counts² per exposure (dark), times its `student_variance`
+    noise_b: float  # counts² per count of signal, as expanded (module docstring)
     #: (K,) counts/s: 1σ of the error the ADC's rounding leaves in each dark rate
     #: (`rounding_var`), the same error in every reading (fully correlated); 0: none.
     dark_rounding: FloatArray | None = None
+    #: Degrees of freedom of the reference readings' noise estimate (∞: none estimated).
+    noise_dof: float = math.inf
 
     def weights(self, t: ArrayLike, *, spline: bool = True) -> FloatArray:
         """(N, K): the interpolated rate at run times ``t`` (s, (N,)) as a combination

@@ -19,6 +19,7 @@ variance assumes (a shipped scene's dark level sits at one place, the same every
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,7 +28,7 @@ import numpy as np
 from gonio.acquire.reference import CALIBRATION_INDEX, reference_pose
 from gonio.analysis.calibrated import calibration_series
 from gonio.analysis.shared import calibration_error
-from gonio.radiometry.series import CalibrationSeries
+from gonio.radiometry.series import CalibrationSeries, student_variance
 from gonio.rig.model import Rig
 from gonio.store.read import Event
 from gonio.types import FloatArray
@@ -60,6 +61,9 @@ class ScaleErrors:
     sigma: FloatArray
     #: The same runs under the former model (`linear`), when asked for.
     linear: ScaleErrors | None = None
+    #: The same runs' σ from the pooled noise model as estimated, without Student's
+    #: factor ν/(ν − 2) (`gonio.analysis.calibrated.noise_model`).
+    unexpanded: FloatArray | None = None
 
     @property
     def z(self) -> FloatArray:
@@ -149,7 +153,7 @@ def scale_errors(
     optics = _Optics(scene, rig)
     exposure = float(schedule.get("exposure_s", 0.05))
     code_e_s = sensor_of(scene)[0].gain_e_per_count / exposure  # one code of dark, e/s
-    errors, sigmas, before = [], [], []
+    errors, sigmas, before, bare = [], [], [], []
     for seed in seeds:
         run_scene = scene
         if dark_step:
@@ -165,12 +169,23 @@ def scale_errors(
         shared = calibration_error(series, t)
         mean_weights = shared.weights.mean(axis=0)
         sigmas.append(float(np.sqrt(np.sum((mean_weights * shared.relative) ** 2))))
+        bare.append(_unexpanded(series, t))
         if linear:
             before.append(linear_model(series, events, t, truth))
     former = None
     if linear:
         former = ScaleErrors(np.array([b[0] for b in before]), np.array([b[1] for b in before]))
-    return ScaleErrors(np.array(errors), np.array(sigmas), former)
+    return ScaleErrors(np.array(errors), np.array(sigmas), former, np.array(bare))
+
+
+def _unexpanded(series: CalibrationSeries, t: FloatArray) -> float:
+    """The scale's σ with the readings' variances divided by Student's factor again (the
+    darks' degrees of freedom those of the references, as `calibration_events` takes
+    them: one factor for both)."""
+    factor = student_variance(series.noise_dof)
+    bare = dataclasses.replace(series, rate_var=series.rate_var / factor)
+    shared = calibration_error(bare, t)
+    return float(np.sqrt(np.sum((shared.weights.mean(axis=0) * shared.relative) ** 2)))
 
 
 def linear_model(

@@ -61,7 +61,7 @@ def fly_files(
         },
         "time_budget_s": 5,
         "acquisition": {
-            "calibration": {"every_samples": 400, "averages": 2},
+            "calibration": {"every_samples": 400, "averages": 4},
             "health": {"every_samples": 300},
             "on_fault": {"retries": 1, "then": "skip"},
         },

@@ -42,8 +42,10 @@ def test_whole_code_darks_below_a_code_of_noise_carry_their_rounding():
     its code, dithered by the dark's own shot noise b·D."""
     cal = events([(16510.0625, 5.3), (16509.8125, 5.1)], [(17.0, 0.0), (16.9375, 0.25)])
     series = calibration_series(cal)
-    b = series.noise_b
-    assert b == pytest.approx(np.mean([5.3**2 / 16493.0625, (5.1**2 - 0.25**2) / 16492.875]))
+    b = np.mean([5.3**2 / 16493.0625, (5.1**2 - 0.25**2) / 16492.875])
+    # as the σ use it, times Student's ν/(ν − 2) of 2·15 degrees of freedom; the rounding's
+    # dither from the estimate itself
+    assert series.noise_b == pytest.approx(b * 30 / 28)
     expected = np.sqrt(rounding_var(np.sqrt(b * np.array([17.0, 16.9375])))) / EXPOSURE
     np.testing.assert_allclose(series.dark_rounding, expected)
     assert 2.4 < series.dark_rounding[0] < 2.8  # ≈ 0.13 codes, vs 1/√12 = 0.29 undithered
@@ -63,11 +65,13 @@ def test_darks_that_are_not_whole_codes_or_dithered_carry_none():
 
 def test_each_readings_variance_comes_from_the_pooled_noise_model():
     """A reading's own spread of n exposures is itself uncertain; the noise model pooled
-    over the calibrations (a + b·signal per exposure) is the better estimate."""
+    over the calibrations (a + b·signal per exposure) is the better estimate, expanded by
+    Student's ν/(ν − 2) for the 2·15 degrees of freedom it rests on."""
     cal = events([(16510.0625, 5.3), (16509.8125, 4.1)], [(17.0, 0.2), (16.9375, 0.25)])
     series = calibration_series(cal)
-    a, b = np.mean([0.2**2, 0.25**2]), series.noise_b
+    a, b = np.mean([0.2**2, 0.25**2]) * 30 / 28, series.noise_b
     assert series.noise_a == pytest.approx(a)
+    assert series.noise_dof == 30
     signal = np.array([16510.0625 - 17.0, 16509.8125 - 16.9375])
     np.testing.assert_allclose(series.rate, signal / EXPOSURE)
     expected = ((a + b * signal) / 16 + a / 16) / EXPOSURE**2

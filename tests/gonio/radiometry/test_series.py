@@ -1,6 +1,7 @@
 """`CalibrationSeries`: the reference rate interpolated through the calibrations (a
-spline that follows a bending drift), and the dark readings' rounding error
-(`rounding_var`)."""
+spline that follows a bending drift), the dark readings' rounding error
+(`rounding_var`), and the factor of a variance estimated from few degrees of freedom
+(`student_variance`)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,18 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.stats import norm
+from scipy.stats import t as student_t
 
 from gonio.radiometry import series as series_module
-from gonio.radiometry.series import NOISE_GAIN, CalibrationSeries, rounding_var
+from gonio.radiometry.series import (
+    NOISE_GAIN,
+    CalibrationSeries,
+    rounding_var,
+    student_variance,
+)
 
 ALBEDO = 0.99
 ZENITH = np.array([0.0, 0.0, 1.0])
@@ -158,3 +167,16 @@ def test_blocks_of_samples_give_the_whole_runs_values(monkeypatch: pytest.Monkey
         np.testing.assert_allclose(b, a, rtol=1e-14)
     empty = cal.brdf(*(a[:0] for a in args))
     assert empty[0].shape == empty[1].shape == (0,)
+
+
+@given(st.floats(min_value=2.0, max_value=1e6, exclude_min=True))
+def test_student_variance_is_that_of_students_t(dof: float) -> None:
+    """ν/(ν − 2) is the variance of Student's t (scipy's), above 1 and falling to 1."""
+    factor = student_variance(dof)
+    assert factor == pytest.approx(float(student_t.var(dof)), rel=1e-9)
+    assert factor > 1.0 and student_variance(2.0 * dof) < factor
+
+
+def test_student_variance_without_a_finite_one() -> None:
+    assert student_variance(math.inf) == 1.0
+    assert student_variance(2.0) == math.inf and student_variance(1.0) == math.inf
