@@ -11,8 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gonio.config import ConfigError
 from gonio.errors import GonioError
-from gonio.rig.alignment_fit import fit, peak_offsets
+from gonio.rig.alignment_file import from_fit, load_alignment, text
+from gonio.rig.alignment_fit import AlignmentFit, fit, peak_offsets
 from gonio.rig.model import Rig
 from sim.scene import load_scene
 from sim.simulate import simulate
@@ -27,6 +29,7 @@ TRUTH = {
     "tilt_deg": 0.5, "tilt_azimuth_deg": 40.0,
     "light_pointing_deg": (0.3, -0.2), "detector_pointing_deg": (-0.25, 0.3),
 }  # fmt: skip
+ARCH = CONFIGS / "rigs" / "arch.yaml"
 #: Coarse then fine offsets (°) of the cross scans.
 SCANS = (
     np.arange(-4.0, 4.0001, 0.1),
@@ -52,9 +55,11 @@ def nominal_poses(rig: Rig) -> np.ndarray:
     return np.concatenate(poses)
 
 
-def test_a_simulated_mirror_scan_recovers_the_misalignment(tmp_path: Path) -> None:
-    rig = Rig.from_yaml(CONFIGS / "rigs" / "arch.yaml")
-    mirror = tmp_path / "mirror.yaml"  # a first-surface mirror: the glossy metal, sharper
+@pytest.fixture(scope="module")
+def scanned(tmp_path_factory: pytest.TempPathFactory) -> tuple[Rig, AlignmentFit]:
+    """The arch rig and the fit of a simulated mirror scan of it misaligned by `TRUTH`."""
+    rig = Rig.from_yaml(ARCH)
+    mirror = tmp_path_factory.mktemp("scan") / "mirror.yaml"  # the glossy metal, sharper
     text = (CONFIGS / "scenes" / "glossy_metal.yaml").read_text(encoding="utf-8")
     mirror.write_text(text.replace("alpha: 0.05", "alpha: 0.005"), encoding="utf-8")
     scene = misaligned(load_scene(mirror, rig), [], **TRUTH)
@@ -65,7 +70,13 @@ def test_a_simulated_mirror_scan_recovers_the_misalignment(tmp_path: Path) -> No
             poses[:, :, joint] += offsets
             values = simulate(Sweep(rig, poses.reshape(-1, len(rig.axes))), scene).value
             peaks[:, joint] += peak_offsets(offsets, values.reshape(len(peaks), -1))
-    result = fit(rig, peaks, math.radians(0.002))
+    return rig, fit(rig, peaks, math.radians(0.002))
+
+
+def test_a_simulated_mirror_scan_recovers_the_misalignment(
+    scanned: tuple[Rig, AlignmentFit],
+) -> None:
+    _, result = scanned
     d = dict(zip(result.names, np.degrees(result.values), strict=True))
     zero = TRUTH["zero_offset_deg"]
     assert d["zero_offset.detector_azimuth"] == pytest.approx(zero["detector_azimuth"], abs=0.03)
@@ -78,6 +89,38 @@ def test_a_simulated_mirror_scan_recovers_the_misalignment(tmp_path: Path) -> No
     assert light == pytest.approx(0.7 - 0.2, abs=0.03)
     assert detector == pytest.approx(0.5 + 0.3, abs=0.03)
     assert "height_mm" in result.hints
+
+
+def test_the_alignment_file_holds_the_fit_and_reads_back(
+    scanned: tuple[Rig, AlignmentFit], tmp_path: Path
+) -> None:
+    rig, result = scanned
+    run = tmp_path / "scan.sqlite"
+    run.write_bytes(b"the scan")
+    made = from_fit(result, rig, ARCH.read_bytes(), run, run.read_bytes(), "2026-12-07T11:30:00Z")
+    path = tmp_path / "arch.alignment.yaml"
+    path.write_text(text(made), encoding="utf-8")
+    assert path.read_text(encoding="utf-8").startswith("# gonio alignment v1\n")
+    back = load_alignment(path)
+    assert back == made and back.fit is not None
+    assert back.fit.parameters["zero_offset.detector_azimuth"].value == pytest.approx(
+        -0.4, abs=0.03
+    )
+    assert "height_mm" in back.fit.undetermined and back.fit.peaks == len(result.residuals_rad)
+    # the alignment the file gives moves the rig as the fit found it
+    wi, wo = rig.forward(nominal_poses(rig), back.alignment.alignment(rig.axes))
+    fitted = rig.forward(nominal_poses(rig), result.alignment)
+    np.testing.assert_allclose(wi, fitted[0], atol=1e-12)
+    np.testing.assert_allclose(wo, fitted[1], atol=1e-12)
+
+
+def test_a_bad_alignment_file_is_one_line(tmp_path: Path) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text("alignment:\n  tilt_deg: 30\n", encoding="utf-8")
+    with pytest.raises(
+        ConfigError, match=r"bad.yaml:2: alignment.tilt_deg: .*less than or equal to 5"
+    ):
+        load_alignment(path)
 
 
 def test_a_scan_that_misses_its_peak_is_one_line() -> None:
