@@ -56,6 +56,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gonio.cli.tradeoff",
         "sweep plans over scenes and axes: error against instrument time, the fastest plan",
     ),
+    "align": (
+        "gonio.cli.align",
+        "measure the rig's misalignment with a mirror and write its alignment file; --check it",
+    ),
     "info": ("gonio.cli.info", "what a run file holds: progress, time, faults, calibration"),
     "serve": (
         "gonio.cli.serve",
