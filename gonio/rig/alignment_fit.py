@@ -198,6 +198,26 @@ def peak_offsets(offsets: FloatArray, values: FloatArray) -> FloatArray:
     return np.asarray(offsets[k] + np.clip(shift, -step, step), dtype=np.float64)
 
 
+def peak_at(x: FloatArray, values: FloatArray) -> float:
+    """Where one scan peaks (rad): the vertex of the parabola through the logarithm of
+    the largest reading and its neighbours, at the angles ``x`` (K,) the joint was read
+    back at (any spacing: readings at one angle are averaged, as a motor's ticks give
+    them), held within its neighbours. `GonioError` when the largest is on the scan's
+    edge (the scan missed the peak) or fewer than three angles were read."""
+    x = np.asarray(x, dtype=np.float64)
+    at, where = np.unique(x, return_inverse=True)
+    if len(at) < 3:
+        raise GonioError("peak: a scan read fewer than three distinct angles; widen its step")
+    mean = np.bincount(where, weights=np.asarray(values, dtype=np.float64)) / np.bincount(where)
+    k = int(np.argmax(mean))
+    if k in (0, len(at) - 1) or not mean[k] > 0:
+        raise GonioError("peak: a scan's largest reading is on its edge; widen the scan")
+    xs, ys = at[k - 1 : k + 2], np.log(np.maximum(mean[k - 1 : k + 2], np.finfo(np.float64).tiny))
+    a, b, _ = np.polyfit(xs - xs[1], ys, 2)
+    vertex = xs[1] - b / (2.0 * a) if a < 0 else xs[1]
+    return float(np.clip(vertex, xs[0], xs[2]))
+
+
 def _directions(
     residuals: Callable[[FloatArray], FloatArray], n: int, scale: FloatArray
 ) -> tuple[FloatArray, np.ndarray]:
@@ -222,4 +242,7 @@ def _directions(
     )
 
 
-__all__ = ["HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_offsets"]
+__all__ = [
+    "HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_at",
+    "peak_offsets",
+]  # fmt: skip

@@ -30,7 +30,7 @@ from gonio.acquire import measure_target
 from gonio.errors import GonioError
 from gonio.rig import Rig
 from gonio.rig.alignment_file import AlignmentFile
-from gonio.rig.alignment_fit import as_alignment, miss, parameters, peak_offsets
+from gonio.rig.alignment_fit import as_alignment, miss, parameters, peak_at
 from gonio.types import FloatArray
 from gonio.workflows import backends
 from gonio.workflows.backends import BackendKind
@@ -171,15 +171,33 @@ def locate(
     readings: Readings,
     peak: int,
 ) -> FloatArray:
-    """The pose (A,) of the mirror's peak near ``center``: a coarse cross scan, then a
-    fine one (elevation, then azimuth, each about the other's latest peak)."""
+    """The pose (A,) of the mirror's peak near ``center``, as the motors read it back:
+    a coarse cross scan, then a fine one (elevation, then azimuth, each about the
+    other's latest peak), the fine step at least one tick of the scanned motor; the
+    peak located in the read-back angles (a motor stands on its ticks, not where it was
+    asked), the other joints where they were read."""
     found = np.asarray(center, dtype=np.float64).copy()
+    ticks = tick_rad(rig)
     for steps in (coarse_offsets(settings), fine_offsets(settings)):
         for joint in SCANNED:
+            j = rig.axes.index(joint)
+            if len(steps) > 1 and steps[1] - steps[0] < ticks[j]:
+                half = steps[-1]
+                steps = np.arange(-half, half + 0.5 * ticks[j], ticks[j])
+            start = len(readings.value)
             poses = cross_scan(rig, found, joint, steps)
             values = measure_line(devices, rig, poses, settings.exposure_s, readings, peak, joint)
-            found[rig.axes.index(joint)] += peak_offsets(steps, values[None, :])[0]
+            read = np.asarray(readings.read_back[start:], dtype=np.float64)
+            found = np.median(read, axis=0)
+            found[j] = peak_at(read[:, j], values)
     return found
+
+
+def tick_rad(rig: Rig) -> FloatArray:
+    """Each joint's smallest step (rad, (A,)): a motor tick through its gear (the
+    simulated motors quantize so too when a scene asks)."""
+    by_name = {a.name: a.resolution_rad for a in rig.bus_axes()}
+    return np.array([by_name[name] for name in rig.axes])
 
 
 @dataclass(frozen=True)
