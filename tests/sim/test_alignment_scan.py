@@ -14,7 +14,7 @@ import pytest
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.rig.alignment_file import from_fit, load_alignment, text
-from gonio.rig.alignment_fit import AlignmentFit, fit, peak_offsets
+from gonio.rig.alignment_fit import AlignmentFit, fit, peak_at, peak_offsets
 from gonio.rig.model import Rig
 from sim.scene import load_scene
 from sim.simulate import simulate
@@ -129,3 +129,16 @@ def test_a_scan_that_misses_its_peak_is_one_line() -> None:
         peak_offsets(offsets, np.exp(-((offsets[None, :] - 0.5) ** 2) / 1e-6))
     center = peak_offsets(offsets, np.exp(-((offsets[None, :] - 0.0123) ** 2) / 1e-4))
     assert center[0] == pytest.approx(0.0123, abs=1e-12)  # a Gaussian's vertex is exact
+
+
+def test_a_peak_is_found_where_the_motors_stood() -> None:
+    """Angles read back on a motor's ticks: uneven, repeated; the vertex of the log
+    parabola of a Gaussian peak is its centre whatever the spacing."""
+    tick = math.radians(360.0 / 4096.0)
+    asked = np.radians(np.linspace(-0.3, 0.3, 15)) + 0.0011
+    read = np.round(asked / tick) * tick  # where the motors stood
+    centre = 0.00123
+    values = np.exp(-((read - centre) ** 2) / (2.0 * math.radians(0.1) ** 2))
+    assert peak_at(read, values) == pytest.approx(centre, abs=1e-12)
+    with pytest.raises(GonioError, match="fewer than three distinct angles"):
+        peak_at(np.zeros(5), np.ones(5))
