@@ -80,8 +80,11 @@ class Measured:
             raise GonioError(f"{run.path}: the run has no sample yet")
         calibrated = calibrate(run) if calibrated is None else calibrated
         wi, wo = run.directions()
+        aligned = run.meta.get("alignment_text")
         rig = Rig.from_yaml(
-            str(run.meta.get("rig_path", run.path)), raw=_bytes(run.meta["rig_text"])
+            str(run.meta.get("rig_path", run.path)),
+            raw=_bytes(run.meta["rig_text"]),
+            alignment_raw=None if aligned is None else _bytes(aligned),
         )
         scene_text = run.meta.get("scene_text")
         band = "luminance"

@@ -11,6 +11,7 @@ rotation stage stays home) and, for refused pairs, why (`Reason`).
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from enum import IntEnum
@@ -26,6 +27,7 @@ from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
 from gonio.rig.alignment import Alignment, Geometry, at_height
+from gonio.rig.alignment_file import AlignmentFile, load_alignment
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
@@ -97,7 +99,11 @@ class Rig:
     """A rig: forward and inverse kinematics, constraints, and its motor axes."""
 
     def __init__(
-        self, spec: RigSpec, source: Path | None = None, text: bytes | None = None
+        self,
+        spec: RigSpec,
+        source: Path | None = None,
+        text: bytes | None = None,
+        alignment_text: bytes | None = None,
     ) -> None:
         self.spec = spec
         self.source = source
@@ -106,6 +112,15 @@ class Rig:
         self.text = text if text is not None else spec_text(spec)
         self._check_chains()
         self.axes: tuple[str, ...] = tuple(spec.axes)
+        #: The alignment file the rig file names (``alignment``; read from
+        #: ``alignment_text`` when given, e.g. as a run stored it): its path, bytes, the
+        #: file and the `Alignment` the kinematics apply (`Alignment.none` without one).
+        self.alignment_path: Path | None = None
+        self.alignment_text: bytes | None = None
+        self.alignment_file: AlignmentFile | None = None
+        self.alignment = Alignment.none()
+        if spec.alignment is not None:
+            self._read_alignment(spec.alignment, alignment_text)
         a = list(spec.axes.values())
         self.limits = np.radians([[s.min_deg, s.max_deg] for s in a])
         #: The rig file's velocities (rad/s) and accelerations (rad/s²): each axis's limits.
@@ -140,11 +155,50 @@ class Rig:
         self._check_something_reachable()
 
     @classmethod
-    def from_yaml(cls, path: str | Path, raw: bytes | None = None) -> Rig:
-        """The rig of the file at ``path`` (or of its bytes ``raw``, already read)."""
+    def from_yaml(
+        cls, path: str | Path, raw: bytes | None = None, alignment_raw: bytes | None = None
+    ) -> Rig:
+        """The rig of the file at ``path`` (or of its bytes ``raw``, already read), with
+        the alignment file it names (read beside it, or from its bytes ``alignment_raw``
+        as a run or a plan stored them)."""
         path = Path(path)
         raw = read_bytes(path) if raw is None else raw
-        return cls(load(path, RigSpec, raw=raw), path, raw)
+        return cls(load(path, RigSpec, raw=raw), path, raw, alignment_raw)
+
+    def _read_alignment(self, name: str, raw: bytes | None) -> None:
+        where = str(self.source) if self.source else "rig"
+        base = self.source.parent if self.source is not None else Path()
+        path = base / name
+        if raw is None:
+            try:
+                raw = path.read_bytes()
+            except OSError as exc:
+                raise ConfigError(
+                    f"{where}: alignment: cannot read the alignment file {str(path)!r}: "
+                    f"{exc.strerror or exc}"
+                ) from None
+        file = load_alignment(path, raw)  # ConfigError naming the alignment file's field
+        unknown = file.alignment.unknown_axes(self.axes)
+        if unknown:
+            raise ConfigError(
+                f"{path}: alignment.zero_offset_deg.{unknown[0]}: no such axis in the rig "
+                f"file {where} (axes: {', '.join(self.axes)})"
+            )
+        self.alignment_path, self.alignment_text, self.alignment_file = path, raw, file
+        self.alignment = file.alignment.alignment(self.axes)
+
+    def realigned(self, path: str | Path, raw: bytes | None = None) -> Rig:
+        """This rig with the alignment file at ``path`` (or its bytes ``raw``) in place of
+        its own: the same rig file's instrument, measured later (`ConfigError`, one line,
+        on a bad file)."""
+        out = copy.copy(self)
+        path = Path(path)
+        out.source = None
+        try:
+            out._read_alignment(str(path), raw)
+        finally:
+            out.source = self.source
+        return out
 
     def _check_chains(self) -> None:
         where = str(self.source) if self.source else "rig"
@@ -398,7 +452,7 @@ class Rig:
         not), and whether each pose may be commanded at all (inside the axes' limits,
         outside every keep-out box)."""
         angles = np.asarray(angles, dtype=np.float64).reshape(-1, len(self.axes))
-        wi, wo = self.forward(angles)
+        wi, wo = self.forward(angles, self.alignment)
         limits_ok = self._inside_limits(angles.T)
         commandable = limits_ok & ~self._collides(angles)
         reasons = self._reasons(wi, wo, limits_ok[None, :], commandable[None, :])
