@@ -25,8 +25,8 @@ from gonio.types import BoolArray, FloatArray
 
 #: The most Gauss–Newton steps: from a start within a few degrees the error falls below
 #: 1e-15 in three or four; an isotropic pair's three invariants, from a start several
-#: degrees off, take up to ten. The steps stop once every pair is reached (`SETTLED`).
-STEPS = 12
+#: degrees off, up to ten or more. Only the pairs not yet settled (`SETTLED`) step on.
+STEPS = 20
 #: The central difference's step (rad): truncation ~H² and rounding ~1e-16 / H both
 #: near 1e-11 of the Jacobian, which only slows the last step's convergence.
 H = 1e-5
@@ -34,7 +34,7 @@ H = 1e-5
 #: Jacobian (a pose where an axis does not move the pair), negligible elsewhere.
 DAMPING = 1e-12
 #: The largest residual component of a reached pair (unit vectors' components).
-TOLERANCE = 1e-11
+TOLERANCE = 1e-12
 #: Every residual component below this: no further step changes anything.
 SETTLED = 1e-14
 

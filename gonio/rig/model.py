@@ -166,17 +166,19 @@ class Rig:
         raw = read_bytes(path) if raw is None else raw
         return cls(load(path, RigSpec, raw=raw), path, raw, alignment_raw)
 
-    def _read_alignment(self, name: str, raw: bytes | None) -> None:
+    def _read_alignment(self, name: str, raw: bytes | None, given: bool = False) -> None:
+        """Read the alignment file ``name`` (relative to the rig file, or as ``given``
+        in place of the one it names)."""
         where = str(self.source) if self.source else "rig"
-        base = self.source.parent if self.source is not None else Path()
+        base = self.source.parent if self.source is not None and not given else Path()
         path = base / name
         if raw is None:
             try:
                 raw = path.read_bytes()
             except OSError as exc:
+                field = f"{path}" if given else f"{where}: alignment"
                 raise ConfigError(
-                    f"{where}: alignment: cannot read the alignment file {str(path)!r}: "
-                    f"{exc.strerror or exc}"
+                    f"{field}: cannot read the alignment file {str(path)!r}: {exc.strerror or exc}"
                 ) from None
         file = load_alignment(path, raw)  # ConfigError naming the alignment file's field
         unknown = file.alignment.unknown_axes(self.axes)
@@ -203,12 +205,7 @@ class Rig:
         its own: the same rig file's instrument, measured later (`ConfigError`, one line,
         on a bad file)."""
         out = copy.copy(self)
-        path = Path(path)
-        out.source = None
-        try:
-            out._read_alignment(str(path), raw)
-        finally:
-            out.source = self.source
+        out._read_alignment(str(path), raw, given=True)
         return out
 
     def _check_chains(self) -> None:

@@ -312,8 +312,8 @@ class RigSpec(Strict):
     alignment: str | None = Field(
         None,
         min_length=1,
-        description="The rig's measured misalignment: the path of an alignment file (as "
-        "gonio align writes it), relative to this file. Forward and inverse kinematics then "
+        description="The rig's measured misalignment: the path of an alignment file (with its "
+        "fit record), relative to this file. Forward and inverse kinematics then "
         "work in the true geometry, and a run stores the alignment file's text. None: the "
         "rig is as this file says.",
     )

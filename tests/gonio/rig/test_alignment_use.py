@@ -118,6 +118,20 @@ def test_a_run_stores_the_alignment_and_info_shows_it(run_gonio: Gonio, tmp_path
     assert info.returncode == 0
     assert "alignment" in info.stdout and "align.yaml" in info.stdout
     assert "set by hand" in info.stdout
+    # Re-derived with another alignment file: the export's pairs follow it.
+    later = tmp_path / "later.yaml"
+    later.write_text(text(AlignmentFile(alignment=AlignmentSpec(tilt_deg=1.0))))
+    csv = tmp_path / "run.csv"
+    r = run_gonio("export", str(out), "--format", "csv", "-o", str(csv), "--alignment", str(later))
+    assert r.returncode == 0, r.stderr
+    plain = tmp_path / "plain.csv"
+    assert run_gonio("export", str(out), "--format", "csv", "-o", str(plain)).returncode == 0
+    assert csv.read_text() != plain.read_text()
+    for command in (("evaluate", str(out)), ("export", str(out), "--format", "csv", "-o",
+                    str(tmp_path / "x.csv"))):  # fmt: skip
+        bad = run_gonio(*command, "--alignment", str(tmp_path / "nowhere.yaml"))
+        assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+        assert "nowhere.yaml" in bad.stderr
 
 
 def test_info_says_none_without_an_alignment(run_gonio: Gonio, tmp_path: Path) -> None:
