@@ -12,7 +12,8 @@ import pytest
 
 from gonio.config import ConfigError
 from gonio.rig import AlignmentSpec, Rig
-from gonio.rig.alignment_file import AlignmentFile, text
+from gonio.rig.alignment_file import AlignmentFile, FitRecord, FittedParameter, text
+from gonio.rig.sensitivity import alignment_sigma
 from gonio.store import open_run
 from tests.conftest import CONFIGS, CliResult
 
@@ -148,3 +149,24 @@ def test_info_says_none_without_an_alignment(run_gonio: Gonio, tmp_path: Path) -
     assert r.returncode == 0, r.stderr
     assert "none" in run_gonio("info", str(out)).stdout.split("alignment")[-1].split("\n")[0]
     assert "alignment_text" not in open_run(out).meta
+
+
+def test_the_alignments_standard_errors_reach_the_directions(tmp_path: Path) -> None:
+    record = FitRecord(
+        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
+        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
+        residual_max_deg=0.02,
+        parameters={"zero_offset.light_elevation": FittedParameter(value=0.3, error=0.05)},
+    )  # fmt: skip
+    (tmp_path / "align.yaml").write_text(text(AlignmentFile(alignment=SPEC, fit=record)))
+    path = tmp_path / "arch.yaml"
+    path.write_text((CONFIGS / "rigs" / "arch.yaml").read_text() + "alignment: align.yaml\n")
+    rig = Rig.from_yaml(path)
+    wi = np.array([[0.3, 0.1, 0.9], [-0.5, 0.2, 0.7]])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo = wi * np.array([-1.0, -1.0, 1.0])
+    q = rig.solve(wi, wo).angles
+    # Only the light's elevation is uncertain: it moves ωi by its error, ωo not at all;
+    # the RMS over the pair's two directions is σ/√2.
+    np.testing.assert_allclose(alignment_sigma(rig, q), np.radians(0.05) / np.sqrt(2), rtol=1e-6)
+    assert np.all(alignment_sigma(Rig.from_yaml(CONFIGS / "rigs" / "arch.yaml"), q) == 0.0)
