@@ -425,7 +425,7 @@ class Engine:
         the ``measured`` ones (the reading, its window and uncertainty) and the
         simulation's ``state`` when it has one."""
         plan = self.plan
-        wi, wo = self.rig.forward(np.array(angles, dtype=np.float64))
+        wi, wo = self.rig.forward(np.array(angles, dtype=np.float64), self.rig.alignment)
         names = plan.coordinate_names
         row: dict[str, Any] = {  # the columns of `gonio.store.schema.samples_table`
             "target": i,

@@ -211,7 +211,7 @@ def calibration_data(
     for ``why``): the pair the reference was read at (from its read-back angles), the
     reference and dark readings (`reading_data`), and why no dark was read."""
     back = [read.reference.read_back[a] for a in rig.axes]
-    wi, wo = rig.forward(np.array(back))
+    wi, wo = rig.forward(np.array(back), rig.alignment)
     data: dict[str, Any] = {
         "why": why,
         "k": k,

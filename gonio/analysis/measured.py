@@ -9,10 +9,12 @@ same plan seen in the r, g and b bands, combined with `Measured.rgb`.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
 from gonio.analysis.calibrated import Calibrated, calibrate
+from gonio.analysis.realign import realigned
 from gonio.analysis.scene import scene_band, scene_truth
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
@@ -70,18 +72,35 @@ class Measured:
         )
 
     @classmethod
-    def from_run(cls, run: Run | str, calibrated: Calibrated | None = None) -> Measured:
+    def from_run(
+        cls,
+        run: Run | str,
+        calibrated: Calibrated | None = None,
+        *,
+        alignment: str | Path | None = None,
+    ) -> Measured:
         """The calibrated samples of a run (a `Run` or a run file's path; ``calibrated``:
         its `calibrate`, when the caller has it already) that have a finite value and σ
-        (`kept`); `GonioError` (one line) when it has no sample or no calibration."""
+        (`kept`); `GonioError` (one line) when it has no sample or no calibration.
+        ``alignment``: an alignment file to re-derive the run's pairs with (`realigned`;
+        ``calibrated`` is then recomputed)."""
         if not isinstance(run, Run):
             run = open_run(run)
+        if alignment is not None:
+            run, calibrated = realigned(run, alignment), None
         if len(run) == 0:
             raise GonioError(f"{run.path}: the run has no sample yet")
         calibrated = calibrate(run) if calibrated is None else calibrated
         wi, wo = run.directions()
-        rig = Rig.from_yaml(
-            str(run.meta.get("rig_path", run.path)), raw=_bytes(run.meta["rig_text"])
+        aligned = run.meta.get("alignment_text")
+        rig = (
+            run.plan.rig
+            if alignment is not None
+            else Rig.from_yaml(
+                str(run.meta.get("rig_path", run.path)),
+                raw=_bytes(run.meta["rig_text"]),
+                alignment_raw=None if aligned is None else _bytes(aligned),
+            )
         )
         scene_text = run.meta.get("scene_text")
         band = "luminance"

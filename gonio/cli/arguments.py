@@ -9,6 +9,18 @@ import math
 from gonio.config import MAX_INTEGER, MAX_SECONDS
 
 
+def add_alignment(p: argparse.ArgumentParser) -> None:
+    """``--alignment FILE``: re-derive the run's pairs with a later alignment file."""
+    p.add_argument(
+        "--alignment",
+        type=str,
+        default=None,
+        metavar="FILE",
+        help="an alignment file to re-derive the run's direction pairs "
+        "with, from its stored joint angles (default: the alignment the run's rig file named)",
+    )
+
+
 def positive(text: str, what: str = "a positive number", most: float = math.inf) -> float:
     """A positive number.
 

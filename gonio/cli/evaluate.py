@@ -7,6 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
+from gonio.cli.arguments import add_alignment
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.reconstruct.methods import DEFAULT_METHOD, FILLS, NAIVE, names
 from gonio.reconstruct.methods import reconstruction as _reconstruction
@@ -56,6 +57,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="score only the test pairs inside the reconstruction's support (no fill)",
     )
     p.add_argument("--json", action="store_true", help="print the scores as JSON")
+    add_alignment(p)
     p.set_defaults(func=cmd_evaluate)
 
 
@@ -68,7 +70,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         from gonio import params
 
         params.get(args.parametrization)  # an unknown name fails before any work
-    measured = Measured.from_run(str(args.run))
+    measured = Measured.from_run(str(args.run), alignment=args.alignment)
     truth = truth_from_spec(
         args.truth,
         measured,

@@ -55,6 +55,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument("--format", required=True, choices=list(FORMATS), help="the output format")
+    arguments.add_alignment(p)
     p.add_argument("-o", "--output", required=True, type=Path, help="the file to write")
     p.add_argument(
         "--alta-param",
@@ -133,6 +134,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         rgl_color=args.rgl_color,
         method=args.method,
         allow_sparse=args.allow_sparse,
+        alignment=args.alignment,
     )
     check_options(args.format, options)  # before any work: one line
     # Each long step is named on a terminal as it starts (no delay: a step that runs in

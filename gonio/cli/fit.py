@@ -32,6 +32,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help="the family, e.g. lambert+ggx (docs/explanations/fitting.md)",
     )
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
+    arguments.add_alignment(p)
     p.add_argument(
         "-o", "--output", type=Path, metavar="MATERIAL.yaml",
         help="write the fitted model as a scene's material",
@@ -61,6 +62,7 @@ def _starts(text: str) -> int:
 def cmd_fit(args: argparse.Namespace) -> int:
     from gonio.analysis.calibrated import calibrate
     from gonio.analysis.measured import Measured
+    from gonio.analysis.realign import realigned
     from gonio.analysis.shared import shared_error
     from gonio.brdf.family import parse
     from gonio.config import ConfigError
@@ -81,6 +83,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
         for path in args.runs:
             try:
                 run = open_run(path)  # read and calibrated once for both
+                if args.alignment is not None:
+                    run = realigned(run, args.alignment)
                 calibrated = calibrate(run) if len(run) else None  # (from_run says why)
                 parts.append(Measured.from_run(run, calibrated))
                 shared.append(shared_error(run, calibrated))

@@ -30,9 +30,15 @@ def cmd_info(args: argparse.Namespace) -> int:
 
     run = open_run(args.run)
     if args.json:
-        figures = {**summary.figures(run), "recoveries": recovery.summaries(run)}
+        figures = {
+            **summary.figures(run),
+            "recoveries": recovery.summaries(run),
+            "alignment_path": run.meta.get("alignment_path"),
+            "alignment_sha256": run.meta.get("alignment_sha256"),
+        }
         print(json.dumps(figures, indent=2, ensure_ascii=False))
     else:
         print(run_table.render(run))
+        print(run_table.alignment_line(run))
         print(run_table.render_details(run))
     return 0

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from gonio.cli.arguments import finite_degrees
+from gonio.cli.arguments import add_alignment, finite_degrees
 from gonio.config import ConfigError
 from gonio.output import reserve_output
 from gonio.plots.polar import DEFAULT_THETA_I_DEG
@@ -36,6 +36,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument("--kind", required=True, choices=KINDS, help="the figure to draw")
+    add_alignment(p)
     p.add_argument(
         "-o", "--output", type=Path, required=True, metavar="FILE",
         help="the figure file; its suffix names the format (.png, .svg, .pdf, …)",
@@ -100,7 +101,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
     with reserve_output(args.output, "-o", inputs=[args.run]) as figure:
         from gonio.analysis.measured import Measured
 
-        measured = Measured.from_run(str(args.run))
+        measured = Measured.from_run(str(args.run), alignment=args.alignment)
         draw = _FIGURES[args.kind](args, measured)
         kind = args.output.suffix.lower().removeprefix(".") or "png"
         figure.write_with(lambda path: draw(path, kind))

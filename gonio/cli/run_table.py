@@ -4,6 +4,7 @@ run's figures (`gonio.analysis.summary`)."""
 from __future__ import annotations
 
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 
@@ -121,3 +122,23 @@ def render_details(run: Run) -> str:
             f"{len(run.events)} events"
         )
     return "\n".join(lines)
+
+
+def alignment_line(run: Run) -> str:
+    """One line: the alignment the run's rig file named (its file's name, date and
+    largest determined parameter), or none."""
+    rig = run.plan.rig
+    file = rig.alignment_file
+    if file is None:
+        return f"  {'alignment':<24}{'none':>10}   (the rig file's geometry)"
+    name = Path(str(run.meta.get("alignment_path") or rig.alignment_path)).name
+    if file.fit is None:
+        return f"  {'alignment':<24}{name:>10}   (set by hand, no fit record)"
+    angles = {k: p.value for k, p in file.fit.parameters.items() if k != "height_mm"}
+    if not angles:
+        return f"  {'alignment':<24}{name:>10}   (fitted {file.fit.date_utc}; none determined)"
+    worst = max(angles, key=lambda k: abs(angles[k]))
+    return (
+        f"  {'alignment':<24}{name:>10}   (fitted {file.fit.date_utc}; largest determined "
+        f"parameter {worst} {angles[worst]:+.4f}°)"
+    )

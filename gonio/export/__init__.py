@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gonio import params
+from gonio.analysis import realigned
 from gonio.errors import GonioError, UnknownNameError
 from gonio.output import reserve_output
 from gonio.store import open_run
@@ -63,6 +64,7 @@ class Options:
     rgl_color: str = "spectral"
     method: str = "linear"
     allow_sparse: bool = False
+    alignment: str | None = None  # an alignment file to re-derive the run's pairs with
 
 
 #: The least share of a format's grid (its bins, pairs or nodes that have a direction
@@ -146,6 +148,8 @@ def export(
     module = importlib.import_module(FORMATS[name][0])
     with reserve_output(out_path, "-o", inputs=[run_path]) as out:
         run = open_run(run_path)
+        if options is not None and options.alignment is not None:
+            run = realigned(run, options.alignment)
         summary: str = module.export_run(run, out, options or Options())
     return summary
 

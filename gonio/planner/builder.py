@@ -252,7 +252,7 @@ def build(
     bound_wall_s = time.perf_counter() - started if bounds else None
     chosen = solved.sel[ordered.given[ordered.order]]
     order = np.searchsorted(solved.sel, chosen)  # positions in generation order
-    wi, wo = rig.forward(ordered.angles)  # the pair the chosen pose measures
+    wi, wo = rig.forward(ordered.angles, rig.alignment)  # the pair the chosen pose measures
     times = timing(spec, rig, wi, wo, ordered.travel)
     return Plan(
         spec=spec,

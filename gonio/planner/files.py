@@ -10,6 +10,7 @@ A stored plan is a header of ``# KEY: JSON`` lines, then the targets as CSV
     # plan_text: "..."     the plan file's text (a JSON string)
     # rig: "arch-4axis"    the rig's name
     # rig_text: "..."      the rig file's text (a JSON string)
+    # alignment_text: "…"  the alignment file's text the rig file names (only then)
     # summary: {...}       the `Summary` (JSON)
     # sweeps: {...}        a fly plan's segments (`Sweeps`, JSON; only in a fly plan)
     # hashes: {"plan_sha256": …, "rig_sha256": …, "content": …, "file_sha256": …}
@@ -100,9 +101,9 @@ def load_plan(path: str | Path, rig_path: str | Path | None = None) -> tuple[Pla
 #: The first line of every stored plan; the version names this layout.
 MAGIC = "# gonio-plan v1"
 #: The header's keys, in the order they are written.
-KEYS = ("spec", "plan_text", "rig", "rig_text", "summary", "sweeps", "hashes")
+KEYS = ("spec", "plan_text", "rig", "rig_text", "alignment_text", "summary", "sweeps", "hashes")
 #: Header keys a stored plan may leave out (a stop-and-go plan has no sweeps).
-OPTIONAL = frozenset({"sweeps"})
+OPTIONAL = frozenset({"sweeps", "alignment_text"})
 HASHES = ("plan_sha256", "rig_sha256", "content", "file_sha256")
 #: Integer columns (every other column is a float64 written with repr).
 INTEGER = frozenset({"index", "generated", "averages"})
@@ -175,6 +176,8 @@ def plan_bytes(plan: Plan) -> bytes:
         "rig_text": plan.rig.text.decode("utf-8"),
         "summary": summary,
     }
+    if plan.rig.alignment_text is not None:
+        header["alignment_text"] = plan.rig.alignment_text.decode("utf-8")
     if plan.sweeps is not None:
         header["sweeps"] = sweeps_header(plan.sweeps)
     lines = [MAGIC, *(f"# {key}: {_json(header[key])}" for key in KEYS[:-1] if key in header)]
@@ -261,18 +264,26 @@ def _texts(path: Path, header: dict[str, Any], line: dict[str, int]) -> tuple[by
     return texts[0], texts[1]
 
 
-def _rig(path: Path, given: Rig | str | Path | None, text: bytes, line: int) -> Rig:
-    """The rig the plan was built for: rebuilt from its stored text, or the one given
-    after checking that its file's bytes are those the plan was built from."""
+def _rig(
+    path: Path, given: Rig | str | Path | None, text: bytes, aligned: bytes | None, line: int
+) -> Rig:
+    """The rig the plan was built for: rebuilt from its stored texts (the rig file's and
+    its alignment file's), or the one given after checking that its files' bytes are
+    those the plan was built from."""
     if given is None:
-        return Rig.from_yaml(Path(f"{path}#rig_text"), text)
+        return Rig.from_yaml(Path(f"{path}#rig_text"), text, aligned)
     rig = given if isinstance(given, Rig) else Rig.from_yaml(given)
     if rig.text != text:
-        built_for = Rig.from_yaml(Path(f"{path}#rig_text"), text).spec.name
+        built_for = Rig.from_yaml(Path(f"{path}#rig_text"), text, aligned).spec.name
         raise ConfigError(
             f"{path}:{line}: rig: the plan was built for rig {built_for!r} (sha256 "
             f"{sha256(text)[:12]}…); the rig given, {rig.spec.name!r}, hashes "
             f"{sha256(rig.text)[:12]}…: not the same rig file"
+        )
+    if rig.alignment_text != aligned:
+        raise ConfigError(
+            f"{path}:{line}: rig: the plan was built with another alignment file than the "
+            f"given rig's ({rig.alignment_path or 'none'}): plan it again"
         )
     return rig
 
@@ -385,7 +396,12 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
     except ValidationError as exc:
         first = exc.errors(include_url=False)[0]
         raise ConfigError(f"{path}:{line['spec']}: spec.{describe(first)}") from None
-    plan_rig = _rig(path, rig, rig_text, line["rig"])
+    aligned = header.get("alignment_text")
+    if aligned is not None and not isinstance(aligned, str):
+        raise ConfigError(
+            f"{path}:{line['alignment_text']}: alignment_text: expected the file's text as a string"
+        )
+    plan_rig = _rig(path, rig, rig_text, None if aligned is None else aligned.encode(), line["rig"])
     summary = _summary(path, header["summary"], line["summary"])
     names = spec.coordinates()
     table = _rows(path, body, columns(names, plan_rig.axes), len(line) + 2)

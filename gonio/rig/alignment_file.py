@@ -13,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import yaml
@@ -21,9 +21,11 @@ from pydantic import Field
 
 from gonio.config import MAX_INTEGER, Strict, load
 from gonio.errors import GonioError
-from gonio.rig.alignment_fit import AlignmentFit
 from gonio.rig.alignment_spec import MAX_ERROR_DEG, MAX_HEIGHT_MM, AlignmentSpec
-from gonio.rig.model import Rig
+
+if TYPE_CHECKING:  # annotations only: the rig model reads alignment files (`load_alignment`)
+    from gonio.rig.alignment_fit import AlignmentFit
+    from gonio.rig.model import Rig
 
 #: The first line of an alignment file.
 HEADER = "# gonio alignment v1"

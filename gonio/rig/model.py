@@ -11,6 +11,7 @@ rotation stage stays home) and, for refused pairs, why (`Reason`).
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from enum import IntEnum
@@ -25,7 +26,9 @@ from drivers.serial_detector import SerialDetectorConfig
 from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text
 from gonio.rig import constraints, inverse
+from gonio.rig.aligned_inverse import newton, pair_residual
 from gonio.rig.alignment import Alignment, Geometry, at_height
+from gonio.rig.alignment_file import AlignmentFile, load_alignment
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
@@ -97,7 +100,11 @@ class Rig:
     """A rig: forward and inverse kinematics, constraints, and its motor axes."""
 
     def __init__(
-        self, spec: RigSpec, source: Path | None = None, text: bytes | None = None
+        self,
+        spec: RigSpec,
+        source: Path | None = None,
+        text: bytes | None = None,
+        alignment_text: bytes | None = None,
     ) -> None:
         self.spec = spec
         self.source = source
@@ -106,6 +113,15 @@ class Rig:
         self.text = text if text is not None else spec_text(spec)
         self._check_chains()
         self.axes: tuple[str, ...] = tuple(spec.axes)
+        #: The alignment file the rig file names (``alignment``; read from
+        #: ``alignment_text`` when given, e.g. as a run stored it): its path, bytes, the
+        #: file and the `Alignment` the kinematics apply (`Alignment.none` without one).
+        self.alignment_path: Path | None = None
+        self.alignment_text: bytes | None = None
+        self.alignment_file: AlignmentFile | None = None
+        self.alignment = Alignment.none()
+        if spec.alignment is not None:
+            self._read_alignment(spec.alignment, alignment_text)
         a = list(spec.axes.values())
         self.limits = np.radians([[s.min_deg, s.max_deg] for s in a])
         #: The rig file's velocities (rad/s) and accelerations (rad/s²): each axis's limits.
@@ -140,11 +156,57 @@ class Rig:
         self._check_something_reachable()
 
     @classmethod
-    def from_yaml(cls, path: str | Path, raw: bytes | None = None) -> Rig:
-        """The rig of the file at ``path`` (or of its bytes ``raw``, already read)."""
+    def from_yaml(
+        cls, path: str | Path, raw: bytes | None = None, alignment_raw: bytes | None = None
+    ) -> Rig:
+        """The rig of the file at ``path`` (or of its bytes ``raw``, already read), with
+        the alignment file it names (read beside it, or from its bytes ``alignment_raw``
+        as a run or a plan stored them)."""
         path = Path(path)
         raw = read_bytes(path) if raw is None else raw
-        return cls(load(path, RigSpec, raw=raw), path, raw)
+        return cls(load(path, RigSpec, raw=raw), path, raw, alignment_raw)
+
+    def _read_alignment(self, name: str, raw: bytes | None, given: bool = False) -> None:
+        """Read the alignment file ``name`` (relative to the rig file, or as ``given``
+        in place of the one it names)."""
+        where = str(self.source) if self.source else "rig"
+        base = self.source.parent if self.source is not None and not given else Path()
+        path = base / name
+        if raw is None:
+            try:
+                raw = path.read_bytes()
+            except OSError as exc:
+                field = f"{path}" if given else f"{where}: alignment"
+                raise ConfigError(
+                    f"{field}: cannot read the alignment file {str(path)!r}: {exc.strerror or exc}"
+                ) from None
+        file = load_alignment(path, raw)  # ConfigError naming the alignment file's field
+        unknown = file.alignment.unknown_axes(self.axes)
+        if unknown:
+            raise ConfigError(
+                f"{path}: alignment.zero_offset_deg.{unknown[0]}: no such axis in the rig "
+                f"file {where} (axes: {', '.join(self.axes)})"
+            )
+        self.alignment_path, self.alignment_text, self.alignment_file = path, raw, file
+        self.alignment = file.alignment.alignment(self.axes)
+
+    def with_alignment(self, alignment: Alignment) -> Rig:
+        """This rig with ``alignment`` (one, not a batch) in place of its own, and no
+        alignment file (a fit's trial, a test)."""
+        if alignment.batch_shape != ():
+            raise ValueError("with_alignment: expected one alignment, not a batch")
+        out = copy.copy(self)
+        out.alignment, out.alignment_file = alignment, None
+        out.alignment_path = out.alignment_text = None
+        return out
+
+    def realigned(self, path: str | Path, raw: bytes | None = None) -> Rig:
+        """This rig with the alignment file at ``path`` (or its bytes ``raw``) in place of
+        its own: the same rig file's instrument, measured later (`ConfigError`, one line,
+        on a bad file)."""
+        out = copy.copy(self)
+        out._read_alignment(str(path), raw, given=True)
+        return out
 
     def _check_chains(self) -> None:
         where = str(self.source) if self.source else "rig"
@@ -243,13 +305,14 @@ class Rig:
         """
         wi = np.asarray(wi, dtype=np.float64).reshape(-1, 3)
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
-        columns, psi = self._columns(wi, wo, isotropic)
+        columns, psi, _ = self._columns(wi, wo, isotropic)
         return np.ascontiguousarray(columns.transpose(2, 1, 0)), np.ascontiguousarray(psi.T)
 
     def _columns(
         self, wi: FloatArray, wo: FloatArray, isotropic: bool
-    ) -> tuple[FloatArray, FloatArray]:
-        """`candidates` axis-major: the angles (A, K', N) and ψ (K', N).
+    ) -> tuple[FloatArray, FloatArray, BoolArray | None]:
+        """`candidates` axis-major: the angles (A, K', N), ψ (K', N) and, with an
+        alignment, where the candidates reach the pair in the true geometry (K', N).
 
         Each axis's angle of each candidate for all pairs is one contiguous row, so every
         test below (limits, keep-out boxes, travel times, the reasons' "any candidate")
@@ -258,7 +321,7 @@ class Rig:
         solution k of the solver in variant v, the variants being the turns (−1, 0, +1)
         of each extended axis in turn, the last one varying fastest.
         """
-        solved = inverse.SOLVERS[self.spec.type](wi, wo)
+        solved, converged = self._solved(wi, wo, isotropic)
         rotation = self._rotation_index
         lo, hi = self.limits[:, 0], self.limits[:, 1]
         extended = [
@@ -282,7 +345,47 @@ class Rig:
             else:
                 out[j] = self._representative(raw, j)
         psi = np.broadcast_to(raw_rotation, (variants, count, n)).reshape(variants * count, n)
-        return out.reshape(len(self.axes), variants * count, n), psi
+        reached = None if converged is None else np.tile(converged, (variants, 1))
+        return out.reshape(len(self.axes), variants * count, n), psi, reached
+
+    def _solved(
+        self, wi: FloatArray, wo: FloatArray, isotropic: bool
+    ) -> tuple[dict[str, FloatArray], BoolArray | None]:
+        """The closed form's solutions {axis: (K, N)}: the rig file's geometry's, or with
+        an alignment the commanded angles that reach the pairs in the true geometry
+        (`gonio.rig.aligned_inverse`), with where they do (K, N) (None: no alignment)."""
+        a = self.alignment
+        if a.is_none:
+            return inverse.SOLVERS[self.spec.type](wi, wo), None
+        tilt = a.tilt_rotation()
+        solved = inverse.SOLVERS[self.spec.type](wi @ tilt.T, wo @ tilt.T)  # ω_stage = R_tilt ω
+        q = np.stack([solved[name] for name in self.axes], axis=-1) - a.zero_offset
+        free = list(range(len(self.axes)))
+        rotation = self._rotation_index
+        if isotropic:
+            q[..., rotation] = self.home[rotation]
+            free.remove(rotation)
+        exact = not (
+            isotropic
+            or np.any(a.light_pointing)
+            or np.any(a.detector_pointing)
+            or (self.source_kind == "point" and np.any(a.height_mm))
+        )
+        if exact:
+            converged = np.ones(q.shape[:-1], dtype=np.bool_)
+        else:
+
+            def forward(angles: FloatArray) -> tuple[FloatArray, FloatArray]:
+                return self.forward(angles, a)
+
+            shape = q.shape
+            ti, to = (np.broadcast_to(w, (*shape[:-1], 3)).reshape(-1, 3) for w in (wi, wo))
+            residual = pair_residual(forward, ti, to, isotropic)
+            flat, reached = newton(residual, q.reshape(-1, shape[-1]), free)
+            q, converged = flat.reshape(shape), reached.reshape(shape[:-1])
+        return {
+            name: np.ascontiguousarray(q[..., j]) for j, name in enumerate(self.axes)
+        }, converged
 
     def _representative(self, raw: FloatArray, j: int) -> FloatArray:
         """Angles ``raw`` of axis ``j`` moved by a whole turn into its range: of raw − 2π,
@@ -357,9 +460,11 @@ class Rig:
         """`solve` of one block: (angles, ωi and ωo measured, reasons, candidates, usable)."""
         # Isotropic: the pair may turn about the normal, so the rotation stage stays home
         # and the turned pair is measured instead (ω' = R_z(ψ) ω for the candidate's ψ).
-        columns, psi = self._columns(wi, wo, isotropic)
+        columns, psi, reached = self._columns(wi, wo, isotropic)
         angles_last = np.moveaxis(columns, 0, -1)  # (K', N, A), a view
         limits_ok = self._inside_limits(columns)
+        if reached is not None:
+            limits_ok &= reached
         usable = limits_ok & ~self._collides(angles_last)
         cost = np.where(usable, self.travel_time(start, angles_last), np.inf)
         pick = np.argmin(cost, axis=0)
@@ -368,7 +473,9 @@ class Rig:
         reasons = self._reasons(wi, wo, limits_ok, usable)
 
         measured_wi, measured_wo = wi, wo
-        if isotropic:
+        if reached is not None:  # what the rig, as it really is, measures at the poses
+            measured_wi, measured_wo = self.forward(angles, self.alignment)
+        elif isotropic:
             turn = psi[pick, rows] - self.home[self._rotation_index]
             measured_wi, measured_wo = rotate_z(wi, turn), rotate_z(wo, turn)
         candidates = np.ascontiguousarray(columns.transpose(2, 1, 0))
@@ -384,8 +491,10 @@ class Rig:
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
 
         def block(wi: FloatArray, wo: FloatArray) -> tuple[BoolArray, np.ndarray]:
-            columns, _ = self._columns(wi, wo, isotropic)
+            columns, _, reached = self._columns(wi, wo, isotropic)
             limits_ok = self._inside_limits(columns)
+            if reached is not None:
+                limits_ok &= reached
             usable = limits_ok & ~self._collides(np.moveaxis(columns, 0, -1))
             reasons = self._reasons(wi, wo, limits_ok, usable)
             return reasons == Reason.OK, reasons
@@ -398,7 +507,7 @@ class Rig:
         not), and whether each pose may be commanded at all (inside the axes' limits,
         outside every keep-out box)."""
         angles = np.asarray(angles, dtype=np.float64).reshape(-1, len(self.axes))
-        wi, wo = self.forward(angles)
+        wi, wo = self.forward(angles, self.alignment)
         limits_ok = self._inside_limits(angles.T)
         commandable = limits_ok & ~self._collides(angles)
         reasons = self._reasons(wi, wo, limits_ok[None, :], commandable[None, :])

@@ -309,6 +309,14 @@ class RigSpec(Strict):
     health: HealthLimitsSpec = Field(
         HealthLimitsSpec(), description="The motors' safe operating range, checked during a run."
     )
+    alignment: str | None = Field(
+        None,
+        min_length=1,
+        description="The rig's measured misalignment: the path of an alignment file (with its "
+        "fit record), relative to this file. Forward and inverse kinematics then "
+        "work in the true geometry, and a run stores the alignment file's text. None: the "
+        "rig is as this file says.",
+    )
 
     @model_validator(mode="after")
     def _known_axes(self) -> RigSpec:

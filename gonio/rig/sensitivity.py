@@ -22,6 +22,13 @@ BRDF: δf = ∇f · δω with ∇f along the same frame (central differences of 
 f read through any parametrization's inverse at the recorded coordinates has the same
 first-order error (chain rule), so a parametrization changes where a measured value is
 filed, not the value.
+
+Alignment: the rig's measured alignment (``rig.alignment_file``) states each fitted
+parameter's standard error; J_p = ∂(si, ti, so, to)/∂p over the parameters of
+`gonio.rig.alignment_fit.parameters` (central differences of the aligned forward map at
+the commanded angles, `ALIGNMENT_STEP`), Σ_ω = J_p diag(σ_p²) J_pᵀ (`alignment_sigma`).
+The file gives no correlations, so the parameters are taken as independent; one it
+could not determine adds nothing (the file names it, with what would determine it).
 """
 
 from __future__ import annotations
@@ -34,11 +41,14 @@ import numpy as np
 from gonio.brdf.base import BRDF
 from gonio.errors import DomainError
 from gonio.params.conditioning import pair_frame, tangent_jacobian
+from gonio.rig.alignment_fit import as_alignment, parameters
 from gonio.rig.model import Rig
 from gonio.types import ArrayLike, FloatArray
 
 #: Central-difference step (rad) of `kinematic_jacobian`.
 KINEMATIC_STEP = 2.0**-20
+#: Central-difference step (rad, mm) of `alignment_jacobian`.
+ALIGNMENT_STEP = 2.0**-20
 #: Largest central-difference step (rad of arc) of `brdf_gradient`; a quarter of the
 #: lower direction's z when that is smaller, so no step crosses the horizon.
 BRDF_STEP = 2.0**-20
@@ -139,3 +149,53 @@ def brdf_sigma(model: BRDF, rig: Rig, angles: ArrayLike, sigma: ArrayLike) -> Fl
     g = brdf_gradient(model, *rig.forward(q))
     cov = direction_covariance(rig, q, sigma)
     return np.asarray(np.sqrt(np.einsum("...i,...ij,...j->...", g, cov, g)), dtype=np.float64)
+
+
+def alignment_parameters(rig: Rig) -> tuple[FloatArray, FloatArray]:
+    """(values, standard errors) (P,) of the rig's alignment in the order of
+    `gonio.rig.alignment_fit.parameters` (rad, mm): the errors its alignment file's fit
+    record states, 0 for a parameter it did not determine or without a file or record."""
+    a = rig.alignment
+    values = np.concatenate(
+        [
+            np.broadcast_to(a.zero_offset, (len(rig.axes),)),
+            [float(a.tilt * np.cos(a.tilt_azimuth)), float(a.tilt * np.sin(a.tilt_azimuth))],
+            [float(a.height_mm)],
+            a.light_pointing,
+            a.detector_pointing,
+        ]
+    )
+    errors = np.zeros_like(values)
+    record = None if rig.alignment_file is None else rig.alignment_file.fit
+    if record is not None:
+        for k, name in enumerate(parameters(rig)):
+            fitted = record.parameters.get(name)
+            if fitted is not None:
+                scale = 1.0 if name == "height_mm" else math.pi / 180.0
+                errors[k] = fitted.error * scale
+    return np.asarray(values, dtype=np.float64), errors
+
+
+def alignment_jacobian(rig: Rig, angles: ArrayLike) -> FloatArray:
+    """∂(si, ti, so, to)/∂p (..., 4, P) of the pair measured at the commanded ``angles``
+    (..., A) per unit of each alignment parameter (`alignment_parameters` order)."""
+    q = np.asarray(angles, dtype=np.float64)
+    p, _ = alignment_parameters(rig)
+    frame = pair_frame(*rig.forward(q, rig.alignment))
+    columns = []
+    for k in range(len(p)):
+        step = np.zeros_like(p)
+        step[k] = ALIGNMENT_STEP
+        ai, ao = rig.forward(q, as_alignment(rig, p + step))
+        bi, bo = rig.forward(q, as_alignment(rig, p - step))
+        moved = np.concatenate([ai - bi, ao - bo], axis=-1) / (2.0 * ALIGNMENT_STEP)
+        columns.append(np.einsum("...k,...kc->...c", moved, frame))
+    return np.asarray(np.stack(columns, axis=-1), dtype=np.float64)
+
+
+def alignment_sigma(rig: Rig, angles: ArrayLike) -> FloatArray:
+    """RMS angular error (rad) of one direction of the pair measured at ``angles``
+    (..., A) from the uncertainty of the rig's measured alignment: √(trace Σ_ω / 2)."""
+    _, errors = alignment_parameters(rig)
+    cov = _covariance(alignment_jacobian(rig, angles), errors)
+    return np.asarray(np.sqrt(np.trace(cov, axis1=-2, axis2=-1) / 2.0), dtype=np.float64)

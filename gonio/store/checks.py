@@ -179,6 +179,9 @@ META_OPTIONAL: dict[str, Check] = {
     "scene_text": optional(text),
     "speedup": optional(positive),
     "any_detector": optional(boolean),
+    "alignment_path": optional(text),
+    "alignment_text": optional(text),
+    "alignment_sha256": optional(text),
 }
 #: The backends a run may name.
 BACKENDS = ("simulated", "hardware", "rehearsal")

@@ -307,7 +307,13 @@ class RunFollower:
                 raise checks.Bad("samples.target: expected whole numbers")
             check_targets(targets, len(plan))
         rig_where = f"{self.path}#rig_text"
-        info = PlanInfo.of(bytes(head), str(meta.get("rig_text", "")), rig_where)
+        aligned = meta.get("alignment_text")
+        info = PlanInfo.of(
+            bytes(head),
+            str(meta.get("rig_text", "")),
+            rig_where,
+            None if aligned is None else str(aligned),
+        )
         self.meta, self.info, self._plan_size = MappingProxyType(meta), info, plan_size
         with self._lock:
             self._plan, self._done = None, None

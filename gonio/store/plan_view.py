@@ -42,7 +42,9 @@ class PlanInfo:
     isotropic: bool = True
 
     @classmethod
-    def of(cls, head: bytes, rig_text: str, where: str) -> PlanInfo:
+    def of(
+        cls, head: bytes, rig_text: str, where: str, alignment_text: str | None = None
+    ) -> PlanInfo:
         """The header of a stored plan's first bytes ``head``; `checks.Bad` (or the rig
         file's `ConfigError`) when it is not one."""
         field_ = "meta.plan_file"
@@ -71,7 +73,11 @@ class PlanInfo:
         dwell = checks.number(summary.get("dwell_s"), f"{field_}.summary.dwell_s")
         return cls(
             name=str(spec.get("name", "")),
-            rig=Rig.from_yaml(where, raw=rig_text.encode("utf-8")),  # ConfigError: one line
+            rig=Rig.from_yaml(  # ConfigError: one line
+                where,
+                raw=rig_text.encode("utf-8"),
+                alignment_raw=None if alignment_text is None else alignment_text.encode("utf-8"),
+            ),
             targets=targets,
             total_s=travel + dwell,
             fly=sampling.get("strategy") == "fly",

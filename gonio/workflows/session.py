@@ -14,6 +14,7 @@ every refusal.
 from __future__ import annotations
 
 import getpass
+import hashlib
 import os
 import platform
 import socket
@@ -87,7 +88,20 @@ def _meta(
         "rig_text": files.rig_text.decode("utf-8"),
         "scene_text": None if files.scene_text is None else files.scene_text.decode("utf-8"),
         "hashes": files.hashes(),
+        **_alignment_meta(plan.rig),
         **extra,
+    }
+
+
+def _alignment_meta(rig: Rig) -> dict[str, Any]:
+    """The alignment file the rig file names, as the run stores it beside the rig file's
+    text (nothing without one: the run's meta as before alignments)."""
+    if rig.alignment_text is None or rig.alignment_path is None:
+        return {}
+    return {
+        "alignment_path": str(rig.alignment_path.resolve()),
+        "alignment_text": rig.alignment_text.decode("utf-8"),
+        "alignment_sha256": hashlib.sha256(rig.alignment_text).hexdigest(),
     }
 
 

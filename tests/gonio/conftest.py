@@ -83,10 +83,17 @@ def rigs_parsed_once(monkeypatch: pytest.MonkeyPatch) -> None:
     original = Rig.from_yaml.__func__  # type: ignore[attr-defined]
 
     @functools.cache
-    def parsed(path: str, raw: bytes) -> Rig:
-        return original(Rig, path, raw)  # type: ignore[no-any-return]
+    def parsed(path: str, raw: bytes, alignment_raw: bytes | None) -> Rig:
+        return original(Rig, path, raw, alignment_raw)  # type: ignore[no-any-return]
 
-    def from_yaml(cls: type[Rig], path: str | Path, raw: bytes | None = None) -> Rig:
-        return original(cls, path, raw) if raw is None else parsed(str(path), raw)  # type: ignore[no-any-return]
+    def from_yaml(
+        cls: type[Rig],
+        path: str | Path,
+        raw: bytes | None = None,
+        alignment_raw: bytes | None = None,
+    ) -> Rig:
+        if raw is None:
+            return original(cls, path, raw, alignment_raw)  # type: ignore[no-any-return]
+        return parsed(str(path), raw, alignment_raw)
 
     monkeypatch.setattr(Rig, "from_yaml", classmethod(from_yaml))

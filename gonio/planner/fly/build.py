@@ -179,7 +179,7 @@ def assemble(
     exposure = np.full(n_total, t_int) if readings.exposure_s is None else readings.exposure_s
     averages = np.ones(n_total, dtype=np.int64) if readings.averages is None else readings.averages
     before = np.concatenate([[0.0], (arrival_s + exposure * averages)[:-1]])
-    wi, wo = rig.forward(angles)
+    wi, wo = rig.forward(angles, rig.alignment)
     p = params.get(spec.parametrization)
     coords = p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo)
     previous = np.vstack([home[None, :], angles[:-1]])

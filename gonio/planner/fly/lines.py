@@ -84,7 +84,7 @@ def sweep_axis(rig: Rig, fly: FlySpec) -> int:
 def _rate(rig: Rig, poses: FloatArray, ok: np.ndarray) -> float:
     """The largest angular rate of ωi or ωo (rad per rad of the swept axis) between
     consecutive commandable poses of a fine grid (1 where there are none)."""
-    wi, wo = rig.forward(poses)
+    wi, wo = rig.forward(poses, rig.alignment)
     step = np.maximum(separation(wi[1:], wi[:-1]), separation(wo[1:], wo[:-1])) / FINE_STEP
     both = ok[1:] & ok[:-1]
     return float(step[both].max()) if both.any() else 1.0
@@ -176,7 +176,7 @@ def box(spec: PlanSpec) -> FloatArray:
 def plan_coords(spec: PlanSpec, rig: Rig, angles: FloatArray) -> FloatArray:
     """The plan's coordinates of the pairs measured at ``angles`` (N, A)."""
     p = params.get(spec.parametrization)
-    wi, wo = rig.forward(angles)
+    wi, wo = rig.forward(angles, rig.alignment)
     return np.asarray(p.forward_iso(wi, wo) if spec.isotropic else p.forward(wi, wo))
 
 

@@ -215,7 +215,7 @@ def build_paths(
         mids.append(got.mids)
         arrival.append(t + period * got.slots)
         streamed.append(got.streamed)
-        wi, wo = rig.forward(goals)
+        wi, wo = rig.forward(goals, rig.alignment)
         rate = np.maximum(separation(wi[1:], wi[:-1]), separation(wo[1:], wo[:-1]))
         smear_max = max(smear_max, float(rate.max()) / period_s * t_int)
         speeds.append(float(np.abs(trajectory.velocities()).max()))

@@ -131,7 +131,7 @@ def time_law(
     s, q = seg.theta_h, seg.poses
     ds = np.diff(s)
     dq = np.abs(np.diff(q, axis=0)) / ds[:, None]  # |dq/dθh| per interval (M − 1, A)
-    wi, wo = rig.forward(q)
+    wi, wo = rig.forward(q, rig.alignment)
     rate = np.maximum(separation(wi[1:], wi[:-1]), separation(wo[1:], wo[:-1])) / ds
     tiny = 1e-12
     v_axes = np.min(rig.velocity / np.maximum(dq, tiny), axis=1)
