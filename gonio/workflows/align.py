@@ -175,7 +175,7 @@ def locate(
     a coarse cross scan, then a fine one (elevation, then azimuth, each about the
     other's latest peak), the fine step at least one tick of the scanned motor; the
     peak located in the read-back angles (a motor stands on its ticks, not where it was
-    asked), the other joints where they were read."""
+    asked), the joints not scanned where they were read."""
     found = np.asarray(center, dtype=np.float64).copy()
     ticks = tick_rad(rig)
     for steps in (coarse_offsets(settings), fine_offsets(settings)):
@@ -188,8 +188,9 @@ def locate(
             poses = cross_scan(rig, found, joint, steps)
             values = measure_line(devices, rig, poses, settings.exposure_s, readings, peak, joint)
             read = np.asarray(readings.read_back[start:], dtype=np.float64)
-            found = np.median(read, axis=0)
-            found[j] = peak_at(read[:, j], values)
+            still = [i for i, name in enumerate(rig.axes) if name not in SCANNED]
+            found[still] = np.median(read[:, still], axis=0)  # where the others stood
+            found[j] = peak_at(read[:, j], values)  # the scanned ones keep their estimates
     return found
 
 

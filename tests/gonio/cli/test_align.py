@@ -143,3 +143,29 @@ def test_a_scan_that_determines_nothing_is_one_line(
     assert result.returncode == 2 and result.stderr.count("\n") == 1
     assert "within the rig's limits" in result.stderr
     assert sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.pty
+@pytest.mark.xdist_group("pty")
+def test_on_the_rehearsal_path_the_scan_recovers_it_and_the_check_holds(
+    run_gonio: Callable[..., CliResult], tmp_path: Path
+) -> None:
+    """The emulated Dynamixel arm and serial photometer: the motors stand on their
+    ticks, so each peak is located in the angles read back; the same recovery."""
+    rig = tmp_path / "arch_serial.yaml"
+    text = (CONFIGS / "rigs" / "arch_serial.yaml").read_text(encoding="utf-8")
+    rig.write_text(text.replace("../", f"{CONFIGS}/"), encoding="utf-8")
+    scene = mirror_scene(tmp_path, TRUTH)
+    fast = ("--rehearse", "--speedup", "1000000")
+    result = run_gonio("align", str(rig), "--scene", str(scene), *fast)
+    assert result.returncode == 0, result.stdout + result.stderr
+    file = load_alignment(rig.with_name("arch_serial.alignment.yaml"))
+    assert file.fit is not None
+    d = {name: p.value for name, p in file.fit.parameters.items()}
+    assert d["zero_offset.detector_azimuth"] == pytest.approx(-0.4, abs=0.03)
+    azimuth = math.radians(40.0 + 0.3)  # the tilt's azimuth as read
+    assert d["tilt_x"] == pytest.approx(0.5 * math.cos(azimuth), abs=0.03)
+    assert d["tilt_y"] == pytest.approx(0.5 * math.sin(azimuth), abs=0.03)
+    good = rig.with_name("arch_serial.alignment.yaml")
+    check = run_gonio("align", str(rig), "--scene", str(scene), *fast, "--check", str(good))
+    assert check.returncode == 0, check.stdout + check.stderr
