@@ -33,7 +33,8 @@ from gonio.params import cases
 from gonio.params.conditioning import singular_values, tangent_jacobian
 from gonio.plots import require_matplotlib
 from gonio.rig import sensitivity
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from sim.scene import load_scene
 from studies.params.accuracy import PATH_DISTANCES, PathRow, measured_errors, path_study
 

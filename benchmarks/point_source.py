@@ -35,7 +35,8 @@ from _machine import describe
 from gonio.analysis import calibrate
 from gonio.planner import build, load_plan
 from gonio.rig import constraints
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import BoolArray, FloatArray
 from gonio.workflows.simulate import Result, simulate_plan
 from sim.scene import load_scene

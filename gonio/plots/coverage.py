@@ -22,7 +22,7 @@ import numpy as np
 from gonio import params
 from gonio.planner.model import Plan
 from gonio.plots import require_matplotlib
-from gonio.rig.model import Reason
+from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 
 #: Pixels per side of each slice image.

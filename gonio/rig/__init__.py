@@ -6,7 +6,8 @@ constraints (``Reason``), the axes' travel-time model, and a rig's misalignment
 
 from gonio.rig.alignment import Alignment, Geometry
 from gonio.rig.alignment_spec import AlignmentSpec
-from gonio.rig.model import Reason, Rig, Solution
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason, Solution
 from gonio.rig.travel import TravelModel
 
 __all__ = ["Alignment", "AlignmentSpec", "Geometry", "Reason", "Rig", "Solution", "TravelModel"]

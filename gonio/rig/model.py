@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
-from enum import IntEnum
 from pathlib import Path
 from typing import Literal
 
@@ -32,26 +30,9 @@ from gonio.rig.alignment_file import AlignmentFile, load_alignment
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
 from gonio.rig.schema import RigSpec
+from gonio.rig.solution import Reason, Solution, Solved
 from gonio.rig.travel import TravelModel
 from gonio.types import ArrayLike, BoolArray, FloatArray
-
-
-class Reason(IntEnum):
-    """Why a pair is refused (0: it is not). "limit" in the issue's words covers
-    THETA_MAX and AXIS_LIMIT."""
-
-    OK = 0
-    THETA_MAX = 1  # beyond the usable polar angle of the light or the detector
-    BLIND_SPOT = 2  # source and detector closer than the minimum separation
-    FOOTPRINT = 3  # the lit area leaves the sample or the detector's view (collimated)
-    VIEW_OFF_SAMPLE = 4  # the detector's view runs past the sample's edge (point source)
-    AXIS_LIMIT = 5  # no inverse-kinematics solution inside the axes' limits
-    COLLISION = 6  # every solution inside the limits hits a keep-out box
-
-    @property
-    def label(self) -> str:
-        return self.name.lower()
-
 
 #: What each closed-form type needs the chains to be: (axis name, rotation axis).
 _EXPECTED_CHAINS = {
@@ -73,27 +54,6 @@ PROBE_PAIRS = 4096
 #: An axis whose range is narrower than a turn by more than this (rad) holds at most one
 #: of an angle's representatives a turn apart, whatever the rounding of their sums.
 _TURN_MARGIN = 1e-9
-
-
-#: `Solution`'s fields in order, as one block of pairs gives them (`Rig._solve`).
-_Solved = tuple[FloatArray, FloatArray, FloatArray, np.ndarray, FloatArray, BoolArray]
-
-
-@dataclass(frozen=True)
-class Solution:
-    """Per pair: joint angles (N, A), the pair measured (N, 3) each, the refusal reason
-    (N,) and every candidate (N, K, A) with its usability (N, K) for a later choice."""
-
-    angles: FloatArray
-    wi: FloatArray
-    wo: FloatArray
-    reasons: np.ndarray
-    candidates: FloatArray
-    usable: BoolArray
-
-    @property
-    def ok(self) -> BoolArray:
-        return np.asarray(self.reasons == Reason.OK, dtype=np.bool_)
 
 
 class Rig:
@@ -450,13 +410,13 @@ class Rig:
         wo = np.asarray(wo, dtype=np.float64).reshape(-1, 3)
         start = self.home if previous is None else np.asarray(previous, dtype=np.float64)
 
-        def block(wi: FloatArray, wo: FloatArray) -> _Solved:
+        def block(wi: FloatArray, wo: FloatArray) -> Solved:
             return self._solve(wi, wo, isotropic, start)
 
         angles, measured_wi, measured_wo, reasons, cand, usable = blockwise(block, wi, wo)
         return Solution(angles, measured_wi, measured_wo, reasons, cand, usable)
 
-    def _solve(self, wi: FloatArray, wo: FloatArray, isotropic: bool, start: FloatArray) -> _Solved:
+    def _solve(self, wi: FloatArray, wo: FloatArray, isotropic: bool, start: FloatArray) -> Solved:
         """`solve` of one block: (angles, ωi and ωo measured, reasons, candidates, usable)."""
         # Isotropic: the pair may turn about the normal, so the rotation stage stays home
         # and the turned pair is measured instead (ω' = R_z(ψ) ω for the candidate's ψ).

@@ -35,7 +35,8 @@ from gonio.config import ConfigError
 from gonio.planner import placement, sampling
 from gonio.planner.schema import FlySpec, PlanSpec
 from gonio.rig.constraints import separation
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 
 #: Anchor points drawn per batch (a power of two for Sobol).

@@ -38,7 +38,8 @@ from drivers.errors import LimitError
 from drivers.trajectory import Trajectory, check_trajectory
 from gonio.planner.poses import choose
 from gonio.rig.constraints import separation
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 
 #: Step (rad) of θh on which a line's poses and rates are solved.

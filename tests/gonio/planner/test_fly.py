@@ -25,7 +25,8 @@ from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.workflows.preflight import refuse_fly
 from tests.conftest import CONFIGS, RIG_FILES
 

@@ -31,7 +31,8 @@ from gonio.planner.fly.paths import (
 )
 from gonio.planner.schema import PlanSpec
 from gonio.rig.constraints import separation
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from tests.conftest import RIG_FILES
 
 RUS = params.get("rusinkiewicz")

@@ -19,7 +19,8 @@ from gonio.planner.files import plan_bytes, write_plan
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.progress import hms
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from tests.support.rigs import with_point_source
 
 PLANS = Path(__file__).resolve().parents[3] / "configs" / "plans"

@@ -16,7 +16,8 @@ import pytest
 import yaml
 
 from gonio.config import ConfigError
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from tests.conftest import RIG_FILES
 from tests.support.rigs import direction, uniform_directions
 

@@ -27,7 +27,8 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 from tests.conftest import RIG_NAMES
 from tests.gonio.rig.helpers import TOL, column, wrap

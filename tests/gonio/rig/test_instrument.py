@@ -17,7 +17,8 @@ from drivers.serial_detector import SerialDetectorConfig, SerialStreamConfig
 from drivers.serial_detector.detector import SerialDetector
 from gonio.config import ConfigError
 from gonio.rig.instrument import NoSwitchSpec, SerialInterfaceSpec, SerialSwitchSpec
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from sim.serial_photometer import RESPONSE, STREAM_CONFIG, SerialPhotometer, default_config
 from tests.conftest import ARCH_POINT_FILE, RIG_FILES
 from tests.support.rigs import direction

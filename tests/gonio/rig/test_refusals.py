@@ -19,7 +19,8 @@ import pytest
 import yaml
 
 from gonio.rig import constraints
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 from tests.conftest import RIG_FILES
 from tests.gonio.rig.helpers import column, in_tilted_plane

@@ -21,7 +21,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gonio.rig.model import Reason, Rig
+from gonio.rig.model import Rig
+from gonio.rig.solution import Reason
 from gonio.types import BoolArray, FloatArray
 from tests.conftest import RIG_NAMES
 from tests.gonio.rig.helpers import TOL, column, wrap
