@@ -25,8 +25,9 @@ from gonio.planner import build, load_plan
 from gonio.planner.model import Plan
 from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
+from sim.effects import EffectsSpec
 from sim.record import SimRun
-from sim.scene import EffectsSpec, Scene, load_scene
+from sim.scene import Scene, load_scene
 from sim.simulate import simulate
 
 ROOT = Path(__file__).resolve().parents[1]

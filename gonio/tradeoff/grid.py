@@ -45,7 +45,8 @@ from gonio.tradeoff.spec import (
     Without,
     effects_label,
 )
-from sim.scene import EffectsSpec, load_scene
+from sim.effects import EffectsSpec
+from sim.scene import load_scene
 
 #: The most combinations one sweep may hold (a few seconds each: weeks of CPU).
 MAX_COMBINATIONS = 100_000

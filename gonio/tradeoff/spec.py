@@ -36,7 +36,7 @@ from gonio.reconstruct import methods
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
-from sim.scene import EffectsSpec
+from sim.effects import EffectsSpec
 
 #: Strategies a sweep may name: the planner's own, and ``warped`` (Sobol with the
 #: sweep's ``warps`` for the parametrization).

@@ -65,9 +65,9 @@ from sim.clock import ManualClock
 from sim.devices.motion import JointPath, profile_duration, profile_position
 from sim.devices.motor_faults import MotorFaults
 from sim.devices.position_error import MotorState, PositionModel
+from sim.effects import PositionErrorSpec
 from sim.faults import FaultInjector, FaultRule
 from sim.physics import streams as streams_module
-from sim.scene import PositionErrorSpec
 
 __all__ = ["MotorState", "PositionModel", "SimMotorBus", "profile_duration", "profile_position"]
 

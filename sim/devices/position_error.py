@@ -11,8 +11,8 @@ import numpy as np
 
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
+from sim.effects import PositionErrorSpec
 from sim.physics import streams as streams_module
-from sim.scene import PositionErrorSpec
 
 
 class PositionModel:

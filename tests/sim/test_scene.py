@@ -16,8 +16,9 @@ from gonio.config import ConfigError
 from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
+from sim.effects import EffectsSpec
 from sim.physics.optics import SceneOptics
-from sim.scene import RIG_FIELDS, EffectsSpec, Scene, load_scene
+from sim.scene import RIG_FIELDS, Scene, load_scene
 from sim.simulate import simulate
 from tests.conftest import CONFIGS
 

@@ -18,9 +18,9 @@ from drivers.values import StampedPositions
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus
+from sim.effects import PositionErrorSpec
 from sim.faults import FaultInjector, FaultRule
 from sim.physics.streams import Streams
-from sim.scene import PositionErrorSpec
 
 START = [0.6, -0.4, 0.8, 1.2]
 END = [0.2, -1.0, 0.3, 0.4]

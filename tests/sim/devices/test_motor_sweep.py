@@ -11,8 +11,8 @@ from drivers.dynamixel.wire import poll_seconds
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus, profile_duration, profile_position
+from sim.effects import PositionErrorSpec
 from sim.physics.streams import Streams
-from sim.scene import PositionErrorSpec
 
 TARGET = [0.6, -1.0, 0.8, 1.5]
 

@@ -13,8 +13,8 @@ from drivers.errors import DriverError, LimitError, MotionTimeout
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.devices.motors import SimMotorBus, profile_position
+from sim.effects import PositionErrorSpec
 from sim.physics.streams import Streams
-from sim.scene import PositionErrorSpec
 from tests.support.rigs import angle_between
 
 
