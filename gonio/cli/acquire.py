@@ -130,8 +130,9 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         if args.scene is not None:
             scene, scene_text = session.load_scene_file(args.scene, source.rig)
         files = preflight.Files(
-            source.path, source.text, source.rig.source, source.rig.text, args.scene, scene_text
-        )
+            source.path, source.text, source.rig.source, source.rig.text, args.scene,
+            scene_text, source.rig.alignment_text,
+        )  # fmt: skip
         kind = preflight.check_scene(files, source.rig, scene, rehearse=args.rehearse)
         preflight.refuse_fly_spec(source.spec, source.rig, kind, scene, args.scene)
         if args.output is not None:

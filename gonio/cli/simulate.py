@@ -137,8 +137,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         text = spec_text(scene)
     files = preflight.Files(
-        source.path, source.text, source.rig.source, source.rig.text, args.scene, text
-    )
+        source.path, source.text, source.rig.source, source.rig.text, args.scene, text,
+        source.rig.alignment_text,
+    )  # fmt: skip
     with planning.quiet() if args.quiet else contextlib.nullcontext():
         plan = source.build()
     result = simulate_plan(

@@ -64,7 +64,7 @@ class PlanSource:
     rig: Rig
 
     def content_hash(self, scene_text: bytes | None = None) -> str:
-        return content_hash(self.text, self.rig.text, scene_text)
+        return content_hash(self.text, self.rig.text, scene_text, self.rig.alignment_text)
 
     def build(self, *, bounds: bool = False) -> Plan:
         """`build` with this file's text (so the plan carries its hash)."""
@@ -244,8 +244,11 @@ def _header(path: Path, raw: bytes) -> tuple[dict[str, Any], dict[str, int], int
     return values, lines, offset, hashed
 
 
-def _texts(path: Path, header: dict[str, Any], line: dict[str, int]) -> tuple[bytes, bytes]:
-    """The plan and rig texts, checked against their hashes."""
+def _texts(
+    path: Path, header: dict[str, Any], line: dict[str, int]
+) -> tuple[bytes, bytes, bytes | None]:
+    """The plan, rig and alignment (None: the rig names none) texts, checked against
+    their hashes."""
     hashes = header["hashes"]
     if not isinstance(hashes, dict) or sorted(hashes) != sorted(HASHES):
         raise ConfigError(f"{path}:{line['hashes']}: hashes: expected exactly {', '.join(HASHES)}")
@@ -259,9 +262,15 @@ def _texts(path: Path, header: dict[str, Any], line: dict[str, int]) -> tuple[by
                 f"{path}:{line[key]}: {key}: does not match hashes.{digest}; the file was changed"
             )
         texts.append(text)
-    if content_hash(texts[0], texts[1]) != hashes["content"]:
+    aligned = header.get("alignment_text")
+    if aligned is not None and not isinstance(aligned, str):
+        raise ConfigError(
+            f"{path}:{line['alignment_text']}: alignment_text: expected the file's text as a string"
+        )
+    alignment = None if aligned is None else aligned.encode("utf-8")
+    if content_hash(texts[0], texts[1], None, alignment) != hashes["content"]:
         raise ConfigError(f"{path}:{line['hashes']}: hashes.content: does not match the texts")
-    return texts[0], texts[1]
+    return texts[0], texts[1], alignment
 
 
 def _rig(
@@ -386,7 +395,7 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
         body = raw[offset:].decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: not UTF-8 text: {exc.reason}") from None
-    plan_text, rig_text = _texts(path, header, line)
+    plan_text, rig_text, aligned = _texts(path, header, line)
     if sha256(hashed) != header["hashes"]["file_sha256"]:
         raise ConfigError(
             f"{path}: the file does not match hashes.file_sha256: it was changed or cut short"
@@ -396,12 +405,7 @@ def parse_plan(raw: bytes, path: str | Path, rig: Rig | str | Path | None = None
     except ValidationError as exc:
         first = exc.errors(include_url=False)[0]
         raise ConfigError(f"{path}:{line['spec']}: spec.{describe(first)}") from None
-    aligned = header.get("alignment_text")
-    if aligned is not None and not isinstance(aligned, str):
-        raise ConfigError(
-            f"{path}:{line['alignment_text']}: alignment_text: expected the file's text as a string"
-        )
-    plan_rig = _rig(path, rig, rig_text, None if aligned is None else aligned.encode(), line["rig"])
+    plan_rig = _rig(path, rig, rig_text, aligned, line["rig"])
     summary = _summary(path, header["summary"], line["summary"])
     names = spec.coordinates()
     table = _rows(path, body, columns(names, plan_rig.axes), len(line) + 2)

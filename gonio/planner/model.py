@@ -25,17 +25,28 @@ from gonio.types import FloatArray
 _HASH_MAGIC = b"gonio content v1\n"
 
 
-def content_hash(plan_text: bytes, rig_text: bytes, scene_text: bytes | None = None) -> str:
-    """SHA-256 (hex) of a plan file's, a rig file's and optionally a scene file's bytes,
-    for the run journal: what a run measured, named by what it was made from.
+def content_hash(
+    plan_text: bytes,
+    rig_text: bytes,
+    scene_text: bytes | None = None,
+    alignment_text: bytes | None = None,
+) -> str:
+    """SHA-256 (hex) of a plan file's, a rig file's and optionally a scene file's and the
+    rig's alignment file's bytes, for the run journal: what a run measured, named by what
+    it was made from.
 
     Framing: the bytes ``gonio content v1\\n``, then for each of plan, rig, scene the
     part's name, a space, its length in bytes in decimal (``-`` for no scene), a newline
-    and the bytes themselves. The lengths make the split unambiguous: ("ab", "c") and
-    ("a", "bc") hash differently, and no scene differs from an empty one.
+    and the bytes themselves; then, only for a rig with an alignment file, the part
+    ``alignment`` framed the same way (so a hash made without one is unchanged). The
+    lengths make the split unambiguous: ("ab", "c") and ("a", "bc") hash differently, and
+    no scene differs from an empty one.
     """
     h = hashlib.sha256(_HASH_MAGIC)
-    for name, text in (("plan", plan_text), ("rig", rig_text), ("scene", scene_text)):
+    parts = [("plan", plan_text), ("rig", rig_text), ("scene", scene_text)]
+    if alignment_text is not None:
+        parts.append(("alignment", alignment_text))
+    for name, text in parts:
         h.update(f"{name} {'-' if text is None else len(text)}\n".encode("ascii"))
         if text is not None:
             h.update(text)
@@ -347,4 +358,4 @@ class Plan:
 
     def content_hash(self, scene_text: bytes | None = None) -> str:
         """`content_hash` of the texts this plan was built from (and a scene's)."""
-        return content_hash(self.plan_text, self.rig.text, scene_text)
+        return content_hash(self.plan_text, self.rig.text, scene_text, self.rig.alignment_text)

@@ -56,6 +56,12 @@ PROBE_PAIRS = 4096
 _TURN_MARGIN = 1e-9
 
 
+def named_alignment(rig_path: Path | None, name: str) -> Path:
+    """Where the alignment file a rig file's ``alignment`` field names lies: relative to
+    the rig file's folder (to the working folder for a rig made in code)."""
+    return (rig_path.parent if rig_path is not None else Path()) / name
+
+
 class Rig:
     """A rig: forward and inverse kinematics, constraints, and its motor axes."""
 
@@ -130,8 +136,7 @@ class Rig:
         """Read the alignment file ``name`` (relative to the rig file, or as ``given``
         in place of the one it names)."""
         where = str(self.source) if self.source else "rig"
-        base = self.source.parent if self.source is not None and not given else Path()
-        path = base / name
+        path = Path(name) if given else named_alignment(self.source, name)
         if raw is None:
             try:
                 raw = path.read_bytes()

@@ -45,14 +45,23 @@ class Files:
     rig_text: bytes
     scene_path: Path | None = None
     scene_text: bytes | None = None
+    #: The alignment file the rig file names (None: it names none).
+    alignment_text: bytes | None = None
 
     def hashes(self) -> dict[str, str | None]:
-        return {
+        """Each file's sha256 (the alignment's only where the rig names one) and their
+        `content_hash`."""
+        out = {
             "plan_sha256": sha256(self.plan_text),
             "rig_sha256": sha256(self.rig_text),
             "scene_sha256": None if self.scene_text is None else sha256(self.scene_text),
-            "content": content_hash(self.plan_text, self.rig_text, self.scene_text),
+            "content": content_hash(
+                self.plan_text, self.rig_text, self.scene_text, self.alignment_text
+            ),
         }
+        if self.alignment_text is not None:
+            out["alignment_sha256"] = sha256(self.alignment_text)
+        return out
 
 
 def check_scene(

@@ -35,12 +35,13 @@ from gonio.acquire.progress import Observer, Unobserved
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
-from gonio.config import ConfigError, read_bytes
+from gonio.config import ConfigError, load, read_bytes
 from gonio.errors import GonioError
 from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, sha256
 from gonio.planner.two_pass import Survey, extend
-from gonio.rig.model import Rig
+from gonio.rig.model import Rig, named_alignment
+from gonio.rig.schema import RigSpec
 from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
 from gonio.workflows import backends, hygiene
@@ -254,11 +255,14 @@ def changed_files(run: Run, files: Files) -> list[str]:
     """Which of the run's files differ from those given now (by hash)."""
     stored = run.meta["hashes"]
     now = files.hashes()
-    return [
+    changed = [
         name
         for name, key in (("plan", "plan_sha256"), ("rig", "rig_sha256"), ("scene", "scene_sha256"))
         if stored.get(key) != now[key] and not (name == "scene" and now[key] is None)
     ]
+    if run.meta.get("alignment_sha256") != now.get("alignment_sha256"):
+        changed.append("alignment")
+    return changed
 
 
 def check_stored_texts(run: Run) -> None:
@@ -293,7 +297,16 @@ def current_files(run: Run, plan: Path | None, rig: Path | None, scene: Path | N
     rig_path, rig_text = now(rig, "rig")
     scene_path, scene_text = now(scene, "scene")
     assert plan_text is not None and rig_text is not None
-    return Files(plan_path, plan_text, rig_path, rig_text, scene_path, scene_text)
+    aligned = load(rig_path or Path("rig"), RigSpec, raw=rig_text).alignment
+    alignment_text = None
+    if aligned is not None:  # the file the rig file names now; gone: the stored text
+        named = named_alignment(rig_path, aligned)
+        stored = run.meta.get("alignment_text")
+        alignment_text = (
+            read_bytes(named) if named.is_file()
+            else None if stored is None else str(stored).encode("utf-8")
+        )  # fmt: skip
+    return Files(plan_path, plan_text, rig_path, rig_text, scene_path, scene_text, alignment_text)
 
 
 def resume(
@@ -323,6 +336,8 @@ def resume(
             name = changed[0]
             where = files.plan_path if name == "plan" else files.rig_path
             where = files.scene_path if name == "scene" else where
+            if name == "alignment":
+                where = run.meta.get("alignment_path") or files.rig_path
             raise ConfigError(
                 f"{where}: the {name} file changed since the run started (sha256 differs "
                 f"from the journal's); restore it, or resume with --force to accept the change"
@@ -330,7 +345,7 @@ def resume(
         kind: BackendKind = run.meta["backend"]
         rig = run.plan.rig
         if changed:  # forced: the devices follow the rig file as it is now
-            rig = Rig.from_yaml(files.rig_path or Path("rig"), files.rig_text)
+            rig = Rig.from_yaml(files.rig_path or Path("rig"), files.rig_text, files.alignment_text)
         scene: Scene | None = None
         if backends.needs_scene(rig, kind):
             if files.scene_text is None:

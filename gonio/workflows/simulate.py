@@ -100,7 +100,10 @@ def simulate_plan(
     ``files``: the texts the run is made from (default: the plan's and rig's, and the
     scene as validated); ``output``: keep the run journal there."""
     if files is None:
-        files = Files(None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene))
+        files = Files(
+            None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene),
+            plan.rig.alignment_text,
+        )  # fmt: skip
     started = time.perf_counter()
     outcome = session.start(
         plan, files, scene=scene, output=output, overwrite=overwrite, seed=seed,

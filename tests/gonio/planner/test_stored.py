@@ -186,6 +186,11 @@ def test_content_hash_framing() -> None:
     with_scene = hashlib.sha256(b"gonio content v1\nplan 1\narig 1\nbscene 3\nxyz").hexdigest()
     assert content_hash(b"a", b"b", b"xyz") == with_scene
     assert len(expected) == 64
+    aligned = hashlib.sha256(
+        b"gonio content v1\nplan 1\narig 1\nbscene -\nalignment 2\nqq"
+    ).hexdigest()
+    assert content_hash(b"a", b"b", None, b"qq") == aligned
+    assert content_hash(b"a", b"b", None, b"") != content_hash(b"a", b"b")
 
 
 def test_load_plan_source_keeps_the_files_bytes(rigs: dict[str, Rig]) -> None:

@@ -4,6 +4,7 @@ shown by `gonio info`."""
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from gonio.config import ConfigError
+from gonio.planner import content_hash
 from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, FitRecord, FittedParameter, text
 from gonio.rig.sensitivity import alignment_sigma
@@ -133,6 +135,43 @@ def test_a_run_stores_the_alignment_and_info_shows_it(run_gonio: Gonio, tmp_path
         bad = run_gonio(*command, "--alignment", str(tmp_path / "nowhere.yaml"))
         assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
         assert "nowhere.yaml" in bad.stderr
+
+
+def test_the_alignment_is_part_of_what_a_run_is_made_from(
+    run_gonio: Gonio, tmp_path: Path
+) -> None:
+    """The run's content hash covers the alignment file's bytes (with the plan's stored
+    copy), and a resume refuses an alignment file changed since the run started unless
+    forced, naming the file."""
+    rig = aligned_rig(tmp_path)
+    plan = tmp_path / "plan.yaml"
+    plan.write_text(
+        (CONFIGS / "plans" / "quick.yaml").read_text()
+        .replace("rig: ../rigs/arch.yaml", f"rig: {rig}")
+        .replace("target: 500", "target: 30")
+    )  # fmt: skip
+    out = tmp_path / "run.sqlite"
+    scene = str(CONFIGS / "scenes" / "matte.yaml")
+    r = run_gonio("acquire", str(plan), "--scene", scene, "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    run = open_run(out)
+    hashes = run.meta["hashes"]
+    texts = [(tmp_path / n).read_bytes() for n in ("plan.yaml", "arch.yaml")]
+    align = (tmp_path / "align.yaml").read_bytes()
+    assert hashes["content"] == content_hash(*texts, Path(scene).read_bytes(), align)
+    assert hashes["alignment_sha256"] == hashlib.sha256(align).hexdigest()
+    assert hashes["content"] != content_hash(*texts, Path(scene).read_bytes())
+    assert run.plan.content_hash(Path(scene).read_bytes()) == hashes["content"]
+    (tmp_path / "align.yaml").write_text(text(AlignmentFile(alignment=AlignmentSpec())))
+    refused = run_gonio("acquire", "--resume", str(out))
+    assert refused.returncode == 2, refused.stderr
+    assert refused.stderr.strip() == (
+        f"gonio: error: {(tmp_path / 'align.yaml').resolve()}: the alignment file changed since the run "
+        "started (sha256 differs from the journal's); restore it, or resume with --force "
+        "to accept the change"
+    )
+    (tmp_path / "align.yaml").write_bytes(align)
+    assert run_gonio("acquire", "--resume", str(out)).returncode == 0
 
 
 def test_info_says_none_without_an_alignment(run_gonio: Gonio, tmp_path: Path) -> None:
