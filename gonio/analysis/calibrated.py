@@ -4,7 +4,8 @@ holds a reading of the reference
 standard and a dark reading; `calibration_series` gathers them and
 `gonio.radiometry.series.CalibrationSeries` inverts the samples (the formula and the
 noise model are there); a point source's spot fall-off is divided out where the
-instrument has it (`gonio.analysis.falloff`)."""
+instrument has it (`gonio.analysis.falloff`); the uncertainty of the rig's measured
+alignment is added to σ (`gonio.analysis.alignment_error`)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from gonio.analysis.alignment_error import with_alignment_error
 from gonio.analysis.falloff import spot_corrected
 from gonio.errors import GonioError
 from gonio.radiometry.series import CalibrationSeries, rounding_var, student_variance
@@ -233,4 +235,4 @@ def calibrate(run: Run, *, falloff: bool = True) -> Calibrated:
     f, sigma = series.brdf(counts, std, s["n"], s["exposure_s"], wi, wo, t)
     if falloff:
         f, sigma = spot_corrected(run, series, f, sigma)
-    return Calibrated(f, sigma, series)
+    return Calibrated(f, with_alignment_error(run, f, sigma), series)

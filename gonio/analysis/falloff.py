@@ -12,10 +12,8 @@ enter f as R_sample / R_ref; the correction divides it out:
 
 * R_ref, R_geo: geometry only (a constant BRDF): exact to the quadrature's rounding;
 * R_f: the BRDF's own variation over the ±F/(2r) of incidence across the spot, with f
-  estimated from the run's own samples (a cubic radial-basis interpolant, Buhmann
-  2003, of f_cal · R_ref / R_geo over the hybrid coordinates of Barla, Belcour &
-  Pacanowski 2015, as (‖h̄‖, ‖k‖, ‖h̄‖ cos Δφ, ‖h̄‖ sin Δφ) so that the mirror
-  configuration is one point). Its error, from the interpolant's, enters σ as
+  estimated from the run's own samples (`gonio.analysis.estimate`, of
+  f_cal · R_ref / R_geo). Its error, from the interpolant's, enters σ as
   |R_f − 1|: on the quick plan with the specular test function the estimated R_f − 1
   is within that of the true one (docs/results/point_source.md).
 
@@ -26,9 +24,8 @@ Applies where the instrument has the fall-off: a point-source rig measured on ha
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import RBFInterpolator
 
-from gonio import params
+from gonio.analysis.estimate import Estimate
 from gonio.analysis.scene import scene_effects
 from gonio.radiometry import DetectorOptics, PointSource, spot_ratio
 from gonio.radiometry.series import CalibrationSeries
@@ -39,10 +36,6 @@ from gonio.types import BoolArray, FloatArray
 #: Spatial quadrature order of R_f (R_f − 1 is ≲ 1 %: this order's error is below 1e-12
 #: of it at r/F ≥ 4).
 BRDF_ORDER = (4, 6)
-#: Samples beyond which the interpolant is local (its nearest ones), not global.
-GLOBAL_SAMPLES = 3000
-#: Nearest samples a local interpolant uses.
-NEIGHBOURS = 64
 
 
 def has_falloff(run: Run) -> bool:
@@ -62,42 +55,19 @@ def _instrument(rig: Rig) -> tuple[PointSource, DetectorOptics]:
     return PointSource(1.0, distance), optics
 
 
-def _features(wi: FloatArray, wo: FloatArray, isotropic: bool) -> FloatArray:
-    """Interpolation coordinates (P, 4) or (P, 6) of pairs (..., 3): hybrid coordinates with
-    h̄ and k̄ as planar vectors (no seam at the mirror configuration)."""
-    hybrid = params.get("hybrid")
-    a, b = np.broadcast_arrays(wi, wo)
-    if isotropic:
-        h, k, dphi = hybrid.forward_iso(a, b).reshape(-1, 3).T
-        return np.stack([h, k, h * np.cos(dphi), h * np.sin(dphi)], axis=-1)
-    h, phi_h, k, phi_k = hybrid.forward(a, b).reshape(-1, 4).T
-    return np.stack(
-        [h, k, h * np.cos(phi_h), h * np.sin(phi_h), k * np.cos(phi_k), k * np.sin(phi_k)],
-        axis=-1,
-    )
-
-
 def brdf_ratio(
     rig: Rig, wi: FloatArray, wo: FloatArray, f: FloatArray, *, isotropic: bool = True
 ) -> FloatArray:
     """R_f (N,): the spot's ratio with the BRDF interpolated through the samples' values
     ``f`` (N,) at pairs (N, 3) (finite), over the geometric ratio; 1 where the estimate
     is not positive at the pair, and everywhere for too few distinct pairs."""
-    points, inverse = np.unique(_features(wi, wo, isotropic), axis=0, return_inverse=True)
-    if len(points) <= 2 * points.shape[1]:  # too few for the interpolant's linear part
+    model = Estimate(wi, wo, f, isotropic=isotropic)
+    if not model.usable:
         return np.ones(len(f))
-    # a pair measured twice: the mean of its values
-    values = np.bincount(inverse, f) / np.bincount(inverse)
-    local = NEIGHBOURS if len(points) > GLOBAL_SAMPLES else None
-    model = RBFInterpolator(points, values, kernel="cubic", degree=1, neighbors=local)
-
-    def estimate(x: FloatArray, y: FloatArray) -> FloatArray:
-        shape = np.broadcast_shapes(x.shape, y.shape)[:-1]
-        return np.asarray(model(_features(x, y, isotropic)).reshape(shape), dtype=np.float64)
 
     source, optics = _instrument(rig)
     diameter = rig.spec.constraints.sample_diameter_mm
-    with_f = spot_ratio(source, optics, diameter, wi, wo, estimate, order=BRDF_ORDER)
+    with_f = spot_ratio(source, optics, diameter, wi, wo, model.eval, order=BRDF_ORDER)
     geometry = spot_ratio(source, optics, diameter, wi, wo, order=BRDF_ORDER)
     ratio = with_f / geometry
     return np.asarray(np.where(np.isfinite(ratio) & (ratio > 0), ratio, 1.0), dtype=np.float64)

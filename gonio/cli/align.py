@@ -95,7 +95,7 @@ def cmd_align(args: argparse.Namespace) -> int:
     from gonio.config import ConfigError
     from gonio.output import reserve_output
     from gonio.rig import Rig
-    from gonio.rig.alignment_file import from_fit, load_alignment, text
+    from gonio.rig.alignment_file import from_fit, text
     from gonio.rig.alignment_fit import fit
     from gonio.workflows import align, backends
     from sim.scene import load_scene
@@ -113,11 +113,10 @@ def cmd_align(args: argparse.Namespace) -> int:
     if args.check is not None:
         if args.output is not None or args.overwrite:
             raise ConfigError("--check writes nothing: drop -o and --overwrite")
-        file = load_alignment(args.check)
+        checked = rig.realigned(args.check)
         settings = dataclasses.replace(align.CHECK, exposure_s=args.exposure)
         result = align.run_scan(rig, scene, kind, settings, seed=args.seed, speedup=args.speedup)
-        values, errors = align.parameter_vector(rig, file)
-        return _print_verdict(align.verdict(rig, result.peaks, values, errors), result, args.check)
+        return _print_verdict(align.verdict(checked, result.peaks), result, args.check)
     output = args.output or default_output(args.rig)
     sidecar = readings_path(output)
     for path in (output, sidecar):

@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
 import yaml
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from gonio.config import MAX_INTEGER, Strict, load
 from gonio.errors import GonioError
 from gonio.rig.alignment_spec import MAX_ERROR_DEG, MAX_HEIGHT_MM, AlignmentSpec
+from gonio.types import FloatArray
 
 if TYPE_CHECKING:  # annotations only: the rig model reads alignment files (`load_alignment`)
     from gonio.rig.alignment_fit import AlignmentFit
@@ -34,6 +35,10 @@ HEADER = "# gonio alignment v1"
 MAX_STATED = 90.0
 
 Stated = Annotated[float, Field(ge=0, le=MAX_STATED)]
+Correlation = Annotated[float, Field(ge=-1, le=1)]
+#: How far a stated correlation matrix may be from symmetric, unit-diagonal and positive
+#: semi-definite (the rounding of its written decimals).
+CORRELATION_TOLERANCE = 1e-6
 
 
 class FittedParameter(Strict):
@@ -60,10 +65,40 @@ class FitRecord(Strict):
     parameters: dict[str, FittedParameter] = Field(
         description="Each determined parameter (names of gonio.rig.alignment_fit)."
     )
+    correlation: list[list[Correlation]] | None = Field(
+        None,
+        description="The fitted parameters' correlation matrix, rows and columns in the "
+        "order of parameters (none: taken as independent).",
+    )
     undetermined: dict[str, str] = Field(
         default_factory=dict,
         description="Each parameter the scan could not determine, with what would.",
     )
+
+    @model_validator(mode="after")
+    def _square(self) -> FitRecord:
+        rows = self.correlation
+        if rows is None:
+            return self
+        n = len(self.parameters)
+        if len(rows) != n or any(len(r) != n for r in rows):
+            raise ValueError(f"correlation: expected {n} rows of {n}, one per parameter")
+        matrix = np.array(rows)
+        if not np.allclose(np.diag(matrix), 1.0, atol=CORRELATION_TOLERANCE):
+            raise ValueError("correlation: expected 1 on the diagonal")
+        if not np.allclose(matrix, matrix.T, atol=CORRELATION_TOLERANCE):
+            raise ValueError("correlation: expected a symmetric matrix")
+        if np.linalg.eigvalsh(0.5 * (matrix + matrix.T)).min() < -CORRELATION_TOLERANCE:
+            raise ValueError("correlation: expected a positive semi-definite matrix")
+        return self
+
+    def covariance(self) -> FloatArray:
+        """The stated covariance (P, P) of `parameters` in their order (°², mm², °·mm):
+        standard errors and correlations (independent where the file gives none)."""
+        errors = np.array([p.error for p in self.parameters.values()], dtype=np.float64)
+        n = len(errors)
+        rho = np.eye(n) if self.correlation is None else np.array(self.correlation)
+        return np.asarray(errors[:, None] * rho * errors[None, :], dtype=np.float64)
 
 
 class AlignmentFile(Strict):
@@ -104,6 +139,11 @@ def from_fit(
         detector_pointing_deg=(angles["detector_pointing_x"], angles["detector_pointing_y"]),
     )
     misses = np.degrees(np.hypot(*result.residuals_rad.T))
+    kept = np.flatnonzero(result.determined)
+    block = result.covariance[np.ix_(kept, kept)]
+    scale = np.sqrt(np.diag(block))
+    correlation = np.clip(block / np.outer(scale, scale), -1.0, 1.0)
+    np.fill_diagonal(correlation, 1.0)
     record = FitRecord(
         date_utc=date_utc,
         run=str(run),
@@ -122,6 +162,7 @@ def from_fit(
             )
             if ok
         },
+        correlation=correlation.tolist(),
         undetermined=dict(result.hints),
     )
     return AlignmentFile(alignment=spec, fit=record)

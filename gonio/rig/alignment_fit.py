@@ -1,7 +1,8 @@
 """The misalignment a mirror scan measures: `fit` finds the `Alignment` whose forward
 kinematics put each observed specular peak where a mirror reflects, by nonlinear least
-squares (scipy's), with its covariance, and says which parameters the scan cannot
-determine instead of setting them silently.
+squares (scipy's), with its covariance (from the peaks' stated location errors, scaled
+by the reduced χ² where the peaks scatter more than those: the Birge ratio), and says
+which parameters the scan cannot determine instead of setting them silently.
 
 An observation is a pose (joint angles as the rig file reads them) at which the detector
 saw the peak of a first-surface mirror seated as the sample, and the angular standard
@@ -59,6 +60,8 @@ def parameters(rig: Rig) -> tuple[str, ...]:
 
 #: What determines each kind of parameter when a scan does not (by name prefix).
 HINTS = {
+    "zero_offset.sample_rotation": "an anisotropic reference (a grating, a brushed "
+    "sample): a mirror looks the same at every turn of the stage",
     "zero_offset": "peaks at more poses of that axis (light elevations, detector azimuths)",
     "tilt": "the same light poses at three or more sample rotations",
     "height_mm": "a point source, or a camera on the spot: with a collimated beam and a "
@@ -80,6 +83,33 @@ def as_alignment(rig: Rig, p: FloatArray) -> Alignment:
         light_pointing=p[a + 3 : a + 5],
         detector_pointing=p[a + 5 : a + 7],
     )
+
+
+def vector(rig: Rig, alignment: Alignment) -> FloatArray:
+    """The parameter vector (P,) (`parameters` order; rad, mm) of one ``alignment``: the
+    inverse of `as_alignment`."""
+    a = alignment
+    tilt = float(a.tilt)
+    return np.concatenate([
+        np.broadcast_to(a.zero_offset, (len(rig.axes),)),
+        [tilt * math.cos(float(a.tilt_azimuth)), tilt * math.sin(float(a.tilt_azimuth))],
+        [float(a.height_mm)], a.light_pointing, a.detector_pointing,
+    ]).astype(np.float64)  # fmt: skip
+
+
+def stated_covariance(rig: Rig) -> FloatArray:
+    """The covariance (P, P) (`parameters` order; rad², mm²) its alignment file states of
+    the rig's alignment: the fitted parameters' standard errors and correlations, 0 for a
+    parameter the fit did not determine, and everywhere without a file or fit record."""
+    names = parameters(rig)
+    out = np.zeros((len(names), len(names)))
+    record = None if rig.alignment_file is None else rig.alignment_file.fit
+    if record is None:
+        return out
+    index = [names.index(name) for name in record.parameters]
+    radians = np.array([1.0 if n == "height_mm" else math.pi / 180.0 for n in record.parameters])
+    out[np.ix_(index, index)] = record.covariance() * np.outer(radians, radians)
+    return out
 
 
 def miss(rig: Rig, angles: FloatArray, alignment: Alignment) -> FloatArray:
@@ -151,9 +181,12 @@ def fit(rig: Rig, angles: FloatArray, sigma_rad: FloatArray) -> AlignmentFit:
     jac = np.asarray(result.jac, dtype=np.float64)
     # p = diag(scale) Bᵀ x: the covariance of x carried to the parameters
     carry = scale[:, None] * basis.T
-    covariance = carry @ np.linalg.pinv(jac.T @ jac) @ carry.T
-    errors = np.where(determined, np.sqrt(np.diag(covariance)), np.nan)
     r = residuals(values)
+    dof = len(r) - len(basis)
+    # the peaks' stated error is a bound; where they scatter more, the scatter says more
+    birge = max(1.0, float(r @ r) / dof) if dof > 0 else 1.0
+    covariance = birge * (carry @ np.linalg.pinv(jac.T @ jac) @ carry.T)
+    errors = np.where(determined, np.sqrt(np.diag(covariance)), np.nan)
     hints = {
         name: next(h for prefix, h in HINTS.items() if name.startswith(prefix))
         for name, ok in zip(names, determined, strict=True)
@@ -167,7 +200,7 @@ def fit(rig: Rig, angles: FloatArray, sigma_rad: FloatArray) -> AlignmentFit:
         covariance=covariance,
         residuals_rad=(r.reshape(-1, 2) * sigma[:, None]),
         chi2=float(r @ r),
-        dof=len(r) - len(basis),
+        dof=dof,
         hints=hints,
         alignment=as_alignment(rig, values),
     )
@@ -244,5 +277,5 @@ def _directions(
 
 __all__ = [
     "HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_at",
-    "peak_offsets",
+    "peak_offsets", "stated_covariance", "vector",
 ]  # fmt: skip

@@ -26,22 +26,24 @@ filed, not the value.
 Alignment: the rig's measured alignment (``rig.alignment_file``) states each fitted
 parameter's standard error; J_p = ∂(si, ti, so, to)/∂p over the parameters of
 `gonio.rig.alignment_fit.parameters` (central differences of the aligned forward map at
-the commanded angles, `ALIGNMENT_STEP`), Σ_ω = J_p diag(σ_p²) J_pᵀ (`alignment_sigma`).
-The file gives no correlations, so the parameters are taken as independent; one it
-could not determine adds nothing (the file names it, with what would determine it).
+the commanded angles, `ALIGNMENT_STEP`), Σ_ω = J_p Σ_p J_pᵀ (`alignment_sigma`), Σ_p the
+covariance the file states (`gonio.rig.alignment_fit.stated_covariance`: standard errors
+and correlations; a parameter it could not determine adds nothing, the file names it
+with what would determine it).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from gonio.brdf.base import BRDF
 from gonio.errors import DomainError
 from gonio.params.conditioning import pair_frame, tangent_jacobian
-from gonio.rig.alignment_fit import as_alignment, parameters
+from gonio.rig.alignment_fit import as_alignment, stated_covariance, vector
 from gonio.rig.model import Rig
 from gonio.types import ArrayLike, FloatArray
 
@@ -114,11 +116,20 @@ def coordinate_sigma(name: str, rig: Rig, angles: ArrayLike, sigma: ArrayLike) -
     return np.asarray(np.sqrt(np.einsum("...ii->...i", _covariance(jc, sigma))), np.float64)
 
 
-def brdf_gradient(model: BRDF, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
+class GreyModel(Protocol):
+    """What `brdf_gradient` needs of a model: grey values f(wi, wo) (sr⁻¹) at pairs
+    (..., 3) (a `BRDF`, or an estimate from measured samples)."""
+
+    is_rgb: bool
+
+    def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray: ...
+
+
+def brdf_gradient(model: GreyModel, wi: ArrayLike, wo: ArrayLike) -> FloatArray:
     """∂f/∂(si, ti, so, to) (..., 4) in sr⁻¹/rad, for a grey model, at pairs above the
     horizon (central differences on the moved pair (ω + s e)/‖ω + s e‖)."""
     if model.is_rgb:
-        raise DomainError(f"brdf_gradient needs a grey model, got an RGB {model.name!r}")
+        raise DomainError(f"brdf_gradient needs a grey model, got an RGB {model!r}")
     wi, wo = np.asarray(wi, np.float64), np.asarray(wo, np.float64)
     lowest = np.minimum(wi[..., 2], wo[..., 2])
     if not np.all(lowest > 0.0):
@@ -151,36 +162,12 @@ def brdf_sigma(model: BRDF, rig: Rig, angles: ArrayLike, sigma: ArrayLike) -> Fl
     return np.asarray(np.sqrt(np.einsum("...i,...ij,...j->...", g, cov, g)), dtype=np.float64)
 
 
-def alignment_parameters(rig: Rig) -> tuple[FloatArray, FloatArray]:
-    """(values, standard errors) (P,) of the rig's alignment in the order of
-    `gonio.rig.alignment_fit.parameters` (rad, mm): the errors its alignment file's fit
-    record states, 0 for a parameter it did not determine or without a file or record."""
-    a = rig.alignment
-    values = np.concatenate(
-        [
-            np.broadcast_to(a.zero_offset, (len(rig.axes),)),
-            [float(a.tilt * np.cos(a.tilt_azimuth)), float(a.tilt * np.sin(a.tilt_azimuth))],
-            [float(a.height_mm)],
-            a.light_pointing,
-            a.detector_pointing,
-        ]
-    )
-    errors = np.zeros_like(values)
-    record = None if rig.alignment_file is None else rig.alignment_file.fit
-    if record is not None:
-        for k, name in enumerate(parameters(rig)):
-            fitted = record.parameters.get(name)
-            if fitted is not None:
-                scale = 1.0 if name == "height_mm" else math.pi / 180.0
-                errors[k] = fitted.error * scale
-    return np.asarray(values, dtype=np.float64), errors
-
-
 def alignment_jacobian(rig: Rig, angles: ArrayLike) -> FloatArray:
     """∂(si, ti, so, to)/∂p (..., 4, P) of the pair measured at the commanded ``angles``
-    (..., A) per unit of each alignment parameter (`alignment_parameters` order)."""
+    (..., A) per unit of each alignment parameter (`gonio.rig.alignment_fit.parameters`
+    order)."""
     q = np.asarray(angles, dtype=np.float64)
-    p, _ = alignment_parameters(rig)
+    p = vector(rig, rig.alignment)
     frame = pair_frame(*rig.forward(q, rig.alignment))
     columns = []
     for k in range(len(p)):
@@ -193,9 +180,26 @@ def alignment_jacobian(rig: Rig, angles: ArrayLike) -> FloatArray:
     return np.asarray(np.stack(columns, axis=-1), dtype=np.float64)
 
 
+def alignment_covariance(rig: Rig, angles: ArrayLike) -> FloatArray:
+    """Σ_ω (..., 4, 4) (rad²) of the pair measured at ``angles`` (..., A) from the
+    covariance the rig's alignment file states: J_p Σ_p J_pᵀ."""
+    jac = alignment_jacobian(rig, angles)
+    cov = np.einsum("...ip,pq,...jq->...ij", jac, stated_covariance(rig), jac)
+    return np.asarray(cov, dtype=np.float64)
+
+
+def alignment_brdf_sigma(model: GreyModel, rig: Rig, angles: ArrayLike) -> FloatArray:
+    """Standard error (...) of f (sr⁻¹) at the pair measured at ``angles`` (..., A) from
+    the uncertainty of the rig's measured alignment: √(∇f Σ_ω ∇fᵀ), ∇f of ``model`` at
+    the pair the rig's alignment puts there."""
+    q = np.asarray(angles, dtype=np.float64)
+    g = brdf_gradient(model, *rig.forward(q, rig.alignment))
+    cov = alignment_covariance(rig, q)
+    return np.asarray(np.sqrt(np.einsum("...i,...ij,...j->...", g, cov, g)), dtype=np.float64)
+
+
 def alignment_sigma(rig: Rig, angles: ArrayLike) -> FloatArray:
     """RMS angular error (rad) of one direction of the pair measured at ``angles``
     (..., A) from the uncertainty of the rig's measured alignment: √(trace Σ_ω / 2)."""
-    _, errors = alignment_parameters(rig)
-    cov = _covariance(alignment_jacobian(rig, angles), errors)
+    cov = alignment_covariance(rig, angles)
     return np.asarray(np.sqrt(np.trace(cov, axis1=-2, axis2=-1) / 2.0), dtype=np.float64)

@@ -29,8 +29,7 @@ from drivers.devices import Devices
 from gonio.acquire import measure_target
 from gonio.errors import GonioError
 from gonio.rig import Rig
-from gonio.rig.alignment_file import AlignmentFile
-from gonio.rig.alignment_fit import as_alignment, miss, parameters, peak_at
+from gonio.rig.alignment_fit import as_alignment, miss, peak_at, stated_covariance, vector
 from gonio.types import FloatArray
 from gonio.workflows import backends
 from gonio.workflows.backends import BackendKind
@@ -289,52 +288,32 @@ class Verdict:
         ]
 
 
-def verdict(rig: Rig, peaks: FloatArray, values: FloatArray, errors: FloatArray) -> Verdict:
-    """Whether the peaks (M, A) agree with the alignment of the parameter vector
-    ``values`` (`gonio.rig.alignment_fit.parameters` order; rad, mm): each miss within
-    three times the peak's location error combined with the alignment's propagated error
-    (each parameter's standard error ``errors``, 0 where not stated, carried by central
-    differences, as independent)."""
+def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
+    """Whether the peaks (M, A) agree with the rig's alignment: each miss within three
+    times the peak's location error combined with the alignment's propagated error (the
+    covariance its file states, `gonio.rig.alignment_fit.stated_covariance`, carried by
+    central differences over each stated parameter's standard error)."""
+    values, covariance = vector(rig, rig.alignment), stated_covariance(rig)
     misses = miss(rig, peaks, as_alignment(rig, values))
-    variance = np.full(misses.shape, math.radians(PEAK_SIGMA_DEG) ** 2)
-    for i in np.flatnonzero(errors > 0):
+    errors = np.sqrt(np.diag(covariance))
+    stated = np.flatnonzero(errors > 0)
+    columns = []
+    for i in stated:
         step = np.zeros_like(values)
         step[i] = errors[i]
         up = miss(rig, peaks, as_alignment(rig, values + step))
         down = miss(rig, peaks, as_alignment(rig, values - step))
-        variance += ((up - down) / 2.0) ** 2
+        columns.append((up - down) / (2.0 * errors[i]))
+    variance = np.full(misses.shape, math.radians(PEAK_SIGMA_DEG) ** 2)
+    if columns:
+        jac = np.stack(columns, axis=-1)  # (M, 2, S) per unit of each stated parameter
+        block = covariance[np.ix_(stated, stated)]
+        variance += np.einsum("mis,st,mit->mi", jac, block, jac)
     return Verdict(misses, 3.0 * np.sqrt(variance))
-
-
-def parameter_vector(rig: Rig, file: AlignmentFile) -> tuple[FloatArray, FloatArray]:
-    """(values, errors) of an alignment file as parameter vectors (rad, mm; in
-    `gonio.rig.alignment_fit.parameters` order; an error 0 where the file states none)."""
-    spec = file.alignment
-    tilt, azimuth = math.radians(spec.tilt_deg), math.radians(spec.tilt_azimuth_deg)
-    degrees = {
-        **{f"zero_offset.{a}": spec.zero_offset_deg.get(a, 0.0) for a in rig.axes},
-        "light_pointing_x": spec.light_pointing_deg[0],
-        "light_pointing_y": spec.light_pointing_deg[1],
-        "detector_pointing_x": spec.detector_pointing_deg[0],
-        "detector_pointing_y": spec.detector_pointing_deg[1],
-    }
-    names = parameters(rig)
-    values = np.array([
-        tilt * math.cos(azimuth) if n == "tilt_x" else tilt * math.sin(azimuth)
-        if n == "tilt_y" else spec.height_mm if n == "height_mm" else math.radians(degrees[n])
-        for n in names
-    ])  # fmt: skip
-    stated = file.fit.parameters if file.fit is not None else {}
-    errors = np.array([
-        0.0 if n not in stated else stated[n].error if n == "height_mm"
-        else math.radians(stated[n].error)
-        for n in names
-    ])  # fmt: skip
-    return values, errors
 
 
 __all__ = [
     "CHECK", "PEAK_SIGMA_DEG", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan",
-    "measure_line", "nominal_poses", "parameter_vector", "reachable", "run_scan", "scan",
+    "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
     "verdict", "write_readings",
 ]  # fmt: skip

@@ -14,7 +14,7 @@ import pytest
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.rig.alignment_file import from_fit, load_alignment, text
-from gonio.rig.alignment_fit import AlignmentFit, fit, peak_at, peak_offsets
+from gonio.rig.alignment_fit import AlignmentFit, fit, peak_at, peak_offsets, stated_covariance
 from gonio.rig.model import Rig
 from sim.scene import load_scene
 from sim.simulate import simulate
@@ -112,6 +112,15 @@ def test_the_alignment_file_holds_the_fit_and_reads_back(
     fitted = rig.forward(nominal_poses(rig), result.alignment)
     np.testing.assert_allclose(wi, fitted[0], atol=1e-12)
     np.testing.assert_allclose(wo, fitted[1], atol=1e-12)
+    # the file states the fit's covariance of what it determines (errors, correlations),
+    # as the rig that names it reads it back
+    kept = np.flatnonzero(result.determined)
+    assert back.fit.correlation is not None and len(back.fit.correlation) == len(kept)
+    stated = stated_covariance(rig.realigned(path))
+    expected = np.zeros_like(result.covariance)
+    expected[np.ix_(kept, kept)] = result.covariance[np.ix_(kept, kept)]
+    np.testing.assert_allclose(stated, expected, rtol=1e-9, atol=1e-30)
+    assert np.any(np.abs(np.array(back.fit.correlation) - np.eye(len(kept))) > 0.01)
 
 
 def test_a_bad_alignment_file_is_one_line(tmp_path: Path) -> None:

@@ -5,11 +5,13 @@ shown by `gonio info`."""
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
 from gonio.config import ConfigError
 from gonio.planner import content_hash
@@ -137,9 +139,7 @@ def test_a_run_stores_the_alignment_and_info_shows_it(run_gonio: Gonio, tmp_path
         assert "nowhere.yaml" in bad.stderr
 
 
-def test_the_alignment_is_part_of_what_a_run_is_made_from(
-    run_gonio: Gonio, tmp_path: Path
-) -> None:
+def test_the_alignment_is_part_of_what_a_run_is_made_from(run_gonio: Gonio, tmp_path: Path) -> None:
     """The run's content hash covers the alignment file's bytes (with the plan's stored
     copy), and a resume refuses an alignment file changed since the run started unless
     forced, naming the file."""
@@ -166,9 +166,9 @@ def test_the_alignment_is_part_of_what_a_run_is_made_from(
     refused = run_gonio("acquire", "--resume", str(out))
     assert refused.returncode == 2, refused.stderr
     assert refused.stderr.strip() == (
-        f"gonio: error: {(tmp_path / 'align.yaml').resolve()}: the alignment file changed since the run "
-        "started (sha256 differs from the journal's); restore it, or resume with --force "
-        "to accept the change"
+        f"gonio: error: {(tmp_path / 'align.yaml').resolve()}: the alignment file changed "
+        "since the run started (sha256 differs from the journal's); restore it, or resume "
+        "with --force to accept the change"
     )
     (tmp_path / "align.yaml").write_bytes(align)
     assert run_gonio("acquire", "--resume", str(out)).returncode == 0
@@ -209,3 +209,78 @@ def test_the_alignments_standard_errors_reach_the_directions(tmp_path: Path) -> 
     # the RMS over the pair's two directions is σ/√2.
     np.testing.assert_allclose(alignment_sigma(rig, q), np.radians(0.05) / np.sqrt(2), rtol=1e-6)
     assert np.all(alignment_sigma(Rig.from_yaml(CONFIGS / "rigs" / "arch.yaml"), q) == 0.0)
+
+
+@pytest.mark.parametrize(
+    ("rho", "factor"), [(0.0, math.sqrt(2.0)), (1.0, 2.0), (-1.0, 0.0), (None, math.sqrt(2.0))]
+)
+def test_the_stated_correlations_reach_the_directions(
+    tmp_path: Path, rho: float | None, factor: float
+) -> None:
+    """The light's elevation zero and its pointing about the same axis turn ωi alike:
+    with equal errors σ the light direction's error is σ√(2 + 2ρ) (independent without
+    a stated correlation), so the pair's RMS is that over √2."""
+    error = 0.05
+    record = FitRecord(
+        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
+        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
+        residual_max_deg=0.02,
+        parameters={
+            "zero_offset.light_elevation": FittedParameter(value=0.3, error=error),
+            "light_pointing_y": FittedParameter(value=0.0, error=error),
+        },
+        correlation=None if rho is None else [[1.0, rho], [rho, 1.0]],
+    )  # fmt: skip
+    (tmp_path / "align.yaml").write_text(text(AlignmentFile(alignment=SPEC, fit=record)))
+    path = tmp_path / "arch.yaml"
+    path.write_text((CONFIGS / "rigs" / "arch.yaml").read_text() + "alignment: align.yaml\n")
+    rig = Rig.from_yaml(path)
+    wi = np.array([[0.3, 0.1, 0.9], [-0.5, 0.2, 0.7]])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    q = rig.solve(wi, wi * np.array([-1.0, -1.0, 1.0])).angles
+    expected = np.radians(error) * factor / np.sqrt(2.0)
+    np.testing.assert_allclose(alignment_sigma(rig, q), expected, rtol=1e-6, atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        ("[[1.0]]", "expected 2 rows of 2"),
+        ("[[1.0, 0.5], [0.4, 1.0]]", "expected a symmetric matrix"),
+        ("[[0.9, 0.5], [0.5, 1.0]]", "expected 1 on the diagonal"),
+        ("[[1.0, 1.5], [1.5, 1.0]]", "less than or equal to 1"),
+    ],
+)
+def test_a_bad_correlation_matrix_is_one_line(tmp_path: Path, rows: str, message: str) -> None:
+    record = FitRecord(
+        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
+        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
+        residual_max_deg=0.02,
+        parameters={
+            "zero_offset.light_elevation": FittedParameter(value=0.3, error=0.05),
+            "light_pointing_y": FittedParameter(value=0.0, error=0.05),
+        },
+    )  # fmt: skip
+    body = text(AlignmentFile(alignment=SPEC, fit=record))
+    assert "  correlation: null\n" in body
+    body = body.replace("  correlation: null", f"  correlation: {rows}")
+    (tmp_path / "align.yaml").write_text(body)
+    path = tmp_path / "arch.yaml"
+    path.write_text((CONFIGS / "rigs" / "arch.yaml").read_text() + "alignment: align.yaml\n")
+    with pytest.raises(ConfigError, match=message) as caught:
+        Rig.from_yaml(path)
+    assert "\n" not in str(caught.value) and "align.yaml" in str(caught.value)
+
+
+def test_a_correlation_matrix_no_covariance_has_is_refused() -> None:
+    with pytest.raises(ValidationError, match="expected a positive semi-definite matrix"):
+        FitRecord(
+            date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64,
+            rig="arch", rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10,
+            residual_rms_deg=0.01, residual_max_deg=0.02,
+            parameters={
+                name: FittedParameter(value=0.0, error=0.05)
+                for name in ("tilt_x", "tilt_y", "height_mm")
+            },
+            correlation=[[1.0, 0.9, -0.9], [0.9, 1.0, 0.9], [-0.9, 0.9, 1.0]],
+        )  # fmt: skip
