@@ -4,8 +4,9 @@ holds a reading of the reference
 standard and a dark reading; `calibration_series` gathers them and
 `gonio.radiometry.series.CalibrationSeries` inverts the samples (the formula and the
 noise model are there); a point source's spot fall-off is divided out where the
-instrument has it (`gonio.analysis.falloff`); the uncertainty of the rig's measured
-alignment is added to σ (`gonio.analysis.alignment_error`)."""
+instrument has it (`gonio.analysis.falloff`), and a point source's distance as the
+sample's measured height changes it (`gonio.analysis.lamp_distance`); the uncertainty
+of the rig's measured alignment is added to σ (`gonio.analysis.alignment_error`)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ import numpy as np
 
 from gonio.analysis.alignment_error import with_alignment_error
 from gonio.analysis.falloff import spot_corrected
+from gonio.analysis.lamp_distance import distance_corrected
 from gonio.errors import GonioError
 from gonio.radiometry.series import CalibrationSeries, rounding_var, student_variance
 from gonio.store.read import Event, Run
@@ -235,4 +237,5 @@ def calibrate(run: Run, *, falloff: bool = True) -> Calibrated:
     f, sigma = series.brdf(counts, std, s["n"], s["exposure_s"], wi, wo, t)
     if falloff:
         f, sigma = spot_corrected(run, series, f, sigma)
+    f, sigma = distance_corrected(run, f, sigma)
     return Calibrated(f, with_alignment_error(run, f, sigma), series)
