@@ -71,7 +71,7 @@ class Item:
 E, R = Area.EEPROM, Area.RAM
 
 ITEMS: tuple[Item, ...] = (
-    Item("model_number", 0, 2, E, False),
+    Item("model_number", 0, 2, E, False, default=1020),
     Item("model_information", 2, 4, E, False),
     Item("firmware_version", 6, 1, E, False),
     Item("id", 7, 1, E, True, default=1, low=0, high=252),

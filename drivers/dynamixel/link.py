@@ -60,7 +60,8 @@ STATUS_ERRORS = {
     4: "data range error (value outside the item's range)",
     5: "data length error (fewer bytes than the item needs)",
     6: "data limit error (value outside the motor's configured limit)",
-    7: "access error (read-only item, or an EEPROM item written with torque on)",
+    7: "access error (read-only item, an address the model lacks, or an EEPROM item "
+    "written with torque on)",
 }
 #: Bytes' worth of line time a late reply may still need after a timeout (`_drain`).
 DRAIN_BYTES = 192
