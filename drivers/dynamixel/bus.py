@@ -29,6 +29,12 @@ profiles back first. `poll_positions` is one SYNC_READ of Present Position (4 by
 motor), stamped on the bus's clock just before the instruction leaves and just after
 the last status arrives.
 
+Models: `open` reads each motor's model number (PING) and from then on uses that model's
+control table (:mod:`drivers.dynamixel.models`) for what it reads and writes; a motor
+that is not the model its axis names (`AxisConfig.model`, the rig file's
+``motor_model``), or whose model lacks the axis's operating mode, stops `open` with one
+line saying so, before anything is written.
+
 EEPROM items (operating mode, drive mode, position limits) are read first and written
 only when they differ; only the motors that need such a write have their torque turned
 off (and read back off) before it, so opening a configured bus never drops an arm.
@@ -47,12 +53,12 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.condition import Condition
 from drivers.dynamixel.control_table import (
     FACTORY_BAUD,
-    MODELS,
     RAD_S_PER_VELOCITY_UNIT,
     item,
 )
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.models import MODEL_NAMES, model
 from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
 from drivers.errors import (
     MOTION_FAULTS,
@@ -154,8 +160,7 @@ class DynamixelBus(Condition, Resource):
         self._swept.clear()
         try:
             for axis in self._axes.values():
-                model = self._link.ping(axis.motor_id)
-                self.models[axis.name] = MODELS.get(model, f"model {model}")
+                self._identify(axis)
                 flags = self._link.hardware_error(axis.motor_id)
                 if flags:
                     raise self._link.fault(axis.motor_id)
@@ -166,6 +171,26 @@ class DynamixelBus(Condition, Resource):
             self._link.reset()
             self._link.close()
             raise
+
+    def _identify(self, axis: AxisConfig) -> None:
+        """PING the axis's motor; its model's table from now on (`DriverError` if it is not
+        the model the axis names, or lacks the axis's operating mode)."""
+        number = self._link.ping(axis.motor_id)
+        spec = model(number)
+        who = self._link.who(axis.motor_id)
+        if axis.model is not None and number != axis.model:
+            expected = MODEL_NAMES.get(axis.model, f"model {axis.model}")
+            raise DriverError(
+                f"{who} is an {spec.name} (model number {number}); the rig file expects "
+                f"{expected} (axes.{axis.name}.motor_model): connect the right motor or "
+                "correct the rig file; nothing was written"
+            )
+        if axis.operating_mode not in spec.modes:
+            raise DriverError(
+                f"{who} is an {spec.name}, which has no {axis.mode} mode; nothing was written"
+            )
+        self._link.tables[axis.motor_id] = spec
+        self.models[axis.name] = spec.name
 
     def close(self) -> None:
         """Hold every axis that answers where it is and release the port (always). If an

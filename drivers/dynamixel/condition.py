@@ -12,15 +12,14 @@ from typing import TYPE_CHECKING
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.control_table import VOLT_PER_UNIT, decode_hardware_error, item
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.models import DEFAULT_MODEL, Model
 from drivers.errors import CommError, DriverError, MotorFault
 from drivers.values import Health, Recovered
 
-_CURRENT = item("present_current")
+_CURRENT = item("present_current")  # Present Load on an XL430, at the same address
 _VOLTAGE = item("present_input_voltage")
 _TEMPERATURE = item("present_temperature")
 _PRESENT = item("present_position")
-#: The load a motor reports is its Present Current over the largest Current Limit (%).
-_FULL_LOAD = float(item("current_limit").high or 1)
 
 
 class Condition:
@@ -112,8 +111,9 @@ class Condition:
 
     # -- condition ---------------------------------------------------------------------
     def health(self) -> dict[str, Health]:
-        """Temperature (°C), input voltage (V), hardware error flags and load (% of the
-        largest Current Limit, signed) per axis; a motor's alert does not raise."""
+        """Temperature (°C), input voltage (V), hardware error flags and load (signed %:
+        Present Current over the model's largest Current Limit; an XL430's Present
+        Load) per axis; a motor's alert does not raise."""
         self._check_open()
         ids = [a.motor_id for a in self._axes.values()]
         status = "hardware_error_status"
@@ -128,7 +128,9 @@ class Condition:
                 temperature_c=float(data[temperature]),
                 voltage_v=_VOLTAGE.decode(data[volts : volts + _VOLTAGE.size]) * VOLT_PER_UNIT,
                 error_flags=decode_hardware_error(errors[axis.motor_id][0]),
-                load_pct=100.0 * _CURRENT.decode(data[: _CURRENT.size]) / _FULL_LOAD,
+                load_pct=_load_pct(
+                    self._link.tables.get(axis.motor_id, DEFAULT_MODEL), data[: _CURRENT.size]
+                ),
             )
         return out
 
@@ -144,3 +146,15 @@ class Condition:
                     axis=name,
                     flags=h.error_flags,
                 )
+
+
+def _load_pct(spec: Model, raw: bytes) -> float:
+    """The load (signed %) in the two bytes at address 126 of a ``spec`` motor: Present
+    Current over the model's largest Current Limit, or Present Load (0.1 %)."""
+    if not spec.has("present_current"):
+        return 0.1 * spec.item("present_load").decode(raw)
+    return (
+        100.0
+        * spec.item("present_current").decode(raw)
+        / float(spec.item("current_limit").high or 1)
+    )

@@ -1,8 +1,11 @@
 """The X-series control table (Protocol 2.0) as data, and the units of its registers.
 
-Addresses, sizes, ranges and defaults follow the ROBOTIS e-manual for the X-series
-(XM430-W350, XM430-W210, XL430-W250 share this layout). EEPROM items can be written
-only with Torque Enable off; writing them with torque on is an Access error.
+Addresses, sizes, ranges and defaults are the XM430-W350's (ROBOTIS e-manual,
+emanual.robotis.com/docs/en/dxl/x/xm430-w350/): the base every model's table in
+:mod:`drivers.dynamixel.models` changes where that model differs. The addresses of the
+items the driver reads and writes are the same on every X-series model. EEPROM items
+can be written only with Torque Enable off; writing them with torque on is an Access
+error.
 """
 
 from __future__ import annotations
@@ -68,7 +71,7 @@ class Item:
 E, R = Area.EEPROM, Area.RAM
 
 ITEMS: tuple[Item, ...] = (
-    Item("model_number", 0, 2, E, False),
+    Item("model_number", 0, 2, E, False, default=1020),
     Item("model_information", 2, 4, E, False),
     Item("firmware_version", 6, 1, E, False),
     Item("id", 7, 1, E, True, default=1, low=0, high=252),
@@ -94,6 +97,8 @@ ITEMS: tuple[Item, ...] = (
     Item("min_voltage_limit", 34, 2, E, True, unit="0.1 V", default=95, low=60, high=160),
     Item("pwm_limit", 36, 2, E, True, default=885, low=0, high=885),
     Item("current_limit", 38, 2, E, True, unit="2.69 mA", default=1193, low=0, high=1193),
+    # 200 on the XM430-W350's present page (an older page, of a firmware with
+    # Acceleration Limit at 40, gave 350).
     Item("velocity_limit", 44, 4, E, True, unit="0.229 rev/min", default=200, low=0, high=1023),
     Item("max_position_limit", 48, 4, E, True, unit="tick", default=4095, low=0, high=4095),
     Item("min_position_limit", 52, 4, E, True, unit="tick", default=0, low=0, high=4095),
@@ -184,9 +189,6 @@ DRIVE_MODE_REVERSE = 0x01
 
 #: Extended position mode range of Goal Position (ticks, ±256 revolutions).
 EXTENDED_POSITION_LIMIT = 1_048_575
-
-#: Known model numbers.
-MODELS: dict[int, str] = {1020: "XM430-W350", 1030: "XM430-W210", 1060: "XL430-W250"}
 
 TICKS_PER_REV = 4096
 RAD_PER_TICK = 2.0 * math.pi / TICKS_PER_REV

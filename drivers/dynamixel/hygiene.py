@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Literal
 
 from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.control_table import MODELS, item
+from drivers.dynamixel.control_table import item
 from drivers.dynamixel.latency import (
     SYSFS_USB_SERIAL,
     UDEV_RULE,
@@ -44,6 +44,7 @@ from drivers.dynamixel.latency import (
     usb_serial_name,
 )
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.models import MODEL_NAMES as MODELS
 from drivers.errors import CommError, DriverError
 
 Level = Literal["ok", "n/a", "warning", "problem"]

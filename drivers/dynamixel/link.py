@@ -13,6 +13,10 @@ always released: also after Ctrl-C in the middle of a transaction, which would
 otherwise leave the SDK's ``is_using`` flag set and every later call failing with
 "port is in use", and a reply still on its way arriving in the next transaction.
 
+Models: ``tables`` holds each motor's control table once it is known (`DynamixelBus`
+sets it from the model number a PING returns); reads and writes then use that model's
+items and ranges, and an item the model lacks is refused before anything is sent.
+
 EEPROM: the link remembers each motor's Torque Enable as far as it knows it (written
 with a status, read, or just rebooted = exact; sent by SYNC_WRITE = 1 presumed on, 0
 unknown) and refuses, before sending, to write an EEPROM item to a motor whose torque
@@ -39,6 +43,7 @@ import serial
 from drivers.devices import Resource
 from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
 from drivers.dynamixel.latency import assumed_adapter_ms, sdk_latency_timer
+from drivers.dynamixel.models import Model
 from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 from drivers.errors import CommError, DriverError, LimitError, MotorFault
 
@@ -55,7 +60,8 @@ STATUS_ERRORS = {
     4: "data range error (value outside the item's range)",
     5: "data length error (fewer bytes than the item needs)",
     6: "data limit error (value outside the motor's configured limit)",
-    7: "access error (read-only item, or an EEPROM item written with torque on)",
+    7: "access error (read-only item, an address the model lacks, or an EEPROM item "
+    "written with torque on)",
 }
 #: Bytes' worth of line time a late reply may still need after a timeout (`_drain`).
 DRAIN_BYTES = 192
@@ -97,6 +103,8 @@ class DynamixelLink(Resource):
         #: Torque Enable per motor as far as the link knows (True also when presumed on
         #: after a SYNC_WRITE; absent when unknown).
         self._torque: dict[int, bool] = {}
+        #: Each motor's control table, where its model is known (else the XM430-W350's).
+        self.tables: dict[int, Model] = {}
         #: A transaction was cut short (Ctrl-C, a serial error): a reply may be on its way.
         self._interrupted = False
 
@@ -315,7 +323,7 @@ class DynamixelLink(Resource):
     def read(self, motor_id: int, name: str, *, alerts: bool | None = None) -> int:
         """The value of control-table item ``name`` of ``motor_id`` (signed where the item
         is). ``alerts=False`` reads a faulted motor without raising `MotorFault`."""
-        reg = item(name)
+        reg = self.item(motor_id, name)
         data, error = self._read_exact(motor_id, reg, f"reading {name}")
         self._check_status(motor_id, error, f"reading {name}", alerts)
         value = reg.decode(data)
@@ -339,7 +347,7 @@ class DynamixelLink(Resource):
     def write(self, motor_id: int, name: str, value: int) -> None:
         """Write ``value`` to item ``name``; refused before sending if out of its range, or
         if it is an EEPROM item and the motor's torque is known to be on."""
-        reg = self._writable(name, value)
+        reg = self._writable(motor_id, name, value)
         self._check_eeprom(motor_id, reg, value)
         payload = list(reg.encode(value))
         error = self._attempt(
@@ -358,9 +366,19 @@ class DynamixelLink(Resource):
         result, error = pair
         return error, result
 
-    @staticmethod
-    def _writable(name: str, value: int) -> Item:
-        reg = item(name)
+    def item(self, motor_id: int, name: str) -> Item:
+        """Item ``name`` of ``motor_id``'s model (`DriverError` if the model lacks it)."""
+        table = self.tables.get(motor_id)
+        if table is None:
+            return item(name)
+        if not table.has(name):
+            raise DriverError(
+                f"{self.who(motor_id)} is an {table.name}, which has no {name}; nothing was sent"
+            )
+        return table.item(name)
+
+    def _writable(self, motor_id: int, name: str, value: int) -> Item:
+        reg = self.item(motor_id, name)
         if not reg.writable:
             raise DriverError(f"{name} is read-only")
         if not reg.in_range(value):
@@ -387,7 +405,7 @@ class DynamixelLink(Resource):
                 raise ValueError(f"{len(row)} values for {len(regs)} items ({', '.join(names)})")
             payload[motor_id] = []
             for reg, value in zip(regs, row, strict=True):
-                self._writable(reg.name, value)
+                self._writable(motor_id, reg.name, value)
                 self._check_eeprom(motor_id, reg, value)
                 payload[motor_id] += reg.encode(value)
         size = sum(reg.size for reg in regs)

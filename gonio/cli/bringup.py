@@ -22,8 +22,9 @@ import dynamixel_sdk as sdk
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.dynamixel.control_table import FACTORY_BAUD, MODELS
+from drivers.dynamixel.control_table import FACTORY_BAUD
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.models import MODEL_NAMES as MODELS
 from drivers.errors import CommError, DriverError
 from gonio.cli.arguments import finite_degrees, positive_seconds
 from gonio.config import ConfigError

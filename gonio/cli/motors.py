@@ -15,9 +15,10 @@ from pathlib import Path
 
 from drivers.dynamixel import hygiene
 from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, MODELS, RAD_PER_TICK
+from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, RAD_PER_TICK
 from drivers.dynamixel.latency import assumed_adapter_ms
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.models import MODEL_NAMES as MODELS
 from drivers.errors import CommError, DriverError
 from gonio.cli import EXIT_BAD_INPUT
 from gonio.config import ConfigError

@@ -22,12 +22,13 @@ import sys
 import threading
 import time
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import FrameType, TracebackType
 from typing import Self
 
 from drivers.dynamixel.control_table import BAUD_RATES
+from drivers.dynamixel.models import MODEL_NAMES, model_number
 from sim import responsive
 from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.dynamixel.faults import Fault, FaultBook
@@ -71,8 +72,9 @@ class BusStats:
 class DxlEmulator:
     """N X-series motors answering Protocol 2.0 on a pseudo-terminal.
 
-    ``ids`` are the motors' IDs (0-252), all of ``model`` with ``firmware``, listening
-    at ``baud`` (an X-series rate). ``clock`` drives the motion (default
+    ``ids`` are the motors' IDs (0-252), all of ``model`` (a model number or name, e.g.
+    ``"XL430-W250"``; or {ID: model} for a bus of several models) with ``firmware``,
+    listening at ``baud`` (a rate of every motor's model). ``clock`` drives the motion (default
     `time.monotonic`; a `ManualClock` in tests). ``wire_time`` and ``return_delay``
     make replies wait as on a real bus; ``record`` keeps a transcript.
     """
@@ -80,7 +82,7 @@ class DxlEmulator:
     def __init__(
         self,
         ids: Iterable[int] = (1,),
-        model: int = 1020,
+        model: int | str | Mapping[int, int | str] = 1020,
         baud: int = 57_600,
         clock: TimeSource | None = None,
         wire_time: bool = True,
@@ -99,9 +101,17 @@ class DxlEmulator:
         self.wire_time = wire_time
         self.return_delay = return_delay
         self._lock = threading.RLock()
+        models = model if isinstance(model, Mapping) else dict.fromkeys(ids, model)
+        if set(models) != set(ids):
+            raise ValueError(f"models {dict(models)} must name exactly the ids {ids}")
         self._motors = [
             EmulatedMotor(
-                i, model=model, firmware=firmware, baud=baud, clock=self.clock, lock=self._lock
+                i,
+                model=model_number(models[i]),
+                firmware=firmware,
+                baud=baud,
+                clock=self.clock,
+                lock=self._lock,
             )
             for i in ids
         ]
@@ -397,6 +407,13 @@ def _ids(text: str) -> tuple[int, ...]:
     return tuple(ids)
 
 
+def _model(text: str) -> int:
+    try:
+        return model_number(int(text) if text.strip().isdigit() else text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _positive(text: str) -> float:
     try:
         value = float(text)
@@ -415,7 +432,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--baud", type=int, default=57_600, choices=rates, metavar="RATE", help=f"bits/s: {rates}"
     )
-    parser.add_argument("--model", type=int, default=1020, help="model number (1020: XM430-W350)")
+    parser.add_argument(
+        "--model",
+        type=_model,
+        default=1020,
+        help=f"model name or number (default 1020, XM430-W350): {', '.join(MODEL_NAMES.values())}",
+    )
     parser.add_argument("--firmware", type=int, default=46, help="firmware version")
     parser.add_argument("--speedup", type=_positive, default=1.0, help="motion clock speed-up")
     parser.add_argument("--no-wire-time", action="store_true", help="answer without wire delays")

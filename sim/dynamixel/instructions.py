@@ -39,7 +39,6 @@ from sim.dynamixel.protocol import (
     StatusError,
     crc16,
 )
-from sim.dynamixel.table import EMULATED_TABLE_SIZE
 
 #: The magic parameters of CLEAR option 1 (reset the multi-turn count).
 CLEAR_MULTI_TURN = bytes([0x01, 0x44, 0x58, 0x4C, 0x22])
@@ -104,7 +103,7 @@ def _answers(motor: EmulatedMotor, instruction: int) -> bool:
 def _read(motor: EmulatedMotor, address: int, length: int) -> tuple[int, bytes]:
     if length < 1:
         return StatusError.DATA_LENGTH, b""
-    if address + length > EMULATED_TABLE_SIZE:
+    if address + length > motor.table.size:
         return StatusError.ACCESS, b""
     return StatusError.NONE, motor.read(address, length)
 

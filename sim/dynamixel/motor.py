@@ -1,12 +1,13 @@
 """One emulated X-series motor: its control-table memory, the write rules, the backup.
 
-The memory is the table of :mod:`sim.dynamixel.table` (the driver's items plus Startup
-Configuration, the feedforward gains, Backup Ready and the Indirect Address/Data blocks;
-addresses 0-661, little endian); writes go through :mod:`sim.dynamixel.rules` (Indirect
-Data resolved there) and a rejected write changes nothing. Motion and heat are the
-motor's :mod:`sim.dynamixel.drive` on its clock, started from the registers written;
-derived registers (Present Position, Present Velocity, Moving, Moving Status,
-trajectories, Realtime Tick, Present Temperature) are computed whenever they are read.
+The memory is its model's table (:mod:`sim.dynamixel.table`, from
+:mod:`drivers.dynamixel.models`: the XM430-W350's addresses 0-661 by default, an XL330's
+0-227; little endian), with that model's defaults and ranges; writes go through
+:mod:`sim.dynamixel.rules` (Indirect Data resolved there) and a rejected write changes
+nothing. Motion and heat are the motor's :mod:`sim.dynamixel.drive` on its clock,
+started from the registers written; derived registers (Present Position, Present
+Velocity, Moving, Moving Status, trajectories, Realtime Tick, Present Temperature) are
+computed whenever they are read.
 
 Position frames (e-manual): Present Position = s·shaft + Homing Offset, with s = −1 in
 reverse Drive Mode (the offset's sign is not reversed); position mode ignores an offset
@@ -50,14 +51,11 @@ from sim.dynamixel.rules import (
     targets,
 )
 from sim.dynamixel.table import (
-    BACKUP_RAM_ITEMS,
     BY_NAME,
-    EMULATED_TABLE_SIZE,
-    ITEM_AT,
-    ITEMS,
     STARTUP_RAM_RESTORE,
     STARTUP_TORQUE_ON,
-    touches_indirect_data,
+    Table,
+    table_of,
 )
 
 #: Drive Mode bit 2: time-based profile (Profile Velocity/Acceleration in ms).
@@ -86,36 +84,30 @@ BACKUP_RESTORE = 0x02
 BACKUP_FIRMWARE = 45
 
 
-def _defaults() -> bytearray:
-    mem = bytearray(EMULATED_TABLE_SIZE)
-    for it in ITEMS:
-        mem[it.address : it.address + it.size] = it.encode(it.default)
-    return mem
-
-
-_DEFAULTS = bytes(_defaults())
-
-
 def _wrap32(value: int) -> int:
     """``value`` as a signed 32-bit register would hold it."""
     return ((value + (1 << 31)) % (1 << 32)) - (1 << 31)
 
 
-def baud_code(bps: int) -> int:
-    """The Baud Rate register value for ``bps`` (ValueError if the X-series has none)."""
-    for code, rate in BAUD_RATES.items():
+def baud_code(bps: int, table: Table | None = None) -> int:
+    """The Baud Rate register value for ``bps`` (ValueError if the X-series, or the
+    model of ``table``, has none)."""
+    top = table.by_name["baud_rate"].high if table is not None else None
+    codes = {code: rate for code, rate in BAUD_RATES.items() if top is None or code <= top}
+    for code, rate in codes.items():
         if rate == bps:
             return code
-    rates = sorted(BAUD_RATES.values())
-    raise ValueError(f"{bps} baud is not an X-series rate; use one of {rates}")
+    raise ValueError(f"{bps} baud is not a rate of this model; use one of {sorted(codes.values())}")
 
 
 class EmulatedMotor:
     """An X-series motor's memory and motion, driven by a clock (seconds).
 
-    ``position`` is where the motor starts (ticks, Present Position). Every public
-    method holds ``lock`` (one lock shared by an emulator's motors; by default a
-    private RLock), so a bus thread and a test can use the motor at the same time.
+    ``model`` is its model number (`drivers.dynamixel.models.MODELS`; an unknown one
+    gets the XM430-W350's table) and chooses its control table. ``position`` is where
+    the motor starts (ticks, Present Position). Every public method holds ``lock`` (one
+    lock shared by an emulator's motors; by default a private RLock), so a bus thread
+    and a test can use the motor at the same time.
     """
 
     def __init__(
@@ -131,7 +123,8 @@ class EmulatedMotor:
     ) -> None:
         self._clock = clock
         self._lock = lock if lock is not None else threading.RLock()
-        self._mem = bytearray(_DEFAULTS)
+        self._table = table_of(model)
+        self._mem = bytearray(self._table.defaults)
         now = clock()
         self._boot = now
         self._drive = Drive(position, now)
@@ -142,7 +135,7 @@ class EmulatedMotor:
         self._put("model_number", model)
         self._put("firmware_version", firmware)
         self._put("id", motor_id)
-        self._put("baud_rate", baud_code(baud))
+        self._put("baud_rate", baud_code(baud, self._table))
         self._reset_ram(position)
 
     # -- identity and bus settings (plain register reads) -------------------------------
@@ -160,6 +153,11 @@ class EmulatedMotor:
     @property
     def model(self) -> int:
         return self._raw("model_number")
+
+    @property
+    def table(self) -> Table:
+        """The motor's control table (its model's)."""
+        return self._table
 
     @property
     def firmware(self) -> int:
@@ -218,18 +216,17 @@ class EmulatedMotor:
     def read(self, address: int, length: int) -> bytes:
         """``length`` bytes from ``address`` (IndexError outside the table); an Indirect
         Data byte reads the byte its Indirect Address names (a reserved one reads 0)."""
-        if length < 1 or address < 0 or address + length > EMULATED_TABLE_SIZE:
-            raise IndexError(
-                f"read of {length} bytes at {address} is outside 0..{EMULATED_TABLE_SIZE}"
-            )
+        table = self._table
+        if length < 1 or address < 0 or address + length > table.size:
+            raise IndexError(f"read of {length} bytes at {address} is outside 0..{table.size}")
         with self._lock:
             self._refresh()
-            if not touches_indirect_data(address, length):
+            if not table.touches_indirect_data(address, length):
                 return bytes(self._mem[address : address + length])
             out = bytearray()
             for a in range(address, address + length):
-                target = resolve(self._mem, a)
-                known = 0 <= target < EMULATED_TABLE_SIZE and ITEM_AT[target] is not None
+                target = resolve(table, self._mem, a)
+                known = 0 <= target < table.size and table.item_at[target] is not None
                 out.append(self._mem[target] if known else 0)
             return bytes(out)
 
@@ -238,15 +235,19 @@ class EmulatedMotor:
         Goal Position in it, directly or through Indirect Data, is logged first, whether
         the rules accept it or not)."""
         with self._lock:
-            inside = address >= 0 and address + len(data) <= EMULATED_TABLE_SIZE
-            writes = targets(self._mem, address, bytes(data)) if inside else {}
+            inside = address >= 0 and address + len(data) <= self._table.size
+            writes = targets(self._table, self._mem, address, bytes(data)) if inside else {}
             sent = writes or dict(zip(range(address, address + len(data)), data, strict=True))
             goal = range(_GOAL.address, _GOAL.address + _GOAL.size)
             if all(a in sent for a in goal):
                 self._goals.append(_GOAL.decode(bytes(sent[a] for a in goal)))
             if writes:
                 error = check_writes(
-                    self._mem, writes, shutdown=self.in_shutdown, via_secondary=via_secondary
+                    self._table,
+                    self._mem,
+                    writes,
+                    shutdown=self.in_shutdown,
+                    via_secondary=via_secondary,
                 )
             else:  # a shape error: empty or outside the table
                 error = self.check_write(address, data, via_secondary=via_secondary)
@@ -259,7 +260,12 @@ class EmulatedMotor:
         """The error a WRITE would get, without applying it."""
         with self._lock:
             return check_write(
-                self._mem, address, data, shutdown=self.in_shutdown, via_secondary=via_secondary
+                self._table,
+                self._mem,
+                address,
+                data,
+                shutdown=self.in_shutdown,
+                via_secondary=via_secondary,
             )
 
     @property
@@ -332,7 +338,7 @@ class EmulatedMotor:
             shaft = self.shaft_position
             keep_id, keep_baud = self.id, self._raw("baud_rate")
             model, firmware = self.model, self.firmware
-            self._mem[:] = _DEFAULTS
+            self._mem[:] = self._table.defaults
             self._put("model_number", model)
             self._put("firmware_version", firmware)
             if option in (0x01, 0x02):
@@ -417,26 +423,27 @@ class EmulatedMotor:
     # -- internals ------------------------------------------------------------------------
 
     def _raw(self, name: str) -> int:
-        it = BY_NAME[name]
+        it = self._table.by_name[name]
         return it.decode(bytes(self._mem[it.address : it.address + it.size]))
 
     def _put(self, name: str, value: int) -> None:
         """Store ``value`` in item ``name``; ValueError (nothing stored) if the register
         cannot hold it (e.g. 2³¹ in a signed 4-byte item)."""
-        it = BY_NAME[name]
+        it = self._table.by_name[name]
         self._mem[it.address : it.address + it.size] = it.encode(value)
 
     def _reset_ram(self, position: float) -> None:
         """Boot: RAM to defaults, then Startup Configuration (RAM restore, torque on)."""
-        self._mem[EEPROM_END:] = _DEFAULTS[EEPROM_END:]
+        self._mem[EEPROM_END:] = self._table.defaults[EEPROM_END:]
         self._put("goal_pwm", self._raw("pwm_limit"))
-        self._put("goal_current", self._raw("current_limit"))
+        if self._table.model.has("goal_current"):
+            self._put("goal_current", self._raw("current_limit"))
         self._put("present_input_voltage", NOMINAL_VOLTAGE)
         self._put("present_temperature", NOMINAL_TEMPERATURE)
         self._put("backup_ready", int(self._backup is not None))
         startup = self._raw("startup_configuration")
         if startup & STARTUP_RAM_RESTORE and self._backup is not None:
-            for it in BACKUP_RAM_ITEMS:
+            for it in self._table.backup_ram_items:
                 end = it.address + it.size
                 self._mem[it.address : end] = self._backup[it.address : end]
         self._drive.reset_kind()
@@ -455,7 +462,7 @@ class EmulatedMotor:
         shaft = self._to_shaft(position)
         for a, byte in writes.items():
             self._mem[a] = byte
-        touched = {it.name for a in writes if (it := ITEM_AT[a]) is not None}
+        touched = {it.name for a in writes if (it := self._table.item_at[a]) is not None}
         changed = {name for name in _WATCHED if self._raw(name) != before[name]}
 
         if changed & {"homing_offset", "drive_mode", "operating_mode"}:

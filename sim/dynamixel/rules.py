@@ -6,7 +6,8 @@ Following the ROBOTIS e-manual (Protocol 2.0 error numbers):
   defined addresses (a reserved gap or past the table → Access error 7);
 * read-only items, and EEPROM items (address < 64) while Torque Enable = 1 or when
   addressed through the Secondary ID → Access error 7;
-* a value outside the item's range, or an Operating Mode other than 0, 1, 3, 4, 5, 16
+* a value outside the item's range (the model's: `sim.dynamixel.table.Table`), or an
+  Operating Mode the model does not have (0, 1, 3, 4, 5, 16; the XL430 1, 3, 4, 16)
   → Data Range error 4;
 * Goal Position outside [Min, Max Position Limit] in position mode or outside
   ±1,048,575 in (current-based) extended position mode, |Goal Velocity| > Velocity
@@ -35,13 +36,7 @@ from drivers.dynamixel.control_table import (
     Item,
 )
 from sim.dynamixel.protocol import StatusError
-from sim.dynamixel.table import (
-    BY_NAME,
-    EMULATED_TABLE_SIZE,
-    INDIRECT_SLOT,
-    ITEM_AT,
-    touches_indirect_data,
-)
+from sim.dynamixel.table import Table
 
 POSITION = OPERATING_MODES["position"]
 MULTI_TURN = (OPERATING_MODES["extended_position"], OPERATING_MODES["current_based_position"])
@@ -53,44 +48,44 @@ _GOAL_LIMITS = {
 }
 
 
-def value_in(memory: bytes | bytearray, name: str) -> int:
-    """The value of item ``name`` in a memory image."""
-    it = BY_NAME[name]
+def value_in(table: Table, memory: bytes | bytearray, name: str) -> int:
+    """The value of item ``name`` in a memory image of ``table``."""
+    it = table.by_name[name]
     return it.decode(bytes(memory[it.address : it.address + it.size]))
 
 
-def resolve(memory: bytes | bytearray, address: int) -> int:
+def resolve(table: Table, memory: bytes | bytearray, address: int) -> int:
     """The address a host access at ``address`` reaches: itself, or for an Indirect Data
     byte the address its Indirect Address holds."""
-    slot = INDIRECT_SLOT.get(address)
+    slot = table.indirect_slot.get(address)
     if slot is None:
         return address
     return memory[slot] | (memory[slot + 1] << 8)
 
 
-def targets(memory: bytes | bytearray, address: int, data: bytes) -> dict[int, int]:
+def targets(table: Table, memory: bytes | bytearray, address: int, data: bytes) -> dict[int, int]:
     """Where each byte of a WRITE of ``data`` at ``address`` lands: target address →
     byte, in packet order (Indirect Data resolved after the packet's direct bytes)."""
-    if not touches_indirect_data(address, len(data)):
+    if not table.touches_indirect_data(address, len(data)):
         return dict(zip(range(address, address + len(data)), data, strict=True))
     direct = bytearray(memory)
     for i, byte in enumerate(data):
-        if address + i not in INDIRECT_SLOT:
+        if address + i not in table.indirect_slot:
             direct[address + i] = byte
     out: dict[int, int] = {}
     for i, byte in enumerate(data):
-        out[resolve(direct, address + i)] = byte
+        out[resolve(table, direct, address + i)] = byte
     return out
 
 
-def items_written(writes: dict[int, int]) -> tuple[list[Item], StatusError]:
+def items_written(table: Table, writes: dict[int, int]) -> tuple[list[Item], StatusError]:
     """The items a scattered write (target address → byte) covers, or the error it gets
     for its shape alone (nothing, outside the table, a reserved byte, part of an item)."""
     if not writes:
         return [], StatusError.DATA_LENGTH
     items: dict[int, Item] = {}
     for a in writes:
-        it = ITEM_AT[a] if 0 <= a < EMULATED_TABLE_SIZE else None
+        it = table.item_at[a] if 0 <= a < table.size else None
         if it is None:
             return [], StatusError.ACCESS
         if it.address in items:
@@ -103,6 +98,7 @@ def items_written(writes: dict[int, int]) -> tuple[list[Item], StatusError]:
 
 
 def check_write(
+    table: Table,
     memory: bytes | bytearray,
     address: int,
     data: bytes,
@@ -116,14 +112,19 @@ def check_write(
     """
     if not data:
         return StatusError.DATA_LENGTH
-    if address < 0 or address + len(data) > EMULATED_TABLE_SIZE:
+    if address < 0 or address + len(data) > table.size:
         return StatusError.ACCESS
     return check_writes(
-        memory, targets(memory, address, data), shutdown=shutdown, via_secondary=via_secondary
+        table,
+        memory,
+        targets(table, memory, address, data),
+        shutdown=shutdown,
+        via_secondary=via_secondary,
     )
 
 
 def check_writes(
+    table: Table,
     memory: bytes | bytearray,
     writes: dict[int, int],
     *,
@@ -131,16 +132,16 @@ def check_writes(
     via_secondary: bool = False,
 ) -> StatusError:
     """The error a scattered write (target address → byte, see `targets`) gets."""
-    items, error = items_written(writes)
+    items, error = items_written(table, writes)
     if error:
         return error
     after = bytearray(memory)
     for a, byte in writes.items():
         after[a] = byte
-    torque_on = value_in(memory, "torque_enable") == 1
+    torque_on = value_in(table, memory, "torque_enable") == 1
     for it in items:
         error = _check_item(
-            it, after, torque_on=torque_on, shutdown=shutdown, via_secondary=via_secondary
+            table, it, after, torque_on=torque_on, shutdown=shutdown, via_secondary=via_secondary
         )
         if error:
             return error
@@ -148,26 +149,33 @@ def check_writes(
 
 
 def _check_item(
-    it: Item, after: bytearray, *, torque_on: bool, shutdown: bool, via_secondary: bool
+    table: Table,
+    it: Item,
+    after: bytearray,
+    *,
+    torque_on: bool,
+    shutdown: bool,
+    via_secondary: bool,
 ) -> StatusError:
     if not it.writable:
         return StatusError.ACCESS
     if it.area is Area.EEPROM and (torque_on or via_secondary):
         return StatusError.ACCESS
-    new = value_in(after, it.name)
+    new = value_in(table, after, it.name)
     if not it.in_range(new):
         return StatusError.DATA_RANGE
-    if it.name == "operating_mode" and new not in OPERATING_MODES.values():
+    if it.name == "operating_mode" and new not in table.model.modes:
         return StatusError.DATA_RANGE
     if it.name == "goal_position":
-        mode = value_in(after, "operating_mode")
+        mode = value_in(table, after, "operating_mode")
         if mode == POSITION:
-            low, high = value_in(after, "min_position_limit"), value_in(after, "max_position_limit")
+            low = value_in(table, after, "min_position_limit")
+            high = value_in(table, after, "max_position_limit")
             if not low <= new <= high:
                 return StatusError.DATA_LIMIT
         elif mode in MULTI_TURN and abs(new) > EXTENDED_POSITION_LIMIT:
             return StatusError.DATA_LIMIT
-    if it.name in _GOAL_LIMITS and abs(new) > value_in(after, _GOAL_LIMITS[it.name]):
+    if it.name in _GOAL_LIMITS and abs(new) > value_in(table, after, _GOAL_LIMITS[it.name]):
         return StatusError.DATA_LIMIT
     if it.name == "torque_enable" and new == 1 and shutdown:
         return StatusError.RESULT_FAIL

@@ -1,107 +1,28 @@
-"""The emulated X-series control table: the driver's table plus what only the emulator needs.
+"""An emulated motor's control table: its model's table (:mod:`drivers.dynamixel.models`)
+with what the emulator derives from it.
 
-:mod:`drivers.dynamixel.control_table` lists the items the driver uses (addresses 0-146).
-An emulated motor also has, as the ROBOTIS e-manual's X430 control tables give them
-(XM430-W350, XM430-W210 and XL430-W250 pages, emanual.robotis.com/docs/en/dxl/x/):
-
-* Startup Configuration (60, EEPROM, 1 byte, 0-3; firmware ≥ 45): bit 0 turns torque on
-  at start-up, bit 1 restores the backed-up RAM items at start-up;
-* Feedforward 2nd and 1st Gains (88 and 90, RAM, 2 bytes, 0-16,383, default 0);
-* Backup Ready (147, RAM, read-only, 1 byte): 1 while a Control Table Backup exists;
-* Indirect Address 1-28 at 168-222 (2 bytes each, RAM, range 64-661, default the address
-  of Indirect Data *n*, 224-251) with Indirect Data 1-28 at 224-251 (1 byte each), and
-  Indirect Address 29-56 at 578-632 (default 634-661) with Indirect Data 29-56 at
-  634-661. The table ends at 661.
+Each model's items, ranges, defaults and Indirect blocks are the driver's data, taken
+from the model's e-manual page; `Table` adds the lookups the write rules need: the item
+at each address, the Indirect Address of each Indirect Data byte, the factory memory
+image and the items a Control Table Backup keeps.
 
 Indirect Data *n* stands for the byte whose address Indirect Address *n* holds, and
 inherits its size, range and access (e-manual, "Indirect Address, Indirect Data"): an
-item wider than one byte takes one slot per byte, and only RAM addresses (64-661) may be
-mapped. How an emulated motor resolves the slots is in :mod:`sim.dynamixel.rules`.
+item wider than one byte takes one slot per byte, and only RAM addresses (64 to the end
+of the table) may be mapped. How an emulated motor resolves the slots is in
+:mod:`sim.dynamixel.rules`.
 """
 
 from __future__ import annotations
 
-from drivers.dynamixel.control_table import ITEMS as DRIVER_ITEMS
-from drivers.dynamixel.control_table import Area, Item
-
-#: Indirect Address n at ADDRESS_BLOCKS[k][0] + 2(n - first), Indirect Data n at
-#: DATA_BLOCKS[k][0] + (n - first): (first slot number, address of its Indirect Address,
-#: address of its Indirect Data, slots in the block).
-INDIRECT_BLOCKS: tuple[tuple[int, int, int, int], ...] = ((1, 168, 224, 28), (29, 578, 634, 28))
-#: One past the last address of the emulated table.
-EMULATED_TABLE_SIZE = 662
-#: The addresses an Indirect Address may hold (the RAM area).
-INDIRECT_TARGETS = range(64, EMULATED_TABLE_SIZE)
-
-
-def _indirect_items() -> tuple[Item, ...]:
-    items: list[Item] = []
-    for first, address_at, data_at, count in INDIRECT_BLOCKS:
-        for k in range(count):
-            n, data = first + k, data_at + k
-            items.append(
-                Item(
-                    f"indirect_address_{n}",
-                    address_at + 2 * k,
-                    2,
-                    Area.RAM,
-                    True,
-                    default=data,
-                    low=INDIRECT_TARGETS.start,
-                    high=INDIRECT_TARGETS.stop - 1,
-                )
-            )
-            items.append(Item(f"indirect_data_{n}", data, 1, Area.RAM, True, low=0, high=255))
-    return tuple(items)
-
-
-_EXTRA: tuple[Item, ...] = (
-    Item("startup_configuration", 60, 1, Area.EEPROM, True, default=0, low=0, high=3),
-    Item("feedforward_2nd_gain", 88, 2, Area.RAM, True, default=0, low=0, high=16383),
-    Item("feedforward_1st_gain", 90, 2, Area.RAM, True, default=0, low=0, high=16383),
-    Item("backup_ready", 147, 1, Area.RAM, False, default=0),
-)
-
-#: Every item of an emulated motor, in address order.
-ITEMS: tuple[Item, ...] = tuple(
-    sorted(DRIVER_ITEMS + _EXTRA + _indirect_items(), key=lambda it: it.address)
-)
-BY_NAME: dict[str, Item] = {it.name: it for it in ITEMS}
-
-#: The item each address belongs to (None for reserved bytes).
-ITEM_AT: tuple[Item | None, ...] = tuple(
-    next((it for it in ITEMS if it.address <= a < it.address + it.size), None)
-    for a in range(EMULATED_TABLE_SIZE)
-)
-
-#: Indirect Data address → address of its Indirect Address.
-INDIRECT_SLOT: dict[int, int] = {
-    data_at + k: address_at + 2 * k
-    for _, address_at, data_at, count in INDIRECT_BLOCKS
-    for k in range(count)
-}
-
-
-def touches_indirect_data(address: int, length: int) -> bool:
-    """True if ``length`` bytes from ``address`` include an Indirect Data byte."""
-    return any(
-        address < data_at + count and data_at < address + length
-        for _, _, data_at, count in INDIRECT_BLOCKS
-    )
-
-
-#: Startup Configuration bits (firmware ≥ 45).
-STARTUP_TORQUE_ON = 0x01
-STARTUP_RAM_RESTORE = 0x02
+from drivers.dynamixel.control_table import Item
+from drivers.dynamixel.models import DEFAULT_MODEL, Model, model
 
 #: The RAM items a Control Table Backup keeps besides the whole EEPROM area (e-manual,
 #: Protocol 2.0, "Control Table Backup"): velocity PI and position PID gains, the
 #: feedforward gains, Profile Acceleration and Velocity, the Indirect Addresses.
-BACKUP_RAM_ITEMS: tuple[Item, ...] = tuple(
-    it
-    for it in ITEMS
-    if it.name
-    in {
+_BACKUP_RAM_NAMES = frozenset(
+    {
         "velocity_i_gain",
         "velocity_p_gain",
         "position_d_gain",
@@ -112,5 +33,66 @@ BACKUP_RAM_ITEMS: tuple[Item, ...] = tuple(
         "profile_acceleration",
         "profile_velocity",
     }
-    or it.name.startswith("indirect_address_")
 )
+
+
+class Table:
+    """The control table of ``spec`` (a model) as an emulated motor uses it."""
+
+    def __init__(self, spec: Model) -> None:
+        self.model = spec
+        self.items: tuple[Item, ...] = spec.items
+        self.by_name: dict[str, Item] = spec.by_name
+        #: One past the last address.
+        self.size: int = spec.table_end
+        #: The item each address belongs to (None for reserved bytes).
+        self.item_at: tuple[Item | None, ...] = spec.item_at
+        #: Indirect Data address → address of its Indirect Address.
+        self.indirect_slot: dict[int, int] = {
+            data_at + k: address_at + 2 * k
+            for _, address_at, data_at, count in spec.indirect
+            for k in range(count)
+        }
+        #: The addresses an Indirect Address may hold (the RAM area).
+        self.indirect_targets = range(64, self.size)
+        self.backup_ram_items: tuple[Item, ...] = tuple(
+            it
+            for it in self.items
+            if it.name in _BACKUP_RAM_NAMES or it.name.startswith("indirect_address_")
+        )
+        memory = bytearray(self.size)
+        for it in self.items:
+            memory[it.address : it.address + it.size] = it.encode(it.default)
+        #: The memory image of a motor fresh from the factory.
+        self.defaults = bytes(memory)
+
+    def touches_indirect_data(self, address: int, length: int) -> bool:
+        """True if ``length`` bytes from ``address`` include an Indirect Data byte."""
+        return any(
+            address < data_at + count and data_at < address + length
+            for _, _, data_at, count in self.model.indirect
+        )
+
+
+_TABLES: dict[int, Table] = {}
+
+
+def table_of(number: int) -> Table:
+    """The emulated table of model ``number`` (an unknown number: the XM430-W350's)."""
+    table = _TABLES.get(number)
+    if table is None:
+        table = _TABLES[number] = Table(model(number))
+    return table
+
+
+#: The default model's table (XM430-W350), as module names.
+DEFAULT_TABLE = table_of(DEFAULT_MODEL.number)
+ITEMS = DEFAULT_TABLE.items
+BY_NAME = DEFAULT_TABLE.by_name
+EMULATED_TABLE_SIZE = DEFAULT_TABLE.size
+INDIRECT_SLOT = DEFAULT_TABLE.indirect_slot
+BACKUP_RAM_ITEMS = DEFAULT_TABLE.backup_ram_items
+
+#: Startup Configuration bits (firmware ≥ 45).
+STARTUP_TORQUE_ON = 0x01
+STARTUP_RAM_RESTORE = 0x02

@@ -1,6 +1,7 @@
 """The backends of the contract suite, each behind a small harness that builds an
 unopened device and looks at the device's own state (not through the driver under
-test): `SimMotorBus` and `DynamixelBus` on the byte-level emulator over a pty;
+test): `SimMotorBus` and `DynamixelBus` on the byte-level emulator over a pty (three motors of
+three models);
 `SimDetector` and `SerialDetector` on the simulated photometer over a pty;
 `PyMeasureDetector` driving PyMeasure's SR830, SR860, ThorlabsPM100USB, Keithley6517B
 and Keithley2000 classes over pyvisa-py on their emulated instruments' ptys;
@@ -39,6 +40,10 @@ from tests.conftest import CONFIGS
 
 #: The motor faults every bus must survive the same way.
 MOTOR_FAULTS = ("motor_fault", "comm_error")
+#: The models of the emulated bus's three motors (each axis names its motor's): an
+#: XM430-W350, an XL430-W250 (no current registers, four modes) and an XL330-M288 (its
+#: own ranges, a shorter table), so every contract test crosses three control tables.
+EMULATED_MODELS = {1: 1020, 2: 1060, 3: 1200}
 #: The tracking error (rad) `DynamixelBus.follow` keeps on the emulated X series: a
 #: trajectory at half the configured velocity and acceleration (4 rad/s, 40 rad/s²).
 EMULATOR_TRACKING_RAD = 0.015
@@ -105,10 +110,11 @@ def _dynamixel_motors(emulator: Callable[..., DxlEmulator], latency_ms: int) -> 
         AxisConfig(
             name=f"axis{i}", motor_id=i, min_rad=-1.0, max_rad=1.0, zero_offset_rad=-math.pi,
             profile_velocity_rad_s=4.0, profile_acceleration_rad_s2=40.0,
+            model=EMULATED_MODELS[i],
         )
         for i in (1, 2, 3)
     ]  # fmt: skip
-    emu = emulator(ids=(1, 2, 3))
+    emu = emulator(ids=(1, 2, 3), model=EMULATED_MODELS)
     clock = emu.clock
     assert isinstance(clock, ManualClock)
     state: dict[str, Any] = {}

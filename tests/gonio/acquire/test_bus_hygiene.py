@@ -73,7 +73,7 @@ def test_the_dry_run_shows_the_bus_checks(
 def test_the_rig_file_names_motors_the_driver_knows_or_model_numbers(tmp_path: Path) -> None:
     rig = Rig.from_yaml(hardware_rig(tmp_path, "/dev/ttyUSB0", model="XL430-W250"))
     assert [(a.model, a.firmware) for a in rig.bus_axes()][2] == (1060, 46)
-    for bad in ("XM540-W270", "70000"):
+    for bad in ("XM999-W270", "70000"):
         with pytest.raises(ConfigError, match=r"axes\.detector_elevation\.motor_model: expected"):
             Rig.from_yaml(hardware_rig(tmp_path, "/dev/ttyUSB0", model=bad))
 
