@@ -5,13 +5,18 @@ classes with the corrections of :mod:`drivers.dynamixel.sdk_boundary`: byte stuf
 on send, true reply lengths, a per-port latency timer) and turns their result codes
 into exceptions: every transaction is retried a bounded number of times on
 communication failures, then raises `CommError` naming the port, the motor and the
-SDK's result; a status whose data is not as long as requested (a late or stale reply)
-counts as a corrupt packet and is retried; a status packet with the alert bit makes it
-read the motor's Hardware Error Status and raise `MotorFault` with the named bits. The
-port is locked while open (two programs on one bus would interleave packets) and
-always released: also after Ctrl-C in the middle of a transaction, which would
-otherwise leave the SDK's ``is_using`` flag set and every later call failing with
-"port is in use", and a reply still on its way arriving in the next transaction.
+SDK's result; a status that is not the answer (another motor's, not as long as
+requested, more bytes behind it: a late or stale reply) counts as a corrupt packet and
+is retried; a status packet with the alert bit makes it read the motor's Hardware
+Error Status and raise `MotorFault` with the named bits. The port is locked while open
+(two programs on one bus would interleave packets) and always released: also after
+Ctrl-C in the middle of a transaction, which would otherwise leave the SDK's
+``is_using`` flag set and every later call failing with "port is in use".
+
+Late replies: every attempt that did not end with its answer (a timeout, a bad reply,
+Ctrl-C) leaves its replies owed, and the next attempt first syncs the bus
+(`drivers.dynamixel.owed`), so a reply to an earlier request is never taken for the
+answer to a later one; `late_counts` says how often.
 
 Models: ``tables`` holds each motor's control table once it is known (`DynamixelBus`
 sets it from the model number a PING returns); reads and writes then use that model's
@@ -44,7 +49,8 @@ from drivers.devices import Resource
 from drivers.dynamixel.control_table import FACTORY_BAUD, Area, Item, decode_hardware_error, item
 from drivers.dynamixel.latency import assumed_adapter_ms, sdk_latency_timer
 from drivers.dynamixel.models import Model
-from drivers.dynamixel.sdk_boundary import PacketHandler, Port
+from drivers.dynamixel.owed import LateCounts, OwedReplies
+from drivers.dynamixel.sdk_boundary import PING_PARAMS, PacketHandler, Port, SyncRead
 from drivers.errors import CommError, DriverError, LimitError, MotorFault
 
 #: Result codes worth another attempt (noise, a lost byte, a late reply).
@@ -63,9 +69,6 @@ STATUS_ERRORS = {
     7: "access error (read-only item, an address the model lacks, or an EEPROM item "
     "written with torque on)",
 }
-#: Bytes' worth of line time a late reply may still need after a timeout (`_drain`).
-DRAIN_BYTES = 192
-
 
 T = TypeVar("T")
 
@@ -105,8 +108,8 @@ class DynamixelLink(Resource):
         self._torque: dict[int, bool] = {}
         #: Each motor's control table, where its model is known (else the XM430-W350's).
         self.tables: dict[int, Model] = {}
-        #: A transaction was cut short (Ctrl-C, a serial error): a reply may be on its way.
-        self._interrupted = False
+        #: Replies the bus may still send (failed or interrupted attempts).
+        self._owed = OwedReplies()
 
     # -- opening and releasing -----------------------------------------------------------
     @property
@@ -144,7 +147,7 @@ class DynamixelLink(Resource):
             ) from None
         self._port = handler
         self._torque.clear()
-        self._interrupted = False
+        self._owed.clear()
 
     def _open_failure(self, exc: BaseException) -> str:
         code = getattr(exc, "errno", None)
@@ -165,39 +168,21 @@ class DynamixelLink(Resource):
         with contextlib.suppress(serial.SerialException, OSError):
             handler.closePort()
 
-    def _drain(self) -> None:
-        """After a failed attempt: let a late reply finish arriving, then discard it.
-
-        Clearing at once is not enough: a reply that missed the SDK's timeout would land
-        in the next transaction, which reads only the ID, so a late PING status would
-        be taken for the data of the READ after it.
-        """
-        port = self._port
-        if port is None:
-            return
-        quiet = (2.0 * port.latency_timer + 2.0) / 1000.0 + 10 * DRAIN_BYTES / self.baud
-        with contextlib.suppress(serial.SerialException, OSError):
-            for _ in range(5):  # a bus that never goes quiet: give up after 5 periods
-                time.sleep(quiet)
-                if not port.getBytesAvailable():
-                    break
-                port.clearPort()
+    @property
+    def late_counts(self) -> LateCounts:
+        """Syncs made, status packets they discarded, syncs that timed out (since the
+        link was made)."""
+        return self._owed.counts
 
     def reset(self) -> None:
-        """Forget a transaction cut short (Ctrl-C): clear the SDK's busy flag and, as after
-        a failed attempt, let a reply still on its way arrive and discard it (`_drain`),
-        so the next transaction starts clean. Without an interrupted transaction nothing
-        can be on its way: the input is just cleared."""
+        """Forget a transaction cut short (Ctrl-C): clear the SDK's busy flag and the
+        input. A reply still on its way is owed: the next transaction syncs first."""
         port = self._port
         if port is None:
             return
         port.is_using = False
-        if self._interrupted:
-            self._interrupted = False
-            self._drain()
-        else:
-            with contextlib.suppress(serial.SerialException, OSError):
-                port.clearPort()
+        with contextlib.suppress(serial.SerialException, OSError):
+            port.clearPort()
 
     # -- transactions ----------------------------------------------------------------------
     def _handler(self) -> Any:
@@ -209,15 +194,31 @@ class DynamixelLink(Resource):
         name = self.names.get(motor_id)
         return f"motor {motor_id}" + (f" (axis {name!r})" if name else "")
 
-    def _attempt(self, what: str, motor_id: int | None, call: Callable[[], tuple[T, int]]) -> T:
-        """Run ``call`` (returning (value, SDK result)) with retries; CommError at the end."""
+    def _attempt(
+        self,
+        what: str,
+        motor_id: int | None,
+        call: Callable[[], tuple[T, int]],
+        replies: Sequence[int] = (),
+        via: int | None = None,
+    ) -> T:
+        """Run ``call`` (returning (value, SDK result)) with retries; CommError at the end.
+
+        ``replies``: the parameter counts of the status packets it waits for (none: it
+        waits for none, and a sync before it is left to the next that does); ``via``:
+        the motor a sync before it reads (default ``motor_id``: the one it talks to).
+        """
         handler = self._handler()
         result = sdk.COMM_SUCCESS
+        sync_via = motor_id if via is None else via
         for _ in range(self.retries + 1):
             try:
-                self._interrupted = True  # until the call returns normally
+                if replies and self._owed and sync_via is not None:
+                    result = self._owed.sync(handler, self._packets, sync_via, self.baud)
+                    if result != sdk.COMM_SUCCESS:
+                        continue  # owed still: the next attempt syncs
+                self._owed.owe(replies)  # until its answer is in
                 value, result = call()
-                self._interrupted = False
             except (serial.SerialException, OSError) as exc:
                 raise CommError(
                     f"{self.port_name}: {what} failed: {exc}",
@@ -228,10 +229,11 @@ class DynamixelLink(Resource):
                 # An interrupted call would leave the SDK's busy flag set for good.
                 handler.is_using = False
             if result == sdk.COMM_SUCCESS:
+                if replies:
+                    self._owed.clear()
                 return value
             if result not in RETRYABLE:
                 break
-            self._drain()
         target = f" to {self.who(motor_id)}" if motor_id is not None else ""
         raise CommError(
             f"{self.port_name}: {what}{target} failed after {self.retries + 1} attempts: "
@@ -286,7 +288,7 @@ class DynamixelLink(Resource):
                 result = sdk.COMM_RX_CORRUPT
             return (bytes(data), error), result
 
-        return self._attempt(what, motor_id, call)
+        return self._attempt(what, motor_id, call, (reg.size,))
 
     def ping(self, motor_id: int) -> int:
         """The model number of ``motor_id``; CommError if it does not answer."""
@@ -294,6 +296,7 @@ class DynamixelLink(Resource):
             "ping",
             motor_id,
             lambda: self._pair(self._packets.ping(self._handler(), motor_id)),
+            (PING_PARAMS,),
         )
         self._check_status(motor_id, error, "a ping")
         return int(model)
@@ -307,9 +310,8 @@ class DynamixelLink(Resource):
         """Every motor answering a broadcast ping: {id: (model number, firmware)}."""
         handler = self._handler()
         try:
-            self._interrupted = True  # until the call returns normally
+            self._owed.owe((PING_PARAMS,))  # a motor may answer past the SDK's wait
             found, result = self._packets.broadcastPing(handler)
-            self._interrupted = False
         finally:
             handler.is_using = False
         if result not in (sdk.COMM_SUCCESS, sdk.COMM_RX_TIMEOUT):
@@ -356,6 +358,7 @@ class DynamixelLink(Resource):
             lambda: self._swap(
                 self._packets.writeTxRx(self._handler(), motor_id, reg.address, reg.size, payload)
             ),
+            (0,),
         )
         if name == "torque_enable" and not error & 0x7F:
             self._torque[motor_id] = bool(value)
@@ -448,7 +451,7 @@ class DynamixelLink(Resource):
         start, end = item(first), item(last)
         length = end.address + end.size - start.address
         ids = list(ids)
-        group = _AlertAwareSyncRead(self._handler(), self._packets, start.address, length)
+        group = SyncRead(self._handler(), self._packets, start.address, length)
         for motor_id in ids:
             group.addParam(motor_id)
         stamps = [0.0, 0.0]
@@ -460,7 +463,7 @@ class DynamixelLink(Resource):
             return None, result
 
         try:
-            self._attempt(f"sync-reading {first}…{last}", None, call)
+            self._attempt(f"sync-reading {first}…{last}", None, call, (length,) * len(ids), ids[0])
         except CommError as exc:
             if group.failed is None:
                 raise
@@ -481,36 +484,11 @@ class DynamixelLink(Resource):
         """Reboot a motor (clears its hardware error; torque comes back off). The status
         leaves before the motor restarts: `ping` it until it answers again."""
         error = self._attempt(
-            "reboot", motor_id, lambda: self._swap(self._packets.reboot(self._handler(), motor_id))
+            "reboot",
+            motor_id,
+            lambda: self._swap(self._packets.reboot(self._handler(), motor_id)),
+            (0,),
         )
         if error & 0x7F:
             self._check_status(motor_id, error & 0x7F, "a reboot")
         self._torque[motor_id] = False
-
-
-class _AlertAwareSyncRead(sdk.GroupSyncRead):  # type: ignore[misc]
-    """The SDK's GroupSyncRead, keeping each status packet's error byte (the SDK drops it,
-    and with it the alert bit), refusing a status whose data is not ``data_length``
-    bytes (a late reply to another instruction) as corrupt, and naming the motor that
-    did not answer or answered wrong."""
-
-    errors: dict[int, int]
-    failed: int | None = None
-
-    def read(self) -> int:
-        self.errors = {}
-        self.failed = None
-        result = self.txPacket()
-        if result != sdk.COMM_SUCCESS:
-            return int(result)
-        for motor_id in self.data_dict:
-            data, result, error = self.ph.readRx(self.port, motor_id, self.data_length)
-            if result == sdk.COMM_SUCCESS and not error & 0x7F and len(data) != self.data_length:
-                result = sdk.COMM_RX_CORRUPT
-            if result != sdk.COMM_SUCCESS:
-                self.failed = motor_id
-                return int(result)
-            self.data_dict[motor_id] = data
-            self.errors[motor_id] = error
-        self.last_result = True
-        return int(sdk.COMM_SUCCESS)

@@ -25,9 +25,20 @@ replaces (checked against dynamixel-sdk 4.1.0, ``protocol2_packet_handler.py`` a
    mismatch as a corrupt packet). PING and the instructions whose status carries no data
    (WRITE, REBOOT, …) check the count here and report a mismatch as ``COMM_RX_CORRUPT``.
 
+4. **Whose reply.** ``txRxPacket`` and ``readRx`` skip status packets of other IDs
+   until one of the expected ID comes: a late reply of another motor is silently
+   passed over and one of the same motor taken. Ours read exactly one status packet
+   (the SDK's ``rxPacket`` already insists on the status instruction 0x55 and a valid
+   CRC) and report ``COMM_RX_CORRUPT`` when its ID is not the request's, when its
+   parameters are not as many as the request asks (`reply_params`), or when more bytes
+   are waiting after it: a reply the bus still owed to an earlier transaction. The
+   link's sync reads check every expected ID exactly once, in order, the same way.
+
 A late reply of exactly the expected length and ID cannot be told from the answer by
-its bytes; the link drains the line after every failed or interrupted transaction so
-that one cannot arrive in the next.
+its bytes. The link therefore never starts a transaction while the bus may still owe
+a reply: after a failed or interrupted one it first *syncs* (`Syncer`): a READ whose
+reply length nothing outstanding has, every status before its answer discarded —
+bytes keep their order on the bus, so nothing owed can come after it.
 """
 
 from __future__ import annotations
@@ -39,6 +50,8 @@ from dynamixel_sdk import protocol2_packet_handler as p2
 
 #: Parameters of a PING status: model number (2) and firmware version (1).
 PING_PARAMS = 3
+#: Bytes of a status packet besides its parameters: header 4, ID, LEN 2, INST, ERR, CRC 2.
+STATUS_OVERHEAD = 11
 
 
 def status_params(rxpacket: list[int]) -> list[int]:
@@ -46,6 +59,25 @@ def status_params(rxpacket: list[int]) -> list[int]:
     count = sdk.DXL_MAKEWORD(rxpacket[p2.PKT_LENGTH_L], rxpacket[p2.PKT_LENGTH_H]) - 4
     start = p2.PKT_PARAMETER0 + 1
     return list(rxpacket[start : start + max(count, 0)])
+
+
+def reply_params(txpacket: list[int]) -> int:
+    """The parameters the status to instruction ``txpacket`` carries when the motor
+    carries it out: a READ's length, a PING's 3, none for the others (WRITE, REBOOT, …)."""
+    instruction = txpacket[p2.PKT_INSTRUCTION]
+    if instruction == sdk.INST_READ:
+        start = p2.PKT_PARAMETER0 + 2
+        return int(sdk.DXL_MAKEWORD(txpacket[start], txpacket[start + 1]))
+    return PING_PARAMS if instruction == sdk.INST_PING else 0
+
+
+def answers(rxpacket: list[int], dxl_id: int, params: int) -> bool:
+    """Whether status ``rxpacket`` can be the answer of motor ``dxl_id`` to a request
+    whose reply carries ``params`` parameters: its ID, and its parameter count unless
+    it reports an error number (a refused instruction carries none)."""
+    if rxpacket[p2.PKT_ID] != dxl_id:
+        return False
+    return bool(rxpacket[p2.PKT_ERROR] & 0x7F) or len(status_params(rxpacket)) == params
 
 
 class Port(sdk.PortHandler):  # type: ignore[misc]
@@ -84,23 +116,39 @@ class PacketHandler(p2.Protocol2PacketHandler):  # type: ignore[misc]
         return int(sdk.COMM_SUCCESS)
 
     def txRxPacket(self, port: Any, txpacket: list[int]) -> tuple[Any, int, int]:
-        rxpacket, result, error = super().txRxPacket(port, txpacket)
+        """Send ``txpacket`` and read its one status packet: ``COMM_RX_CORRUPT`` if that
+        is not the answer (`answers`) or more bytes wait behind it."""
+        result = self.txPacket(port, txpacket)
         instruction = txpacket[p2.PKT_INSTRUCTION]
-        if result == sdk.COMM_SUCCESS and rxpacket is not None and instruction != sdk.INST_READ:
-            expected = PING_PARAMS if instruction == sdk.INST_PING else 0
-            if not error & 0x7F and len(status_params(rxpacket)) != expected:
-                result = sdk.COMM_RX_CORRUPT
-        return rxpacket, int(result), int(error)
+        if result != sdk.COMM_SUCCESS:
+            return None, int(result), 0
+        if instruction in (sdk.INST_SYNC_READ, sdk.INST_BULK_READ):
+            port.is_using = False  # their statuses are read by the group classes
+            return None, int(sdk.COMM_NOT_AVAILABLE), 0
+        if txpacket[p2.PKT_ID] == sdk.BROADCAST_ID or instruction == sdk.INST_ACTION:
+            port.is_using = False  # no status comes back
+            return None, int(result), 0
+        params = reply_params(txpacket)
+        port.setPacketTimeout(params + STATUS_OVERHEAD)
+        rxpacket, result = self.rxPacket(port, False)
+        if result != sdk.COMM_SUCCESS:
+            return rxpacket, int(result), 0
+        error = int(rxpacket[p2.PKT_ERROR])
+        if not answers(rxpacket, txpacket[p2.PKT_ID], params) or port.getBytesAvailable():
+            return rxpacket, int(sdk.COMM_RX_CORRUPT), error
+        return rxpacket, int(result), error
 
     def readRx(self, port: Any, dxl_id: int, length: int) -> tuple[list[int], int, int]:
-        """As the SDK's, but ``data`` is the status's parameters, however many."""
-        while True:
-            rxpacket, result = self.rxPacket(port, False)
-            if result != sdk.COMM_SUCCESS or rxpacket[p2.PKT_ID] == dxl_id:
-                break
-        if result == sdk.COMM_SUCCESS:
-            return status_params(rxpacket), int(result), int(rxpacket[p2.PKT_ERROR])
-        return [], int(result), 0
+        """The next status packet, as motor ``dxl_id``'s answer of ``length`` bytes: its
+        parameters, however many; ``COMM_RX_CORRUPT`` if it is another motor's or of
+        another length (a refused read's error aside)."""
+        rxpacket, result = self.rxPacket(port, False)
+        if result != sdk.COMM_SUCCESS:
+            return [], int(result), 0
+        error = int(rxpacket[p2.PKT_ERROR])
+        if not answers(rxpacket, dxl_id, length):
+            return [], int(sdk.COMM_RX_CORRUPT), error
+        return status_params(rxpacket), int(result), error
 
     def readTxRx(
         self, port: Any, dxl_id: int, address: int, length: int
@@ -123,3 +171,34 @@ class PacketHandler(p2.Protocol2PacketHandler):  # type: ignore[misc]
         if result != sdk.COMM_SUCCESS:
             return [], int(result), int(error)
         return status_params(rxpacket), int(result), int(rxpacket[p2.PKT_ERROR])
+
+
+class SyncRead(sdk.GroupSyncRead):  # type: ignore[misc]
+    """The SDK's GroupSyncRead, keeping each status packet's error byte (the SDK drops it,
+    and with it the alert bit), taking the statuses one each from the expected motors
+    in order, refusing one of another motor or whose data is not ``data_length`` bytes,
+    or more bytes waiting after the last (a late reply to another instruction) as
+    corrupt, and naming the motor that did not answer or answered wrong."""
+
+    errors: dict[int, int]
+    failed: int | None = None
+
+    def read(self) -> int:
+        self.errors = {}
+        self.failed = None
+        result = self.txPacket()
+        if result != sdk.COMM_SUCCESS:
+            return int(result)
+        for motor_id in self.data_dict:
+            data, result, error = self.ph.readRx(self.port, motor_id, self.data_length)
+            if result == sdk.COMM_SUCCESS and not error & 0x7F and len(data) != self.data_length:
+                result = sdk.COMM_RX_CORRUPT
+            if result != sdk.COMM_SUCCESS:
+                self.failed = motor_id
+                return int(result)
+            self.data_dict[motor_id] = data
+            self.errors[motor_id] = error
+        if self.port.getBytesAvailable():  # a status more than the motors asked owed
+            return int(sdk.COMM_RX_CORRUPT)
+        self.last_result = True
+        return int(sdk.COMM_SUCCESS)

@@ -88,27 +88,30 @@ def set_timeout(instrument: Instrument, seconds: float) -> None:
         connection.timeout = max(1, round(seconds * 1000))
 
 
-def drain(instrument: Instrument, seconds: float, most: int = 100) -> int:
-    """Read and discard what the instrument still sends (a late answer after a timeout)
-    until it has been quiet for ``seconds``; at most ``most`` answers. Returns how many
-    were discarded; the connection's timeout is restored."""
+#: The common query every IEEE 488.2 instrument answers with its identification.
+IDENTIFY = "*IDN?"
+
+
+def sync(instrument: Instrument, seconds: float, most: int = 100) -> int:
+    """After a failed exchange: ask `IDENTIFY` and discard every answer before its own
+    (four comma-separated fields, IEEE 488.2), so a late answer to the failed query is
+    never read as the next one's (the instrument answers in order). Each read waits at
+    most ``seconds``; a timeout propagates (the sync is then still needed). Returns how
+    many answers were discarded; the connection's timeout is restored."""
     connection = getattr(instrument.adapter, "connection", None)
     before = getattr(connection, "timeout", None)
     set_timeout(instrument, seconds)
     discarded = 0
     try:
+        instrument.write(IDENTIFY)
         while discarded < most:
-            try:
-                instrument.read()
-            except pyvisa.errors.VisaIOError as exc:
-                if is_timeout(exc):
-                    break
-                raise
+            if instrument.read().count(",") >= 3:
+                return discarded
             discarded += 1
     finally:
         if connection is not None and before is not None:
             connection.timeout = before
-    return discarded
+    raise pyvisa.errors.VisaIOError(pyvisa.constants.StatusCode.error_timeout)
 
 
 def close(instrument: Instrument) -> None:

@@ -93,6 +93,8 @@ class PyMeasureDetector(Resource):
         self._instrument_range: float | None = None
         self._time_constants: tuple[float, ...] = ()
         self._stale = False  # a failed exchange may leave a late answer to discard
+        #: Answers a resync after a failed exchange discarded (late ones), so far.
+        self.late_answers = 0
         self.range_changes: list[RangeChange] = []
 
     # -- what the engine may ask -------------------------------------------------------
@@ -205,11 +207,12 @@ class PyMeasureDetector(Resource):
         exposure, n = self._check(exposure_s, averages)
         cfg = self._config
         started = self._clock.now()
-        if self._stale:
-            with self._talking("discarding a late answer"):
-                late = boundary.drain(self._instrument, self._config.timeout_s)
+        if self._stale:  # what the failed exchange's answer may still be on its way
+            with self._talking(f"resynchronizing ({boundary.IDENTIFY})"):
+                late = boundary.sync(self._instrument, 3 * self._config.timeout_s)
             if late:
                 log.warning("%s: discarded %d late answer(s)", self.resource, late)
+            self.late_answers += late
             self._stale = False
         self._apply_exposure(exposure)
         samples: list[float] = []

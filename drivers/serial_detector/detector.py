@@ -79,6 +79,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         self._reopen = False  # closed by the driver after an I/O error: reopen on next call
         self._exposure_command: str | None = None  # the last set_exposure sent
         self._resets = 0
+        self._synced_away = 0
         self._init_stream_state()
 
     # -- properties ---------------------------------------------------------------
@@ -98,6 +99,12 @@ class SerialDetector(_Streaming, _LineIO, Resource):
     @property
     def exposure_range_s(self) -> tuple[float, float]:
         return self._exposure_range
+
+    @property
+    def resynced_away(self) -> int:
+        """Lines a resync after a failed exchange discarded before its acknowledgement
+        (late answers among them), since the detector was made."""
+        return self._synced_away
 
     @property
     def resets(self) -> int:
@@ -352,6 +359,8 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                 if not line.overflow:
                     if line.text == command.strip():  # the device echoes commands
                         continue
+                    if self._stray_ack(line.text):  # a resync's, sent again
+                        continue
                     match = self._response.fullmatch(line.text)
                     if match is not None:
                         value = _number(match.group("value"))
@@ -380,6 +389,13 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                 f"after {len(malformed)} malformed line(s), the last {malformed[-1].quoted()}",
             )
         raise self._malformed(command, malformed)
+
+    def _stray_ack(self, text: str) -> bool:
+        """An acknowledgement where an answer was awaited: a resync sent its command
+        again and the earlier one's came late (never a value)."""
+        if self._ack is None or self._ack.search(text) is None:
+            return False
+        return self._response.fullmatch(text) is None
 
     def _command(self, command: str) -> None:
         """Send an init or set-exposure command and, with ``command_ack``, wait for it."""

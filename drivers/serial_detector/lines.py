@@ -86,6 +86,10 @@ class _LineIO:
     _last_rx: float
     _needs_resync: bool
     _reopen: bool
+    _ack: re.Pattern[str] | None
+    _exposure_command: str | None
+    #: Lines a resync discarded before its acknowledgement.
+    _synced_away: int
 
     if TYPE_CHECKING:
 
@@ -126,9 +130,12 @@ class _LineIO:
         self._discard_buffered()
 
     def _resync(self) -> None:
-        """After a failed query: discard input until the line has been quiet for
-        ``timeout_s`` (at most ``3 × timeout_s``), so that a late answer to the failed
-        query is not taken for the answer to the next one."""
+        """After a failed query: make sure a late answer to it is not taken for the
+        answer to the next one. With an acknowledged command at hand (`_sync`) its
+        acknowledgement marks the end of everything owed; else discard input until the
+        line has been quiet for ``timeout_s`` (at most ``3 × timeout_s``)."""
+        if self._sync():
+            return
         quiet = self._config.timeout_s
         start = time.monotonic()
         quiet_until, give_up = start + quiet, start + 3 * quiet
@@ -138,6 +145,36 @@ class _LineIO:
         self._discard_buffered()
         self._clear_input_state()
         self._needs_resync = False
+
+    def _sync(self) -> bool:
+        """Send the exposure command last sent (else the first ``init`` command) and
+        discard every line before its acknowledgement: the device answers in order, so
+        nothing owed comes after it. The command goes out again after each ``timeout_s``
+        without one (a line without an ending swallows the acknowledgement behind it),
+        three times at most. False without ``command_ack`` or such a command;
+        `SerialDetectorError` (``timeout``) if no acknowledgement comes (the resync is
+        then still needed; a stray acknowledgement later is skipped as an echo is)."""
+        cfg = self._config
+        command = self._exposure_command or next(iter(cfg.init), None)
+        if self._ack is None or command is None:
+            return False
+        for _ in range(3):
+            self._send(command)
+            deadline = time.monotonic() + cfg.timeout_s
+            while (line := self._next_line(deadline)) is not None:
+                if line.overflow or line.text == command.strip():
+                    continue
+                if self._ack.search(line.text):
+                    self._discard_buffered()
+                    self._clear_input_state()
+                    self._needs_resync = False
+                    return True
+                if self._banner is not None and self._banner.search(line.text):
+                    self._note_reset()  # re-initialized before the next query
+                self._synced_away += 1
+                log.debug("%s: resync: discarding %s", self.port, line.quoted())
+        budget = 3 * cfg.timeout_s
+        raise self._timeout(command, budget, "acknowledgement (resynchronizing)")
 
     def _discard_buffered(self) -> None:
         while self._lines:

@@ -63,6 +63,11 @@ class BusStats:
     bytes_out: int = 0
     crc_errors: int = 0
     stuffing_errors: int = 0
+    #: Late status packets (`Fault.LATE`) sent, and those of them the host's next
+    #: packet had overtaken (it had given up waiting: the reply lands in a later
+    #: transaction).
+    late: int = 0
+    overtaken: int = 0
     instructions: Counter[str] = field(default_factory=Counter)
 
 
@@ -220,12 +225,21 @@ class DxlEmulator:
 
     # -- faults -------------------------------------------------------------------------
 
-    def inject(self, fault: Fault, motor_id: int | None = None, count: int | None = 1) -> None:
+    def inject(
+        self,
+        fault: Fault,
+        motor_id: int | None = None,
+        count: int | None = 1,
+        *,
+        delay_ms: float = 0.0,
+    ) -> None:
         """Cause ``fault`` on motor ``motor_id`` (None: every motor).
 
         Reply faults affect that motor's next ``count`` status packets (None: all of them
-        until `clear_faults`). Hardware alerts latch until REBOOT. `Fault.SILENT` mutes
-        the whole bus (nothing is heard or answered) until `clear_faults`.
+        until `clear_faults`); `Fault.LATE` sends each ``delay_ms`` (ms) late, and the bus
+        behind it waits (bytes keep their order). Hardware alerts latch until REBOOT.
+        `Fault.SILENT` mutes the whole bus (nothing is heard or answered) until
+        `clear_faults`.
         """
         with self._lock:
             if fault is Fault.SILENT:
@@ -238,7 +252,7 @@ class DxlEmulator:
                     motor.raise_alert(bit)
                 return
             for motor in targets:
-                self._faults.add(motor, fault, count)
+                self._faults.add(motor, fault, count, delay_ms / 1000.0)
 
     def inject_rate(self, fault: Fault, rate: float, *, seed: int = 0) -> None:
         """Let reply ``fault`` strike every motor's status packets at random, each with
@@ -353,16 +367,27 @@ class DxlEmulator:
         for response in responses:
             sender = _sender(response)
             with self._lock:
-                raw = self._faults.encode(response)
+                out = self._faults.encode(response)
             due += sender.delay if self.return_delay else 0.0
-            if raw is None:
+            if out is None:
                 continue
+            raw = out.raw
             due += len(raw) * BITS_PER_BYTE / sender.baud if self.wire_time else 0.0
+            due += out.delay_s  # a late reply holds the line: nothing is served meanwhile
             self._line_free = due
             wait = due - time.perf_counter()
             if wait > 0 and self._stopping.wait(wait):
                 return
+            if out.delay_s:
+                self._count_late()
             self._write(raw)
+
+    def _count_late(self) -> None:
+        """Count a late reply about to leave, and whether the host has sent more since."""
+        overtaken = bool(select.select([self._master], [], [], 0)[0])
+        with self._lock:
+            self._stats.late += 1
+            self._stats.overtaken += overtaken
 
     def _write(self, raw: bytes) -> None:
         with self._lock:

@@ -3,7 +3,10 @@
 Reply faults are queued per motor and consumed one status packet at a time (a count
 of None never runs out), or strike each status packet at random with a rate
 (`FaultBook.strike`, after the queued ones); hardware alerts are not kept here, they
-latch a bit in the motor's Hardware Error Status.
+latch a bit in the motor's Hardware Error Status. A late reply (`Fault.LATE`) carries
+its delay: the status packet, and every byte the bus sends after it, leaves that much
+later, as when a loaded host or a USB adapter hands the bytes on late (they keep their
+order).
 """
 
 from __future__ import annotations
@@ -31,6 +34,9 @@ class Fault(Enum):
     #: the motor's previous status packet arrives again just before this one: a late
     #: reply the host had given up on (nothing extra if the motor has not answered yet)
     STALE = "stale"
+    #: the status packet leaves ``delay_ms`` late, and what follows it on the bus waits
+    #: behind it: past the host's timeout, it arrives in the host's next transaction
+    LATE = "late"
     SILENT = "silent"  #: the whole bus is unplugged until cleared
     # Hardware alerts: latch a Hardware Error Status bit (REBOOT clears it).
     INPUT_VOLTAGE = "input_voltage"
@@ -46,14 +52,23 @@ class Fault(Enum):
 
 
 REPLY_FAULTS = frozenset(
-    {Fault.NO_REPLY, Fault.CORRUPT_CRC, Fault.WRONG_ID, Fault.GARBAGE, Fault.STALE}
+    {Fault.NO_REPLY, Fault.CORRUPT_CRC, Fault.WRONG_ID, Fault.GARBAGE, Fault.STALE, Fault.LATE}
 )
+
+
+@dataclass(frozen=True)
+class Outgoing:
+    """The bytes a status puts on the wire after its faults, and how late (s) they leave."""
+
+    raw: bytes
+    delay_s: float = 0.0
 
 
 @dataclass
 class _Pending:
     fault: Fault
     remaining: int | None
+    delay_s: float = 0.0
 
 
 def _wrong_id(packet_id: int) -> int:
@@ -75,18 +90,24 @@ class FaultBook:
         #: Each motor's last status packet as it left (clean), for `Fault.STALE`.
         self._last: dict[EmulatedMotor, bytes] = {}
 
-    def add(self, motor: EmulatedMotor, fault: Fault, count: int | None) -> None:
+    def add(
+        self, motor: EmulatedMotor, fault: Fault, count: int | None, delay_s: float = 0.0
+    ) -> None:
+        """Queue ``fault`` for ``motor``'s next ``count`` status packets; ``delay_s`` (s)
+        is how late a `Fault.LATE` reply leaves."""
         if fault not in REPLY_FAULTS:
             raise ValueError(f"{fault} is not a reply fault")
         if count is not None and count < 1:
             raise ValueError(f"count must be ≥ 1 or None, got {count}")
-        self._queues.setdefault(motor, []).append(_Pending(fault, count))
+        if (fault is Fault.LATE) != (delay_s > 0):
+            raise ValueError(f"a late reply (and only it) needs a delay > 0, got {delay_s!r} s")
+        self._queues.setdefault(motor, []).append(_Pending(fault, count, delay_s))
 
     def strike(self, fault: Fault, rate: float, seed: int = 0) -> None:
         """Let ``fault`` strike each status packet with probability ``rate`` (on top of
         other rates; 0 ends it), drawn from a generator seeded with ``seed``."""
-        if fault not in REPLY_FAULTS:
-            raise ValueError(f"{fault} is not a reply fault")
+        if fault not in REPLY_FAULTS or fault is Fault.LATE:
+            raise ValueError(f"{fault} is not a reply fault that strikes at a rate")
         if not 0.0 <= rate <= 1.0:
             raise ValueError(f"rate must be in [0, 1], got {rate}")
         self._rates = [(f, r) for f, r in self._rates if f is not fault]
@@ -100,24 +121,29 @@ class FaultBook:
 
     def take(self, motor: EmulatedMotor) -> Fault | None:
         """The fault for ``motor``'s next status packet (consumes one count)."""
+        return self._take(motor)[0]
+
+    def _take(self, motor: EmulatedMotor) -> tuple[Fault | None, float]:
+        """(fault, delay in s) for ``motor``'s next status packet (consumes one count)."""
         queue = self._queues.get(motor)
         if not queue:
             for fault, rate in self._rates:
                 if self._rng.random() < rate:
-                    return fault
-            return None
+                    return fault, 0.0
+            return None, 0.0
         head = queue[0]
         if head.remaining is not None:
             head.remaining -= 1
             if head.remaining == 0:
                 queue.pop(0)
-        return head.fault
+        return head.fault, head.delay_s
 
-    def encode(self, response: Response) -> bytes | None:
-        """The bytes ``response`` puts on the wire after its faults (None: nothing)."""
+    def encode(self, response: Response) -> Outgoing | None:
+        """What ``response`` puts on the wire after its faults (None: nothing)."""
         if isinstance(response, FastChain):
-            return self._encode_chain(response)
-        fault = self.take(response.motor)
+            raw = self._encode_chain(response)
+            return None if raw is None else Outgoing(raw)
+        fault, delay_s = self._take(response.motor)
         if fault is Fault.NO_REPLY:
             return None
         packet_id = _wrong_id(response.packet_id) if fault is Fault.WRONG_ID else response.packet_id
@@ -126,12 +152,12 @@ class FaultBook:
         self._last[response.motor] = raw
         if fault is Fault.CORRUPT_CRC:
             raw = _corrupt(raw)
-        return stale + (NOISE + raw if fault is Fault.GARBAGE else raw)
+        return Outgoing(stale + (NOISE + raw if fault is Fault.GARBAGE else raw), delay_s)
 
     def _encode_chain(self, chain: FastChain) -> bytes | None:
         """A fast-read chain: a lost block truncates it, a wrong ID shows in its block,
-        a corrupt CRC spoils the packet CRC, garbage precedes the packet (a stale reply
-        has no effect here)."""
+        a corrupt CRC spoils the packet CRC, garbage precedes the packet (a stale or a late
+        reply has no effect here)."""
         blocks: list[tuple[int, int, bytes]] = []
         noise, corrupt = b"", False
         for block in chain.blocks:

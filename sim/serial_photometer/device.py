@@ -46,6 +46,7 @@ class _Faults:
     slow_s: float = 0.0
     garbage: int = 0
     inject: deque[str] = field(default_factory=deque)
+    late: deque[float] = field(default_factory=deque)
 
 
 class SerialPhotometer(_PtyServer):
@@ -212,6 +213,14 @@ class SerialPhotometer(_PtyServer):
         with self._lock:
             self._faults.slow_s = seconds
 
+    def late(self, seconds: float, count: int = 1) -> None:
+        """Send the next ``count`` answers ``seconds`` late; the device is busy meanwhile,
+        so what it answers after them waits behind them (lines keep their order)."""
+        if not seconds > 0 or count < 1:
+            raise ValueError(f"a late answer needs seconds > 0 and count ≥ 1, got {seconds!r}")
+        with self._lock:
+            self._faults.late.extend([seconds] * count)
+
     def garbage_without_newline(self, nbytes: int) -> None:
         """Answer the next measurement with ``nbytes`` digits and no line ending."""
         with self._lock:
@@ -261,6 +270,7 @@ class SerialPhotometer(_PtyServer):
                 return
             start = max(now, self._busy_until)
             delay = self._reply_delay_s + faults.slow_s
+            delay += faults.late.popleft() if faults.late else 0.0
             words = line.split()
             name, args = words[0].upper(), words[1:]
             if name == "STOP" and not args:  # idle already: acknowledged all the same

@@ -1,13 +1,14 @@
 """The transport every emulated instrument shares: a pseudo-terminal served by the
 simulated photometer's thread (`sim.serial_photometer.server`), ``;``-separated
 commands, queries answered after the instrument's integration time, and the faults a
-test injects (silence, garbage, slow answers)."""
+test injects (silence, garbage, slow answers, late ones)."""
 
 from __future__ import annotations
 
 import threading
+from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from sim.serial_photometer.server import _PtyServer
 
@@ -20,6 +21,7 @@ class _Faults:
     silent: bool = False
     garbage: int = 0
     slow_s: float = 0.0
+    late: deque[float] = field(default_factory=deque)
 
 
 class EmulatedInstrument(_PtyServer):
@@ -72,6 +74,14 @@ class EmulatedInstrument(_PtyServer):
         with self._lock:
             self._faults.slow_s = seconds
 
+    def late(self, seconds: float, count: int = 1) -> None:
+        """Send the next ``count`` answers ``seconds`` late; the instrument is busy
+        meanwhile, so what it answers after them waits behind them (in order)."""
+        if not seconds > 0 or count < 1:
+            raise ValueError(f"a late answer needs seconds > 0 and count ≥ 1, got {seconds!r}")
+        with self._lock:
+            self._faults.late.extend([seconds] * count)
+
     def clear(self) -> None:
         with self._lock:
             self._faults = _Faults()
@@ -107,6 +117,7 @@ class EmulatedInstrument(_PtyServer):
                 if reply is None:
                     continue
                 done = start + integration_s / self._speedup + faults.slow_s
+                done += faults.late.popleft() if faults.late else 0.0
                 if faults.garbage:
                     faults.garbage -= 1
                     reply = "#?garbage?#"

@@ -100,8 +100,9 @@ def test_link_retries_then_succeeds(emulator: Emulator, fault: Fault) -> None:
     [
         (Fault.NO_REPLY, sdk.COMM_RX_TIMEOUT),
         (Fault.CORRUPT_CRC, sdk.COMM_RX_CORRUPT),
-        # The SDK skips a status from another ID and then times out.
-        (Fault.WRONG_ID, sdk.COMM_RX_TIMEOUT),
+        # A status from another ID is not the answer (the SDK alone would skip it and
+        # then time out).
+        (Fault.WRONG_ID, sdk.COMM_RX_CORRUPT),
     ],
 )
 def test_link_gives_up_with_a_comm_error_naming_port_motor_and_result(

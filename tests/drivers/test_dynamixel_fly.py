@@ -104,7 +104,7 @@ def test_a_retried_poll_is_stamped_by_the_attempt_that_answered(
 ) -> None:
     emu = emulator(ids=(1, 2, 3), clock=time.monotonic)
     with DynamixelBus(emu.path, AXES, latency_ms=latency_timer, retries=1) as bus:
-        emu.inject(Fault.NO_REPLY, motor_id=2, count=1)
+        emu.inject(Fault.NO_REPLY, motor_id=3, count=1)  # the last: nothing comes after
         before = time.monotonic()
         poll = bus.poll_positions()
         # the first attempt waited out its timeout (2 × latency timer + 2 ms) first

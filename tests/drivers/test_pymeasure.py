@@ -275,6 +275,26 @@ def test_a_late_answer_after_a_timeout_is_not_taken_for_the_next_one(
         assert det.measure(0.05).value == pytest.approx(0.01)
 
 
+def test_an_answer_later_than_a_quiet_spell_is_never_taken_for_the_next_one(
+    sr830: tuple[EmulatedInstrument, PyMeasureDetector],
+) -> None:
+    """The late answer comes after the line has been quiet for longer than the timeout
+    (listening it out alone would have let it into the next query): the resync's
+    *IDN? marks the end of what the instrument still owed."""
+    device, det = sr830
+    with det:
+        assert det.measure(0.05).value == pytest.approx(0.01)
+        device.late(0.8)  # the next answer, 0.5 s past the 0.3 s timeout
+        with pytest.raises(DetectorError, match=r"timed out"):
+            det.measure(0.05)
+        before = len(device.commands)
+        assert det.measure(0.05).value == pytest.approx(0.01)
+        assert det.late_answers == 1
+        assert device.commands[before] == "*IDN?"  # the resync came first
+        assert det.measure(0.05).value == pytest.approx(0.01)
+        assert det.late_answers == 1
+
+
 def test_garbage_is_a_detector_error_and_the_next_reading_works(
     sr830: tuple[EmulatedInstrument, PyMeasureDetector],
 ) -> None:

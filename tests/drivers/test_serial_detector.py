@@ -363,6 +363,38 @@ def test_late_answer_is_never_taken_for_the_next_one() -> None:
         assert det.measure(EXPOSURE_S).value == 3.0  # not the late 2.0
 
 
+def test_an_answer_later_than_a_quiet_spell_is_never_taken_for_the_next_one() -> None:
+    """The late answer comes after the line has been quiet for ``timeout_s`` past the
+    failed query's deadline (listening out the line alone would then have let it in):
+    the resync's acknowledged command marks the end of what the device still owed."""
+    with (
+        SerialPhotometer(sequence(1.0, 2.0, 3.0, 4.0)) as dev,
+        SerialDetector(config_for(dev)) as det,
+    ):
+        assert det.measure(EXPOSURE_S).value == 1.0
+        dev.late(2.5 * TIMEOUT_S)  # the answer 2.0, and everything behind it
+        error, _ = failing(lambda: det.measure(EXPOSURE_S))
+        assert error.kind == "timeout"
+        dev.clear_commands()
+        assert det.measure(EXPOSURE_S).value == 3.0  # not the late 2.0
+        assert det.resynced_away == 1  # the late 2.0, before the acknowledgement
+        assert dev.commands[-1] == "MEAS"
+        assert set(dev.commands[:-1]) == {"EXP 10"}  # the resync first
+        assert det.measure(EXPOSURE_S).value == 4.0
+        assert det.resynced_away == 1
+
+
+def test_a_resync_without_an_acknowledgement_fails_and_is_tried_again() -> None:
+    with SerialPhotometer(sequence(1.0, 2.0, 3.0)) as dev, SerialDetector(config_for(dev)) as det:
+        assert det.measure(EXPOSURE_S).value == 1.0
+        dev.late(6 * TIMEOUT_S)  # past the query's deadline and the resync's 3 × timeout_s
+        assert failing(lambda: det.measure(EXPOSURE_S))[0].kind == "timeout"
+        error, _ = failing(lambda: det.measure(EXPOSURE_S))
+        assert error.kind == "timeout" and "resynchronizing" in str(error)
+        assert det.measure(EXPOSURE_S).value == 3.0  # the late 2.0 was discarded
+        assert det.resynced_away >= 1
+
+
 def test_ctrl_c_during_a_reading_then_the_late_answer_is_discarded() -> None:
     with SerialPhotometer(sequence(1.0, 2.0, 3.0)) as dev, SerialDetector(config_for(dev)) as det:
         assert det.measure(EXPOSURE_S).value == 1.0

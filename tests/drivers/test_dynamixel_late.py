@@ -1,0 +1,141 @@
+"""Late status packets never answer a later request: the unmodified SDK over a real pty
+against the emulator, replies of chosen packets sent past the SDK's timeout
+(`Fault.LATE`: the bus behind them waits, as on hardware bytes keep their order).
+
+Every value read is compared with the emulator's register; the counts compared are
+the run's own: the late replies the emulator sent after the host had moved on
+(``overtaken``) are exactly the status packets the link's syncs discarded."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel.bus import DynamixelBus
+from drivers.dynamixel.control_table import item
+from drivers.dynamixel.link import DynamixelLink
+from drivers.errors import CommError
+from sim.dynamixel.emulator import DxlEmulator
+from sim.dynamixel.faults import Fault
+from tests.support.dynamixel import axes
+
+Emulator = Callable[..., DxlEmulator]
+#: Late by this much (ms): well past a pty link's reply timeout (about 19 ms), within
+#: a sync's wait (`drivers.dynamixel.owed.SYNC_WAIT_MS` more).
+LATE_MS = 80.0
+#: Items of one size, so that a late reply of one has the length of the next's answer.
+WORDS = ("current_limit", "pwm_limit", "max_voltage_limit", "velocity_i_gain", "position_p_gain")
+LONGS = ("velocity_limit", "moving_threshold", "profile_velocity", "goal_position")
+
+
+def distinct_values(emu: DxlEmulator) -> None:
+    """Give every item of `WORDS` and `LONGS` of every motor its own value."""
+    for motor_id, motor in emu.motors.items():
+        for k, name in enumerate(WORDS + LONGS):
+            reg = item(name)
+            motor.set(name, min(reg.high or 1000, 100 + 7 * k + 50 * motor_id))
+
+
+def check_counts(emu: DxlEmulator, link: DynamixelLink, late: int, behind: int = 0) -> None:
+    """Every late reply was sent; each one that arrived after the host's next packet was
+    discarded by a sync (one that arrived before it, by the port's clearing), with the
+    ``behind`` statuses of a sync read held behind them, and no sync had to give up
+    (so nothing else was discarded)."""
+    stats = emu.stats
+    assert stats.late == late
+    assert link.late_counts.failed == 0
+    assert link.late_counts.discarded == stats.overtaken + behind
+    assert link.late_counts.syncs >= stats.overtaken
+
+
+def test_a_late_read_reply_never_answers_the_next_read(emulator: Emulator) -> None:
+    emu = emulator(ids=(1, 2))
+    distinct_values(emu)
+    chosen = {1, 4, 5, 9, 12}  # reads whose reply comes late
+    with DynamixelLink(emu.path, latency_ms=0) as link:
+        names = [(m, n) for _ in range(2) for n in WORDS + LONGS for m in (1, 2)]
+        for k, (motor_id, name) in enumerate(names):
+            if k in chosen:
+                emu.inject(Fault.LATE, motor_id=motor_id, delay_ms=LATE_MS)
+            assert link.read(motor_id, name) == emu.motors[motor_id].get(name), (k, name)
+        check_counts(emu, link, len(chosen))
+        assert emu.stats.overtaken >= 1  # the host did move on before some of them
+        assert [link.read(2, n) for n in WORDS] == [emu.motors[2].get(n) for n in WORDS]
+
+
+def test_a_read_given_up_leaves_its_reply_to_the_next_ones_sync(emulator: Emulator) -> None:
+    """Without retries the late read fails, and the next read, of another item of the
+    same size, still gets its own value (not the late one's bytes: a Current Limit
+    read back as another item's value)."""
+    emu = emulator(ids=(1,))
+    distinct_values(emu)
+    with DynamixelLink(emu.path, latency_ms=0, retries=0) as link:
+        emu.inject(Fault.LATE, motor_id=1, delay_ms=LATE_MS)
+        with pytest.raises(CommError, match="reading pwm_limit"):
+            link.read(1, "pwm_limit")
+        assert link.read(1, "current_limit") == emu.motors[1].get("current_limit")
+        assert link.read(1, "pwm_limit") == emu.motors[1].get("pwm_limit")
+        check_counts(emu, link, 1)
+        assert emu.stats.overtaken == 1
+
+
+def test_a_late_write_status_is_not_taken_for_the_next_ones(emulator: Emulator) -> None:
+    emu = emulator(ids=(1, 2))
+    distinct_values(emu)
+    with DynamixelLink(emu.path, latency_ms=0) as link:
+        for k, value in enumerate((300, 301, 302, 303)):
+            if k % 2 == 0:
+                emu.inject(Fault.LATE, motor_id=1, delay_ms=LATE_MS)
+            link.write(1, "velocity_i_gain", value)
+            link.write(2, "velocity_i_gain", value + 10)
+            assert emu.motors[1].get("velocity_i_gain") == value
+            for motor_id in (1, 2):
+                for name in WORDS:
+                    assert link.read(motor_id, name) == emu.motors[motor_id].get(name)
+        check_counts(emu, link, 2)
+
+
+def test_a_late_status_in_a_sync_read_is_never_taken_for_data(
+    emulator: Emulator,
+) -> None:
+    emu = emulator(ids=(1, 2, 3))
+    distinct_values(emu)
+    behind = 0  # statuses held behind a late one that overtook the host's next packet
+    with DynamixelLink(emu.path, latency_ms=0) as link:
+        for round_ in range(6):
+            late = 1 + round_ % 3
+            emu.inject(Fault.LATE, motor_id=late, delay_ms=LATE_MS)
+            overtaken = emu.stats.overtaken
+            first, last = ("current_limit", "current_limit") if round_ % 2 else ("pwm_limit",) * 2
+            data = link.sync_read([1, 2, 3], first, last)
+            reg = item(first)
+            assert {m: reg.decode(d) for m, d in data.items()} == {
+                m: emu.motors[m].get(first) for m in (1, 2, 3)
+            }
+            behind += (3 - late) * (emu.stats.overtaken - overtaken)
+            # a single read of the same length right after
+            assert link.read(late, "max_voltage_limit") == emu.motors[late].get("max_voltage_limit")
+        check_counts(emu, link, 6, behind)
+
+
+def test_the_bus_holds_and_reads_true_positions_after_late_replies(
+    emulator: Emulator,
+) -> None:
+    config: list[AxisConfig] = axes()
+    emu = emulator(ids=tuple(a.motor_id for a in config))
+    ids = [a.motor_id for a in config]
+    bus = DynamixelBus(emu.path, config, latency_ms=0)
+    with bus:
+        for motor_id in ids:
+            emu.inject(Fault.LATE, motor_id=motor_id, delay_ms=LATE_MS)
+            got = bus.positions()
+            assert got == {
+                a.name: pytest.approx(a.to_rad(emu.motors[a.motor_id].get("present_position")))
+                for a in config
+            }
+        bus.stop()
+        assert {m: emu.motors[m].get("goal_position") for m in ids} == {
+            m: emu.motors[m].get("present_position") for m in ids
+        }
