@@ -3,16 +3,20 @@ measured through the device contract (move the motors, read the detector), so th
 code runs on the simulator, the rehearsal and the hardware; the detector's specular
 peaks are located by cross scans and fitted (`gonio.rig.alignment_fit`).
 
-The scan's planning is pure (`nominal_poses`, `cross_scan`, `predicted_peaks`, the
-verdict of a check); its device I/O is `measure_line` and `scan`. A pose outside the
+The scan's planning is pure (`nominal_poses`, `cross_scan`, `fly_sweep`,
+`visiting_order`, the verdict of a check); its device I/O is `measure_line` (stop and
+go), `fly_cross` (flown, `gonio.workflows.align_fly`) and `scan`. A pose outside the
 rig's limits or inside a keep-out box is never commanded: the rig's own pose check
-(`Rig.pose_reasons`) drops a peak whose scan would reach one.
+(`Rig.pose_reasons`) drops a peak whose scan (a fly sweep's whole travel included)
+would reach one.
 
 Each peak is found by a coarse cross scan (detector elevation, then azimuth) about the
-rig file's specular pose, then a fine one about the coarse peak. Every reading (pose
-commanded and read back, value, time) is kept in `Readings`, written beside the
-alignment file as a small SQLite table (`write_readings`): the acquisition engine takes
-plans of direction pairs, not explicit joint-space scans, so the scan is not a run.
+rig file's specular pose, then a fine one about the coarse peak; flown where the
+detector streams (`scan_mode`; `run_scan` on the `FLY_BACKENDS`), the fine one both
+ways. Every reading (how it was taken, pose commanded and read back, value, window) is
+kept in `Readings`, written beside the alignment file as a small SQLite table
+(`write_readings`): the acquisition engine takes plans of direction pairs, not explicit
+joint-space scans, so the scan is not a run.
 """
 
 from __future__ import annotations
