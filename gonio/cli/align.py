@@ -19,6 +19,8 @@ if TYPE_CHECKING:  # imported when the command runs
 
 #: Exit code of a check that ran and found the alignment no longer holds.
 EXIT_DRIFTED = 1
+#: How the printed summary names the scan's mode (`gonio.workflows.align`).
+_MODE = {"fly": "fly scans", "stop_and_go": "stop-and-go"}
 
 
 def _speedup(text: str) -> float:
@@ -35,11 +37,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help=help_,
         description="Measure the rig's misalignment: with a first-surface mirror in the "
         "sample holder, cross scans of the detector locate the specular peak at poses "
-        "within the rig's limits; the fit gives each axis's zero offset, the sample's "
-        "tilt and the pointing errors it determines, with standard errors, and names what "
-        "would determine the rest. Writes the alignment file and the scan's readings "
-        "beside it (docs/how-to/align.md). With --check: a short scan and a verdict on "
-        "whether an existing alignment file still holds.",
+        "within the rig's limits (on the simulated rig, where its detector streams, flown: "
+        "the scanned joint sweeps while the detector streams readings; stop-and-go on the "
+        "hardware path, or with --stop-and-go); the fit "
+        "gives each axis's zero offset, the sample's tilt and the pointing errors it "
+        "determines, with standard errors, and names what would determine the rest. "
+        "Writes the alignment file and the scan's readings beside it "
+        "(docs/how-to/align.md). With --check: a short scan and a verdict on whether an "
+        "existing alignment file still holds.",
         exit_codes={
             0: "the alignment written (or, with --check, it still holds)",
             EXIT_DRIFTED: "--check: the alignment no longer holds (the numbers are printed)",
@@ -64,6 +69,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--exposure", type=arguments.positive_seconds, default=1e-3, metavar="S",
         help="each reading's exposure (default 1 ms: a mirror's peak is bright)",
+    )  # fmt: skip
+    p.add_argument(
+        "--stop-and-go", action="store_true",
+        help="stop at each angle of a cross scan (move, settle, read) even on the simulated "
+        "rig whose detector streams (default there: fly scans, 2.2 min against 6.2 on the "
+        "arch rig)",
     )  # fmt: skip
     p.add_argument("--seed", type=arguments.seed, help="the scan's seed (default: the scene's)")
     p.add_argument(
@@ -115,7 +126,10 @@ def cmd_align(args: argparse.Namespace) -> int:
             raise ConfigError("--check writes nothing: drop -o and --overwrite")
         checked = rig.realigned(args.check)
         settings = dataclasses.replace(align.CHECK, exposure_s=args.exposure)
-        result = align.run_scan(rig, scene, kind, settings, seed=args.seed, speedup=args.speedup)
+        result = align.run_scan(
+            rig, scene, kind, settings, seed=args.seed, speedup=args.speedup,
+            stop_and_go=args.stop_and_go,
+        )  # fmt: skip
         return _print_verdict(align.verdict(checked, result.peaks), result, args.check)
     output = args.output or default_output(args.rig)
     sidecar = readings_path(output)
@@ -128,7 +142,10 @@ def cmd_align(args: argparse.Namespace) -> int:
         reserve_output(sidecar, "-o", inputs=inputs) as readings_out,
     ):
         settings = dataclasses.replace(align.ScanSettings(), exposure_s=args.exposure)
-        result = align.run_scan(rig, scene, kind, settings, seed=args.seed, speedup=args.speedup)
+        result = align.run_scan(
+            rig, scene, kind, settings, seed=args.seed, speedup=args.speedup,
+            stop_and_go=args.stop_and_go,
+        )  # fmt: skip
         fitted = fit(
             rig, result.peaks, np.full(len(result.peaks), math.radians(align.PEAK_SIGMA_DEG))
         )
@@ -138,8 +155,8 @@ def cmd_align(args: argparse.Namespace) -> int:
         out.write_bytes(text(made).encode("utf-8"))
     assert made.fit is not None
     print(
-        f"mirror scan: {len(result.peaks)} peaks, {len(result.readings.value)} readings, "
-        f"instrument time {result.seconds / 60:.1f} min ({kind})"
+        f"mirror scan: {len(result.peaks)} peaks, {len(result.readings.value)} readings "
+        f"({_MODE[result.mode]}), instrument time {result.seconds / 60:.1f} min ({kind})"
     )
     print("determined:")
     for name, p in made.fit.parameters.items():
@@ -159,7 +176,7 @@ def cmd_align(args: argparse.Namespace) -> int:
 
 def _print_verdict(verdict: Verdict, result: Scan, check: Path) -> int:
     print(
-        f"check of {check}: {len(result.peaks)} peaks, "
+        f"check of {check}: {len(result.peaks)} peaks ({_MODE[result.mode]}), "
         f"instrument time {result.seconds / 60:.1f} min"
     )
     for i, (miss, bound) in enumerate(verdict.rows_deg()):

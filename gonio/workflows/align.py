@@ -3,16 +3,20 @@ measured through the device contract (move the motors, read the detector), so th
 code runs on the simulator, the rehearsal and the hardware; the detector's specular
 peaks are located by cross scans and fitted (`gonio.rig.alignment_fit`).
 
-The scan's planning is pure (`nominal_poses`, `cross_scan`, `predicted_peaks`, the
-verdict of a check); its device I/O is `measure_line` and `scan`. A pose outside the
+The scan's planning is pure (`nominal_poses`, `cross_scan`, `fly_sweep`,
+`visiting_order`, the verdict of a check); its device I/O is `measure_line` (stop and
+go), `fly_cross` (flown, `gonio.workflows.align_fly`) and `scan`. A pose outside the
 rig's limits or inside a keep-out box is never commanded: the rig's own pose check
-(`Rig.pose_reasons`) drops a peak whose scan would reach one.
+(`Rig.pose_reasons`) drops a peak whose scan (a fly sweep's whole travel included)
+would reach one.
 
 Each peak is found by a coarse cross scan (detector elevation, then azimuth) about the
-rig file's specular pose, then a fine one about the coarse peak. Every reading (pose
-commanded and read back, value, time) is kept in `Readings`, written beside the
-alignment file as a small SQLite table (`write_readings`): the acquisition engine takes
-plans of direction pairs, not explicit joint-space scans, so the scan is not a run.
+rig file's specular pose, then a fine one about the coarse peak; flown where the
+detector streams (`scan_mode`; `run_scan` on the `FLY_BACKENDS`), the fine one both
+ways. Every reading (how it was taken, pose commanded and read back, value, window) is
+kept in `Readings`, written beside the alignment file as a small SQLite table
+(`write_readings`): the acquisition engine takes plans of direction pairs, not explicit
+joint-space scans, so the scan is not a run.
 """
 
 from __future__ import annotations
@@ -26,12 +30,13 @@ from pathlib import Path
 import numpy as np
 
 from drivers.devices import Devices
-from gonio.acquire import measure_target
+from drivers.stream import can_stream
+from gonio.acquire import TargetReading, measure_target
 from gonio.errors import GonioError
 from gonio.rig import Rig
 from gonio.rig.alignment_fit import as_alignment, miss, peak_at, stated_covariance, vector
 from gonio.types import FloatArray
-from gonio.workflows import backends
+from gonio.workflows import align_fly, backends
 from gonio.workflows.backends import BackendKind
 from sim.scene import Scene
 
@@ -50,6 +55,10 @@ class ScanSettings:
     fine_half_deg: float = 0.3
     fine_points: int = 15
     exposure_s: float = 1e-3
+    #: A fly scan's stream rate (readings a second) and how far its ramps may run
+    #: beyond a scan (°; `gonio.workflows.align_fly`).
+    stream_rate_hz: float = 100.0
+    fly_overshoot_deg: float = 0.5
 
 
 #: The settings of ``--check``: a few peaks, at one sample rotation more than the fit's.
@@ -60,6 +69,19 @@ CHECK = ScanSettings(
 PEAK_SIGMA_DEG = 0.005
 #: The joints a cross scan moves.
 SCANNED = ("detector_elevation", "detector_azimuth")
+#: How the readings are taken: stopping at each angle, or streamed while sweeping.
+STOP_AND_GO, FLY = "stop_and_go", "fly"
+#: The backends whose scans `run_scan` flies by default: the simulated one. On the
+#: hardware path (the rehearsal, the hardware) a mirror scan is stop-and-go: rehearsed
+#: at real speed (``--speedup 1``), fly sweeps lost readings at their ends (no peak, or
+#: one on a scan's edge, at 5 of 16 peaks) and the same pose's peaks scattered by up
+#: to 0.025°, above the 0.005° a peak's location is held to (docs/how-to/align.md).
+#: `scan` flies wherever the detector streams.
+FLY_BACKENDS = ("simulated",)
+#: Encoder ticks a fly sweep's stop lies at least past its readings (its ramp, else
+#: constant velocity): a bus counts a move arrived within a few ticks of its goal, and
+#: the sweep stops polling then.
+MARGIN_TICKS = 3
 
 
 def nominal_poses(rig: Rig, settings: ScanSettings) -> FloatArray:
@@ -100,31 +122,94 @@ def cross_scan(rig: Rig, center: FloatArray, joint: str, steps: FloatArray) -> F
     return poses
 
 
-def reachable(rig: Rig, centers: FloatArray, settings: ScanSettings) -> np.ndarray:
-    """Which peaks (M,) can be scanned: every pose of their coarse cross scans is inside
-    the limits and outside the keep-out boxes (the fine scans lie within them)."""
-    half = math.radians(settings.coarse_half_deg + settings.fine_half_deg)
+@dataclass(frozen=True)
+class FlySweep:
+    """How a flown cross scan sweeps: its velocity (rad/s), stream rate (Hz), the
+    constant-velocity travel past its readings (rad, `MARGIN_TICKS`) and how far beyond
+    the scan its travel reaches (rad, ramps included)."""
+
+    velocity: float
+    rate_hz: float
+    margin_rad: float
+    beyond_rad: float
+
+
+def fly_sweep(rig: Rig, settings: ScanSettings, joint: str, fine: bool) -> FlySweep:
+    """How a flown coarse or ``fine`` cross scan of ``joint`` sweeps
+    (`gonio.workflows.align_fly`): its readings spaced as the stop-and-go scan's steps."""
+    j = rig.axes.index(joint)
+    steps = fine_offsets(settings) if fine else coarse_offsets(settings)
+    velocity, rate = align_fly.fly_rate(
+        rig, j, float(steps[1] - steps[0]), settings.stream_rate_hz, settings.exposure_s,
+        math.radians(settings.fly_overshoot_deg),
+    )  # fmt: skip
+    ramp = align_fly.overshoot(rig, j, velocity, rate, 0.0, 0.0)  # the ramp alone
+    margin = max(0.0, MARGIN_TICKS * float(tick_rad(rig)[j]) - ramp)
+    beyond = align_fly.overshoot(rig, j, velocity, rate, settings.exposure_s, margin)
+    return FlySweep(velocity, rate, margin, beyond)
+
+
+def reachable(
+    rig: Rig, centers: FloatArray, settings: ScanSettings, mode: str = STOP_AND_GO
+) -> np.ndarray:
+    """Which peaks (M,) can be scanned: every pose of their coarse cross scans, widened
+    by the fine scan's half width and, flown, by the sweeps' travel beyond the scans
+    (ramps included), is inside the limits and outside the keep-out boxes."""
     ok = np.ones(len(centers), dtype=np.bool_)
     for joint in SCANNED:
+        half = math.radians(settings.coarse_half_deg + settings.fine_half_deg)
+        points = 41
+        if mode == FLY:
+            coarse, fine = (fly_sweep(rig, settings, joint, f).beyond_rad for f in (False, True))
+            half = max(half + fine, math.radians(settings.coarse_half_deg) + coarse)
+            points = max(points, math.ceil(2.0 * half / align_fly.CHECK_STEP) + 1)
         for i, center in enumerate(centers):
-            poses = cross_scan(rig, center, joint, np.linspace(-half, half, 41))
+            poses = cross_scan(rig, center, joint, np.linspace(-half, half, points))
             ok[i] &= bool(np.all(rig.pose_reasons(poses)[1]))
     return ok
 
 
 @dataclass
 class Readings:
-    """Every reading of a scan, in order: the peak and the joint scanned, the commanded
-    and read-back poses (rad), the value and when its exposure ended (s)."""
+    """Every reading of a scan, in order: the peak and the joint scanned, how it was
+    taken (`STOP_AND_GO` or `FLY`), the commanded and read-back poses (rad; a fly
+    reading's: the pose its sweep was sent to and the angles interpolated at its
+    window's middle), the value and its window (s)."""
 
     axes: tuple[str, ...]
     peak: list[int] = field(default_factory=list)
     joint: list[str] = field(default_factory=list)
+    mode: list[str] = field(default_factory=list)
     commanded: list[list[float]] = field(default_factory=list)
     read_back: list[list[float]] = field(default_factory=list)
     value: list[float] = field(default_factory=list)
+    started_s: list[float] = field(default_factory=list)
     ended_s: list[float] = field(default_factory=list)
     saturated: list[bool] = field(default_factory=list)
+
+    def add(
+        self, peak: int, joint: str, mode: str, commanded: FloatArray, read_back: FloatArray,
+        value: FloatArray, started_s: FloatArray, ended_s: FloatArray, saturated: np.ndarray,
+    ) -> None:  # fmt: skip
+        """Keep K readings: poses (K, A) rad, the rest (K,)."""
+        k = len(value)
+        self.peak += [peak] * k
+        self.joint += [joint] * k
+        self.mode += [mode] * k
+        self.commanded += np.asarray(commanded, dtype=np.float64).reshape(k, -1).tolist()
+        self.read_back += np.asarray(read_back, dtype=np.float64).reshape(k, -1).tolist()
+        self.value += np.asarray(value, dtype=np.float64).tolist()
+        self.started_s += np.asarray(started_s, dtype=np.float64).tolist()
+        self.ended_s += np.asarray(ended_s, dtype=np.float64).tolist()
+        self.saturated += [bool(x) for x in np.asarray(saturated).tolist()]
+
+
+def _refuse_saturated(saturated: np.ndarray, exposure_s: float) -> None:
+    if np.any(saturated):
+        raise GonioError(
+            f"align: the mirror saturates the detector at {exposure_s:g} s; give a shorter "
+            "--exposure"
+        )
 
 
 def measure_line(
@@ -140,26 +225,60 @@ def measure_line(
     the device contract); the values (K,), each reading kept in ``readings``."""
     if not np.all(rig.pose_reasons(poses)[1]):  # never command outside the rig's limits
         raise GonioError(f"align: a scan of {joint} leaves the rig's limits; nothing moved")
-    values = np.empty(len(poses))
-    for k, pose in enumerate(poses):
+    got: list[TargetReading] = []
+    for pose in poses:
         target = dict(zip(rig.axes, pose.tolist(), strict=True))
-        got = measure_target(
-            devices, len(readings.value), target, exposure_s, 1, settle_s=rig.spec.settle_s
-        )
-        values[k] = got.reading.value
-        readings.peak.append(peak)
-        readings.joint.append(joint)
-        readings.commanded.append(pose.tolist())
-        readings.read_back.append([got.read_back[a] for a in rig.axes])
-        readings.value.append(float(got.reading.value))
-        readings.ended_s.append(float(got.reading.ended_s))
-        readings.saturated.append(bool(got.reading.saturated))
-    if any(readings.saturated[-len(poses) :]):
-        raise GonioError(
-            f"align: the mirror saturates the detector at {exposure_s:g} s; give a shorter "
-            "--exposure"
-        )
+        got.append(
+            measure_target(
+                devices, len(readings.value) + len(got), target, exposure_s, 1,
+                settle_s=rig.spec.settle_s,
+            )
+        )  # fmt: skip
+    values = np.array([g.reading.value for g in got], dtype=np.float64)
+    saturated = np.array([g.reading.saturated for g in got], dtype=np.bool_)
+    readings.add(
+        peak, joint, STOP_AND_GO, poses,
+        np.array([[g.read_back[a] for a in rig.axes] for g in got], dtype=np.float64),
+        values, np.array([g.reading.started_s for g in got], dtype=np.float64),
+        np.array([g.reading.ended_s for g in got], dtype=np.float64), saturated,
+    )  # fmt: skip
+    _refuse_saturated(saturated, exposure_s)
     return values
+
+
+def fly_cross(
+    devices: Devices,
+    rig: Rig,
+    center: FloatArray,
+    joint: str,
+    settings: ScanSettings,
+    readings: Readings,
+    peak: int,
+    fine: bool,
+) -> tuple[FloatArray, float]:
+    """A flown cross scan of ``joint`` about ``center`` (A,): one sweep (coarse), or one
+    each way (``fine``: a timing latency shifts a one-way sweep's peak by velocity ×
+    latency, and the two ways' mean cancels it); the angles (K, A) of every reading and
+    the peak (rad, the mean of each way's), each reading kept in ``readings``."""
+    j = rig.axes.index(joint)
+    sweep = fly_sweep(rig, settings, joint, fine)
+    half = settings.fine_half_deg if fine else settings.coarse_half_deg
+    angles, peaks = [], []
+    for backward in (False, True) if fine else (False,):
+        sweeps = align_fly.line_sweep(
+            rig, center, j, math.radians(half), sweep.velocity, sweep.rate_hz,
+            settings.exposure_s, sweep.margin_rad, backward=backward,
+        )  # fmt: skip
+        line = align_fly.fly_line(devices, rig, sweeps, len(readings.value))
+        target = np.repeat(line.target[None, :], len(line.values), axis=0)
+        readings.add(
+            peak, joint, FLY, target, line.angles, line.values, line.started_s, line.ended_s,
+            line.saturated,
+        )  # fmt: skip
+        _refuse_saturated(line.saturated, settings.exposure_s)
+        angles.append(line.angles)
+        peaks.append(peak_at(line.angles[:, j], line.values))
+    return np.concatenate(angles), float(np.mean(peaks))
 
 
 def locate(
@@ -169,27 +288,35 @@ def locate(
     settings: ScanSettings,
     readings: Readings,
     peak: int,
+    mode: str = STOP_AND_GO,
 ) -> FloatArray:
     """The pose (A,) of the mirror's peak near ``center``, as the motors read it back:
     a coarse cross scan, then a fine one (elevation, then azimuth, each about the
-    other's latest peak), the fine step at least one tick of the scanned motor; the
-    peak located in the read-back angles (a motor stands on its ticks, not where it was
-    asked), the joints not scanned where they were read."""
+    other's latest peak), the peak located in the read-back angles (a motor stands on
+    its ticks, not where it was asked), the joints not scanned where they were read.
+    Stop and go, the fine step is at least one tick of the scanned motor; flown
+    (`fly_cross`), the readings are spaced as the stop-and-go steps would be."""
     found = np.asarray(center, dtype=np.float64).copy()
     ticks = tick_rad(rig)
-    for steps in (coarse_offsets(settings), fine_offsets(settings)):
+    still = [i for i, name in enumerate(rig.axes) if name not in SCANNED]
+    for fine, steps in ((False, coarse_offsets(settings)), (True, fine_offsets(settings))):
         for joint in SCANNED:
             j = rig.axes.index(joint)
-            if len(steps) > 1 and steps[1] - steps[0] < ticks[j]:
-                half = steps[-1]
-                steps = np.arange(-half, half + 0.5 * ticks[j], ticks[j])
-            start = len(readings.value)
-            poses = cross_scan(rig, found, joint, steps)
-            values = measure_line(devices, rig, poses, settings.exposure_s, readings, peak, joint)
-            read = np.asarray(readings.read_back[start:], dtype=np.float64)
-            still = [i for i, name in enumerate(rig.axes) if name not in SCANNED]
+            if mode == FLY:
+                read, found[j] = fly_cross(devices, rig, found, joint, settings, readings,
+                                           peak, fine)  # fmt: skip
+            else:
+                if len(steps) > 1 and steps[1] - steps[0] < ticks[j]:
+                    half = steps[-1]
+                    steps = np.arange(-half, half + 0.5 * ticks[j], ticks[j])
+                start = len(readings.value)
+                poses = cross_scan(rig, found, joint, steps)
+                values = measure_line(
+                    devices, rig, poses, settings.exposure_s, readings, peak, joint
+                )
+                read = np.asarray(readings.read_back[start:], dtype=np.float64)
+                found[j] = peak_at(read[:, j], values)  # the scanned ones keep their estimates
             found[still] = np.median(read[:, still], axis=0)  # where the others stood
-            found[j] = peak_at(read[:, j], values)  # the scanned ones keep their estimates
     return found
 
 
@@ -202,28 +329,48 @@ def tick_rad(rig: Rig) -> FloatArray:
 
 @dataclass(frozen=True)
 class Scan:
-    """A mirror scan: the peaks' poses (M, A), the readings, the instrument time (s)."""
+    """A mirror scan: the peaks' poses (M, A), the readings, the instrument time (s),
+    how the readings were taken (`STOP_AND_GO` or `FLY`)."""
 
     peaks: FloatArray
     readings: Readings
     seconds: float
+    mode: str = STOP_AND_GO
 
 
-def scan(devices: Devices, rig: Rig, settings: ScanSettings) -> Scan:
+def visiting_order(centers: FloatArray) -> np.ndarray:
+    """The order (M,) in which to visit the peaks ``centers`` (M, A): equal poses one
+    after another (the settings' azimuths and stage rotations reach some poses more
+    than once: measured again, not travelled to again), else as given."""
+    key = np.round(np.asarray(centers, dtype=np.float64), 9) + 0.0  # -0.0 as 0.0
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return np.argsort(first[np.ravel(inverse)], kind="stable")
+
+
+def scan_mode(devices: Devices, stop_and_go: bool = False) -> str:
+    """`FLY` where the bus sweeps and the detector streams, unless ``stop_and_go``;
+    else `STOP_AND_GO`."""
+    return STOP_AND_GO if stop_and_go or not can_stream(devices.detector) else FLY
+
+
+def scan(devices: Devices, rig: Rig, settings: ScanSettings, *, stop_and_go: bool = False) -> Scan:
     """Locate the mirror's peaks at the reachable nominal poses of ``settings`` with the
-    opened ``devices``; `GonioError` if none is reachable."""
+    opened ``devices``, flown where the detector streams unless ``stop_and_go``;
+    `GonioError` if none is reachable."""
+    mode = scan_mode(devices, stop_and_go)
     centers = nominal_poses(rig, settings)
-    centers = centers[reachable(rig, centers, settings)]
+    centers = centers[reachable(rig, centers, settings, mode)]
     if not len(centers):
         raise GonioError("align: no mirror pose of the scan is within the rig's limits")
+    centers = centers[visiting_order(centers)]
     readings = Readings(rig.axes)
     if devices.light is not None:
         devices.light.on()
     start = devices.clock.now()
     peaks = np.stack(
-        [locate(devices, rig, c, settings, readings, i) for i, c in enumerate(centers)]
+        [locate(devices, rig, c, settings, readings, i, mode) for i, c in enumerate(centers)]
     )
-    return Scan(peaks, readings, devices.clock.now() - start)
+    return Scan(peaks, readings, devices.clock.now() - start, mode)
 
 
 def run_scan(
@@ -234,35 +381,40 @@ def run_scan(
     *,
     seed: int | None = None,
     speedup: float = 50.0,
+    stop_and_go: bool = False,
 ) -> Scan:
     """A mirror scan on the backend ``kind`` built from the rig file (the ``scene``
-    where the detector is simulated), its devices opened and closed here."""
+    where the detector is simulated), its devices opened and closed here; flown where
+    the detector streams on the `FLY_BACKENDS`, unless ``stop_and_go``."""
+    stop_and_go |= kind not in FLY_BACKENDS
     backend = backends.build(kind, rig, scene, seed, time.time(), speedup=speedup)
     try:
         with backend.devices:
-            return scan(backend.devices, rig, settings)
+            return scan(backend.devices, rig, settings, stop_and_go=stop_and_go)
     finally:
         backend.close()
 
 
 def write_readings(path: Path, readings: Readings) -> None:
-    """The readings as a SQLite table ``reading`` (one row each; angles in rad, one
-    column per axis commanded and read back) at ``path`` (a new file)."""
+    """The readings as a SQLite table ``reading`` (one row each; how it was taken;
+    angles in rad, one column per axis commanded and read back; its window, s) at
+    ``path`` (a new file)."""
     axes = readings.axes
     columns = [f'"commanded_{a}" REAL, "read_{a}" REAL' for a in axes]
     with sqlite3.connect(path) as db:
         db.execute(
-            "CREATE TABLE reading (i INTEGER PRIMARY KEY, peak INTEGER, joint TEXT, "
-            f"{', '.join(columns)}, value REAL, ended_s REAL, saturated INTEGER)"
+            "CREATE TABLE reading (i INTEGER PRIMARY KEY, peak INTEGER, joint TEXT, mode TEXT, "
+            f"{', '.join(columns)}, value REAL, started_s REAL, ended_s REAL, saturated INTEGER)"
         )
         rows = [
-            (i, readings.peak[i], readings.joint[i],
+            (i, readings.peak[i], readings.joint[i], readings.mode[i],
              *(v for pair in zip(readings.commanded[i], readings.read_back[i], strict=True)
                for v in pair),
-             readings.value[i], readings.ended_s[i], int(readings.saturated[i]))
+             readings.value[i], readings.started_s[i], readings.ended_s[i],
+             int(readings.saturated[i]))
             for i in range(len(readings.value))
         ]  # fmt: skip
-        marks = ", ".join("?" * (6 + 2 * len(axes)))
+        marks = ", ".join("?" * (8 + 2 * len(axes)))
         db.executemany(f"INSERT INTO reading VALUES ({marks})", rows)
     db.close()
 
@@ -313,7 +465,8 @@ def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
 
 
 __all__ = [
-    "CHECK", "PEAK_SIGMA_DEG", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan",
-    "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
-    "verdict", "write_readings",
+    "CHECK", "FLY", "FLY_BACKENDS", "MARGIN_TICKS", "PEAK_SIGMA_DEG", "STOP_AND_GO",
+    "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan", "fly_cross",
+    "fly_sweep", "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
+    "scan_mode", "verdict", "write_readings",
 ]  # fmt: skip
