@@ -64,10 +64,10 @@ from gonio.reconstruct.methods import DEFAULT_METHOD, reconstruction
 from gonio.reconstruct.truth import truth_from_spec
 from gonio.rig import Rig
 from gonio.rig.alignment_file import AlignmentFile, load_alignment
-from gonio.rig.alignment_fit import parameters
+from gonio.rig.alignment_fit import miss, parameters
 from gonio.rig.alignment_spec import AlignmentSpec
 from gonio.types import FloatArray
-from gonio.workflows.align import parameter_vector
+from gonio.workflows.align import ScanSettings, nominal_poses, parameter_vector, reachable
 from gonio.workflows.simulate import simulate_plan
 from sim.scene import Scene, load_scene
 
@@ -161,6 +161,32 @@ def in_units(names: tuple[str, ...], values: FloatArray) -> FloatArray:
     return np.where(np.array([n == "height_mm" for n in names]), values, np.degrees(values))
 
 
+def peak_offsets(rig: Rig, truth: AlignmentSpec) -> FloatArray:
+    """(M, 2) (°): where each mirror peak of the default scan lies under ``truth``, from
+    its scan's centre, in detector elevation and azimuth (the scanned joints): the zero
+    of the first-order miss (`gonio.rig.alignment_fit.miss`) by Newton steps, the light
+    and the stage where the centre puts them."""
+    settings = ScanSettings()
+    centres = nominal_poses(rig, settings)
+    centres = centres[reachable(rig, centres, settings)]
+    alignment = truth.alignment(rig.axes)
+    scanned = [rig.axes.index("detector_elevation"), rig.axes.index("detector_azimuth")]
+
+    def missed(delta: FloatArray) -> FloatArray:
+        poses = centres.copy()
+        poses[:, scanned] += delta
+        return miss(rig, poses, alignment)
+
+    delta, step = np.zeros((len(centres), 2)), 1e-6
+    for _ in range(8):
+        jac = np.stack(
+            [(missed(delta + step * e) - missed(delta - step * e)) / (2 * step) for e in np.eye(2)],
+            axis=-1,
+        )
+        delta = delta - np.linalg.solve(jac, missed(delta)[..., None])[..., 0]
+    return np.asarray(np.degrees(delta), dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class Aligned:
     """One `gonio align`: the file, where it is, the scan's instrument and wall time (s)."""
@@ -180,17 +206,17 @@ def mirror_scene(base: dict[str, Any], truth: AlignmentSpec, folder: Path) -> Pa
     return path
 
 
-def align(rig_path: Path, scene: Path, seed: int, folder: Path) -> Aligned:
-    """`gonio align` in-process on the simulator; `RuntimeError` unless it succeeds."""
+def align(rig_path: Path, scene: Path, seed: int, folder: Path) -> Aligned | str:
+    """`gonio align` in-process on the simulator; the line it refused with, if it did."""
     output = folder / f"{rig_path.stem}.alignment.yaml"
-    out = io.StringIO()
+    out, err = io.StringIO(), io.StringIO()
     started = time.perf_counter()
-    with contextlib.redirect_stdout(out):
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = gonio(["align", str(rig_path), "--scene", str(scene), "-o", str(output),
                       "--overwrite", "--seed", str(seed)])  # fmt: skip
     wall = time.perf_counter() - started
     if code != 0:
-        raise RuntimeError(f"gonio align exited {code}: {out.getvalue()}")
+        return err.getvalue().strip().removeprefix("gonio: error: ") or f"exit {code}"
     sidecar = output.with_name(f"{output.stem}.scan.sqlite")
     with contextlib.closing(sqlite3.connect(sidecar)) as db:
         span = db.execute("SELECT MAX(ended_s) - MIN(ended_s) FROM reading").fetchone()[0]
@@ -227,51 +253,99 @@ def recover(rig: Rig, truth: AlignmentSpec, aligned: Aligned, poses: FloatArray)
     )
 
 
-def recovery_tables(rig: Rig, results: list[Recovery]) -> None:
+@dataclass(frozen=True)
+class Draw:
+    """One draw: its truth, where its peaks lie from their scans' centres ((M, 2) °,
+    `peak_offsets`), and the recovery, or the line `gonio align` refused with."""
+
+    truth: AlignmentSpec
+    offsets: FloatArray
+    outcome: Recovery | str
+
+
+def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
     """The per-draw table, then the per-parameter one and the worst case."""
+    half = ScanSettings().coarse_half_deg
     print("| draw | determined | χ²/dof | direction error max (°) | p95 (°) | "
-          "with no alignment: max (°) | instrument time (min) | wall (s) |")  # fmt: skip
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    for i, r in enumerate(results):
+          "with no alignment: max (°) | peaks' largest offset: elevation, azimuth (°) | "
+          "instrument time (min) | wall (s) |")  # fmt: skip
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for i, d in enumerate(draws):
+        el, az = np.abs(d.offsets).max(axis=0)
+        where = f"{el:.2f}, {az:.2f}"
+        r = d.outcome
+        if isinstance(r, str):
+            print(f"| {i} | refused: {r} | | | | | {where} | | |")
+            continue
         fit = r.aligned.file.fit
         assert fit is not None
-        d = r.directions
         print(
             f"| {i} | {int(r.determined.sum())} | {fit.chi2 / max(fit.dof, 1):.3g} | "
-            f"{d.max():.4f} | {np.percentile(d, 95):.4f} | {r.unaligned.max():.3f} | "
-            f"{r.aligned.instrument_s / 60:.1f} | {r.aligned.wall_s:.1f} |"
+            f"{r.directions.max():.4f} | {np.percentile(r.directions, 95):.4f} | "
+            f"{r.unaligned.max():.3f} | {where} | {r.aligned.instrument_s / 60:.1f} | "
+            f"{r.aligned.wall_s:.1f} |"
         )
+    done = [(i, d.outcome) for i, d in enumerate(draws) if not isinstance(d.outcome, str)]
+    refused = [i for i, d in enumerate(draws) if isinstance(d.outcome, str)]
+    if refused:
+        far = [i for i in refused if np.abs(draws[i].offsets).max() > half]
+        print(
+            f"\n{len(refused)} of {len(draws)} draws refused (draws "
+            f"{', '.join(map(str, refused))}); "
+            f"in {len(far)} of them a peak lies beyond the coarse scan's ±{half:g}° of a joint "
+            "from its centre."
+        )
+    if not done:
+        return
     names = parameters(rig)
-    print()
     print(
-        f"| parameter | determined in | median error | max error | within {WITHIN_DEG}° "
+        f"\n| parameter | determined in | median error | max error | within {WITHIN_DEG}° "
         f"({WITHIN_MM} mm) | median error / SE | max / SE | within {WITHIN_SE:g} SE |"
     )
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     worst = (0.0, "", -1)
     for k, name in enumerate(names):
-        rows = [j for j, r in enumerate(results) if r.determined[k]]
+        rows = [(i, r) for i, r in done if r.determined[k]]
         if not rows:
-            print(f"| {name} | 0 of {len(results)} | — | — | — | — | — | — |")
+            print(f"| {name} | 0 of {len(done)} | — | — | — | — | — | — |")
             continue
-        err = np.array([results[j].error[k] for j in rows])
-        z = err / np.array([results[j].se[k] for j in rows])
+        err = np.array([r.error[k] for _, r in rows])
+        z = err / np.array([r.se[k] for _, r in rows])
         bound = WITHIN_MM if name == "height_mm" else WITHIN_DEG
         unit = " mm" if name == "height_mm" else "°"
         print(
-            f"| {name} | {len(rows)} of {len(results)} | {np.median(err):.4f}{unit} | "
+            f"| {name} | {len(rows)} of {len(done)} | {np.median(err):.4f}{unit} | "
             f"{err.max():.4f}{unit} | {np.mean(err <= bound):.0%} | {np.median(z):.2f} | "
             f"{z.max():.2f} | {np.mean(z <= WITHIN_SE):.0%} |"
         )
-        i = int(np.argmax(err / bound))
-        if err[i] / bound > worst[0]:
-            worst = (float(err[i] / bound), f"{name} {err[i]:.4f}{unit}", rows[i])
-    d = np.stack([r.directions for r in results])
+        j = int(np.argmax(err / bound))
+        if err[j] / bound > worst[0]:
+            worst = (float(err[j] / bound), f"{name} {err[j]:.4f}{unit}", rows[j][0])
+    d = np.stack([r.directions for _, r in done])
+    chi = np.array([r.aligned.file.fit.chi2 / max(r.aligned.file.fit.dof, 1) for _, r in done
+                    if r.aligned.file.fit is not None])  # fmt: skip
     print(
         f"\nWorst determined parameter: {worst[1]} (draw {worst[2]}). Direction error over "
-        f"all draws and poses: max {d.max():.4f}° (ωi {d[..., 0].max():.4f}°, ωo "
-        f"{d[..., 1].max():.4f}°), p95 {np.percentile(d, 95):.4f}°."
+        f"the {len(done)} fitted draws and every pose: max {d.max():.4f}° (ωi "
+        f"{d[..., 0].max():.4f}°, ωo {d[..., 1].max():.4f}°), p95 {np.percentile(d, 95):.4f}°. "
+        f"Median χ²/dof {np.median(chi):.3g}: the peaks scatter √(χ²/dof) = "
+        f"{np.sqrt(np.median(chi)):.2f} times the location error the fit assumes."
     )
+
+
+def recoveries(
+    rig: Rig, rig_path: Path, scene: dict[str, Any], truths: list[AlignmentSpec],
+    poses: FloatArray, folder: Path,
+) -> list[Draw]:  # fmt: skip
+    """`gonio align` of ``rig_path`` in the mirror made of ``scene``, for each truth."""
+    out = []
+    for i, truth in enumerate(truths):
+        where = folder / f"{rig_path.stem}-{i}"
+        where.mkdir()
+        aligned = align(rig_path, mirror_scene(scene, truth, where), 1 + i, where)
+        outcome = aligned if isinstance(aligned, str) else recover(rig, truth, aligned, poses)
+        out.append(Draw(truth, peak_offsets(rig, truth), outcome))
+    return out
 
 
 @dataclass(frozen=True)
@@ -374,39 +448,32 @@ def main() -> None:
     base = yaml.safe_load(GOLD.read_text())
     gold = load_scene(GOLD, arch)
     pairs = testset.draw(arch, isotropic=True)
-    truths = [draw(rng, arch.axes) for _ in range(max(args.draws, args.paired))]
-    results: list[Recovery] = []
-    rows: list[dict[str, Scores]] = []
+    truths = [draw(rng, arch.axes) for _ in range(args.draws)]
     with tempfile.TemporaryDirectory() as tmp:
-        for i, truth in enumerate(truths[: args.draws]):
-            folder = Path(tmp) / f"draw{i}"
-            folder.mkdir()
-            aligned = align(ARCH, mirror_scene(base, truth, folder), 1 + i, folder)
-            results.append(recover(arch, truth, aligned, poses))
-            if i < args.paired:
-                rows.append(paired(plain, gold, truth, aligned, 100 + i, folder, pairs))
+        draws = recoveries(arch, ARCH, base, truths, poses, Path(tmp))
         print(f"\n== Recovery on the arch rig: {args.draws} draws\n")
-        recovery_tables(arch, results)
+        recovery_tables(arch, draws)
+        rows: list[dict[str, Scores]] = []
+        for i, d in enumerate(draws):
+            if isinstance(d.outcome, Recovery) and len(rows) < args.paired:
+                folder = Path(tmp) / f"paired-{i}"
+                folder.mkdir()
+                rows.append(paired(plain, gold, d.truth, d.outcome.aligned, 100 + i, folder, pairs))
         print(f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
               f"the quick plan ({len(plain)} targets)\n")  # fmt: skip
         brdf_table(rows)
         point = Rig.from_yaml(POINT)
         lamp = {**base, "source": {"intensity_w_sr": POINT_INTENSITY}}
-        spots: list[Recovery] = []
         seen = poses[point.pose_reasons(poses)[1]]  # the plan's poses the point rig measures
-        for i, truth in enumerate(truths[: args.point_draws]):
-            folder = Path(tmp) / f"point{i}"
-            folder.mkdir()
-            aligned = align(POINT, mirror_scene(lamp, truth, folder), 1 + i, folder)
-            spots.append(recover(point, truth, aligned, seen))
+        spots = recoveries(point, POINT, lamp, truths[: args.point_draws], seen, Path(tmp))
         print(f"\n== Recovery on the point-source rig: {args.point_draws} draws, the "
               f"directions at the {len(seen)} of the plan's poses it measures\n")  # fmt: skip
         recovery_tables(point, spots)
-        held = [s.aligned.file.fit for s in spots]
+        fits = [d.outcome.aligned.file.fit for d in spots if isinstance(d.outcome, Recovery)]
         print(
             "\nThe height is determined in "
-            f"{sum('height_mm' in f.parameters for f in held if f is not None)} of "
-            f"{len(held)} point-source draws."
+            f"{sum('height_mm' in f.parameters for f in fits if f is not None)} of "
+            f"{len(fits)} fitted point-source draws."
         )
 
 

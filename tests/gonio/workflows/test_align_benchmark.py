@@ -109,3 +109,17 @@ def test_the_truth_is_compared_in_the_estimates_gauge(bench: ModuleType, rig: Ri
     assert math.degrees(values["zero_offset.detector_azimuth"]) == pytest.approx(-0.4)
     assert math.degrees(values["tilt_x"]) == pytest.approx(0.5 * math.cos(math.radians(40.2)))
     assert math.degrees(values["tilt_y"]) == pytest.approx(0.5 * math.sin(math.radians(40.2)))
+
+
+def test_the_peaks_offsets_are_where_the_detector_must_be_commanded(
+    bench: ModuleType, rig: Rig
+) -> None:
+    none = bench.peak_offsets(rig, AlignmentSpec())
+    assert none.shape[1] == 2 and len(none) >= 10 and np.allclose(none, 0.0, atol=1e-12)
+    turned = bench.peak_offsets(rig, AlignmentSpec(zero_offset_deg={"detector_azimuth": 0.5}))
+    assert np.allclose(turned, [0.0, -0.5], atol=1e-9)  # commanded back by the offset
+    lifted = bench.peak_offsets(rig, AlignmentSpec(zero_offset_deg={"detector_elevation": 0.5}))
+    assert np.allclose(lifted, [-0.5, 0.0], atol=1e-9)
+    # a turn across the plane of incidence needs 1 / sin θo of azimuth
+    tilted = bench.peak_offsets(rig, AlignmentSpec(detector_pointing_deg=(0.5, 0.0)))
+    assert np.abs(tilted[:, 1]).max() > 0.5 / math.sin(math.radians(25.0))
