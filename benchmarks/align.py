@@ -265,7 +265,8 @@ class Draw:
 
 def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
     """The per-draw table, then the per-parameter one and the worst case."""
-    half = ScanSettings().coarse_half_deg
+    settings = ScanSettings()
+    half, edge = settings.coarse_half_deg, settings.coarse_half_deg - settings.coarse_step_deg / 2
     print("| draw | determined | χ²/dof | direction error max (°) | p95 (°) | "
           "with no alignment: max (°) | peaks' largest offset: elevation, azimuth (°) | "
           "instrument time (min) | wall (s) |")  # fmt: skip
@@ -288,12 +289,12 @@ def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
     done = [(i, d.outcome) for i, d in enumerate(draws) if not isinstance(d.outcome, str)]
     refused = [i for i, d in enumerate(draws) if isinstance(d.outcome, str)]
     if refused:
-        far = [i for i in refused if np.abs(draws[i].offsets).max() > half]
+        far = [i for i in refused if np.abs(draws[i].offsets).max() > edge]
         print(
             f"\n{len(refused)} of {len(draws)} draws refused (draws "
             f"{', '.join(map(str, refused))}); "
-            f"in {len(far)} of them a peak lies beyond the coarse scan's ±{half:g}° of a joint "
-            "from its centre."
+            f"in {len(far)} of them a peak lies nearer the coarse scan's last point (±{half:g}°) "
+            f"than the one before it (beyond {edge:g}° from its centre)."
         )
     if not done:
         return
@@ -380,11 +381,11 @@ def with_misalignment(scene: Scene, truth: AlignmentSpec | None) -> Scene:
 
 
 def paired(
-    plain: Plan, gold: Scene, truth: AlignmentSpec, aligned: Aligned, seed: int, folder: Path,
+    plain: Plan, gold: Scene, truth: AlignmentSpec, aligned: Aligned, seed: int,
     pairs: testset.TestSet,
 ) -> dict[str, Scores]:  # fmt: skip
     """(a), (b), (c) and (c′) of one draw, every run with the noise ``seed``."""
-    rig_file = folder / ARCH.name
+    rig_file = aligned.path.parent / ARCH.name  # beside the alignment file it names
     rig_file.write_text(f"{ARCH.read_text()}\nalignment: {aligned.path.name}\n")
     with_file = load_plan_source(PLAN, rig_file).build()
     misaligned = with_misalignment(gold, truth)
@@ -456,9 +457,7 @@ def main() -> None:
         rows: list[dict[str, Scores]] = []
         for i, d in enumerate(draws):
             if isinstance(d.outcome, Recovery) and len(rows) < args.paired:
-                folder = Path(tmp) / f"paired-{i}"
-                folder.mkdir()
-                rows.append(paired(plain, gold, d.truth, d.outcome.aligned, 100 + i, folder, pairs))
+                rows.append(paired(plain, gold, d.truth, d.outcome.aligned, 100 + i, pairs))
         print(f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
               f"the quick plan ({len(plain)} targets)\n")  # fmt: skip
         brdf_table(rows)
