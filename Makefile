@@ -109,6 +109,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/export.py
 	$(BIN)/python benchmarks/point_source.py
 	$(BIN)/python benchmarks/misalignment.py
+	$(BIN)/python benchmarks/align.py
 	$(BIN)/python benchmarks/utia.py
 	$(BIN)/python benchmarks/rgl.py
 	$(BIN)/python benchmarks/plots.py
