@@ -64,10 +64,10 @@ from gonio.reconstruct.methods import DEFAULT_METHOD, reconstruction
 from gonio.reconstruct.truth import truth_from_spec
 from gonio.rig import Rig
 from gonio.rig.alignment_file import AlignmentFile, load_alignment
-from gonio.rig.alignment_fit import miss, parameters
+from gonio.rig.alignment_fit import miss, parameters, vector
 from gonio.rig.alignment_spec import AlignmentSpec
 from gonio.types import FloatArray
-from gonio.workflows.align import ScanSettings, nominal_poses, parameter_vector, reachable
+from gonio.workflows.align import ScanSettings, nominal_poses, reachable
 from gonio.workflows.simulate import simulate_plan
 from sim.scene import Scene, load_scene
 
@@ -153,7 +153,7 @@ def truth_vector(rig: Rig, truth: AlignmentSpec, estimate: AlignmentSpec) -> Flo
     mm) in the estimate's gauge: its stage zero offset the estimate's."""
     stage = stage_axis(rig)
     same = gauged(truth, stage, estimate.zero_offset_deg.get(stage, 0.0))
-    return parameter_vector(rig, AlignmentFile(alignment=same))[0]
+    return vector(rig, same.alignment(rig.axes))
 
 
 def in_units(names: tuple[str, ...], values: FloatArray) -> FloatArray:
@@ -240,7 +240,10 @@ class Recovery:
 def recover(rig: Rig, truth: AlignmentSpec, aligned: Aligned, poses: FloatArray) -> Recovery:
     names = parameters(rig)
     assert aligned.file.fit is not None
-    values, errors = parameter_vector(rig, aligned.file)
+    values = vector(rig, aligned.file.alignment.alignment(rig.axes))
+    errors = np.zeros(len(names))  # rad (mm), 0 where not determined
+    for name, fitted in aligned.file.fit.parameters.items():
+        errors[names.index(name)] = fitted.error * (1.0 if name == "height_mm" else np.pi / 180)
     true = truth_vector(rig, truth, aligned.file.alignment)
     determined = np.array([n in aligned.file.fit.parameters for n in names])
     return Recovery(
