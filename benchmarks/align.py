@@ -461,9 +461,10 @@ def main() -> None:
         for i, d in enumerate(draws):
             if isinstance(d.outcome, Recovery) and len(rows) < args.paired:
                 rows.append(paired(plain, gold, d.truth, d.outcome.aligned, 100 + i, pairs))
-        print(f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
-              f"the quick plan ({len(plain)} targets)\n")  # fmt: skip
-        brdf_table(rows)
+        if rows:
+            print(f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
+                  f"the quick plan ({len(plain)} targets)\n")  # fmt: skip
+            brdf_table(rows)
         point = Rig.from_yaml(POINT)
         lamp = {**base, "source": {"intensity_w_sr": POINT_INTENSITY}}
         seen = poses[point.pose_reasons(poses)[1]]  # the plan's poses the point rig measures

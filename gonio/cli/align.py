@@ -73,7 +73,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument(
         "--stop-and-go", action="store_true",
         help="stop at each angle of a cross scan (move, settle, read) even on the simulated "
-        "rig whose detector streams (default there: fly scans, 2.2 min against 6.2 on the "
+        "rig whose detector streams (default there: fly scans, 2.8 min against 7.3 on the "
         "arch rig)",
     )  # fmt: skip
     p.add_argument("--seed", type=arguments.seed, help="the scan's seed (default: the scene's)")
@@ -165,7 +165,7 @@ def cmd_align(args: argparse.Namespace) -> int:
     if made.fit.undetermined:
         print("undetermined (the least-norm share of what they do together is kept):")
         for name, hint in made.fit.undetermined.items():
-            print(f"  {name:<32} needs {hint}")
+            print(f"  {name:<32} {hint}")
     print(
         f"residuals: rms {made.fit.residual_rms_deg:.4f}°, max {made.fit.residual_max_deg:.4f}°"
         f"; χ² {made.fit.chi2:.3g} for {made.fit.dof} degrees of freedom"

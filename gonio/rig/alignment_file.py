@@ -72,7 +72,7 @@ class FitRecord(Strict):
     )
     undetermined: dict[str, str] = Field(
         default_factory=dict,
-        description="Each parameter the scan could not determine, with what would.",
+        description="Each parameter the scan could not determine, with why and what would.",
     )
 
     @model_validator(mode="after")

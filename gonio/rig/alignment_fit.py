@@ -20,8 +20,8 @@ undetermined. The fit moves only along the determined combinations (an undetermi
 one stays at no error: the least-norm solution, so two parameters that act alike, such
 as an axis's zero offset and a pointing error about that axis, share what they do
 together). A parameter with more than `SHARE` of its unit vector outside them is
-reported as undetermined (no standard error), named with what would determine it
-(`HINTS`).
+reported as undetermined (no standard error), named with why and what would determine
+it (`gonio.rig.alignment_hints`).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from gonio.errors import GonioError
+from gonio.rig import alignment_hints
 from gonio.rig.alignment import Alignment
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
@@ -56,19 +57,6 @@ def parameters(rig: Rig) -> tuple[str, ...]:
         "tilt_x", "tilt_y", "height_mm",
         "light_pointing_x", "light_pointing_y", "detector_pointing_x", "detector_pointing_y",
     )  # fmt: skip
-
-
-#: What determines each kind of parameter when a scan does not (by name prefix).
-HINTS = {
-    "zero_offset.sample_rotation": "an anisotropic reference (a grating, a brushed "
-    "sample): a mirror looks the same at every turn of the stage",
-    "zero_offset": "peaks at more poses of that axis (light elevations, detector azimuths)",
-    "tilt": "the same light poses at three or more sample rotations",
-    "height_mm": "a point source, or a camera on the spot: with a collimated beam and a "
-    "distant detector the height moves no direction",
-    "light_pointing": "peaks over a wider range of light elevations",
-    "detector_pointing": "peaks over a wider range of detector azimuths",
-}
 
 
 def as_alignment(rig: Rig, p: FloatArray) -> Alignment:
@@ -187,11 +175,8 @@ def fit(rig: Rig, angles: FloatArray, sigma_rad: FloatArray) -> AlignmentFit:
     birge = max(1.0, float(r @ r) / dof) if dof > 0 else 1.0
     covariance = birge * (carry @ np.linalg.pinv(jac.T @ jac) @ carry.T)
     errors = np.where(determined, np.sqrt(np.diag(covariance)), np.nan)
-    hints = {
-        name: next(h for prefix, h in HINTS.items() if name.startswith(prefix))
-        for name, ok in zip(names, determined, strict=True)
-        if not ok
-    }
+    undetermined = [name for name, ok in zip(names, determined, strict=True) if not ok]
+    hints = alignment_hints.hints(rig, names, undetermined, lambda p: as_alignment(rig, p))
     return AlignmentFit(
         names=names,
         values=values,
@@ -276,6 +261,6 @@ def _directions(
 
 
 __all__ = [
-    "HINTS", "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_at",
+    "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_at",
     "peak_offsets", "stated_covariance", "vector",
 ]  # fmt: skip

@@ -21,6 +21,7 @@ joint-space scans, so the scan is not a run.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sqlite3
 import time
@@ -60,6 +61,15 @@ class ScanSettings:
     stream_rate_hz: float = 100.0
     fly_overshoot_deg: float = 0.5
 
+    def widened(self, factor: float) -> ScanSettings:
+        """These settings with the scans' widths and steps times ``factor``."""
+        return dataclasses.replace(
+            self,
+            coarse_half_deg=self.coarse_half_deg * factor,
+            coarse_step_deg=self.coarse_step_deg * factor,
+            fine_half_deg=self.fine_half_deg * factor,
+        )
+
 
 #: The settings of ``--check``: a few peaks, at one sample rotation more than the fit's.
 CHECK = ScanSettings(
@@ -67,8 +77,13 @@ CHECK = ScanSettings(
 )
 #: A peak's location error (°): the fine scan's step over the log-parabola's vertex.
 PEAK_SIGMA_DEG = 0.005
-#: The joints a cross scan moves.
-SCANNED = ("detector_elevation", "detector_azimuth")
+#: The joints a cross scan moves, per rig type: the detector across the peak in the
+#: plane of incidence, then out of it (the in-plane rig's detector moves in the plane
+#: only; tilting the sample moves the reflection out of it).
+SCANNED = {
+    "arch": ("detector_elevation", "detector_azimuth"),
+    "in_plane": ("detector_arm", "sample_tilt"),
+}
 #: How the readings are taken: stopping at each angle, or streamed while sweeping.
 STOP_AND_GO, FLY = "stop_and_go", "fly"
 #: The backends whose scans `run_scan` flies by default: the simulated one. On the
@@ -78,6 +93,10 @@ STOP_AND_GO, FLY = "stop_and_go", "fly"
 #: to 0.025°, above the 0.005° a peak's location is held to (docs/how-to/align.md).
 #: `scan` flies wherever the detector streams.
 FLY_BACKENDS = ("simulated",)
+#: The widest a scan of a joint is made per degree of arc it sweeps the detector over
+#: (`arc_factor`: the azimuth at θo ≥ 10°), and the step of its central difference (rad).
+MAX_ARC_FACTOR = 1.0 / math.sin(math.radians(10.0))
+ARC_STEP = 1e-6
 #: Encoder ticks a fly sweep's stop lies at least past its readings (its ramp, else
 #: constant velocity): a bus counts a move arrived within a few ticks of its goal, and
 #: the sweep stops polling then.
@@ -134,6 +153,18 @@ class FlySweep:
     beyond_rad: float
 
 
+def arc_factor(rig: Rig, center: FloatArray, joint: str) -> float:
+    """How many radians of ``joint`` move the detector's direction by one radian of arc
+    at the pose ``center`` (A,): 1 for the elevation, 1/sin θo for the azimuth (a scan
+    of it crosses the peak that much slower), at most `MAX_ARC_FACTOR`."""
+    step = np.zeros(len(rig.axes))
+    step[rig.axes.index(joint)] = ARC_STEP
+    center = np.asarray(center, dtype=np.float64)
+    moved = rig.forward(center + step)[1] - rig.forward(center - step)[1]
+    rate = float(np.linalg.norm(moved)) / (2.0 * ARC_STEP)
+    return min(MAX_ARC_FACTOR, 1.0 / max(rate, 1.0 / MAX_ARC_FACTOR))
+
+
 def fly_sweep(rig: Rig, settings: ScanSettings, joint: str, fine: bool) -> FlySweep:
     """How a flown coarse or ``fine`` cross scan of ``joint`` sweeps
     (`gonio.workflows.align_fly`): its readings spaced as the stop-and-go scan's steps."""
@@ -156,14 +187,15 @@ def reachable(
     by the fine scan's half width and, flown, by the sweeps' travel beyond the scans
     (ramps included), is inside the limits and outside the keep-out boxes."""
     ok = np.ones(len(centers), dtype=np.bool_)
-    for joint in SCANNED:
-        half = math.radians(settings.coarse_half_deg + settings.fine_half_deg)
-        points = 41
-        if mode == FLY:
-            coarse, fine = (fly_sweep(rig, settings, joint, f).beyond_rad for f in (False, True))
-            half = max(half + fine, math.radians(settings.coarse_half_deg) + coarse)
-            points = max(points, math.ceil(2.0 * half / align_fly.CHECK_STEP) + 1)
+    for joint in SCANNED[rig.spec.type]:
         for i, center in enumerate(centers):
+            wide = settings.widened(arc_factor(rig, center, joint))
+            half = math.radians(wide.coarse_half_deg + wide.fine_half_deg)
+            points = 41
+            if mode == FLY:
+                coarse, fine = (fly_sweep(rig, wide, joint, f).beyond_rad for f in (False, True))
+                half = max(half + fine, math.radians(wide.coarse_half_deg) + coarse)
+                points = max(points, math.ceil(2.0 * half / align_fly.CHECK_STEP) + 1)
             poses = cross_scan(rig, center, joint, np.linspace(-half, half, points))
             ok[i] &= bool(np.all(rig.pose_reasons(poses)[1]))
     return ok
@@ -292,18 +324,22 @@ def locate(
 ) -> FloatArray:
     """The pose (A,) of the mirror's peak near ``center``, as the motors read it back:
     a coarse cross scan, then a fine one (elevation, then azimuth, each about the
-    other's latest peak), the peak located in the read-back angles (a motor stands on
+    other's latest peak; each joint's widths and steps the settings' degrees of arc,
+    `arc_factor`), the peak located in the read-back angles (a motor stands on
     its ticks, not where it was asked), the joints not scanned where they were read.
     Stop and go, the fine step is at least one tick of the scanned motor; flown
     (`fly_cross`), the readings are spaced as the stop-and-go steps would be."""
     found = np.asarray(center, dtype=np.float64).copy()
     ticks = tick_rad(rig)
-    still = [i for i, name in enumerate(rig.axes) if name not in SCANNED]
-    for fine, steps in ((False, coarse_offsets(settings)), (True, fine_offsets(settings))):
-        for joint in SCANNED:
+    scanned = SCANNED[rig.spec.type]
+    still = [i for i, name in enumerate(rig.axes) if name not in scanned]
+    wide = {joint: settings.widened(arc_factor(rig, center, joint)) for joint in scanned}
+    for fine in (False, True):
+        for joint in scanned:
             j = rig.axes.index(joint)
+            steps = fine_offsets(wide[joint]) if fine else coarse_offsets(wide[joint])
             if mode == FLY:
-                read, found[j] = fly_cross(devices, rig, found, joint, settings, readings,
+                read, found[j] = fly_cross(devices, rig, found, joint, wide[joint], readings,
                                            peak, fine)  # fmt: skip
             else:
                 if len(steps) > 1 and steps[1] - steps[0] < ticks[j]:

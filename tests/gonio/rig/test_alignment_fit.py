@@ -13,7 +13,8 @@ from scipy.optimize import least_squares
 
 from gonio.errors import GonioError
 from gonio.rig.alignment import Alignment
-from gonio.rig.alignment_fit import fit, miss, parameters
+from gonio.rig.alignment_fit import as_alignment, fit, miss, parameters
+from gonio.rig.alignment_hints import hints
 from gonio.rig.model import Rig
 from tests.conftest import CONFIGS
 
@@ -98,10 +99,27 @@ def test_what_a_collimated_scan_cannot_see_is_said_not_set() -> None:
     result = fit(RIG, peaks(draw(rng), (0.0, 120.0, 240.0), rng), SIGMA)
     height = result.names.index("height_mm")
     assert not result.determined[height] and math.isnan(result.errors[height])
-    assert "point source" in result.hints["height_mm"]
+    assert result.hints["height_mm"] == "moves no direction this rig measures: nothing to correct"
     assert set(result.hints) == {
         n for n, d in zip(result.names, result.determined, strict=True) if not d
     }
+    # aliases are named as such, whatever the scan; what a mirror cannot see, with what can
+    assert result.hints["light_pointing_y"] == (
+        "no scan separates it from zero_offset.light_elevation: it moves every measured "
+        "direction as that does (what they do together is fitted, and is what the "
+        "directions need)"
+    )
+    assert "anisotropic reference" in result.hints["zero_offset.sample_rotation"]
+
+
+def test_a_point_sources_height_is_no_alias() -> None:
+    """With a point source the height moves the light's direction by h sin θi / r: not
+    as any other parameter does, so a scan over a wider range of incidences would
+    determine it."""
+    point = Rig.from_yaml(CONFIGS / "rigs" / "arch_point.yaml")
+    names = parameters(point)
+    said = hints(point, names, ["height_mm"], lambda p: as_alignment(point, p))
+    assert said["height_mm"].startswith("needs peaks over a wider range of incidences")
 
 
 def test_too_few_or_bad_peaks_are_one_line() -> None:
