@@ -36,6 +36,9 @@ class EmulatedInstrument(_PtyServer):
     """
 
     identity = "gonio-sim instrument"
+    #: The pty's slave end is not held: until a host opens it no process has it open
+    #: (``fuser``/``lsof`` name none), as a real instrument's port.
+    _hold_slave = False
     #: What ends its answers by default.
     terminator = "\n"
 

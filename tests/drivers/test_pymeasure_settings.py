@@ -10,6 +10,7 @@ per instrument for the module."""
 from __future__ import annotations
 
 import contextlib
+import os
 import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -185,3 +186,35 @@ def test_every_property_of_the_class_is_answered(
     finally:
         boundary.close(instrument)
     assert outcomes == DEFECTS.get(name, {})
+
+
+def _users(path: str) -> list[int]:
+    """The processes holding ``path`` open (as ``fuser`` finds them: /proc/*/fd)."""
+    users = []
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        with contextlib.suppress(OSError):
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                with contextlib.suppress(OSError):
+                    if os.readlink(f"/proc/{pid}/fd/{fd}") == path:
+                        users.append(int(pid))
+                        break
+    return users
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="needs /proc")
+def test_the_emulated_port_has_no_user_until_a_host_opens_it(
+    emulator: Callable[[str], EmulatedInstrument],
+) -> None:
+    """The emulator holds only the pty's master: before a host opens the port and
+    after it closes it no process has the port open, and a host opening it again is
+    answered."""
+    device = emulator("pm100usb")
+    assert _users(device.path) == []
+    for _ in range(2):
+        instrument = _open(CLASSES["pm100usb"], device)
+        try:
+            assert _users(device.path) == [os.getpid()]  # the host's, pyvisa-py's fd
+            assert instrument.ask("*IDN?").strip() == device.identity
+        finally:
+            boundary.close(instrument)
+        assert _users(device.path) == []
