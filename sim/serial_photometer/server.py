@@ -60,6 +60,12 @@ class _PtyServer:
     _path: str | None
     _error: BaseException | None
     _link_latency_s: float
+    #: Whether the server keeps the pty's slave end open while it serves. Held, the
+    #: master never reads EIO between hosts, but tools that look for a port's users
+    #: (``fuser``, ``lsof``) name the server; released (Linux: the master then reads
+    #: EIO until a host opens the slave, and the server polls every 10 ms meanwhile),
+    #: the port looks free until a host opens it.
+    _hold_slave: bool = True
 
     if TYPE_CHECKING:
 
@@ -111,7 +117,11 @@ class _PtyServer:
             os.close(master)
             os.close(slave)
             raise
-        self._master, self._slave, self._wake, self._path = master, slave, wake, path
+        held: int | None = slave
+        if not self._hold_slave:
+            os.close(slave)
+            held = None
+        self._master, self._slave, self._wake, self._path = master, held, wake, path
         self._stopping.clear()
         self._thread = threading.Thread(target=self._serve, name=f"photometer {path}", daemon=True)
         self._thread.start()
@@ -181,7 +191,7 @@ class _PtyServer:
             packet = os.read(master, 4096)
         except (BlockingIOError, InterruptedError):
             return
-        except OSError:  # EIO: no host has the slave open (cannot happen while we hold it)
+        except OSError:  # EIO: no host has the slave open (never while the server holds it)
             time.sleep(0.01)
             return
         if not packet:
@@ -215,6 +225,8 @@ class _PtyServer:
             written = os.write(master, chunk)
         except (BlockingIOError, InterruptedError):
             return
+        except OSError:  # EIO: no host has the slave open; what it was owed is dropped
+            written = len(chunk)
         with self._lock:
             del self._outbuf[:written]
 

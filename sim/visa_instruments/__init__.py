@@ -2,17 +2,21 @@
 set as PyMeasure's class sends it, so that `drivers.pymeasure.detector.PyMeasureDetector`
 drives the unmodified PyMeasure class over PyVISA's pure-Python backend (resource
 ``ASRL/dev/pts/N::INSTR``) with no hardware: the SR830 and SR860 lock-in amplifiers
-(`sim.visa_instruments.sr830`), the PM100USB power meter
+(`sim.visa_instruments.sr830`, `sim.visa_instruments.sr860`), the PM100USB power meter
 (`sim.visa_instruments.pm100usb`), the 6517B electrometer and the 2000 multimeter
 (`sim.visa_instruments.keithley`). Their readings come from a signal (in a rehearsal:
-the simulated detector chain). `EMULATORS` maps a PyMeasure class's dotted name to its
+the simulated detector chain). Each answers every query its class sends for every
+setting the class controls, stores what is set and reads it back; a command it does not
+know is refused as the instrument documents (`sim.visa_instruments.registers`), never
+answered with silence alone. `EMULATORS` maps a PyMeasure class's dotted name to its
 emulator.
 """
 
 from sim.visa_instruments.base import EmulatedInstrument, Signal
 from sim.visa_instruments.keithley import Keithley2000, Keithley6517B
 from sim.visa_instruments.pm100usb import PM100USB
-from sim.visa_instruments.sr830 import SR830, SR860
+from sim.visa_instruments.sr830 import SR830
+from sim.visa_instruments.sr860 import SR860
 
 #: The emulator of each PyMeasure class (dotted name), with the terminator of its
 #: answers (what the rig file's ``read_termination`` must say).

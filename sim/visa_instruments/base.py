@@ -1,7 +1,9 @@
 """The transport every emulated instrument shares: a pseudo-terminal served by the
 simulated photometer's thread (`sim.serial_photometer.server`), ``;``-separated
-commands, queries answered after the instrument's integration time, and the faults a
-test injects (silence, garbage, slow answers, late ones)."""
+commands, queries answered after the instrument's integration time, a refused command
+left unanswered and recorded in the instrument's event status
+(`sim.visa_instruments.registers`), and the faults a test injects (silence, garbage,
+slow answers, late ones)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from sim.serial_photometer.server import _PtyServer
+from sim.visa_instruments.registers import EventStatus, Refused
 
 #: The reading of one integration of t seconds, in the instrument's unit.
 Signal = Callable[[float], float]
@@ -33,6 +36,9 @@ class EmulatedInstrument(_PtyServer):
     """
 
     identity = "gonio-sim instrument"
+    #: The pty's slave end is not held: until a host opens it no process has it open
+    #: (``fuser``/``lsof`` name none), as a real instrument's port.
+    _hold_slave = False
     #: What ends its answers by default.
     terminator = "\n"
 
@@ -48,6 +54,7 @@ class EmulatedInstrument(_PtyServer):
         self._faults = _Faults()
         self._busy_until = 0.0
         self._commands: list[str] = []
+        self.status = EventStatus()
         self._init_pty_state()
         self._lock = threading.Lock()
 
@@ -89,8 +96,15 @@ class EmulatedInstrument(_PtyServer):
     # -- the dialect ------------------------------------------------------------------------
 
     def answer(self, command: str) -> tuple[str | None, float]:
-        """(the answer or None for a command, the integration it takes in s)."""
+        """(the answer or None for a command, the integration it takes in s); `Refused`
+        for a command the instrument does not know or a value it does not take."""
         raise NotImplementedError
+
+    @property
+    def refusals(self) -> list[tuple[int, str]]:
+        """The errors queued and not yet read (oldest first)."""
+        with self._lock:
+            return list(self.status.queue)
 
     def read_signal(self, integration_s: float) -> float:
         return float(self._signal(integration_s))
@@ -111,9 +125,12 @@ class EmulatedInstrument(_PtyServer):
             for part in parts:
                 try:
                     reply, integration_s = self.answer(part)
-                except Exception as exc:  # a bad argument: a real one beeps and goes on
+                except Refused as refused:  # unanswered, remembered as the instrument does
                     reply, integration_s = None, 0.0
-                    self._error = None if isinstance(exc, ValueError | KeyError) else exc
+                    self.status.refuse(refused)
+                except Exception as exc:  # a defect of the emulator: reported by .error
+                    reply, integration_s = None, 0.0
+                    self._error = exc
                 if reply is None:
                     continue
                 done = start + integration_s / self._speedup + faults.slow_s

@@ -34,6 +34,7 @@ INTERFACES = {
         "    kind: pymeasure\n"
         "    instrument: pymeasure.instruments.thorlabs.ThorlabsPM100USB\n"
         "    resource: USB0::0x1313::0x8072::P2000000::INSTR\n"
+        "    settings: {wavelength: 633}\n"  # as the how-to shows it
         "    full_scale: 0.05\n"
     ),
     "keithley6517b": (
