@@ -93,6 +93,8 @@ STOP_AND_GO, FLY = "stop_and_go", "fly"
 #: to 0.025°, above the 0.005° a peak's location is held to (docs/how-to/align.md).
 #: `scan` flies wherever the detector streams.
 FLY_BACKENDS = ("simulated",)
+#: The incidences `for_rig` probes: every this many degrees.
+PROBE_STEP_DEG = 5.0
 #: The widest a scan of a joint is made per degree of arc it sweeps the detector over
 #: (`arc_factor`: the azimuth at θo ≥ 10°), and the step of its central difference (rad).
 MAX_ARC_FACTOR = 1.0 / math.sin(math.radians(10.0))
@@ -118,6 +120,29 @@ def nominal_poses(rig: Rig, settings: ScanSettings) -> FloatArray:
         solution = rig.solve(wi @ turn.T, (wi * (-1.0, -1.0, 1.0)) @ turn.T)
         poses.append(solution.angles[solution.ok])
     return np.concatenate(poses).reshape(-1, len(rig.axes))
+
+
+def for_rig(rig: Rig, settings: ScanSettings, mode: str = STOP_AND_GO) -> ScanSettings:
+    """``settings`` with incidences the rig reaches: as given where at least two of them
+    are (every azimuth and stage rotation of theirs scannable, `reachable`), else the
+    lowest, the middle and the highest of the incidences every `PROBE_STEP_DEG` it
+    reaches so (a point source's rig reaches no incidence beyond its detector's view of
+    the spot): peaks over the widest range of incidences it offers."""
+
+    def reached(theta: float) -> bool:
+        one = dataclasses.replace(settings, incidences_deg=(theta,))
+        centers = nominal_poses(rig, one)
+        expected = len(settings.azimuths_deg) * len(settings.rotations_deg)
+        return len(centers) == expected and bool(np.all(reachable(rig, centers, one, mode)))
+
+    given = [t for t in settings.incidences_deg if reached(t)]
+    if len(given) >= 2:
+        return settings
+    probed = [t for t in np.arange(PROBE_STEP_DEG, 90.0, PROBE_STEP_DEG) if reached(float(t))]
+    if len(probed) < 2:
+        return settings  # the scan refuses, or fits what it reaches
+    chosen = sorted({probed[0], probed[len(probed) // 2], probed[-1]})
+    return dataclasses.replace(settings, incidences_deg=tuple(float(t) for t in chosen))
 
 
 def offsets(half_deg: float, points: int) -> FloatArray:
@@ -390,10 +415,11 @@ def scan_mode(devices: Devices, stop_and_go: bool = False) -> str:
 
 
 def scan(devices: Devices, rig: Rig, settings: ScanSettings, *, stop_and_go: bool = False) -> Scan:
-    """Locate the mirror's peaks at the reachable nominal poses of ``settings`` with the
-    opened ``devices``, flown where the detector streams unless ``stop_and_go``;
-    `GonioError` if none is reachable."""
+    """Locate the mirror's peaks at the reachable nominal poses of ``settings`` (its
+    incidences those the rig reaches, `for_rig`) with the opened ``devices``, flown where
+    the detector streams unless ``stop_and_go``; `GonioError` if none is reachable."""
     mode = scan_mode(devices, stop_and_go)
+    settings = for_rig(rig, settings, mode)
     centers = nominal_poses(rig, settings)
     centers = centers[reachable(rig, centers, settings, mode)]
     if not len(centers):
@@ -503,6 +529,6 @@ def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
 __all__ = [
     "CHECK", "FLY", "FLY_BACKENDS", "MARGIN_TICKS", "PEAK_SIGMA_DEG", "STOP_AND_GO",
     "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan", "fly_cross",
-    "fly_sweep", "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
+    "fly_sweep", "for_rig", "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
     "scan_mode", "verdict", "write_readings",
 ]  # fmt: skip

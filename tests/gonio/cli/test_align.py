@@ -133,6 +133,15 @@ def test_an_azimuth_scan_is_as_wide_in_arc_as_an_elevation_scan() -> None:
         assert align.arc_factor(rig, pose, "detector_elevation") == pytest.approx(1.0)
 
 
+def test_a_rig_that_reaches_few_incidences_is_scanned_over_those_it_does() -> None:
+    """The point-source rig sees the spot only up to θo 33.6°: of the default 20° and
+    65° it reaches one, so the scan takes the lowest, middle and highest it reaches."""
+    settings = align.ScanSettings()
+    assert align.for_rig(Rig.from_yaml(ARCH), settings) == settings
+    point = Rig.from_yaml(CONFIGS / "rigs" / "arch_point.yaml")
+    assert align.for_rig(point, settings).incidences_deg == (5.0, 20.0, 30.0)
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -165,7 +174,7 @@ def test_a_scan_that_determines_nothing_is_one_line(
     the rig reaches refuses in one line, writing nothing."""
     rig = tmp_path / "arch.yaml"
     data = yaml.safe_load(ARCH.read_text())
-    data["axes"]["light_elevation"]["max_deg"] = 10  # no incidence of the scan reachable
+    data["axes"]["light_elevation"]["max_deg"] = 3  # no incidence a scan could use
     rig.write_text(yaml.safe_dump(data), encoding="utf-8")
     scene = mirror_scene(tmp_path, None)
     before = sorted(tmp_path.iterdir())
