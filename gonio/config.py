@@ -2,14 +2,17 @@
 
 Files are parsed with PyYAML's safe loader (no object construction). Any mistake —
 unreadable file, not YAML, wrong shape, a field out of range, an unknown field — raises
-`ConfigError` whose message is one line naming the file, the line when known, the field
-path and what was expected, e.g.::
+`ConfigError` whose message is one line per problem (the first few, `SHOWN_PROBLEMS`)
+naming the file, the line when known, the field path and what was expected, e.g.::
 
     configs/plans/quick.yaml:7: sampling.counts.hbar: Input should be greater than 0 (got -3)
+
+an unknown field with the closest known one (``did you mean 'sampling'?``).
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import types
 import typing
@@ -24,10 +27,15 @@ from pydantic_core import ErrorDetails
 from gonio.errors import GonioError
 
 M = TypeVar("M", bound=BaseModel)
+#: How many of a file's problems an error names, one line each.
+SHOWN_PROBLEMS = 5
+#: How alike an unknown field's name must be to a known one to be suggested for it
+#: (`difflib`'s ratio: a letter missed or swapped in a word of six or more).
+SUGGEST_CUTOFF = 0.75
 
 
 class ConfigError(GonioError):
-    """A configuration file that cannot be used; the message is one line."""
+    """A configuration file that cannot be used; the message is one line per problem."""
 
 
 class Strict(BaseModel):
@@ -408,12 +416,93 @@ def load(
     try:
         return model.model_validate(data, context={**(context or {}), "path": path})
     except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        loc, message = located(first)
+        raise ConfigError(problems(path, data, node, model, exc)) from None
+
+
+def problems(
+    path: Path, data: Any, node: yaml.Node | None, model: type[BaseModel], exc: ValidationError
+) -> str:
+    """The first `SHOWN_PROBLEMS` of a validation's problems, one line each in the order
+    of their lines in the file (``FILE:LINE: field: message``), then how many more: an
+    unknown field with the closest known one (`known_keys`), a missing one named where its
+    mapping starts."""
+    found = []
+    for error in exc.errors(include_url=False):
+        loc, message = located(error)
         loc = untagged(data, loc)
-        line = line_of(node, loc)
+        if error["type"] == "extra_forbidden":
+            line = key_line(node, loc)
+            close = difflib.get_close_matches(
+                str(loc[-1]), known_keys(model, loc[:-1]), n=1, cutoff=SUGGEST_CUTOFF
+            )
+            message = "unknown field" + (f"; did you mean {close[0]!r}?" if close else "")
+        else:
+            line = line_of(node, loc)
         where = f"{path}:{line}" if line is not None else str(path)
-        more = exc.error_count() - 1
-        extra = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-        field = dotted(loc)
-        raise ConfigError(f"{where}: {field}: {message}{extra}") from None
+        found.append((line or 0, f"{where}: {dotted(loc)}: {message}"))
+    shown = [text for _, text in sorted(found[:SHOWN_PROBLEMS], key=lambda f: f[0])]
+    more = len(found) - len(shown)
+    if more:
+        shown.append(f"{path}: and {more} more problem{'s' if more > 1 else ''}")
+    return "\n".join(shown)
+
+
+def key_line(node: yaml.Node | None, loc: Sequence[int | str]) -> int | None:
+    """The 1-based line of the key at ``loc`` (an unknown field's own line, not its
+    value's), else as `line_of`."""
+    parent = line_of(node, loc[:-1])
+    for key in loc[:-1]:
+        if isinstance(node, yaml.MappingNode):
+            node = next((v for k, v in node.value if k.value == str(key)), None)
+        elif isinstance(node, yaml.SequenceNode) and isinstance(key, int) and key < len(node.value):
+            node = node.value[key]
+        else:
+            return parent
+    if isinstance(node, yaml.MappingNode):
+        for k, _ in node.value:
+            if k.value == str(loc[-1]):
+                return int(k.start_mark.line) + 1
+    return parent
+
+
+def known_keys(model: type[BaseModel], loc: Sequence[int | str]) -> list[str]:
+    """The field names a model accepts at the mapping ``loc`` (through nested models,
+    lists, mappings and unions: every alternative's fields)."""
+    at: list[Any] = [model]
+    for key in loc:  # a model's field, or a list's or mapping's entry
+        inner: list[Any] = []
+        for t in at:
+            if isinstance(t, type) and issubclass(t, BaseModel):
+                field = t.model_fields.get(str(key))
+                if field is not None:
+                    inner.extend(_held(field.annotation))
+            elif isinstance(t, _Entries):
+                inner.extend(_held(t.of))
+        at = inner
+    return sorted({
+        name for t in at if isinstance(t, type) and issubclass(t, BaseModel)
+        for name in t.model_fields
+    })  # fmt: skip
+
+
+class _Entries:
+    """A list's or a mapping's entries, each an ``of``."""
+
+    def __init__(self, of: Any) -> None:
+        self.of = of
+
+
+def _held(annotation: Any) -> list[Any]:
+    """What a field of this annotation holds: its models (a union's alternatives,
+    ``Annotated``'s type), or the entries of a list or mapping."""
+    origin = typing.get_origin(annotation)
+    args = typing.get_args(annotation)
+    if origin is typing.Annotated:
+        return _held(args[0])
+    if origin in (typing.Union, types.UnionType):
+        return [m for arg in args for m in _held(arg)]
+    if origin in (list, tuple, set, frozenset, Sequence):
+        return [_Entries(arg) for arg in args if arg is not Ellipsis]
+    if origin is dict:
+        return [_Entries(args[1])]
+    return [annotation]

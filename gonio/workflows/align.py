@@ -124,7 +124,7 @@ def nominal_poses(rig: Rig, settings: ScanSettings) -> FloatArray:
 
 def for_rig(rig: Rig, settings: ScanSettings, mode: str = STOP_AND_GO) -> ScanSettings:
     """``settings`` with incidences the rig reaches: as given where at least two of them
-    are (every azimuth and stage rotation of theirs scannable, `reachable`), else the
+    are, or all (every azimuth and stage rotation of theirs scannable, `reachable`), else the
     lowest, the middle and the highest of the incidences every `PROBE_STEP_DEG` it
     reaches so (a point source's rig reaches no incidence beyond its detector's view of
     the spot): peaks over the widest range of incidences it offers."""
@@ -136,7 +136,7 @@ def for_rig(rig: Rig, settings: ScanSettings, mode: str = STOP_AND_GO) -> ScanSe
         return len(centers) == expected and bool(np.all(reachable(rig, centers, one, mode)))
 
     given = [t for t in settings.incidences_deg if reached(t)]
-    if len(given) >= 2:
+    if len(given) >= 2 or len(given) == len(settings.incidences_deg):
         return settings
     probed = [t for t in np.arange(PROBE_STEP_DEG, 90.0, PROBE_STEP_DEG) if reached(float(t))]
     if len(probed) < 2:

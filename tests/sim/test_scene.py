@@ -74,7 +74,12 @@ CASES = [
         "material.alpha",
         "parameter alpha must lie in",
     ),
-    ("unknown-effect", {"effects": ["shot_noise", "lens_flare"]}, "effects.lens_flare", "Extra"),
+    (
+        "unknown-effect",
+        {"effects": ["shot_noise", "lens_flare"]},
+        "effects.lens_flare",
+        "unknown field",
+    ),
     (
         "bad-effect-parameter",
         {"effects": {"source_drift": {"amplitude": 2}}},

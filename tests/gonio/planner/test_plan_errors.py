@@ -17,6 +17,7 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.planner.files import load_plan_source
+from gonio.rig import Rig
 from tests.conftest import CONFIGS, CliResult
 
 QUICK = yaml.safe_load((CONFIGS / "plans" / "quick.yaml").read_text())
@@ -218,7 +219,7 @@ CASES: list[tuple[str, Callable[[dict[str, Any]], object], str, tuple[str, ...],
         lambda d: d.update(colour="red"),
         "colour",
         ("colour",),
-        "Extra inputs are not permitted",
+        "unknown field",
     ),
     (
         "missing-sampling",
@@ -249,6 +250,42 @@ def test_invalid_field(
     assert err.startswith(f"gonio: error: {path}:{line}: {field}: "), err
     assert expected in err
     assert err.count("\n") == 1
+
+
+def test_a_misspelt_key_is_named_on_its_line_with_the_closest_known_one(
+    tmp_path: Path, run_gonio: Gonio
+) -> None:
+    """Every problem on its own line with its own line number, sorted by line: the field
+    the misspelling leaves missing, then the unknown key with a suggestion (also nested,
+    and inside a mapping of models)."""
+    text = (
+        (CONFIGS / "plans" / "quick.yaml")
+        .read_text()
+        .replace("rig: ../rigs/arch.yaml", f"rig: {CONFIGS / 'rigs' / 'arch.yaml'}")
+    )
+    lines = text.splitlines()
+    top = next(i for i, line in enumerate(lines) if line.startswith("name:")) + 1
+    at = next(i for i, line in enumerate(lines) if line.startswith("sampling:")) + 1
+    path = write(tmp_path, text.replace("\nsampling:", "\nsamplng:"))
+    code, out, err = run_plan(run_gonio, str(path))
+    assert code == 2 and out == ""
+    assert err.splitlines() == [
+        f"gonio: error: {path}:{top}: sampling: Field required",
+        f"{path}:{at}: samplng: unknown field; did you mean 'sampling'?",
+    ]
+    path.write_text(text.replace("  strategy: sobol", "  strategi: sobol"))
+    code, _, err = run_plan(run_gonio, str(path))
+    assert code == 2
+    assert f"{path}:{at + 1}: sampling.strategi: unknown field; did you mean 'strategy'?" in err
+    rig = tmp_path / "rig.yaml"
+    rig.write_text((CONFIGS / "rigs" / "arch.yaml").read_text().replace(
+        "    max_velocity_deg_s:", "    max_velocity_deg:", 1
+    ))  # fmt: skip
+    with pytest.raises(ConfigError, match=r"did you mean 'max_velocity_deg_s'\?"):
+        Rig.from_yaml(rig)
+    path.write_text(text + "colour: red\n")
+    code, _, err = run_plan(run_gonio, str(path))
+    assert err.strip().endswith("colour: unknown field")  # nothing close: no suggestion
 
 
 def test_not_yaml(tmp_path: Path, run_gonio: Gonio) -> None:

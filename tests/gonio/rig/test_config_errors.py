@@ -35,8 +35,7 @@ def error_of(path: Path) -> str:
     with pytest.raises(ConfigError) as info:
         Rig.from_yaml(path)
     message = str(info.value)
-    assert "\n" not in message
-    assert message.startswith(f"{path}:")
+    assert all(line.startswith(f"{path}:") for line in message.splitlines())  # one a problem
     return message
 
 
@@ -329,7 +328,7 @@ INSTRUMENT_CASES: list[
         serial(parity="E"),
         "detector.interface.parity",
         ("detector", "interface", "parity"),
-        "Extra inputs are not permitted",
+        "unknown field",
     ),
     (
         "reference-albedo-above-one",
@@ -453,7 +452,7 @@ CASES: list[tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, 
         lambda d: d["axes"]["light_elevation"].update(speed=3),
         "axes.light_elevation.speed",
         ("axes", "light_elevation", "speed"),
-        "Extra inputs are not permitted",
+        "unknown field",
     ),
     (
         "unknown-top-level-field",
@@ -461,7 +460,7 @@ CASES: list[tuple[str, str, Callable[[dict[str, Any]], object], str, tuple[str, 
         lambda d: d.update(colour="red"),
         "colour",
         ("colour",),
-        "Extra inputs are not permitted",
+        "unknown field",
     ),
     (
         "zero-axis-vector",

@@ -136,7 +136,7 @@ def test_fields_override_the_preset() -> None:
             "exposure.nplc_range.1",
             "less than or equal to 1000",
         ),
-        ({"frobnicate": 1}, "frobnicate", "Extra inputs"),
+        ({"frobnicate": 1}, "frobnicate", "unknown field"),
     ],
 )
 def test_a_mistake_is_one_line_naming_the_field(

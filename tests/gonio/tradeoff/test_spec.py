@@ -40,7 +40,7 @@ AXES: dict[str, Any] = SMALL["axes"]
         ({"axes": {**AXES, "effects": [{"without": ["glare"]}]}}, "axes.effects.0.without.0",
          "unknown effect 'glare'"),
         ({"axes": {**AXES, "effects": ["all"]}}, "axes.effects.0", "expected scene"),
-        ({"axes": {**AXES, "exposure": [1]}}, "axes.exposure", "Extra inputs are not permitted"),
+        ({"axes": {**AXES, "exposure": [1]}}, "axes.exposure", "unknown field"),
         ({"axes": {k: v for k, v in AXES.items() if k != "samples"}}, "axes.samples",
          "Field required"),
         ({"exclude": [{"sample": 100}]}, "exclude.0.sample", "not an axis"),
