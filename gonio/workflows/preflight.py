@@ -166,11 +166,17 @@ def refuse_fly_detector(spec: PlanSpec, rig: Rig) -> None:
 
 
 def preflight(
-    plan: Plan, backend: backends.Backend, plan_path: Path | None, rig: Rig | None = None
+    plan: Plan,
+    backend: backends.Backend,
+    plan_path: Path | None,
+    rig: Rig | None = None,
+    *,
+    dry: bool = False,
 ) -> list[hygiene.Finding]:
     """Refuse, before anything is created or moved, a run the backend cannot finish;
     the findings of the bus hygiene checks (`gonio.workflows.hygiene`) on the devices of
-    ``rig`` (default the plan's), whose warnings the caller shows."""
+    ``rig`` (default the plan's), whose warnings the caller shows. ``dry``: for a dry
+    run, which asks no operator (`needs_operator` is the caller's to report)."""
     reference_pose(plan.rig)  # a reference reading the calibration could not trust
     spec = plan.spec.acquisition.calibration
     # A detector whose readings are dark-subtracted (a lock-in) takes no dark reading.
@@ -181,13 +187,19 @@ def preflight(
             "switched (light.switch: none), so no dark reading can be taken; give the rig a "
             "switch, or set dark: false (the dark signal is then taken as 0 counts)"
         )
-    stage = backend.stage
-    if isinstance(stage, backends.OperatorStage) and not stage.can_ask():
+    if needs_operator(backend) and not dry:
         raise GonioError(
             "the reference standard is put on the stage by the operator and no one can be "
             "asked (no terminal): run gonio acquire from a terminal"
         )
     return hygiene.backend_findings(rig or plan.rig, backend)
+
+
+def needs_operator(backend: backends.Backend) -> bool:
+    """Whether the run asks an operator to swap the sample and the reference standard
+    and no one can be asked here (no terminal)."""
+    stage = backend.stage
+    return isinstance(stage, backends.OperatorStage) and not stage.can_ask()
 
 
 def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | None, overwrite: bool,
@@ -227,8 +239,13 @@ def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | Non
     backend = backends.build(kind, rig, scene, None if scene is None else scene.seed, time.time())
     try:
         # what a run refuses, its dry run refuses
-        findings = preflight(plan, backend, files.plan_path)
+        findings = preflight(plan, backend, files.plan_path, dry=True)
         lines += [str(f) for f in findings]
+        if needs_operator(backend):  # a dry run asks nothing; the run will
+            lines.append(
+                "operator: the run will ask for the reference standard to be put on the "
+                "stage (no terminal here): run it from a terminal"
+            )
         with backend.devices as devices:
             positions = devices.bus.positions()
             health = devices.bus.health()

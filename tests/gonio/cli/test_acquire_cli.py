@@ -4,14 +4,18 @@ progress display, one-line refusals before anything moves."""
 from __future__ import annotations
 
 import io
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from gonio.acquire.progress import Shown, for_stream
+from gonio.cli import main
 from gonio.planner import Plan
 from gonio.progress import Bar, Lines
+from gonio.workflows import backends
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file, scene_file
 
@@ -34,6 +38,30 @@ def test_a_dry_run_checks_everything_and_writes_nothing(run_gonio: Gonio, tmp_pa
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
         "scene.yaml", "small.yaml"
     ]  # fmt: skip
+
+
+def test_a_dry_run_with_an_operator_and_no_terminal_says_the_run_will_need_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A dry run moves nothing and asks nothing: where the run would ask an operator to
+    place the reference standard and there is no terminal, it reports that, and the run
+    itself refuses (in-process, a backend whose stage is the operator's)."""
+    built = backends.build
+
+    def operated(*args: object, **kwargs: object) -> backends.Backend:
+        backend = built(*args, **kwargs)  # type: ignore[arg-type]
+        backend.stage = backends.OperatorStage()
+        return backend
+
+    monkeypatch.setattr(backends, "build", operated)
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))  # no terminal
+    args = ["acquire", str(plan_file(tmp_path, target=20)), "--scene",
+            str(scene_file(tmp_path)), "-o", str(tmp_path / "run.sqlite")]  # fmt: skip
+    assert main([*args, "--dry-run"]) == 0
+    assert "operator: the run will ask for the reference standard" in capsys.readouterr().out
+    assert main(args) == 2
+    assert "no one can be asked (no terminal)" in capsys.readouterr().err
+    assert not (tmp_path / "run.sqlite").exists()
 
 
 def test_a_hardware_rig_whose_port_is_missing_is_one_line_before_anything(
