@@ -2,7 +2,8 @@
 for the module, into a temporary folder) and opened from the file system
 (``file://…/index.html``) in headless Chromium with every network request refused. Three
 links are followed (each lands on its page, not a folder's listing), a search finds pages,
-and wide tables and code blocks scroll inside the page at 1280 px instead of widening it."""
+and wide tables and code blocks scroll in their own box at 1280 px (the page never scrolls
+sideways, nothing runs under the table of contents)."""
 
 from __future__ import annotations
 
@@ -110,3 +111,49 @@ def test_search_finds_pages(site: Path, page: Any) -> None:
     page.wait_for_load_state()
     assert page.url.startswith("file://") and ".html" in page.url, page.url
     assert not page.title().startswith("Index of")
+
+
+#: Measured in the page: the page's sideways overflow, the box (its overflow-x, its left and
+#: right edges, its hidden width), the element's right edge before and after the box is
+#: scrolled to its end, the table of contents' left edge (px).
+LAYOUT = """([selector, last]) => {
+  const doc = document.documentElement;
+  const element = document.querySelector(selector);
+  const box = element.closest('.md-typeset__scrollwrap') || element;
+  const end = () => (last ? element.querySelector(last) : element).getBoundingClientRect();
+  const before = end().right;
+  box.scrollLeft = box.scrollWidth;
+  const rect = box.getBoundingClientRect();
+  return {
+    page: doc.scrollWidth - doc.clientWidth, overflow: getComputedStyle(box).overflowX,
+    left: rect.left, right: rect.right, hidden: box.scrollWidth - box.clientWidth,
+    before: before, after: end().right, width: element.getBoundingClientRect().width,
+    toc: document.querySelector('.md-sidebar--secondary').getBoundingClientRect().left,
+  };
+}"""
+
+
+def test_a_wide_table_scrolls_in_its_own_box_at_1280_px(site: Path, page: Any) -> None:
+    page.goto((site / "results" / "study-curves.html").as_uri())
+    assert page.viewport_size["width"] == 1280
+    m = page.evaluate(LAYOUT, ["article table", "tr:first-child th:last-child"])
+    assert m["page"] == 0 and m["overflow"] == "auto", m
+    assert m["right"] <= m["toc"], m  # the box ends before the table of contents
+    assert m["hidden"] > 0 and m["before"] > m["right"], m  # the last column hidden at first
+    assert m["left"] < m["after"] <= m["right"] + 1, m  # and shown once scrolled to
+    # 19 columns kept compact: under 1.7 times the text column's width (2.4 wide open)
+    assert m["width"] < 1.7 * (m["right"] - m["left"]), m
+
+
+def test_a_wide_code_block_scrolls_in_its_own_box_at_1280_px(site: Path, page: Any) -> None:
+    page.goto((site / "explanations" / "radiometry.html").as_uri())
+    widest = page.evaluate("""() => {
+      const codes = Array.from(document.querySelectorAll('article pre > code'));
+      const widest = codes.reduce((a, b) => (b.scrollWidth > a.scrollWidth ? b : a));
+      widest.id = 'widest';
+      return widest.scrollWidth;
+    }""")
+    m = page.evaluate(LAYOUT, ["#widest", ""])
+    assert m["page"] == 0 and m["overflow"] == "auto", m
+    assert m["right"] <= m["toc"], m
+    assert widest > 2 * (m["right"] - m["left"]) and m["hidden"] > 0, (widest, m)
