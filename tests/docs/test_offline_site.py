@@ -68,6 +68,27 @@ def page(browser: Any) -> Iterator[Any]:
     assert errors == [], errors
 
 
+#: A link or a source in a page: the attribute's value.
+LINK = re.compile(r'<(?:a|link|script|img)\b[^>]*?\b(?:href|src)="([^"]*)"')
+
+
+def test_every_link_in_the_site_names_a_file(site: Path) -> None:
+    """Opened as files, a link to a folder shows its listing: every page's links and
+    sources that stay in the site name a file that is there (fragments and queries
+    aside), none a folder."""
+    checked = 0
+    for html in site.rglob("*.html"):
+        if html.name == "404.html":  # a server's answer, its links from the site's root
+            continue
+        for target in LINK.findall(html.read_text(encoding="utf-8")):
+            if re.match(r"^([a-z]+:|#|//)", target) or not target:
+                continue
+            path = (html.parent / target.split("#")[0].split("?")[0]).resolve()
+            assert path.is_file(), f"{html.relative_to(site)}: {target}"
+            checked += 1
+    assert checked > 10_000
+
+
 def _landed(page: Any, path: str, heading: str) -> None:
     """The page at ``path`` (relative to the site) is shown, with its ``heading``."""
     page.wait_for_load_state()
