@@ -204,6 +204,7 @@ def grid(plt: Any, title: str) -> tuple[Any, np.ndarray]:
         ax.grid(True, which="major", lw=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("distance d to the extreme (°)", fontsize=7)
+    axes.flat[0].invert_xaxis()  # once: the panels share it (the extreme on the right)
     return fig, axes
 
 
@@ -219,7 +220,6 @@ def plots(rows: list[PathRow], names: list[str], studies: dict[str, Study]) -> N
             for n in names:
                 y = [max(getattr(cell(rows, n, extreme, x), key), 1e-17) for x in d]
                 ax.plot(np.degrees(d), y, lw=1.2, label=n)
-            ax.invert_xaxis()
         axes.flat[0].legend(fontsize=7)
         fig.tight_layout()
         save(fig, f"extremes_{fname}.png")
@@ -241,7 +241,6 @@ def plots(rows: list[PathRow], names: list[str], studies: dict[str, Study]) -> N
             reach = float(np.median(study[extreme, p[-1]]["direction"]))
             # d = σω: the error reaches the extreme
             ax.axvline(math.degrees(reach), color="grey", lw=0.8)
-            ax.invert_xaxis()
         axes.flat[0].legend(fontsize=6)
         fig.tight_layout()
         save(fig, f"extremes_position_{rig_name}.png")
