@@ -203,7 +203,8 @@ def grid(plt: Any, title: str) -> tuple[Any, np.ndarray]:
         ax.tick_params(labelsize=7)
         ax.grid(True, which="major", lw=0.3)
     for ax in axes[-1]:
-        ax.set_xlabel("distance d (rad)", fontsize=7)
+        ax.set_xlabel("distance d to the extreme (°)", fontsize=7)
+    axes.flat[0].invert_xaxis()  # once: the panels share it (the extreme on the right)
     return fig, axes
 
 
@@ -218,8 +219,7 @@ def plots(rows: list[PathRow], names: list[str], studies: dict[str, Study]) -> N
         for ax, extreme in zip(axes.flat, cases.EXTREMES, strict=True):
             for n in names:
                 y = [max(getattr(cell(rows, n, extreme, x), key), 1e-17) for x in d]
-                ax.plot(d, y, lw=1.2, label=n)
-            ax.invert_xaxis()
+                ax.plot(np.degrees(d), y, lw=1.2, label=n)
         axes.flat[0].legend(fontsize=7)
         fig.tight_layout()
         save(fig, f"extremes_{fname}.png")
@@ -234,13 +234,13 @@ def plots(rows: list[PathRow], names: list[str], studies: dict[str, Study]) -> N
         for ax, extreme in zip(axes.flat, cases.EXTREMES, strict=True):
             for n in names:
                 y = [np.median(study[extreme, x][n] / study[extreme, x]["direction"]) for x in p]
-                ax.plot(p, y, lw=1.2, label=n)
+                ax.plot(np.degrees(p), y, lw=1.2, label=n)
             for a, style in zip(ALPHAS, ("--", ":"), strict=True):
                 y = [np.median(study[extreme, x][f"ggx{a}"]) for x in p]
-                ax.plot(p, y, style, color="k", lw=1, label=f"GGX α={a} σf/f")
+                ax.plot(np.degrees(p), y, style, color="k", lw=1, label=f"GGX α={a} σf/f")
             reach = float(np.median(study[extreme, p[-1]]["direction"]))
-            ax.axvline(reach, color="grey", lw=0.8)  # d = σω: the error reaches the extreme
-            ax.invert_xaxis()
+            # d = σω: the error reaches the extreme
+            ax.axvline(math.degrees(reach), color="grey", lw=0.8)
         axes.flat[0].legend(fontsize=6)
         fig.tight_layout()
         save(fig, f"extremes_position_{rig_name}.png")

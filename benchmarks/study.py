@@ -39,6 +39,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
+import _curves_figure
 import _report
 from _machine import describe
 
@@ -172,16 +173,26 @@ def curves(args: argparse.Namespace) -> None:
                     # progress on stderr: the page holds the report
                     print(scene, kind, name, method, n, f"{row['log_rmse']:.4f}", file=sys.stderr)
     print(f"{computed} rows computed in this run, {len(done)} read from {out} (resumed)")
-    report(out, tuple(args.targets))
+    report(out, tuple(args.targets), figure_of(args))
 
 
-def report(path: Path, targets: tuple[float, ...] = TARGETS) -> None:
-    """Markdown tables of curves.csv: error by count, then the counts for each target;
-    where adaptive plans were measured too, the best of each kind against the other."""
+def figure_of(args: argparse.Namespace) -> Path:
+    """The figure of the curves page ``args`` write (docs/img/study-curves*.png)."""
+    suffix = "-adaptive" if "adaptive" in args.sampling else ""  # as `adaptive` names the page
+    return ROOT / "docs" / "img" / f"study-{args.part}{suffix}.png"
+
+
+def report(path: Path, targets: tuple[float, ...] = TARGETS, figure: Path | None = None) -> None:
+    """The figure of curves.csv (``figure``: its path; `_curves_figure`), then markdown
+    tables: error by count, then the counts for each target; where adaptive plans were
+    measured too, the best of each kind against the other."""
     with path.open(encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
     for r in rows:
         r.setdefault("sampling", "sobol")  # a curves.csv of uniform plans only
+    if figure is not None:
+        _curves_figure.draw(rows, figure, targets)
+        _report.figure(figure, _curves_figure.alt_text(rows))
     for scene in dict.fromkeys(r["scene"] for r in rows):
         mine = [r for r in rows if r["scene"] == scene]
         counts = sorted({int(r["samples"]) for r in mine})
@@ -411,7 +422,7 @@ def main() -> None:
     args.adaptive = {} if args.adaptive_model is None else {"model": args.adaptive_model}
     print(describe())
     if args.part == "report":
-        report(Path(args.out) / "curves.csv", tuple(args.targets))
+        report(Path(args.out) / "curves.csv", tuple(args.targets), figure_of(args))
         return
     {"curves": curves, "where": where, "budget": budget, "lobes": lobes}[args.part](args)
 

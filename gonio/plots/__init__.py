@@ -50,28 +50,57 @@ def check_figure_format(path: Path, option: str) -> None:
 #: pixels: the figures are saved without tight cropping).
 DPI = 100
 
-#: Pretty axis labels of the parametrizations' coordinate names.
-LABELS = {
+#: The coordinates of the parametrizations that are angles (radians in code): every
+#: figure draws them in degrees.
+ANGLES = frozenset({
+    "phi_h", "phi_k", "phi_k_minus_phi_h", "theta_h", "theta_d", "phi_d",
+    "theta_i", "theta_o", "phi_i", "phi_o", "phi_o_minus_phi_i",
+})  # fmt: skip
+
+#: The symbols of the parametrizations' coordinate names.
+SYMBOLS = {
     "hbar": "‖h̄‖",
     "k": "‖k‖",
     "kbar": "‖k̄‖",
-    "phi_h": "φh (rad)",
-    "phi_k": "φk (rad)",
-    "phi_k_minus_phi_h": "φk − φh (rad)",
-    "theta_h": "θh (rad)",
-    "theta_d": "θd (rad)",
-    "phi_d": "φd (rad)",
-    "theta_i": "θi (rad)",
-    "theta_o": "θo (rad)",
-    "phi_i": "φi (rad)",
-    "phi_o": "φo (rad)",
-    "phi_o_minus_phi_i": "φo − φi (rad)",
+    "phi_h": "φh",
+    "phi_k": "φk",
+    "phi_k_minus_phi_h": "φk − φh",
+    "theta_h": "θh",
+    "theta_d": "θd",
+    "phi_d": "φd",
+    "theta_i": "θi",
+    "theta_o": "θo",
+    "phi_i": "φi",
+    "phi_o": "φo",
+    "phi_o_minus_phi_i": "φo − φi",
 }
+
+#: Axis labels: the symbol, with the unit of an angle (°; the others are lengths of unit
+#: vectors' projections, without a unit).
+LABELS = {name: f"{s} (°)" if name in ANGLES else s for name, s in SYMBOLS.items()}
 
 
 def label(name: str) -> str:
     """The axis label of a coordinate name (the name itself if it has none)."""
     return LABELS.get(name, name)
+
+
+def symbol(name: str) -> str:
+    """The symbol of a coordinate name, without a unit (the name itself if it has none)."""
+    return SYMBOLS.get(name, name)
+
+
+def drawn(name: str, values: object) -> FloatArray:
+    """A coordinate's values (any shape) as a figure draws them: an angle (`ANGLES`, rad
+    in code) in degrees, any other as it is."""
+    v = np.asarray(values, dtype=np.float64)
+    return np.asarray(np.degrees(v) if name in ANGLES else v, dtype=np.float64)
+
+
+def quantity(name: str, value: float) -> str:
+    """A coordinate's value as a caption writes it: an angle in degrees with its unit
+    (``22.5°``), any other to three decimals."""
+    return f"{float(drawn(name, value)):.4g}°" if name in ANGLES else f"{value:.3f}"
 
 
 def save(fig: Any, path: str | Path, format: str | None = None) -> None:
@@ -115,15 +144,20 @@ def supported(surface: object, wi: FloatArray, wo: FloatArray) -> BoolArray:
 
 
 __all__ = [
+    "ANGLES",
     "DPI",
     "LABELS",
+    "SYMBOLS",
     "PlotUnavailable",
     "Surface",
     "check_figure_format",
+    "drawn",
     "label",
     "one_channel",
+    "quantity",
     "require_matplotlib",
     "save",
     "supported",
+    "symbol",
     "values",
 ]

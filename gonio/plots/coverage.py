@@ -21,7 +21,7 @@ import numpy as np
 
 from gonio import params
 from gonio.planner.model import Plan
-from gonio.plots import require_matplotlib
+from gonio.plots import drawn, label, quantity, require_matplotlib, save, symbol
 from gonio.rig.solution import Reason
 from gonio.types import FloatArray
 
@@ -86,23 +86,27 @@ def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) ->
         kind = classify(plan, coords).reshape(gx.shape)
         ax = fig.add_subplot(grid[0, i])
         ax.imshow(
-            kind + 1, origin="lower", extent=(*bounds[0], *bounds[1]), cmap=cmap,
+            kind + 1, origin="lower", cmap=cmap,
+            extent=(*drawn(names[0], bounds[0]), *drawn(names[1], bounds[1])),
             vmin=-0.5, vmax=len(labels) - 0.5, interpolation="nearest", aspect="auto",
         )  # fmt: skip
-        ax.contour(gx, gy, (kind >= 0).astype(float), levels=[0.5], colors="k", linewidths=1.0)
+        x, y = drawn(names[0], gx), drawn(names[1], gy)
+        ax.contour(x, y, (kind >= 0).astype(float), levels=[0.5], colors="k", linewidths=1.0)
         near = np.abs(targets[:, 2] - value) <= half_slab
-        ax.plot(targets[near, 0], targets[near, 1], ".", ms=2.0, color="k")
-        ax.set_title(f"{names[2]} = {value:.3f} ± {half_slab:.3f}\n{near.sum()} targets")
-        ax.set_xlabel(names[0])
-        ax.set_ylabel(names[1])
+        x, y = drawn(names[0], targets[near, 0]), drawn(names[1], targets[near, 1])
+        ax.plot(x, y, ".", ms=2.0, color="k")
+        slab = f"{quantity(names[2], value)} ± {quantity(names[2], half_slab)}"
+        ax.set_title(f"{symbol(names[2])} = {slab}\n{near.sum()} targets")
+        ax.set_xlabel(label(names[0]))
+        ax.set_ylabel(label(names[1]))
 
     order = np.arange(len(plan))
     theta_max = plan.rig.theta_max
-    for j, (w, label) in enumerate(((plan.wi, "ωi (light)"), (plan.wo, "ωo (detector)"))):
+    for j, (w, name) in enumerate(((plan.wi, "ωi (light)"), (plan.wo, "ωo (detector)"))):
         ax = fig.add_subplot(grid[1, j])
         _hemisphere(ax, theta_max)
         dots = ax.scatter(w[:, 0], w[:, 1], c=order, s=3.0, cmap="viridis")
-        ax.set_title(f"{label} on the hemisphere (x, y)")
+        ax.set_title(f"{name} on the hemisphere (x, y)")
     fig.colorbar(dots, ax=ax, label="measuring order")
     legend = fig.add_subplot(grid[1, 2:])
     legend.axis("off")
@@ -119,8 +123,7 @@ def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) ->
         f"{'isotropic' if plan.spec.isotropic else 'anisotropic'} "
         f"{plan.spec.parametrization}, rig {plan.rig.spec.name!r}"
     )
-    fig.savefig(path, dpi=100, format=format)
-    plt.close(fig)
+    save(fig, path, format)
 
 
 def _hemisphere(ax: Any, theta_max: float) -> None:
@@ -140,4 +143,5 @@ def _summary_text(plan: Plan) -> str:
     lines = [f"requested {s.requested}", f"outside the domain {s.invalid}"]
     lines += [f"refused, {k.replace('_', ' ')} {v}" for k, v in s.refused.items() if v]
     lines.append(f"kept {s.kept}")
+    lines.append(f"θ limit of the rig: {np.degrees(plan.rig.theta_max):.1f}° (dashed)")
     return "\n".join(lines)

@@ -22,6 +22,7 @@ from scipy.stats import binned_statistic_2d
 from gonio import params
 from gonio.plots import (
     Surface,
+    drawn,
     label,
     one_channel,
     require_matplotlib,
@@ -135,7 +136,8 @@ def draw(data: Errors, path: str | Path, *, format: str | None = None) -> None:
     image = None
     for m, ax in zip(data.maps, axes[:2], strict=True):
         a, b = m.axes
-        image = ax.pcolormesh(m.x_edges, m.y_edges, m.rms.T, cmap="inferno", vmin=0.0, vmax=top)
+        x, y = drawn(data.names[a], m.x_edges), drawn(data.names[b], m.y_edges)
+        image = ax.pcolormesh(x, y, m.rms.T, cmap="inferno", vmin=0.0, vmax=top)
         ax.set_xlabel(label(data.names[a]))
         ax.set_ylabel(label(data.names[b]))
         ax.set_title(f"RMS log error over {data.parametrization} coordinates")

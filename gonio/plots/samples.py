@@ -19,7 +19,7 @@ import numpy as np
 
 from gonio import params
 from gonio.errors import GonioError
-from gonio.plots import label, one_channel, require_matplotlib, save
+from gonio.plots import drawn, label, one_channel, require_matplotlib, save
 from gonio.types import BrdfEval, FloatArray
 
 #: What the samples can be coloured by.
@@ -120,11 +120,13 @@ def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None
     text.text(0.0, 0.5, _summary(data), va="center", family="monospace", fontsize=10)
     for j, (a, b) in enumerate(PROJECTIONS[len(data.names)]):
         ax = fig.add_subplot(grid[1, j])
-        dots = ax.scatter(data.coords[:, a], data.coords[:, b], c=data.colour, s=8.0, **style)
-        ax.set_xlim(*data.bounds[a])
-        ax.set_ylim(*data.bounds[b])
-        ax.set_xlabel(label(data.names[a]))
-        ax.set_ylabel(label(data.names[b]))
+        x, y = data.names[a], data.names[b]
+        dots = ax.scatter(drawn(x, data.coords[:, a]), drawn(y, data.coords[:, b]),
+                          c=data.colour, s=8.0, **style)  # fmt: skip
+        ax.set_xlim(*drawn(x, data.bounds[a]))
+        ax.set_ylim(*drawn(y, data.bounds[b]))
+        ax.set_xlabel(label(x))
+        ax.set_ylabel(label(y))
         ax.set_title(f"{data.parametrization} coordinates")
     if dots is not None:
         bar = fig.add_axes((1 - 1.1 / width, 0.15, 0.15 / width, 0.7))

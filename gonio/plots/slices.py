@@ -21,7 +21,7 @@ import numpy as np
 
 from gonio import params
 from gonio.errors import GonioError
-from gonio.plots import Surface, label, require_matplotlib, save, supported, values
+from gonio.plots import Surface, drawn, label, require_matplotlib, save, supported, symbol, values
 from gonio.types import BoolArray, FloatArray
 
 #: Pixels per side of each slice.
@@ -133,8 +133,8 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
     plt = require_matplotlib()
     from matplotlib.colors import ListedColormap  # optional: the plot extra
 
-    shown = [s.f[~s.masked] for row in data.rows for s in row]
-    finite = np.concatenate(shown) if shown else np.empty(0)
+    kept = [s.f[~s.masked] for row in data.rows for s in row]
+    finite = np.concatenate(kept) if kept else np.empty(0)
     logs = np.log10(np.maximum(finite, FLOOR))
     lo, hi = (float(logs.min()), float(logs.max())) if len(logs) else (-1.0, 1.0)
     hi = max(hi, lo + 0.5)
@@ -150,21 +150,20 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
     image = None
     for row, ax_row in zip(data.rows, axes, strict=True):
         for s, ax in zip(row, ax_row, strict=True):
-            ax.pcolormesh(s.x, s.y, s.valid.astype(float), shading="nearest", cmap=background,
+            x, y = drawn(s.names[0], s.x), drawn(s.names[1], s.y)
+            ax.pcolormesh(x, y, s.valid.astype(float), shading="nearest", cmap=background,
                           vmin=0.0, vmax=1.0)  # fmt: skip
             shade = np.ma.masked_array(np.log10(np.maximum(np.nan_to_num(s.f), FLOOR)), s.masked)
-            image = ax.pcolormesh(
-                s.x, s.y, shade, shading="nearest", cmap="magma", vmin=lo, vmax=hi
-            )
-            drawn = shade.compressed()
-            inside = levels[(levels > drawn.min()) & (levels < drawn.max())] if drawn.size else []
+            image = ax.pcolormesh(x, y, shade, shading="nearest", cmap="magma", vmin=lo, vmax=hi)
+            lit = shade.compressed()
+            inside = levels[(levels > lit.min()) & (levels < lit.max())] if lit.size else []
             if len(inside):  # else no iso-line crosses the slice
-                ax.contour(s.x, s.y, shade, levels=inside, colors="w", linewidths=0.6,
+                ax.contour(x, y, shade, levels=inside, colors="w", linewidths=0.6,
                            linestyles="solid")  # fmt: skip
             ax.set_xlabel(label(s.names[0]))
             ax.set_ylabel(label(s.names[1]))
-            third = label(s.names[2]).removesuffix(" (rad)")
-            ax.set_title(f"{s.parametrization}, {third} = {math.degrees(s.angle):g}°")
+            third = f"{symbol(s.names[2])} = {math.degrees(s.angle):g}°"
+            ax.set_title(f"{s.parametrization}, {third}")
             ax.set_aspect("auto")
     if image is not None:
         bar = fig.add_axes((1 - 1.1 / width, 0.15, 0.15 / width, 0.7))

@@ -3,7 +3,9 @@ with a support mask."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -53,3 +55,29 @@ def capture(monkeypatch: object, module: object) -> list[object]:
 
     monkeypatch.setattr(module, "save", spy)  # type: ignore[attr-defined]
     return figures
+
+
+def texts(fig: Any) -> list[str]:
+    """Every non-empty string a figure shows: titles, axis labels, tick labels (as
+    drawn), legends, colour bars and free text."""
+    from matplotlib.text import Text
+
+    fig.canvas.draw()  # tick labels are set when drawn
+    return [t.get_text() for t in fig.findobj(Text) if t.get_visible() and t.get_text()]
+
+
+def assert_angles_in_degrees(fig: Any) -> None:
+    """Every text that names an angle (θ, φ) says its unit in degrees, none says
+    radians, and every axis labelled in degrees spans more than 2π (its data are in
+    degrees, not radians under a degree label)."""
+    for text in texts(fig):
+        assert not re.search(r"\brad\b|radian", text), text
+        if "θ" in text or "φ" in text:
+            assert "°" in text or "degrees" in text, text
+    for ax in fig.axes:
+        for axis_label, limits in (
+            (ax.get_xlabel(), ax.get_xlim()),
+            (ax.get_ylabel(), ax.get_ylim()),
+        ):
+            if "°" in axis_label:
+                assert abs(limits[1] - limits[0]) > 2 * np.pi, (axis_label, limits)
