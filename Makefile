@@ -29,9 +29,9 @@ $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	@mkdir -p runs
 	$(BIN)/gonio acquire configs/plans/quickstart.yaml --scene configs/scenes/glossy_metal.yaml \
-		-o runs/quickstart.sqlite --overwrite
-	$(BIN)/gonio info runs/quickstart.sqlite
-	$(BIN)/gonio evaluate runs/quickstart.sqlite --method rbf
+		-o runs/demo.sqlite --overwrite
+	$(BIN)/gonio info runs/demo.sqlite
+	$(BIN)/gonio evaluate runs/demo.sqlite --method rbf
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .

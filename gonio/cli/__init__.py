@@ -28,9 +28,9 @@ from gonio.errors import GonioError
 #: name → (module with ``add_parser(sub, help_)``, the command's one-line help: the only
 #: copy, shown by ``gonio --help`` and passed to the module when it builds its parser).
 COMMANDS: dict[str, tuple[str, str]] = {
-    "demo": (
-        "gonio.cli.demo",
-        "the parametrization and lobe tables (the main job is make demo: gonio acquire)",
+    "tables": (
+        "gonio.cli.tables",
+        "the parametrizations on named direction pairs and the lobe comparison, as tables",
     ),
     "plan": (
         "gonio.cli.plan",

@@ -1,4 +1,4 @@
-"""`gonio export RUN.sqlite --format F -o PATH`: a run in another program's format
+"""`gonio export RUN.sqlite -o PATH [--format F]`: a run in another program's format
 (csv, hdf5, alta, bluesky; merl, rgl and factored from the run's reconstruction).
 docs/reference/formats.md."""
 
@@ -43,6 +43,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         MERL_FILLS,
         MIN_SUPPORTED,
         RGL_COLORS,
+        SUFFIXES,
     )
 
     p = sub.add_parser(
@@ -54,7 +55,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "Layouts, units and what each format loses: docs/reference/formats.md.",
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
-    p.add_argument("--format", required=True, choices=list(FORMATS), help="the output format")
+    p.add_argument(
+        "--format", metavar="FORMAT",
+        help=f"the output format, any case: {', '.join(FORMATS)} (default: the one -o's "
+        "suffix says: " + ", ".join(f"{k} {v}" for k, v in SUFFIXES.items()) + ")",
+    )  # fmt: skip
     arguments.add_alignment(p)
     p.add_argument("-o", "--output", required=True, type=Path, help="the file to write")
     p.add_argument(
@@ -118,8 +123,10 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 def cmd_export(args: argparse.Namespace) -> int:
     from gonio import params, progress
-    from gonio.export import Options, check_options, export
+    from gonio.export import Options, check_options, export, format_of
     from gonio.reconstruct import methods
+
+    args.format = format_of(args.output, args.format)
 
     if args.grid is not None:
         params.get(args.grid)  # an unknown name: one line, before any work

@@ -38,6 +38,33 @@ FORMATS: dict[str, tuple[str, str]] = {
     "bluesky": ("gonio.export.bluesky", "event-model documents, JSON lines (needs event-model)"),
 }
 
+#: The format an output file's suffix (lower case) says, where ``--format`` is not given.
+SUFFIXES: dict[str, str] = {
+    ".csv": "csv", ".h5": "hdf5", ".hdf5": "hdf5", ".binary": "merl", ".bsdf": "rgl",
+    ".factored": "factored", ".alta": "alta", ".jsonl": "bluesky",
+}  # fmt: skip
+
+
+def format_of(output: str | Path, given: str | None) -> str:
+    """The export format: ``given`` in any case, else the one ``output``'s suffix says
+    (`SUFFIXES`); `UnknownNameError` (one line) when neither names one."""
+    if given is not None:
+        name = given.lower()
+        if name not in FORMATS:
+            raise UnknownNameError(
+                f"--format {given}: unknown export format; expected one of {', '.join(FORMATS)}"
+            )
+        return name
+    suffix = Path(output).suffix.lower()
+    if suffix not in SUFFIXES:
+        known = ", ".join(f"{k} ({v})" for k, v in SUFFIXES.items())
+        raise UnknownNameError(
+            f"-o {output}: the suffix {suffix or '(none)'!r} names no format; give --format "
+            f"({', '.join(FORMATS)}) or a suffix that says it: {known}"
+        )
+    return SUFFIXES[suffix]
+
+
 #: ALTA input parametrizations `gonio.export.alta` writes.
 ALTA_PARAMS = ("stark_3d", "rusin_th_td_pd")
 #: The RGL export's colour: a spectrum, or RGB.
@@ -162,8 +189,10 @@ __all__ = [
     "MERL_FILLS",
     "MIN_SUPPORTED",
     "RGL_COLORS",
+    "SUFFIXES",
     "Options",
     "check_options",
     "export",
+    "format_of",
     "names",
 ]

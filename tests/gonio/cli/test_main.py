@@ -50,7 +50,7 @@ def test_help_lists_every_command_without_importing_them() -> None:
         "import sys; from gonio.cli import main\n"
         "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
         "heavy = [m for m in ('scipy', 'numpy', 'gonio.cli.plan', 'gonio.cli.simulate', "
-        "'gonio.cli.motors', 'gonio.cli.demo', 'sim') if m in sys.modules]\n"
+        "'gonio.cli.motors', 'gonio.cli.tables', 'sim') if m in sys.modules]\n"
         "print('HEAVY', heavy)\n"
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
@@ -74,15 +74,15 @@ def test_each_command_has_its_own_help(run_gonio: Gonio, name: str) -> None:
     assert f"usage: gonio {name}" in r.stdout
 
 
-def test_demo_prints_the_tables(run_gonio: Gonio) -> None:
-    r = run_gonio("demo")
+def test_tables_prints_the_tables(run_gonio: Gonio) -> None:
+    r = run_gonio("tables")
     assert r.returncode == 0, r.stderr
     _, _, tables = r.stdout.partition("Parametrizations on named direction pairs")
     for name in ("spherical", "rusinkiewicz", "orthographic", "hybrid"):
         assert name in tables
     assert "opposite grazing" in tables
     assert "F_VOL" in tables
-    # Every round-trip error printed is small: no configuration changes in the demo.
+    # Every round-trip error printed is small: no configuration changes in the tables.
     errors = [float(line.split()[-1]) for line in tables.splitlines() if line.startswith("  ")][:36]
     assert len(errors) == 36
     assert max(errors) < 1e-7
@@ -111,7 +111,7 @@ def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:
 def test_a_closed_pipe_in_a_real_shell_pipeline() -> None:
     """The same through ``| head -1``: the first line arrives, the rest is dropped."""
     r = subprocess.run(
-        ["sh", "-c", f"'{sys.executable}' -m gonio demo | head -1; exit $(( 0 ))"],
+        ["sh", "-c", f"'{sys.executable}' -m gonio tables | head -1; exit $(( 0 ))"],
         cwd=ROOT, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
     )  # fmt: skip
     assert r.stdout.startswith("Parametrizations on named direction pairs")
@@ -123,13 +123,13 @@ def test_a_closed_pipe_in_process_returns_141(
     monkeypatch: pytest.MonkeyPatch, run_gonio: Gonio
 ) -> None:
     """Output printed by any subcommand: the error surfaces in `main`, which ends quietly."""
-    from gonio.cli import demo
+    from gonio.cli import tables
 
     def closed(*args: object, **kwargs: object) -> None:
         raise BrokenPipeError(32, "Broken pipe")
 
-    monkeypatch.setattr(demo, "print", closed, raising=False)
-    r = run_gonio("demo")
+    monkeypatch.setattr(tables, "print", closed, raising=False)
+    r = run_gonio("tables")
     assert r.returncode == 141
     assert r.stderr == ""
 
@@ -186,8 +186,8 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
 
 @pytest.mark.parametrize(
     "args",
-    [["schema", "plan"], ["plan", "configs/plans/rehearsal.yaml"], ["demo"], ["--help"]],
-    ids=["schema", "plan", "demo", "help"],
+    [["schema", "plan"], ["plan", "configs/plans/rehearsal.yaml"], ["tables"], ["--help"]],
+    ids=["schema", "plan", "tables", "help"],
 )
 def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None:
     """``gonio … > /dev/full``: one line on stderr naming the standard output, exit 74

@@ -56,3 +56,10 @@ def test_the_readme_transcript_is_what_make_demo_prints(
         if not any(out.startswith(line.split("…")[0].rstrip()) for out in printed)
     ]
     assert missing == []
+    # The first tutorial's step 2, as it is written, right after make demo: no clash
+    tutorial = (ROOT / "docs" / "tutorials" / "first-measurement.md").read_text()
+    step = re.search(r"^\$ gonio (acquire configs/plans/quickstart\.yaml .*)$", tutorial, re.M)
+    assert step, "the first tutorial has no acquire step"
+    words = [str(ROOT / w) if w.startswith("configs/") else w for w in step.group(1).split()]
+    result = run_gonio(*words)
+    assert result.returncode == 0, result.stderr

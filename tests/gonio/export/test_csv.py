@@ -96,3 +96,23 @@ def test_floats_read_back_bit_for_bit(values):
     assert np.array_equal(np.isnan(back), np.isnan(original))
     finite = ~np.isnan(original)
     assert back[finite].tobytes() == original[finite].tobytes()  # −0.0 stays −0.0
+
+
+def test_the_format_is_what_the_suffix_says_in_any_case(run_file, tmp_path, capsys):
+    """``--format`` may be left out where ``-o``'s suffix says it, and is taken in any
+    case; an unknown suffix without it is one line naming what would do."""
+    plain = tmp_path / "plain.csv"
+    assert main(["export", str(run_file), "--format", "csv", "-o", str(plain), "-q"]) == 0
+    inferred = tmp_path / "RUN.CSV"
+    assert main(["export", str(run_file), "-o", str(inferred), "-q"]) == 0
+    upper = tmp_path / "upper.txt"
+    assert main(["export", str(run_file), "--format", "CSV", "-o", str(upper), "-q"]) == 0
+    assert inferred.read_bytes() == plain.read_bytes() == upper.read_bytes()
+    capsys.readouterr()
+    unknown = tmp_path / "run.dat"
+    assert main(["export", str(run_file), "-o", str(unknown)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "give --format" in err and ".binary (merl)" in err
+    assert main(["export", str(run_file), "--format", "velvet", "-o", str(unknown)]) == 2
+    assert "--format velvet: unknown export format" in capsys.readouterr().err
+    assert not unknown.exists()

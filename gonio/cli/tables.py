@@ -1,7 +1,7 @@
-"""`gonio demo`: the core tables — the four parametrizations on named direction pairs
-(coordinates and round-trip error) and the lobe comparison of Romanyuk et al.'s
-modified cosine-quadratic model. The main job on the simulated rig is
-`make demo` (`gonio acquire configs/plans/quickstart.yaml …`, then `gonio info`)."""
+"""`gonio tables`: the four parametrizations on named direction pairs (coordinates and
+round-trip error) and the lobe comparison of Romanyuk et al.'s modified
+cosine-quadratic model. The demo of the instrument is `make demo` (`gonio acquire` of
+the quickstart plan on the simulated rig, then `gonio info` and `gonio evaluate`)."""
 
 from __future__ import annotations
 
@@ -42,16 +42,17 @@ def render() -> str:
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
-    demo = sub.add_parser(
-        "demo",
+    tables = sub.add_parser(
+        "tables",
         help=help_,
         description="The four parametrizations' coordinates and round-trip errors for named "
-        "direction pairs, and the lobe comparison of Romanyuk et al. The main "
-        "job on the simulated rig is make demo (gonio acquire, then gonio info).",
+        "direction pairs, and the lobe comparison of Romanyuk et al. (The instrument's "
+        "demo is make demo: gonio acquire on the simulated rig, then gonio info and gonio "
+        "evaluate.)",
     )
-    demo.set_defaults(func=_cmd_demo)
+    tables.set_defaults(func=_cmd_tables)
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
+def _cmd_tables(args: argparse.Namespace) -> int:
     print(render())
     return 0
