@@ -30,12 +30,13 @@ the acquiring process (who asked, when).
 
 from __future__ import annotations
 
+import contextlib
 import hmac
 import ipaddress
 import json
 import threading
 import time
-from collections.abc import Awaitable, Callable, MutableMapping
+from collections.abc import AsyncIterator, Awaitable, Callable, MutableMapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -125,6 +126,10 @@ class Served:
                 "gonio serve: a non-loopback --host needs a token (--token-file FILE); "
                 "every request must then carry it"
             )
+
+    def close(self) -> None:
+        """Stop the worker that derives fits and slices (the server's end)."""
+        self._deriver.close()
 
     # -- paths ---------------------------------------------------------------------------
     def run_path(self, name: str | None) -> Path:
@@ -348,4 +353,12 @@ def app(served: Served) -> ASGIApp:
         Route("/api/control", post_control, methods=["POST"]),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
-    return _Guard(Starlette(routes=routes), served)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: Starlette) -> AsyncIterator[None]:
+        try:
+            yield
+        finally:  # SIGTERM or Ctrl-C: the server shuts down, its worker with it
+            served.close()
+
+    return _Guard(Starlette(routes=routes, lifespan=lifespan), served)

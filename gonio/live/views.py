@@ -20,7 +20,7 @@ from gonio.types import FloatArray
 
 #: Events the event log lists (health readings and calibrations have views of their own).
 LOGGED = frozenset(
-    {"start", "resume", "pause", "fault", "retry", "skip", "second_pass", "range", "phase"}
+    {"start", "resume", "pause", "stop", "fault", "retry", "skip", "second_pass", "range", "phase"}
 )
 
 
