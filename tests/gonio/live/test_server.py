@@ -153,7 +153,11 @@ def test_control_of_a_run_not_being_acquired_is_refused(
         status, body, _ = call(f"{base}/api/overview?run=done.sqlite")
         assert status == 200 and body["state"] == "completed" and body["measured"] == 20
         status, body, _ = call(f"{base}/api/points?run=done.sqlite")
-        assert status == 200 and len(body["xy"]) == 2 * 20 and body["unit"] == "sr⁻¹"
+        assert (
+            status == 200
+            and len(body["theta_o_deg"]) == len(body["phi_deg"]) == 20
+            and body["unit"] == "sr⁻¹"
+        )
         status, body, _ = call(f"{base}/api/runs")
         assert status == 200 and body["single"] and body["runs"][0]["name"] == "done.sqlite"
         status, _, _ = call(f"{base}/api/overview?run=other.sqlite")
