@@ -22,7 +22,9 @@
    the benchmark's own process, at its priority).
 
 With ``--screenshot PNG`` (and Chromium at /usr/bin/chromium with Playwright), the page
-of the paced run of part 1 is saved there, as the docs show it.
+of the paced run of part 1 is saved there at 1280 px (a sample hovered), and at 1920 px
+beside it (``PNG-1920``), as the docs show it, with the time the page takes to redraw its
+sample panels.
 
 Run: .venv/bin/python benchmarks/live.py [--repeat 5] [--screenshot docs/img/live-page.png]
 """
@@ -167,6 +169,15 @@ def latency(folder: Path, pace_s: float, screenshot: Path | None) -> None:
     print("|---:|---:|---:|---:|---:|")
     q50, q95 = np.percentile(delays, [50, 95])
     print(f"| {len(delays)} | {pace_s:g} | {q50:.2f} | {q95:.2f} | {delays.max():.2f} |")
+    for ms, shown in DRAWN:
+        print(
+            f"\nThe page redraws its sample panels (hemisphere, in-plane, fit, slice) with "
+            f"{shown} samples in {ms:.0f} ms (its own clock, Chromium at 1280 px)."
+        )
+
+
+#: (ms, samples) of each redraw of the page's sample panels that `take_screenshot` timed.
+DRAWN: list[tuple[float, int]] = []
 
 
 def take_screenshot(url: str, base: str, path: Path) -> None:
@@ -183,12 +194,24 @@ def take_screenshot(url: str, base: str, path: Path) -> None:
             viewport={"width": 1300, "height": 1000},
         )  # fmt: skip
         page = context.new_page()
+        page.set_viewport_size({"width": 1280, "height": 900})
         page.goto(url.replace("http://127.0.0.1:8765", base))
         page.wait_for_function(
             "Number(document.getElementById('hemisphere').dataset.samples) >= 40 && "
-            "Number(document.getElementById('slice').dataset.filled) > 0"
+            "Number(document.getElementById('slice').dataset.filled) > 0 && "
+            "document.getElementById('fit').dataset.fitted"
         )
+        # Redrawing every panel of the samples (Plotly.react), in the page's own clock.
+        ms = page.evaluate(
+            "() => { const t = performance.now(); drawSamples(); return performance.now() - t; }"
+        )
+        shown = page.evaluate("state.points.shown")
+        DRAWN.append((float(ms), int(shown)))
+        page.evaluate("Plotly.Fx.hover('hemisphere', [{curveNumber: 1, pointNumber: 0}], 'polar')")
         page.screenshot(path=str(path), full_page=True)
+        page.set_viewport_size({"width": 1920, "height": 1080})
+        page.wait_for_timeout(500)  # the plots follow the window's size
+        page.screenshot(path=str(path.with_name(f"{path.stem}-1920{path.suffix}")), full_page=True)
         context.close()
 
 
@@ -350,7 +373,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         latency(Path(tmp), args.pace, args.screenshot)
     if args.screenshot is not None and args.screenshot.exists():
-        _report.figure(args.screenshot, "the page of a run being acquired")
+        _report.figure(args.screenshot, "the page of a run being acquired, 1280 px wide")
+        wide = args.screenshot.with_name(f"{args.screenshot.stem}-1920{args.screenshot.suffix}")
+        if wide.exists():
+            _report.figure(wide, "the same page 1920 px wide")
     with tempfile.TemporaryDirectory() as tmp:
         opening(Path(tmp), args.samples)
     with tempfile.TemporaryDirectory() as tmp:

@@ -14,8 +14,9 @@ Beside the run file ``RUN.sqlite`` lie two small files:
 A ``stop`` request acts exactly as a first Ctrl-C: the sample in flight finishes, the
 session ends resumable (`StopRequested`). A ``pause`` holds the axes between targets
 and waits, the process still running, until a ``resume`` (or a ``stop``, or Ctrl-C).
-Each is journaled by the engine as a ``pause`` / ``resume`` event whose ``reason`` is
-``request``, with who asked and when (`Request.data`).
+Each is journaled by the engine as a ``pause``, ``resume`` or ``stop`` event (the kind
+is the action) whose ``reason`` is ``request``, with who asked and when
+(`Request.data`).
 """
 
 from __future__ import annotations

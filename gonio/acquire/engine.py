@@ -278,9 +278,10 @@ class Engine:
             # snapshot taken now would resume the simulation mid-step).
             state = {} if exc.abandoned else self._sim()
             data = {"reason": "signal", "signal": exc.args[0], "abandoned": exc.abandoned}
-            if isinstance(exc, StopRequested):
-                data = {"reason": "request", **exc.request.data(), "abandoned": False}
-            self._event("pause", {**data, **state})
+            kind = "pause"
+            if isinstance(exc, StopRequested):  # its own kind: the run ends, resumable
+                kind, data = "stop", {"reason": "request", **exc.request.data(), "abandoned": False}
+            self._event(kind, {**data, **state})
             return "interrupted", f"stopped by {exc.args[0]}"
         if isinstance(exc, MotorFault | MotionTimeout):
             self._event("fault", {**fault_data(exc), **self._sim()}, target=self._current)

@@ -78,6 +78,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         raise ConfigError(
             "gonio serve needs Starlette and uvicorn: pip install 'gonio[live]'"
         ) from None
+    server.plotly_js()  # the page's plots: one line if plotly is missing
     path: Path = args.path
     _check_served(path)
     token = None

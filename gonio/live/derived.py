@@ -1,15 +1,16 @@
 """What ``gonio serve`` derives from a run's samples as they land: a model fitted to
 them (`gonio.reconstruct.fit`, as ``gonio fit`` fits) and the reconstruction's slice
 in the plan's coordinates (`gonio.reconstruct.reconstruct` by ``rbf``, as
-``gonio evaluate --method rbf`` reconstructs), recomputed every ``every`` new samples,
-never per request.
+``gonio evaluate --method rbf`` reconstructs), recomputed every ``every`` new samples
+and once more when the run ends, never per request.
 
 Bounded, so the acquisition does not feel it (docs/results/live.md): at most `SAMPLES`
 samples (evenly spaced in commit order, the newest among them) are fitted, from one
 start, and reconstructed; the slice is `RESOLUTION`² points; the work runs in one worker
-process of the server (`Deriver`) at the lowest CPU priority (nice 19), one job per run
-at a time, while requests are answered at once from what was derived last. The residual
-of a shown sample is (f − f_fit)/σ, evaluated when the samples' view is made.
+process of the server (`Deriver`) at the lowest CPU priority (nice 19), which ends with
+the server however it ends, one job per run at a time, while requests are answered at
+once from what was derived last. The residual of a shown sample is (f − f_fit)/σ,
+evaluated when the samples' view is made.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import math
 import multiprocessing
 import os
 import threading
+import time
 import weakref
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -48,6 +50,8 @@ SAMPLES = 1500
 RESOLUTION = 48
 #: Fewer samples than this are not fitted nor reconstructed yet.
 MINIMUM = 20
+#: How often the worker looks whether its server is still there (s).
+ORPHAN_CHECK_S = 0.5
 
 
 @dataclass(frozen=True)
@@ -202,8 +206,19 @@ def _line(exc: BaseException) -> str:
     return " ".join(text.split())[:300]
 
 
-def _low_priority() -> None:
-    os.nice(19)  # the worker process: after the acquisition and the server
+def _worker_start() -> None:
+    """In the worker process: the lowest CPU priority (after the acquisition and the
+    server), and an end of its own once its server is gone, however the server ended
+    (SIGTERM, SIGKILL): it never outlives it."""
+    os.nice(19)
+    server = os.getppid()
+    threading.Thread(target=_orphaned, args=(server,), daemon=True).start()
+
+
+def _orphaned(server: int, every_s: float = ORPHAN_CHECK_S) -> None:
+    while os.getppid() == server:
+        time.sleep(every_s)
+    os._exit(0)
 
 
 @dataclass
@@ -228,20 +243,25 @@ class Deriver:
 
     def ask(self, key: str, live: LiveRun) -> None:
         """Submit ``live`` (the caller holds what guards it) when it has `every` new
-        samples since it was last submitted (or was never and has `MINIMUM`), unless its
-        last job is still running."""
+        samples since it was last submitted (or was never and has `MINIMUM`, or no
+        process acquires it any more and it has any new one), unless its last job is
+        still running."""
         with self._lock:
             last = self._asked.get(key)
             if last is not None and live.measured < last:  # the run was started again
                 last = None
-            due = live.measured >= MINIMUM if last is None else live.measured - last >= self.every
+            if last is None:
+                due = live.measured >= MINIMUM
+            else:  # and once more when the run ends (completed, stopped), whatever it had
+                ended = not live.writing and live.measured != last
+                due = live.measured - last >= self.every or ended
             if not due or key in self._running:
                 return
             self._asked[key] = live.measured
             self._running.add(key)
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_low_priority
+                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_worker_start
                 )
                 weakref.finalize(self, self._pool.shutdown, wait=False, cancel_futures=True)
             pool = self._pool
@@ -255,6 +275,14 @@ class Deriver:
             return
         measured = live.measured
         future.add_done_callback(lambda f: self._done(key, self._result(f, measured)))
+
+    def close(self) -> None:
+        """Stop the worker: the jobs not begun are dropped, the one running ends with it
+        (`gonio serve`'s end)."""
+        with self._lock:
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
 
     def _result(self, future: Future[Result], measured: int) -> Result:
         try:

@@ -1,11 +1,13 @@
 """``gonio serve``: the local web page of the runs in a folder (or of one run file), as
 JSON endpoints over the read model (`gonio.live.model`) and one static page whose
-script and style sheet are served from the package (no CDN: a lab PC has no internet).
+script, style sheet and plotting library (Plotly.js) are served from the installed
+packages (no CDN: a lab PC has no internet).
 
 Endpoints (``RUN``: a run file's path relative to the served folder):
 
 - ``GET /`` and ``GET /run/RUN``: the page (the same bytes for everyone; it holds no
-  data); ``GET /static/…``: its script and style sheet;
+  data); ``GET /static/…``: its script and style sheet; ``GET /vendor/plotly.min.js``:
+  the Plotly.js bundle the installed ``plotly`` package ships (the page's plots);
 - ``GET /api/runs``: the runs under the served path, their state, progress and ETA (a
   run file that cannot be read: ``unreadable`` and the one line why);
 - ``GET /api/overview?run=RUN``: a run's figures (`gonio.live.views.overview`);
@@ -30,12 +32,14 @@ the acquiring process (who asked, when).
 
 from __future__ import annotations
 
+import contextlib
 import hmac
+import importlib.util
 import ipaddress
 import json
 import threading
 import time
-from collections.abc import Awaitable, Callable, MutableMapping
+from collections.abc import AsyncIterator, Awaitable, Callable, MutableMapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -53,6 +57,8 @@ from gonio.live.model import LiveRun
 from gonio.live.views import overview, points, values
 
 STATIC = Path(__file__).resolve().parent / "static"
+#: Where the installed ``plotly`` package keeps the Plotly.js bundle it ships.
+PLOTLY_JS = ("package_data", "plotly.min.js")
 #: The header that carries a token (never a cookie, never the URL).
 TOKEN_HEADER = "x-gonio-token"
 #: How often a run file is read again at most (s): every client shares the reads.
@@ -67,6 +73,17 @@ Scope = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[MutableMapping[str, Any]]]
 Send = Callable[[MutableMapping[str, Any]], Awaitable[None]]
 ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+
+def plotly_js() -> Path:
+    """The Plotly.js bundle the installed ``plotly`` package ships (the page's plots,
+    served from here: no CDN); `GonioError` (one line) when it is not installed."""
+    spec = importlib.util.find_spec("plotly")  # found, not imported
+    for folder in (spec.submodule_search_locations or []) if spec else []:
+        path = Path(folder).joinpath(*PLOTLY_JS)
+        if path.is_file():
+            return path
+    raise GonioError("gonio serve needs Plotly.js from plotly: pip install 'gonio[live]'")
 
 
 def is_loopback(host: str) -> bool:
@@ -125,6 +142,10 @@ class Served:
                 "gonio serve: a non-loopback --host needs a token (--token-file FILE); "
                 "every request must then carry it"
             )
+
+    def close(self) -> None:
+        """Stop the worker that derives fits and slices (the server's end)."""
+        self._deriver.close()
 
     # -- paths ---------------------------------------------------------------------------
     def run_path(self, name: str | None) -> Path:
@@ -281,6 +302,10 @@ class _Guard:
         await self.app(scope, receive, send)
 
 
+#: The Plotly.js bundle changes only with the installed package: checked once an hour.
+_CACHED = {"Cache-Control": "max-age=3600"}
+
+
 def _who(request: Request) -> str:
     client = request.client.host if request.client else "unknown"
     agent = request.headers.get("user-agent", "")[:80]
@@ -295,6 +320,11 @@ def app(served: Served) -> ASGIApp:
 
     def page(request: Request) -> Response:
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-cache"})
+
+    plotly = plotly_js()
+
+    def script(request: Request) -> Response:
+        return FileResponse(plotly, media_type="text/javascript", headers=_CACHED)
 
     def runs(request: Request) -> Response:
         try:
@@ -346,6 +376,15 @@ def app(served: Served) -> ASGIApp:
         Route("/api/overview", view("overview")),
         Route("/api/points", view("points")),
         Route("/api/control", post_control, methods=["POST"]),
+        Route("/vendor/plotly.min.js", script),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
-    return _Guard(Starlette(routes=routes), served)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: Starlette) -> AsyncIterator[None]:
+        try:
+            yield
+        finally:  # SIGTERM or Ctrl-C: the server shuts down, its worker with it
+            served.close()
+
+    return _Guard(Starlette(routes=routes, lifespan=lifespan), served)

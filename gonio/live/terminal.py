@@ -1,6 +1,6 @@
 """``gonio watch``'s text: a run's figures (`gonio.live.views.overview`) as the lines a
-terminal redraws in place (`screen`), or as one plain line when stdout is not a
-terminal (`line`)."""
+terminal redraws in place (`screen`, with the last samples' angles and values:
+`last_samples`), or as one plain line when stdout is not a terminal (`line`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,10 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 from gonio.live.model import LiveRun
+from gonio.live.views import values
 
 
 def duration(s: float | None) -> str:
@@ -42,6 +45,33 @@ def _event(e: Mapping[str, Any]) -> str:
     return f"{e['utc'][11:19]} {e['kind']}{target}: {detail}"
 
 
+def last_samples(live: LiveRun, count: int = 3) -> list[str]:
+    """The last ``count`` samples, a line each: the target, the pair's angles (degrees)
+    and the value with its 1σ (the BRDF in sr⁻¹ once the run has a calibration, else
+    the reading per second; `gonio.live.views.values`)."""
+    s = live.samples
+    n = len(s["target"])
+    if not n:
+        return []
+    index = np.arange(max(n - count, 0), n)
+    f, sigma, unit = values(live, index)
+    angles = {}
+    for w in ("wi", "wo"):
+        x, y, z = (s[f"{w}_{c}"][index] for c in "xyz")
+        angles[w] = (
+            np.degrees(np.arccos(np.clip(z, -1.0, 1.0))),
+            np.degrees(np.arctan2(y, x)) % 360.0,
+        )
+    (ti, pi), (to, po) = angles["wi"], angles["wo"]
+    out = [f"last samples (θi φi θo φo in degrees; f ± 1σ in {unit}):"]
+    for k, i in enumerate(index):
+        out.append(
+            f"  target {int(s['target'][i])}: {ti[k]:5.1f} {pi[k]:5.1f} {to[k]:5.1f} "
+            f"{po[k]:5.1f}  f {f[k]:.4g} ± {sigma[k]:.2g} (t = {float(s['ended_s'][i]):.1f} s)"
+        )
+    return out
+
+
 def screen(live: LiveRun, o: Mapping[str, Any], *, width: int = 80, height: int = 24) -> list[str]:
     """The lines of the terminal view, at most ``height`` of at most ``width`` chars:
     the progress, the times, the last samples, the last health reading and the last
@@ -59,14 +89,7 @@ def screen(live: LiveRun, o: Mapping[str, Any], *, width: int = 80, height: int 
     ]
     if o["resume"]:
         out.append(f"resume with: {o['resume']}")
-    s = live.samples
-    if len(s["target"]):
-        out.append("last samples:")
-        for k in range(max(len(s["target"]) - 3, 0), len(s["target"])):
-            out.append(
-                f"  target {int(s['target'][k])}: {float(s['counts'][k]):.6g} at "
-                f"{float(s['exposure_s'][k]):g} s (t = {float(s['ended_s'][k]):.1f} s)"
-            )
+    out.extend(last_samples(live))
     if o["health"]:
         h = o["health"][-1]
         temps = ", ".join(f"{a} {v:g}" for a, v in h["temperatures_c"].items())

@@ -10,8 +10,10 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import yaml
 
 from gonio.analysis.calibrated import calibration_series, is_level
+from gonio.brdf import BRDF
 from gonio.errors import GonioError
 from gonio.live.derived import Result, residuals, rounded
 from gonio.live.model import LiveRun
@@ -20,7 +22,7 @@ from gonio.types import FloatArray
 
 #: Events the event log lists (health readings and calibrations have views of their own).
 LOGGED = frozenset(
-    {"start", "resume", "pause", "fault", "retry", "skip", "second_pass", "range", "phase"}
+    {"start", "resume", "pause", "stop", "fault", "retry", "skip", "second_pass", "range", "phase"}
 )
 
 
@@ -42,6 +44,19 @@ def _reference_rate(data: Mapping[str, Any]) -> float:
     ref, dark = data["reference"], data["dark"]
     counts = float(ref["value"]) - (0.0 if dark is None else float(dark["value"]))
     return counts / (1.0 if is_level(data) else float(ref["exposure_s"]))
+
+
+def scene_name(meta: Mapping[str, Any]) -> str | None:
+    """The stored scene's ``name`` (a simulated run; None on hardware or without one)."""
+    text = meta.get("scene_text")
+    if not text:
+        return None
+    try:
+        scene = yaml.safe_load(text)
+    except yaml.YAMLError:
+        return None
+    name = scene.get("name") if isinstance(scene, dict) else None
+    return str(name) if name is not None else None
 
 
 def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
@@ -94,7 +109,9 @@ def overview(live: LiveRun, *, events: int = 100) -> dict[str, Any]:
         "state": state,
         "plan": info.name,
         "rig": info.rig.spec.name,
+        "scene": scene_name(live.meta),
         "backend": live.meta.get("backend"),
+        "isotropic": info.isotropic,
         "fly": info.fly,
         "targets": targets,
         "measured": measured,
@@ -162,6 +179,43 @@ def values(live: LiveRun, index: np.ndarray) -> tuple[FloatArray, FloatArray, st
     return np.asarray(f, np.float64), np.asarray(sigma, np.float64), "sr⁻¹"
 
 
+def _degrees(w: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Polar angle and azimuth (degrees, azimuth in [0, 360)) of unit vectors (N, 3)."""
+    theta = np.degrees(np.arccos(np.clip(w[:, 2], -1.0, 1.0)))
+    return theta, np.degrees(np.arctan2(w[:, 1], w[:, 0])) % 360.0
+
+
+def incidence_groups(theta_i_deg: FloatArray, most: int = 8) -> tuple[FloatArray, float]:
+    """Each in-plane sample's curve: its θi to the degree, or, when that makes more than
+    ``most`` curves (a plan whose θi vary continuously), the middle of its 10° band; the
+    curves' θi (degrees) and the width they stand for (1 or 10)."""
+    theta: FloatArray = np.asarray(theta_i_deg, np.float64)
+    whole: FloatArray = np.round(theta)
+    if np.unique(whole).size <= most:
+        return whole, 1.0
+    band: FloatArray = np.floor(theta / 10.0) * 10.0 + 5.0
+    return band, 10.0
+
+
+def fit_curves(model: BRDF, theta_i_deg: FloatArray, *, n: int = 121) -> list[dict[str, Any]]:
+    """The fitted model in the plane of incidence at each θi (degrees): f (sr⁻¹) at ``n``
+    signed θo from −89° to 89° (positive on the mirror side), as JSON values."""
+    if not len(theta_i_deg):
+        return []
+    ti = np.radians(np.asarray(theta_i_deg, np.float64))[:, None]
+    to = np.radians(np.linspace(-89.0, 89.0, n))[None, :]
+    shape = np.broadcast_shapes(ti.shape, to.shape)
+    zero = np.zeros(shape)
+    wi = np.stack([-np.sin(ti) + zero, zero, np.cos(ti) + zero], axis=-1).reshape(-1, 3)
+    wo = np.stack([np.sin(to) + zero, zero, np.cos(to) + zero], axis=-1).reshape(-1, 3)
+    f = np.asarray(model.eval(wi, wo), np.float64).reshape(shape)
+    x = np.round(np.degrees(to[0]), 2).tolist()
+    return [
+        {"theta_i_deg": float(t), "theta_o_deg": x, "f": [rounded(v) for v in row.tolist()]}
+        for t, row in zip(np.asarray(theta_i_deg, np.float64).tolist(), f, strict=True)
+    ]
+
+
 def points(
     live: LiveRun,
     *,
@@ -175,8 +229,12 @@ def points(
     while a large plan is parsed), and the in-plane samples (ωo within ``plane_deg`` of
     the plane of incidence) with their BRDF and 1σ: JSON values, rounded for size. The
     value is the BRDF (sr⁻¹) once the run has a calibration, else the reading per second
-    of exposure. With ``derived`` (`gonio.live.derived`): each shown sample's residual
-    against the fit, the fit's figures and the reconstruction's slice."""
+    of exposure. Each shown sample: its pair's angles (θi, φi, θo, φo in degrees), its
+    azimuth on the plot (``phi_deg``: φo turned so ωi lies at 180°, the mirror direction
+    at 0°), its value and 1σ, its target, its place among the run's samples and its run
+    time (s). With ``derived`` (`gonio.live.derived`): each shown sample's residual
+    against the fit, the fit's figures, its curves in the plane of incidence at the
+    in-plane samples' θi (`incidence_groups`) and the reconstruction's slice."""
     s = live.samples
     pick = _pick(len(s["target"]), limit, newest=min(500, limit // 4))
     value, sigma, unit = values(live, pick)
@@ -185,35 +243,55 @@ def points(
     xy = _rotated(wi, wo)
     plan, missing = live.plan, live.missing()
     gxy = np.empty((0, 2))
+    g_theta = np.empty(0)
     if plan is not None and missing is not None and missing.size:
         grey = missing[_pick(missing.size, pending, newest=0)]
         gxy = _rotated(plan.wi[grey], plan.wo[grey])
-    theta_i = np.degrees(np.arccos(np.clip(wi[:, 2], -1.0, 1.0)))
-    theta_o = np.degrees(np.arccos(np.clip(wo[:, 2], -1.0, 1.0)))
+        g_theta = _degrees(plan.wo[grey])[0]
+    theta_i, phi_i = _degrees(wi)
+    theta_o, phi_o = _degrees(wo)
     sin_o = np.hypot(xy[:, 0], xy[:, 1])
     off_plane = np.degrees(np.arcsin(np.clip(np.abs(xy[:, 1]) / np.maximum(sin_o, 1e-12), 0, 1)))
     in_plane = np.flatnonzero((off_plane <= plane_deg) | (sin_o < 1e-6))
     signed = np.where(xy[in_plane, 0] >= 0, 1.0, -1.0) * theta_o[in_plane]
+    group, width = incidence_groups(theta_i[in_plane])
     residual: list[float | None] | None = None
+    curves: list[dict[str, Any]] = []
     if derived is not None and derived.model is not None:
         r = residuals(derived.model, wi, wo, value, sigma)
         residual = [rounded(v) for v in np.round(r, 3).tolist()]
+        curves = fit_curves(derived.model, np.unique(group))
+    azimuth = np.degrees(np.arctan2(xy[:, 1], xy[:, 0])) % 360.0
+    g_azimuth = np.degrees(np.arctan2(gxy[:, 1], gxy[:, 0])) % 360.0
     return {
         "name": live.path.name,
         "version": live.version,
         "measured": live.measured,
+        "isotropic": live.info.isotropic,
         "fit": None if derived is None else derived.summary(),
+        "fit_curves": curves,
         "residual": residual,
         "slice": None if derived is None else derived.slice,
         "shown": int(pick.size),
         "unit": unit,
-        "xy": np.round(xy, 4).ravel().tolist(),
+        "theta_i_deg": np.round(theta_i, 2).tolist(),
+        "phi_i_deg": np.round(phi_i, 2).tolist(),
+        "theta_o_deg": np.round(theta_o, 2).tolist(),
+        "phi_o_deg": np.round(phi_o, 2).tolist(),
+        "phi_deg": np.round(azimuth, 2).tolist(),
         "value": [rounded(v) for v in value.tolist()],
-        "pending_xy": np.round(gxy, 4).ravel().tolist(),
+        "sigma": [rounded(v) for v in sigma.tolist()],
+        "target": s["target"][pick].astype(np.int64).tolist(),
+        "index": pick.astype(np.int64).tolist(),
+        "t_s": np.round(s["ended_s"][pick], 2).tolist(),
+        "pending_theta_o_deg": np.round(g_theta, 2).tolist(),
+        "pending_phi_deg": np.round(g_azimuth, 2).tolist(),
         "pending": max(live.info.targets - live.measured - live.skipped, 0),
         "in_plane": {
             "theta_o_deg": np.round(signed, 3).tolist(),
             "theta_i_deg": np.round(theta_i[in_plane], 2).tolist(),
+            "group_deg": group.tolist(),
+            "group_width_deg": width,
             "value": [rounded(v) for v in value[in_plane].tolist()],
             "sigma": [rounded(v) for v in sigma[in_plane].tolist()],
         },

@@ -408,11 +408,38 @@ class RunFollower:
         return done and not self.info.survey
 
     def rate_per_s(self) -> float | None:
-        """Samples per second of wall time over the last samples (None: too few)."""
+        """Samples per second of wall time over the last samples, the time the run was
+        held in between not counted (`held_s`; None: too few)."""
         recent = [u for _, u in self._recent if math.isfinite(u)]
         if len(recent) < 3 or recent[-1] <= recent[0]:
             return None
-        return (len(recent) - 1) / (recent[-1] - recent[0])
+        active = recent[-1] - recent[0] - self.held_s(recent[0], recent[-1])
+        return (len(recent) - 1) / active if active > 0 else None
+
+    def held_s(self, start: float, end: float) -> float:
+        """Wall time (s) between the epochs ``start`` and ``end`` during which the run was
+        held: from a ``pause`` or ``stop`` event to the next ``resume`` or ``start``, and
+        from a session's end to the next session's start."""
+        spans: list[tuple[float, float]] = []
+        opened: float | None = None
+        for e in self.events:
+            if e.kind in ("pause", "stop") and opened is None:
+                opened = _epoch(e.utc)
+            elif e.kind in ("resume", "start") and opened is not None:
+                spans.append((opened, _epoch(e.utc)))
+                opened = None
+        if opened is not None:
+            spans.append((opened, math.inf))
+        for before, after in zip(self.sessions, self.sessions[1:], strict=False):
+            if before.ended_utc is not None:
+                spans.append((_epoch(before.ended_utc), _epoch(after.started_utc)))
+        held, reached = 0.0, start
+        for a, b in sorted(x for x in spans if math.isfinite(x[0]) and not math.isnan(x[1])):
+            a, b = max(a, reached), min(b, end)
+            if b > a:
+                held += b - a
+                reached = b
+        return held
 
 
 __all__: Sequence[str] = (

@@ -1,10 +1,13 @@
-// The page of `gonio serve`: polls the JSON endpoints and draws on canvases (no library,
-// no network beyond this server). The control token comes from the URL's fragment
-// (#token=…, never sent to a server) or the form, and is sent in the X-Gonio-Token header.
+// The page of `gonio serve`: polls the JSON endpoints and draws them with plots.js (Plotly.js
+// served by this server; no network beyond it). The control token comes from the URL's
+// fragment (#token=…, never sent to a server) or the form, and is sent in the
+// X-Gonio-Token header.
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { run: null, token: null, version: -1, pointsVersion: "", single: false, points: null };
+const state = { run: null, token: null, pointsVersion: "", points: null, overview: null, overlay: null,
+  healthKey: "", requested: null };
+const PANELS = ["hemisphere", "inplane", "fit", "slice", "temperature", "voltage", "drift"];
 
 function readToken() {
   const hash = new URLSearchParams(location.hash.slice(1));
@@ -78,9 +81,7 @@ async function poll() {
       const p = await getJSON("/api/points?run=" + encodeURIComponent(state.run));
       state.pointsVersion = wanted;
       state.points = p;
-      drawHemisphere(p);
-      drawInPlane(p);
-      drawSlice(p);
+      drawSamples();
     }
   } catch (e) {
     message(e.message, true);
@@ -88,8 +89,22 @@ async function poll() {
   setTimeout(poll, 1000);
 }
 
+function drawSamples() {
+  const p = state.points;
+  if (!p) return;
+  $("unit").textContent = drawHemisphere($("hemisphere"), p, $("colour").value, state.overlay);
+  $("shown").textContent = `${p.shown} of ${p.measured} samples shown; ${p.pending} targets to measure.`;
+  drawInPlane($("inplane"), p, $("scale").value, state.overlay);
+  $("fit-caption").textContent = drawFit($("fit"), p, $("scale").value);
+  $("slice-caption").textContent = drawSlice($("slice"), p);
+}
+
 function showOverview(o) {
+  state.overview = o;
   $("run-name").textContent = o.name;
+  $("plan").textContent = o.plan || "";
+  $("rig").textContent = o.rig || "";
+  $("scene").textContent = o.scene || (o.backend === "simulated" ? "" : o.backend || "");
   const st = $("state");
   st.textContent = o.state;
   st.className = "state " + o.state;
@@ -111,9 +126,18 @@ function showOverview(o) {
   $("pause").disabled = !state.token || o.state !== "running";
   $("resume").disabled = !state.token || o.state !== "paused";
   $("stop").disabled = !state.token;
+  // A request's message stays until the next request, or until the run ends.
+  if (state.requested && !live) {
+    state.requested = null;
+    message("");
+  }
   showEvents(o.events);
-  drawHealth(o);
-  drawDrift(o);
+  const key = `${o.health.length}:${o.calibrations.length}`;
+  if (key !== state.healthKey) {  // redrawn when a reading lands, not every poll
+    state.healthKey = key;
+    drawHealth($("temperature"), $("voltage"), o);
+    drawDrift($("drift"), o);
+  }
 }
 
 function showEvents(events) {
@@ -143,171 +167,74 @@ async function send(action) {
     const body = await r.json();
     if (!r.ok) throw new Error(body.error || r.statusText);
     message(`${action} requested; it takes effect between targets`);
+    state.requested = action;
   } catch (e) {
     message(e.message, true);
   }
 }
 
-// -- drawing -----------------------------------------------------------------------------
-function viridis(t) {
-  const stops = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-  t = Math.min(1, Math.max(0, t)) * (stops.length - 1);
-  const i = Math.min(Math.floor(t), stops.length - 2), f = t - i;
-  const c = stops[i].map((v, k) => Math.round(v + f * (stops[i + 1][k] - v)));
-  return `rgb(${c[0]},${c[1]},${c[2]})`;
+// -- overlays: another run of the folder, or a file's export ----------------------------
+async function listOverlays() {
+  try {
+    const body = await getJSON("/api/runs");
+    const chosen = $("overlay").value;
+    const options = body.runs.filter((r) => r.name !== state.run && r.state !== "unreadable").map((r) => {
+      const option = document.createElement("option");
+      option.value = option.textContent = r.name;
+      return option;
+    });
+    const none = document.createElement("option");
+    none.value = "";
+    none.textContent = "none";
+    $("overlay").replaceChildren(none, ...options);
+    $("overlay").value = options.some((o) => o.value === chosen) ? chosen : "";
+  } catch (e) {
+    message(e.message, true);
+  }
+  setTimeout(listOverlays, 10000);
 }
 
-function logRange(values) {
-  const logs = values.filter((v) => v !== null && v > 0).map(Math.log10).sort((a, b) => a - b);
-  if (!logs.length) return [0, 1];
-  const lo = logs[Math.floor(0.02 * (logs.length - 1))], hi = logs[Math.floor(0.98 * (logs.length - 1))];
-  return hi > lo ? [lo, hi] : [lo - 0.5, lo + 0.5];
+async function chooseOverlay(name) {
+  $("overlay-file").value = "";
+  try {
+    state.overlay = name ? overlayOfPoints(await getJSON("/api/points?run=" + encodeURIComponent(name))) : null;
+    $("overlay-note").textContent = state.overlay ? `overlay: ${name}, open red rings and dotted curves` : "";
+  } catch (e) {
+    state.overlay = null;
+    message(e.message, true);
+  }
+  drawSamples();
 }
 
-function drawHemisphere(p) {
-  const c = $("hemisphere"), g = c.getContext("2d");
-  const r = c.width / 2 - 14, cx = c.width / 2, cy = c.height / 2;
-  g.clearRect(0, 0, c.width, c.height);
-  g.strokeStyle = "#c5ccd3";
-  for (const deg of [30, 60, 90]) {
-    g.beginPath();
-    g.arc(cx, cy, r * Math.sin((deg * Math.PI) / 180), 0, 2 * Math.PI);
-    g.stroke();
+async function readOverlayFile(file) {
+  if (!file) return;
+  $("overlay").value = "";
+  try {
+    state.overlay = overlayOfCsv(file.name, await file.text());
+    $("overlay-note").textContent = `overlay: ${file.name} (${state.overlay.value.length} samples), open red rings and dotted curves`;
+  } catch (e) {
+    state.overlay = null;
+    message(e.message, true);
   }
-  g.beginPath(); g.moveTo(cx - r, cy); g.lineTo(cx + r, cy); g.stroke();
-  g.fillStyle = "#b9bfc6";
-  for (let k = 0; k < p.pending_xy.length; k += 2) {
-    g.fillRect(cx + r * p.pending_xy[k] - 1, cy - r * p.pending_xy[k + 1] - 1, 2, 2);
-  }
-  const [lo, hi] = logRange(p.value);
-  const size = p.shown > 5000 ? 2 : 4;
-  const residual = $("colour").value === "residual" && p.residual !== null;
-  for (let k = 0; k < p.value.length; k++) {
-    const v = p.value[k];
-    if (residual) {
-      const e = p.residual[k];
-      g.fillStyle = e === null ? "#b9bfc6" : diverging(e / 3);
-    } else {
-      g.fillStyle = v !== null && v > 0 ? viridis((Math.log10(v) - lo) / (hi - lo)) : "#e0523f";
+  drawSamples();
+}
+
+// -- save any panel as PNG or SVG --------------------------------------------------------
+function addSaveButtons() {
+  for (const id of PANELS) {
+    const box = document.createElement("span");
+    box.className = "save";
+    for (const format of ["png", "svg"]) {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.textContent = format.toUpperCase();
+      b.title = `save this panel as ${format.toUpperCase()}`;
+      b.dataset.save = `${id}.${format}`;
+      b.onclick = () => save($(id), format, `${(state.run || "run").replace(/[^\w.-]+/g, "_")}-${id}`);
+      box.appendChild(b);
     }
-    g.fillRect(cx + r * p.xy[2 * k] - size / 2, cy - r * p.xy[2 * k + 1] - size / 2, size, size);
+    $(id).parentElement.appendChild(box);
   }
-  const fit = p.fit;
-  $("unit").textContent = residual
-    ? `residual (f − fit)/σ of ${fit.model}, blue −3 … red +3 (χ²/dof ${fit.chi2_red}, fitted at ${fit.measured} samples)`
-    : `log₁₀ value (${p.unit}), ${lo.toFixed(2)}…${hi.toFixed(2)}`
-      + (fit && fit.error ? `; fit: ${fit.error}` : fit === null || p.residual === null ? "; fit: not yet" : "");
-  c.dataset.colour = residual ? "residual" : "value";
-  $("shown").textContent = `${p.shown} of ${p.measured} samples shown; ${p.pending} targets to measure`;
-  c.dataset.samples = String(p.measured);
-}
-
-function diverging(t) {
-  t = Math.min(1, Math.max(-1, t));
-  const a = [59, 76, 192], w = [235, 235, 235], b = [180, 4, 38];
-  const [from, to, f] = t < 0 ? [w, a, -t] : [w, b, t];
-  const c = from.map((v, k) => Math.round(v + f * (to[k] - v)));
-  return `rgb(${c[0]},${c[1]},${c[2]})`;
-}
-
-function drawSlice(p) {
-  const c = $("slice"), g = c.getContext("2d");
-  g.clearRect(0, 0, c.width, c.height);
-  const s = p.slice;
-  if (!s) {
-    $("slice-caption").textContent = p.fit && p.fit.slice_error ? p.fit.slice_error : "not yet";
-    c.dataset.filled = "0";
-    return;
-  }
-  const [lo, hi] = logRange(s.f);
-  const m = 30, w = (c.width - m - 4) / s.n, h = (c.height - m - 4) / s.n;
-  let filled = 0;
-  for (let j = 0; j < s.n; j++) {
-    for (let i = 0; i < s.n; i++) {
-      const v = s.f[j * s.n + i];
-      g.fillStyle = v !== null && v > 0 ? viridis((Math.log10(v) - lo) / (hi - lo)) : "#e4e7ea";
-      if (v !== null && v > 0) filled++;
-      g.fillRect(m + i * w, c.height - m - (j + 1) * h, Math.ceil(w), Math.ceil(h));
-    }
-  }
-  g.fillStyle = "#6b737b"; g.font = "11px system-ui";
-  // angles (θ…, φ…) in degrees, the other coordinates as they are
-  const show = (name, x) => /^(theta|phi)/.test(name) ? (x * 180 / Math.PI).toFixed(0) + "°" : x.toFixed(2);
-  g.fillText(`${s.names[0]} ${show(s.names[0], s.x[0])} … ${show(s.names[0], s.x[1])}`, m, c.height - 10);
-  g.save(); g.translate(12, c.height - m); g.rotate(-Math.PI / 2);
-  g.fillText(`${s.names[1]} ${show(s.names[1], s.y[0])} … ${show(s.names[1], s.y[1])}`, 0, 0); g.restore();
-  const fixed = Object.entries(s.fixed).map(([k, v]) => `${k} = ${show(k, v)}`).join(", ");
-  $("slice-caption").textContent = `${fixed}; rbf from ${s.samples} samples at ${p.fit.measured}; log₁₀ f ${lo.toFixed(2)}…${hi.toFixed(2)}`;
-  c.dataset.filled = String(filled);
-}
-
-function axes(g, c, xr, yr, xlabel, ylabel) {
-  const m = { l: 44, r: 8, t: 8, b: 26 };
-  const w = c.width - m.l - m.r, h = c.height - m.t - m.b;
-  g.clearRect(0, 0, c.width, c.height);
-  g.strokeStyle = "#c5ccd3"; g.fillStyle = "#6b737b"; g.font = "11px system-ui";
-  g.strokeRect(m.l, m.t, w, h);
-  g.fillText(xlabel, m.l + w / 2 - 20, c.height - 6);
-  g.fillText(`${+yr[1].toPrecision(3)}`, 2, m.t + 10);
-  g.fillText(`${+yr[0].toPrecision(3)}`, 2, m.t + h);
-  g.fillText(`${+xr[0].toPrecision(3)}`, m.l, m.t + h + 12);
-  g.fillText(`${+xr[1].toPrecision(3)}`, m.l + w - 24, m.t + h + 12);
-  g.save(); g.translate(10, m.t + h / 2 + 20); g.rotate(-Math.PI / 2); g.fillText(ylabel, 0, 0); g.restore();
-  const X = (x) => m.l + ((x - xr[0]) / (xr[1] - xr[0] || 1)) * w;
-  const Y = (y) => m.t + h - ((y - yr[0]) / (yr[1] - yr[0] || 1)) * h;
-  return [X, Y];
-}
-
-function drawInPlane(p) {
-  const c = $("inplane"), g = c.getContext("2d");
-  const q = p.in_plane, keep = [];
-  for (let k = 0; k < q.value.length; k++) if (q.value[k] !== null && q.value[k] > 0) keep.push(k);
-  const [lo, hi] = logRange(keep.map((k) => q.value[k]));
-  const [X, Y] = axes(g, c, [-90, 90], [lo, hi], "signed θo (deg)", "log₁₀ value");
-  for (const k of keep) {
-    const v = q.value[k], s = q.sigma[k] || 0;
-    const t = q.theta_i_deg[k] / 90;
-    g.strokeStyle = g.fillStyle = viridis(t);
-    const y0 = Math.log10(Math.max(v - s, v * 1e-3)), y1 = Math.log10(v + s);
-    g.beginPath(); g.moveTo(X(q.theta_o_deg[k]), Y(y0)); g.lineTo(X(q.theta_o_deg[k]), Y(y1)); g.stroke();
-    g.fillRect(X(q.theta_o_deg[k]) - 2, Y(Math.log10(v)) - 2, 4, 4);
-  }
-  c.dataset.points = String(keep.length);
-}
-
-function series(c, rows, key, limits, label) {
-  const g = c.getContext("2d");
-  const names = new Set();
-  rows.forEach((r) => Object.keys(r[key] || {}).forEach((n) => names.add(n)));
-  const ts = rows.map((r) => r.t_s);
-  const vals = rows.flatMap((r) => Object.values(r[key] || {}));
-  const all = vals.concat(limits);
-  const xr = ts.length ? [Math.min(...ts), Math.max(...ts)] : [0, 1];
-  if (xr[1] <= xr[0]) xr[1] = xr[0] + 1;  // one reading: a point, not a line
-  const yr = all.length ? [Math.min(...all) - 1, Math.max(...all) + 1] : [0, 1];
-  const [X, Y] = axes(g, c, xr, yr, "instrument time (s)", label);
-  g.setLineDash([4, 4]); g.strokeStyle = "#e0523f";
-  for (const l of limits) { g.beginPath(); g.moveTo(X(xr[0]), Y(l)); g.lineTo(X(xr[1]), Y(l)); g.stroke(); }
-  g.setLineDash([]);
-  [...names].forEach((n, i) => {
-    g.strokeStyle = viridis(i / Math.max(names.size - 1, 1) * 0.85);
-    g.fillStyle = g.strokeStyle;
-    g.beginPath();
-    rows.forEach((r, k) => { const v = (r[key] || {})[n]; if (v !== undefined) (k ? g.lineTo : g.moveTo).call(g, X(r.t_s), Y(v)); });
-    g.stroke();
-    rows.forEach((r) => { const v = (r[key] || {})[n]; if (v !== undefined) g.fillRect(X(r.t_s) - 2, Y(v) - 2, 4, 4); });
-  });
-}
-
-function drawHealth(o) {
-  const lim = o.health_limits;
-  series($("temperature"), o.health, "temperatures_c", [lim.max_temperature_c], "°C");
-  series($("voltage"), o.health, "voltages_v", [lim.min_voltage_v, lim.max_voltage_v], "V");
-}
-
-function drawDrift(o) {
-  const rows = o.calibrations.map((c) => ({ t_s: c.t_s, d: { reference: 100 * (c.drift || 0) } }));
-  series($("drift"), rows, "d", [], "%");
 }
 
 // -- start -------------------------------------------------------------------------------
@@ -316,13 +243,18 @@ function start() {
   $("pause").onclick = () => send("pause");
   $("resume").onclick = () => send("resume");
   $("stop").onclick = () => { if (confirm("Stop the run? It stays resumable.")) send("stop"); };
-  $("colour").onchange = () => { if (state.points) drawHemisphere(state.points); };
+  $("colour").onchange = drawSamples;
+  $("scale").onchange = drawSamples;
+  $("overlay").onchange = () => chooseOverlay($("overlay").value);
+  $("overlay-file").onchange = () => readOverlayFile($("overlay-file").files[0]);
+  addSaveButtons();
   $("token-set").onclick = () => { state.token = $("token").value.trim() || null; $("token-form").hidden = true; };
   const m = location.pathname.match(/^\/run\/(.+)$/);
   if (m) {
     state.run = decodeURI(m[1]);
     $("run").hidden = false;
     poll();
+    listOverlays();
   } else {
     showRuns().catch((e) => message(e.message, true));
   }

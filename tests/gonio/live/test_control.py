@@ -10,6 +10,7 @@ import signal
 import stat
 import time
 from collections.abc import Callable
+from datetime import datetime
 from pathlib import Path
 
 import pytest
@@ -74,6 +75,11 @@ def test_pause_then_resume_continues_the_run(
     assert_same_samples(run, uninterrupted(files))
     live.refresh()
     assert live.state() == "completed"
+    # The rate (and so the ETA) counts the wall time the run was acquiring, not paused.
+    utc = [datetime.fromisoformat(u).timestamp() for u in run.samples["utc"]]
+    held = datetime.fromisoformat(resume.utc) - datetime.fromisoformat(pause.utc)
+    active = utc[-1] - utc[0] - held.total_seconds()
+    assert live.rate_per_s() == pytest.approx((len(utc) - 1) / active, rel=1e-6)
 
 
 @pytest.mark.usefixtures("rigs_parsed_once")
@@ -91,7 +97,9 @@ def test_stop_ends_resumable_as_a_first_ctrl_c(
     run = open_run(path)
     assert run.sessions[-1].outcome == "interrupted"
     last = run.events[-1]
-    assert last.kind == "pause" and last.data["reason"] == "request"
+    assert last.kind == "stop" and last.data["reason"] == "request"
+    assert not [e for e in run.of_kind("pause") if e.data.get("action") == "stop"]
+    assert "sim_state" in last.data  # a resumed simulation starts from it
     assert last.data["action"] == "stop" and last.data["by"] == "b"
     assert LiveRun(path).state() == "stopped"
     outcome = session.resume(path)  # an old stop request does not act on a new session

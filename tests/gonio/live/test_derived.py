@@ -5,16 +5,22 @@ new samples in one worker process, never per request."""
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from gonio.acquire import control
 from gonio.cli import main, serve
 from gonio.live import derived
 from gonio.live.model import LiveRun
 from gonio.live.views import points, values
+from gonio.store.read import open_run
+from tests.gonio.live.conftest import forked_acquire
 from tests.support.acquire import MATTE, plan_file
 
 
@@ -61,3 +67,43 @@ def test_gonio_serve_s_defaults_are_the_deriver_s() -> None:
     serve.add_parser(parser.add_subparsers(), "")
     args = parser.parse_args(["serve"])
     assert (args.refit_every, args.fit_model) == (derived.EVERY, derived.MODEL)
+
+
+def test_the_end_of_a_run_is_derived_too(tmp_path: Path) -> None:
+    plan = plan_file(tmp_path, target=60)
+    path = tmp_path / "run.sqlite"
+    pid = forked_acquire(["acquire", str(plan), "--scene", str(MATTE), "-o", str(path)], 0.02)
+    try:
+        _until(lambda: path.exists() and len(open_run(path)) >= derived.MINIMUM)
+        control.post_request(path, "pause", "the test")
+        live = LiveRun(path)
+        _until(lambda: live.refresh() is not None and live.state() == "paused")
+        deriver = derived.Deriver(values, every=1000)
+        deriver.ask("run", live)
+        _until(lambda: deriver.latest("run") is not None)
+        first = deriver.latest("run")
+        assert first is not None and first.measured == live.measured < 60
+        control.post_request(path, "resume", "the test")
+        _, status = os.waitpid(pid, 0)
+        pid = 0
+        assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
+        live.refresh()
+        assert live.state() == "completed"
+        deriver.ask("run", live)  # fewer than `every` new samples, but the run ended
+        _until(lambda: deriver.generation == 2)
+        last = deriver.latest("run")
+        assert last is not None and last.measured == 60 and last.slice is not None
+        deriver.ask("run", live)  # and then no more
+        assert deriver.generation == 2
+        deriver.close()
+    finally:
+        if pid:
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+
+
+def _until(check: Callable[[], bool], timeout_s: float = 60.0) -> None:
+    give_up = time.monotonic() + timeout_s
+    while not check():
+        assert time.monotonic() < give_up, "timed out"
+        time.sleep(0.05)

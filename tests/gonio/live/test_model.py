@@ -37,7 +37,7 @@ def test_a_large_run_is_read_in_part_and_its_plan_in_the_background(
     same = overview(whole)
     for key in ("state", "measured", "targets", "skipped", "missing", "progress", "plan"):
         assert first[key] == same[key], key
-    assert points(part)["shown"] == 8 and points(part)["pending_xy"] == []
+    assert points(part)["shown"] == 8 and points(part)["pending_phi_deg"] == []
     give_up = time.monotonic() + 60
     while part.plan is None:  # the loader starts at the second refresh
         assert time.monotonic() < give_up, "the plan was not parsed"

@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 import time
 import urllib.error
 import urllib.request
@@ -23,7 +25,7 @@ from gonio.cli import main
 from gonio.errors import GonioError
 from gonio.live import server
 from gonio.store.read import open_run
-from tests.gonio.live.conftest import forked_acquire
+from tests.gonio.live.conftest import ROOT, forked_acquire, free_port
 from tests.support.acquire import MATTE, plan_file
 
 
@@ -151,7 +153,11 @@ def test_control_of_a_run_not_being_acquired_is_refused(
         status, body, _ = call(f"{base}/api/overview?run=done.sqlite")
         assert status == 200 and body["state"] == "completed" and body["measured"] == 20
         status, body, _ = call(f"{base}/api/points?run=done.sqlite")
-        assert status == 200 and len(body["xy"]) == 2 * 20 and body["unit"] == "sr⁻¹"
+        assert (
+            status == 200
+            and len(body["theta_o_deg"]) == len(body["phi_deg"]) == 20
+            and body["unit"] == "sr⁻¹"
+        )
         status, body, _ = call(f"{base}/api/runs")
         assert status == 200 and body["single"] and body["runs"][0]["name"] == "done.sqlite"
         status, _, _ = call(f"{base}/api/overview?run=other.sqlite")
@@ -187,3 +193,56 @@ def test_serve_refuses_a_missing_path(capsys: pytest.CaptureFixture[str], tmp_pa
     assert capsys.readouterr().err.count("\n") == 1
     (tmp_path / "notes.txt").write_text("x")
     assert main(["serve", str(tmp_path / "notes.txt")]) == 2
+
+
+def _children(pid: int) -> set[int]:
+    """The processes whose parent is ``pid`` (from /proc)."""
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.add(int(entry.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.slow
+def test_serve_stopped_by_sigterm_leaves_no_worker(tmp_path: Path) -> None:
+    plan = plan_file(tmp_path, target=30)
+    path = tmp_path / "done.sqlite"
+    assert main(["acquire", str(plan), "--scene", str(MATTE), "-o", str(path), "-q"]) == 0
+    port = free_port()
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    child = subprocess.Popen(
+        [sys.executable, "-m", "gonio", "serve", str(path), "--port", str(port),
+         "--refit-every", "20"],
+        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    workers: set[int] = set()
+    try:
+        assert child.stdout is not None and child.stdout.readline().startswith("serving")
+        base = f"http://127.0.0.1:{port}"
+        assert call(f"{base}/api/points?run=done.sqlite")[0] == 200  # the deriver starts
+        _wait(lambda: bool(_children(child.pid)))
+        workers = _children(child.pid)
+        _wait(lambda: call(f"{base}/api/points?run=done.sqlite")[1]["fit"] is not None)
+        child.send_signal(signal.SIGTERM)
+        assert child.wait(30) in (0, -signal.SIGTERM)  # uvicorn ends as the signal asks
+        _wait(lambda: not any(_alive(w) for w in workers), timeout_s=10)
+    finally:
+        for w in workers:  # first: a worker left behind holds the pipes open
+            if _alive(w):
+                os.kill(w, signal.SIGKILL)
+        child.kill()
+        child.communicate()

@@ -11,9 +11,14 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pexpect
+import pytest
 
 from gonio.acquire import control
+from gonio.analysis import calibrate
+from gonio.live.model import LiveRun
+from gonio.live.terminal import last_samples
 from gonio.store.read import open_run
 from tests.gonio.live.conftest import ROOT, forked_acquire
 from tests.support.acquire import MATTE, plan_file
@@ -46,6 +51,9 @@ def test_watch_in_a_terminal_and_piped(tmp_path: Path) -> None:
         term.expect(r"samples (\d+) of 60")
         while int(term.match.group(1)) == first:
             term.expect(r"samples (\d+) of 60")
+        # the last samples by their angles (degrees) and calibrated value, not raw counts
+        term.expect(r"last samples \(θi φi θo φo in degrees; f ± 1σ in sr⁻¹\):")
+        term.expect(r"target \d+: +[\d.]+ +[\d.]+ +[\d.]+ +[\d.]+  f [\d.e+-]+ ± [\d.e+-]+")
         term.expect(r"reason=request")  # the pause among the events
         term.expect("q or Ctrl-C: quit")
         term.send("q")
@@ -67,4 +75,22 @@ def test_watch_in_a_terminal_and_piped(tmp_path: Path) -> None:
         if pid:
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
-    assert open_run(path).complete  # quitting the view left the run alone
+    run = open_run(path)
+    assert run.complete  # quitting the view left the run alone
+    # The watch's last samples are the analysis's calibrated ones (an independent path).
+    calibrated = calibrate(run)
+    wi, wo = run.directions()
+    shown = last_samples(LiveRun(path))
+    assert len(shown) == 4
+    for line, k in zip(shown[1:], range(len(run) - 3, len(run)), strict=True):
+        target, rest = line.split(":", 1)
+        assert int(target.split()[-1]) == int(run.samples["target"][k])
+        angles = [float(v) for v in rest.split("f")[0].split()]
+        expected = [
+            np.degrees(np.arccos(wi[k, 2])), np.degrees(np.arctan2(wi[k, 1], wi[k, 0])) % 360,
+            np.degrees(np.arccos(wo[k, 2])), np.degrees(np.arctan2(wo[k, 1], wo[k, 0])) % 360,
+        ]  # fmt: skip
+        assert angles == pytest.approx(expected, abs=0.051)
+        f, sigma = (float(v) for v in rest.split(" f ")[1].split(" (t")[0].split(" ± "))
+        assert f == pytest.approx(calibrated.brdf[k], rel=1e-3)
+        assert sigma == pytest.approx(calibrated.sigma[k], rel=1e-2)
