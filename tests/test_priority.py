@@ -1,0 +1,56 @@
+"""A real-time (``pty``) test runs ahead of the host's other work: its thread, the
+threads and processes it starts at `REAL_TIME_NICE` (as root, as CI runs), and every
+other test at the priority the suite started with."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+
+import pytest
+
+from tests.support.priority import REAL_TIME_NICE, ahead
+
+
+def thread_nice() -> int:
+    return os.getpriority(os.PRIO_PROCESS, 0)
+
+
+def started_nice() -> tuple[int, int]:
+    """The nice value of a thread and of a process started now."""
+    seen: list[int] = []
+    thread = threading.Thread(target=lambda: seen.append(thread_nice()))
+    thread.start()
+    thread.join()
+    child = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpriority(os.PRIO_PROCESS, 0))"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    return seen[0], int(child.stdout)
+
+
+def test_ahead_raises_what_starts_inside_and_restores_the_thread() -> None:
+    before = thread_nice()
+    with ahead() as raised:
+        inside = thread_nice()
+        thread, process = started_nice()
+    assert thread_nice() == before
+    if not raised:  # only root may lower a nice value
+        assert os.geteuid() != 0
+        assert inside == before
+        return
+    assert inside == thread == process == min(REAL_TIME_NICE, before)
+    assert started_nice() == (before, before)
+
+
+@pytest.mark.pty
+def test_a_pty_test_runs_ahead() -> None:
+    if os.geteuid() == 0:
+        assert thread_nice() <= REAL_TIME_NICE
+        assert started_nice() == (thread_nice(), thread_nice())
+
+
+def test_any_other_test_runs_at_the_suites_priority() -> None:
+    assert thread_nice() > REAL_TIME_NICE
