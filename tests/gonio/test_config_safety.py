@@ -40,6 +40,7 @@ def refusal(tmp_path: Path, text: str | bytes) -> str:
     return message
 
 
+@pytest.mark.timing
 def test_billion_laughs_is_refused_quickly(tmp_path: Path, run_gonio: Gonio) -> None:
     plan = tmp_path / "plan.yaml"
     plan.write_text(f"rig: {ARCH}\n" + laughs(9))
@@ -53,6 +54,7 @@ def test_billion_laughs_is_refused_quickly(tmp_path: Path, run_gonio: Gonio) -> 
     assert elapsed < 2.0
 
 
+@pytest.mark.timing
 def test_duplicate_key_under_many_aliases_in_linear_time(tmp_path: Path) -> None:
     # Within the expansion bound, yet 10 ** 4 paths to the innermost mapping: each
     # node is checked once.
