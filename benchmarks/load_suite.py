@@ -7,7 +7,9 @@ average near 9). Prints each round's passes, failures (by name) and wall time; a
 green is the requirement.
 
 The pty tests run ahead of the spinning processes (`tests.support.priority`: nice -20
-as root, as CI runs); the spinning processes run at the priority this script has. Each
+as root, as CI runs, and their session's scheduling group raised where the kernel groups
+processes by session); the spinning processes run at the priority this script has, each
+in a session of its own (as other jobs on a shared host would). Each
 round's pytest runs at that nice value too (as root), its collection included, so that
 a round's wall time is its tests' rather than the import of 50 test modules beside the
 spinning processes; a failed test is listed with the first line of its error.
@@ -70,7 +72,7 @@ def one_round(paths: list[str]) -> tuple[int, int, list[str], float]:
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", MARKERS,
          "-rf", *paths],
         cwd=ROOT, capture_output=True, text=True, stdin=subprocess.DEVNULL,
-        preexec_fn=ahead,
+        preexec_fn=ahead, env={**os.environ, "COLUMNS": "400"},
     )  # fmt: skip
     wall = time.perf_counter() - started
     summary = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
@@ -92,8 +94,15 @@ def main() -> None:
     print(describe())
     paths = files()
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    # each in a session of its own: where the kernel groups processes by session, as
+    # many competitors as other jobs on a shared host would be
     hogs = [
-        subprocess.Popen([sys.executable, "-c", SPIN], env=env, stdin=subprocess.DEVNULL)
+        subprocess.Popen(
+            [sys.executable, "-c", SPIN],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,
+        )
         for _ in range(args.busy)
     ]
     root = f"as root (at nice {REAL_TIME_NICE})" if os.geteuid() == 0 else "not as root"

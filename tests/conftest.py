@@ -158,10 +158,11 @@ def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
 
 #: Tests that talk to a pseudo-terminal (the emulated bus, the photometer, the lamp): the
 #: SDK busy-waits for replies in the test's thread while the device serves from another
-#: (`sim.responsive` keeps that hand-off short). They are marked ``pty`` and kept in one
-#: xdist group, so `make test` runs them one after another on a single worker; the other
-#: workers' CPU-bound tests load the machine as an unquiet host would (they held on a
-#: 2-core machine loaded 150 %).
+#: (`sim.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
+#: hand) are marked ``pty`` and kept in one xdist group, so `make test` runs them one
+#: after another on a single worker (and one worker at a time raises its session's
+#: priority: `real_time_first`); the other workers' CPU-bound tests load the machine as
+#: an unquiet host would (they held on a 2-core machine loaded 150 %).
 PTY_TESTS = (
     "tests/drivers/",
     "tests/sim/dynamixel/",
@@ -217,7 +218,11 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     root = Path(config.rootpath)
     for item in items:
         where = item.path.relative_to(root).as_posix()
-        if where.startswith(PTY_TESTS) or "emulator" in getattr(item, "fixturenames", ()):
+        if (
+            where.startswith(PTY_TESTS)
+            or "emulator" in getattr(item, "fixturenames", ())
+            or item.get_closest_marker("pty") is not None
+        ):
             item.add_marker(pytest.mark.pty)
             item.add_marker(pytest.mark.xdist_group("pty"))
         elif where in SHARED_SETUP:

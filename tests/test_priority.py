@@ -11,7 +11,7 @@ import threading
 
 import pytest
 
-from tests.support.priority import REAL_TIME_NICE, ahead
+from tests.support.priority import REAL_TIME_NICE, SESSION_NICE, ahead, autogroup_nice
 
 
 def thread_nice() -> int:
@@ -45,11 +45,25 @@ def test_ahead_raises_what_starts_inside_and_restores_the_thread() -> None:
     assert started_nice() == (before, before)
 
 
+def test_ahead_raises_the_sessions_group_and_restores_it() -> None:
+    """Where the kernel groups by session, the group's weight is what another session's
+    load competes with: raised in the block, back to the suite's starting value after."""
+    if SESSION_NICE is None:
+        pytest.skip("this kernel has no autogroups (/proc/self/autogroup)")
+    with ahead() as raised:
+        inside = autogroup_nice()
+    assert autogroup_nice() == SESSION_NICE
+    assert inside == (min(REAL_TIME_NICE, SESSION_NICE) if raised else SESSION_NICE)
+
+
 @pytest.mark.pty
-def test_a_pty_test_runs_ahead() -> None:
+def test_a_pty_test_runs_ahead_in_the_pty_group(request: pytest.FixtureRequest) -> None:
+    group = request.node.get_closest_marker("xdist_group")
+    assert group is not None and group.args == ("pty",)
     if os.geteuid() == 0:
         assert thread_nice() <= REAL_TIME_NICE
         assert started_nice() == (thread_nice(), thread_nice())
+        assert SESSION_NICE is None or autogroup_nice() == REAL_TIME_NICE
 
 
 def test_any_other_test_runs_at_the_suites_priority() -> None:
