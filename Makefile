@@ -78,7 +78,8 @@ test: $(VENV)/.installed-test
 # Every benchmark, one after another, each writing its page docs/results/<script>.md (and
 # docs/results/index.md) with the command, the machine, the date, the load and the wall
 # time, besides printing it (`--no-page`: print only). Fast ones first; about 45 min on
-# the 2-core machine, of which planner.py takes about 25 (LKH-3's tours, a plan of a million).
+# the 2-core machine, of which planner.py takes about 25 (LKH-3's tours, a plan of a million)
+# and load_suite.py about 25 (the real-time tests ten times beside busy processes).
 bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py --repeat 11
 	$(BIN)/python benchmarks/extremes.py --near-horizon 4000
@@ -126,6 +127,7 @@ bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/adaptive_limit.py
 	$(BIN)/python benchmarks/planner.py
 	$(BIN)/python benchmarks/fly_plan.py
+	$(BIN)/python benchmarks/load_suite.py
 	$(BIN)/python benchmarks/make_test.py
 
 # The study (docs/explanations/tradeoff.md "The study"): the `gonio tradeoff` sweeps of

@@ -37,7 +37,8 @@ from drivers.pymeasure.config import SETTLE_TAU
 from drivers.pymeasure.detector import PyMeasureDetector
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
-from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner.files import load_plan_source
+from gonio.planner.stored import plan_bytes
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.store.journal import Journal
 from gonio.workflows.rehearsal import rehearsal_devices

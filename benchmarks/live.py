@@ -61,8 +61,8 @@ from gonio.live import derived
 from gonio.live.model import LiveRun
 from gonio.live.views import values
 from gonio.planner import load_plan_source
-from gonio.planner.files import plan_bytes
 from gonio.planner.model import ARRAYS, Plan
+from gonio.planner.stored import plan_bytes
 from gonio.store.journal import Journal
 from gonio.store.read import open_run
 from gonio.workflows import session

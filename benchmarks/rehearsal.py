@@ -54,8 +54,9 @@ from _machine import describe
 from drivers.dynamixel.wire import DEFAULT_RETURN_DELAY_S, step_seconds
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
-from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
+from gonio.planner.stored import plan_bytes
 from gonio.rig.travel import TravelModel
 from gonio.store import Journal, open_run
 from gonio.workflows.rehearsal import rehearsal_devices

@@ -6,6 +6,14 @@ packages: tests/support)."""
 from __future__ import annotations
 
 import os
+
+# One BLAS thread per test process, set before numpy or scipy loads theirs (the processes
+# the tests start inherit it). OpenBLAS's threads spin while they wait for work: with
+# three workers on two cores, each with a pool of its own, they took the cores from each
+# other (a Delaunay test took 50 s beside two busy processes, 2 s with one thread each).
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
 import signal
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -19,6 +27,7 @@ from hypothesis import HealthCheck, settings
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.dynamixel.emulator import DxlEmulator
+from tests.support.priority import ahead
 
 #: The shipped configuration files.
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -149,10 +158,11 @@ def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
 
 #: Tests that talk to a pseudo-terminal (the emulated bus, the photometer, the lamp): the
 #: SDK busy-waits for replies in the test's thread while the device serves from another
-#: (`sim.responsive` keeps that hand-off short). They are marked ``pty`` and kept in one
-#: xdist group, so `make test` runs them one after another on a single worker; the other
-#: workers' CPU-bound tests load the machine as an unquiet host would (they held on a
-#: 2-core machine loaded 150 %).
+#: (`sim.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
+#: hand) are marked ``pty`` and kept in one xdist group, so `make test` runs them one
+#: after another on a single worker (and one worker at a time raises its session's
+#: priority: `real_time_first`); the other workers' CPU-bound tests load the machine as
+#: an unquiet host would (they held on a 2-core machine loaded 150 %).
 PTY_TESTS = (
     "tests/drivers/",
     "tests/sim/dynamixel/",
@@ -163,6 +173,19 @@ PTY_TESTS = (
     "tests/gonio/acquire/test_hardware.py",
     "tests/gonio/acquire/test_fly_rehearsal.py",
 )
+
+
+@pytest.fixture(autouse=True)
+def real_time_first(request: pytest.FixtureRequest) -> Iterator[None]:
+    """A ``pty`` test runs ahead of the host's other work (`tests.support.priority`): its
+    thread, the emulators' threads and the processes it starts get the CPU first, so a
+    loaded machine cannot hold a device's reply past the protocol's deadline (as root,
+    as CI runs; elsewhere at the priority the suite has)."""
+    if request.node.get_closest_marker("pty") is None:
+        yield
+        return
+    with ahead():
+        yield
 
 
 #: Modules whose tests share a costly module- or session-scoped fixture (a second or more
@@ -195,7 +218,11 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     root = Path(config.rootpath)
     for item in items:
         where = item.path.relative_to(root).as_posix()
-        if where.startswith(PTY_TESTS) or "emulator" in getattr(item, "fixturenames", ()):
+        if (
+            where.startswith(PTY_TESTS)
+            or "emulator" in getattr(item, "fixturenames", ())
+            or item.get_closest_marker("pty") is not None
+        ):
             item.add_marker(pytest.mark.pty)
             item.add_marker(pytest.mark.xdist_group("pty"))
         elif where in SHARED_SETUP:

@@ -13,8 +13,9 @@ from gonio.cli.render import render_choice, render_summary
 from gonio.errors import GonioError
 from gonio.output import reserve_output
 from gonio.planner import Plan
-from gonio.planner.files import PlanSource, load_plan_source, plan_bytes
+from gonio.planner.files import PlanSource, load_plan_source
 from gonio.planner.schema import MAX_PLAN_MINUTES
+from gonio.planner.stored import plan_bytes
 from gonio.workflows.preflight import refuse_fly_detector
 
 

@@ -3,7 +3,7 @@ hashes that name the texts a plan was built from (`content_hash`, `sha256`).
 
 A `Plan` is the same for a given plan file, rig and seed on any machine unless the
 ordering's wall-clock safety cap binds (the summary says so). `gonio.planner.builder`
-makes one; `gonio.planner.files` stores it and reads it back bit for bit.
+makes one; `gonio.planner.stored` stores it and reads it back bit for bit.
 """
 
 from __future__ import annotations

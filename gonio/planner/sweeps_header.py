@@ -1,4 +1,4 @@
-"""A fly plan's segments in a stored plan's header (`gonio.planner.files`): written as
+"""A fly plan's segments in a stored plan's header (`gonio.planner.stored`): written as
 JSON (`sweeps_header`) and read back with every field checked (`parse_sweeps`). The
 path fields (each segment's set-points) are written only when a segment has them, so a
 plan of axis sweeps keeps the bytes it had before path segments existed.

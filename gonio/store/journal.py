@@ -4,7 +4,7 @@ sample, that a crash never corrupts and a resumed run appends to.
 The layout (schema version `SCHEMA_VERSION`) is documented in docs/reference/journal.md:
 
 - ``meta`` (key → JSON text, or bytes for ``plan_file``): the plan, rig and scene
-  texts and their hashes, the stored plan itself (`gonio.planner.files`), the axes and
+  texts and their hashes, the stored plan itself (`gonio.planner.stored`), the axes and
   coordinate names, the backend, the seed, the package versions, the host;
 - ``sessions``: one row per process that wrote to the run (start, end, how it ended);
 - ``samples``: one row per measured target (``target`` = its index in the plan), its

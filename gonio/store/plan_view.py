@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
+from gonio.planner.stored import parse_plan
 from gonio.rig.model import Rig
 from gonio.store import checks, readonly
 from gonio.store.read import check_plan, check_targets, decode_meta, refusing

@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from gonio.config import ConfigError
-from gonio.planner.files import parse_plan
 from gonio.planner.model import Plan
+from gonio.planner.stored import parse_plan
 from gonio.store import checks, readonly
 from gonio.store.journal import JournalError, check_version
 from gonio.store.schema import (

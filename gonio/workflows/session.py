@@ -37,8 +37,8 @@ from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
 from gonio.config import ConfigError, load, read_bytes
 from gonio.errors import GonioError
-from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import Plan, sha256
+from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import Survey, extend
 from gonio.rig.model import Rig, named_alignment
 from gonio.rig.schema import RigSpec

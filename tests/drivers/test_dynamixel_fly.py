@@ -40,7 +40,9 @@ def test_polls_in_real_time_follow_the_emulated_trajectory(
     target = {"axis1": 0.4, "axis2": -0.4, "axis3": 0.2}
     with DynamixelBus(emu.path, AXES, baud=baud, latency_ms=16.0) as bus:
         start = bus.positions()
-        speeds = bus.sweep(target, dict.fromkeys(target, 2.0))
+        # 0.5 rad/s: the sweeps last a second or so, long enough for a host that polls
+        # a few times slower (loaded, or sharing its cores) to see each one mid-way
+        speeds = bus.sweep(target, dict.fromkeys(target, 0.5))
         emu.reset_stats()
         polls, truths = [], []
         deadline = time.monotonic() + 5.0

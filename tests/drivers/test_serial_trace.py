@@ -54,7 +54,8 @@ def test_lines_after_the_stop_acknowledgement_are_seen() -> None:
         det.read_stream(0.5)
         det.stop_stream()
         trace = det.last_stream
-        heard = det.listen(0.1)
+        # the device's thread sends them at its own pace: a loaded host may run it late
+        heard = det.listen(0.5)
     assert trace is not None and trace.stop_acknowledged_s is not None
     late = trace.lines_after_ack + sum(text.startswith("DAT ") for text, _ in heard)
     assert late == 3

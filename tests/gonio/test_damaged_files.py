@@ -380,6 +380,7 @@ def held(original: Path, tmp_path: Path) -> Iterator[Path]:
         yield path
 
 
+@pytest.mark.timing
 @pytest.mark.parametrize("command", ["info", "evaluate", "export", "watch"])
 def test_a_run_locked_by_another_process_is_one_line_in_bounded_time(
     held: Path, tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, command: str
@@ -591,6 +592,7 @@ def _text(folder: Path, text: str) -> Path:
     return path
 
 
+@pytest.mark.timing
 @pytest.mark.parametrize("case", list(SWEEPS))
 def test_a_hostile_sweep_is_one_line_at_once(tmp_path: Path, run_gonio: Gonio, case: str) -> None:
     make, words = SWEEPS[case]
@@ -628,6 +630,7 @@ def peer(request: pytest.FixtureRequest) -> Iterator[str]:
         conn.close()
 
 
+@pytest.mark.timing
 def test_a_scheduler_that_does_not_answer_is_one_line_within_the_timeout(
     tmp_path: Path, run_gonio: Gonio, monkeypatch: pytest.MonkeyPatch, peer: str
 ) -> None:
@@ -640,6 +643,7 @@ def test_a_scheduler_that_does_not_answer_is_one_line_within_the_timeout(
     one_line(result, f"--scheduler {peer}: cannot reach the scheduler")
 
 
+@pytest.mark.timing
 def test_the_scheduler_timeout_is_a_parameter(peer: str) -> None:
     pytest.importorskip("distributed")
     start = time.monotonic()

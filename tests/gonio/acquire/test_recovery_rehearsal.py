@@ -17,8 +17,9 @@ import pytest
 from gonio.acquire.ending import Report
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
-from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
+from gonio.planner.stored import plan_bytes
 from gonio.store.journal import Journal
 from gonio.store.read import Run, read_run
 from gonio.workflows.rehearsal import rehearsal_devices

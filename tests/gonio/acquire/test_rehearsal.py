@@ -17,8 +17,9 @@ import pytest
 from gonio.acquire.engine import Engine
 from gonio.acquire.runtime import RunTime
 from gonio.analysis.calibrated import calibrate
-from gonio.planner.files import load_plan_source, plan_bytes
+from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
+from gonio.planner.stored import plan_bytes
 from gonio.radiometry.bands import band_eval
 from gonio.rig.model import Rig
 from gonio.store import open_run

@@ -15,7 +15,7 @@ from gonio.analysis.calibrated import calibrate
 from gonio.analysis.measured import Measured
 from gonio.cli import main
 from gonio.export.hdf5 import write
-from gonio.planner.files import parse_plan
+from gonio.planner.stored import parse_plan
 from gonio.reconstruct.methods import reconstruction
 from gonio.store import open_run
 

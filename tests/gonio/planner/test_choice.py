@@ -16,8 +16,8 @@ from gonio.analysis.measured import Measured
 from gonio.cli.render import render_summary
 from gonio.planner import adaptive, choice
 from gonio.planner.builder import build
-from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import Survey, extend
 from gonio.radiometry.bands import band_eval
 from gonio.reconstruct import testset

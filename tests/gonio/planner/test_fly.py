@@ -20,10 +20,10 @@ from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, plan_bytes, read_plan, write_plan
 from gonio.planner.blur import blur_budget_of_width
-from gonio.planner.files import parse_plan
 from gonio.planner.fly import THINNED, sweep_axis
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import parse_plan
 from gonio.rig.constraints import separation
 from gonio.rig.model import Rig
 from gonio.rig.solution import Reason

@@ -15,9 +15,9 @@ from gonio import brdf, params
 from gonio.cli.render import render_summary
 from gonio.config import ConfigError
 from gonio.planner import build, load_plan, ordering, placement, sampling
-from gonio.planner.files import plan_bytes, write_plan
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import plan_bytes, write_plan
 from gonio.progress import hms
 from gonio.rig.model import Rig
 from gonio.rig.solution import Reason

@@ -14,9 +14,9 @@ import pytest
 
 from gonio.cli.render import render_summary
 from gonio.planner import build
-from gonio.planner.files import plan_bytes, read_plan, write_plan
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import plan_bytes, read_plan, write_plan
 from gonio.rig.model import Rig
 
 RIGS = Path(__file__).resolve().parents[3] / "configs" / "rigs"

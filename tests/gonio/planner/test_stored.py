@@ -17,9 +17,9 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.planner import build, content_hash, load_plan, load_plan_source, read_plan
-from gonio.planner.files import MAGIC, columns, write_plan
 from gonio.planner.model import ARRAYS, Plan
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import MAGIC, columns, write_plan
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
 from tests.conftest import CONFIGS

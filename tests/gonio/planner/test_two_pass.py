@@ -15,9 +15,9 @@ from gonio.analysis.measured import Measured
 from gonio.cli.render import render_summary
 from gonio.planner import adaptive
 from gonio.planner.builder import build
-from gonio.planner.files import parse_plan, plan_bytes
 from gonio.planner.model import ARRAYS, Plan, same_bits
 from gonio.planner.schema import PlanSpec
+from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import Survey, extend, second_pass
 from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
