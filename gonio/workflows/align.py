@@ -57,9 +57,12 @@ class ScanSettings:
     fine_points: int = 15
     exposure_s: float = 1e-3
     #: A fly scan's stream rate (readings a second) and how far its ramps may run
-    #: beyond a scan (°; `gonio.workflows.align_fly`).
+    #: beyond a scan (°; `gonio.workflows.align_fly`); the fine scan's rate (Hz): its
+    #: sweeps are that much slower, so that a timing error δt of the polls or the
+    #: stamps moves its readings by v · δt only.
     stream_rate_hz: float = 100.0
     fly_overshoot_deg: float = 0.5
+    fine_rate_hz: float = 100.0
 
     def widened(self, factor: float) -> ScanSettings:
         """These settings with the scans' widths and steps times ``factor``."""
@@ -103,6 +106,10 @@ ARC_STEP = 1e-6
 #: constant velocity): a bus counts a move arrived within a few ticks of its goal, and
 #: the sweep stops polling then.
 MARGIN_TICKS = 3
+#: How many times a fly sweep is measured at most: one whose readings leave a gap in
+#: its scan (`align_fly.FlyLine.covers`: a host stalled past the polls' or the
+#: stream's reading) is measured again.
+SWEEP_ATTEMPTS = 3
 
 
 def nominal_poses(rig: Rig, settings: ScanSettings) -> FloatArray:
@@ -196,7 +203,8 @@ def fly_sweep(rig: Rig, settings: ScanSettings, joint: str, fine: bool) -> FlySw
     j = rig.axes.index(joint)
     steps = fine_offsets(settings) if fine else coarse_offsets(settings)
     velocity, rate = align_fly.fly_rate(
-        rig, j, float(steps[1] - steps[0]), settings.stream_rate_hz, settings.exposure_s,
+        rig, j, float(steps[1] - steps[0]),
+        settings.fine_rate_hz if fine else settings.stream_rate_hz, settings.exposure_s,
         math.radians(settings.fly_overshoot_deg),
     )  # fmt: skip
     ramp = align_fly.overshoot(rig, j, velocity, rate, 0.0, 0.0)  # the ramp alone
@@ -319,14 +327,23 @@ def fly_cross(
     the peak (rad, the mean of each way's), each reading kept in ``readings``."""
     j = rig.axes.index(joint)
     sweep = fly_sweep(rig, settings, joint, fine)
-    half = settings.fine_half_deg if fine else settings.coarse_half_deg
+    half = math.radians(settings.fine_half_deg if fine else settings.coarse_half_deg)
+    spacing = sweep.velocity / sweep.rate_hz
     angles, peaks = [], []
     for backward in (False, True) if fine else (False,):
         sweeps = align_fly.line_sweep(
-            rig, center, j, math.radians(half), sweep.velocity, sweep.rate_hz,
-            settings.exposure_s, sweep.margin_rad, backward=backward,
+            rig, center, j, half, sweep.velocity, sweep.rate_hz, settings.exposure_s,
+            sweep.margin_rad, backward=backward,
         )  # fmt: skip
-        line = align_fly.fly_line(devices, rig, sweeps, len(readings.value))
+        for _ in range(SWEEP_ATTEMPTS):
+            line = align_fly.fly_line(devices, rig, sweeps, len(readings.value))
+            if line.covers(j, center[j] - half, center[j] + half, spacing):
+                break
+        else:
+            raise GonioError(
+                f"align: {SWEEP_ATTEMPTS} fly sweeps of {joint} in a row lost readings the "
+                "scan needs (the polls or the stream stalled); try --stop-and-go"
+            )
         target = np.repeat(line.target[None, :], len(line.values), axis=0)
         readings.add(
             peak, joint, FLY, target, line.angles, line.values, line.started_s, line.ended_s,
@@ -528,6 +545,7 @@ def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
 
 __all__ = [
     "CHECK", "FLY", "FLY_BACKENDS", "MARGIN_TICKS", "PEAK_SIGMA_DEG", "STOP_AND_GO",
+    "SWEEP_ATTEMPTS",
     "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan", "fly_cross",
     "fly_sweep", "for_rig", "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
     "scan_mode", "verdict", "write_readings",

@@ -83,6 +83,10 @@ def test_merged_angles_follow_the_emulated_trajectory() -> None:
                 cruise = (t > middle[0]) & (t < middle[-1])
                 speed = np.polyfit(t[cruise], d.positions[cruise, j], 1)[0]
                 assert speed / sweeps.velocity[k, j] == pytest.approx(1.0, abs=0.02)
+                # the velocity the bus commanded is the register's, the one measured
+                assert raw.velocities is not None
+                commanded = raw.velocities[rig.axes[j]]
+                assert abs(speed) == pytest.approx(commanded, rel=0.01)
 
 
 def test_a_fly_plan_acquires_on_the_rehearsal_path(

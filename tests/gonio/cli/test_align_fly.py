@@ -150,11 +150,11 @@ def test_a_detector_that_cannot_stream_scans_stop_and_go(tmp_path: Path) -> None
     (tmp_path / "lockin.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
     scene = load_scene(tmp_path / "lockin.yaml", rig)
     settings = align.ScanSettings(
-        incidences_deg=(30.0,), azimuths_deg=(60.0,), rotations_deg=(0.0,), exposure_s=0.1
-    )
+        incidences_deg=(30.0, 55.0), azimuths_deg=(60.0,), rotations_deg=(0.0,), exposure_s=0.1
+    )  # two incidences the rig reaches: scanned as given (`align.for_rig`)
     result = align.run_scan(rig, scene, "simulated", settings)
     assert result.mode == align.STOP_AND_GO
-    assert set(result.readings.mode) == {"stop_and_go"} and len(result.peaks) == 1
+    assert set(result.readings.mode) == {"stop_and_go"} and len(result.peaks) == 2
     photodiode = load_scene(mirror_scene(tmp_path, TRUTH), rig)
     streaming = align.run_scan(rig, photodiode, "simulated", replace(settings, exposure_s=1e-3))
     assert streaming.mode == align.FLY
