@@ -143,14 +143,20 @@ class FlyLine:
 @dataclass(frozen=True)
 class CruiseLine:
     """The swept joint's angle on a sweep's constant-velocity part: ``intercept`` (rad)
-    at ``t0`` (s, the clock's) plus ``slope`` (rad/s) per second; fitted through
-    ``points`` points spanning ``span_s`` (s)."""
+    at ``t0`` (s, the clock's) plus ``slope`` (rad/s) per second; from ``points`` points
+    spanning ``span_s`` (s); ``fitted``: the slope too (else the velocity commanded)."""
 
     t0: float
     slope: float
     intercept: float
     points: int
     span_s: float
+    fitted: bool = True
+
+    def placed(self, cruise_s: float) -> bool:
+        """Whether the line places the readings of a constant-velocity part ``cruise_s``
+        (s) long: three points at least, over half of it where the slope was fitted."""
+        return self.points >= 3 and (not self.fitted or self.span_s >= 0.5 * cruise_s)
 
     def at(self, times: FloatArray) -> FloatArray:
         """The angle (rad) at ``times`` (s)."""
@@ -166,8 +172,7 @@ def fly_line(devices: Devices, rig: Rig, sweeps: Sweeps, sample: int) -> FlyLine
     the constant-velocity part (`cruise_line`), the other joints' interpolated from the
     polls; only the windows that lie wholly inside that part (on the line) are kept. No
     reading needs polls about it: a host that stalls between two polls loses none,
-    while the polls determine the line (else none is kept: at least three points over
-    half the constant-velocity part's time)."""
+    while the polls determine the line (else none is kept: `CruiseLine.placed`)."""
     j = int(np.argmax(np.abs(sweeps.velocity[0])))
     first, last = float(sweeps.start[0, j]), float(sweeps.stop[0, j])
     grid = np.linspace(first, last, max(2, math.ceil(abs(last - first) / CHECK_STEP) + 1))
@@ -189,7 +194,7 @@ def fly_line(devices: Devices, rig: Rig, sweeps: Sweeps, sample: int) -> FlyLine
     velocity = None if commanded is None else math.copysign(commanded, sweeps.velocity[0, j])
     line = cruise_line(request, reply, positions[:, j], lo, hi, tick, velocity)
     cruise_s = (hi - lo) / abs(float(sweeps.velocity[0, j]))
-    if line is None or line.points < 3 or line.span_s < 0.5 * cruise_s:
+    if line is None or not line.placed(cruise_s):
         keep = np.zeros(len(ended), dtype=np.bool_)
     else:
         a, b = line.at(started), line.at(ended)
@@ -237,7 +242,7 @@ def cruise_line(
             t0 = float(np.mean(t))
             b = consistent_intercept(request - t0, reply - t0, x, tick_rad, velocity)
             if b is not None:
-                return CruiseLine(t0, velocity, b, len(x), float(np.ptp(t)))
+                return CruiseLine(t0, velocity, b, len(x), float(np.ptp(t)), fitted=False)
         t, x, weight = tick_changes(request, reply, x)
     if len(t) < 2 or np.ptp(t) <= 0:
         return None

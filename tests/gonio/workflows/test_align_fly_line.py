@@ -35,7 +35,8 @@ def test_the_line_at_the_commanded_velocity_is_within_what_the_polls_allow(seed:
     request, reply, x = _polls(seed)
     lo, hi = float(x.min()) - 1.0, float(x.max()) + 1.0
     line = align_fly.cruise_line(request, reply, x, lo, hi, TICK, VELOCITY)
-    assert line is not None and line.slope == VELOCITY
+    assert line is not None and line.slope == VELOCITY and not line.fitted
+    assert line.placed(10.0)  # the velocity known: three polls place it, however close
     error = float(line.at(np.zeros(1))[0]) - TRUE_AT_ZERO
     # the truth is one of the angles every poll allows; the estimate their middle
     early = np.minimum(VELOCITY * request, VELOCITY * reply)
@@ -83,3 +84,4 @@ def test_polls_off_the_commanded_velocity_fall_back_to_the_changes() -> None:
     assert align_fly.consistent_intercept(request, reply, x, TICK, VELOCITY) is None
     line = align_fly.cruise_line(request, reply, x, -1.0, 1.0, TICK, VELOCITY)
     assert line is not None and line.slope == pytest.approx(0.5 * VELOCITY, rel=0.05)
+    assert line.fitted and line.placed(0.3) and not line.placed(0.5)  # over half of it
