@@ -49,9 +49,11 @@ class SerialStreamConfig:
     a window's end to its line's arrival that the host subtracts when the device sends
     no timestamp. ``max_rate_hz`` is the highest rate the instrument streams at;
     ``rate_hz`` the rate used when none is asked. ``starts_on_command``: the device
-    begins its first window when the start command arrives, so the host stamps the
-    windows from the time it sent it (a bound the command's delivery keeps tight)
-    rather than from the lines' arrival (which a late reader loosens).
+    begins its first window when the start command arrives (and acknowledges it then,
+    with a ``command_ack``), so the host stamps the windows between the time it sent
+    it and the time the acknowledgement came back (bounds the command's round trip
+    keeps tight) rather than from the lines' arrival alone (which a late reader
+    loosens).
     """
 
     start: str = "STREAM {rate_hz:g} {integration_ms:d}"

@@ -12,8 +12,14 @@ one read share that time, ``received_s``). A window's end on the host clock is
 * without: ``received − latency_s``, the earlier lines of a read spaced one period
   apart before the last;
 * with ``starts_on_command`` (the device's first window begins when the start command
-  arrives): at most ``sent + period + (device_t − the first line's device_t)``, ``sent``
-  the host clock just before the command left.
+  arrives): within the bounds the start command gives, ``sent + period + (device_t −
+  the first line's device_t)`` from below (``sent`` the host clock just before the
+  command left) and, with a ``command_ack`` (the device acknowledges the command when
+  its first window begins; `start_stream` awaits the first line after it, at most
+  ``timeout_s``), the same from the acknowledgement's arrival from above: the
+  arrivals' estimate (the upper bounds less ``latency_s``), never below the lower
+  bound. A device slow to take the command (its loop busy) starts late; the
+  acknowledgement's arrival says how late.
 
 Then ``ended_s`` is raised, if needed, to the previous window's end plus the
 integration, so stamps increase and windows never overlap; ``started_s = ended_s −
@@ -63,6 +69,7 @@ class _Stream:
     lines: int = 0  # data lines received: the clock of a device that sends no time
     sent_s: float = math.nan  # host clock just before the start command was sent
     start_offset_s: float = math.nan  # sent_s + period − the first line's device clock
+    ack_offset_s: float = math.inf  # start_ack_s + period − the first line's device clock
     begun: bool = False  # a data line or the start's acknowledgement came
     stopping: bool = False  # ``stop`` was sent
     stopped: bool = False  # ``stop`` was acknowledged (after every data line)
@@ -192,7 +199,23 @@ class _Streaming:
             self._needs_resync = self._serial is not None
             raise
         stall = self._config.timeout_s + 2.0 / rate
-        self._stream = _Stream(rate, integration, command, time.monotonic(), stall, sent_s=sent)
+        stream = _Stream(rate, integration, command, time.monotonic(), stall, sent_s=sent)
+        self._stream = stream
+        if cfg.starts_on_command and self._ack is not None:
+            self._await_first_line(stream)
+
+    def _await_first_line(self, stream: _Stream) -> None:
+        """Wait (at most ``timeout_s``) for the first line after the start command, its
+        acknowledgement, stamped as it arrives: the bound from above on when the first
+        window began (the module docstring). Nothing is parsed here; without a line in
+        time, ``read_stream`` finds the stall."""
+        give_up = time.monotonic() + self._config.timeout_s
+        try:
+            while not stream.pending and time.monotonic() < give_up:
+                self._pump(stream, block=True)
+        except BaseException:
+            self._abort_stream()
+            raise
 
     def _stream_arguments(
         self, cfg: SerialStreamConfig, rate_hz: float | None, integration_s: float | None
@@ -335,14 +358,17 @@ class _Streaming:
                 clock = stream.lines * stream.period_s
             if not stream.lines:  # the first window began when the command arrived
                 stream.start_offset_s = stream.sent_s + stream.period_s - clock
+                if stream.start_ack_s is not None:
+                    stream.ack_offset_s = stream.start_ack_s + stream.period_s - clock
             stream.lines += 1
             stream.offset_s = min(stream.offset_s, received - clock)
             parsed.append((value, std, self._saturated(value, match), device_t, received, clock))
         readings = []
         for value, std, saturated, device_t, received, clock in parsed:
             end = clock + stream.offset_s - cfg.latency_s
-            if cfg.starts_on_command:  # the tighter bound (never past the arrival's)
-                end = min(end, clock + stream.start_offset_s)
+            if cfg.starts_on_command:  # between the start command's bounds
+                end = min(end, clock + stream.ack_offset_s - cfg.latency_s)
+                end = max(end, clock + stream.start_offset_s)
             end = max(end, stream.prev_ended + stream.integration_s)
             stream.prev_ended = end
             readings.append(

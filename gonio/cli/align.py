@@ -37,9 +37,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         help=help_,
         description="Measure the rig's misalignment: with a first-surface mirror in the "
         "sample holder, cross scans of the detector locate the specular peak at poses "
-        "within the rig's limits (on the simulated rig, where its detector streams, flown: "
-        "the scanned joint sweeps while the detector streams readings; stop-and-go on the "
-        "hardware path, or with --stop-and-go); the fit "
+        "within the rig's limits (where the detector streams, flown: the scanned joint "
+        "sweeps while the detector streams readings; a rehearsal flies at --speedup 1 "
+        "only; stop-and-go with --stop-and-go); the fit "
         "gives each axis's zero offset, the sample's tilt and the pointing errors it "
         "determines, with standard errors, and names what would determine the rest. "
         "Writes the alignment file and the scan's readings beside it "
@@ -72,8 +72,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )  # fmt: skip
     p.add_argument(
         "--stop-and-go", action="store_true",
-        help="stop at each angle of a cross scan (move, settle, read) even on the simulated "
-        "rig whose detector streams (default there: fly scans, 2.8 min against 7.3 on the "
+        help="stop at each angle of a cross scan (move, settle, read) even where the "
+        "detector streams (default there: fly scans, 2.8 min against 7.3 on the simulated "
         "arch rig)",
     )  # fmt: skip
     p.add_argument("--seed", type=arguments.seed, help="the scan's seed (default: the scene's)")
@@ -83,7 +83,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )  # fmt: skip
     p.add_argument(
         "--speedup", type=_speedup, default=50.0,
-        help="--rehearse: how many times faster than real time the emulated rig runs (default 50)",
+        help="--rehearse: how many times faster than real time the emulated rig runs "
+        "(default 50; the scans fly at 1 only, else stop-and-go)",
     )  # fmt: skip
     p.set_defaults(func=cmd_align)
 

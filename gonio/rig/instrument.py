@@ -290,8 +290,9 @@ class SerialStreamSpec(Strict):
     )
     starts_on_command: bool = Field(
         _stream_default("starts_on_command"),
-        description="The device begins its first window when the start command arrives: "
-        "the host stamps the windows from when it sent the command.",
+        description="The device begins its first window when the start command arrives "
+        "(and, with a command_ack, acknowledges it then): the host stamps the windows "
+        "between when it sent the command and when the acknowledgement came back.",
     )
 
     def config(self) -> SerialStreamConfig:

@@ -12,7 +12,7 @@ would reach one.
 
 Each peak is found by a coarse cross scan (detector elevation, then azimuth) about the
 rig file's specular pose, then a fine one about the coarse peak; flown where the
-detector streams (`scan_mode`; `run_scan` on the `FLY_BACKENDS`), the fine one both
+detector streams (`scan_mode`; `run_scan` where `fly_allowed`), the fine one both
 ways. Every reading (how it was taken, pose commanded and read back, value, window) is
 kept in `Readings`, written beside the alignment file as a small SQLite table
 (`write_readings`): the acquisition engine takes plans of direction pairs, not explicit
@@ -57,9 +57,12 @@ class ScanSettings:
     fine_points: int = 15
     exposure_s: float = 1e-3
     #: A fly scan's stream rate (readings a second) and how far its ramps may run
-    #: beyond a scan (°; `gonio.workflows.align_fly`).
+    #: beyond a scan (°; `gonio.workflows.align_fly`); the fine scan's rate (Hz): its
+    #: sweeps are that much slower, so that a timing error δt of the polls or the
+    #: stamps moves its readings by v · δt only.
     stream_rate_hz: float = 100.0
     fly_overshoot_deg: float = 0.5
+    fine_rate_hz: float = 100.0
 
     def widened(self, factor: float) -> ScanSettings:
         """These settings with the scans' widths and steps times ``factor``."""
@@ -86,13 +89,19 @@ SCANNED = {
 }
 #: How the readings are taken: stopping at each angle, or streamed while sweeping.
 STOP_AND_GO, FLY = "stop_and_go", "fly"
-#: The backends whose scans `run_scan` flies by default: the simulated one. On the
-#: hardware path (the rehearsal, the hardware) a mirror scan is stop-and-go: rehearsed
-#: at real speed (``--speedup 1``), fly sweeps lost readings at their ends (no peak, or
-#: one on a scan's edge, at 5 of 16 peaks) and the same pose's peaks scattered by up
-#: to 0.025°, above the 0.005° a peak's location is held to (docs/how-to/align.md).
-#: `scan` flies wherever the detector streams.
-FLY_BACKENDS = ("simulated",)
+#: The fine fly scan's stream rate (Hz) on the hardware path (the rehearsal, the
+#: hardware), where the polls and the stamps are known to a millisecond or so (several
+#: on a loaded host): a sweep moves its readings by v · δt, and at 25 Hz the fine sweep
+#: moves 1.07°/s (0.001° a millisecond; rehearsed at real speed, one pose's peaks
+#: within 0.004° where at 100 Hz they scattered by 0.013°). The simulated clock has no
+#: such error: its fine scan streams at `ScanSettings.fine_rate_hz`.
+HARDWARE_FINE_RATE_HZ = 25.0
+#: The fastest rehearsal (``--speedup``) whose scans `run_scan` flies: real speed. A
+#: poll's and a line's real delays count ``speedup`` times on the rehearsal's clock
+#: (at 2, one pose's peaks scattered by 0.007°; at 4, sweeps lost their polls three
+#: times in a row; at 10⁶ a stream does not stop within its timeout); a faster
+#: rehearsal scans stop-and-go.
+MAX_FLY_SPEEDUP = 1.0
 #: The incidences `for_rig` probes: every this many degrees.
 PROBE_STEP_DEG = 5.0
 #: The widest a scan of a joint is made per degree of arc it sweeps the detector over
@@ -103,6 +112,10 @@ ARC_STEP = 1e-6
 #: constant velocity): a bus counts a move arrived within a few ticks of its goal, and
 #: the sweep stops polling then.
 MARGIN_TICKS = 3
+#: How many times a fly sweep is measured at most: one whose readings leave a gap in
+#: its scan (`align_fly.FlyLine.covers`: a host stalled past the polls' or the
+#: stream's reading) is measured again.
+SWEEP_ATTEMPTS = 3
 
 
 def nominal_poses(rig: Rig, settings: ScanSettings) -> FloatArray:
@@ -196,7 +209,8 @@ def fly_sweep(rig: Rig, settings: ScanSettings, joint: str, fine: bool) -> FlySw
     j = rig.axes.index(joint)
     steps = fine_offsets(settings) if fine else coarse_offsets(settings)
     velocity, rate = align_fly.fly_rate(
-        rig, j, float(steps[1] - steps[0]), settings.stream_rate_hz, settings.exposure_s,
+        rig, j, float(steps[1] - steps[0]),
+        settings.fine_rate_hz if fine else settings.stream_rate_hz, settings.exposure_s,
         math.radians(settings.fly_overshoot_deg),
     )  # fmt: skip
     ramp = align_fly.overshoot(rig, j, velocity, rate, 0.0, 0.0)  # the ramp alone
@@ -319,14 +333,23 @@ def fly_cross(
     the peak (rad, the mean of each way's), each reading kept in ``readings``."""
     j = rig.axes.index(joint)
     sweep = fly_sweep(rig, settings, joint, fine)
-    half = settings.fine_half_deg if fine else settings.coarse_half_deg
+    half = math.radians(settings.fine_half_deg if fine else settings.coarse_half_deg)
+    spacing = sweep.velocity / sweep.rate_hz
     angles, peaks = [], []
     for backward in (False, True) if fine else (False,):
         sweeps = align_fly.line_sweep(
-            rig, center, j, math.radians(half), sweep.velocity, sweep.rate_hz,
-            settings.exposure_s, sweep.margin_rad, backward=backward,
+            rig, center, j, half, sweep.velocity, sweep.rate_hz, settings.exposure_s,
+            sweep.margin_rad, backward=backward,
         )  # fmt: skip
-        line = align_fly.fly_line(devices, rig, sweeps, len(readings.value))
+        for _ in range(SWEEP_ATTEMPTS):
+            line = align_fly.fly_line(devices, rig, sweeps, len(readings.value))
+            if line.covers(j, center[j] - half, center[j] + half, spacing):
+                break
+        else:
+            raise GonioError(
+                f"align: {SWEEP_ATTEMPTS} fly sweeps of {joint} in a row lost readings the "
+                "scan needs (the polls or the stream stalled); try --stop-and-go"
+            )
         target = np.repeat(line.target[None, :], len(line.values), axis=0)
         readings.add(
             peak, joint, FLY, target, line.angles, line.values, line.started_s, line.ended_s,
@@ -435,6 +458,12 @@ def scan(devices: Devices, rig: Rig, settings: ScanSettings, *, stop_and_go: boo
     return Scan(peaks, readings, devices.clock.now() - start, mode)
 
 
+def fly_allowed(kind: BackendKind, speedup: float) -> bool:
+    """Whether `run_scan` may fly on the backend ``kind``: the simulated one and the
+    hardware, and a rehearsal no faster than `MAX_FLY_SPEEDUP`."""
+    return kind != "rehearsal" or speedup <= MAX_FLY_SPEEDUP
+
+
 def run_scan(
     rig: Rig,
     scene: Scene | None,
@@ -447,8 +476,12 @@ def run_scan(
 ) -> Scan:
     """A mirror scan on the backend ``kind`` built from the rig file (the ``scene``
     where the detector is simulated), its devices opened and closed here; flown where
-    the detector streams on the `FLY_BACKENDS`, unless ``stop_and_go``."""
-    stop_and_go |= kind not in FLY_BACKENDS
+    the detector streams (`fly_allowed`), unless ``stop_and_go``; the fine scan on the
+    hardware path at `HARDWARE_FINE_RATE_HZ` at most."""
+    stop_and_go |= not fly_allowed(kind, speedup)
+    if kind != "simulated":
+        rate = min(settings.fine_rate_hz, HARDWARE_FINE_RATE_HZ)
+        settings = dataclasses.replace(settings, fine_rate_hz=rate)
     backend = backends.build(kind, rig, scene, seed, time.time(), speedup=speedup)
     try:
         with backend.devices:
@@ -527,8 +560,8 @@ def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
 
 
 __all__ = [
-    "CHECK", "FLY", "FLY_BACKENDS", "MARGIN_TICKS", "PEAK_SIGMA_DEG", "STOP_AND_GO",
-    "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict", "cross_scan", "fly_cross",
-    "fly_sweep", "for_rig", "measure_line", "nominal_poses", "reachable", "run_scan", "scan",
-    "scan_mode", "verdict", "write_readings",
+    "CHECK", "FLY", "HARDWARE_FINE_RATE_HZ", "MARGIN_TICKS", "MAX_FLY_SPEEDUP", "PEAK_SIGMA_DEG",
+    "STOP_AND_GO", "SWEEP_ATTEMPTS", "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict",
+    "cross_scan", "fly_allowed", "fly_cross", "fly_sweep", "for_rig", "measure_line",
+    "nominal_poses", "reachable", "run_scan", "scan", "scan_mode", "verdict", "write_readings",
 ]  # fmt: skip

@@ -186,15 +186,40 @@ def test_the_simulated_photometer_reads_its_signal_at_each_window_middle() -> No
 def test_a_device_that_starts_on_the_command_is_stamped_from_it(
     device: SerialPhotometer,
 ) -> None:
-    """``starts_on_command``: the windows are stamped from when the start command left
-    (the truth between the stamp and the stamp plus the smallest arrival delay); the
-    stop's acknowledgement ends the stream, every window the device sent received."""
+    """``starts_on_command``: the first window began when the command arrived, between
+    when it left and when its acknowledgement came back (awaited by ``start_stream``):
+    each stamp is within those bounds of the truth, the stop's acknowledgement ends the
+    stream, every window the device sent received."""
     with streaming_detector(device, starts_on_command=True) as det:
         det.start_stream(250, 0.002)
         readings = collect(det, 0.1) + det.stop_stream()
+        trace = det.last_stream
         det.measure(0.01)  # idle again
     truth = device.stream_ends
-    assert len(readings) == len(truth)
-    slack = min(r.received_s - r.ended_s for r in readings if r.received_s is not None)
-    late = [t - r.ended_s for r, t in zip(readings, truth, strict=True)]
-    assert min(late) >= -1e-3 and max(late) <= slack + 1e-3
+    assert len(readings) == len(truth) and trace is not None
+    assert trace.start_acknowledged_s is not None
+    round_trip = trace.start_acknowledged_s - trace.sent_s
+    early = [r.ended_s - t for r, t in zip(readings, truth, strict=True)]
+    assert min(early) >= -1e-6 and max(early) <= round_trip + 1e-6
+
+
+def test_a_device_slow_to_take_the_start_is_stamped_from_its_acknowledgement(
+    device: SerialPhotometer,
+) -> None:
+    """A device that takes the start command 20 ms after it arrived (its loop busy)
+    begins its first window then, and acknowledges it then: the stamps follow the
+    acknowledgement, not the command's departure (which would put every window 20 ms
+    early)."""
+    with streaming_detector(device, starts_on_command=True) as det:
+        device.late(0.02)
+        det.start_stream(250, 0.002)
+        readings = collect(det, 0.1) + det.stop_stream()
+        trace = det.last_stream
+    truth = device.stream_ends
+    assert len(readings) == len(truth) >= 10 and trace is not None
+    assert trace.start_acknowledged_s is not None
+    round_trip = trace.start_acknowledged_s - trace.sent_s
+    assert round_trip >= 0.02
+    early = [r.ended_s - t for r, t in zip(readings, truth, strict=True)]
+    # at most the acknowledgement's way back (the round trip less the 20 ms it waited)
+    assert min(early) >= -1e-6 and max(early) <= round_trip - 0.02 + 1e-6

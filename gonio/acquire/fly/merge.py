@@ -47,13 +47,16 @@ SLOW_POLL = 3.0
 
 @dataclass(frozen=True)
 class RawSweep:
-    """A sweep's raw streams: the polls and the stream's readings (host clock, s)."""
+    """A sweep's raw streams: the polls and the stream's readings (host clock, s); a
+    sweep's ``velocities`` (rad/s) are those the bus commanded (a register holds them in
+    steps: a Dynamixel's is 0.229 rev/min of the motor), not the plan's."""
 
     polls: list[StampedPositions]
     readings: list[StreamReading]
     started_s: float
     ended_s: float
     origin_s: float | None = None  # a path sweep's: when its set-point 0 was due
+    velocities: dict[str, float] | None = None  # a sweep's, as commanded
 
 
 @dataclass(frozen=True)

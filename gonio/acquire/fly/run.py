@@ -4,9 +4,9 @@
 command the sweep (the swept axes at the plan's velocity, to the stop pose), then poll
 the positions and read the stream in turn until the motion is over (on the simulated
 backend both advance the one virtual clock), stop the stream. What comes back is raw
-(`RawSweep`): the stamped polls and the stamped readings, the readings stamped again
-with the stream's final clock offset (`drivers.stream.restamped`, the latency the live
-stamps assumed). Merging them is `gonio.acquire.fly.merge`'s.
+(`RawSweep`): the stamped polls, the velocities the bus commanded and the stamped
+readings, stamped again with the stream's final clock offset (`drivers.stream.restamped`,
+the latency the live stamps assumed). Merging them is `gonio.acquire.fly.merge`'s.
 
 `run_path_sweep`: a path sweep (a trajectory every axis follows): move to its first
 set-point (at rest) and settle, poll the positions there (the first window starts after
@@ -50,7 +50,7 @@ def run_sweep(
     readings: list[StreamReading] = []
     detector.start_stream(1.0 / sweeps.period_s, sweeps.integration_s)
     try:
-        bus.sweep({a: stop[a] for a in moving}, moving)
+        commanded = bus.sweep({a: stop[a] for a in moving}, moving)
         deadline = started + timeout_s
         while True:
             poll = bus.poll_positions()
@@ -61,7 +61,7 @@ def run_sweep(
     finally:
         readings += detector.stop_stream()
     bus.wait_settled(timeout_s)
-    return RawSweep(polls, restamped(readings, None), started, clock.now())
+    return RawSweep(polls, restamped(readings, None), started, clock.now(), velocities=commanded)
 
 
 def run_path_sweep(

@@ -83,6 +83,12 @@ def test_merged_angles_follow_the_emulated_trajectory() -> None:
                 cruise = (t > middle[0]) & (t < middle[-1])
                 speed = np.polyfit(t[cruise], d.positions[cruise, j], 1)[0]
                 assert speed / sweeps.velocity[k, j] == pytest.approx(1.0, abs=0.02)
+                # the velocity the bus commanded is the register's, the one the motor runs
+                assert raw.velocities is not None
+                inner = middle[[1, -2]]  # a period in from each end: wholly cruising
+                x0, x1 = (side.true_pose_at(float(t))[rig.axes[j]] for t in inner)
+                run = abs(x1 - x0) / float(inner[1] - inner[0])
+                assert run == pytest.approx(raw.velocities[rig.axes[j]], rel=1e-3)
 
 
 def test_a_fly_plan_acquires_on_the_rehearsal_path(

@@ -2,7 +2,8 @@
 the same misaligned mirror: both recover every determined parameter within 0.03°, the
 fly scan in well under half the instrument time (the simulated clock's, from the
 readings' own windows); a timing latency shifts each way of a fine sweep and the two
-ways' mean cancels it; a detector that cannot stream scans stop-and-go."""
+ways' mean cancels it; a detector that cannot stream scans stop-and-go; on the
+rehearsal path at real speed the fly scan lands where the stop-and-go one does."""
 
 from __future__ import annotations
 
@@ -150,12 +151,45 @@ def test_a_detector_that_cannot_stream_scans_stop_and_go(tmp_path: Path) -> None
     (tmp_path / "lockin.yaml").write_text(yaml.safe_dump(data), encoding="utf-8")
     scene = load_scene(tmp_path / "lockin.yaml", rig)
     settings = align.ScanSettings(
-        incidences_deg=(30.0,), azimuths_deg=(60.0,), rotations_deg=(0.0,), exposure_s=0.1
-    )
+        incidences_deg=(30.0, 55.0), azimuths_deg=(60.0,), rotations_deg=(0.0,), exposure_s=0.1
+    )  # two incidences the rig reaches: scanned as given (`align.for_rig`)
     result = align.run_scan(rig, scene, "simulated", settings)
     assert result.mode == align.STOP_AND_GO
-    assert set(result.readings.mode) == {"stop_and_go"} and len(result.peaks) == 1
+    assert set(result.readings.mode) == {"stop_and_go"} and len(result.peaks) == 2
     photodiode = load_scene(mirror_scene(tmp_path, TRUTH), rig)
     streaming = align.run_scan(rig, photodiode, "simulated", replace(settings, exposure_s=1e-3))
     assert streaming.mode == align.FLY
     assert np.degrees(np.abs(result.peaks - streaming.peaks)).max() <= 0.003
+
+
+@pytest.mark.pty
+@pytest.mark.xdist_group("pty")
+def test_on_the_rehearsal_path_at_real_speed_the_scan_flies_to_the_stop_and_go_peaks(
+    tmp_path: Path,
+) -> None:
+    """The emulated Dynamixel arm polled over its pty and the serial photometer
+    streaming, at real speed: each peak's fly scans (the fine one at the hardware's 25
+    Hz, both ways) land where the stop-and-go rehearsal (0.0003° from the truth) puts
+    it; faster than real time the rehearsal scans stop-and-go."""
+    text = (CONFIGS / "rigs" / "arch_serial.yaml").read_text(encoding="utf-8")
+    (tmp_path / "arch_serial.yaml").write_text(text.replace("../", f"{CONFIGS}/"), "utf-8")
+    rig = Rig.from_yaml(tmp_path / "arch_serial.yaml")
+    scene = load_scene(mirror_scene(tmp_path, TRUTH), rig)
+    settings = align.ScanSettings(incidences_deg=(45.0, 65.0), azimuths_deg=(0.0,),
+                                  rotations_deg=(0.0,))  # fmt: skip
+    flown = align.run_scan(rig, scene, "rehearsal", settings, speedup=1.0)
+    still = align.run_scan(rig, scene, "rehearsal", settings, speedup=1e6)
+    assert flown.mode == align.FLY and set(flown.readings.mode) == {"fly"}
+    assert still.mode == align.STOP_AND_GO and len(flown.peaks) == len(still.peaks) == 2
+    el, az = rig.axes.index("detector_elevation"), rig.axes.index("detector_azimuth")
+    miss = np.degrees(flown.peaks - still.peaks)
+    arc = np.abs(np.sin(still.peaks[:, el]))  # an azimuth turn moves the detector sin θo
+    assert np.all(np.abs(miss[:, el]) <= 0.01), miss
+    assert np.all(np.abs(miss[:, az]) * arc <= 0.01), miss
+    # On the run's clock: the fine sweeps' readings 1/25 s apart, each the exposure long.
+    readings = flown.readings
+    started, ended = np.array(readings.started_s), np.array(readings.ended_s)
+    assert np.allclose(ended - started, settings.exposure_s, atol=1e-9)
+    steps = np.diff(ended)
+    fine = steps[np.abs(steps - 1.0 / align.HARDWARE_FINE_RATE_HZ) < 1e-3]
+    assert len(fine) >= 2 * 2 * 2 * 14  # peaks, joints, ways: 15 points (14 steps) or more
