@@ -175,13 +175,20 @@ PTY_TESTS = (
 )
 
 
+#: Whether pty tests run at a raised priority. Off: in a clean-clone `make test` on the
+#: shared 2-core machine, five pty tests failed with it on (replies missing, the SDK's
+#: spinning wait at nice -20 likely starving the kernel's pty hand-off); they passed
+#: without it in the runs before.
+RAISE_PTY_PRIORITY = False
+
+
 @pytest.fixture(autouse=True)
 def real_time_first(request: pytest.FixtureRequest) -> Iterator[None]:
     """A ``pty`` test runs ahead of the host's other work (`tests.support.priority`): its
     thread, the emulators' threads and the processes it starts get the CPU first, so a
     loaded machine cannot hold a device's reply past the protocol's deadline (as root,
     as CI runs; elsewhere at the priority the suite has)."""
-    if request.node.get_closest_marker("pty") is None:
+    if request.node.get_closest_marker("pty") is None or not RAISE_PTY_PRIORITY:
         yield
         return
     with ahead():
