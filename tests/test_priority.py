@@ -11,6 +11,7 @@ import threading
 
 import pytest
 
+from tests.conftest import RAISE_PTY_PRIORITY
 from tests.support.priority import REAL_TIME_NICE, SESSION_NICE, ahead, autogroup_nice
 
 
@@ -57,10 +58,14 @@ def test_ahead_raises_the_sessions_group_and_restores_it() -> None:
 
 
 @pytest.mark.pty
-def test_a_pty_test_runs_ahead_in_the_pty_group(request: pytest.FixtureRequest) -> None:
+def test_a_pty_test_runs_in_the_pty_group_ahead_where_raised(
+    request: pytest.FixtureRequest,
+) -> None:
     group = request.node.get_closest_marker("xdist_group")
     assert group is not None and group.args == ("pty",)
-    if os.geteuid() == 0:
+    if not RAISE_PTY_PRIORITY:
+        assert thread_nice() > REAL_TIME_NICE  # the suite's own priority
+    elif os.geteuid() == 0:
         assert thread_nice() <= REAL_TIME_NICE
         assert started_nice() == (thread_nice(), thread_nice())
         assert SESSION_NICE is None or autogroup_nice() == REAL_TIME_NICE
