@@ -12,8 +12,6 @@ installed and not in CI (``make test`` installs it where it can)."""
 from __future__ import annotations
 
 import io
-import os
-import shutil
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -28,43 +26,14 @@ from gonio.live import server
 from gonio.store.read import open_run
 from tests.gonio.live.conftest import paced_acquire, printed_url
 from tests.support.acquire import MATTE, plan_file
-
-CHROMIUM = os.environ.get("GONIO_CHROMIUM", "/usr/bin/chromium")
-ARGS = [
-    "--no-sandbox", "--headless", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--no-first-run", "--disable-sync",
-]  # fmt: skip
-
-
-def _why_not() -> str | None:
-    try:
-        import playwright.sync_api  # noqa: F401  (the test extra)
-    except ImportError:
-        return "playwright is not installed (pip install -e '.[test]')"
-    if not (os.path.exists(CHROMIUM) or shutil.which("chromium")):
-        return f"no Chromium at {CHROMIUM} (apt-get install chromium; make test does as root)"
-    return None
+from tests.support.browser import chromium
 
 
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    why = _why_not()
-    if why is not None:
-        if os.environ.get("CI") == "true":
-            pytest.fail(f"the browser tests must run in CI: {why}")
-        pytest.skip(why)
-    from playwright.sync_api import sync_playwright  # the test extra
-
-    profile = tmp_path_factory.mktemp("chromium-profile")
-    with sync_playwright() as p:
-        context = p.chromium.launch_persistent_context(
-            str(profile), executable_path=CHROMIUM, args=ARGS, headless=True,
-            viewport={"width": 1300, "height": 1000},
-        )  # fmt: skip
-        try:
-            yield context
-        finally:
-            context.close()
+    """One browser for the module (`tests.support.browser`), 1300 × 1000 px."""
+    with chromium(tmp_path_factory.mktemp("chromium-profile"), 1300, 1000) as context:
+        yield context
 
 
 def _ink(png: bytes) -> int:
