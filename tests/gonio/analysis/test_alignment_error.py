@@ -15,12 +15,13 @@ from gonio.analysis.alignment_error import alignment_error
 from gonio.analysis.scene import scene_truth
 from gonio.planner import build, load_plan
 from gonio.rig import AlignmentSpec, Rig
-from gonio.rig.alignment_file import AlignmentFile, FitRecord, FittedParameter, text
+from gonio.rig.alignment_file import AlignmentFile, FitRecord, text
 from gonio.rig.sensitivity import alignment_brdf_sigma
 from gonio.store.read import Run
 from gonio.workflows.simulate import simulate_plan
 from sim.scene import load_scene
 from tests.conftest import CONFIGS
+from tests.support.alignment import fit_record
 
 ERROR_DEG = 0.5  # large, so that it dominates the radiometric noise
 
@@ -34,16 +35,10 @@ def rig_with(tmp_path: Path, fit: FitRecord | None) -> Rig:
 
 
 def record() -> FitRecord:
-    return FitRecord(
-        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
-        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
-        residual_max_deg=0.02,
-        parameters={
-            "zero_offset.detector_elevation": FittedParameter(value=0.2, error=ERROR_DEG),
-            "tilt_x": FittedParameter(value=0.3, error=ERROR_DEG),
-        },
-        correlation=[[1.0, 0.3], [0.3, 1.0]],
-    )  # fmt: skip
+    return fit_record(
+        {"zero_offset.detector_elevation": (0.2, ERROR_DEG), "tilt_x": (0.3, ERROR_DEG)},
+        [[1.0, 0.3], [0.3, 1.0]],
+    )
 
 
 def simulated(rig: Rig, scene_name: str) -> Run:

@@ -16,10 +16,11 @@ from pydantic import ValidationError
 from gonio.config import ConfigError
 from gonio.planner import content_hash
 from gonio.rig import AlignmentSpec, Rig
-from gonio.rig.alignment_file import AlignmentFile, FitRecord, FittedParameter, text
+from gonio.rig.alignment_file import AlignmentFile, text
 from gonio.rig.sensitivity import alignment_sigma
 from gonio.store import open_run
 from tests.conftest import CONFIGS, CliResult
+from tests.support.alignment import fit_record
 
 Gonio = Callable[..., CliResult]
 
@@ -191,12 +192,7 @@ def test_info_says_none_without_an_alignment(run_gonio: Gonio, tmp_path: Path) -
 
 
 def test_the_alignments_standard_errors_reach_the_directions(tmp_path: Path) -> None:
-    record = FitRecord(
-        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
-        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
-        residual_max_deg=0.02,
-        parameters={"zero_offset.light_elevation": FittedParameter(value=0.3, error=0.05)},
-    )  # fmt: skip
+    record = fit_record({"zero_offset.light_elevation": (0.3, 0.05)})
     (tmp_path / "align.yaml").write_text(text(AlignmentFile(alignment=SPEC, fit=record)))
     path = tmp_path / "arch.yaml"
     path.write_text((CONFIGS / "rigs" / "arch.yaml").read_text() + "alignment: align.yaml\n")
@@ -221,16 +217,10 @@ def test_the_stated_correlations_reach_the_directions(
     with equal errors σ the light direction's error is σ√(2 + 2ρ) (independent without
     a stated correlation), so the pair's RMS is that over √2."""
     error = 0.05
-    record = FitRecord(
-        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
-        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
-        residual_max_deg=0.02,
-        parameters={
-            "zero_offset.light_elevation": FittedParameter(value=0.3, error=error),
-            "light_pointing_y": FittedParameter(value=0.0, error=error),
-        },
-        correlation=None if rho is None else [[1.0, rho], [rho, 1.0]],
-    )  # fmt: skip
+    record = fit_record(
+        {"zero_offset.light_elevation": (0.3, error), "light_pointing_y": (0.0, error)},
+        None if rho is None else [[1.0, rho], [rho, 1.0]],
+    )
     (tmp_path / "align.yaml").write_text(text(AlignmentFile(alignment=SPEC, fit=record)))
     path = tmp_path / "arch.yaml"
     path.write_text((CONFIGS / "rigs" / "arch.yaml").read_text() + "alignment: align.yaml\n")
@@ -252,15 +242,9 @@ def test_the_stated_correlations_reach_the_directions(
     ],
 )
 def test_a_bad_correlation_matrix_is_one_line(tmp_path: Path, rows: str, message: str) -> None:
-    record = FitRecord(
-        date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64, rig="arch",
-        rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10, residual_rms_deg=0.01,
-        residual_max_deg=0.02,
-        parameters={
-            "zero_offset.light_elevation": FittedParameter(value=0.3, error=0.05),
-            "light_pointing_y": FittedParameter(value=0.0, error=0.05),
-        },
-    )  # fmt: skip
+    record = fit_record(
+        {"zero_offset.light_elevation": (0.3, 0.05), "light_pointing_y": (0.0, 0.05)}
+    )
     body = text(AlignmentFile(alignment=SPEC, fit=record))
     assert "  correlation: null\n" in body
     body = body.replace("  correlation: null", f"  correlation: {rows}")
@@ -274,13 +258,7 @@ def test_a_bad_correlation_matrix_is_one_line(tmp_path: Path, rows: str, message
 
 def test_a_correlation_matrix_no_covariance_has_is_refused() -> None:
     with pytest.raises(ValidationError, match="expected a positive semi-definite matrix"):
-        FitRecord(
-            date_utc="2026-01-01T00:00:00Z", run="scan.sqlite", run_sha256="0" * 64,
-            rig="arch", rig_sha256="0" * 64, peaks=20, chi2=1.0, dof=10,
-            residual_rms_deg=0.01, residual_max_deg=0.02,
-            parameters={
-                name: FittedParameter(value=0.0, error=0.05)
-                for name in ("tilt_x", "tilt_y", "height_mm")
-            },
-            correlation=[[1.0, 0.9, -0.9], [0.9, 1.0, 0.9], [-0.9, 0.9, 1.0]],
-        )  # fmt: skip
+        fit_record(
+            dict.fromkeys(("tilt_x", "tilt_y", "height_mm"), (0.0, 0.05)),
+            [[1.0, 0.9, -0.9], [0.9, 1.0, 0.9], [-0.9, 0.9, 1.0]],
+        )
