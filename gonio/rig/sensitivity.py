@@ -35,6 +35,7 @@ with what would determine it).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -162,15 +163,17 @@ def brdf_sigma(model: BRDF, rig: Rig, angles: ArrayLike, sigma: ArrayLike) -> Fl
     return np.asarray(np.sqrt(np.einsum("...i,...ij,...j->...", g, cov, g)), dtype=np.float64)
 
 
-def alignment_jacobian(rig: Rig, angles: ArrayLike) -> FloatArray:
+def alignment_jacobian(
+    rig: Rig, angles: ArrayLike, which: Sequence[int] | None = None
+) -> FloatArray:
     """∂(si, ti, so, to)/∂p (..., 4, P) of the pair measured at the commanded ``angles``
     (..., A) per unit of each alignment parameter (`gonio.rig.alignment_fit.parameters`
-    order)."""
+    order; only those indexed by ``which``, in its order, where given)."""
     q = np.asarray(angles, dtype=np.float64)
     p = vector(rig, rig.alignment)
     frame = pair_frame(*rig.forward(q, rig.alignment))
     columns = []
-    for k in range(len(p)):
+    for k in range(len(p)) if which is None else which:
         step = np.zeros_like(p)
         step[k] = ALIGNMENT_STEP
         ai, ao = rig.forward(q, as_alignment(rig, p + step))
@@ -183,9 +186,13 @@ def alignment_jacobian(rig: Rig, angles: ArrayLike) -> FloatArray:
 def alignment_covariance(rig: Rig, angles: ArrayLike) -> FloatArray:
     """Σ_ω (..., 4, 4) (rad²) of the pair measured at ``angles`` (..., A) from the
     covariance the rig's alignment file states: J_p Σ_p J_pᵀ."""
-    jac = alignment_jacobian(rig, angles)
-    cov = np.einsum("...ip,pq,...jq->...ij", jac, stated_covariance(rig), jac)
-    return np.asarray(cov, dtype=np.float64)
+    stated = stated_covariance(rig)
+    which = np.flatnonzero(np.diag(stated) > 0)  # the others add nothing: not differenced
+    if not len(which):
+        return np.zeros((*np.shape(angles)[:-1], 4, 4))
+    jac = alignment_jacobian(rig, angles, which.tolist())
+    block = stated[np.ix_(which, which)]
+    return np.asarray(np.einsum("...ip,pq,...jq->...ij", jac, block, jac), dtype=np.float64)
 
 
 def alignment_brdf_sigma(model: GreyModel, rig: Rig, angles: ArrayLike) -> FloatArray:
