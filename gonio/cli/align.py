@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 from gonio.cli import arguments
 
 if TYPE_CHECKING:  # imported when the command runs
-    from gonio.workflows.align import Scan, Verdict
+    from gonio.workflows.align import Scan
+    from gonio.workflows.align_check import Verdict
 
 #: Exit code of a check that ran and found the alignment no longer holds.
 EXIT_DRIFTED = 1
@@ -109,7 +110,7 @@ def cmd_align(args: argparse.Namespace) -> int:
     from gonio.rig import Rig
     from gonio.rig.alignment_file import from_fit, text
     from gonio.rig.alignment_fit import fit
-    from gonio.workflows import align, backends
+    from gonio.workflows import align, align_check, backends
     from sim.scene import load_scene
 
     rig = Rig.from_yaml(args.rig)
@@ -131,7 +132,7 @@ def cmd_align(args: argparse.Namespace) -> int:
             rig, scene, kind, settings, seed=args.seed, speedup=args.speedup,
             stop_and_go=args.stop_and_go,
         )  # fmt: skip
-        return _print_verdict(align.verdict(checked, result.peaks), result, args.check)
+        return _print_verdict(align_check.verdict(checked, result.peaks), result, args.check)
     output = args.output or default_output(args.rig)
     sidecar = readings_path(output)
     for path in (output, sidecar):

@@ -4,9 +4,10 @@ code runs on the simulator, the rehearsal and the hardware; the detector's specu
 peaks are located by cross scans and fitted (`gonio.rig.alignment_fit`).
 
 The scan's planning is pure (`nominal_poses`, `cross_scan`, `fly_sweep`,
-`visiting_order`, the verdict of a check); its device I/O is `measure_line` (stop and
-go), `fly_cross` (flown, `gonio.workflows.align_fly`) and `scan`. A pose outside the
-rig's limits or inside a keep-out box is never commanded: the rig's own pose check
+`visiting_order`; a check's verdict is `gonio.workflows.align_check`'s); its device I/O
+is `measure_line` (stop and go), `fly_cross` (flown, `gonio.workflows.align_fly`) and
+`scan`. A pose outside the rig's limits or inside a keep-out box is never commanded: the
+rig's own pose check
 (`Rig.pose_reasons`) drops a peak whose scan (a fly sweep's whole travel included)
 would reach one.
 
@@ -35,7 +36,7 @@ from drivers.stream import can_stream
 from gonio.acquire import TargetReading, measure_target
 from gonio.errors import GonioError
 from gonio.rig import Rig
-from gonio.rig.alignment_fit import as_alignment, miss, peak_at, stated_covariance, vector
+from gonio.rig.alignment_fit import peak_at
 from gonio.types import FloatArray
 from gonio.workflows import align_fly, backends
 from gonio.workflows.backends import BackendKind
@@ -514,54 +515,9 @@ def write_readings(path: Path, readings: Readings) -> None:
     db.close()
 
 
-@dataclass(frozen=True)
-class Verdict:
-    """A check of an alignment: each peak's miss under it (rad, (M, 2)), its allowed
-    bound (rad, (M, 2), three standard errors) and whether every miss is within."""
-
-    misses_rad: FloatArray
-    bounds_rad: FloatArray
-
-    @property
-    def holds(self) -> bool:
-        return bool(np.all(np.abs(self.misses_rad) <= self.bounds_rad))
-
-    def rows_deg(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-        """Each peak's |miss| and bound (°, two components each)."""
-        misses, bounds = np.degrees(np.abs(self.misses_rad)), np.degrees(self.bounds_rad)
-        return [
-            ((m[0], m[1]), (b[0], b[1]))
-            for m, b in zip(misses.tolist(), bounds.tolist(), strict=True)
-        ]
-
-
-def verdict(rig: Rig, peaks: FloatArray) -> Verdict:
-    """Whether the peaks (M, A) agree with the rig's alignment: each miss within three
-    times the peak's location error combined with the alignment's propagated error (the
-    covariance its file states, `gonio.rig.alignment_fit.stated_covariance`, carried by
-    central differences over each stated parameter's standard error)."""
-    values, covariance = vector(rig, rig.alignment), stated_covariance(rig)
-    misses = miss(rig, peaks, as_alignment(rig, values))
-    errors = np.sqrt(np.diag(covariance))
-    stated = np.flatnonzero(errors > 0)
-    columns = []
-    for i in stated:
-        step = np.zeros_like(values)
-        step[i] = errors[i]
-        up = miss(rig, peaks, as_alignment(rig, values + step))
-        down = miss(rig, peaks, as_alignment(rig, values - step))
-        columns.append((up - down) / (2.0 * errors[i]))
-    variance = np.full(misses.shape, math.radians(PEAK_SIGMA_DEG) ** 2)
-    if columns:
-        jac = np.stack(columns, axis=-1)  # (M, 2, S) per unit of each stated parameter
-        block = covariance[np.ix_(stated, stated)]
-        variance += np.einsum("mis,st,mit->mi", jac, block, jac)
-    return Verdict(misses, 3.0 * np.sqrt(variance))
-
-
 __all__ = [
     "CHECK", "FLY", "HARDWARE_FINE_RATE_HZ", "MARGIN_TICKS", "MAX_FLY_SPEEDUP", "PEAK_SIGMA_DEG",
-    "STOP_AND_GO", "SWEEP_ATTEMPTS", "FlySweep", "Readings", "Scan", "ScanSettings", "Verdict",
+    "STOP_AND_GO", "SWEEP_ATTEMPTS", "FlySweep", "Readings", "Scan", "ScanSettings",
     "cross_scan", "fly_allowed", "fly_cross", "fly_sweep", "for_rig", "measure_line",
-    "nominal_poses", "reachable", "run_scan", "scan", "scan_mode", "verdict", "write_readings",
+    "nominal_poses", "reachable", "run_scan", "scan", "scan_mode", "write_readings",
 ]  # fmt: skip
