@@ -31,9 +31,9 @@ from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files
 from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.devices.position_error import planned_poses
 from sim.virtual.record import SimRun
 from sim.virtual.scene import Scene
-from sim.virtual.simulate import planned_poses
 
 
 @dataclass(frozen=True)

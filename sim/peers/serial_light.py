@@ -17,12 +17,13 @@ rehearsal's dark reading really is dark.
 
 from __future__ import annotations
 
+from typing import Self
+
 from drivers.light import SerialLightConfig
-from sim.peers.serial_photometer.protocol import _line
-from sim.peers.serial_photometer.server import _PtyServer
+from sim.peers.line_server import LineServer
 
 
-class SerialLamp(_PtyServer):
+class SerialLamp:
     """A lamp behind a serial relay, off at power-up."""
 
     def __init__(
@@ -37,12 +38,39 @@ class SerialLamp(_PtyServer):
         if len(self._words) != 3 or len(set(self._words)) != 3 or not all(self._words):
             raise ValueError(f"expected three distinct commands (on, off, query), got {commands}")
         self._reply_delay_s = reply_delay_s
-        self._reset_on_open = False
         self._on = False
         self._silent = False
         self._refuse = 0
         self._commands: list[str] = []
-        self._init_pty_state()
+        self._server = LineServer("lamp", self._handle, self._reset_locked)
+        self._lock = self._server.lock
+
+    # -- life cycle ---------------------------------------------------------------
+
+    @property
+    def path(self) -> str:
+        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
+        return self._server.path
+
+    def start(self) -> str:
+        """Open the pty, start serving, and return the path a host opens."""
+        return self._server.start()
+
+    def stop(self) -> None:
+        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
+        self._server.stop()
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    @property
+    def error(self) -> BaseException | None:
+        """An unexpected exception that stopped the serving thread, if any."""
+        return self._server.error
 
     def config(self, **overrides: object) -> SerialLightConfig:
         """The driver configuration that speaks this protocol."""
@@ -79,7 +107,7 @@ class SerialLamp(_PtyServer):
             self._silent, self._refuse = False, 0
 
     def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
-        self._events.clear()
+        self._server.events.clear()
 
     def _handle(self, line: str, now: float) -> None:
         with self._lock:
@@ -99,4 +127,5 @@ class SerialLamp(_PtyServer):
                 answer = "ON" if self._on else "OFF"
             else:
                 answer = f"ERR unknown command: {line}"
-            self._schedule_locked(now + self._reply_delay_s, _line(answer))
+            reply = (answer + "\r\n").encode("ascii", "replace")
+            self._server.schedule_locked(now + self._reply_delay_s, reply)

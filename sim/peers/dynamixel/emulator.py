@@ -1,7 +1,7 @@
 """A byte-level Dynamixel Protocol 2.0 bus of X-series motors on a real pseudo-terminal.
 
-`DxlEmulator` opens a pty, keeps its slave end open (to read the rate the host set
-with termios), and serves the master end from a daemon thread: bytes are split into
+`DxlEmulator` holds a `sim.peers.pty_host.PtyHost` (the slave end kept open, to read
+the rate the host set with termios) and serves the master end from its thread: bytes are split into
 packets by `PacketReader`, executed by :func:`sim.peers.dynamixel.instructions.handle`, and the
 status packets are written back after the time they would take on the wire (10 bits
 per byte at the bus rate) and each motor's Return Delay Time. A motor whose Baud Rate
@@ -30,7 +30,6 @@ from typing import Self
 from drivers.dynamixel.control_table import BAUD_RATES
 from drivers.dynamixel.models import MODEL_NAMES, model_number
 from sim.clock import ManualClock, ScaledClock, TimeSource
-from sim.peers import responsive
 from sim.peers.dynamixel.faults import Fault, FaultBook
 from sim.peers.dynamixel.instructions import FastChain, Reply, Response, handle
 from sim.peers.dynamixel.instructions import instruction_name as _name
@@ -44,6 +43,7 @@ from sim.peers.dynamixel.protocol import (
     StatusError,
 )
 from sim.peers.dynamixel.tty import set_raw, tty_rate
+from sim.peers.pty_host import PtyHost
 
 __all__ = ["BusStats", "DxlEmulator", "EmulatedMotor", "Fault", "ManualClock", "main"]
 
@@ -126,10 +126,10 @@ class DxlEmulator:
         self._silent = False
         self._stats = BusStats()
         self._transcript: list[tuple[str, bytes]] | None = [] if record else None
-        self._master = self._slave = self._wake_r = self._wake_w = -1
-        self._path: str | None = None
-        self._thread: threading.Thread | None = None
-        self._stopping = threading.Event()
+        self._pty = PtyHost(
+            self._serve, "dxl-emulator", configure=lambda fd: set_raw(fd, baud), join_s=2.0
+        )
+        self._stopping = self._pty.stopping
         #: The last exception raised while serving a packet (the thread keeps serving).
         self.error: BaseException | None = None
 
@@ -137,32 +137,11 @@ class DxlEmulator:
 
     def start(self) -> str:
         """Open the pty, start serving, and return the slave's path (e.g. /dev/pts/5)."""
-        if self._thread is not None:
-            raise RuntimeError("the emulator is already started")
-        self._stopping.clear()
-        self._master, self._slave = os.openpty()
-        set_raw(self._slave, self.baud)
-        os.set_blocking(self._master, False)
-        self._wake_r, self._wake_w = os.pipe()
-        self._path = os.ttyname(self._slave)
-        self._thread = threading.Thread(target=self._serve, name="dxl-emulator", daemon=True)
-        self._thread.start()
-        responsive.serving_started()
-        return self._path
+        return self._pty.start()
 
     def stop(self) -> None:
         """Stop serving and close the pty (idempotent; never blocks for long)."""
-        thread, self._thread = self._thread, None
-        self._stopping.set()
-        if thread is not None:
-            os.write(self._wake_w, b"x")
-            thread.join(timeout=2.0)
-            responsive.serving_stopped()
-        for name in ("_master", "_slave", "_wake_r", "_wake_w"):
-            fd = getattr(self, name)
-            if fd >= 0:
-                os.close(fd)
-                setattr(self, name, -1)
+        self._pty.stop()
 
     def __enter__(self) -> Self:
         self.start()
@@ -181,9 +160,7 @@ class DxlEmulator:
     @property
     def path(self) -> str:
         """The pty slave a client opens (after `start`)."""
-        if self._path is None:
-            raise RuntimeError("the emulator is not started")
-        return self._path
+        return self._pty.path
 
     @property
     def motors(self) -> dict[int, EmulatedMotor]:
@@ -221,7 +198,8 @@ class DxlEmulator:
 
     def host_baud(self) -> int | None:
         """The rate the host has set on the tty (bits/s)."""
-        return tty_rate(self._slave) if self._slave >= 0 else None
+        slave = self._pty.slave
+        return tty_rate(slave) if slave is not None else None
 
     # -- faults -------------------------------------------------------------------------
 
@@ -282,12 +260,13 @@ class DxlEmulator:
 
     def _serve(self) -> None:
         reader = PacketReader()
+        master, wake = self._pty.master, self._pty.wake
         while not self._stopping.is_set():
             try:
-                ready, _, _ = select.select([self._master, self._wake_r], [], [])
-                if self._wake_r in ready:
+                ready, _, _ = select.select([master, wake], [], [])
+                if wake in ready:
                     return
-                data = os.read(self._master, 4096)
+                data = os.read(master, 4096)
             except (BlockingIOError, InterruptedError):
                 continue
             except (OSError, ValueError):  # closed under us by stop(), or EIO
@@ -384,7 +363,7 @@ class DxlEmulator:
 
     def _count_late(self) -> None:
         """Count a late reply about to leave, and whether the host has sent more since."""
-        overtaken = bool(select.select([self._master], [], [], 0)[0])
+        overtaken = bool(select.select([self._pty.master], [], [], 0)[0])
         with self._lock:
             self._stats.late += 1
             self._stats.overtaken += overtaken
@@ -395,13 +374,13 @@ class DxlEmulator:
             self._stats.bytes_out += len(raw)
             if self._transcript is not None:
                 self._transcript.append(("tx", raw))
-        view = memoryview(raw)
+        view, master = memoryview(raw), self._pty.master
         deadline = time.monotonic() + 1.0
         while view and not self._stopping.is_set() and time.monotonic() < deadline:
             try:
-                view = view[os.write(self._master, view) :]
+                view = view[os.write(master, view) :]
             except BlockingIOError:  # the host is not reading: wait, then give up
-                select.select([], [self._master], [], 0.05)
+                select.select([], [master], [], 0.05)
 
 
 def _sender(response: Response) -> Reply:

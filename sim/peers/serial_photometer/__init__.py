@@ -33,10 +33,10 @@ exposure time (plus ``reply_delay_s``), as on a real single-threaded device.
 ``python -m sim.serial_photometer`` prints the pty path and serves until Ctrl-C.
 
 The package: :mod:`~sim.peers.serial_photometer.protocol` (the device's fixed lines and the
-matching driver configuration), :mod:`~sim.peers.serial_photometer.server` (the pty and the
-serving thread), :mod:`~sim.peers.serial_photometer.device` (the photometer: its settings,
-faults and answers), :mod:`~sim.peers.serial_photometer.quirks` (the ways its stream can fall
-short of the requirements, for testing a qualification) and
+matching driver configuration), :mod:`~sim.peers.serial_photometer.device` (the photometer:
+its settings, faults and answers; the pty and the serving thread are its
+`sim.peers.line_server.LineServer`'s), :mod:`~sim.peers.serial_photometer.quirks` (the
+ways its stream can fall short of the requirements, for testing a qualification) and
 :mod:`~sim.peers.serial_photometer.cli` (the command line).
 """
 

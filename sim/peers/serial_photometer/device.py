@@ -3,19 +3,18 @@ answers each command (see the package docstring for the protocol)."""
 
 from __future__ import annotations
 
-import heapq
 import math
 import random
 import statistics
 import termios
-import threading
 import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Self
 
 from drivers.serial_detector import SerialDetectorConfig
+from sim.peers.line_server import Event, LineServer
 from sim.peers.serial_photometer.protocol import (
     BANNER,
     IDENTITY,
@@ -25,7 +24,6 @@ from sim.peers.serial_photometer.protocol import (
     default_config,
 )
 from sim.peers.serial_photometer.quirks import CONFORMING, StreamQuirks
-from sim.peers.serial_photometer.server import _Event, _PtyServer
 
 Signal = float | Callable[[float], float]
 #: Stream windows' counts in one call: given the windows' starts and ends
@@ -49,7 +47,7 @@ class _Faults:
     late: deque[float] = field(default_factory=deque)
 
 
-class SerialPhotometer(_PtyServer):
+class SerialPhotometer:
     """A photometer on a pseudo-terminal.
 
     ``signal`` is a constant rate in counts per second (the reading is rate × exposure)
@@ -69,8 +67,7 @@ class SerialPhotometer(_PtyServer):
     rehearsal needs when one exposure costs more than a sped-up period: the lines then
     come in bursts, each stamped with its window's end).
 
-    The pty and the serving thread come from
-    :class:`~sim.peers.serial_photometer.server._PtyServer`.
+    The pty and the serving thread are its `sim.peers.line_server.LineServer`'s.
     """
 
     def __init__(
@@ -108,7 +105,6 @@ class SerialPhotometer(_PtyServer):
         self._full_scale = full_scale
         self._reply_delay_s = reply_delay_s
         self._default_exposure_ms = default_exposure_ms
-        self._reset_on_open = reset_on_open
         self._boot_s = boot_s
         self._echo = echo
         self._speedup = float(speedup)
@@ -121,7 +117,14 @@ class SerialPhotometer(_PtyServer):
         self._stream_index = 0  # data lines of the running stream so far
         self._stop_after: int | None = None  # lines still sent after an acknowledged STOP
 
-        self._lock = threading.Lock()
+        self._server = LineServer(
+            "photometer",
+            self._handle,
+            self._reset_locked,
+            self._tick_locked,
+            reset_on_open=reset_on_open,
+        )
+        self._lock = self._server.lock
         self._faults = _Faults()
         self._exposure_ms = default_exposure_ms
         self._gain = 1
@@ -133,8 +136,34 @@ class SerialPhotometer(_PtyServer):
         self._window: tuple[float, bool] | Exception | None = None  # read at its middle
         self._stream_ends: list[float] = []  # time.monotonic() of each DAT line's window end
         self._t0 = time.monotonic()  # the device's clock starts at zero here
-        self._init_pty_state()
-        self._link_latency_s = quirks.link_latency_s
+        self._server.link_latency_s = quirks.link_latency_s
+
+    # -- life cycle ---------------------------------------------------------------
+
+    @property
+    def path(self) -> str:
+        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
+        return self._server.path
+
+    def start(self) -> str:
+        """Open the pty, start serving, and return the path a host opens."""
+        return self._server.start()
+
+    def stop(self) -> None:
+        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
+        self._server.stop()
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    @property
+    def error(self) -> BaseException | None:
+        """An unexpected exception that stopped the serving thread, if any."""
+        return self._server.error
 
     # -- configuration -------------------------------------------------------------
 
@@ -229,20 +258,20 @@ class SerialPhotometer(_PtyServer):
 
     def unsolicited(self, line: str) -> None:
         """Send ``line`` now, unasked (a debug print, a stray message)."""
-        self._schedule(time.monotonic(), _line(line))
+        self._server.schedule(time.monotonic(), _line(line))
 
     def reboot(self) -> None:
         """Reset now: forget the settings and print the banner after ``boot_s``."""
         with self._lock:
             self._reset_locked(time.monotonic())
-        self._wakeup()
+        self._server.wakeup()
 
     def set_quirks(self, quirks: StreamQuirks) -> None:
         """Stream with ``quirks`` from the next ``STREAM`` on (`StreamQuirks`)."""
         if self._windows_signal is not None and quirks != CONFORMING:
             raise ValueError("quirks apply to a stream read window by window, not with windows")
         with self._lock:
-            self._quirks, self._link_latency_s = quirks, quirks.link_latency_s
+            self._quirks, self._server.link_latency_s = quirks, quirks.link_latency_s
 
     def clear(self) -> None:
         """Remove every fault."""
@@ -253,19 +282,19 @@ class SerialPhotometer(_PtyServer):
 
     def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
         """Reboot: pending answers are lost, settings return to their defaults."""
-        self._events.clear()
+        self._server.events.clear()
         self._stream, self._stream_gen = None, self._stream_gen + 1
         self._exposure_ms = self._default_exposure_ms
         self._gain = 1
         self._busy_until = now + (0.0 if banner_now else self._boot_s)
         self._resets += 1
-        self._schedule_locked(self._busy_until, _line(BANNER))
+        self._server.schedule_locked(self._busy_until, _line(BANNER))
 
     def _handle(self, line: str, now: float) -> None:
         with self._lock:
             self._commands.append(line)
             if self._echo:
-                self._output_locked(_line(line))
+                self._server.output_locked(_line(line))
             faults = self._faults
             if faults.silent:
                 return
@@ -306,7 +335,7 @@ class SerialPhotometer(_PtyServer):
             else:
                 answer = f"ERR unknown command: {line}"
             self._busy_until = start + delay
-            self._schedule_locked(self._busy_until, _line(answer))
+            self._server.schedule_locked(self._busy_until, _line(answer))
 
     def _start_stream_locked(self, args: list[str], at: float) -> str:
         """``STREAM <rate_hz> <integration_ms>``: windows end every period from ``at``."""
@@ -324,17 +353,13 @@ class SerialPhotometer(_PtyServer):
         self._stream_index, self._stop_after = 0, None
         if self._windows_signal is not None:  # the windows ended, read in one call
             self._stream_from, self._stream_sent = at, 0
-            heapq.heappush(
-                self._events, _Event(at + period, next(self._seq), tick=self._stream_gen)
-            )
+            self._server.tick_locked(at + period, self._stream_gen)
             return "OK"
         middle = self._quirks.first_end(at, period, self._t0) - integration / self._speedup / 2
-        heapq.heappush(
-            self._events, _Event(middle, next(self._seq), tick=self._stream_gen, middle=True)
-        )
+        self._server.tick_locked(middle, self._stream_gen, middle=True)
         return "OK"
 
-    def _burst_locked(self, event: _Event) -> None:
+    def _burst_locked(self, event: Event) -> None:
         """With ``windows``: send a line for every window ended by now, then wake at the
         next window's end."""
         if self._faults.silent:  # the stream stops, as a crashed sketch's would
@@ -344,7 +369,7 @@ class SerialPhotometer(_PtyServer):
         assert self._stream is not None
         following = self._stream_from + (self._stream_sent + 1) * self._stream[0]
         following = max(following, time.monotonic() + BURST_S)
-        heapq.heappush(self._events, _Event(following, next(self._seq), tick=event.tick))
+        self._server.tick_locked(following, event.tick)
 
     def _send_windows_locked(self, now: float) -> None:
         """A line for each window of the running stream ended by ``now`` and not yet
@@ -375,9 +400,9 @@ class SerialPhotometer(_PtyServer):
                 data = _line(f"DAT {t_ms:.3f} {value!r} {'SAT' if sat else 'OK'}")
             else:
                 data = _line(f"ERR signal failed: {type(window).__name__}")
-            self._output_locked(data)
+            self._server.output_locked(data)
 
-    def _tick_locked(self, event: _Event) -> None:
+    def _tick_locked(self, event: Event) -> None:
         """A stream window's middle (``event.middle``: read the signal, as the pose is
         then) or end (send its line; schedule the next window's middle)."""
         if self._stream is None or event.tick != self._stream_gen:
@@ -392,7 +417,7 @@ class SerialPhotometer(_PtyServer):
                 self._window = self._counts_locked(integration)
             except Exception as exc:  # a test's signal ran out of values, say
                 self._window = exc
-            heapq.heappush(self._events, _Event(event.due + half, next(self._seq), tick=event.tick))
+            self._server.tick_locked(event.due + half, event.tick)
             return
         faults = self._faults
         if faults.silent:  # the stream stops, as a crashed sketch's would
@@ -413,14 +438,14 @@ class SerialPhotometer(_PtyServer):
             data = b"" if text is None else _line(text)
         else:
             data = _line(f"ERR signal failed: {type(window).__name__}")
-        self._output_locked(data)
+        self._server.output_locked(data)
         if self._stop_after is not None:  # still streaming after an acknowledged STOP
             self._stop_after -= 1
             if self._stop_after <= 0:
                 self._stream, self._stream_gen, self._stop_after = None, self._stream_gen + 1, None
                 return
         middle = event.due + self._quirks.next_period(period, self._quirk_rng) - half
-        heapq.heappush(self._events, _Event(middle, next(self._seq), tick=event.tick, middle=True))
+        self._server.tick_locked(middle, event.tick, middle=True)
 
     def _counts_locked(self, exposure_s: float) -> tuple[float, bool]:
         """One exposure's counts (signal, noise, dark, gain) and whether it saturated."""
@@ -441,10 +466,12 @@ class SerialPhotometer(_PtyServer):
 
     def _measure_locked(self, args: list[str], start: float, delay: float) -> None:
         if len(args) > 2 or not all(_int_in(a, 1, 60_000) for a in args[:1]):
-            self._schedule_locked(start + delay, _line(f"ERR bad argument: MEAS {' '.join(args)}"))
+            self._server.schedule_locked(
+                start + delay, _line(f"ERR bad argument: MEAS {' '.join(args)}")
+            )
             return
         if len(args) == 2 and not _int_in(args[1], 1, 10_000):
-            self._schedule_locked(start + delay, _line(f"ERR bad averages: {args[1]}"))
+            self._server.schedule_locked(start + delay, _line(f"ERR bad averages: {args[1]}"))
             return
         exposure_ms = int(args[0]) if args else self._exposure_ms
         count = int(args[1]) if len(args) == 2 else 1
@@ -453,7 +480,7 @@ class SerialPhotometer(_PtyServer):
         if faults.reset_next:
             faults.reset_next = False
             self._busy_until = start + duration / 2
-            self._schedule_locked(self._busy_until, reset=True)
+            self._server.schedule_locked(self._busy_until, reset=True)
             return
         done = start + duration + delay
         self._busy_until = done
@@ -461,7 +488,7 @@ class SerialPhotometer(_PtyServer):
         data = (
             faulty if faulty is not None else _line(self._answer_locked(exposure_ms / 1000, count))
         )
-        self._schedule_locked(done, data)
+        self._server.schedule_locked(done, data)
 
     def _fault_line_locked(self) -> bytes | None:
         """The line an injected fault sends instead of the next answer or stream line

@@ -1,5 +1,5 @@
 """The transport every emulated instrument shares: a pseudo-terminal served by the
-simulated photometer's thread (`sim.peers.serial_photometer.server`), ``;``-separated
+line server the simulated photometer also holds (`sim.peers.line_server`), ``;``-separated
 commands, queries answered after the instrument's integration time, a refused command
 left unanswered and recorded in the instrument's event status
 (`sim.peers.visa_instruments.registers`), and the faults a test injects (silence, garbage,
@@ -7,12 +7,12 @@ slow answers, late ones)."""
 
 from __future__ import annotations
 
-import threading
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Self
 
-from sim.peers.serial_photometer.server import _PtyServer
+from sim.peers.line_server import LineServer
 from sim.peers.visa_instruments.registers import EventStatus, Refused
 
 #: The reading of one integration of t seconds, in the instrument's unit.
@@ -27,7 +27,7 @@ class _Faults:
     late: deque[float] = field(default_factory=deque)
 
 
-class EmulatedInstrument(_PtyServer):
+class EmulatedInstrument:
     """An instrument's command set on a pseudo-terminal (subclasses: the dialects).
 
     ``signal(t)`` is the reading of an integration of ``t`` s; ``speedup``: an
@@ -36,9 +36,6 @@ class EmulatedInstrument(_PtyServer):
     """
 
     identity = "gonio-sim instrument"
-    #: The pty's slave end is not held: until a host opens it no process has it open
-    #: (``fuser``/``lsof`` name none), as a real instrument's port.
-    _hold_slave = False
     #: What ends its answers by default.
     terminator = "\n"
 
@@ -50,13 +47,43 @@ class EmulatedInstrument(_PtyServer):
         self._signal = signal
         self._speedup = float(speedup)
         self._terminator = terminator or self.terminator
-        self._reset_on_open = False
         self._faults = _Faults()
         self._busy_until = 0.0
         self._commands: list[str] = []
         self.status = EventStatus()
-        self._init_pty_state()
-        self._lock = threading.Lock()
+        # The pty's slave end is not held: until a host opens it no process has it open
+        # (``fuser``/``lsof`` name none), as a real instrument's port.
+        self._server = LineServer(
+            type(self).__name__, self._handle, self._reset_locked, hold_slave=False
+        )
+        self._lock = self._server.lock
+
+    # -- life cycle ---------------------------------------------------------------
+
+    @property
+    def path(self) -> str:
+        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
+        return self._server.path
+
+    def start(self) -> str:
+        """Open the pty, start serving, and return the path a host opens."""
+        return self._server.start()
+
+    def stop(self) -> None:
+        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
+        self._server.stop()
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    @property
+    def error(self) -> BaseException | None:
+        """An unexpected exception that stopped the serving thread, if any."""
+        return self._server.error
 
     # -- inspection and faults ------------------------------------------------------------
 
@@ -112,7 +139,7 @@ class EmulatedInstrument(_PtyServer):
     # -- the transport ------------------------------------------------------------------------
 
     def _reset_locked(self, now: float, *, banner_now: bool = False) -> None:
-        self._events.clear()
+        self._server.events.clear()
 
     def _handle(self, line: str, now: float) -> None:
         with self._lock:
@@ -130,7 +157,7 @@ class EmulatedInstrument(_PtyServer):
                     self.status.refuse(refused)
                 except Exception as exc:  # a defect of the emulator: reported by .error
                     reply, integration_s = None, 0.0
-                    self._error = exc
+                    self._server.error = exc
                 if reply is None:
                     continue
                 done = start + integration_s / self._speedup + faults.slow_s
@@ -139,5 +166,5 @@ class EmulatedInstrument(_PtyServer):
                     faults.garbage -= 1
                     reply = "#?garbage?#"
                 self._busy_until = start = done
-                self._schedule_locked(done, (reply + self._terminator).encode("ascii"))
-        self._wakeup()
+                self._server.schedule_locked(done, (reply + self._terminator).encode("ascii"))
+        self._server.wakeup()

@@ -21,10 +21,10 @@ from gonio.rig.model import Rig
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.devices.motors import MotorState, SimMotorBus
+from sim.virtual.devices.position_error import planned_poses
 from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import Streams
 from sim.virtual.scene import Scene
-from sim.virtual.simulate import planned_poses
 
 
 class SimulatedInstrument(Resource):

@@ -1,6 +1,7 @@
 """The position_error effect of the simulated motors (`sim.virtual.devices.motors`): encoder
-quantization, backlash and repeatability (`PositionModel`), and the motors' state a
-resumed run restores (`MotorState`)."""
+quantization, backlash and repeatability (`PositionModel`), the motors' state a
+resumed run restores (`MotorState`), and where a plan's moves really end
+(`planned_poses`, vectorized: what the instrument and `sim.virtual.simulate` share)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from sim.virtual.effects import PositionErrorSpec
 from sim.virtual.physics import streams as streams_module
+from sim.virtual.scene import Scene
 
 
 class PositionModel:
@@ -61,3 +63,40 @@ class MotorState:
     encoder: tuple[float, ...]
     direction: tuple[float, ...]
     repeatability: tuple[float, ...]
+
+
+def _carry(values: FloatArray, where: np.ndarray) -> FloatArray:
+    """Per column, ``values`` of the last row up to each row where ``where`` holds (0
+    before the first)."""
+    rows = np.arange(len(values))[:, None]
+    last = np.maximum.accumulate(np.where(where, rows, -1), axis=0)
+    filled = np.take_along_axis(values, np.maximum(last, 0), axis=0)
+    return np.asarray(np.where(last >= 0, filled, 0.0), dtype=np.float64)
+
+
+def planned_poses(
+    rig: Rig,
+    angles: FloatArray,
+    scene: Scene,
+    streams: streams_module.Streams,
+    index: np.ndarray | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(goals the motors go to, true joint angles there, the previous goals), each
+    (N, A), for joint ``angles`` (N, A) measured in order from the rig's home pose as
+    samples ``index`` (default 0 … N − 1: their random streams)."""
+    goal = np.asarray(angles, dtype=np.float64)
+    error = np.zeros_like(goal)
+    spec = scene.effects.position_error
+    if spec is not None:
+        model = PositionModel(rig, spec, streams)
+        goal = np.clip(model.quantize(goal), rig.limits[:, 0], rig.limits[:, 1])
+    previous = np.vstack([rig.home[None, :], goal[:-1]])
+    if spec is not None:
+        # Each axis keeps the direction and the repeatability draw of its last move.
+        step = np.sign(goal - previous)
+        moved = step != 0
+        if index is None:
+            index = np.arange(len(goal), dtype=np.int64)
+        draws = model.repeatability_draw(index, goal.shape[1])
+        error = model.backlash_error(_carry(step, moved)) + _carry(draws, moved)
+    return goal, goal + error, previous
