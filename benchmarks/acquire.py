@@ -43,8 +43,8 @@ from gonio.store.journal import Journal
 from gonio.store.schema import samples_table
 from gonio.workflows import session
 from gonio.workflows.simulate import measure_targets
-from sim.devices.instrument import SimulatedInstrument
-from sim.scene import Scene
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.scene import Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANS = {

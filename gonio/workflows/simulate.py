@@ -1,7 +1,7 @@
 """A whole simulated session: the acquisition engine on the simulated backend (the
 same loop, journal and calibration as `gonio acquire`), and what it recovers; and a
 plan measured target by target on a `SimulatedInstrument` without the engine
-(`measure_targets`, checked against the vectorized `sim.simulate.simulate`).
+(`measure_targets`, checked against the vectorized `sim.virtual.simulate.simulate`).
 
 `simulate_plan` runs `gonio.workflows.session.start` with the simulated backend into a
 run journal (in memory unless ``output`` names a file), then derives the BRDF from the
@@ -30,10 +30,10 @@ from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files
-from sim.devices.instrument import SimulatedInstrument
-from sim.record import SimRun
-from sim.scene import Scene
-from sim.simulate import planned_poses
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.devices.position_error import planned_poses
+from sim.virtual.record import SimRun
+from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from drivers.serial_detector import (
 )
 from drivers.serial_detector.detector import SerialDetector
 from drivers.values import Reading
-from sim.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
+from sim.peers.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
 
 TIMEOUT_S = 0.2  # the per-line margin used throughout: deadlines are exposure + this
 EXPOSURE_S = 0.01

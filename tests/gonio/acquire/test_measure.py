@@ -13,8 +13,8 @@ from gonio.acquire.measure import measure_target
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import measure_targets
-from sim.devices.instrument import SimulatedInstrument
-from sim.scene import load_scene
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 MATTE = load_scene(CONFIGS / "scenes" / "matte.yaml")
