@@ -10,9 +10,12 @@ the readings' stamp slack / √12, `stamp_slack`, in quadrature) × the angular 
 there (rad); polls slower than `SLOW_POLL` × the median are left out.
 Only readings whose whole window lies inside the constant-velocity part (the swept axis
 between the entry and exit poses, give or take one period's travel: the stream's phase is
-the device's) and between two polls (`bracketed`) are matched, each
-to a stream slot j (the j-th reading streamed at constant velocity, planned mid-pose
-entry + v (j period + integration / 2)). The readings are consecutive windows
+the device's) and between two polls (`bracketed`) are matched: two polls both in the
+constant-velocity part, or close enough in time that a ramp between them bends the path
+by at most `RAMP_BIAS` of a period's travel (`ramp_gap`, from the planned acceleration;
+sparse polls about a ramp place no reading). Each is matched to a stream slot j (the
+j-th reading streamed at constant velocity, planned mid-pose entry + v (j period +
+integration / 2)). The readings are consecutive windows
 (`window_numbers`: from the device's timestamps, else their order), so one shift maps
 them all to slots: the median, over the readings inside, of the window number less the
 slot their position along the swept axis gives (robust to the scatter of each position;
@@ -43,6 +46,9 @@ from gonio.types import FloatArray
 #: A poll whose request-to-reply span exceeds this many times the sweep's median is not
 #: interpolated (when it happened within the span is too loosely known).
 SLOW_POLL = 3.0
+#: The largest share of one period's travel that interpolating two polls across a ramp
+#: (accelerating between them, not at constant velocity) may put a reading off by.
+RAMP_BIAS = 0.1
 
 
 @dataclass(frozen=True)
@@ -128,7 +134,7 @@ def merge(
     inside = (np.minimum(first[:, j], last[:, j]) >= lo - margin) & (
         np.maximum(first[:, j], last[:, j]) <= hi + margin
     )
-    inside &= bracketed(t, w.positions[:, j], lo, hi, started, ended)
+    inside &= bracketed(t, w.positions[:, j], lo, hi, started, ended, ramp_gap(sweeps, k, j))
     v = abs(float(sweeps.velocity[k, j]))
     along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
     estimate = (along - 0.5 * sweeps.integration_s) / sweeps.period_s  # slot by position
@@ -229,12 +235,13 @@ def _matched(
 
 
 def bracketed(
-    t: FloatArray, swept: FloatArray, lo: float, hi: float, started: FloatArray, ended: FloatArray
-) -> np.ndarray:
+    t: FloatArray, swept: FloatArray, lo: float, hi: float, started: FloatArray,
+    ended: FloatArray, ramp_gap_s: float,
+) -> np.ndarray:  # fmt: skip
     """Whether each window [started, ended] lies between two polls (mid-times ``t``,
     sorted; never extrapolated) that either are both inside the constant-velocity part
-    (``swept`` positions within [lo, hi]: linear motion between them) or are no further
-    apart than twice the median poll interval (a ramp's curvature negligible)."""
+    (``swept`` positions within [lo, hi]: linear motion between them) or are at most
+    ``ramp_gap_s`` apart (s; `ramp_gap`: a ramp's curvature between them negligible)."""
     if len(t) < 2:
         return np.zeros(len(started), dtype=np.bool_)
     a = np.searchsorted(t, started, side="right") - 1
@@ -242,8 +249,23 @@ def bracketed(
     ok = (a >= 0) & (b < len(t))
     a, b = np.clip(a, 0, len(t) - 1), np.clip(b, 0, len(t) - 1)
     cruising = (swept >= lo - 1e-9) & (swept <= hi + 1e-9)
-    close = (t[b] - t[a]) <= 2.0 * float(np.median(np.diff(t)))
+    close = (t[b] - t[a]) <= ramp_gap_s
     return np.asarray(ok & ((cruising[a] & cruising[b]) | close), dtype=np.bool_)
+
+
+def ramp_gap(sweeps: Sweeps, k: int, j: int) -> float:
+    """The longest poll gap (s) across which interpolating sweep ``k``'s swept axis
+    ``j`` linearly errs at most `RAMP_BIAS` of a period's travel at its velocity v
+    where the gap takes in a ramp: a·g²/8 ≤ RAMP_BIAS·v·period, a = v²/(2 d) the ramp's
+    acceleration as planned (d its length, the shorter of the run-up and the overrun)."""
+    v = abs(float(sweeps.velocity[k, j]))
+    d = min(
+        abs(float(sweeps.entry[k, j] - sweeps.start[k, j])),
+        abs(float(sweeps.stop[k, j] - sweeps.exit[k, j])),
+    )
+    if v <= 0.0 or d <= 0.0:
+        return 0.0
+    return math.sqrt(16.0 * RAMP_BIAS * sweeps.period_s * d / v)
 
 
 def interpolated_span(t: FloatArray, spans: FloatArray, times: FloatArray) -> FloatArray:
