@@ -1,11 +1,13 @@
 """A sweep's merge against a known trapezoidal motion (no devices): readings are placed
 only from polls whose linear interpolation the motion supports, exactly where both lie
 in the constant-velocity part, within `RAMP_BIAS` of a period's travel where close polls
-take in a ramp; sparse polls about a ramp place no reading there."""
+take in a ramp; where sparse polls take in a ramp, on the line at the commanded
+velocity through the constant-velocity part's polls, else not at all."""
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -44,26 +46,38 @@ def sweeps() -> Sweeps:
     )  # fmt: skip
 
 
-def merged_against_truth(poll_at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def merged_against_truth(
+    poll_at: np.ndarray, velocity: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The matched slots and their angles' errors (K,) rad, polls at ``poll_at`` (s;
     each answered 1 ms after its request), the stream's phase 4 ms ahead of the cruise
-    (its first window starts in the ramp)."""
+    (its first window starts in the ramp); ``velocity``: the plan's (rad/s; the motion's
+    `V` is the one commanded)."""
     request = np.asarray(poll_at, dtype=np.float64)
     reply = request + 1e-3
     positions = truth(0.5 * (request + reply))
     started = RAMP_S - 4e-3 + PERIOD * np.arange(round(CRUISE_S / PERIOD) + 1)
     ended = started + PERIOD
-    m = merge(request, reply, positions, started, ended, sweeps(), 0)
+    plan = sweeps() if velocity is None else replace(sweeps(), velocity=[[velocity, 0.0]])
+    m = merge(request, reply, positions, started, ended, plan, 0, velocity=np.array([V, 0.0]))
     middle = 0.5 * (started + ended)[m.index]
     return m.slot, np.abs(m.angles - truth(middle)).max(axis=1)
 
 
-def test_sparse_polls_about_a_ramp_place_no_reading_there() -> None:
-    # polls 400 ms apart, the first at rest and the last after the stop: the median gap
-    # is the only gap, and interpolating across either ramp errs by degrees
-    slots, error = merged_against_truth(np.arange(5) * 0.4)
-    assert len(slots) >= 70  # the readings between the polls at 0.4, 0.8 and 1.2 s
-    assert error.max() <= 1e-9  # linear motion between polls both cruising: exact
+def test_sparse_polls_about_a_ramp_place_readings_on_the_commanded_line() -> None:
+    # polls 400 ms apart, the first at rest and the last after the stop (the median gap
+    # is the only gap: interpolating across either ramp errs by up to a degree); three
+    # in the cruise place it on the line at the commanded velocity, the plan's 4 % off
+    slots, error = merged_against_truth(np.arange(5) * 0.4, velocity=1.04 * V)
+    # every window, the first too (it begins 4 ms in the ramp, its middle in the cruise)
+    np.testing.assert_array_equal(slots, np.arange(round(CRUISE_S / PERIOD)))
+    assert error.max() <= 1e-9
+
+
+def test_two_polls_in_the_cruise_place_only_the_readings_between_them() -> None:
+    slots, error = merged_against_truth(np.array([0.0, 0.5, 1.0, 1.6]))
+    assert 45 <= len(slots) <= 51  # the half second between the polls at 0.5 and 1.0 s
+    assert error.max() <= 1e-9
 
 
 def test_close_polls_place_every_reading_even_at_a_ramp() -> None:
