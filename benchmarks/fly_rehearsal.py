@@ -52,8 +52,9 @@ def lines_plan(folder: Path) -> Path:
     return out
 
 
-def rehearse(plan: Path, out: Path) -> dict[str, float]:
-    """One rehearsal of ``plan`` into ``out``: its figures."""
+def rehearse(plan: Path, out: Path, failures: list[str]) -> dict[str, float]:
+    """One rehearsal of ``plan`` into ``out``: its figures (a failed one's reason added
+    to ``failures``)."""
     started = time.perf_counter()
     result = subprocess.run(
         [str(GONIO), "acquire", str(plan), "--scene", str(SCENE), "--rehearse", "--speedup",
@@ -62,8 +63,9 @@ def rehearse(plan: Path, out: Path) -> dict[str, float]:
     )  # fmt: skip
     wall = time.perf_counter() - started
     load = os.getloadavg()[0]
-    if result.returncode != 0:
-        raise SystemExit(f"{plan.name}: gonio acquire failed: {result.stderr.strip()}")
+    if result.returncode != 0:  # counted as none kept, its reason printed below the table
+        failures.append(f"{plan.name}: {result.stderr.strip()}")
+        return {"kept": 0, "targets": 1, "sweeps": 0, "redone": 0, "wall": wall, "load": load}
     run = open_run(out)
     redone = sum(1 for s in run.sweeps if s.outcome == "abandoned" and s.data.get("short"))
     return {
@@ -97,10 +99,11 @@ def main() -> None:
         time.sleep(args.warmup if args.busy else 0.0)
         folder = Path(tmp)
         plans = {"detector arcs, 0.5°": PLAN, "θh lines, 1°": lines_plan(folder)}
+        failures: list[str] = []
         for name, plan in plans.items():
             shares, loads = [], []
             for k in range(args.runs):
-                f = rehearse(plan, folder / f"run{k}.sqlite")
+                f = rehearse(plan, folder / f"run{k}.sqlite", failures)
                 share = f["kept"] / f["targets"]
                 shares.append(share)
                 loads.append(f["load"])
@@ -114,6 +117,8 @@ def main() -> None:
                 f"| {name} | least | | | {100 * min(shares):.1f} % | | | | "
                 f"{min(loads):.2f}–{max(loads):.2f} |"
             )
+    for failure in failures:
+        print(f"\nA rehearsal failed (none kept): {failure}")
 
 
 if __name__ == "__main__":
