@@ -33,6 +33,7 @@ from types import FrameType
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.support
 import _report
+from _busy import spinning
 from _machine import describe
 
 from tests.support.priority import REAL_TIME_NICE
@@ -40,7 +41,6 @@ from tests.support.priority import REAL_TIME_NICE
 ROOT = Path(__file__).resolve().parents[1]
 #: The tests a round runs.
 MARKERS = "pty or timing"
-SPIN = "while True: pass"
 
 
 def files() -> list[str]:
@@ -93,18 +93,6 @@ def main() -> None:
     signal.signal(signal.SIGTERM, stop)
     print(describe())
     paths = files()
-    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
-    # each in a session of its own: where the kernel groups processes by session, as
-    # many competitors as other jobs on a shared host would be
-    hogs = [
-        subprocess.Popen(
-            [sys.executable, "-c", SPIN],
-            env=env,
-            stdin=subprocess.DEVNULL,
-            start_new_session=True,
-        )
-        for _ in range(args.busy)
-    ]
     root = f"as root (at nice {REAL_TIME_NICE})" if os.geteuid() == 0 else "not as root"
     print(
         f"\nThe `{MARKERS}` tests of {len(paths)} files, {args.rounds} rounds beside "
@@ -113,7 +101,7 @@ def main() -> None:
     print("| round | passed | failed | wall s | load (1 min) | failed tests |")
     print("|---:|---:|---:|---:|---:|---|")
     rounds = []
-    try:
+    with spinning(args.busy):  # each in a session of its own, as other jobs would be
         for n in range(1, args.rounds + 1):
             passed, failed, names, wall = one_round(paths)
             rounds.append((passed, failed, wall))
@@ -123,11 +111,6 @@ def main() -> None:
                 f"{'; '.join(name.replace('|', '/') for name in names) or '-'} |",
                 flush=True,
             )
-    finally:
-        for hog in hogs:
-            hog.kill()
-        for hog in hogs:
-            hog.wait()
     green = sum(1 for _, failed, _ in rounds if failed == 0)
     walls = sorted(wall for _, _, wall in rounds)
     print(

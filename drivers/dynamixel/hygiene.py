@@ -54,6 +54,9 @@ MAX_LATENCY_MS = 1.0
 STATUS_RETURN_LEVEL = 2
 #: Microseconds per unit of the Return Delay Time register.
 US_PER_RETURN_DELAY_UNIT = 2
+#: The rounds of READ, each after a PING, a motor must leave unanswered to be taken as
+#: at Status Return Level 0 (not a reply the host was too busy to take in time).
+READ_ROUNDS = 3
 #: Where the udev rule goes.
 UDEV_FILE = "/etc/udev/rules.d/99-dynamixel.rules"
 
@@ -136,6 +139,25 @@ def _model_name(number: int) -> str:
     return f"{name} (model number {number})" if name else f"model number {number}"
 
 
+def _status_registers(link: DynamixelLink, motor_id: int) -> tuple[int, int, int] | None:
+    """(Firmware Version, Status Return Level, Return Delay Time) of a motor that answered
+    PING; None when READ went unanswered `READ_ROUNDS` times, each after a PING (a
+    motor at Status Return Level 0 answers every PING and no READ; a host too loaded
+    to take a reply in time misses some of either)."""
+    for round_ in range(READ_ROUNDS):
+        try:
+            if round_:
+                link.ping(motor_id)
+            return (
+                link.read(motor_id, "firmware_version", alerts=False),
+                link.read(motor_id, "status_return_level", alerts=False),
+                link.read(motor_id, "return_delay_time", alerts=False),
+            )
+        except CommError:
+            continue
+    return None
+
+
 def motor_findings(
     link: DynamixelLink, axes: Sequence[Expected], adapter_ms: float
 ) -> list[Finding]:
@@ -179,20 +201,19 @@ def motor_findings(
                     f"{field}.motor_model: {model} to accept it",
                 )
             )
-        try:
-            firmware = link.read(axis.motor_id, "firmware_version", alerts=False)
-            level = link.read(axis.motor_id, "status_return_level", alerts=False)
-            delay = link.read(axis.motor_id, "return_delay_time", alerts=False)
-        except CommError:
+        registers = _status_registers(link, axis.motor_id)
+        if registers is None:
             out.append(
                 Finding(
                     "problem",
-                    f"{who} answers PING but not READ: its Status Return Level is 0; the "
+                    f"{who} answers PING but not READ ({READ_ROUNDS} times, each after a "
+                    f"PING it answered): its Status Return Level is 0; the "
                     f"driver needs {STATUS_RETURN_LEVEL}: reboot it (gonio motors reboot "
                     f"--port {port} --ids {axis.motor_id}) to restore it",
                 )
             )
             continue
+        firmware, level, delay = registers
         if axis.firmware is not None and firmware != axis.firmware:
             out.append(
                 Finding(

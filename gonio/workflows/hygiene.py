@@ -22,8 +22,10 @@ __all__ = ["Finding", "backend_findings", "rig_findings", "warn"]
 
 
 def rig_findings(rig: Rig, port: str | None = None) -> list[Finding]:
-    """The checks on the rig's bus (on ``port`` if given: a rehearsal's pty)."""
-    return check_bus(port or rig.spec.bus.port, rig.spec.bus.baud, rig.bus_axes())
+    """The checks on the rig's bus (on ``port`` if given: a rehearsal's pty), with the
+    rig's retries per transaction (those its run will have)."""
+    bus = rig.spec.bus
+    return check_bus(port or bus.port, bus.baud, rig.bus_axes(), retries=bus.retries)
 
 
 def backend_findings(rig: Rig, backend: Backend) -> list[Finding]:

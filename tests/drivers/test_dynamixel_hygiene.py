@@ -26,6 +26,7 @@ from drivers.dynamixel.latency import (
     return_delay_budget_us,
 )
 from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
 
 Emulator = Callable[..., DxlEmulator]
 
@@ -142,6 +143,19 @@ def test_each_mismatch_is_one_line_naming_the_motor_and_the_fix(emulator: Emulat
     assert "at most 142" in motors[6][0].text and "address 9" in motors[6][0].text
     assert len(blocking(findings)) == sum(len(v) for k, v in motors.items() if k != 1)
     assert emu.stats.instructions.keys() <= {"PING", "READ"}  # nothing written
+
+
+def test_a_read_reply_lost_once_is_no_status_return_level_0(emulator: Emulator) -> None:
+    """A motor whose first READ reply is lost (a host too busy to take it in time), with
+    no retry left, answers the next round: ok, not taken for Status Return Level 0."""
+    emu = emulator(ids=(1,))
+    emu.motors[1].set("return_delay_time", 0)
+    emu.inject(Fault.LATE, 1, count=1, delay_ms=0.01)  # the PING's reply, answered
+    emu.inject(Fault.NO_REPLY, 1, count=1)  # the first READ's, lost
+    findings = check_bus(emu.path, 57_600, [axis(1)], retries=0, latency_ms=0.0)
+    (line,) = by_motor(findings)[1]
+    assert line.level == "ok", line.text
+    assert emu.stats.instructions["PING"] == 2  # the second round PINGs again
 
 
 def test_without_expectations_any_known_model_passes(emulator: Emulator) -> None:

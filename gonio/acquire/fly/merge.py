@@ -10,16 +10,23 @@ the readings' stamp slack / √12, `stamp_slack`, in quadrature) × the angular 
 there (rad); polls slower than `SLOW_POLL` × the median are left out.
 Only readings whose whole window lies inside the constant-velocity part (the swept axis
 between the entry and exit poses, give or take one period's travel: the stream's phase is
-the device's) and between two polls (`bracketed`) are matched, each
-to a stream slot j (the j-th reading streamed at constant velocity, planned mid-pose
-entry + v (j period + integration / 2)). The readings are consecutive windows
-(`window_numbers`: from the device's timestamps, else their order), so one shift maps
-them all to slots: the median, over the readings inside, of the window number less the
-slot their position along the swept axis gives (robust to the scatter of each position;
-a velocity off the plan's shows as read-back angles drifting from the targets' along the
-sweep). The plan's targets are the slots its coverage thinning kept (`target_slots`); a
-matched reading in a slot that is no target stays in the journal's raw ``stream`` table
-only: the sweep's samples are exactly the plan's targets read (`derive`).
+the device's) and between two polls whose straight line the commanded motion supports
+(`bracketed`: both in the constant-velocity part, or close enough in time that a ramp
+between them bends the path by at most `RAMP_BIAS` of a period's travel, `ramp_gap`,
+from the planned acceleration) are placed so. A window inside that part whose polls do
+not support it (a host stall about a ramp) is placed on the lines at the commanded
+velocity through the part's polls (`cruise_offsets`, from `CRUISE_POLLS` of them; its
+smear the speed × the window), else not at all. Each is matched to a stream slot j (the
+j-th reading streamed at constant velocity, planned mid-pose entry + v (j period +
+integration / 2)). The readings are consecutive windows (`window_numbers`: from the
+device's timestamps, else their order), so one shift maps them all to slots: the
+median, over the readings inside, of the window number less the slot their position
+along the swept axis gives at the commanded velocity (robust to the scatter of each
+position; a velocity off the plan's shows as read-back angles drifting from the
+targets' along the sweep). The plan's targets are the slots its coverage thinning kept
+(`target_slots`); a matched reading in a slot that is no target stays in the journal's
+raw ``stream`` table only: the sweep's samples are exactly the plan's targets read
+(`derive`).
 
 `merge_path`: a path sweep's (a trajectory every axis follows) readings get their angles
 the same way; their slots by time since the trajectory's origin (set-point 0 due):
@@ -31,7 +38,7 @@ between the first and the last poll are matched.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -43,6 +50,12 @@ from gonio.types import FloatArray
 #: A poll whose request-to-reply span exceeds this many times the sweep's median is not
 #: interpolated (when it happened within the span is too loosely known).
 SLOW_POLL = 3.0
+#: The largest share of one period's travel that interpolating two polls across a ramp
+#: (accelerating between them, not at constant velocity) may put a reading off by.
+RAMP_BIAS = 0.1
+#: The polls in a sweep's constant-velocity part that place its windows on the line at
+#: the commanded velocity where the polls about a window do not (`cruise_offsets`).
+CRUISE_POLLS = 3
 
 
 @dataclass(frozen=True)
@@ -111,15 +124,17 @@ def merge(
     slots: np.ndarray | None = None,
     slack_s: float = 0.0,
     window: np.ndarray | None = None,
+    velocity: FloatArray | None = None,
 ) -> Merged:
     """Merge a sweep's polls (request, reply (P,) s; positions (P, A) rad) with its
     readings' windows (started, ended (R,) s) (see the module docstring); ``slots``:
     the stream slots of the sweep's targets (`target_slots`; None: the first ``count``
     slots, a plan streaming its targets only); ``slack_s`` the readings' stamp slack
     (`stamp_slack`), whose /√12 adds to the timing jitter in quadrature; ``window`` the
-    readings' window numbers (`window_numbers`; None: their order)."""
+    readings' window numbers (`window_numbers`; None: their order); ``velocity`` (A,)
+    rad/s the axes' as commanded (None: the plan's), the slope of `cruise_offsets`."""
     w = _windows(request, reply, positions, started, ended, slack_s)
-    t, angles, first, last = w.t, w.angles, w.first, w.last
+    t, first, last = w.t, w.first, w.last
     j = int(np.argmax(np.abs(sweeps.velocity[k])))
     lo, hi = sorted((float(sweeps.entry[k, j]), float(sweeps.exit[k, j])))
     # The stream's phase is the device's: its first or last window may reach up to one
@@ -128,9 +143,18 @@ def merge(
     inside = (np.minimum(first[:, j], last[:, j]) >= lo - margin) & (
         np.maximum(first[:, j], last[:, j]) <= hi + margin
     )
-    inside &= bracketed(t, w.positions[:, j], lo, hi, started, ended)
-    v = abs(float(sweeps.velocity[k, j]))
-    along = np.abs(angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
+    supported = bracketed(t, w.positions[:, j], lo, hi, started, ended, ramp_gap(sweeps, k, j))
+    inside &= supported
+    slope = np.asarray(sweeps.velocity[k] if velocity is None else velocity, dtype=np.float64)
+    offsets = cruise_offsets(t, w.positions, (w.positions[:, j] >= lo) & (w.positions[:, j] <= hi),
+                             slope)  # fmt: skip
+    if offsets is not None:  # windows in the cruise the polls about them do not support
+        a, b = offsets[j] + slope[j] * started, offsets[j] + slope[j] * ended
+        on_line = ~supported & (np.minimum(a, b) >= lo - margin) & (np.maximum(a, b) <= hi + margin)
+        w = _on_line(w, on_line, offsets, slope, started, ended)
+        inside |= on_line
+    v = abs(float(slope[j]))  # as commanded: a slot is a time
+    along = np.abs(w.angles[:, j] - float(sweeps.entry[k, j])) / v  # s after the entry
     estimate = (along - 0.5 * sweeps.integration_s) / sweeps.period_s  # slot by position
     numbers = np.arange(len(ended)) if window is None else np.asarray(window, dtype=np.int64)
     shift = int(np.rint(np.median(numbers[inside] - estimate[inside]))) if inside.any() else 0
@@ -138,6 +162,42 @@ def merge(
     if slots is None:
         slots = np.arange(int(sweeps.count[k]), dtype=np.int64)
     return _matched(w, slot, inside, slots, sweeps, k)
+
+
+def cruise_offsets(
+    t: FloatArray, positions: FloatArray, cruising: np.ndarray, velocity: FloatArray
+) -> FloatArray | None:
+    """The axes' angles (A,) rad at time 0 on the lines at ``velocity`` (A,) rad/s
+    through the polls (mid-times ``t`` (P,) s, ``positions`` (P, A) rad) that are
+    ``cruising`` (P,): the median of each poll's; None with fewer than `CRUISE_POLLS`."""
+    if int(np.count_nonzero(cruising)) < CRUISE_POLLS:
+        return None
+    at_zero = positions[cruising] - t[cruising, None] * velocity[None, :]
+    return np.asarray(np.median(at_zero, axis=0), dtype=np.float64)
+
+
+def _on_line(
+    w: _Windows, rows: np.ndarray, offsets: FloatArray, velocity: FloatArray,
+    started: FloatArray, ended: FloatArray,
+) -> _Windows:  # fmt: skip
+    """``w`` with the windows ``rows`` placed on the cruise lines (`cruise_offsets`):
+    their angles at the middle, smear |velocity| × the window, timing the steady
+    polls' median span / √12 × the speed (the lines' points are polls)."""
+    if not rows.any():
+        return w
+    angles, first, last = w.angles.copy(), w.first.copy(), w.last.copy()
+    smear, timing = w.smear.copy(), w.timing.copy()
+
+    def line(times: FloatArray) -> FloatArray:
+        return np.asarray(offsets[None, :] + times[:, None] * velocity[None, :])
+
+    s, e = started[rows], ended[rows]
+    angles[rows], first[rows], last[rows] = line(0.5 * (s + e)), line(s), line(e)
+    speed = float(np.linalg.norm(velocity))
+    smear[rows] = speed * (e - s)
+    span = float(np.median(w.spans)) if len(w.spans) else 0.0
+    timing[rows] = np.hypot(span, w.slack_s) / math.sqrt(12.0) * speed
+    return replace(w, angles=angles, first=first, last=last, smear=smear, timing=timing)
 
 
 def merge_path(
@@ -175,7 +235,8 @@ def merge_path(
 class _Windows:
     """The readings' windows against the polls: the steady polls' mid-times ``t`` (P′,)
     sorted and their ``positions`` (P′, A), each window's angles at its middle, start
-    and end (R, A), its ``smear`` and ``timing`` (R,) rad (the module docstring)."""
+    and end (R, A), its ``smear`` and ``timing`` (R,) rad (the module docstring), the
+    steady polls' request-to-reply ``spans`` (P′,) s and the readings' ``slack_s``."""
 
     t: FloatArray
     positions: FloatArray
@@ -184,6 +245,8 @@ class _Windows:
     last: FloatArray
     smear: FloatArray
     timing: FloatArray
+    spans: FloatArray  # (P′,) s, the steady polls' request-to-reply spans
+    slack_s: float
 
 
 def _windows(
@@ -208,7 +271,7 @@ def _windows(
     span = ended - started
     speed = np.divide(smear, span, out=np.zeros_like(smear), where=span > 0)
     timing = np.hypot(interpolated_span(t, spans, middle), slack_s) / math.sqrt(12.0) * speed
-    return _Windows(t, positions, angles, first, last, smear, timing)
+    return _Windows(t, positions, angles, first, last, smear, timing, spans, slack_s)
 
 
 def _matched(
@@ -229,12 +292,13 @@ def _matched(
 
 
 def bracketed(
-    t: FloatArray, swept: FloatArray, lo: float, hi: float, started: FloatArray, ended: FloatArray
-) -> np.ndarray:
+    t: FloatArray, swept: FloatArray, lo: float, hi: float, started: FloatArray,
+    ended: FloatArray, ramp_gap_s: float,
+) -> np.ndarray:  # fmt: skip
     """Whether each window [started, ended] lies between two polls (mid-times ``t``,
     sorted; never extrapolated) that either are both inside the constant-velocity part
-    (``swept`` positions within [lo, hi]: linear motion between them) or are no further
-    apart than twice the median poll interval (a ramp's curvature negligible)."""
+    (``swept`` positions within [lo, hi]: linear motion between them) or are at most
+    ``ramp_gap_s`` apart (s; `ramp_gap`: a ramp's curvature between them negligible)."""
     if len(t) < 2:
         return np.zeros(len(started), dtype=np.bool_)
     a = np.searchsorted(t, started, side="right") - 1
@@ -242,8 +306,23 @@ def bracketed(
     ok = (a >= 0) & (b < len(t))
     a, b = np.clip(a, 0, len(t) - 1), np.clip(b, 0, len(t) - 1)
     cruising = (swept >= lo - 1e-9) & (swept <= hi + 1e-9)
-    close = (t[b] - t[a]) <= 2.0 * float(np.median(np.diff(t)))
+    close = (t[b] - t[a]) <= ramp_gap_s
     return np.asarray(ok & ((cruising[a] & cruising[b]) | close), dtype=np.bool_)
+
+
+def ramp_gap(sweeps: Sweeps, k: int, j: int) -> float:
+    """The longest poll gap (s) across which interpolating sweep ``k``'s swept axis
+    ``j`` linearly errs at most `RAMP_BIAS` of a period's travel at its velocity v
+    where the gap takes in a ramp: a·g²/8 ≤ RAMP_BIAS·v·period, a = v²/(2 d) the ramp's
+    acceleration as planned (d its length, the shorter of the run-up and the overrun)."""
+    v = abs(float(sweeps.velocity[k, j]))
+    d = min(
+        abs(float(sweeps.entry[k, j] - sweeps.start[k, j])),
+        abs(float(sweeps.stop[k, j] - sweeps.exit[k, j])),
+    )
+    if v <= 0.0 or d <= 0.0:
+        return 0.0
+    return math.sqrt(16.0 * RAMP_BIAS * sweeps.period_s * d / v)
 
 
 def interpolated_span(t: FloatArray, spans: FloatArray, times: FloatArray) -> FloatArray:
@@ -311,7 +390,13 @@ def derive(
         matched = merge_path(request, reply, positions, started, ended, sweeps, k, raw.origin_s,
                              slots, slack, window if stamped else None)  # fmt: skip
     else:
-        matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack, window)
+        velocity = np.asarray(sweeps.velocity[k], dtype=np.float64)
+        if raw.velocities is not None:  # the register's steps, the plan's signs
+            pairs = zip(axes, velocity.tolist(), strict=True)
+            commanded = [raw.velocities.get(a, abs(v)) for a, v in pairs]
+            velocity = np.copysign(np.asarray(commanded, dtype=np.float64), velocity)
+        matched = merge(request, reply, positions, started, ended, sweeps, k, slots, slack,
+                        window, velocity)  # fmt: skip
     counts = np.array([raw.readings[r].value for r in matched.index.tolist()], dtype=np.float64)
     extra = angular_sigma(counts, matched.angles, matched.smear, matched.timing)
     return Derived(

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from gonio.acquire.fly import derive, run_sweep
+from gonio.acquire.fly.merge import SLOW_POLL
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from gonio.store import open_run
@@ -80,7 +81,10 @@ def test_merged_angles_follow_the_emulated_trajectory() -> None:
                 # Planned against measured velocity: the register's step (0.229 rev/min).
                 j = int(np.argmax(np.abs(sweeps.velocity[k])))
                 t = 0.5 * (d.request + d.reply)
-                cruise = (t > middle[0]) & (t < middle[-1])
+                # (the polls a loaded host took long to answer sampled anywhere in their
+                # span: left out, as the merge leaves them out of its interpolation)
+                steady = (d.reply - d.request) <= SLOW_POLL * np.median(d.reply - d.request)
+                cruise = (t > middle[0]) & (t < middle[-1]) & steady
                 speed = np.polyfit(t[cruise], d.positions[cruise, j], 1)[0]
                 assert speed / sweeps.velocity[k, j] == pytest.approx(1.0, abs=0.02)
                 # the velocity the bus commanded is the register's, the one the motor runs
