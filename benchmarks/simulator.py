@@ -23,12 +23,12 @@ from _machine import describe
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
 from gonio.planner.model import Plan
-from gonio.workflows.simulate import measure_targets
 from sim.devices.instrument import SimulatedInstrument
 from sim.effects import EffectsSpec
 from sim.record import SimRun
 from sim.scene import Scene, load_scene
 from sim.simulate import simulate
+from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 

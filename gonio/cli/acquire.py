@@ -15,8 +15,7 @@ from urllib.parse import quote
 
 from drivers.errors import DriverError
 from gonio import progress as planning
-from gonio.acquire import control
-from gonio.acquire import progress as progress_module
+from gonio.acquire import control, observer
 from gonio.acquire.signals import RunInterrupted
 from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, arguments
 from gonio.cli.arguments import positive
@@ -105,7 +104,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     from gonio.planner.files import load_plan_source
     from gonio.workflows import preflight, session
 
-    progress = progress_module.for_stream(args.quiet)
+    progress = observer.for_stream(args.quiet)
     argv = ["gonio", *sys.argv[1:]]
     if args.resume is not None:
         if args.plan is not None or args.output is not None:

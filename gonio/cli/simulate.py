@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio import progress as planning
-from gonio.acquire import progress as progress_module
+from gonio.acquire import observer
 from gonio.analysis.summary import error_figures
 from gonio.cli import arguments
 from gonio.cli.run_table import render
@@ -144,7 +144,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         plan = source.build()
     result = simulate_plan(
         plan, scene, args.seed, files=files, output=args.output, overwrite=args.overwrite,
-        progress=progress_module.for_stream(args.quiet),
+        progress=observer.for_stream(args.quiet),
     )  # fmt: skip
     print(
         f"simulated plan {plan.spec.name!r} on rig {plan.rig.spec.name!r}, {render_result(result)}"

@@ -31,7 +31,7 @@ from drivers.errors import DriverError
 from gonio import __version__
 from gonio.acquire.ending import Report
 from gonio.acquire.engine import Engine
-from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.observer import Observer, Unobserved
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
@@ -235,20 +235,12 @@ def start(
             except DriverError:
                 # The devices could not be opened (port missing, busy, no permission):
                 # nothing moved and nothing was measured, so no run file is left behind.
-                if output is not None and not _anything_measured(journal):
+                if output is not None and not journal.anything_recorded():
                     journal.close()
                     remove_run_file(output)
                 raise
     finally:
         backend.close()
-
-
-def _anything_measured(journal: Journal) -> bool:
-    samples = journal.conn.execute("SELECT COUNT(*) FROM samples").fetchone()[0]
-    events = journal.conn.execute(
-        "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
-    ).fetchone()[0]
-    return bool(samples or events)
 
 
 def changed_files(run: Run, files: Files) -> list[str]:
@@ -367,7 +359,7 @@ def resume(
             if on_ready is not None:
                 on_ready()
             journal.upgrade()
-            journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
+            journal.make_durable(backend.durable)
             if changed:
                 journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
                 journal.end_session(utc_now(), "forced")

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.progress import Shown, for_stream
+from gonio.acquire.observer import Shown, for_stream
 from gonio.cli import main
 from gonio.planner import Plan
 from gonio.progress import Bar, Lines
@@ -125,7 +125,7 @@ def test_progress_lines_when_not_a_terminal_and_a_bar_on_one(quick_plan: Plan) -
 
 
 def test_the_time_left_follows_the_measured_pace(quick_plan: Plan) -> None:
-    from gonio.acquire.progress import Pace
+    from gonio.acquire.observer import Pace
 
     plan = quick_plan
     pace = Pace(plan, np.arange(len(plan)))
