@@ -174,8 +174,10 @@ def main() -> None:
     args = parser.parse_args()
     print(describe())
     print()
-    print("| plan | scene | targets | bare devices (µs/sample) | engine + journal (µs/sample) "
-          "| overhead (µs/sample) | engine samples/s |")  # fmt: skip
+    print(
+        "| plan | scene | targets | bare devices (µs/sample) | engine + journal (µs/sample) "
+        "| overhead (µs/sample) | engine samples/s |"
+    )
     print("|---|---|---:|---:|---:|---:|---:|")
     RUNS.mkdir(exist_ok=True)
     with tempfile.TemporaryDirectory(dir=RUNS, prefix=".bench-acquire-") as tmp:
@@ -186,9 +188,13 @@ def main() -> None:
             for scene_name, scene_path in SCENES.items():
                 scene, text = session.load_scene_file(scene_path, source.rig)
                 files = session.Files(
-                    source.path, source.text, source.rig.source, source.rig.text,
-                    scene_path, text,
-                )  # fmt: skip
+                    source.path,
+                    source.text,
+                    source.rig.source,
+                    source.rig.text,
+                    scene_path,
+                    text,
+                )
                 b = min(bare(plan, scene) for _ in range(args.repeat)) / len(plan)
                 e = min(engine(files, plan, scene, folder) for _ in range(args.repeat)) / len(plan)
                 print(

@@ -135,10 +135,12 @@ def aperture_orders() -> None:
     for aperture in (1e-5, 1e-4, 1e-3):
         exact = radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=48)
         errors = [
-            abs(radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=n)
-                / exact - 1)[0]
+            abs(
+                radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=n) / exact
+                - 1
+            )[0]
             for n in orders
-        ]  # fmt: skip
+        ]
         print(f"| {aperture:g} sr | " + " | ".join(f"{e:.0e}" for e in errors) + " |")
 
 

@@ -95,14 +95,25 @@ def simulate_plan(
     scene as validated); ``output``: keep the run journal there."""
     if files is None:
         files = Files(
-            None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene),
+            None,
+            plan.plan_text,
+            plan.rig.source,
+            plan.rig.text,
+            None,
+            spec_text(scene),
             plan.rig.alignment_text,
-        )  # fmt: skip
+        )
     started = time.perf_counter()
     outcome = session.start(
-        plan, files, scene=scene, output=output, overwrite=overwrite, seed=seed,
-        progress=progress, force_simulated=True,
-    )  # fmt: skip
+        plan,
+        files,
+        scene=scene,
+        output=output,
+        overwrite=overwrite,
+        seed=seed,
+        progress=progress,
+        force_simulated=True,
+    )
     wall = time.perf_counter() - started
     run = outcome.run
     try:

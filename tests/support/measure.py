@@ -36,11 +36,15 @@ def measure_targets(
     axes, settle = instrument.rig.axes, instrument.rig.spec.settle_s
     rows = [
         measure_target(
-            instrument.devices(), i, dict(zip(axes, plan.angles[i].tolist(), strict=True)),
-            float(plan.exposure_s[i]), int(plan.averages[i]), settle_s=settle,
+            instrument.devices(),
+            i,
+            dict(zip(axes, plan.angles[i].tolist(), strict=True)),
+            float(plan.exposure_s[i]),
+            int(plan.averages[i]),
+            settle_s=settle,
         )
         for i in range(start, stop)
-    ]  # fmt: skip
+    ]
     n = len(axes)
     true = np.array([[m.true[a] for a in axes] for m in rows if m.true], dtype=np.float64)
     true = true.reshape(-1, n)  # every row has its true pose: this backend is simulated

@@ -62,8 +62,12 @@ def paced_acquire(args: list[str], seconds_per_target: float) -> subprocess.Pope
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen(
         [sys.executable, "-m", "tests.gonio.live.paced", str(seconds_per_target), *args],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def printed_url(child: subprocess.Popen[str]) -> str:
