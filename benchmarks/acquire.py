@@ -42,8 +42,8 @@ from gonio.planner.model import Plan
 from gonio.store.journal import Journal
 from gonio.store.schema import samples_table
 from gonio.workflows import session
-from sim.devices.instrument import SimulatedInstrument
-from sim.scene import Scene
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.scene import Scene
 from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]

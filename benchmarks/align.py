@@ -69,7 +69,7 @@ from gonio.rig.alignment_spec import AlignmentSpec
 from gonio.types import FloatArray
 from gonio.workflows.align import ScanSettings, nominal_poses, reachable
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import Scene, load_scene
+from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCH = ROOT / "configs" / "rigs" / "arch.yaml"

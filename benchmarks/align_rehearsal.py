@@ -35,7 +35,7 @@ from gonio.errors import GonioError
 from gonio.rig import Rig
 from gonio.rig.alignment_fit import fit
 from gonio.workflows import align
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 RIG = ROOT / "configs" / "rigs" / "arch_serial.yaml"

@@ -24,7 +24,7 @@ from _machine import describe
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 AXES = [
     AxisConfig(

@@ -43,7 +43,7 @@ from bus import AXES  # the four axes benchmarks/bus.py times
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import CommError, DriverError
-from sim.dynamixel.emulator import DxlEmulator, Fault
+from sim.peers.dynamixel.emulator import DxlEmulator, Fault
 
 IDS = [a.motor_id for a in AXES]
 LOSS_RATES = (0.0, 0.001, 0.01, 0.05)

@@ -1,7 +1,7 @@
 """The calibration's scale error against its predicted σ, over many seeds.
 
 Each seed is one simulated run's calibrations: reference and dark readings at the arch
-rig's 0°/45° geometry, taken as the engine takes them (`sim.simulate.simulate_standard`,
+rig's 0°/45° geometry, taken as the engine takes them (`sim.virtual.simulate.simulate_standard`,
 its readings bit for bit), journaled and turned into the run's calibration series by
 `gonio.analysis.calibrated`. The scale error is the mean over the run's time of
 S_true/S − 1 (S the interpolated reference rate every value is divided by, S_true the
@@ -40,9 +40,9 @@ from _machine import describe
 
 from gonio.acquire.reference import reference_pose
 from gonio.rig.model import Rig
-from sim.devices.detector import sensor_of
-from sim.scene import Scene
-from sim.simulate import expected_rate
+from sim.virtual.devices.detector import sensor_of
+from sim.virtual.scene import Scene
+from sim.virtual.simulate import expected_rate
 from tests.support.calibration import calibration_events, scale_errors
 from tests.support.runs import RIGS, scene_spec
 

@@ -4,7 +4,7 @@ smear a lobe width allows.
 A reading taken while the detector sweeps integrates the BRDF along the arc it travels
 during the integration; a reconstruction attributes it to the pose at the window's
 middle. The bias is (mean power along the arc) / (power at the middle) − 1, computed with
-the simulator's optics directly (`sim.physics.optics.SceneOptics`, no engine, no noise, no
+the simulator's optics directly (`sim.virtual.physics.optics.SceneOptics`, no engine, no noise, no
 aperture or footprint effect, so the bias is the blur's alone): the arch rig, the light at
 30° incidence, the detector sweeping in the plane of incidence, the gold material of the
 glossy scene with GGX widths α from 0.02 to 0.5. The arc mean is a 96-node
@@ -33,8 +33,8 @@ import _report
 
 from gonio.planner.blur import BLUR_K_DEG, blur_budget_deg
 from gonio.rig.model import Rig
-from sim.physics.optics import SceneOptics
-from sim.scene import Scene, load_scene
+from sim.virtual.physics.optics import SceneOptics
+from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 ALPHAS = (0.02, 0.05, 0.1, 0.2, 0.5)

@@ -33,7 +33,7 @@ from bus import AXES, two_rate_table  # the four axes benchmarks/bus.py times
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, poll_seconds
 from drivers.values import StampedPositions
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 SPEED = 1.0  # rad/s
 STROKE = 0.6  # rad

@@ -81,7 +81,7 @@ from gonio.tradeoff.grid import Sweep, load_sweep, scaled_rig
 from gonio.tradeoff.store import open_store
 from gonio.tradeoff.sweep import run_sweep
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import Scene, load_scene
+from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SWEEPS = ROOT / "configs" / "sweeps"

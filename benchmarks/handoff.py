@@ -1,6 +1,6 @@
 """The SDK and an in-process emulator sharing one interpreter: how long a raw 4-motor
 SYNC_READ takes against its reply budget, with the interpreter's default switch interval
-and with the one `sim.responsive` sets while a server runs.
+and with the one `sim.peers.responsive` sets while a server runs.
 
 The ROBOTIS SDK polls its port in a tight loop while it waits; the emulator serves from
 another thread of the same process, so every hand-off of the GIL waits for the switch
@@ -25,8 +25,8 @@ import dynamixel_sdk as sdk
 from _machine import describe
 from dynamixel_sdk import COMM_SUCCESS, GroupSyncRead, port_handler
 
-from sim import responsive
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers import responsive
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 IDS = (1, 2, 3, 4)
 PRESENT, SIZE = 132, 4

@@ -33,7 +33,7 @@ from gonio.reconstruct import evaluate, reconstruct, testset
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from studies.reconstruct.synthetic_lines import synthesize_lines
 
 ROOT = Path(__file__).resolve().parents[1]

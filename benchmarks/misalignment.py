@@ -43,7 +43,7 @@ from gonio.reconstruct.naive import NaiveReconstruction
 from gonio.reconstruct.truth import truth_from_spec
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import Scene, load_scene
+from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {"glossy metal": "glossy_metal.yaml", "matte": "matte.yaml"}

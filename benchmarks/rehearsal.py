@@ -60,7 +60,7 @@ from gonio.planner.stored import plan_bytes
 from gonio.rig.travel import TravelModel
 from gonio.store import Journal, open_run
 from gonio.workflows.rehearsal import rehearsal_devices
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"

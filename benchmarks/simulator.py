@@ -1,6 +1,6 @@
 """Simulated acquisition speed: samples per second through `SimMotorBus` + `SimDetector`
 (target by target, as the acquisition engine drives them: with the detector prepared
-with the plan's poses, and cold) and through the vectorized `sim.simulate`, for the
+with the plan's poses, and cold) and through the vectorized `sim.virtual.simulate`, for the
 shipped quick (500) and isotropic (≈ 5 000) plans, with no effects, with every effect,
 and with each effect alone; and the ratio of simulated wall time to the instrument time
 the run represents (target ≤ 1/10 000).
@@ -23,11 +23,11 @@ from _machine import describe
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
 from gonio.planner.model import Plan
-from sim.devices.instrument import SimulatedInstrument
-from sim.effects import EffectsSpec
-from sim.record import SimRun
-from sim.scene import Scene, load_scene
-from sim.simulate import simulate
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.effects import EffectsSpec
+from sim.virtual.record import SimRun
+from sim.virtual.scene import Scene, load_scene
+from sim.virtual.simulate import simulate
 from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -5,8 +5,8 @@ disk filling up.
 A simulated run of 100 000 targets (a Sobol plan on the arch rig, 0.5 s × 4 exposures
 each, brushed metal with noise, drift, backlash and repeatability) is acquired by
 ``python -m gonio acquire``, a real process, resumed with ``gonio acquire --resume``
-after every session until it completes (`sim.soak`). Faults are injected by the scene
-at rates per sample of the order users report (`sim.soak.realistic_faults`): lost status
+after every session until it completes (`tests.soak`). Faults are injected by the scene
+at rates per sample of the order users report (`tests.soak.realistic_faults`): lost status
 packets and corrupt ones (in bursts, one longer than the plan's two retries), detector
 timeouts (one burst longer than the retries), saturated readings, motor overload and
 overheating (a hardware error: today's policy stops the run resumable, and the loop
@@ -42,8 +42,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 
 from gonio.rig.model import Rig
-from sim.scene import load_scene
-from sim.soak import (
+from sim.virtual.scene import load_scene
+from tests.soak import (
     ROOT,
     Journal,
     KillSchedule,
@@ -58,7 +58,7 @@ from sim.soak import (
     tmpfs,
     write_files,
 )
-from sim.soak_rehearsal import ARCH_SERIAL, RehearsalSoak, read_events, run_rehearsal_soak
+from tests.soak.rehearsal import ARCH_SERIAL, RehearsalSoak, read_events, run_rehearsal_soak
 
 
 def hours(seconds: float) -> str:

@@ -56,7 +56,7 @@ from gonio.reconstruct.regions import regions
 from gonio.reconstruct.result import Reconstruction
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -274,7 +274,7 @@ def timing(args: argparse.Namespace) -> None:
     from gonio.rig.model import Rig
     from gonio.tradeoff.spec import EFFECT_NAMES
     from gonio.workflows.simulate import simulate_plan
-    from sim.scene import load_scene
+    from sim.virtual.scene import load_scene
 
     root = Path(__file__).resolve().parent.parent
     rig = Rig.from_yaml(root / "configs/rigs/arch.yaml")

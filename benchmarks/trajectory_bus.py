@@ -38,7 +38,7 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import setpoint_period, setpoint_seconds, sync_write_bytes
 from drivers.trajectory import Trajectory
 from drivers.values import StampedPositions
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 SHARE = 0.5  # of the configured velocity and acceleration
 STROKE = 1.2  # rad per axis

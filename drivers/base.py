@@ -4,7 +4,7 @@ The acquisition engine talks to an instrument only through the small protocols h
 (in the manner of ophyd's ``Movable`` / ``Readable``): `MotorBus`, `Detector`,
 `LightSource` and `Clock`. The real backends (`drivers.dynamixel.bus.DynamixelBus`,
 `drivers.serial_detector.detector.SerialDetector`,
-`drivers.light.serial_switch.SerialLightSwitch`) and the simulated ones (`sim.devices`)
+`drivers.light.serial_switch.SerialLightSwitch`) and the simulated ones (`sim.virtual.devices`)
 follow the same rules, and one contract suite (``tests/drivers/contract/``) runs every
 rule against every backend. Units: radians, seconds, degrees Celsius, volts; detector
 values in the detector's counts. The values the calls return are in `drivers.values`,

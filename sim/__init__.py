@@ -1,8 +1,16 @@
-"""The simulated backend: virtual motors and detector, noise effects, a Dynamixel bus emulator."""
+"""The simulated backend: the virtual instrument (`sim.virtual`) and the byte-level peers
+on pseudo-terminals (`sim.peers`) over one clock (`sim.clock`); `sim.rehearsal` puts a
+rig's hardware path on the peers."""
 
-from sim.devices import SimDetector, SimLightSource, SimMotorBus, SimulatedInstrument
-from sim.scene import Scene, load_scene
-from sim.simulate import simulate
+from sim.virtual import (
+    Scene,
+    SimDetector,
+    SimLightSource,
+    SimMotorBus,
+    SimulatedInstrument,
+    load_scene,
+    simulate,
+)
 
 __all__ = [
     "Scene",

@@ -5,15 +5,15 @@ pseudo-terminal, for the real driver built from the rig file exactly as for hard
 
 - the motors: the byte-level Dynamixel emulator, driven by `DynamixelBus` through the
   unmodified SDK;
-- a ``serial`` detector: the simulated photometer (`sim.serial_photometer`) driven by
+- a ``serial`` detector: the simulated photometer (`sim.peers.serial_photometer`) driven by
   `SerialDetector`, its counts those of the scene through `SimDetector`'s radiometric
   chain and sensor at the pose the emulated motors are at; a ``simulated`` detector:
   `SimDetector` reading the bus's positions;
 - a ``pymeasure`` detector: the emulated instrument of its PyMeasure class
-  (`sim.visa_instruments`), opened by PyVISA's pure-Python backend on its pty and driven
+  (`sim.peers.visa_instruments`), opened by PyVISA's pure-Python backend on its pty and driven
   by the unmodified class through `PyMeasureDetector`, its readings the scene's rate
   through the same chain;
-- a ``serial`` light switch: the simulated lamp relay (`sim.serial_light`) driven by
+- a ``serial`` light switch: the simulated lamp relay (`sim.peers.serial_light`) driven by
   `SerialLightSwitch`, whose state the detector sees; else a `SimLightSource`.
 
 Time runs ``speedup`` times faster than real time (motion profiles, settle dwells and
@@ -37,13 +37,13 @@ from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
 from sim.clock import ScaledClock, TimeSource
-from sim.devices.detector import SimDetector
-from sim.dynamixel.emulator import DxlEmulator
-from sim.serial_light import SerialLamp
-from sim.serial_photometer import SerialPhotometer
-from sim.serial_photometer.protocol import mismatch
-from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
-from sim.visa_instruments.sr830 import SR830
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.serial_light import SerialLamp
+from sim.peers.serial_photometer import SerialPhotometer
+from sim.peers.serial_photometer.protocol import mismatch
+from sim.peers.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
+from sim.peers.visa_instruments.sr830 import SR830
+from sim.virtual.devices.detector import SimDetector
 
 Pose = Callable[[], dict[str, float]]
 PoseAt = Callable[[float], dict[str, float]]

@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, settings
 
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 from tests.support.priority import ahead
 
 #: The shipped configuration files.
@@ -158,16 +158,16 @@ def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
 
 #: Tests that talk to a pseudo-terminal (the emulated bus, the photometer, the lamp): the
 #: SDK busy-waits for replies in the test's thread while the device serves from another
-#: (`sim.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
+#: (`sim.peers.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
 #: hand) are marked ``pty`` and kept in one xdist group, so `make test` runs them one
 #: after another on a single worker (and one worker at a time raises its session's
 #: priority: `real_time_first`); the other workers' CPU-bound tests load the machine as
 #: an unquiet host would (they held on a 2-core machine loaded 150 %).
 PTY_TESTS = (
     "tests/drivers/",
-    "tests/sim/dynamixel/",
-    "tests/sim/test_serial_photometer.py",
-    "tests/sim/devices/test_rehearsal.py",
+    "tests/sim/peers/dynamixel/",
+    "tests/sim/peers/test_serial_photometer.py",
+    "tests/sim/virtual/devices/test_rehearsal.py",
     "tests/gonio/cli/test_motors.py",
     "tests/gonio/cli/test_detector.py",
     "tests/gonio/workflows/test_hardware.py",
@@ -213,7 +213,7 @@ SHARED_SETUP = {
     "tests/gonio/test_damaged_files.py": "damaged-files",
     "tests/gonio/tradeoff/test_executors.py": "reference-sweep",
     "tests/gonio/tradeoff/test_sweep.py": "reference-sweep",
-    "tests/sim/test_simulate.py": "shipped-plans",
+    "tests/sim/virtual/test_simulate.py": "shipped-plans",
     "tests/studies/brdf/test_lobe_anisotropy.py": "lobe-widths",
 }
 

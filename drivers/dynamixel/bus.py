@@ -29,28 +29,22 @@ profiles back first. `poll_positions` is one SYNC_READ of Present Position (4 by
 motor), stamped on the bus's clock just before the instruction leaves and just after
 the last status arrives.
 
-Models: `open` reads each motor's model number (PING) and from then on uses that model's
-control table (:mod:`drivers.dynamixel.models`) for what it reads and writes; a motor
-that is not the model its axis names (`AxisConfig.model`, the rig file's
-``motor_model``), or whose model lacks the axis's operating mode, stops `open` with one
-line saying so, before anything is written.
-
-EEPROM items (operating mode, drive mode, position limits) are read first and written
-only when they differ; only the motors that need such a write have their torque turned
-off (and read back off) before it, so opening a configured bus never drops an arm.
+Models and configuration: `open` identifies each motor by its model and writes what its
+axis needs (`drivers.dynamixel.setup`); a motor that is not the model its axis names
+stops `open` with one line saying so, before anything is written.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from types import TracebackType
 
 from drivers.base import Clock, SystemClock
 from drivers.devices import Resource
 from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.condition import Condition
+from drivers.dynamixel.condition import Condition, ConditionContext
 from drivers.dynamixel.control_table import (
     FACTORY_BAUD,
     RAD_S_PER_VELOCITY_UNIT,
@@ -58,7 +52,7 @@ from drivers.dynamixel.control_table import (
 )
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
-from drivers.dynamixel.models import MODEL_NAMES, model
+from drivers.dynamixel.setup import MotorSetup, axis_named
 from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
 from drivers.errors import (
     MOTION_FAULTS,
@@ -70,13 +64,13 @@ from drivers.errors import (
 )
 from drivers.sweep import sweep_profile
 from drivers.trajectory import SETTLE_TIMEOUT_S, Followed, Trajectory
-from drivers.values import StampedPositions
+from drivers.values import Health, Recovered, StampedPositions
 
 _MOVING = item("moving")
 _PRESENT = item("present_position")
 
 
-class DynamixelBus(Condition, Resource):
+class DynamixelBus(Resource):
     """A `MotorBus` of ``axes`` on the Dynamixel bus at ``port``.
 
     ``baud`` is the motors' rate (factory default 57 600; see docs/reference/hardware.md to move
@@ -86,6 +80,9 @@ class DynamixelBus(Condition, Resource):
     ``reboot_timeout_s`` how long `reboot` waits for a motor to answer again;
     ``clock`` stamps `poll_positions` and paces `wait_settled`'s polls (default the
     host's monotonic clock; a rehearsal passes its run's scaled clock, the motion's).
+
+    It holds the configuration it gives its motors (`drivers.dynamixel.setup`) and its
+    condition and recovery (`drivers.dynamixel.condition`).
     """
 
     def __init__(
@@ -127,6 +124,10 @@ class DynamixelBus(Condition, Resource):
         self._torque_on = False
         #: Motors running a sweep's profile: the next `move_to` restores the configured one.
         self._swept: set[int] = set()
+        self._setup = MotorSetup(self._link, self._axes)
+        self._condition = Condition(
+            ConditionContext(self._link, self._axes, hold=self._hold, restore=self._restore)
+        )
 
     # -- lifecycle ---------------------------------------------------------------------
     @property
@@ -160,37 +161,17 @@ class DynamixelBus(Condition, Resource):
         self._swept.clear()
         try:
             for axis in self._axes.values():
-                self._identify(axis)
+                self.models[axis.name] = self._setup.identify(axis)
                 flags = self._link.hardware_error(axis.motor_id)
                 if flags:
                     raise self._link.fault(axis.motor_id)
             if self.configure:
-                self._configure()
+                self._setup.configure()
             self.torque(True)
         except BaseException:
             self._link.reset()
             self._link.close()
             raise
-
-    def _identify(self, axis: AxisConfig) -> None:
-        """PING the axis's motor; its model's table from now on (`DriverError` if it is not
-        the model the axis names, or lacks the axis's operating mode)."""
-        number = self._link.ping(axis.motor_id)
-        spec = model(number)
-        who = self._link.who(axis.motor_id)
-        if axis.model is not None and number != axis.model:
-            expected = MODEL_NAMES.get(axis.model, f"model {axis.model}")
-            raise DriverError(
-                f"{who} is an {spec.name} (model number {number}); the rig file expects "
-                f"{expected} (axes.{axis.name}.motor_model): connect the right motor or "
-                "correct the rig file; nothing was written"
-            )
-        if axis.operating_mode not in spec.modes:
-            raise DriverError(
-                f"{who} is an {spec.name}, which has no {axis.mode} mode; nothing was written"
-            )
-        self._link.tables[axis.motor_id] = spec
-        self.models[axis.name] = spec.name
 
     def close(self) -> None:
         """Hold every axis that answers where it is and release the port (always). If an
@@ -244,53 +225,16 @@ class DynamixelBus(Condition, Resource):
                 exc.add_note(f"and holding the axes: {problem}")
             raise
 
-    def _configure(self, motor_ids: Sequence[int] | None = None) -> None:
-        """EEPROM first (read; torque off, read back off and write only where it differs),
-        then the RAM profiles, of every motor (or those of ``motor_ids``: a reboot's)."""
-        link = self._link
-        ids = {
-            a.motor_id: a
-            for a in self._axes.values()
-            if motor_ids is None or a.motor_id in motor_ids
-        }
-        changes: dict[int, dict[str, int]] = {}
-        for motor_id, axis in ids.items():
-            wanted = {"operating_mode": axis.operating_mode, "drive_mode": 0}
-            if axis.mode == "position":
-                low, high = axis.tick_limits()
-                wanted |= {"min_position_limit": low, "max_position_limit": high}
-            # EEPROM wears, and writing it needs torque off: change only what differs.
-            differ = {n: v for n, v in wanted.items() if link.read(motor_id, n) != v}
-            if differ:
-                changes[motor_id] = differ
-        if changes:
-            link.sync_write("torque_enable", dict.fromkeys(changes, 0))
-            for motor_id in changes:
-                if link.read(motor_id, "torque_enable") != 0:
-                    raise DriverError(
-                        f"{link.who(motor_id)} did not turn its torque off; its EEPROM "
-                        f"({', '.join(changes[motor_id])}) was not written"
-                    )
-            for motor_id, differ in changes.items():
-                for name, value in differ.items():
-                    link.write(motor_id, name, value)
-        self._write_profiles(list(ids))
-
-    def _write_profiles(self, motor_ids: Sequence[int]) -> None:
-        by_id = {a.motor_id: a for a in self._axes.values()}
-        profiles = {m: by_id[m].profile_registers() for m in motor_ids}
-        self._link.sync_write("profile_acceleration", {m: p[1] for m, p in profiles.items()})
-        self._link.sync_write("profile_velocity", {m: p[0] for m, p in profiles.items()})
+    def _restore(self, motor_ids: Sequence[int]) -> None:
+        """The configuration `open` gave ``motor_ids`` written again (with ``configure``
+        off only the profile): they no longer run a sweep's profile."""
+        if self.configure:
+            self._setup.configure(motor_ids)
+        else:
+            self._setup.write_profiles(motor_ids)
+        self._swept.difference_update(motor_ids)
 
     # -- motion ------------------------------------------------------------------------
-    def _axis(self, name: str) -> AxisConfig:
-        try:
-            return self._axes[name]
-        except KeyError:
-            raise DriverError(
-                f"unknown axis {name!r}; the axes are {', '.join(self._axes)}"
-            ) from None
-
     def move_to(self, targets: Mapping[str, float]) -> None:
         """Command axis angles (rad) in one SYNC_WRITE; returns at once. `LimitError`
         (a target outside its limits or not finite) and `TorqueOff` send nothing. After
@@ -301,7 +245,7 @@ class DynamixelBus(Condition, Resource):
             raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
         with self._holding_on_fault():
             if self._swept:
-                self._write_profiles(sorted(self._swept))
+                self._setup.write_profiles(sorted(self._swept))
                 self._swept.clear()
             self._send_goals(goals)
 
@@ -313,7 +257,9 @@ class DynamixelBus(Condition, Resource):
 
     def _goal_ticks(self, targets: Mapping[str, float]) -> dict[str, int]:
         """Goal registers of ``targets`` (rad); `LimitError` / `DriverError` first."""
-        return {name: self._axis(name).goal_ticks(angle) for name, angle in targets.items()}
+        return {
+            name: axis_named(self._axes, name).goal_ticks(angle) for name, angle in targets.items()
+        }
 
     def velocity_limits(self) -> dict[str, float]:
         """Each axis's configured profile velocity (rad/s): the fastest a sweep may ask."""
@@ -475,8 +421,9 @@ class DynamixelBus(Condition, Resource):
         self._check_open()
         self._hold(list(self._axes))
 
-    def _hold(self, names: Sequence[str]) -> None:
-        """Goal := present position (within limits) for ``names``, in one SYNC_WRITE."""
+    def _hold(self, names: Sequence[str]) -> dict[str, int]:
+        """Goal := present position (within limits) for ``names``, in one SYNC_WRITE; the
+        goals (ticks)."""
         axes = [self._axes[n] for n in names]
         present: dict[str, int] = {}
         missing: dict[str, DriverError] = {}
@@ -506,6 +453,7 @@ class DynamixelBus(Condition, Resource):
                 motor_id=self._axes[first].motor_id,
                 result=cause.result if isinstance(cause, CommError) else None,
             )
+        return goals
 
     def torque(self, on: bool) -> None:
         """Enable (after setting each goal to the present position) or disable torque."""
@@ -516,3 +464,43 @@ class DynamixelBus(Condition, Resource):
         self._torque_on = False  # until the motors have been told
         self._link.sync_write("torque_enable", dict.fromkeys(ids, 1 if on else 0))
         self._torque_on = bool(on)
+
+    # -- condition and recovery (`drivers.dynamixel.condition`) ---------------------------
+    def reboot(self, axes: Iterable[str] | None = None) -> tuple[str, ...]:
+        """Reboot the motors reporting a hardware error (or those of ``axes``), wait for
+        them to answer again, restore the configuration `open` gave them (operating
+        mode, drive mode and position limits where they differ, the profile; with
+        ``configure`` off only the profile) and leave them holding where they are with
+        torque on. Returns the axes rebooted.
+
+        A motor whose error is still there after the reboot raises `MotorFault` (remove
+        the cause first: load, heat, supply). In extended position mode a reboot loses
+        the multi-turn count (the motor comes back within one turn), so re-home such an
+        axis before trusting its angle.
+        """
+        self._check_open()
+        return self._condition.reboot(
+            axes, timeout_s=self.reboot_timeout_s, poll_s=self.poll_interval_s
+        )
+
+    def recover(self, axis: str) -> Recovered:
+        """Hold every axis where it is, reboot ``axis``'s motor back into its configuration
+        (`reboot`) and read its position again: the position (rad) it was told to hold
+        just before the reboot and the one it reads after. `MotorFault` if its error
+        is still there after the reboot, `CommError` if it does not answer again."""
+        self._check_open()
+        return self._condition.recover(
+            axis, timeout_s=self.reboot_timeout_s, poll_s=self.poll_interval_s
+        )
+
+    def health(self) -> dict[str, Health]:
+        """Temperature (°C), input voltage (V), hardware error flags and load (signed %:
+        Present Current over the model's largest Current Limit; an XL430's Present
+        Load) per axis; a motor's alert does not raise."""
+        self._check_open()
+        return self._condition.health()
+
+    def check(self) -> None:
+        """Raise `MotorFault` for the first axis reporting a hardware error."""
+        self._check_open()
+        self._condition.check()

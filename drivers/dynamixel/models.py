@@ -252,7 +252,7 @@ _XM540_W150 = _model(
     1130,
     "XM540-W150",
     "xm540-w150",
-    changes={"velocity_limit": {"default": 380}},
+    changes={"velocity_limit": {"default": 230}},
 )
 
 _XL430_CHANGES: dict[str, Mapping[str, Any] | None] = {

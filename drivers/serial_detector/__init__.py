@@ -30,11 +30,12 @@ file is checked without opening anything); the driver is
 `drivers.serial_detector.detector.SerialDetector`. The package:
 :mod:`~drivers.serial_detector.errors` (the failures),
 :mod:`~drivers.serial_detector.config` (the configuration and its validation),
-:mod:`~drivers.serial_detector.lines` (reading lines from the port),
-:mod:`~drivers.serial_detector.stream` (the streaming mode),
+:mod:`~drivers.serial_detector.arguments` (a measurement's and a stream's arguments),
+:mod:`~drivers.serial_detector.lines` (the lines exchanged over the port, `LineIO`),
+:mod:`~drivers.serial_detector.stream` (the streaming mode, `Streaming`),
 :mod:`~drivers.serial_detector.trace` (what the driver saw of a stream) and
-:mod:`~drivers.serial_detector.detector` (the driver). Its logger is
-``drivers.serial_detector``.
+:mod:`~drivers.serial_detector.detector` (the driver, which holds a `LineIO` and a
+`Streaming`). Its logger is ``drivers.serial_detector``.
 """
 
 from drivers.serial_detector.config import EXPOSURE_FIELDS as EXPOSURE_FIELDS

@@ -122,14 +122,14 @@ class SerialStreamConfig:
         line = _compile(self.line, "stream.line", bad)
         if line is None or "value" not in line.groupindex:
             raise bad(f"stream.line {self.line!r} needs a named group (?P<value>...)")
-        rate, top = _as_real(self.rate_hz), _as_real(self.max_rate_hz)
+        rate, top = as_real(self.rate_hz), as_real(self.max_rate_hz)
         if top is None or not 0 < top < math.inf:
             raise bad(f"stream.max_rate_hz must be a positive number, got {self.max_rate_hz!r}")
         if rate is None or not 0 < rate <= top:
             raise bad(
                 f"stream.rate_hz must be a number in (0, max_rate_hz={top:g}], got {self.rate_hz!r}"
             )
-        unit, latency = _as_real(self.device_time_s), _as_real(self.latency_s)
+        unit, latency = as_real(self.device_time_s), as_real(self.latency_s)
         if unit is None or not 0 < unit < math.inf:
             raise bad(
                 f"stream.device_time_s must be a positive number of seconds, "
@@ -280,11 +280,11 @@ class SerialDetectorConfig:
         if not isinstance(self.port, str) or not self.port.strip():
             raise bad("port must be a non-empty string such as '/dev/ttyACM0'")
         baud, retries, max_line = (
-            _as_int(self.baud),
-            _as_int(self.retries),
-            _as_int(self.max_line_bytes),
+            as_int(self.baud),
+            as_int(self.retries),
+            as_int(self.max_line_bytes),
         )
-        timeout, settle = _as_real(self.timeout_s), _as_real(self.settle_s)
+        timeout, settle = as_real(self.timeout_s), as_real(self.settle_s)
         if baud is None or baud <= 0:
             raise bad(f"baud must be a positive integer, got {self.baud!r}")
         if self.line_ending not in _LINE_ENDINGS:
@@ -295,7 +295,7 @@ class SerialDetectorConfig:
             raise bad(f"settle_s must be ≥ 0 seconds, got {self.settle_s!r}")
         if retries is None or retries < 0:
             raise bad(f"retries must be an integer ≥ 0, got {self.retries!r}")
-        full_scale = None if self.full_scale is None else _as_real(self.full_scale)
+        full_scale = None if self.full_scale is None else as_real(self.full_scale)
         if self.full_scale is not None and (full_scale is None or not 0 < full_scale < math.inf):
             raise bad(f"full_scale must be a positive number or None, got {self.full_scale!r}")
         if max_line is None or max_line < 16:
@@ -335,14 +335,14 @@ class SerialDetectorConfig:
         return fields
 
 
-def _as_real(x: object) -> float | None:
+def as_real(x: object) -> float | None:
     """``x`` as a float if it is a real number (numpy scalars included, bool not)."""
     if isinstance(x, bool) or not isinstance(x, numbers.Real):
         return None
     return float(x)
 
 
-def _as_int(x: object) -> int | None:
+def as_int(x: object) -> int | None:
     """``x`` as an int if it is an integer (numpy integers included, bool not)."""
     if isinstance(x, bool) or not isinstance(x, numbers.Integral):
         return None

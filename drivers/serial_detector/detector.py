@@ -9,22 +9,16 @@ import math
 import re
 import statistics
 import time
-from collections import deque
-from typing import Any
-
-import serial
 
 from drivers.base import Clock, SystemClock
 from drivers.devices import Resource
-from drivers.serial_detector.config import SerialDetectorConfig, _as_int, _as_real
-from drivers.serial_detector.errors import (
-    _OPEN_ERRORS,
-    SerialDetectorClosed,
-    SerialDetectorError,
-    _open_reason,
-)
-from drivers.serial_detector.lines import _POLL_S, _Line, _LineIO, _number, _quote, is_saturated
-from drivers.serial_detector.stream import _Streaming
+from drivers.serial_detector.arguments import integrated, measure_arguments, template_values
+from drivers.serial_detector.config import SerialDetectorConfig
+from drivers.serial_detector.errors import SerialDetectorClosed, SerialDetectorError
+from drivers.serial_detector.lines import Line, LineIO, is_saturated, number, pattern, quote
+from drivers.serial_detector.stream import StreamContext, Streaming
+from drivers.serial_detector.trace import StreamTrace
+from drivers.stream import StreamReading
 from drivers.values import Reading
 
 log = logging.getLogger("drivers.serial_detector")  # one logger for the package
@@ -33,14 +27,15 @@ log = logging.getLogger("drivers.serial_detector")  # one logger for the package
 _ANSWERED = frozenset({"reset", "device", "value", "invalid"})
 
 
-class SerialDetector(_Streaming, _LineIO, Resource):
+class SerialDetector(Resource):
     """A :class:`drivers.base.Detector` on a line-based serial protocol.
 
     Use it as a context manager (``with SerialDetector(config) as det: det.measure(0.1)``)
-    or call :meth:`open` and :meth:`close`. Reading lines from the port, raw I/O and the
-    error messages come from :class:`~drivers.serial_detector.lines._LineIO`; with a
-    ``stream`` section it also streams (`drivers.stream.StreamingDetector`, from
-    :class:`~drivers.serial_detector.stream._Streaming`).
+    or call :meth:`open` and :meth:`close`. It holds its lines
+    (:class:`~drivers.serial_detector.lines.LineIO`: the port, what was received, raw I/O
+    and the error messages) and, with a ``stream`` section, streams
+    (`drivers.stream.StreamingDetector`) through the
+    :class:`~drivers.serial_detector.stream.Streaming` it holds.
 
     ``clock`` stamps every reading (real time by default); ``exposure_range_s`` is the
     range the instrument allows (the rig file's), checked before anything is sent.
@@ -64,23 +59,27 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         self._clock: Clock = clock or SystemClock()
         self._exposure_range = (lo, hi)
         self._response = re.compile(config.response)
-        self._banner = _compile_optional(config.reset_banner)
-        self._ack = _compile_optional(config.command_ack)
-        self._error_reply = _compile_optional(config.error_reply)
-        self._saturated_status = _compile_optional(config.saturated_status)
+        self._error_reply = pattern(config.error_reply)
+        self._saturated_status = pattern(config.saturated_status)
         self._fields = config.template_fields
-        self._serial: Any = None
-        self._rx = bytearray()  # the line being received
-        self._lines: deque[_Line] = deque()  # complete lines not yet consumed
-        self._discarding = 0  # >0: bytes of an over-long/stale line dropped so far
-        self._last_rx = -math.inf  # monotonic time of the last byte received
+        self._io = LineIO(config, on_reset=self._note_reset, on_lost=self._lost)
+        self._streaming = Streaming(
+            StreamContext(
+                config,
+                self._io,
+                self._clock,
+                self._exposure_range,
+                usable=self._check_usable,
+                prepare=self._prepare,
+                check_unsolicited=self._check_unsolicited,
+                lost_sync=self._lost_sync,
+            )
+        )
         self._needs_init = False
         self._needs_resync = False
         self._reopen = False  # closed by the driver after an I/O error: reopen on next call
         self._exposure_command: str | None = None  # the last set_exposure sent
         self._resets = 0
-        self._synced_away = 0
-        self._init_stream_state()
 
     # -- properties ---------------------------------------------------------------
 
@@ -94,7 +93,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
 
     @property
     def is_open(self) -> bool:
-        return self._serial is not None
+        return self._io.is_open
 
     @property
     def exposure_range_s(self) -> tuple[float, float]:
@@ -104,7 +103,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
     def resynced_away(self) -> int:
         """Lines a resync after a failed exchange discarded before its acknowledgement
         (late answers among them), since the detector was made."""
-        return self._synced_away
+        return self._io.synced_away
 
     @property
     def resets(self) -> int:
@@ -122,25 +121,13 @@ class SerialDetector(_Streaming, _LineIO, Resource):
 
         Does nothing if already open. On any failure the port is closed again.
         """
-        if self._serial is not None:
+        if self._io.is_open:
             return
-        cfg = self._config
-        try:
-            self._serial = serial.serial_for_url(
-                cfg.port,
-                baudrate=cfg.baud,
-                timeout=_POLL_S,
-                write_timeout=cfg.timeout_s,
-                exclusive=True,
-            )
-        except _OPEN_ERRORS as exc:
-            raise self._error(f"cannot open the port: {_open_reason(exc)}", "open") from exc
+        self._io.open()
         self._reopen = False
-        self._clear_input_state()
-        log.debug("%s: opened at %d baud", cfg.port, cfg.baud)
         try:
-            self._settle()
-            self._quiet_stream()  # a stream left running (a killed run) is stopped
+            self._io.settle()
+            self._streaming.quiet()  # a stream left running (a killed run) is stopped
             self._initialize()
         except BaseException:
             self._release()
@@ -150,28 +137,36 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         """Release the port (idempotent). Unsent bytes are dropped, not waited for; a
         running stream is stopped first (`stop_stream`)."""
         self._reopen = False
-        if self._stream is not None:
+        if self._streaming.running:
             with contextlib.suppress(Exception):  # bounded: 3 × timeout_s at most
                 self.stop_stream()
         self._release()
 
     def _release(self) -> None:
-        port, self._serial = self._serial, None
         self._needs_init = False
         self._needs_resync = False
         self._exposure_command = None
-        self._stream = None
-        self._clear_input_state()
-        if port is None:
-            return
-        # A USB serial close() waits up to 30 s for unsent output; drop it instead.
-        with contextlib.suppress(Exception):
-            port.reset_output_buffer()
-        try:
-            port.close()
-        except Exception as exc:  # nothing more can be done; the fd is gone either way
-            log.debug("%s: error while closing: %s", self.port, exc)
-        log.debug("%s: closed", self.port)
+        self._streaming.drop()
+        self._io.close()
+
+    def _lost(self) -> None:
+        """An OS error ended the port: released, and reopened on the next call."""
+        self._release()
+        self._reopen = True
+
+    def _check_usable(self) -> None:
+        """`SerialDetectorClosed` unless the port is open or was lost (to be reopened)."""
+        if not self._io.is_open and not self._reopen:
+            raise SerialDetectorClosed(
+                f"serial detector {self.port}: the port is not open (use "
+                "`with SerialDetector(config) as det:` or call open() first)",
+                port=self.port,
+                kind="closed",
+            )
+
+    def _lost_sync(self) -> None:
+        """An exchange failed: a late answer may still come; listen it out first."""
+        self._needs_resync = True
 
     # -- measuring ----------------------------------------------------------------
 
@@ -182,17 +177,13 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         ``device_averaging`` it is the device's ``std`` group, or NaN if the device
         does not report one, and ``raw`` holds the device's mean only.
         """
-        if self._serial is None and not self._reopen:
-            raise SerialDetectorClosed(
-                f"serial detector {self.port}: the port is not open (use "
-                "`with SerialDetector(config) as det:` or call open() first)",
-                port=self.port,
-                kind="closed",
-            )
-        exposure_s, averages = self._check_arguments(exposure_s, averages)
-        if self._stream is not None:
-            raise self._error("measure() during a stream (stop_stream first)", "streaming")
-        if self._serial is None:
+        self._check_usable()
+        exposure_s, averages = measure_arguments(
+            self._fields, self._exposure_range, self.port, exposure_s, averages
+        )
+        if self._streaming.running:
+            raise self._io.error("measure() during a stream (stop_stream first)", "streaming")
+        if not self._io.is_open:
             log.info("%s: reopening the port after an I/O error", self.port)
             self.open()
         started = self._clock.now()
@@ -205,10 +196,10 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                 reading = self._host_averaged(exposure_s, averages, started)
         except BaseException as exc:
             answered = isinstance(exc, SerialDetectorError) and exc.kind in _ANSWERED
-            if not answered and self._serial is not None:
+            if not answered and self._io.is_open:
                 # A late answer to the interrupted query may still come (after a timeout,
                 # malformed lines, Ctrl-C): listen it out before the next query.
-                self._needs_resync = True
+                self._lost_sync()
             raise
         log.debug("%s: %s", self.port, reading)
         return reading
@@ -218,71 +209,33 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         within ``timeout_s``, an echo skipped: an identification query (``ID?``,
         ``*IDN?``) or any other one-line exchange. Fails as a query does (``timeout``,
         ``device`` for an error reply, ``reset``); ``streaming`` during a stream."""
-        if self._serial is None and not self._reopen:
-            raise self._error("the port is not open (use open() first)", "closed")
+        if not self._io.is_open and not self._reopen:
+            raise self._io.error("the port is not open (use open() first)", "closed")
         if not isinstance(command, str) or not command.strip() or not command.isascii():
-            raise self._invalid(f"a command must be a non-empty ASCII string, got {command!r}")
+            raise self._io.invalid(f"a command must be a non-empty ASCII string, got {command!r}")
         if "\r" in command or "\n" in command:
-            raise self._invalid(f"a command must not contain a line ending, got {command!r}")
-        if self._stream is not None:
-            raise self._error("ask() during a stream (stop_stream first)", "streaming")
-        if self._serial is None:
+            raise self._io.invalid(f"a command must not contain a line ending, got {command!r}")
+        if self._streaming.running:
+            raise self._io.error("ask() during a stream (stop_stream first)", "streaming")
+        if not self._io.is_open:
             self.open()
         try:
             self._ready()
-            self._send(command)
+            self._io.send(command)
             deadline = time.monotonic() + self._config.timeout_s
-            while (line := self._next_line(deadline)) is not None:
+            while (line := self._io.next_line(deadline)) is not None:
                 self._check_unsolicited(line, command)
                 if line.overflow or line.text != command.strip():
                     return line.text
-            raise self._timeout(command, self._config.timeout_s, "answer")
+            raise self._io.timeout(command, self._config.timeout_s, "answer")
         except BaseException as exc:
             answered = isinstance(exc, SerialDetectorError) and exc.kind in _ANSWERED
-            if not answered and self._serial is not None:
-                self._needs_resync = True
+            if not answered and self._io.is_open:
+                self._lost_sync()
             raise
 
-    def _check_arguments(self, exposure_s: object, averages: object) -> tuple[float, int]:
-        exposure, n = _as_real(exposure_s), _as_int(averages)
-        if exposure is None or not (0 < exposure < math.inf):
-            raise self._invalid(
-                f"exposure_s must be a positive finite number of seconds, got {exposure_s!r}"
-            )
-        lo, hi = self._exposure_range
-        if not lo <= exposure <= hi:
-            raise self._invalid(
-                f"exposure {exposure!r} s is outside the detector's range [{lo:g}, {hi:g}] s"
-            )
-        if n is None or n < 1:
-            raise self._invalid(f"averages must be an integer ≥ 1, got {averages!r}")
-        for name, scale, unit in (("exposure_ms", 1e3, "ms"), ("exposure_us", 1e6, "µs")):
-            if name in self._fields and round(exposure * scale) < 1:
-                raise self._invalid(
-                    f"exposure_s={exposure!r} rounds to 0 {unit}, below the resolution "
-                    f"of the command templates"
-                )
-        return exposure, n
-
-    def _integrated(self, exposure_s: float) -> float | None:
-        """The exposure the device integrates when the templates round it (s), or None
-        when it is the one asked."""
-        for name, scale in (("exposure_ms", 1e3), ("exposure_us", 1e6)):
-            if name in self._fields and "exposure_s" not in self._fields:
-                integrated = round(exposure_s * scale) / scale
-                return None if integrated == exposure_s else integrated
-        return None
-
-    def _values(self, exposure_s: float, averages: int) -> dict[str, float | int]:
-        return {
-            "exposure_s": exposure_s,
-            "exposure_ms": round(exposure_s * 1e3),
-            "exposure_us": round(exposure_s * 1e6),
-            "averages": averages,
-        }
-
     def _host_averaged(self, exposure_s: float, averages: int, started: float) -> Reading:
-        command = self._config.query.format(**self._values(exposure_s, averages))
+        command = self._config.query.format(**template_values(exposure_s, averages))
         budget = exposure_s + self._config.timeout_s
         samples: list[float] = []
         saturated = False
@@ -299,21 +252,21 @@ class SerialDetector(_Streaming, _LineIO, Resource):
             started_s=started,
             ended_s=self._clock.now(),
             raw=tuple(samples),
-            exposure_s=self._integrated(exposure_s),
+            exposure_s=integrated(self._fields, exposure_s),
         )
 
     def _device_averaged(self, exposure_s: float, averages: int, started: float) -> Reading:
-        command = self._config.query.format(**self._values(exposure_s, averages))
+        command = self._config.query.format(**template_values(exposure_s, averages))
         budget = exposure_s * averages + self._config.timeout_s
         value, match = self._query(command, budget)
         std = math.nan
         std_text = match.groupdict().get("std")
         if std_text is not None:
-            parsed = _number(std_text)
+            parsed = number(std_text)
             if parsed is None or not math.isfinite(parsed) or parsed < 0:
                 line = match.string
-                raise self._error(
-                    f"the device's standard deviation {std_text!r} in {_quote(line)} "
+                raise self._io.error(
+                    f"the device's standard deviation {std_text!r} in {quote(line)} "
                     f"is not a finite number ≥ 0",
                     "value",
                     line,
@@ -327,7 +280,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
             started_s=started,
             ended_s=self._clock.now(),
             raw=(value,),
-            exposure_s=self._integrated(exposure_s),
+            exposure_s=integrated(self._fields, exposure_s),
         )
 
     def _is_saturated(self, value: float, match: re.Match[str]) -> bool:
@@ -341,7 +294,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         real answer may follow a stray line); if the deadline passes after a malformed
         line, the query is sent again (at most ``retries`` more times)."""
         cfg = self._config
-        malformed: list[_Line] = []
+        malformed: list[Line] = []
         for attempt in range(cfg.retries + 1):
             if attempt:
                 log.warning(
@@ -350,11 +303,11 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                     command,
                     malformed[-1].quoted(),
                 )
-                self._drain()
-            self._send(command)
+                self._io.drain()
+            self._io.send(command)
             deadline = time.monotonic() + budget_s
             heard = False
-            while (line := self._next_line(deadline)) is not None:
+            while (line := self._io.next_line(deadline)) is not None:
                 self._check_unsolicited(line, command)
                 if not line.overflow:
                     if line.text == command.strip():  # the device echoes commands
@@ -363,12 +316,12 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                         continue
                     match = self._response.fullmatch(line.text)
                     if match is not None:
-                        value = _number(match.group("value"))
+                        value = number(match.group("value"))
                         if value is not None:
                             if not math.isfinite(value):
-                                raise self._error(
+                                raise self._io.error(
                                     f"the device answered a non-finite value "
-                                    f"{match.group('value')!r} in {_quote(line.text)} "
+                                    f"{match.group('value')!r} in {quote(line.text)} "
                                     f"to {command!r}",
                                     "value",
                                     line.text,
@@ -378,70 +331,74 @@ class SerialDetector(_Streaming, _LineIO, Resource):
                 malformed.append(line)
                 log.warning("%s: malformed answer to %r: %s", self.port, command, line.quoted())
                 if len(malformed) > cfg.retries:
-                    raise self._malformed(command, malformed)
+                    raise self._io.malformed(command, malformed)
             if not malformed:
-                raise self._timeout(command, budget_s, "answer")
+                raise self._io.timeout(command, budget_s, "answer")
         if not heard:
-            raise self._timeout(
+            raise self._io.timeout(
                 command,
                 budget_s,
                 "answer",
                 f"after {len(malformed)} malformed line(s), the last {malformed[-1].quoted()}",
             )
-        raise self._malformed(command, malformed)
+        raise self._io.malformed(command, malformed)
 
     def _stray_ack(self, text: str) -> bool:
         """An acknowledgement where an answer was awaited: a resync sent its command
         again and the earlier one's came late (never a value)."""
-        if self._ack is None or self._ack.search(text) is None:
+        ack = self._io.ack
+        if ack is None or ack.search(text) is None:
             return False
         return self._response.fullmatch(text) is None
 
     def _command(self, command: str) -> None:
         """Send an init or set-exposure command and, with ``command_ack``, wait for it."""
-        self._send(command)
-        if self._ack is None:
+        self._io.send(command)
+        ack = self._io.ack
+        if ack is None:
             return
         cfg = self._config
         deadline = time.monotonic() + cfg.timeout_s
-        malformed: list[_Line] = []
-        while (line := self._next_line(deadline)) is not None:
+        malformed: list[Line] = []
+        while (line := self._io.next_line(deadline)) is not None:
             self._check_unsolicited(line, command)
             if not line.overflow:
                 if line.text == command.strip():
                     continue
-                if self._ack.search(line.text):
+                if ack.search(line.text):
                     return
             malformed.append(line)
             log.warning("%s: unexpected answer to %r: %s", self.port, command, line.quoted())
             if len(malformed) > cfg.retries:
-                raise self._malformed(command, malformed, expected="an acknowledgement")
-        raise self._timeout(command, cfg.timeout_s, "acknowledgement")
+                raise self._io.malformed(command, malformed, expected="an acknowledgement")
+        raise self._io.timeout(command, cfg.timeout_s, "acknowledgement")
 
-    def _check_unsolicited(self, line: _Line, command: str) -> None:
+    def _check_unsolicited(self, line: Line, command: str) -> None:
         """Raise on a reset banner or an error reply received while waiting."""
         if line.overflow:
             return
-        if self._banner is not None and self._banner.search(line.text):
+        banner = self._io.banner
+        if banner is not None and banner.search(line.text):
             self._note_reset()
-            raise self._error(
-                f"device reset during a reading: it printed {_quote(line.text)} while the "
+            raise self._io.error(
+                f"device reset during a reading: it printed {quote(line.text)} while the "
                 f"driver waited for the answer to {command!r}; it will be re-initialized on "
                 f"the next call",
                 "reset",
                 line.text,
             )
         if self._error_reply is not None and self._error_reply.search(line.text):
-            raise self._error(
-                f"the device refused {command!r}: {_quote(line.text)}", "device", line.text
+            raise self._io.error(
+                f"the device refused {command!r}: {quote(line.text)}", "device", line.text
             )
 
     def _ready(self) -> None:
         """Bring the instrument to a known state before a command: resynchronised after
         a lost exchange, unread input dropped, initialised again after a reset."""
         if self._needs_resync:
-            self._resync()
-        self._drain()
+            self._io.resync(self._exposure_command or next(iter(self._config.init), None))
+            self._needs_resync = False
+        self._io.drain()
         if self._needs_init:
             self._initialize()
 
@@ -456,7 +413,7 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         template = self._config.set_exposure
         if template is None:
             return
-        command = template.format(**self._values(exposure_s, 1))
+        command = template.format(**template_values(exposure_s, 1))
         if command == self._exposure_command:
             return
         self._exposure_command = None
@@ -468,6 +425,64 @@ class SerialDetector(_Streaming, _LineIO, Resource):
         self._needs_init = True
         self._exposure_command = None
 
+    # -- streaming (`drivers.serial_detector.stream`) -----------------------------------
 
-def _compile_optional(pattern: str | None) -> re.Pattern[str] | None:
-    return None if pattern is None else re.compile(pattern)
+    @property
+    def can_stream(self) -> bool:
+        """Whether the configuration has a streaming mode (`drivers.stream.can_stream`)."""
+        return self._config.stream is not None
+
+    @property
+    def is_streaming(self) -> bool:
+        return self._streaming.running
+
+    @property
+    def last_stream(self) -> StreamTrace | None:
+        """What the driver saw of the last stream stopped or failed (`StreamTrace`), None
+        before the first."""
+        return self._streaming.last
+
+    def start_stream(
+        self, rate_hz: float | None = None, integration_s: float | None = None
+    ) -> None:
+        """Start streaming readings of ``integration_s`` s (default: the whole period)
+        every ``1 / rate_hz`` s (default: the configuration's ``rate_hz``).
+
+        Refused before anything is sent (`SerialDetectorError`, kind ``invalid``) for a
+        rate above ``max_rate_hz``, an integration longer than the period, outside the
+        exposure range or below the templates' resolution; ``streaming`` when a stream
+        already runs; `StreamNotSupported` without a stream section.
+        """
+        self._streaming.start(rate_hz, integration_s)
+
+    def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
+        """The readings received since the last call, in order; with none yet, wait up
+        to ``timeout_s`` (s) for the first. Raises `SerialDetectorError` naming the port
+        when the stream stalls (no line for ``timeout_s`` of the configuration plus two
+        periods), on malformed lines beyond ``retries`` in a row, a reset, an error
+        reply or a non-finite value; the stream is then stopped (best effort)."""
+        return self._streaming.read(timeout_s)
+
+    def stop_stream(self) -> list[StreamReading]:
+        """Stop the stream (idempotent; nothing is sent when none runs) and return the
+        readings that arrived until the device acknowledged ``stop`` (with a
+        ``command_ack``: the device sends it after its last line) or, without one, went
+        quiet: at least ``max(3 periods, 50 ms)`` without a line; waited at most ``3 ×
+        timeout_s``. The device is then idle and ``measure`` works; a device still
+        streaming after that raises (``timeout``) and the next call first waits for
+        quiet."""
+        return self._streaming.stop()
+
+    def listen(self, duration_s: float) -> list[tuple[str, float]]:
+        """The lines that arrive unasked in the next ``duration_s`` seconds, each with the
+        clock when it was read (s): what a device sends after its stream was stopped.
+        ``streaming`` error while a stream runs (read it with `read_stream`)."""
+        return self._streaming.listen(duration_s)
+
+    # -- the state of the instrument ---------------------------------------------------
+
+    def _prepare(self) -> None:
+        """Reopened after an I/O error, then `_ready`."""
+        if not self._io.is_open:
+            self.open()
+        self._ready()

@@ -12,11 +12,11 @@ from drivers.errors import DetectorError, DeviceClosed
 try:  # POSIX only; tcflush failures on a vanished device raise termios.error
     import termios
 
-    _IO_ERRORS: tuple[type[Exception], ...] = (OSError, termios.error)
+    IO_ERRORS: tuple[type[Exception], ...] = (OSError, termios.error)
 except ImportError:  # pragma: no cover - Windows
-    _IO_ERRORS = (OSError,)
+    IO_ERRORS = (OSError,)
 
-_OPEN_ERRORS: tuple[type[Exception], ...] = (*_IO_ERRORS, ValueError)  # ValueError: bad URL
+OPEN_ERRORS: tuple[type[Exception], ...] = (*IO_ERRORS, ValueError)  # ValueError: bad URL
 
 ErrorKind = Literal[
     "invalid",  # a bad configuration field or measure() argument; nothing was sent
@@ -70,7 +70,7 @@ _OPEN_HINTS = {
 }
 
 
-def _open_reason(exc: BaseException) -> str:
+def open_reason(exc: BaseException) -> str:
     code = getattr(exc, "errno", None)
     if isinstance(code, int) and code in _OPEN_HINTS:
         return _OPEN_HINTS[code]

@@ -1,28 +1,34 @@
-"""Reading lines from the port: the line-level half of
-:class:`~drivers.serial_detector.detector.SerialDetector`.
+"""Reading lines from the port: `LineIO`, the line-level conversation a
+:class:`~drivers.serial_detector.detector.SerialDetector` holds.
 
-Raw reads and writes (an OS error becomes a :class:`SerialDetectorError` and releases the
-port), the bounded line buffer, discarding stale input and resynchronizing after a failed
-query, and the errors that quote what was received.
+Opening and releasing the port, raw reads and writes (an OS error becomes a
+:class:`SerialDetectorError` and the detector is told the port was lost), the bounded
+line buffer, discarding stale input and resynchronizing after a failed query, and the
+errors that quote what was received.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import math
 import re
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import serial
 
 from drivers.serial_detector.config import SerialDetectorConfig
 from drivers.serial_detector.errors import (
-    _IO_ERRORS,
+    IO_ERRORS,
+    OPEN_ERRORS,
     ErrorKind,
     SerialDetectorError,
     SerialDetectorValueError,
+    open_reason,
 )
 
 log = logging.getLogger("drivers.serial_detector")  # one logger for the package
@@ -39,7 +45,7 @@ _QUOTE_CHARS = 80
 
 
 @dataclass(frozen=True)
-class _Line:
+class Line:
     """A received line, or (``overflow``) the start of an over-long one."""
 
     text: str
@@ -50,19 +56,19 @@ class _Line:
         if self.overflow:
             return (
                 f"a line longer than {self.nbytes} bytes (max_line_bytes) starting "
-                f"{_quote(self.text)}"
+                f"{quote(self.text)}"
             )
-        return _quote(self.text)
+        return quote(self.text)
 
 
-def _quote(text: str) -> str:
+def quote(text: str) -> str:
     """``repr`` of a line, truncated: safe to put in a one-line message."""
     if len(text) > _QUOTE_CHARS:
         return repr(text[:_QUOTE_CHARS]) + f"... ({len(text)} characters)"
     return repr(text)
 
 
-def _number(text: str) -> float | None:
+def number(text: str) -> float | None:
     """The float in ``text``, or None if it is not a plain decimal number/nan/inf."""
     text = text.strip()
     if not _NUMBER.fullmatch(text):
@@ -70,57 +76,112 @@ def _number(text: str) -> float | None:
     return float(text)
 
 
-class _LineIO:
-    """A mixin holding :class:`SerialDetector`'s line-level methods.
+def pattern(text: str | None) -> re.Pattern[str] | None:
+    """``text`` compiled as a regular expression, None for None."""
+    return None if text is None else re.compile(text)
 
-    Its state is created by ``SerialDetector.__init__``; the attributes and methods it
-    uses from there are declared here.
+
+class LineIO:
+    """The lines exchanged with the device on the port of ``config``.
+
+    It owns the port and what has been received: the line being received, the complete
+    lines not yet taken, the bytes of a stale line still being dropped. ``on_reset`` is
+    called when a reset banner is seen among discarded lines; ``on_lost`` when an OS
+    error has ended the port (after which the port is closed: its owner releases it).
     """
 
-    _config: SerialDetectorConfig
-    _banner: re.Pattern[str] | None
-    _serial: Any
-    _rx: bytearray
-    _lines: deque[_Line]
-    _discarding: int
-    _last_rx: float
-    _needs_resync: bool
-    _reopen: bool
-    _ack: re.Pattern[str] | None
-    _exposure_command: str | None
-    #: Lines a resync discarded before its acknowledgement.
-    _synced_away: int
+    def __init__(
+        self,
+        config: SerialDetectorConfig,
+        *,
+        on_reset: Callable[[], None],
+        on_lost: Callable[[], None],
+    ) -> None:
+        self._config = config
+        self._on_reset = on_reset
+        self._on_lost = on_lost
+        #: The reset banner and the command acknowledgement (None: not configured).
+        self.banner = pattern(config.reset_banner)
+        self.ack = pattern(config.command_ack)
+        self._serial: Any = None
+        self._rx = bytearray()  # the line being received
+        self._lines: deque[Line] = deque()  # complete lines not yet taken
+        self._discarding = 0  # >0: bytes of an over-long/stale line dropped so far
+        self._last_rx = -math.inf  # monotonic time of the last byte received
+        self._synced_away = 0
 
-    if TYPE_CHECKING:
+    @property
+    def port(self) -> str:
+        return self._config.port
 
-        @property
-        def port(self) -> str: ...
+    @property
+    def is_open(self) -> bool:
+        return self._serial is not None
 
-        def _note_reset(self) -> None: ...
+    @property
+    def synced_away(self) -> int:
+        """Lines a resync discarded before its acknowledgement, since it was made."""
+        return self._synced_away
 
-        def _release(self) -> None: ...
+    @property
+    def pending(self) -> int:
+        """Bytes held of the line being received (at most ``max_line_bytes``)."""
+        return len(self._rx)
+
+    # -- the port -----------------------------------------------------------------------
+
+    def open(self) -> None:
+        """Open the port (`SerialDetectorError` ``open`` if it cannot be), input cleared."""
+        cfg = self._config
+        try:
+            self._serial = serial.serial_for_url(
+                cfg.port,
+                baudrate=cfg.baud,
+                timeout=_POLL_S,
+                write_timeout=cfg.timeout_s,
+                exclusive=True,
+            )
+        except OPEN_ERRORS as exc:
+            raise self.error(f"cannot open the port: {open_reason(exc)}", "open") from exc
+        self.clear()
+        log.debug("%s: opened at %d baud", cfg.port, cfg.baud)
+
+    def close(self) -> None:
+        """Release the port (idempotent); unsent bytes are dropped, not waited for."""
+        port, self._serial = self._serial, None
+        self.clear()
+        if port is None:
+            return
+        # A USB serial close() waits up to 30 s for unsent output; drop it instead.
+        with contextlib.suppress(Exception):
+            port.reset_output_buffer()
+        try:
+            port.close()
+        except Exception as exc:  # nothing more can be done; the fd is gone either way
+            log.debug("%s: error while closing: %s", self.port, exc)
+        log.debug("%s: closed", self.port)
 
     # -- input housekeeping -----------------------------------------------------------
 
-    def _settle(self) -> None:
+    def settle(self) -> None:
         """After opening: wait for the reset banner, or ``settle_s`` without one."""
         settle = self._config.settle_s
         if settle <= 0:
             return
         deadline = time.monotonic() + settle
-        while (line := self._next_line(deadline)) is not None:
-            if self._banner is not None and not line.overflow and self._banner.search(line.text):
+        while (line := self.next_line(deadline)) is not None:
+            if self.banner is not None and not line.overflow and self.banner.search(line.text):
                 log.debug("%s: device ready: %s", self.port, line.quoted())
-                self._clear_input_state()
+                self.clear()
                 return
             log.debug("%s: discarding %s while settling", self.port, line.quoted())
-        self._clear_input_state()
+        self.clear()
 
-    def _drain(self) -> None:
+    def drain(self) -> None:
         """Discard stale input before a query, noticing a reset banner among it."""
         budget = _DRAIN_MAX_BYTES
         while budget > 0:
-            waiting = self._in_waiting()
+            waiting = self.in_waiting()
             if not waiting:
                 break
             data = self._read(min(waiting, budget, _CHUNK))
@@ -129,63 +190,60 @@ class _LineIO:
             self._feed(data)
         self._discard_buffered()
 
-    def _resync(self) -> None:
+    def resync(self, command: str | None) -> None:
         """After a failed query: make sure a late answer to it is not taken for the
-        answer to the next one. With an acknowledged command at hand (`_sync`) its
+        answer to the next one. With ``command`` (acknowledged: `_sync`) its
         acknowledgement marks the end of everything owed; else discard input until the
         line has been quiet for ``timeout_s`` (at most ``3 × timeout_s``)."""
-        if self._sync():
+        if self._sync(command):
             return
         quiet = self._config.timeout_s
         start = time.monotonic()
         quiet_until, give_up = start + quiet, start + 3 * quiet
         while time.monotonic() < min(quiet_until, give_up):
-            if self._receive():
+            if self.receive():
                 quiet_until = time.monotonic() + quiet
         self._discard_buffered()
-        self._clear_input_state()
-        self._needs_resync = False
+        self.clear()
 
-    def _sync(self) -> bool:
-        """Send the exposure command last sent (else the first ``init`` command) and
-        discard every line before its acknowledgement: the device answers in order, so
-        nothing owed comes after it. The command goes out again after each ``timeout_s``
-        without one (a line without an ending swallows the acknowledgement behind it),
-        three times at most. False without ``command_ack`` or such a command;
+    def _sync(self, command: str | None) -> bool:
+        """Send ``command`` (the exposure command last sent, else the first ``init``
+        command) and discard every line before its acknowledgement: the device answers
+        in order, so nothing owed comes after it. The command goes out again after each
+        ``timeout_s`` without one (a line without an ending swallows the acknowledgement
+        behind it), three times at most. False without ``command_ack`` or a command;
         `SerialDetectorError` (``timeout``) if no acknowledgement comes (the resync is
         then still needed; a stray acknowledgement later is skipped as an echo is)."""
         cfg = self._config
-        command = self._exposure_command or next(iter(cfg.init), None)
-        if self._ack is None or command is None:
+        if self.ack is None or command is None:
             return False
         for _ in range(3):
-            self._send(command)
+            self.send(command)
             deadline = time.monotonic() + cfg.timeout_s
-            while (line := self._next_line(deadline)) is not None:
+            while (line := self.next_line(deadline)) is not None:
                 if line.overflow or line.text == command.strip():
                     continue
-                if self._ack.search(line.text):
+                if self.ack.search(line.text):
                     self._discard_buffered()
-                    self._clear_input_state()
-                    self._needs_resync = False
+                    self.clear()
                     return True
-                if self._banner is not None and self._banner.search(line.text):
-                    self._note_reset()  # re-initialized before the next query
+                if self.banner is not None and self.banner.search(line.text):
+                    self._on_reset()  # re-initialized before the next query
                 self._synced_away += 1
                 log.debug("%s: resync: discarding %s", self.port, line.quoted())
         budget = 3 * cfg.timeout_s
-        raise self._timeout(command, budget, "acknowledgement (resynchronizing)")
+        raise self.timeout(command, budget, "acknowledgement (resynchronizing)")
 
     def _discard_buffered(self) -> None:
         while self._lines:
             line = self._lines.popleft()
-            if self._banner is not None and not line.overflow and self._banner.search(line.text):
+            if self.banner is not None and not line.overflow and self.banner.search(line.text):
                 log.warning(
                     "%s: the device reset between readings (%s); re-initializing",
                     self.port,
                     line.quoted(),
                 )
-                self._note_reset()
+                self._on_reset()
             else:
                 log.debug("%s: discarding stale %s", self.port, line.quoted())
         if self._rx or self._discarding:
@@ -198,24 +256,31 @@ class _LineIO:
                 self._rx.clear()
                 self._discarding = 0
 
-    def _clear_input_state(self) -> None:
+    def clear(self) -> None:
+        """Forget what has been received."""
         self._rx.clear()
         self._lines.clear()
         self._discarding = 0
 
-    def _next_line(self, deadline: float) -> _Line | None:
+    def next_line(self, deadline: float) -> Line | None:
         """The next received line, or None once ``deadline`` (monotonic) has passed."""
         while not self._lines:
             if time.monotonic() >= deadline:
                 return None
-            self._receive()
+            self.receive()
         return self._lines.popleft()
 
-    def _receive(self) -> int:
+    def take_lines(self) -> list[Line]:
+        """Every complete line received and not yet taken, in order."""
+        lines = list(self._lines)
+        self._lines.clear()
+        return lines
+
+    def receive(self) -> int:
         """Read what has arrived (waiting at most the poll interval); returns the count."""
         data = self._read(1)
         if data:
-            waiting = self._in_waiting()
+            waiting = self.in_waiting()
             if waiting:
                 data += self._read(min(waiting, _CHUNK))
             self._last_rx = time.monotonic()
@@ -237,7 +302,7 @@ class _LineIO:
                 received = len(self._rx) + len(part)
                 head = (bytes(self._rx) + part[:_QUOTE_CHARS])[:_QUOTE_CHARS]
                 preview = head.decode("ascii", "replace")
-                self._lines.append(_Line(preview, overflow=True, nbytes=limit))
+                self._lines.append(Line(preview, overflow=True, nbytes=limit))
                 self._discarding = 0 if complete else received
                 self._rx.clear()
                 continue
@@ -247,65 +312,69 @@ class _LineIO:
                 self._rx.clear()
                 if text:
                     log.debug("%s: <- %r", self.port, text)
-                    self._lines.append(_Line(text))
+                    self._lines.append(Line(text))
 
-    # -- raw I/O (every OS error becomes a SerialDetectorError, and the port is released)
+    # -- raw I/O (every OS error becomes a SerialDetectorError; the port is lost)
 
     def _port(self) -> Any:
         if self._serial is None:  # pragma: no cover - guarded by measure()
-            raise self._error("the port is not open", "closed")
+            raise self.error("the port is not open", "closed")
         return self._serial
 
-    def _send(self, command: str) -> None:
+    def send(self, command: str) -> None:
+        """Write ``command`` and the line ending."""
         data = (command + self._config.line_ending).encode("ascii")
         log.debug("%s: -> %r", self.port, command)
         try:
             self._port().write(data)
         except serial.SerialTimeoutException as exc:
-            raise self._io_error(
+            raise self._lost(
                 f"writing {command!r} timed out after {self._config.timeout_s} s "
                 f"(the device does not take input: flow control, a hung USB adapter?)",
                 exc,
             ) from exc
-        except _IO_ERRORS as exc:
-            raise self._io_error(f"writing {command!r} failed", exc) from exc
+        except IO_ERRORS as exc:
+            raise self._lost(f"writing {command!r} failed", exc) from exc
 
     def _read(self, size: int) -> bytes:
         try:
             return bytes(self._port().read(size))
-        except _IO_ERRORS as exc:
-            raise self._io_error("reading failed", exc) from exc
+        except IO_ERRORS as exc:
+            raise self._lost("reading failed", exc) from exc
 
-    def _in_waiting(self) -> int:
+    def in_waiting(self) -> int:
+        """Bytes received and not yet read."""
         try:
             return int(self._port().in_waiting)
-        except _IO_ERRORS as exc:
-            raise self._io_error("reading failed", exc) from exc
+        except IO_ERRORS as exc:
+            raise self._lost("reading failed", exc) from exc
 
     # -- errors ---------------------------------------------------------------------
 
-    def _error(self, what: str, kind: ErrorKind, line: str | None = None) -> SerialDetectorError:
+    def error(self, what: str, kind: ErrorKind, line: str | None = None) -> SerialDetectorError:
+        """A failure of ``kind``, its message naming the port."""
         return SerialDetectorError(
             f"serial detector {self.port}: {what}", port=self.port, kind=kind, line=line
         )
 
-    def _invalid(self, what: str) -> SerialDetectorValueError:
+    def invalid(self, what: str) -> SerialDetectorValueError:
+        """A bad argument (nothing was sent)."""
         return SerialDetectorValueError(
             f"serial detector {self.port}: {what}", port=self.port, kind="invalid"
         )
 
-    def _io_error(self, what: str, exc: BaseException) -> SerialDetectorError:
+    def _lost(self, what: str, exc: BaseException) -> SerialDetectorError:
         reason = " ".join(str(exc).split()) or type(exc).__name__
-        self._release()
-        self._reopen = True
-        return self._error(
+        self._on_lost()
+        return self.error(
             f"{what}: {reason}; the port was released and will be reopened on the next call",
             "io",
         )
 
-    def _timeout(
+    def timeout(
         self, command: str, budget_s: float, what: str, earlier: str = ""
     ) -> SerialDetectorError:
+        """No ``what`` to ``command`` within ``budget_s`` (s), quoting a partial line."""
         pending = len(self._rx) or self._discarding
         detail = f" ({earlier})" if earlier else ""
         if pending:
@@ -313,18 +382,19 @@ class _LineIO:
             detail += f"; received {pending} bytes without a line ending" + (
                 f" starting {start!r}" if start else ""
             )
-        return self._error(
+        return self.error(
             f"no {what} to {command!r} within {budget_s:.3g} s{detail} (is the device on, "
             f"at {self._config.baud} baud, speaking this protocol?)",
             "timeout",
         )
 
-    def _malformed(
-        self, command: str, lines: list[_Line], expected: str = "a valid answer"
+    def malformed(
+        self, command: str, lines: list[Line], expected: str = "a valid answer"
     ) -> SerialDetectorError:
+        """``lines`` received instead of ``expected``, quoting the last."""
         last = lines[-1]
         kind: ErrorKind = "overflow" if last.overflow else "malformed"
-        return self._error(
+        return self.error(
             f"{len(lines)} malformed line(s) instead of {expected} to {command!r}, "
             f"the last {last.quoted()}",
             kind,

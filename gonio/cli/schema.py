@@ -17,7 +17,7 @@ from gonio.config_schema import json_schema
 from gonio.planner.schema import PlanSpec
 from gonio.rig.schema import RigSpec
 from gonio.tradeoff.spec import SweepSpec
-from sim.scene import Scene
+from sim.virtual.scene import Scene
 
 #: Each kind of file: (the model that loads it, the schema's title).
 KINDS: dict[str, tuple[type[BaseModel], str]] = {

@@ -13,7 +13,7 @@ standard are, beside where their chains put them (`gonio.rig.schema`).
   ``pymeasure`` (a PyMeasure instrument class, `gonio.rig.lab_instrument`).
 - ``reference``: the Lambertian standard read for calibration, and where.
 
-A value here is never repeated in a scene file (`sim.scene` refuses it).
+A value here is never repeated in a scene file (`sim.virtual.scene` refuses it).
 """
 
 from __future__ import annotations
@@ -230,7 +230,7 @@ class LightSpec(Strict):
 
 
 class SimulatedInterfaceSpec(Strict):
-    """The simulated detector (`sim.devices.detector.SimDetector`); the scene file
+    """The simulated detector (`sim.virtual.devices.detector.SimDetector`); the scene file
     gives its sensor."""
 
     kind: Literal["simulated"] = Field(description="simulated: the scene file gives its sensor.")

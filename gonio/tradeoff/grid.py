@@ -45,8 +45,8 @@ from gonio.tradeoff.spec import (
     Without,
     effects_label,
 )
-from sim.effects import EffectsSpec
-from sim.scene import load_scene
+from sim.virtual.effects import EffectsSpec
+from sim.virtual.scene import load_scene
 
 #: The most combinations one sweep may hold (a few seconds each: weeks of CPU).
 MAX_COMBINATIONS = 100_000

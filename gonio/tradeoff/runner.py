@@ -35,7 +35,7 @@ from gonio.reconstruct.testset import TestSet
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import Task
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 
 #: The figures of a row after its inputs: the target the plan asked (fitted under a
 #: time budget), counts, predicted and simulated instrument time (s), why the ordering

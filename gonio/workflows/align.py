@@ -40,7 +40,7 @@ from gonio.rig.alignment_fit import peak_at
 from gonio.types import FloatArray
 from gonio.workflows import align_fly, backends
 from gonio.workflows.backends import BackendKind
-from sim.scene import Scene
+from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """The backends a run can drive, built from the rig file.
 
 - ``simulated``: the rig's ``bus.kind`` is ``simulated``: virtual motors, detector and
-  light on a virtual clock (`sim.devices.instrument.SimulatedInstrument`); the scene
+  light on a virtual clock (`sim.virtual.devices.instrument.SimulatedInstrument`); the scene
   supplies material, noise and faults. Its journal commits without fsync and a resumed
   run restores the virtual instrument exactly where the journal left it.
 - ``hardware``: ``bus.kind: dynamixel``: the real `DynamixelBus`, the rig's serial
@@ -29,11 +29,11 @@ from gonio.errors import GonioError
 from gonio.rig.model import Rig
 from gonio.workflows.hardware import hardware_devices
 from gonio.workflows.rehearsal import rehearsal_devices
-from sim.devices.detector import SimDetector, SimLightSource
-from sim.devices.instrument import SimulatedInstrument
-from sim.physics.streams import Streams
 from sim.rehearsal import RehearsalSide
-from sim.scene import Scene
+from sim.virtual.devices.detector import SimDetector, SimLightSource
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.physics.streams import Streams
+from sim.virtual.scene import Scene
 
 BackendKind = Literal["simulated", "hardware", "rehearsal"]
 

@@ -4,7 +4,7 @@ built from the rig's sections as `Devices` on the real
 clock. Nothing here talks to a device until the `Devices` are opened.
 
 A rig whose detector is ``simulated`` has no hardware detector: `ConfigError` names the
-field (the simulated and rehearsal backends are built by `sim.devices`). Each builder
+field (the simulated and rehearsal backends are built by `sim.virtual.devices`). Each builder
 takes a ``port`` that replaces the rig's (a rehearsal wires the same drivers to
 pseudo-terminals: `sim.rehearsal`).
 """

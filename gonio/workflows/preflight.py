@@ -28,7 +28,7 @@ from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
 from gonio.workflows import backends, hygiene, stream_check
 from gonio.workflows.backends import BackendKind
-from sim.scene import Scene
+from sim.virtual.scene import Scene
 
 #: Journal bytes per sample, measured on the shipped plans (with a simulated
 #: snapshot), for the disk-space check of a dry run; doubled there for the WAL.

@@ -24,8 +24,6 @@ from gonio.workflows.hardware import (
     serial_detector,
 )
 from sim.clock import ScaledClock
-from sim.devices.detector import LightState, SimDetector, SimLightSource
-from sim.physics.streams import Streams
 from sim.rehearsal import (
     Peers,
     RehearsalSide,
@@ -36,7 +34,9 @@ from sim.rehearsal import (
     lamp_for,
     photometer_for,
 )
-from sim.scene import Scene
+from sim.virtual.devices.detector import LightState, SimDetector, SimLightSource
+from sim.virtual.physics.streams import Streams
+from sim.virtual.scene import Scene
 
 
 @contextmanager

@@ -48,7 +48,7 @@ from gonio.workflows import backends, hygiene
 from gonio.workflows.adaptive import estimate
 from gonio.workflows.backends import BackendKind
 from gonio.workflows.preflight import Files, check_output, check_scene, preflight, refuse_fly
-from sim.scene import Scene, load_scene
+from sim.virtual.scene import Scene, load_scene
 
 
 def load_scene_file(path: Path, rig: Rig) -> tuple[Scene, bytes]:

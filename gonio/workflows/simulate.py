@@ -27,7 +27,7 @@ from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files
-from sim.scene import Scene
+from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

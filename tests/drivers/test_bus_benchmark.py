@@ -8,7 +8,7 @@ from pathlib import Path
 from types import ModuleType
 
 from drivers.dynamixel.bus import DynamixelBus
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 BENCHMARK = Path(__file__).resolve().parents[2] / "benchmarks" / "bus.py"
 

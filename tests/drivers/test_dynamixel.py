@@ -24,8 +24,8 @@ from drivers.dynamixel.control_table import RAD_PER_TICK
 from drivers.dynamixel.latency import sdk_latency_timer
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import CommError, DriverError, LimitError, MotionTimeout, MotorFault
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
 from tests.support.dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]

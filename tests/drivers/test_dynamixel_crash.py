@@ -16,7 +16,7 @@ import pytest
 
 from drivers.dynamixel.control_table import RAD_PER_TICK
 from drivers.dynamixel.link import DynamixelLink
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 ROOT = Path(__file__).resolve().parents[2]
 #: The child imports only the installed-or-on-PYTHONPATH packages (not the tests), and

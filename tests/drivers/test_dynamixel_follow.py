@@ -19,7 +19,7 @@ from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import LimitError
 from drivers.trajectory import Trajectory
 from sim.clock import ManualClock
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 from tests.support.dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]

@@ -25,7 +25,7 @@ from drivers.dynamixel.latency import (
     assumed_adapter_ms,
     return_delay_budget_us,
 )
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 Emulator = Callable[..., DxlEmulator]
 

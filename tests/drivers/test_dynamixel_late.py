@@ -17,8 +17,8 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import item
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import CommError
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
 from tests.support.dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]

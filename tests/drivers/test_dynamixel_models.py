@@ -13,7 +13,7 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.link import DynamixelLink
 from drivers.dynamixel.models import MODELS
 from drivers.errors import DriverError
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 Emulator = Callable[..., DxlEmulator]
 #: XM430-W350, XL430-W250 (no current registers, 4 modes), XL330-M288 (another table end).

@@ -14,7 +14,7 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.errors import MotorFault
 from sim.clock import ManualClock
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 
 #: What `open` configures, and a reboot resets to factory values unless restored.
 CONFIGURED = (

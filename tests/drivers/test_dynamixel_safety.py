@@ -24,9 +24,9 @@ from drivers.dynamixel.latency import sdk_latency_timer
 from drivers.dynamixel.link import DynamixelLink
 from drivers.errors import CommError, DriverError, MotionTimeout, MotorFault
 from sim.clock import ManualClock
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
-from sim.dynamixel.protocol import Instruction, Packet, PacketReader
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
+from sim.peers.dynamixel.protocol import Instruction, Packet, PacketReader
 from tests.support.dynamixel import axes
 
 Emulator = Callable[..., DxlEmulator]

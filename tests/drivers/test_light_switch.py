@@ -12,7 +12,7 @@ from drivers.errors import LightError
 from drivers.light import SerialLightConfig
 from drivers.light.serial_switch import SerialLightSwitch
 from sim.clock import ManualClock
-from sim.serial_light import SerialLamp
+from sim.peers.serial_light import SerialLamp
 
 
 @pytest.fixture

@@ -27,9 +27,9 @@ from drivers.pymeasure.config import settle_tau
 from drivers.pymeasure.detector import PyMeasureDetector, PyMeasureDetectorError
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from sim.clock import ManualClock, ScaledClock
-from sim.visa_instruments import SR830 as EmulatedSR830
-from sim.visa_instruments import EmulatedInstrument
-from sim.visa_instruments import Keithley2000 as Emulated2000
+from sim.peers.visa_instruments import SR830 as EmulatedSR830
+from sim.peers.visa_instruments import EmulatedInstrument
+from sim.peers.visa_instruments import Keithley2000 as Emulated2000
 from tools import pymeasure_properties
 
 SENSOR = "S120C,12345678,01-Jan-2024,1,18,289"

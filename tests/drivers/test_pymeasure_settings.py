@@ -19,7 +19,7 @@ import pytest
 
 from drivers.pymeasure import PROPERTIES
 from sim.clock import ScaledClock
-from sim.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
+from sim.peers.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
 
 pytest.importorskip("pymeasure")
 

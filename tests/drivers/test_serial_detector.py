@@ -31,7 +31,7 @@ from drivers.serial_detector import (
 )
 from drivers.serial_detector.detector import SerialDetector
 from drivers.values import Reading
-from sim.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
+from sim.peers.serial_photometer import MALFORMED_LINE, SerialPhotometer, default_config
 
 TIMEOUT_S = 0.2  # the per-line margin used throughout: deadlines are exposure + this
 EXPOSURE_S = 0.01
@@ -450,7 +450,7 @@ def test_garbage_without_newline_is_bounded_and_an_error(device: SerialPhotomete
         assert error.kind == "overflow"
         assert "longer than 256 bytes" in str(error)
         assert "'0123456789" in str(error)
-        assert len(det._rx) <= 256  # nothing held beyond the limit
+        assert det._io.pending <= 256  # nothing held beyond the limit
         assert det.measure(EXPOSURE_S).value == 200.0  # and it recovers
     cfg = config_for(device, retries=0, max_line_bytes=256, timeout_s=PATIENT_S)
     with SerialDetector(cfg) as det:

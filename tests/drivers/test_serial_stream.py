@@ -15,7 +15,7 @@ from drivers.errors import StreamNotSupported
 from drivers.serial_detector import SerialDetectorError
 from drivers.serial_detector.detector import SerialDetector
 from drivers.stream import StreamReading, can_stream, restamped
-from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
+from sim.peers.serial_photometer import STREAM_CONFIG, SerialPhotometer
 
 TIMEOUT_S = 0.3
 

@@ -10,7 +10,7 @@ import pytest
 
 from drivers.serial_detector import SerialDetectorError
 from drivers.serial_detector.detector import SerialDetector
-from sim.serial_photometer import IDENTITY, STREAM_CONFIG, SerialPhotometer, StreamQuirks
+from sim.peers.serial_photometer import IDENTITY, STREAM_CONFIG, SerialPhotometer, StreamQuirks
 
 
 def detector(dev: SerialPhotometer, **stream: object) -> SerialDetector:

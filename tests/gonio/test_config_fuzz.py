@@ -31,7 +31,7 @@ from gonio.config import SHOWN_PROBLEMS, ConfigError
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import load_sweep
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 #: CPU seconds one case may take (loading a config takes milliseconds). CPU time, not the

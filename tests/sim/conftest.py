@@ -12,9 +12,9 @@ from typing import Any
 import dynamixel_sdk as sdk
 import pytest
 
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.protocol import Packet, PacketReader
-from sim.dynamixel.tty import set_raw
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.protocol import Packet, PacketReader
+from sim.peers.dynamixel.tty import set_raw
 
 
 class RawLink:

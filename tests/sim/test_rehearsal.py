@@ -20,9 +20,9 @@ from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.clock import ManualClock
-from sim.devices.detector import SimDetector, SimLightSource
-from sim.physics.streams import Streams
-from sim.scene import Scene, load_scene
+from sim.virtual.devices.detector import SimDetector, SimLightSource
+from sim.virtual.physics.streams import Streams
+from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS, RIG_FILES
 
 pytestmark = pytest.mark.pty

@@ -1,5 +1,5 @@
 """The calibration's scale error over many seeds, fast: the reference standard and dark
-readings a run's calibrations take, simulated vectorized (`sim.simulate.simulate_standard`,
+readings a run's calibrations take, simulated vectorized (`sim.virtual.simulate.simulate_standard`,
 the engine's readings bit for bit), journaled as the engine journals them, turned into
 the run's `CalibrationSeries` by `gonio.analysis.calibrated.calibration_series`, and
 compared with the reference rate the simulator knows.
@@ -32,11 +32,11 @@ from gonio.radiometry.series import CalibrationSeries, student_variance
 from gonio.rig.model import Rig
 from gonio.store.read import Event
 from gonio.types import FloatArray
-from sim.devices.detector import sensor_of
-from sim.physics.optics import SceneOptics
-from sim.physics.sensor import Summary
-from sim.scene import Scene
-from sim.simulate import expected_rate, simulate_standard
+from sim.virtual.devices.detector import sensor_of
+from sim.virtual.physics.optics import SceneOptics
+from sim.virtual.physics.sensor import Summary
+from sim.virtual.scene import Scene
+from sim.virtual.simulate import expected_rate, simulate_standard
 
 
 class _Optics(SceneOptics):

@@ -1,5 +1,5 @@
 """A plan measured target by target on a `SimulatedInstrument` through the engine's
-own step, without the engine: the oracle the vectorized `sim.simulate.simulate` and the
+own step, without the engine: the oracle the vectorized `sim.virtual.simulate.simulate` and the
 engine's runs are checked against (and the simulator benchmark's per-sample path)."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import numpy as np
 
 from gonio.acquire.measure import measure_target
 from gonio.planner.model import Plan
-from sim.devices.instrument import SimulatedInstrument
-from sim.record import SimRun
-from sim.simulate import planned_poses
+from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual.devices.position_error import planned_poses
+from sim.virtual.record import SimRun
 
 
 def measure_targets(

@@ -26,16 +26,16 @@ from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.model import Rig
 from sim.clock import ManualClock, ScaledClock
-from sim.devices.detector import SimDetector, SimLightSource
-from sim.devices.motors import SimMotorBus
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
-from sim.faults import FaultInjector, FaultRule
-from sim.physics.streams import Streams
-from sim.scene import load_scene
-from sim.serial_light import SerialLamp
-from sim.serial_photometer import STREAM_CONFIG, SerialPhotometer
-from sim.visa_instruments import EMULATORS, FULL_SCALE
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
+from sim.peers.serial_light import SerialLamp
+from sim.peers.serial_photometer import STREAM_CONFIG, SerialPhotometer
+from sim.peers.visa_instruments import EMULATORS, FULL_SCALE
+from sim.virtual.devices.detector import SimDetector, SimLightSource
+from sim.virtual.devices.motors import SimMotorBus
+from sim.virtual.faults import FaultInjector, FaultRule
+from sim.virtual.physics.streams import Streams
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 #: The motor faults every bus must survive the same way.

@@ -16,7 +16,7 @@ import pytest
 from gonio.store.read import Run, open_run
 from gonio.workflows import backends, session
 from sim.clock import ManualClock
-from sim.devices.motors import SimMotorBus
+from sim.virtual.devices.motors import SimMotorBus
 from tests.support.acquire import RunFiles, assert_same_samples
 
 

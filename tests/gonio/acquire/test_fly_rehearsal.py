@@ -19,7 +19,7 @@ from gonio.rig.model import Rig
 from gonio.store import open_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 pytestmark = pytest.mark.pty

@@ -18,7 +18,7 @@ from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import Scene, load_scene
+from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 
 

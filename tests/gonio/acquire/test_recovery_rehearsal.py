@@ -23,10 +23,10 @@ from gonio.planner.stored import plan_bytes
 from gonio.store.journal import Journal
 from gonio.store.read import Run, read_run
 from gonio.workflows.rehearsal import rehearsal_devices
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
 from sim.rehearsal import RehearsalSide
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.support.acquire import ARCH, plan_yaml
 

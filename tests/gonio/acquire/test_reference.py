@@ -1,5 +1,5 @@
 """The engine's samples against the simulator's own target-by-target run (the
-vectorized `sim.simulate.simulate` is the fast reference of the engine's results).
+vectorized `sim.virtual.simulate.simulate` is the fast reference of the engine's results).
 
 What can be compared exactly: the engine always reads the reference standard at the
 start and on its schedule, which moves the motors (backlash direction, repeatability
@@ -10,7 +10,7 @@ by a fresh instrument restored from the snapshot journaled with the calibration 
 it, and must agree bit for bit (counts, std, read-back angles, settle and end times,
 saturation, directions from the read-back angles). `SimulatedInstrument.run` equals
 `simulate` bit for bit on the same plan from the same state
-(tests/sim/test_simulate.py), which closes the chain to the vectorized reference."""
+(tests/sim/virtual/test_simulate.py), which closes the chain to the vectorized reference."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from sim.devices.instrument import SimulatedInstrument
+from sim.virtual.devices.instrument import SimulatedInstrument
 from tests.support.acquire import RunFiles
 from tests.support.measure import measure_targets
 

@@ -19,7 +19,7 @@ from gonio.rig.alignment_file import AlignmentFile, FitRecord, text
 from gonio.rig.sensitivity import alignment_brdf_sigma
 from gonio.store.read import Run
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.support.alignment import fit_record
 

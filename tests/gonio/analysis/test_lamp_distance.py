@@ -17,7 +17,7 @@ from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, text
 from gonio.store.read import Run
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 HEIGHT_MM = 0.5

@@ -26,7 +26,7 @@ from gonio.planner.policies import CalibrationSpec
 from gonio.radiometry.series import student_variance
 from gonio.rig.model import Rig
 from gonio.store.read import Event
-from sim.scene import Scene
+from sim.virtual.scene import Scene
 from tests.support.calibration import scale_errors
 from tests.support.runs import scene_spec
 

@@ -16,7 +16,7 @@ from gonio.planner import build, load_plan
 from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, text
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 #: The alignment the simulated rig really has and its alignment file says.

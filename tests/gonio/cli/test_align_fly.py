@@ -22,7 +22,7 @@ from gonio.cli import main
 from gonio.rig import Rig
 from gonio.rig.alignment_file import load_alignment
 from gonio.workflows import align, backends
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.gonio.cli.test_align import ARCH, TRUTH, mirror_scene
 

@@ -20,7 +20,7 @@ from gonio.planner.schema import PlanSpec
 from gonio.rig import Rig
 from gonio.workflows.preflight import refuse_fly
 from gonio.workflows.stream_check import REQUIREMENTS, check_stream, read_verdict, verdict_path
-from sim.serial_photometer import SerialPhotometer, StreamQuirks
+from sim.peers.serial_photometer import SerialPhotometer, StreamQuirks
 from tests.conftest import CONFIGS
 
 ARCH_SERIAL = CONFIGS / "rigs" / "arch_serial.yaml"

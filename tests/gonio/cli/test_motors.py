@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from sim.dynamixel.emulator import DxlEmulator
-from sim.dynamixel.faults import Fault
+from sim.peers.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.faults import Fault
 from tests.conftest import CONFIGS, CliResult
 
 Emulator = Callable[..., DxlEmulator]

@@ -16,7 +16,7 @@ import yaml
 from drivers.dynamixel.link import DynamixelLink
 from gonio.rig.model import Rig
 from sim.clock import ScaledClock
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.rehearsal import emulated_bus
 from tests.conftest import RIG_FILES, CliResult
 
@@ -154,7 +154,7 @@ def test_torque_off_then_a_move_is_refused(
 def test_a_fault_during_a_move_is_one_line_and_the_port_is_released(
     bench: tuple[Rig, Path, DxlEmulator], run_gonio: Gonio
 ) -> None:
-    from sim.dynamixel.faults import Fault
+    from sim.peers.dynamixel.faults import Fault
 
     _, path, emu = bench
     assert run_gonio("motors", "torque", "on", "--rig", str(path)).returncode == 0

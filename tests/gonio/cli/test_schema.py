@@ -28,7 +28,7 @@ from gonio.config import ConfigError, dotted, located, untagged
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
 from gonio.tradeoff.grid import load_sweep
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 from tools.reference_config import (
     FOLDERS,

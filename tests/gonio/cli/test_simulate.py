@@ -21,7 +21,7 @@ from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.store import open_run
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file
 from tests.support.process import gonio_process

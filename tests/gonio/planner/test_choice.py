@@ -26,7 +26,7 @@ from gonio.reconstruct.evaluate import evaluate
 from gonio.rig.model import Rig
 from gonio.types import BrdfEval
 from gonio.workflows.adaptive import estimate
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from studies.brdf import random_materials
 from studies.reconstruct.synthetic import adaptive_choice, synthesize
 

@@ -9,7 +9,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gonio.rig import Alignment, Rig
+from gonio.rig import Alignment, Reason, Rig
 from gonio.rig.alignment_spec import MAX_ERROR_DEG, MAX_HEIGHT_MM
 from tests.conftest import ARCH_POINT_FILE, RIG_FILES
 
@@ -42,6 +42,15 @@ def alignment(seed: int, scale: float) -> Alignment:
     )
 
 
+def shift_bound(a: Alignment) -> float:
+    """An upper bound (rad) on how far the alignment moves a joint angle that measures a
+    given pair: every angular error added up, the height seen from a 100 mm arm."""
+    angles = np.concatenate(
+        [np.abs(a.zero_offset), np.abs(a.light_pointing), np.abs(a.detector_pointing)]
+    )
+    return float(angles.sum() + abs(a.tilt) + abs(a.height_mm) / 100.0)
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.sampled_from(sorted(RIGS)),
@@ -57,7 +66,23 @@ def test_the_commanded_angles_measure_the_pair_in_the_true_geometry(
     wi, wo = pairs(seed)
     s = rig.solve(wi, wo, isotropic=isotropic)
     ok = s.ok
-    assert ok.sum() >= 0.8 * nominal.solve(wi, wo, isotropic=isotropic).ok.sum()
+    lost = nominal.solve(wi, wo, isotropic=isotropic)
+    lost_ok = lost.ok & ~ok
+    # A pair the rig file reaches is lost only to a limit or a keep-out box that its pose
+    # lay within the misalignment of (some pose that near it cannot be commanded), or
+    # about the pole of the detector's azimuth axis: a pointing error across the arc
+    # leaves a cone about that pole that no azimuth reaches.
+    reasons = (Reason.AXIS_LIMIT, Reason.THETA_MAX, Reason.COLLISION)
+    assert np.all(np.isin(s.reasons[lost_ok], reasons))
+    bound = 2.0 * shift_bound(rig.alignment)
+    q0 = lost.angles[lost_ok]
+    corners = np.stack(np.meshgrid(*[[-1.0, 0.0, 1.0]] * 4, indexing="ij"), -1).reshape(-1, 4)
+    _, commandable = nominal.pose_reasons((q0[:, None, :] + bound * corners).reshape(-1, 4))
+    near_limit = ~commandable.reshape(len(q0), len(corners)).all(axis=1)
+    near_pole = np.zeros(len(q0), dtype=np.bool_)
+    if "detector_azimuth" in nominal.axes:
+        near_pole = np.abs(q0[:, nominal.axes.index("detector_elevation")]) <= bound
+    assert np.all(near_limit | near_pole)
     q = s.angles[ok]
     ai, ao = rig.forward(q, rig.alignment)
     if isotropic:  # the pair turned about the true normal: what a turn keeps

@@ -19,7 +19,7 @@ from gonio.config import ConfigError
 from gonio.rig.instrument import NoSwitchSpec, SerialInterfaceSpec, SerialSwitchSpec
 from gonio.rig.model import Rig
 from gonio.rig.solution import Reason
-from sim.serial_photometer import RESPONSE, STREAM_CONFIG, SerialPhotometer, default_config
+from sim.peers.serial_photometer import RESPONSE, STREAM_CONFIG, SerialPhotometer, default_config
 from tests.conftest import ARCH_POINT_FILE, RIG_FILES
 from tests.support.rigs import direction
 

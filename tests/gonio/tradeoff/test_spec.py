@@ -12,7 +12,7 @@ import yaml
 from gonio.config import ConfigError
 from gonio.planner.schema import PlanSpec
 from gonio.tradeoff.grid import load_sweep
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.gonio.tradeoff.conftest import SMALL, write_sweep
 
 AXES: dict[str, Any] = SMALL["axes"]

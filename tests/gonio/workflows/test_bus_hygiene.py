@@ -13,7 +13,7 @@ import pytest
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from sim.clock import ManualClock
-from sim.dynamixel.emulator import DxlEmulator
+from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.rehearsal import emulated_bus
 from tests.conftest import CliResult
 from tests.support.acquire import ARCH, RunFiles

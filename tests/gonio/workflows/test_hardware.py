@@ -17,9 +17,9 @@ from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from gonio.workflows.hardware import hardware_devices
 from sim.clock import ScaledClock
+from sim.peers.serial_light import SerialLamp
+from sim.peers.serial_photometer import SerialPhotometer
 from sim.rehearsal import emulated_bus
-from sim.serial_light import SerialLamp
-from sim.serial_photometer import SerialPhotometer
 from tests.conftest import RIG_FILES
 
 RATE = 2.0e4  # counts per second with the lamp on

@@ -27,7 +27,7 @@ from gonio.store.journal import Journal
 from gonio.store.read import read_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 pytestmark = pytest.mark.pty

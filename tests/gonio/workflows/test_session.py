@@ -15,7 +15,7 @@ from gonio.cli.render import render_summary
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
 from gonio.workflows.simulate import simulate_plan
-from sim.scene import load_scene
+from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 

@@ -1,8 +1,0 @@
-"""The simulated devices: virtual motors (`motors`), a virtual detector and light source
-(`detector`), and the factory that builds them as one instrument (`instrument`)."""
-
-from sim.devices.detector import SimDetector, SimLightSource
-from sim.devices.instrument import SimulatedInstrument
-from sim.devices.motors import SimMotorBus
-
-__all__ = ["SimDetector", "SimLightSource", "SimMotorBus", "SimulatedInstrument"]

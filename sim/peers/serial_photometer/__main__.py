@@ -1,0 +1,8 @@
+"""``python -m sim.serial_photometer``: print the pty path and serve until Ctrl-C."""
+
+import sys
+
+from sim.peers.serial_photometer.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())
