@@ -48,8 +48,9 @@ def draw(rows: list[dict[str, str]], path: Path, targets: tuple[float, ...]) -> 
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     cols = min(len(scenes), 2)
     lines = -(-len(scenes) // cols)
-    fig, axes = plt.subplots(lines, cols, figsize=(5.2 * cols, 3.6 * lines), squeeze=False,
-                             sharex=True)  # fmt: skip
+    fig, axes = plt.subplots(
+        lines, cols, figsize=(5.2 * cols, 3.6 * lines), squeeze=False, sharex=True
+    )
     for ax, scene in zip(axes.flat, scenes, strict=False):
         mine = [r for r in rows if r["scene"] == scene]
         plans = dict.fromkeys((r["sampling"], r["parametrization"], r["method"]) for r in mine)
@@ -63,8 +64,16 @@ def draw(rows: list[dict[str, str]], path: Path, targets: tuple[float, ...]) -> 
             e = np.array([p[1] for p in pts], dtype=np.float64)
             e[e <= 0.0] = np.nan  # below the table's last decimal: no point on a log axis
             label = f"{name}, {method}" + (", adaptive" if kind == "adaptive" else "")
-            ax.plot(n, e, STYLES.get(method, ":"), marker=MARKERS.get(kind, "s"), ms=3,
-                    color=COLOURS.get(name, "k"), lw=1.1, label=label)  # fmt: skip
+            ax.plot(
+                n,
+                e,
+                STYLES.get(method, ":"),
+                marker=MARKERS.get(kind, "s"),
+                ms=3,
+                color=COLOURS.get(name, "k"),
+                lw=1.1,
+                label=label,
+            )
         drawn = [float(r["log_rmse"]) for r in mine if float(r["log_rmse"]) > 0.0]
         for target in targets:  # the targets the curves reach or come near
             if min(drawn) / 2.0 <= target <= max(drawn) * 2.0:
@@ -107,8 +116,16 @@ def rows_of_page(text: str) -> list[dict[str, str]]:
             continue
         for n, value in zip(counts, cells[3 : 3 + len(counts)], strict=True):
             if value != "—":
-                rows.append({"scene": scene, "sampling": cells[0], "parametrization": cells[1],
-                             "method": cells[2], "samples": n, "log_rmse": value})  # fmt: skip
+                rows.append(
+                    {
+                        "scene": scene,
+                        "sampling": cells[0],
+                        "parametrization": cells[1],
+                        "method": cells[2],
+                        "samples": n,
+                        "log_rmse": value,
+                    }
+                )
     return rows
 
 

@@ -42,9 +42,9 @@ from gonio.planner.model import Plan
 from gonio.store.journal import Journal
 from gonio.store.schema import samples_table
 from gonio.workflows import session
-from gonio.workflows.simulate import measure_targets
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.scene import Scene
+from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANS = {
@@ -174,8 +174,10 @@ def main() -> None:
     args = parser.parse_args()
     print(describe())
     print()
-    print("| plan | scene | targets | bare devices (µs/sample) | engine + journal (µs/sample) "
-          "| overhead (µs/sample) | engine samples/s |")  # fmt: skip
+    print(
+        "| plan | scene | targets | bare devices (µs/sample) | engine + journal (µs/sample) "
+        "| overhead (µs/sample) | engine samples/s |"
+    )
     print("|---|---|---:|---:|---:|---:|---:|")
     RUNS.mkdir(exist_ok=True)
     with tempfile.TemporaryDirectory(dir=RUNS, prefix=".bench-acquire-") as tmp:
@@ -186,9 +188,13 @@ def main() -> None:
             for scene_name, scene_path in SCENES.items():
                 scene, text = session.load_scene_file(scene_path, source.rig)
                 files = session.Files(
-                    source.path, source.text, source.rig.source, source.rig.text,
-                    scene_path, text,
-                )  # fmt: skip
+                    source.path,
+                    source.text,
+                    source.rig.source,
+                    source.rig.text,
+                    scene_path,
+                    text,
+                )
                 b = min(bare(plan, scene) for _ in range(args.repeat)) / len(plan)
                 e = min(engine(files, plan, scene, folder) for _ in range(args.repeat)) / len(plan)
                 print(

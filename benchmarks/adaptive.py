@@ -97,8 +97,14 @@ SCENES: dict[str, tuple[Callable[[], BrdfEval], str, bool, str]] = {
 }  # fmt: skip
 
 
-def score(samples: Measured, method: str, truth: BrdfEval, rig: Rig, pairs: testset.TestSet,
-          isotropic: bool) -> float:  # fmt: skip
+def score(
+    samples: Measured,
+    method: str,
+    truth: BrdfEval,
+    rig: Rig,
+    pairs: testset.TestSet,
+    isotropic: bool,
+) -> float:
     candidate = reconstruct(samples, method=method, extrapolate="nearest")
     result = evaluate(candidate, truth, rig, isotropic=isotropic, test_set=pairs)
     value = result.regions["all"].scores.log_rmse
@@ -130,15 +136,20 @@ def main() -> None:
     )
     parser.add_argument("--sigma-floor", type=float, default=1.0)
     args = parser.parse_args()
-    options = {"survey": args.survey, "model": args.model, "floor": args.floor,
-               "edge": args.edge}  # fmt: skip
+    options = {"survey": args.survey, "model": args.model, "floor": args.floor, "edge": args.edge}
     counts = args.targets
     print(describe())
     steer = "its own rbf reconstruction" if args.model == "survey" else f"a {args.model} fit"
-    print(f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
-          f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor})"
-          + (f"; {args.random} random materials (seeds {args.random_first} … "
-             f"{args.random_first + args.random - 1})" if args.random else ""))  # fmt: skip
+    print(
+        f"log-RMSE on log(1 + f); adaptive: survey {args.survey}, steered by {steer}, "
+        f"floor {args.floor}, edge {args.edge}; σ = 1 % of (|f| + {args.sigma_floor})"
+        + (
+            f"; {args.random} random materials (seeds {args.random_first} … "
+            f"{args.random_first + args.random - 1})"
+            if args.random
+            else ""
+        )
+    )
     summary: list[tuple[str, list[float], list[float], str, str, float, float]] = []
     materials = [(name, *SCENES[name]) for name in args.scenes]
     for seed in range(args.random_first, args.random_first + args.random):
@@ -150,19 +161,25 @@ def main() -> None:
             f"\n### {name}: {what}, rig {rig_name}, {'isotropic' if isotropic else 'anisotropic'}\n"
         )
         summary.append((name, *compare(make(), rig, isotropic, args, options)))
-    print(f"\nBy material: best uniform / best adaptive error at {', '.join(map(str, counts))} "
-          "samples; the choices (A: adapted, U: uniform outright; Rusinkiewicz/hybrid); the "
-          "predicted gain G of adapting in Rusinkiewicz's coordinates at the first and last "
-          "count; best uniform / best adaptive error had the plans been forced to adapt; the "
-          "worst adaptive / best uniform error ratio over the counts; samples for "
-          f"{TARGET}.\n")  # fmt: skip
-    print("| material | error ratio | choices | G | forced to adapt | worst adaptive / "
-          f"best uniform | samples for {TARGET}: uniform | adaptive |")  # fmt: skip
+    print(
+        f"\nBy material: best uniform / best adaptive error at {', '.join(map(str, counts))} "
+        "samples; the choices (A: adapted, U: uniform outright; Rusinkiewicz/hybrid); the "
+        "predicted gain G of adapting in Rusinkiewicz's coordinates at the first and last "
+        "count; best uniform / best adaptive error had the plans been forced to adapt; the "
+        "worst adaptive / best uniform error ratio over the counts; samples for "
+        f"{TARGET}.\n"
+    )
+    print(
+        "| material | error ratio | choices | G | forced to adapt | worst adaptive / "
+        f"best uniform | samples for {TARGET}: uniform | adaptive |"
+    )
     print("|---|---|---|---|---|---:|---:|---:|")
     for name, ratios, forced, gains, choices, nu, na in summary:
-        print(f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {choices} | {gains} "
-              f"| {', '.join(f'{r:.2f}×' for r in forced)} | {1 / min(ratios):.3f} "
-              f"| {fmt_needed(nu, counts)} | {fmt_needed(na, counts)} |")  # fmt: skip
+        print(
+            f"| {name} | {', '.join(f'{r:.2f}×' for r in ratios)} | {choices} | {gains} "
+            f"| {', '.join(f'{r:.2f}×' for r in forced)} | {1 / min(ratios):.3f} "
+            f"| {fmt_needed(nu, counts)} | {fmt_needed(na, counts)} |"
+        )
 
 
 def compare(
@@ -223,17 +240,21 @@ def compare(
     }
     print()
     for parametrization, gains in reasons.items():
-        print(f"- predicted gain G of adapting in {parametrization} at "
-              f"{', '.join(f'{n:,}' for n in counts)}: {', '.join(gains)}")  # fmt: skip
+        print(
+            f"- predicted gain G of adapting in {parametrization} at "
+            f"{', '.join(f'{n:,}' for n in counts)}: {', '.join(gains)}"
+        )
     ratios = [u / a for u, a in zip(best["uniform"], best["adaptive"], strict=True)]
     forced = [u / a for u, a in zip(best["uniform"], best["forced"], strict=True)]
     choices = ", ".join("/".join(chosen[n]) for n in counts)
     nu, na = (needed(counts, best[k], TARGET) for k in ("uniform", "adaptive"))
-    print(f"\nbest uniform / best adaptive error at equal counts: "
-          f"{', '.join(f'{r:.2f}×' for r in ratios)}; forced to adapt: "
-          f"{', '.join(f'{r:.2f}×' for r in forced)}; samples for {TARGET}: uniform "
-          f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)}; choices "
-          f"(Rusinkiewicz/hybrid): {choices}")  # fmt: skip
+    print(
+        f"\nbest uniform / best adaptive error at equal counts: "
+        f"{', '.join(f'{r:.2f}×' for r in ratios)}; forced to adapt: "
+        f"{', '.join(f'{r:.2f}×' for r in forced)}; samples for {TARGET}: uniform "
+        f"{fmt_needed(nu, counts)}, adaptive {fmt_needed(na, counts)}; choices "
+        f"(Rusinkiewicz/hybrid): {choices}"
+    )
     rus = reasons.get("rusinkiewicz", ["–"])
     return ratios, forced, f"{rus[0]}–{rus[-1]}", choices, nu, na
 

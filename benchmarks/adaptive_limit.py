@@ -145,9 +145,13 @@ def counts(m: Measured, shape: tuple[int, ...], bounds: FloatArray) -> FloatArra
 
 
 def error_cells(
-    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, cells: int,
+    truth: BrdfEval,
+    rig: Rig,
+    pairs: testset.TestSet,
+    n: int,
+    cells: int,
     volume: tuple[FloatArray, FloatArray],
-) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+) -> tuple[FloatArray, FloatArray]:
     """Per cell of a ``cells``³ grid on the coordinate box: the squared log error E_c of
     the uniform plan of ``n`` samples of ``truth`` (rbf), each test pair weighted by its
     share of the test measure; and the share v_c of a uniform plan's samples."""
@@ -168,9 +172,14 @@ def best_shares(mass: FloatArray, share: FloatArray, beta: float) -> FloatArray:
 
 
 def cell_shares(
-    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, cells: int, beta: float,
+    truth: BrdfEval,
+    rig: Rig,
+    pairs: testset.TestSet,
+    n: int,
+    cells: int,
+    beta: float,
     volume: tuple[FloatArray, FloatArray],
-) -> adaptive.Density:  # fmt: skip
+) -> adaptive.Density:
     """The density on ``cells``³ cells whose kept samples follow `best_shares` for
     `error_cells` of ``truth``, 10 % of them as a uniform plan's."""
     mass, share = error_cells(truth, rig, pairs, n, cells, volume)
@@ -183,24 +192,34 @@ def cell_shares(
 def drawn(truth: BrdfEval, rig: Rig, density: adaptive.Density, count: int, seed: int) -> Measured:
     """``count`` kept samples of ``truth`` drawn from ``density`` (a stream seeded by
     ``seed``), noise-free, σ = 1 % of f."""
-    spec = PlanSpec.model_validate({
-        "name": "limit", "parametrization": PARAMETRIZATION, "isotropic": True,
-        "sampling": {"strategy": "sobol", "target": count, "seed": SEED},
-    })  # fmt: skip
+    spec = PlanSpec.model_validate(
+        {
+            "name": "limit",
+            "parametrization": PARAMETRIZATION,
+            "isotropic": True,
+            "sampling": {"strategy": "sobol", "target": count, "seed": SEED},
+        }
+    )
     bounds = np.asarray(params.get(PARAMETRIZATION).iso_bounds, dtype=np.float64)
     stream = adaptive.Stream(density, seed)
     points = draw_kept(
-        spec, rig, "limit",
+        spec,
+        rig,
+        "limit",
         lambda k: draw_points(stream, k, bounds, rig, PARAMETRIZATION, True, False),
         count,
-    )  # fmt: skip
+    )
     return measured_at(truth, spec, rig, points)
 
 
 def simulated(
-    truth: BrdfEval, rig: Rig, pairs: testset.TestSet, n: int, beta: float,
+    truth: BrdfEval,
+    rig: Rig,
+    pairs: testset.TestSet,
+    n: int,
+    beta: float,
     volume: tuple[FloatArray, FloatArray],
-) -> Measured:  # fmt: skip
+) -> Measured:
     survey = synthesize(truth, rig, PARAMETRIZATION, True, 128, seed=SEED)
     model = fit(survey, "lambert+beckmann").model.eval
     density = cell_shares(model, rig, pairs, n, 8, beta, volume)
@@ -265,8 +284,10 @@ def main() -> None:
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
     if len(args.counts) > 1:  # the ceiling needs the uniform curve's slope
         beta = -np.polyfit(np.log(args.counts), np.log(errors["uniform"]), 1)[0]
-        print(f"\nThe ceiling of any density (uniform error ∝ N^−{beta:.2f}): uniform log-RMSE / "
-              "the best a density can give\n")  # fmt: skip
+        print(
+            f"\nThe ceiling of any density (uniform error ∝ N^−{beta:.2f}): uniform log-RMSE / "
+            "the best a density can give\n"
+        )
         print("| cells | " + " | ".join(f"{n:,}" for n in args.counts) + " |")
         print("|---|" + "---:|" * len(args.counts))
         for cells in (4, 8, 16):
@@ -285,16 +306,20 @@ def main() -> None:
     test_h, sample_h = theta_h(pairs.wi, pairs.wo), theta_h(last.wi, last.wo)
     uniform = synthesize(truth, rig, PARAMETRIZATION, True, args.counts[-1], seed=SEED)
     uniform_h = theta_h(uniform.wi, uniform.wo)
-    print(f"\nThe oracle's plan at {args.counts[-1]:,}: where its squared error sits, by θh "
-          "(and the uniform plan's samples)\n")  # fmt: skip
+    print(
+        f"\nThe oracle's plan at {args.counts[-1]:,}: where its squared error sits, by θh "
+        "(and the uniform plan's samples)\n"
+    )
     print("| θh | test pairs | uniform plan's samples | oracle's samples | its squared error |")
     print("|---|---:|---:|---:|---:|")
     for lo, hi in ((0, 2.5), (2.5, 5), (5, 10), (10, 20), (20, 90)):
         t = (test_h >= lo) & (test_h < hi)
         s = (sample_h >= lo) & (sample_h < hi)
         u = (uniform_h >= lo) & (uniform_h < hi)
-        print(f"| {lo}°–{hi}° | {t.mean():.1%} | {u.mean():.1%} | {s.mean():.1%} | "
-              f"{square[t].sum() / square.sum():.1%} |")  # fmt: skip
+        print(
+            f"| {lo}°–{hi}° | {t.mean():.1%} | {u.mean():.1%} | {s.mean():.1%} | "
+            f"{square[t].sum() / square.sum():.1%} |"
+        )
 
 
 if __name__ == "__main__":

@@ -61,17 +61,21 @@ def main() -> None:
     args = parser.parse_args()
     print(describe())
     print("\nbest uniform / adaptive error (Rusinkiewicz, rbf), per seed; geometric mean\n")
-    print("| material | samples | σ of the survey | " + " | ".join(f"seed {s}" for s in args.seeds)
-          + " | mean |")  # fmt: skip
+    print(
+        "| material | samples | σ of the survey | "
+        + " | ".join(f"seed {s}" for s in args.seeds)
+        + " | mean |"
+    )
     print("|---|---:|---|" + "---:|" * (len(args.seeds) + 1))
     for name in args.scenes:
         rig, iso, truth = material(name)
         for n in args.counts:
             uniform = [
-                score(synthesize(truth, rig, "rusinkiewicz", iso, n, seed=s), "rbf", truth, rig,
-                      iso)["log_rmse"]
+                score(
+                    synthesize(truth, rig, "rusinkiewicz", iso, n, seed=s), "rbf", truth, rig, iso
+                )["log_rmse"]
                 for s in args.seeds
-            ]  # fmt: skip
+            ]
             for label, floor in FLOORS.items():
                 ratios = []
                 for s, u in zip(args.seeds, uniform, strict=True):
@@ -88,11 +92,13 @@ def main() -> None:
     for name in args.scenes:
         rig, iso, truth = material(name)
         for label, floor in FLOORS.items():
-            survey = synthesize(truth, rig, "rusinkiewicz", iso, 128, seed=args.seeds[0],
-                                sigma_floor=floor)  # fmt: skip
+            survey = synthesize(
+                truth, rig, "rusinkiewicz", iso, 128, seed=args.seeds[0], sigma_floor=floor
+            )
             result = fit(survey, "lambert+beckmann")
-            values = ", ".join(f"{k} {v:.3g}" for k, v in zip(result.names, result.values,
-                                                                strict=True))  # fmt: skip
+            values = ", ".join(
+                f"{k} {v:.3g}" for k, v in zip(result.names, result.values, strict=True)
+            )
             print(f"| {name} | {label} | {values} |", flush=True)
 
 

@@ -270,9 +270,11 @@ def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
     """The per-draw table, then the per-parameter one and the worst case."""
     settings = ScanSettings()
     half, edge = settings.coarse_half_deg, settings.coarse_half_deg - settings.coarse_step_deg / 2
-    print("| draw | determined | χ²/dof | direction error max (°) | p95 (°) | "
-          "with no alignment: max (°) | peaks' largest offset: elevation, azimuth (°) | "
-          "instrument time (min) | wall (s) |")  # fmt: skip
+    print(
+        "| draw | determined | χ²/dof | direction error max (°) | p95 (°) | "
+        "with no alignment: max (°) | peaks' largest offset: elevation, azimuth (°) | "
+        "instrument time (min) | wall (s) |"
+    )
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for i, d in enumerate(draws):
         el, az = np.abs(d.offsets).max(axis=0)
@@ -326,8 +328,13 @@ def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
         if err[j] / bound > worst[0]:
             worst = (float(err[j] / bound), f"{name} {err[j]:.4f}{unit}", rows[j][0])
     d = np.stack([r.directions for _, r in done])
-    chi = np.array([r.aligned.file.fit.chi2 / max(r.aligned.file.fit.dof, 1) for _, r in done
-                    if r.aligned.file.fit is not None])  # fmt: skip
+    chi = np.array(
+        [
+            r.aligned.file.fit.chi2 / max(r.aligned.file.fit.dof, 1)
+            for _, r in done
+            if r.aligned.file.fit is not None
+        ]
+    )
     print(
         f"\nWorst determined parameter: {worst[1]} (draw {worst[2]}). Direction error over "
         f"the {len(done)} fitted draws and every pose: max {d.max():.4f}° (ωi "
@@ -338,9 +345,13 @@ def recovery_tables(rig: Rig, draws: list[Draw]) -> None:
 
 
 def recoveries(
-    rig: Rig, rig_path: Path, scene: dict[str, Any], truths: list[AlignmentSpec],
-    poses: FloatArray, folder: Path,
-) -> list[Draw]:  # fmt: skip
+    rig: Rig,
+    rig_path: Path,
+    scene: dict[str, Any],
+    truths: list[AlignmentSpec],
+    poses: FloatArray,
+    folder: Path,
+) -> list[Draw]:
     """`gonio align` of ``rig_path`` in the mirror made of ``scene``, for each truth."""
     out = []
     for i, truth in enumerate(truths):
@@ -384,9 +395,13 @@ def with_misalignment(scene: Scene, truth: AlignmentSpec | None) -> Scene:
 
 
 def paired(
-    plain: Plan, gold: Scene, truth: AlignmentSpec, aligned: Aligned, seed: int,
+    plain: Plan,
+    gold: Scene,
+    truth: AlignmentSpec,
+    aligned: Aligned,
+    seed: int,
     pairs: testset.TestSet,
-) -> dict[str, Scores]:  # fmt: skip
+) -> dict[str, Scores]:
     """(a), (b), (c) and (c′) of one draw, every run with the noise ``seed``."""
     rig_file = aligned.path.parent / ARCH.name  # beside the alignment file it names
     rig_file.write_text(f"{ARCH.read_text()}\nalignment: {aligned.path.name}\n")
@@ -404,8 +419,10 @@ def paired(
 
 
 def brdf_table(rows: list[dict[str, Scores]]) -> None:
-    print("| draw | (a) aligned | (b) misaligned | (c) with the file | (c′) re-derived | "
-          "(b)/(a) | (c)/(a) | (c′)/(a) | samples (a) | (b) | (c) | (c′) |")  # fmt: skip
+    print(
+        "| draw | (a) aligned | (b) misaligned | (c) with the file | (c′) re-derived | "
+        "(b)/(a) | (c)/(a) | (c′)/(a) | samples (a) | (b) | (c) | (c′) |"
+    )
     print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for i, s in enumerate(rows):
         a = s["a"].test
@@ -462,15 +479,19 @@ def main() -> None:
             if isinstance(d.outcome, Recovery) and len(rows) < args.paired:
                 rows.append(paired(plain, gold, d.truth, d.outcome.aligned, 100 + i, pairs))
         if rows:
-            print(f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
-                  f"the quick plan ({len(plain)} targets)\n")  # fmt: skip
+            print(
+                f"\n== The glossy gold through the misaligned rig: {len(rows)} draws, "
+                f"the quick plan ({len(plain)} targets)\n"
+            )
             brdf_table(rows)
         point = Rig.from_yaml(POINT)
         lamp = {**base, "source": {"intensity_w_sr": POINT_INTENSITY}}
         seen = poses[point.pose_reasons(poses)[1]]  # the plan's poses the point rig measures
         spots = recoveries(point, POINT, lamp, truths[: args.point_draws], seen, Path(tmp))
-        print(f"\n== Recovery on the point-source rig: {args.point_draws} draws, the "
-              f"directions at the {len(seen)} of the plan's poses it measures\n")  # fmt: skip
+        print(
+            f"\n== Recovery on the point-source rig: {args.point_draws} draws, the "
+            f"directions at the {len(seen)} of the plan's poses it measures\n"
+        )
         recovery_tables(point, spots)
         fits = [d.outcome.aligned.file.fit for d in spots if isinstance(d.outcome, Recovery)]
         print(

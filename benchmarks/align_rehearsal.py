@@ -42,12 +42,16 @@ RIG = ROOT / "configs" / "rigs" / "arch_serial.yaml"
 GOLD = ROOT / "configs" / "scenes" / "glossy_metal.yaml"
 TRUTH = {
     "zero_offset_deg": {
-        "light_elevation": 0.7, "detector_azimuth": -0.4, "detector_elevation": 0.5,
+        "light_elevation": 0.7,
+        "detector_azimuth": -0.4,
+        "detector_elevation": 0.5,
         "sample_rotation": 0.3,
     },
-    "tilt_deg": 0.5, "tilt_azimuth_deg": 40.0,
-    "light_pointing_deg": [0.3, -0.2], "detector_pointing_deg": [-0.25, 0.3],
-}  # fmt: skip
+    "tilt_deg": 0.5,
+    "tilt_azimuth_deg": 40.0,
+    "light_pointing_deg": [0.3, -0.2],
+    "detector_pointing_deg": [-0.25, 0.3],
+}
 
 
 def errors(rig: Rig, peaks: np.ndarray) -> dict[str, float]:
@@ -108,8 +112,9 @@ def main() -> None:
             load = os.getloadavg()[0]
             name = "fly" if align.fly_allowed("rehearsal", speedup) else "stop-and-go"
             try:
-                scan = align.run_scan(rig, scene, "rehearsal", align.ScanSettings(),
-                                      speedup=speedup)  # fmt: skip
+                scan = align.run_scan(
+                    rig, scene, "rehearsal", align.ScanSettings(), speedup=speedup
+                )
             except (GonioError, DriverError) as exc:  # a host starving the emulators
                 print(f"| {name} | {speedup:g} | {k + 1} | failed: {exc} | | | | | | {load:.1f} |")
                 continue

@@ -73,8 +73,9 @@ def main_() -> None:
                 t0 = time.perf_counter()
                 naive = NaiveReconstruction(m)
                 t1 = time.perf_counter()
-                result = evaluate(naive, truth_from_spec(None, m), m.rig, isotropic=True,
-                                  test_set=pairs)  # fmt: skip
+                result = evaluate(
+                    naive, truth_from_spec(None, m), m.rig, isotropic=True, test_set=pairs
+                )
                 t2 = time.perf_counter()
                 for region in ("all", "mirror", "grazing"):
                     r = result.regions[region]

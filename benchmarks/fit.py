@@ -56,8 +56,9 @@ def table(rows: list[tuple[str, str, list[FitResult], dict[str, float]]]) -> Non
     print("| scene | SPEC | parameter | 2σ coverage | RMS z | median χ²_red |")
     print("|---|---|---|---|---|---|")
     for scene, spec, fits, truth in rows:
-        z = np.array([[(r.params()[n][0] - v) / r.params()[n][1] for n, v in truth.items()]
-                      for r in fits])  # fmt: skip
+        z = np.array(
+            [[(r.params()[n][0] - v) / r.params()[n][1] for n, v in truth.items()] for r in fits]
+        )
         chi2 = float(np.median([r.chi2_red for r in fits]))
         for j, name in enumerate(truth):
             cover = float(np.mean(np.abs(z[:, j]) <= 2.0))
@@ -89,10 +90,15 @@ def main() -> None:
         fits = []
         for s in seeds:
             parts = [
-                measured(folder, plan(args.samples), scene_spec(
-                    "glossy_metal", material=GOLD, effects=NOISE, band=b, seed=100 + 3 * s + j))
+                measured(
+                    folder,
+                    plan(args.samples),
+                    scene_spec(
+                        "glossy_metal", material=GOLD, effects=NOISE, band=b, seed=100 + 3 * s + j
+                    ),
+                )
                 for j, b in enumerate("rgb")
-            ]  # fmt: skip
+            ]
             rgb = Measured.rgb(*(p[0] for p in parts))
             fits.append(fit(rgb, spec, shared=[p[1] for p in parts]))
         truth = {"ggx.alpha": GOLD["alpha"]}
@@ -110,8 +116,9 @@ def main() -> None:
         rows.append(("brushed", spec, fits, truth))
         table(rows)
 
-        m, _ = measured(folder, plan(200), scene_spec("glossy_metal", material=BECKMANN,
-                                                        effects=NOISE, seed=5))  # fmt: skip
+        m, _ = measured(
+            folder, plan(200), scene_spec("glossy_metal", material=BECKMANN, effects=NOISE, seed=5)
+        )
         print()
         print("| Beckmann data (α 0.2, f0 0.9, 200 samples) fitted by | χ²_red |")
         print("|---|---|")

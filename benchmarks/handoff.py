@@ -73,16 +73,21 @@ def main() -> None:
     for hog in hogs:
         hog.start()
     try:
-        print(f"\n4-motor SYNC_READ against the in-process emulator, {args.load} busy "
-              f"processes, {args.repeat} reads each\n")  # fmt: skip
+        print(
+            f"\n4-motor SYNC_READ against the in-process emulator, {args.load} busy "
+            f"processes, {args.repeat} reads each\n"
+        )
         print("| switch interval | median ms | p99 ms | worst ms | budget ms | timeouts |")
         print("|---|---:|---:|---:|---:|---:|")
         for interval in (DEFAULT_SWITCH_INTERVAL_S, responsive.SERVING_SWITCH_INTERVAL_S):
             times, failed, budget = polls(interval, args.repeat)
             ms = sorted(1000 * t for t in times)
             p99 = ms[min(len(ms) - 1, int(0.99 * len(ms)))]
-            print(f"| {1000 * interval:g} ms | {statistics.median(ms):.2f} | {p99:.1f} | "
-                  f"{ms[-1]:.1f} | {budget:.1f} | {failed} |", flush=True)  # fmt: skip
+            print(
+                f"| {1000 * interval:g} ms | {statistics.median(ms):.2f} | {p99:.1f} | "
+                f"{ms[-1]:.1f} | {budget:.1f} | {failed} |",
+                flush=True,
+            )
     finally:
         for hog in hogs:
             hog.terminate()

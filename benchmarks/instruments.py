@@ -150,13 +150,16 @@ def main() -> None:
     lines = [
         ("wall time of one reading, ms", "wall_ms", ".1f"),
         ("the instrument's own time (exposure waited or integrated), ms", "own_ms", ".1f"),
-        (f"the lock-in's time constant τ and its settle time ({SETTLE_TAU[24]} τ), ms",
-         "settle_ms", ".1f"),
+        (
+            f"the lock-in's time constant τ and its settle time ({SETTLE_TAU[24]} τ), ms",
+            "settle_ms",
+            ".1f",
+        ),
         ("left for the round trips (wall − own), ms", "overhead_ms", ".1f"),
         ("commands per reading", "commands", ".0f"),
         ("rehearsal at 10⁶ × real time: wall time per sample, ms", "sample_ms", ".1f"),
         ("of which the detector, ms", "detector_ms", ".1f"),
-    ]  # fmt: skip
+    ]
     for label, key, fmt in lines:
         cells = []
         for row in rows.values():

@@ -74,8 +74,9 @@ def main() -> None:
                     start = time.perf_counter()
                     result = evaluate(r, f, rig, isotropic=True, test_set=pairs)
                     spent = time.perf_counter() - start
-                    inside = evaluate(r, f, rig, isotropic=True, test_set=pairs,
-                                      only_supported=True)  # fmt: skip
+                    inside = evaluate(
+                        r, f, rig, isotropic=True, test_set=pairs, only_supported=True
+                    )
                     every = result.regions["all"]
                     score = every.scores.log_rmse or float("nan")
                     best.setdefault((scene, lines, step), {})[method] = score

@@ -85,8 +85,9 @@ def served(folder: Path, *options: str) -> Any:
     port = free_port()
     proc = subprocess.Popen(
         [sys.executable, "-m", "gonio", "serve", str(folder), "--port", str(port), *options],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-    )  # fmt: skip
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     base = f"http://127.0.0.1:{port}"
     try:
         for _ in range(300):
@@ -123,8 +124,12 @@ def paced(args: list[str], pace_s: float) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen(
         [sys.executable, "-m", "tests.gonio.live.paced", str(pace_s), *args],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
 
 
 def _epoch(utc: str) -> float:
@@ -186,13 +191,23 @@ def take_screenshot(url: str, base: str, path: Path) -> None:
     except ImportError:
         print("no screenshot: playwright is not installed")
         return
-    args = ["--no-sandbox", "--headless", "--disable-gpu", "--disable-background-networking",
-            "--disable-component-update", "--no-first-run", "--disable-sync"]  # fmt: skip
+    args = [
+        "--no-sandbox",
+        "--headless",
+        "--disable-gpu",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--no-first-run",
+        "--disable-sync",
+    ]
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as p:
         context = p.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, args=args, headless=True,
+            profile,
+            executable_path=CHROMIUM,
+            args=args,
+            headless=True,
             viewport={"width": 1300, "height": 1000},
-        )  # fmt: skip
+        )
         page = context.new_page()
         page.set_viewport_size({"width": 1280, "height": 900})
         page.goto(url.replace("http://127.0.0.1:8765", base))

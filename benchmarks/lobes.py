@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report
 
-from gonio.brdf import lobe_study as st
+from gonio.brdf import lobe_errors as st
 from gonio.brdf import lobes
 from studies.brdf import lobe_grid
 

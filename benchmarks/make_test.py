@@ -48,9 +48,14 @@ def one_run() -> tuple[dict[str, float], float, str]:
         summary = ""
         tail: list[str] = []
         with subprocess.Popen(
-            ["make", "test"], cwd=clone, env=env, stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        ) as proc:  # fmt: skip
+            ["make", "test"],
+            cwd=clone,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        ) as proc:
             assert proc.stdout is not None
             for line in proc.stdout:
                 tail = [*tail[-29:], line]

@@ -88,8 +88,9 @@ def score(rig: Rig, scene: Scene, targets: int, pairs: Any) -> tuple[float, ...]
     ok = (result.brdf > 0) & (truth > 0) & np.isfinite(result.brdf)
     ratio = np.log(result.brdf[ok] / truth[ok])
     m = Measured.from_run(result.run, result.calibrated)
-    e = evaluate(NaiveReconstruction(m), truth_from_spec(None, m), rig, isotropic=True,
-                 test_set=pairs)  # fmt: skip
+    e = evaluate(
+        NaiveReconstruction(m), truth_from_spec(None, m), rig, isotropic=True, test_set=pairs
+    )
     return (
         float(np.sqrt(np.mean(ratio**2))),
         float(np.median(ratio)),
@@ -98,12 +99,15 @@ def score(rig: Rig, scene: Scene, targets: int, pairs: Any) -> tuple[float, ...]
     )
 
 
-def table(label: str, rig: Rig, base: Scene, rows: list[tuple[str, dict[str, Any]]],
-          targets: int) -> None:  # fmt: skip
+def table(
+    label: str, rig: Rig, base: Scene, rows: list[tuple[str, dict[str, Any]]], targets: int
+) -> None:
     pairs = testset.draw(rig, isotropic=True)
     print(f"\n**{label}** ({targets} targets, {len(pairs)} test pairs)\n")
-    print("| misalignment | samples log-RMSE | Δ vs aligned | median log ratio | "
-          "test log-RMSE | Δ | mirror log-RMSE | Δ |")  # fmt: skip
+    print(
+        "| misalignment | samples log-RMSE | Δ vs aligned | median log ratio | "
+        "test log-RMSE | Δ | mirror log-RMSE | Δ |"
+    )
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     aligned: tuple[float, ...] | None = None
     effects = base.effects.model_dump()
@@ -125,8 +129,13 @@ def main() -> None:
     started = time.perf_counter()
     arch = Rig.from_yaml(ROOT / "configs/rigs/arch.yaml")
     for label, file in SCENES.items():
-        table(f"{label}, arch rig", arch, load_scene(ROOT / "configs/scenes" / file), cases(arch),
-              args.targets)  # fmt: skip
+        table(
+            f"{label}, arch rig",
+            arch,
+            load_scene(ROOT / "configs/scenes" / file),
+            cases(arch),
+            args.targets,
+        )
     point = Rig.from_yaml(ROOT / "configs/rigs/arch_point.yaml")
     matte = load_scene(ROOT / "configs/scenes/matte.yaml")
     lamp = Scene.model_validate(

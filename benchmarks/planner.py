@@ -200,8 +200,9 @@ def memory(sizes: list[int]) -> None:
             started = time.perf_counter()
             child = subprocess.run(
                 [sys.executable, "-c", _CHILD, str(path), str(stored)],
-                capture_output=True, text=True,
-            )  # fmt: skip
+                capture_output=True,
+                text=True,
+            )
             figures = json.loads(child.stderr.strip().splitlines()[-1])
             figures["wall_s"] = time.perf_counter() - started  # the process's, end to end
             if figures["code"] != 0:
@@ -214,13 +215,21 @@ def memory(sizes: list[int]) -> None:
             per = (rss - smallest[1]) / max(n - smallest[0], 1)
             growth = "—" if n == smallest[0] else f"{per:,.0f} B"
             search = next(
-                (line.split(None, 1)[1] for line in child.stdout.splitlines()
-                 if line.strip().startswith("ordering ")), "?"
-            )  # fmt: skip
+                (
+                    line.split(None, 1)[1]
+                    for line in child.stdout.splitlines()
+                    if line.strip().startswith("ordering ")
+                ),
+                "?",
+            )
             moves = next(
-                (line.split("moves ", 1)[1].split(",")[0] for line in child.stdout.splitlines()
-                 if "predicted duration" in line), "?"
-            )  # fmt: skip
+                (
+                    line.split("moves ", 1)[1].split(",")[0]
+                    for line in child.stdout.splitlines()
+                    if "predicted duration" in line
+                ),
+                "?",
+            )
             print(
                 f"| {n:,} | {rss / 2**20:,.0f} MiB | {growth} | {figures['cpu_s']:.1f} s "
                 f"| {figures['wall_s']:.1f} s | {moves} | {search.strip()} |",

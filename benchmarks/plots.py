@@ -33,8 +33,15 @@ IMPORTS = "import matplotlib.pyplot, scipy.spatial, gonio.plots.slices, gonio.pl
 def acquire(folder: Path) -> Path:
     """The demo's run: `make demo`'s `gonio acquire`, in this process."""
     out = folder / "quickstart.sqlite"
-    args = ["acquire", str(ROOT / "configs/plans/quickstart.yaml"), "--scene",
-            str(ROOT / "configs/scenes/glossy_metal.yaml"), "-o", str(out), "-q"]  # fmt: skip
+    args = [
+        "acquire",
+        str(ROOT / "configs/plans/quickstart.yaml"),
+        "--scene",
+        str(ROOT / "configs/scenes/glossy_metal.yaml"),
+        "-o",
+        str(out),
+        "-q",
+    ]
     with contextlib.redirect_stdout(io.StringIO()):
         code = main(args)
     assert code == 0, f"gonio acquire exited {code}"

@@ -255,9 +255,12 @@ def main() -> None:
     ap.add_argument("--transforms", action="store_true", help="run the transform study")
     ap.add_argument("--study-samples", type=int, default=3_000)
     ap.add_argument(
-        "--scaling", type=int, nargs="+", default=[10_000, 100_000, 1_000_000],
+        "--scaling",
+        type=int,
+        nargs="+",
+        default=[10_000, 100_000, 1_000_000],
         help="numbers of pairs of the linear evaluation's scaling table",
-    )  # fmt: skip
+    )
     args = ap.parse_args()
     print(f"machine: {describe()}\n")
     if args.transforms:

@@ -113,7 +113,7 @@ class Timer:
 
 
 class Window:
-    """`gonio.acquire.progress.Observer` that opens the measuring window after the first
+    """`gonio.acquire.observer.Observer` that opens the measuring window after the first
     sample and closes it after the last: wall time, traffic and the timers inside it."""
 
     def __init__(self, emulator: Any, timers: list[Timer]) -> None:

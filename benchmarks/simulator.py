@@ -23,12 +23,12 @@ from _machine import describe
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
 from gonio.planner.model import Plan
-from gonio.workflows.simulate import measure_targets
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.effects import EffectsSpec
 from sim.virtual.record import SimRun
 from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import simulate
+from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -135,10 +135,12 @@ def aperture_orders() -> None:
     for aperture in (1e-5, 1e-4, 1e-3):
         exact = radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=48)
         errors = [
-            abs(radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=n)
-                / exact - 1)[0]
+            abs(
+                radiometry.aperture_integral(model.eval, wi, wo, aperture, "cos", order=n) / exact
+                - 1
+            )[0]
             for n in orders
-        ]  # fmt: skip
+        ]
         print(f"| {aperture:g} sr | " + " | ".join(f"{e:.0e}" for e in errors) + " |")
 
 

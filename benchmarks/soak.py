@@ -104,9 +104,13 @@ def main(argv: list[str] | None = None) -> None:
             rig = Rig.from_yaml(ARCH_SERIAL)
             scene = load_scene(ROOT / "configs" / "scenes" / "matte.yaml", rig)
             rehearsal = run_rehearsal_soak(
-                folder / "rehearsal", args.rehearsal_targets, args.rehearsal_kills, args.seed,
-                scene, say=say,
-            )  # fmt: skip
+                folder / "rehearsal",
+                args.rehearsal_targets,
+                args.rehearsal_kills,
+                args.seed,
+                scene,
+                say=say,
+            )
             report_rehearsal(rehearsal)
 
 
@@ -127,16 +131,24 @@ def report_rehearsal(soak: RehearsalSoak) -> None:
         ("wall time", f"{soak.wall_s:.0f} s"),
         ("sessions (processes started)", f"{len(sessions)}"),
         ("SIGKILLs survived", f"{soak.kills}"),
-        ("integrity_check ok after a session", f"{sum(s.integrity == 'ok' for s in checked)} "
-         f"of {len(checked)}"),
-        ("after a kill: every motor's torque on", f"{sum(a.torque_on for a in soak.after_kills)} "
-         f"of {len(soak.after_kills)}"),
-        ("after a kill: every motor still, at its goal", f"{sum(a.held for a in soak.after_kills)} "
-         f"of {len(soak.after_kills)}"),
-        ("after a kill: every port released", f"{sum(a.ports_free for a in soak.after_kills)} "
-         f"of {len(soak.after_kills)}"),
+        (
+            "integrity_check ok after a session",
+            f"{sum(s.integrity == 'ok' for s in checked)} of {len(checked)}",
+        ),
+        (
+            "after a kill: every motor's torque on",
+            f"{sum(a.torque_on for a in soak.after_kills)} of {len(soak.after_kills)}",
+        ),
+        (
+            "after a kill: every motor still, at its goal",
+            f"{sum(a.held for a in soak.after_kills)} of {len(soak.after_kills)}",
+        ),
+        (
+            "after a kill: every port released",
+            f"{sum(a.ports_free for a in soak.after_kills)} of {len(soak.after_kills)}",
+        ),
         ("motor reboots (`gonio motors reboot`, as an operator)", f"{soak.reboots}"),
-    ]  # fmt: skip
+    ]
     print("| figure | value |")
     print("|---|---:|")
     for label, value in rows:
@@ -149,8 +161,10 @@ def report_rehearsal(soak: RehearsalSoak) -> None:
     print("|---|---:|")
     for kind, count in sorted(events.items(), key=lambda kv: -kv[1]):
         print(f"| {kind} | {count} |")
-    print("\nsessions: " + ", ".join(
-        "killed" if s.killed else f"exit {s.returncode}" for s in sessions))  # fmt: skip
+    print(
+        "\nsessions: "
+        + ", ".join("killed" if s.killed else f"exit {s.returncode}" for s in sessions)
+    )
     for a in soak.after_kills:
         if a.detail:
             print(f"- after the kill of session {a.session}: {a.detail}")
@@ -194,11 +208,13 @@ def report(
         ("of which resumed by the next session", f"{resumed_after_kill}"),
         ("full disks survived", f"{sum(s.returncode == 3 for s in full)} of {len(full)}"),
         ("sessions ended resumable (exit 3)", f"{sum(s.returncode == 3 for s in sessions)}"),
-        ("integrity_check ok after a session",
-         f"{sum(s.integrity == 'ok' for s in checked)} of {len(checked)}"),
+        (
+            "integrity_check ok after a session",
+            f"{sum(s.integrity == 'ok' for s in checked)} of {len(checked)}",
+        ),
         ("samples journaled", f"{len(journal.samples['target']):,}"),
         ("targets skipped by policy", f"{told.counts['skip']}"),
-    ]  # fmt: skip
+    ]
     for label, value in rows:
         print(f"| {label} | {value} |")
     print(f"\nthe full disk: {disk}")
@@ -229,11 +245,17 @@ def report(
             [s.integrity for s in checked if s.integrity != "ok"],
         ),
         ("no finished target lost by a kill or a full disk", not soak.problems, soak.problems),
-        ("the journal tells the whole story (faults ↔ events, sessions ↔ processes)",
-         not told.problems, told.problems),
-        ("samples, calibrations and skips equal the uninterrupted run's, bit for bit",
-         not differ, differ),
-    ]  # fmt: skip
+        (
+            "the journal tells the whole story (faults ↔ events, sessions ↔ processes)",
+            not told.problems,
+            told.problems,
+        ),
+        (
+            "samples, calibrations and skips equal the uninterrupted run's, bit for bit",
+            not differ,
+            differ,
+        ),
+    ]
     print("| check | result |")
     print("|---|---|")
     for label, ok, problems in checks:

@@ -222,12 +222,15 @@ def compare(rows: list[dict[str, str]], counts: list[int], targets: tuple[float,
     methods measured), at each count and in the samples each needs for each target."""
     best = {
         kind: {
-            n: min(float(r["log_rmse"]) for r in rows
-                   if r["sampling"] == kind and int(r["samples"]) == n)
+            n: min(
+                float(r["log_rmse"])
+                for r in rows
+                if r["sampling"] == kind and int(r["samples"]) == n
+            )
             for n in counts
         }
         for kind in ("sobol", "adaptive")
-    }  # fmt: skip
+    }
     ratios = ", ".join(f"{best['sobol'][n] / best['adaptive'][n]:.2f}×" for n in counts)
     print(
         f"\nbest uniform / best adaptive error at {', '.join(f'{n:,}' for n in counts)}: {ratios}"
@@ -236,8 +239,10 @@ def compare(rows: list[dict[str, str]], counts: list[int], targets: tuple[float,
         u = needed(counts, [best["sobol"][n] for n in counts], t)
         a = needed(counts, [best["adaptive"][n] for n in counts], t)
         ratio = "" if math.isinf(u) or math.isinf(a) else f" (adaptive / uniform {a / u:.2f})"
-        print(f"samples for {t}: best uniform {fmt_needed(u, counts)}, best adaptive "
-              f"{fmt_needed(a, counts)}{ratio}")  # fmt: skip
+        print(
+            f"samples for {t}: best uniform {fmt_needed(u, counts)}, best adaptive "
+            f"{fmt_needed(a, counts)}{ratio}"
+        )
 
 
 def where(args: argparse.Namespace) -> None:

@@ -320,8 +320,10 @@ def adaptive(args: argparse.Namespace) -> None:
     for r in rows:
         key = (r["scene"], r["parametrization"], r["method"], int(r["samples"]), r["effects"])
         plans[key][r["sampling"]] = r
-    print("| scene | effects | samples | uniform | adaptive | uniform / adaptive | "
-          "instrument time, uniform → adaptive |")  # fmt: skip
+    print(
+        "| scene | effects | samples | uniform | adaptive | uniform / adaptive | "
+        "instrument time, uniform → adaptive |"
+    )
     print("|---|---|---:|---:|---:|---:|---|")
     for (scene, _, _, n, effects), kinds in sorted(plans.items()):
         if "adaptive" not in kinds or len(kinds) < 2:
@@ -330,8 +332,10 @@ def adaptive(args: argparse.Namespace) -> None:
         u, a = kinds[other], kinds["adaptive"]
         eu, ea = float(u["log_rmse"]), float(a["log_rmse"])
         tu, ta = float(u["instrument_s"]), float(a["instrument_s"])
-        print(f"| {scene} | {effects} | {n:,} | {eu:.3g} | {ea:.3g} | {eu / ea:.1f}× | "
-              f"{tu:,.0f} s → {ta:,.0f} s |")  # fmt: skip
+        print(
+            f"| {scene} | {effects} | {n:,} | {eu:.3g} | {ea:.3g} | {eu / ea:.1f}× | "
+            f"{tu:,.0f} s → {ta:,.0f} s |"
+        )
 
 
 def main() -> None:

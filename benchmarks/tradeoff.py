@@ -36,8 +36,9 @@ def rate(sweep: Sweep, mode: str, jobs: int) -> tuple[float, float, float]:
             from distributed import LocalCluster
 
             started = time.perf_counter()
-            with LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster:  # fmt: skip
+            with LocalCluster(
+                n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None
+            ) as cluster:
                 up = time.perf_counter() - started
                 outcome = run_sweep(sweep, out, scheduler=cluster.scheduler_address)
         else:
@@ -80,11 +81,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sweep", type=Path, default=QUICK)
     parser.add_argument("--limit", type=int, help="only the first N combinations")
-    parser.add_argument("--modes", nargs="*", default=["pool", "dask"],
-                        choices=["here", "pool", "dask"])  # fmt: skip
+    parser.add_argument(
+        "--modes", nargs="*", default=["pool", "dask"], choices=["here", "pool", "dask"]
+    )
     parser.add_argument("--jobs", type=int, default=2, help="pool processes, Dask workers")
-    parser.add_argument("--samples", type=int, nargs="*",
-                        default=[100, 200, 400, 800, 1600, 3200])  # fmt: skip
+    parser.add_argument("--samples", type=int, nargs="*", default=[100, 200, 400, 800, 1600, 3200])
     args = parser.parse_args()
     print(describe())
     sweep = load_sweep(args.sweep)

@@ -170,7 +170,7 @@ PTY_TESTS = (
     "tests/sim/virtual/devices/test_rehearsal.py",
     "tests/gonio/cli/test_motors.py",
     "tests/gonio/cli/test_detector.py",
-    "tests/gonio/acquire/test_hardware.py",
+    "tests/gonio/workflows/test_hardware.py",
     "tests/gonio/acquire/test_fly_rehearsal.py",
 )
 

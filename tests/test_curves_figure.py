@@ -78,8 +78,14 @@ def test_a_row_is_a_cell_of_the_table(curves: ModuleType) -> None:
 |---|---|---|---:|---:|---:|
 | sobol | hybrid | rbf | 0.0106 | — | 359 |
 """
-    assert curves.rows_of_page(text) == [{
-        "scene": "matte", "sampling": "sobol", "parametrization": "hybrid", "method": "rbf",
-        "samples": "250", "log_rmse": "0.0106",
-    }]  # fmt: skip
+    assert curves.rows_of_page(text) == [
+        {
+            "scene": "matte",
+            "sampling": "sobol",
+            "parametrization": "hybrid",
+            "method": "rbf",
+            "samples": "250",
+            "log_rmse": "0.0106",
+        }
+    ]
     assert curves.targets_of_page(text) == (0.01,)

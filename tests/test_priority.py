@@ -27,8 +27,10 @@ def started_nice() -> tuple[int, int]:
     thread.join()
     child = subprocess.run(
         [sys.executable, "-c", "import os; print(os.getpriority(os.PRIO_PROCESS, 0))"],
-        capture_output=True, text=True, check=True,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return seen[0], int(child.stdout)
 
 

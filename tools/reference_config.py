@@ -551,8 +551,13 @@ class _Page:
             if isinstance(values, dict) and values:
                 return f"mapping of {_grouped(self.type_of(self.resolve(values)))}"
             return "mapping"
-        return {"number": "number", "integer": "integer", "string": "string",
-                "boolean": "boolean", "null": "null"}.get(str(kind), "any")  # fmt: skip
+        return {
+            "number": "number",
+            "integer": "integer",
+            "string": "string",
+            "boolean": "boolean",
+            "null": "null",
+        }.get(str(kind), "any")
 
     def _each(self, items: dict[str, Any]) -> list[str]:
         """What a list's items may be, in words."""

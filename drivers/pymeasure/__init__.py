@@ -9,6 +9,7 @@ PyVISA (the ``instruments`` extra) and are loaded only when a rig names such a d
 """
 
 from drivers.pymeasure.config import (
+    PRESET_FIELDS,
     PRESETS,
     SETTLE_TAU,
     ExposureConfig,
@@ -20,6 +21,7 @@ from drivers.pymeasure.properties import PROPERTIES
 
 __all__ = [
     "PRESETS",
+    "PRESET_FIELDS",
     "PROPERTIES",
     "SETTLE_TAU",
     "ExposureConfig",

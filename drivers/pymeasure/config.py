@@ -12,6 +12,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from drivers.described import described
+
 #: How an exposure is realised.
 #:
 #: - ``wait``: nothing is set; the driver waits the exposure, then reads.
@@ -27,6 +29,50 @@ ExposureKind = Literal["wait", "time_constant", "averaging", "nplc"]
 #: ``auto``: the instrument auto-ranges and the driver reads the range back after every
 #: sample, keeping each change in `PyMeasureDetector.range_changes`.
 Ranging = Literal["fixed", "auto"]
+
+#: How long an answer may take beyond the integration (s): VISA's timeout is a 32-bit
+#: count of milliseconds (49.7 days at most, the exposure added); an instrument silent
+#: for an hour is not answering.
+MAX_TIMEOUT_S = 3600.0
+#: The slowest and the fastest serial line (baud): the slowest standard rate, and
+#: USB-serial adapters' fastest (FTDI's FT2232H).
+BAUD_RANGE = (50, 12_000_000)
+#: The largest reading a full scale or a time constant may give (V, A, W; s): nine
+#: orders above a volt, an ampere, a watt (a meter's over-range marker, 9.9e37, is
+#: recognised on its own).
+MAX_READING = 1e9
+#: A status register's bits (SCPI's are 16, PyMeasure's status properties at most 32).
+MAX_MASK = 2**32 - 1
+#: Settle time in time constants: 99.9 % at 24 dB/oct is 13 τ; a hundred is generous.
+MAX_SETTLE_TAU = 100.0
+#: The longest averaged sample of a power meter (s; a PM100's is 0.3 ms).
+MAX_COUNT_S = 60.0
+#: The largest averaging count (a PM100's is 16 bits; ten million is generous).
+MAX_COUNT = 10_000_000
+#: The power line's frequency (Hz): railways' 16.7 Hz to aircraft's 400 Hz.
+LINE_HZ_RANGE = (16.0, 400.0)
+#: The power-line cycles an integrating meter takes (a Keithley's 0.01…10, a 34465A's
+#: 0.001…100).
+NPLC_RANGE = (1e-4, 1000.0)
+#: The fields a preset gives (`PRESETS`): a configuration file may leave them out.
+PRESET_FIELDS = frozenset(
+    {
+        "reading",
+        "unit",
+        "query",
+        "exposure",
+        "settings",
+        "commands",
+        "range_property",
+        "saturate_at_range",
+        "overload_property",
+        "overload_mask",
+        "ranging",
+        "dark_subtracted",
+        "phase_property",
+        "phase_tolerance_deg",
+    }
+)
 
 #: The value a Keithley (and many SCPI meters) returns for an over-range reading.
 OVERFLOW = 9.9e37
@@ -46,15 +92,59 @@ class ExposureConfig:
     property, a command template with ``{count}`` (``averaging``) or ``{nplc}``;
     ``values``: the time constants allowed (s; empty: the class's ``TIME_CONSTANTS``)."""
 
-    kind: ExposureKind = "wait"
-    property: str | None = None
-    command: str | None = None
-    settle_tau: float = 5.0
-    values: tuple[float, ...] = ()
-    count_s: float = 3e-4
-    max_count: int = 10_000
-    line_hz: float = 50.0
-    nplc_range: tuple[float, float] = (0.01, 10.0)
+    kind: ExposureKind = field(
+        default="wait", metadata=described("wait, time_constant, averaging or nplc.")
+    )
+    property: str | None = field(
+        default=None,
+        metadata=described(
+            "The instrument's property set: the time constant, averaging count or NPLC."
+        ),
+    )
+    command: str | None = field(
+        default=None,
+        metadata=described(
+            "Instead of a property: a command template of {count} (averaging) or {nplc}, e.g. "
+            "'SENS:AVER:COUN {count:d}'."
+        ),
+    )
+    settle_tau: float = field(
+        default=10.0,
+        metadata=described(
+            "time_constant: the settle time in time constants (99 %: 5 at 6 dB/oct, 7 at 12, "
+            "9 at 18, 10 at 24).",
+            gt=0,
+            le=MAX_SETTLE_TAU,
+        ),
+    )
+    values: tuple[float, ...] = field(
+        default=(),
+        metadata=described(
+            "time_constant: the allowed time constants (s; empty: the class's).",
+            items={"gt": 0, "le": MAX_READING},
+        ),
+    )
+    count_s: float = field(
+        default=3e-4,
+        metadata=described("averaging: seconds per averaged sample.", gt=0, le=MAX_COUNT_S),
+    )
+    max_count: int = field(
+        default=10_000,
+        metadata=described("averaging: the largest count.", ge=1, le=MAX_COUNT),
+    )
+    line_hz: float = field(
+        default=50.0,
+        metadata=described(
+            "nplc: the power line's frequency (Hz).", ge=LINE_HZ_RANGE[0], le=LINE_HZ_RANGE[1]
+        ),
+    )
+    nplc_range: tuple[float, float] = field(
+        default=(0.01, 10.0),
+        metadata=described(
+            "nplc: the [min, max] NPLC the instrument accepts.",
+            items={"ge": NPLC_RANGE[0], "le": NPLC_RANGE[1]},
+        ),
+    )
 
     def __post_init__(self) -> None:
         if self.property is not None and _NAME.fullmatch(self.property) is None:
@@ -108,7 +198,7 @@ class ExposureConfig:
         return max(fitting) if fitting else min(allowed)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PyMeasureDetectorConfig:
     """A detector read through a PyMeasure instrument class.
 
@@ -130,29 +220,132 @@ class PyMeasureDetectorConfig:
     from the reference reading's beyond ``phase_tolerance_deg`` is journaled.
     """
 
-    instrument: str
-    resource: str
-    reading: str
-    unit: str = ""
-    query: str | None = None
-    exposure: ExposureConfig = field(default_factory=ExposureConfig)
-    visa_library: str = ""
-    read_termination: str | None = None
-    write_termination: str | None = None
-    baud_rate: int | None = None
-    timeout_s: float = 2.0
-    settings: tuple[tuple[str, Any], ...] = ()
-    commands: tuple[str, ...] = ()
-    range_property: str | None = None
-    saturate_at_range: bool = False
-    full_scale: float | None = None
-    overload_property: str | None = None
-    overload_mask: int = 0
-    ranging: Ranging = "fixed"
-    std_property: str | None = None
-    dark_subtracted: bool = False
-    phase_property: str | None = None
-    phase_tolerance_deg: float = 5.0
+    instrument: str = field(
+        metadata=described(
+            "The PyMeasure class's dotted name, e.g. pymeasure.instruments.srs.SR830."
+        )
+    )
+    resource: str = field(
+        metadata=described(
+            "The VISA resource: GPIB0::8::INSTR, USB0::0x1313::0x8072::P2000000::INSTR, "
+            "ASRL/dev/ttyUSB1::INSTR.",
+            min_length=1,
+        )
+    )
+    visa_library: str = field(
+        default="",
+        metadata=described("PyVISA's backend: '' (the system's VISA), '@py' (pyvisa-py)."),
+    )
+    read_termination: str | None = field(
+        default=None,
+        metadata=described(
+            "What ends an answer (none: PyVISA's default; an SR830 on RS-232: \\r)."
+        ),
+    )
+    write_termination: str | None = field(
+        default=None,
+        metadata=described("What ends a command (none: PyVISA's default, \\r\\n)."),
+    )
+    baud_rate: int | None = field(
+        default=None,
+        metadata=described("A serial instrument's baud rate.", ge=BAUD_RANGE[0], le=BAUD_RANGE[1]),
+    )
+    timeout_s: float = field(
+        default=2.0,
+        metadata=described(
+            "How long an answer may take beyond the instrument's integration (s).",
+            gt=0,
+            le=MAX_TIMEOUT_S,
+        ),
+    )
+    reading: str = field(
+        metadata=described("The property read per sample, e.g. magnitude (none: the preset's).")
+    )
+    unit: str = field(
+        default="", metadata=described("The reading's unit, e.g. V (none: the preset's).")
+    )
+    query: str | None = field(
+        default=None,
+        metadata=described(
+            "Instead of the reading property: a command whose answer's first number is the "
+            "reading, e.g. ':READ?' (none: the preset's)."
+        ),
+    )
+    exposure: ExposureConfig = field(
+        default_factory=ExposureConfig,
+        metadata=described("How an exposure is realised (none: the preset's)."),
+    )
+    settings: tuple[tuple[str, Any], ...] = field(
+        default=(),
+        metadata=described(
+            "Properties set on opening, in order, e.g. {filter_slope: 24, sensitivity: 0.01} "
+            "(none: the preset's)."
+        ),
+    )
+    commands: tuple[str, ...] = field(
+        default=(),
+        metadata=described("Commands written on opening, after settings (none: the preset's)."),
+    )
+    range_property: str | None = field(
+        default=None,
+        metadata=described("The property holding the range or sensitivity (none: the preset's)."),
+    )
+    saturate_at_range: bool = field(
+        default=False,
+        metadata=described("A reading at or above the range is saturated (none: the preset's)."),
+    )
+    full_scale: float | None = field(
+        default=None,
+        metadata=described(
+            "A reading at or above this is saturated (none: no such limit).",
+            gt=0,
+            le=MAX_READING,
+        ),
+    )
+    overload_property: str | None = field(
+        default=None,
+        metadata=described("A status property read after each sample (none: the preset's)."),
+    )
+    overload_mask: int = field(
+        default=0,
+        metadata=described(
+            "The status bits that mean overload (none: the preset's).", ge=1, le=MAX_MASK
+        ),
+    )
+    ranging: Ranging = field(
+        default="fixed",
+        metadata=described(
+            "fixed: the range is never changed; auto: the instrument auto-ranges and each "
+            "change is logged (none: the preset's)."
+        ),
+    )
+    std_property: str | None = field(
+        default=None,
+        metadata=described("A property with the instrument's own standard deviation."),
+    )
+    dark_subtracted: bool = field(
+        default=False,
+        metadata=described(
+            "The reading carries no dark or ambient signal (a lock-in behind a chopper; none: "
+            "the preset's)."
+        ),
+    )
+    phase_property: str | None = field(
+        default=None,
+        metadata=described(
+            "A lock-in's phase property (°), read after each sample and compared with the "
+            "reference reading's, e.g. theta (none: the preset's)."
+        ),
+    )
+    phase_tolerance_deg: float = field(
+        default=5.0,
+        metadata=described(
+            "How far the phase may drift from the reference reading's before an event is "
+            "journaled (°; none: the preset's, 5).",
+            gt=0,
+            le=180,
+        ),
+    )
 
     def __post_init__(self) -> None:
         if _DOTTED.fullmatch(self.instrument) is None:

@@ -8,8 +8,9 @@ import numbers
 import re
 import string
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from drivers.described import described
 from drivers.serial_detector.errors import SerialDetectorValueError
 
 #: The fields a command template may use. Exposures are rounded to the nearest unit.
@@ -19,6 +20,12 @@ QUERY_FIELDS = EXPOSURE_FIELDS | {"averages"}
 STREAM_FIELDS = frozenset(
     {"rate_hz", "period_ms", "period_us", "integration_s", "integration_ms", "integration_us"}
 )
+#: A streaming detector's rates (Hz): a reading every 100 s to 10⁵ a second, beyond what
+#: a serial line carries (12 Mbaud of 16-byte lines is 75 000 lines a second).
+STREAM_RATE_RANGE_HZ = (0.01, 1e5)
+#: The largest count a detector's full scale may name: 10¹⁸, within float64's exact
+#: integers' reach of a 64-bit counter.
+MAX_FULL_SCALE = 1e18
 _LINE_ENDINGS = ("\n", "\r\n", "\r")
 _SAMPLE_FIELDS: Mapping[str, float | int] = {
     "exposure_s": 0.125,
@@ -56,14 +63,57 @@ class SerialStreamConfig:
     loosens).
     """
 
-    start: str = "STREAM {rate_hz:g} {integration_ms:d}"
-    stop: str = "STOP"
-    line: str = r"DAT (?P<device_t>\S+) (?P<value>\S+)"
-    rate_hz: float = 100.0
-    max_rate_hz: float = 1000.0
-    device_time_s: float = 1e-3
-    latency_s: float = 0.0
-    starts_on_command: bool = False
+    start: str = field(
+        default="STREAM {rate_hz:g} {integration_ms:d}",
+        metadata=described(
+            "The command that starts the stream: a template of {rate_hz}, {period_ms}, "
+            "{period_us}, {integration_s}, {integration_ms} and {integration_us}."
+        ),
+    )
+    stop: str = field(default="STOP", metadata=described("The command that stops it."))
+    line: str = field(
+        default=r"DAT (?P<device_t>\S+) (?P<value>\S+)",
+        metadata=described(
+            "A Python regex a whole data line matches: group value (required), optional "
+            "device_t (the device's time of the window's end), std, status, saturated."
+        ),
+    )
+    rate_hz: float = field(
+        default=100.0,
+        metadata=described(
+            "The rate used when none is asked (Hz).",
+            ge=STREAM_RATE_RANGE_HZ[0],
+            le=STREAM_RATE_RANGE_HZ[1],
+        ),
+    )
+    max_rate_hz: float = field(
+        default=1000.0,
+        metadata=described(
+            "The highest rate it streams at (Hz).",
+            ge=STREAM_RATE_RANGE_HZ[0],
+            le=STREAM_RATE_RANGE_HZ[1],
+        ),
+    )
+    device_time_s: float = field(
+        default=1e-3,
+        metadata=described("Seconds per unit of the device_t group (1e-3: milliseconds).", gt=0),
+    )
+    latency_s: float = field(
+        default=0.0,
+        metadata=described(
+            "The shortest delay from a window's end to its line's arrival (s), subtracted "
+            "from the host's stamps.",
+            ge=0,
+        ),
+    )
+    starts_on_command: bool = field(
+        default=False,
+        metadata=described(
+            "The device begins its first window when the start command arrives (and, with a "
+            "command_ack, acknowledges it then): the host stamps the windows between when it "
+            "sent the command and when the acknowledgement came back."
+        ),
+    )
 
     def check(self, bad: Callable[[str], Exception]) -> None:
         """Raise ``bad(message)`` (a message starting ``stream.<field>``) for a bad field."""
@@ -101,46 +151,121 @@ class SerialDetectorConfig:
     anywhere in a line unless anchored.
     """
 
-    port: str
-    baud: int = 115200
+    port: str = field(metadata=described("The serial port, e.g. /dev/ttyACM0.", min_length=1))
+    baud: int = field(default=115200, metadata=described("The baud rate.", gt=0))
     #: Sent once per sample, or once per measurement when ``device_averaging``.
-    query: str = "MEAS {exposure_ms:d}"
+    query: str = field(
+        default="MEAS {exposure_ms:d}",
+        metadata=described(
+            "The command that asks for a reading: a template of {exposure_s}, {exposure_ms}, "
+            "{exposure_us} and {averages}."
+        ),
+    )
     #: Sent before a query when the formatted command differs from the last one sent.
-    set_exposure: str | None = None
-    #: The answer to a query. Named groups: ``value`` (required); optional ``status``
-    #: (saturated when it matches ``saturated_status``), ``saturated`` (saturated when
-    #: it took part in the match and is not empty, 0, false, no, off) and ``std`` (the
-    #: device's standard deviation, with ``device_averaging``).
-    response: str = r"(?P<value>\S+)"
-    line_ending: str = "\n"
-    #: The margin on every deadline: a query waits exposure (× averages with device
-    #: averaging) plus this; a command acknowledgement waits this.
-    timeout_s: float = 1.0
-    #: Malformed lines tolerated per sample (the query is sent again, at most this many
-    #: more times, when a deadline passes after a malformed line).
-    retries: int = 2
-    #: Counts at or above which a sample is saturated.
-    full_scale: float | None = None
-    #: A line the device prints after a reset or reboot, e.g. ``"^READY"``.
-    reset_banner: str | None = None
-    #: Commands sent after opening and after a reset (no template fields).
-    init: tuple[str, ...] = ()
-    #: After opening, wait up to this long for ``reset_banner`` (an Arduino reboots
-    #: when the port opens); without a banner pattern, wait exactly this long.
-    settle_s: float = 0.0
-    #: If set, every ``init`` and ``set_exposure`` command must be answered by a line
-    #: matching it (e.g. ``"^OK"``); if not, no answer is read.
-    command_ack: str | None = None
-    #: A line the device sends to refuse a command, e.g. ``"^ERR"``: fails at once.
-    error_reply: str | None = None
-    #: With a ``status`` group in ``response``: a status matching this is saturation.
-    saturated_status: str | None = None
-    #: Send one query with ``{averages}`` and let the device average.
-    device_averaging: bool = False
-    #: Longest line accepted; longer input is discarded up to the next line ending.
-    max_line_bytes: int = 1024
-    #: The streaming mode, if the device has one (`SerialStreamConfig`).
-    stream: SerialStreamConfig | None = None
+    set_exposure: str | None = field(
+        default=None,
+        metadata=described(
+            "A command that sets the exposure, sent when its text changes (a template of "
+            "{exposure_s}, {exposure_ms}, {exposure_us}; none: the query carries it)."
+        ),
+    )
+    #: Named groups: ``value`` (required); optional ``status`` (saturated when it
+    #: matches ``saturated_status``), ``saturated`` (saturated when it took part in the
+    #: match and is not empty, 0, false, no, off) and ``std`` (the device's standard
+    #: deviation, with ``device_averaging``).
+    response: str = field(
+        default=r"(?P<value>\S+)",
+        metadata=described(
+            "A Python regex the whole answer line matches: group value (required), optional "
+            "status, saturated and std."
+        ),
+    )
+    line_ending: str = field(
+        default="\n",
+        metadata=described(
+            'What ends a command: lf, crlf or cr (or the characters in double quotes: "\\r\\n").'
+        ),
+    )
+    timeout_s: float = field(
+        default=1.0,
+        metadata=described(
+            "The margin on every deadline (s): a query waits its exposure (times the averages "
+            "when the device averages) plus this, a command's acknowledgement this.",
+            gt=0,
+        ),
+    )
+    #: The query is sent again, at most this many more times, when a deadline passes
+    #: after a malformed line.
+    retries: int = field(
+        default=2,
+        metadata=described(
+            "Malformed answers tolerated per reading (the query is sent again).", ge=0
+        ),
+    )
+    full_scale: float | None = field(
+        default=None,
+        metadata=described(
+            "Counts at or above which a reading is saturated (none: no such limit).",
+            gt=0,
+            le=MAX_FULL_SCALE,
+        ),
+    )
+    reset_banner: str | None = field(
+        default=None,
+        metadata=described(
+            "A Python regex of the line the device prints after a reset, e.g. ^READY."
+        ),
+    )
+    init: tuple[str, ...] = field(
+        default=(),
+        metadata=described("Commands sent after opening and after a reset (no template fields)."),
+    )
+    #: An Arduino reboots when the port opens.
+    settle_s: float = field(
+        default=0.0,
+        metadata=described(
+            "After opening, wait up to this long for reset_banner, or exactly this long "
+            "without one (s).",
+            ge=0,
+        ),
+    )
+    command_ack: str | None = field(
+        default=None,
+        metadata=described(
+            "A Python regex an answer to every init and set_exposure command must match "
+            "(none: no answer is read)."
+        ),
+    )
+    #: A refused command fails at once.
+    error_reply: str | None = field(
+        default=None,
+        metadata=described(
+            "A Python regex of the line the device sends to refuse a command, e.g. ^ERR."
+        ),
+    )
+    saturated_status: str | None = field(
+        default=None,
+        metadata=described(
+            "A Python regex: a response's status group matching it is a saturated reading."
+        ),
+    )
+    device_averaging: bool = field(
+        default=False,
+        metadata=described("Send one query with {averages} and let the device average."),
+    )
+    max_line_bytes: int = field(
+        default=1024,
+        metadata=described(
+            "The longest line read (bytes); longer input is discarded to the line's end.",
+            ge=16,
+        ),
+    )
+    stream: SerialStreamConfig | None = field(
+        default=None,
+        metadata=described(
+            "Its streaming mode, for measuring while moving (none: it does not stream)."
+        ),
+    )
 
     def __post_init__(self) -> None:
         port = self.port if isinstance(self.port, str) else repr(self.port)

@@ -23,8 +23,8 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.acquire.measure import (
         measure_target as measure_target,
     )
-    from gonio.acquire.progress import Observer as Observer
-    from gonio.acquire.progress import Unobserved as Unobserved
+    from gonio.acquire.observer import Observer as Observer
+    from gonio.acquire.observer import Unobserved as Unobserved
     from gonio.acquire.recovery import MotorRecovery as MotorRecovery
     from gonio.acquire.reference import (
         Stage as Stage,

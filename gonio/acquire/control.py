@@ -116,9 +116,11 @@ class Request:
         if not isinstance(value, Mapping) or value.get("action") not in ACTIONS:
             return None
         return cls(
-            value["action"], str(value.get("by", ""))[:BY_CHARS],
-            str(value.get("utc", "")), str(value.get("id", "")),
-        )  # fmt: skip
+            value["action"],
+            str(value.get("by", ""))[:BY_CHARS],
+            str(value.get("utc", "")),
+            str(value.get("id", "")),
+        )
 
 
 def post_request(run: Path, action: Action, by: str) -> Request:

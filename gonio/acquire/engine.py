@@ -57,7 +57,7 @@ from gonio.acquire.ending import EndSession, Outcome, Report, fault_data
 from gonio.acquire.fly import FlyContext, FlyLoop
 from gonio.acquire.health_check import HealthChecks
 from gonio.acquire.measure import MOVE_TIMEOUT_S, TargetReading, measure_target, reading_fields
-from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.observer import Observer, Unobserved
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.reference import Stage, calibration_data, read_standard
 from gonio.acquire.runtime import RunTime, utc_now

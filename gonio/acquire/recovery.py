@@ -156,12 +156,15 @@ class MotorRecovery:
         self.event(
             KIND,
             {
-                **base, "step": "diagnosed", "error": str(fault),
-                "flags": list(health.error_flags or fault.flags), **_condition(health),
+                **base,
+                "step": "diagnosed",
+                "error": str(fault),
+                "flags": list(health.error_flags or fault.flags),
+                **_condition(health),
                 "max_recoveries": self.spec.max_recoveries,
             },
             target,
-        )  # fmt: skip
+        )
         if NEVER_RECOVERED & {*health.error_flags, *fault.flags}:
             raise NotRecovered(
                 "an electrical shock is never recovered unattended: check the motor's "
@@ -182,12 +185,15 @@ class MotorRecovery:
         self.event(
             KIND,
             {
-                **base, "step": "rebooted", "held_rad": recovered.held_rad,
-                "position_rad": recovered.position_rad, "deviation_deg": deviation,
+                **base,
+                "step": "rebooted",
+                "held_rad": recovered.held_rad,
+                "position_rad": recovered.position_rad,
+                "deviation_deg": deviation,
                 "tolerance_deg": tolerance,
             },
             target,
-        )  # fmt: skip
+        )
         if not deviation <= tolerance:
             raise NotRecovered(
                 f"after the reboot it reads {deviation:.4g}° from where it held "
@@ -205,11 +211,14 @@ class MotorRecovery:
         self.event(
             KIND,
             {
-                **base, "step": "cooling", "temperature_c": health.temperature_c,
-                "below_c": limit, "max_wait_s": longest,
+                **base,
+                "step": "cooling",
+                "temperature_c": health.temperature_c,
+                "below_c": limit,
+                "max_wait_s": longest,
             },
             target,
-        )  # fmt: skip
+        )
         began = clock.now()
         temperature = health.temperature_c
         while temperature >= limit:
@@ -226,9 +235,10 @@ class MotorRecovery:
             temperature = self.devices.bus.health()[axis].temperature_c
         waited = clock.now() - began
         self.event(
-            KIND, {**base, "step": "cooled", "temperature_c": temperature, "waited_s": waited},
+            KIND,
+            {**base, "step": "cooled", "temperature_c": temperature, "waited_s": waited},
             target,
-        )  # fmt: skip
+        )
 
 
 def _condition(health: Health) -> dict[str, Any]:
@@ -259,13 +269,22 @@ def summaries(run: Run) -> list[dict[str, Any]]:
         data = e.data
         step = data.get("step")
         if step == "diagnosed" or not out:
-            out.append({
-                "axis": data.get("axis"), "motor_id": data.get("motor_id"),
-                "recovery": data.get("recovery"), "target": e.target, "t_s": e.t_s,
-                "flags": list(data.get("flags", ())), "temperature_c": data.get("temperature_c"),
-                "load_pct": data.get("load_pct"), "waited_s": None, "deviation_deg": None,
-                "outcome": None, "reason": None,
-            })  # fmt: skip
+            out.append(
+                {
+                    "axis": data.get("axis"),
+                    "motor_id": data.get("motor_id"),
+                    "recovery": data.get("recovery"),
+                    "target": e.target,
+                    "t_s": e.t_s,
+                    "flags": list(data.get("flags", ())),
+                    "temperature_c": data.get("temperature_c"),
+                    "load_pct": data.get("load_pct"),
+                    "waited_s": None,
+                    "deviation_deg": None,
+                    "outcome": None,
+                    "reason": None,
+                }
+            )
         last = out[-1]
         if step == "cooled":
             last["waited_s"] = data.get("waited_s")

@@ -155,9 +155,14 @@ def read_standard(
 
     def read(index: int) -> TargetReading:
         return measure_target(
-            devices, index, pose, exposure_s, averages, settle_s=rig.spec.settle_s,
+            devices,
+            index,
+            pose,
+            exposure_s,
+            averages,
+            settle_s=rig.spec.settle_s,
             timeout_s=timeout_s,
-        )  # fmt: skip
+        )
 
     level = reading_unit(devices.detector) != "counts"
     stage.show("reference")

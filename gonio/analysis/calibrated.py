@@ -81,9 +81,12 @@ def calibration_series(events: tuple[Event, ...]) -> CalibrationSeries:
     dark_var = model.a / np.array(dns) / exposure_s**2
     ref_var = (model.a + model.b * rate * exposure_s) / np.array(ns) / exposure_s**2 + dark_var
     rounding = _dark_rounding(
-        np.array(codes), np.array(dark_counts_), np.array(dark_spread), model.b_estimate,
+        np.array(codes),
+        np.array(dark_counts_),
+        np.array(dark_spread),
+        model.b_estimate,
         exposure_s,
-    )  # fmt: skip
+    )
     return CalibrationSeries(
         albedo=float(first["albedo"]),
         source_kind=str(first["source_kind"]),

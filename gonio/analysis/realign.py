@@ -46,9 +46,13 @@ def realigned(run: Run, path: str | Path) -> Run:
         "alignment_sha256": hashlib.sha256(rig.alignment_text).hexdigest(),
     }
     return replace(
-        run, meta=meta, plan=replace(run.plan, rig=rig), samples=samples, events=events,
+        run,
+        meta=meta,
+        plan=replace(run.plan, rig=rig),
+        samples=samples,
+        events=events,
         _by_kind={},
-    )  # fmt: skip
+    )
 
 
 def _pair(rig: Rig, pose: list[float]) -> dict[str, list[float]]:

@@ -149,9 +149,10 @@ class Family:
             if not term.free:
                 continue
             same = [
-                k for k, t in enumerate(self.terms)
+                k
+                for k, t in enumerate(self.terms)
                 if (t.model, t.fixed, t.free) == (term.model, term.fixed, term.free)
-            ]  # fmt: skip
+            ]
             key = {k: float(x[_first(slots, k)]) for k in same}
             ranked = sorted(same, key=lambda k: key[k])
             order[j] = ranked[same.index(j)]

@@ -15,8 +15,7 @@ from urllib.parse import quote
 
 from drivers.errors import DriverError
 from gonio import progress as planning
-from gonio.acquire import control
-from gonio.acquire import progress as progress_module
+from gonio.acquire import control, observer
 from gonio.acquire.signals import RunInterrupted
 from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, arguments
 from gonio.cli.arguments import positive
@@ -71,10 +70,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "hardware needed)",
     )
     p.add_argument(
-        "--speedup", type=_speedup, default=50.0,
+        "--speedup",
+        type=_speedup,
+        default=50.0,
         help="--rehearse: how many times faster than real time the emulated rig runs, 1 "
         "to 1e6 (default 50)",
-    )  # fmt: skip
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=cmd_acquire)
 
@@ -105,7 +106,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     from gonio.planner.files import load_plan_source
     from gonio.workflows import preflight, session
 
-    progress = progress_module.for_stream(args.quiet)
+    progress = observer.for_stream(args.quiet)
     argv = ["gonio", *sys.argv[1:]]
     if args.resume is not None:
         if args.plan is not None or args.output is not None:
@@ -113,10 +114,15 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         path: Path | None = args.resume
         try:
             outcome = session.resume(
-                args.resume, rig_path=args.rig, scene_path=args.scene, force=args.force,
-                retry_skipped=args.retry_skipped, progress=progress, argv=argv,
+                args.resume,
+                rig_path=args.rig,
+                scene_path=args.scene,
+                force=args.force,
+                retry_skipped=args.retry_skipped,
+                progress=progress,
+                argv=argv,
                 on_ready=lambda: _print_control(args.resume, args.quiet),
-            )  # fmt: skip
+            )
         except RunInterrupted:
             return _interrupted(path)
     else:
@@ -130,9 +136,14 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         if args.scene is not None:
             scene, scene_text = session.load_scene_file(args.scene, source.rig)
         files = preflight.Files(
-            source.path, source.text, source.rig.source, source.rig.text, args.scene,
-            scene_text, source.rig.alignment_text,
-        )  # fmt: skip
+            source.path,
+            source.text,
+            source.rig.source,
+            source.rig.text,
+            args.scene,
+            scene_text,
+            source.rig.alignment_text,
+        )
         kind = preflight.check_scene(files, source.rig, scene, rehearse=args.rehearse)
         preflight.refuse_fly_spec(source.spec, source.rig, kind, scene, args.scene)
         if args.output is not None:
@@ -142,9 +153,13 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         print(render_summary(plan), flush=True)
         if args.dry_run:
             for line in preflight.dry_run(
-                plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
+                plan,
+                files,
+                scene=scene,
+                output=args.output,
+                overwrite=args.overwrite,
                 rehearse=args.rehearse,
-            ):  # fmt: skip
+            ):
                 # bus hygiene lines come with their level: "warning: …", "n/a: …"
                 print(f"  {line}" if line.split(":")[0] in ("warning", "n/a") else f"  ok: {line}")
             print("dry run: nothing moved, nothing written")
@@ -152,11 +167,18 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         path = args.output
         try:
             outcome = session.start(
-                plan, files, scene=scene, output=args.output, overwrite=args.overwrite,
-                seed=args.seed, rehearse=args.rehearse, speedup=args.speedup,
-                progress=progress, argv=argv,
+                plan,
+                files,
+                scene=scene,
+                output=args.output,
+                overwrite=args.overwrite,
+                seed=args.seed,
+                rehearse=args.rehearse,
+                speedup=args.speedup,
+                progress=progress,
+                argv=argv,
                 on_ready=lambda: _print_control(args.output, args.quiet),
-            )  # fmt: skip
+            )
         except RunInterrupted:
             return _interrupted(path)
         except DriverError:

@@ -58,35 +58,46 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "--scene", type=Path, help="the scene file (where the detector is simulated: the mirror)"
     )
     p.add_argument(
-        "-o", "--output", type=Path,
+        "-o",
+        "--output",
+        type=Path,
         help="the alignment file to write (default RIG.alignment.yaml beside the rig file); "
         "the readings go beside it (.scan.sqlite)",
-    )  # fmt: skip
+    )
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument(
-        "--check", type=Path, metavar="ALIGNMENT.yaml",
+        "--check",
+        type=Path,
+        metavar="ALIGNMENT.yaml",
         help="check this alignment file with a short scan instead of fitting a new one",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--exposure", type=arguments.positive_seconds, default=1e-3, metavar="S",
+        "--exposure",
+        type=arguments.positive_seconds,
+        default=1e-3,
+        metavar="S",
         help="each reading's exposure (default 1 ms: a mirror's peak is bright)",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--stop-and-go", action="store_true",
+        "--stop-and-go",
+        action="store_true",
         help="stop at each angle of a cross scan (move, settle, read) even where the "
         "detector streams (default there: fly scans, 2.8 min against 7.3 on the simulated "
         "arch rig)",
-    )  # fmt: skip
+    )
     p.add_argument("--seed", type=arguments.seed, help="the scan's seed (default: the scene's)")
     p.add_argument(
-        "--rehearse", action="store_true",
+        "--rehearse",
+        action="store_true",
         help="run the hardware path against emulated devices on pseudo-terminals",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--speedup", type=_speedup, default=50.0,
+        "--speedup",
+        type=_speedup,
+        default=50.0,
         help="--rehearse: how many times faster than real time the emulated rig runs "
         "(default 50; the scans fly at 1 only, else stop-and-go)",
-    )  # fmt: skip
+    )
     p.set_defaults(func=cmd_align)
 
 
@@ -129,9 +140,14 @@ def cmd_align(args: argparse.Namespace) -> int:
         checked = rig.realigned(args.check)
         settings = dataclasses.replace(align.CHECK, exposure_s=args.exposure)
         result = align.run_scan(
-            rig, scene, kind, settings, seed=args.seed, speedup=args.speedup,
+            rig,
+            scene,
+            kind,
+            settings,
+            seed=args.seed,
+            speedup=args.speedup,
             stop_and_go=args.stop_and_go,
-        )  # fmt: skip
+        )
         return _print_verdict(align_check.verdict(checked, result.peaks), result, args.check)
     output = args.output or default_output(args.rig)
     sidecar = readings_path(output)
@@ -145,9 +161,14 @@ def cmd_align(args: argparse.Namespace) -> int:
     ):
         settings = dataclasses.replace(align.ScanSettings(), exposure_s=args.exposure)
         result = align.run_scan(
-            rig, scene, kind, settings, seed=args.seed, speedup=args.speedup,
+            rig,
+            scene,
+            kind,
+            settings,
+            seed=args.seed,
+            speedup=args.speedup,
             stop_and_go=args.stop_and_go,
-        )  # fmt: skip
+        )
         fitted = fit(
             rig, result.peaks, np.full(len(result.peaks), math.radians(align.PEAK_SIGMA_DEG))
         )

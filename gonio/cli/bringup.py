@@ -91,9 +91,11 @@ def add_parsers(
         "is outside 0…252, or if the motor's torque is on; asks before writing (--yes "
         "skips the question); pings B afterwards. Connect one motor at a time to be sure "
         "which one you change.",
-        exit_codes={0: "the ID changed", EXIT_DECLINED: "the question was not answered yes: "
-                    "nothing written"},
-    )  # fmt: skip
+        exit_codes={
+            0: "the ID changed",
+            EXIT_DECLINED: "the question was not answered yes: nothing written",
+        },
+    )
     set_id.add_argument("--port", required=True, help="serial port, e.g. /dev/ttyUSB0")
     set_id.add_argument(
         "--from", dest="old", type=motor_id, required=True, metavar="A", help="its present ID"
@@ -115,9 +117,12 @@ def _rig_options(p: argparse.ArgumentParser) -> None:
 
 def _timeout_option(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "--timeout", type=positive_seconds, default=DEFAULT_TIMEOUT_S, metavar="S",
+        "--timeout",
+        type=positive_seconds,
+        default=DEFAULT_TIMEOUT_S,
+        metavar="S",
         help=f"how long to wait for the axes to settle (default {DEFAULT_TIMEOUT_S:g} s)",
-    )  # fmt: skip
+    )
 
 
 def _rig_bus(args: argparse.Namespace) -> tuple[str, int, list[AxisConfig]]:

@@ -56,10 +56,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     p.add_argument("run", type=Path, help="the run file (SQLite, from gonio acquire)")
     p.add_argument(
-        "--format", metavar="FORMAT",
+        "--format",
+        metavar="FORMAT",
         help=f"the output format, any case: {', '.join(FORMATS)} (default: the one -o's "
         "suffix says: " + ", ".join(f"{k} {v}" for k, v in SUFFIXES.items()) + ")",
-    )  # fmt: skip
+    )
     arguments.add_alignment(p)
     p.add_argument("-o", "--output", required=True, type=Path, help="the file to write")
     p.add_argument(
@@ -101,13 +102,17 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         f"({', '.join(names())}; default {DEFAULT_METHOD})",
     )
     p.add_argument(
-        "--outer", type=_terms(MAX_OUTER, "outer terms"), default=2,
+        "--outer",
+        type=_terms(MAX_OUTER, "outer terms"),
+        default=2,
         help="factored: outer terms J (default 2)",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--inner", type=_terms(MAX_INNER, "inner terms"), default=2,
+        "--inner",
+        type=_terms(MAX_INNER, "inner terms"),
+        default=2,
         help="factored: inner terms K per outer term (default 2)",
-    )  # fmt: skip
+    )
     p.add_argument(
         "--allow-sparse",
         action="store_true",

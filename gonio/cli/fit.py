@@ -34,13 +34,18 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument("--json", action="store_true", help="print the figures as JSON")
     arguments.add_alignment(p)
     p.add_argument(
-        "-o", "--output", type=Path, metavar="MATERIAL.yaml",
+        "-o",
+        "--output",
+        type=Path,
+        metavar="MATERIAL.yaml",
         help="write the fitted model as a scene's material",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--starts", type=_starts, default=4,
+        "--starts",
+        type=_starts,
+        default=4,
         help=f"starting points tried, at most {MAX_STARTS} (default 4)",
-    )  # fmt: skip
+    )
     p.add_argument(
         "--seed", type=arguments.seed, default=0, help="seed of the jittered starts (default 0)"
     )

@@ -33,9 +33,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     plan.add_argument("plan", type=Path, help="the plan file (YAML)")
     plan.add_argument("--rig", type=Path, help="the rig file (default: the plan's rig field)")
     plan.add_argument(
-        "-o", "--output", type=Path,
+        "-o",
+        "--output",
+        type=Path,
         help="store the plan: a '# gonio-plan v1' header, then the ordered targets as CSV",
-    )  # fmt: skip
+    )
     plan.add_argument(
         "--plot",
         type=Path,
@@ -43,28 +45,33 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "(.png, .svg, .pdf, …; needs matplotlib)",
     )
     plan.add_argument(
-        "--bounds", action="store_true",
+        "--bounds",
+        action="store_true",
         help="also compute the duration in generation order and the MST lower bound",
-    )  # fmt: skip
+    )
     plan.add_argument(
-        "--budget-min", type=_minutes,
+        "--budget-min",
+        type=_minutes,
         metavar="M",
         help="choose the plan for M minutes of predicted instrument time: stop-and-go "
         "Sobol and warped targets in Rusinkiewicz's coordinates, fly detector arcs and θh "
         "lines, each fitted to the budget, their errors predicted for --material; prints "
         "the candidates and the choice, and -o stores the chosen plan "
         "(docs/explanations/tradeoff.md)",
-    )  # fmt: skip
+    )
     plan.add_argument(
-        "--material", metavar="SPEC",
+        "--material",
+        metavar="SPEC",
         help="the material guess of --budget-min: a material or scene YAML file, or a model "
         "NAME:key=value,... (e.g. cook_torrance:alpha=0.05,fresnel=conductor)",
-    )  # fmt: skip
+    )
     plan.add_argument(
-        "--test-pairs", type=_pairs,
-        metavar="N", help="test pairs the --budget-min predictions are scored on, at most "
+        "--test-pairs",
+        type=_pairs,
+        metavar="N",
+        help="test pairs the --budget-min predictions are scored on, at most "
         f"{MAX_TEST_PAIRS:,} (default 5000)",
-    )  # fmt: skip
+    )
     plan.set_defaults(func=cmd_plan)
 
 
@@ -156,9 +163,13 @@ def _choose(args: argparse.Namespace, source: PlanSource) -> Plan:
         args.material, parametrization=spec.parametrization, isotropic=spec.isotropic, rig=rig
     )
     choice = choose(
-        spec, rig, 60.0 * args.budget_min, material, test_pairs=args.test_pairs or TEST_PAIRS,
+        spec,
+        rig,
+        60.0 * args.budget_min,
+        material,
+        test_pairs=args.test_pairs or TEST_PAIRS,
         where=str(source.path),
-    )  # fmt: skip
+    )
     print(render_choice(choice))
     print()
     return choice.plan

@@ -38,9 +38,13 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     p.add_argument("--kind", required=True, choices=KINDS, help="the figure to draw")
     add_alignment(p)
     p.add_argument(
-        "-o", "--output", type=Path, required=True, metavar="FILE",
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="FILE",
         help="the figure file; its suffix names the format (.png, .svg, .pdf, …)",
-    )  # fmt: skip
+    )
     p.add_argument(
         "--method",
         default=DEFAULT_METHOD,
@@ -61,18 +65,26 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "YAML file, or another run file",
     )
     p.add_argument(
-        "--phi-k", type=finite_degrees, nargs="+", metavar="DEG",
+        "--phi-k",
+        type=finite_degrees,
+        nargs="+",
+        metavar="DEG",
         help="slices: the values of φk − φh (hybrid, orthographic) and φd (halfway/"
         f"difference) in degrees, in [0, 180) (default {_degrees(DEFAULT_ANGLES_DEG)})",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--theta-i", type=finite_degrees, nargs="+", metavar="DEG",
+        "--theta-i",
+        type=finite_degrees,
+        nargs="+",
+        metavar="DEG",
         help=f"polar: the angles of incidence in degrees (default {_degrees(DEFAULT_THETA_I_DEG)})",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--colour", choices=("value", "residual"), default="value",
+        "--colour",
+        choices=("value", "residual"),
+        default="value",
         help="coverage: colour the samples by log10 f or by (f − truth) / σ (default value)",
-    )  # fmt: skip
+    )
     p.set_defaults(func=cmd_plot)
 
 

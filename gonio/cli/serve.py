@@ -39,26 +39,36 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         "--token-file, and every request must then carry that token.",
     )
     p.add_argument(
-        "path", type=Path, nargs="?", default=Path("."),
+        "path",
+        type=Path,
+        nargs="?",
+        default=Path("."),
         help="a run file, or a folder of run files (default: the current folder)",
-    )  # fmt: skip
+    )
     p.add_argument("--host", default="127.0.0.1", help="the address to bind (default 127.0.0.1)")
     p.add_argument("--port", type=port, default=8765, help="the port (default 8765)")
     p.add_argument(
-        "--token-file", type=Path, metavar="FILE",
+        "--token-file",
+        type=Path,
+        metavar="FILE",
         help="a file (owner-only) holding the token every request needs on a non-loopback "
         "--host; it also allows control of every served run",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--refit-every", type=_count, default=200, metavar="N",
+        "--refit-every",
+        type=_count,
+        default=200,
+        metavar="N",
         help="new samples between two fits of --fit-model and two reconstructions of a "
         "run's slice, done in the server at the lowest priority (default 200)",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--fit-model", default="lambert+ggx", metavar="SPEC",
+        "--fit-model",
+        default="lambert+ggx",
+        metavar="SPEC",
         help="the model family fitted to a run's samples for the residuals, as gonio fit "
         "--model takes it (default lambert+ggx)",
-    )  # fmt: skip
+    )
     p.set_defaults(func=cmd_serve)
 
 
@@ -106,9 +116,13 @@ def cmd_serve(args: argparse.Namespace) -> int:
         if not loopback:
             print("every request needs the token (the page takes it as #token=… in its URL)")
         config = uvicorn.Config(
-            server.app(served), host=ip, port=args.port, log_level="warning",
-            server_header=False, date_header=False,
-        )  # fmt: skip
+            server.app(served),
+            host=ip,
+            port=args.port,
+            log_level="warning",
+            server_header=False,
+            date_header=False,
+        )
         uvicorn.Server(config).run(sockets=[sock])
     finally:
         sock.close()

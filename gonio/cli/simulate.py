@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio import progress as planning
-from gonio.acquire import progress as progress_module
+from gonio.acquire import observer
 from gonio.analysis.summary import error_figures
 from gonio.cli import arguments
 from gonio.cli.run_table import render
@@ -107,9 +107,12 @@ def _footprint_note(result: Result) -> list[str]:
         return []
     if c.beam_diameter_mm is not None:
         over = ~footprint_ok(
-            result.true_wi, result.true_wo, c.beam_diameter_mm, c.sample_diameter_mm,
+            result.true_wi,
+            result.true_wo,
+            c.beam_diameter_mm,
+            c.sample_diameter_mm,
             c.detector_fov_mm,
-        )  # fmt: skip
+        )
         what = "the beam's footprint leaves the sample or the detector's view"
     elif rig.source_kind == "point" and result.scene.effects.footprint is not None:
         over = ~view_on_sample(result.true_wo, c.detector_fov_mm, c.sample_diameter_mm)
@@ -137,15 +140,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         text = spec_text(scene)
     files = preflight.Files(
-        source.path, source.text, source.rig.source, source.rig.text, args.scene, text,
+        source.path,
+        source.text,
+        source.rig.source,
+        source.rig.text,
+        args.scene,
+        text,
         source.rig.alignment_text,
-    )  # fmt: skip
+    )
     with planning.quiet() if args.quiet else contextlib.nullcontext():
         plan = source.build()
     result = simulate_plan(
-        plan, scene, args.seed, files=files, output=args.output, overwrite=args.overwrite,
-        progress=progress_module.for_stream(args.quiet),
-    )  # fmt: skip
+        plan,
+        scene,
+        args.seed,
+        files=files,
+        output=args.output,
+        overwrite=args.overwrite,
+        progress=observer.for_stream(args.quiet),
+    )
     print(
         f"simulated plan {plan.spec.name!r} on rig {plan.rig.spec.name!r}, {render_result(result)}"
     )

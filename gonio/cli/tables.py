@@ -36,9 +36,9 @@ def parametrization_table() -> str:
 
 
 def render() -> str:
-    from gonio.brdf import lobe_study
+    from gonio.brdf import lobe_errors
 
-    return "\n\n".join([parametrization_table(), lobe_study.render_summary()])
+    return "\n\n".join([parametrization_table(), lobe_errors.render_summary()])
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:

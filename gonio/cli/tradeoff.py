@@ -49,8 +49,14 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
         },
     )
     p.add_argument("sweep", type=Path, help="the sweep file (YAML)")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR",
-                   help="the output folder (created; a reused one resumes)")  # fmt: skip
+    p.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="OUTDIR",
+        help="the output folder (created; a reused one resumes)",
+    )
     p.add_argument(
         "--target-error",
         type=positive,
@@ -97,9 +103,13 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         flush=True,
     )
     outcome = run_sweep(
-        sweep, args.output, jobs=jobs, scheduler=args.scheduler, target=args.target_error,
+        sweep,
+        args.output,
+        jobs=jobs,
+        scheduler=args.scheduler,
+        target=args.target_error,
         progress=None if args.quiet else Bar(leave=False),
-    )  # fmt: skip
+    )
     pace = f" ({60 * outcome.ran / outcome.wall_s:.1f} per minute)" if outcome.wall_s > 0 else ""
     print(
         f"ran {outcome.ran} combinations in {hms(outcome.wall_s)}{pace}; "

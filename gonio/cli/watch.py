@@ -35,9 +35,11 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
     )
     p.add_argument("run", type=Path, help="the run file (SQLite), being acquired or not")
     p.add_argument(
-        "--every", type=positive_seconds, default=1.0,
+        "--every",
+        type=positive_seconds,
+        default=1.0,
         help="seconds between reads of the run file (default 1)",
-    )  # fmt: skip
+    )
     p.add_argument("--once", action="store_true", help="show the run once and exit")
     p.set_defaults(func=cmd_watch)
 

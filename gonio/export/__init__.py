@@ -40,9 +40,15 @@ FORMATS: dict[str, tuple[str, str]] = {
 
 #: The format an output file's suffix (lower case) says, where ``--format`` is not given.
 SUFFIXES: dict[str, str] = {
-    ".csv": "csv", ".h5": "hdf5", ".hdf5": "hdf5", ".binary": "merl", ".bsdf": "rgl",
-    ".factored": "factored", ".alta": "alta", ".jsonl": "bluesky",
-}  # fmt: skip
+    ".csv": "csv",
+    ".h5": "hdf5",
+    ".hdf5": "hdf5",
+    ".binary": "merl",
+    ".bsdf": "rgl",
+    ".factored": "factored",
+    ".alta": "alta",
+    ".jsonl": "bluesky",
+}
 
 
 def format_of(output: str | Path, given: str | None) -> str:

@@ -239,8 +239,12 @@ def export_run(run: Run, out: PendingOutput, options: Options) -> str:
             run, options.method, extrapolate="nearest", allow_sparse=options.allow_sparse
         )
         y, supported, lit = supported_table(surface, res)
-        note = sparse_note(lit if supported is None else supported, lit, "factored table's bins",
-                           allow=options.allow_sparse)  # fmt: skip
+        note = sparse_note(
+            lit if supported is None else supported,
+            lit,
+            "factored table's bins",
+            allow=options.allow_sparse,
+        )
         result = factorize_table(y, options.outer, options.inner, res, seed=0)
         with step("writing"):
             out.write_bytes(ff.format_factors(result.tables).encode("utf-8"))

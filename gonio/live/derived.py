@@ -124,9 +124,17 @@ def inputs_of(
     keep = np.isfinite(f) & np.isfinite(sigma) & (f >= 0) & (wi[:, 2] >= 0) & (wo[:, 2] >= 0)
     info = live.info
     return Inputs(
-        wi[keep], wo[keep], f[keep], np.maximum(sigma[keep], 0.0), info.parametrization,
-        info.isotropic, info.rig, str(live.path), live.measured, spec,
-    )  # fmt: skip
+        wi[keep],
+        wo[keep],
+        f[keep],
+        np.maximum(sigma[keep], 0.0),
+        info.parametrization,
+        info.isotropic,
+        info.rig,
+        str(live.path),
+        live.measured,
+        spec,
+    )
 
 
 def derive(inputs: Inputs) -> Result:

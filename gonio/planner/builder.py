@@ -131,9 +131,17 @@ def order_targets(
     started = time.perf_counter()
     cand, usable = solution.candidates[sel][given], solution.usable[sel][given]
     joint = order_jointly(
-        rig.travel, cand, usable, targets, home, method=method, max_moves=budget,
-        kicks=kicks, seed=spec.sampling.seed, time_budget_s=spec.time_budget_s,
-    )  # fmt: skip
+        rig.travel,
+        cand,
+        usable,
+        targets,
+        home,
+        method=method,
+        max_moves=budget,
+        kicks=kicks,
+        seed=spec.sampling.seed,
+        time_budget_s=spec.time_budget_s,
+    )
     order, angles, travel = joint.order, joint.angles, joint.travel
     if spec.ordering == "lkh":
         if not lkh.available():

@@ -278,9 +278,17 @@ def order_jointly(
     """
     compile_kernels()
     return _order_jointly(
-        model, candidates, usable, nearest, start, method=method, max_moves=max_moves,
-        kicks=kicks, seed=seed, time_budget_s=time_budget_s,
-    )  # fmt: skip
+        model,
+        candidates,
+        usable,
+        nearest,
+        start,
+        method=method,
+        max_moves=max_moves,
+        kicks=kicks,
+        seed=seed,
+        time_budget_s=time_budget_s,
+    )
 
 
 def _order_jointly(

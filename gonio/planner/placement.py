@@ -75,8 +75,9 @@ def place(spec: PlanSpec, rig: Rig, where: str) -> tuple[FloatArray, tuple[int, 
     adaptive = s.strategy == "adaptive"
     target = s.options().survey if adaptive else s.target
     stream = sampling.Sequence("sobol" if adaptive else s.strategy, len(names), s.seed)
-    return draw_kept(spec, rig, where, lambda n: sampling.to_box(stream.draw(n), bounds, powers),
-                     target), None  # fmt: skip
+    return draw_kept(
+        spec, rig, where, lambda n: sampling.to_box(stream.draw(n), bounds, powers), target
+    ), None
 
 
 def draw_kept(

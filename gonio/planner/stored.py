@@ -82,9 +82,17 @@ def _table(plan: Plan) -> list[np.ndarray]:
     """The columns' values, one 1-d array per column."""
     n = len(plan)
     return [
-        np.arange(n, dtype=np.int64), plan.generated, *plan.coords.T, *plan.wi.T, *plan.wo.T,
-        *plan.angles.T, plan.exposure_s, plan.averages, plan.travel_s, plan.arrival_s,
-    ]  # fmt: skip
+        np.arange(n, dtype=np.int64),
+        plan.generated,
+        *plan.coords.T,
+        *plan.wi.T,
+        *plan.wo.T,
+        *plan.angles.T,
+        plan.exposure_s,
+        plan.averages,
+        plan.travel_s,
+        plan.arrival_s,
+    ]
 
 
 def _json(value: Any) -> str:

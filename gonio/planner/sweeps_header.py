@@ -88,9 +88,11 @@ def parse_sweeps(path: Path, data: Any, line: int, axes: int, targets: int) -> S
     if "path" in data:
         extra = _path_fields(path, data, line, axes, arrays)
     return Sweeps(
-        **arrays, period_s=float(data["period_s"]), integration_s=float(data["integration_s"]),
+        **arrays,
+        period_s=float(data["period_s"]),
+        integration_s=float(data["integration_s"]),
         **extra,
-    )  # fmt: skip
+    )
 
 
 def _path_fields(
@@ -114,5 +116,7 @@ def _path_fields(
             f"{path}:{line}: sweeps.path_first, path_count: expected runs of at least 2 "
             f"set-points inside the {len(points)} of sweeps.path"
         )
-    return {"path": points, "path_period_s": _positive(path, line, "path_period_s",
-                                                       data["path_period_s"])}  # fmt: skip
+    return {
+        "path": points,
+        "path_period_s": _positive(path, line, "path_period_s", data["path_period_s"]),
+    }

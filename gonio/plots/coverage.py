@@ -86,10 +86,15 @@ def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) ->
         kind = classify(plan, coords).reshape(gx.shape)
         ax = fig.add_subplot(grid[0, i])
         ax.imshow(
-            kind + 1, origin="lower", cmap=cmap,
+            kind + 1,
+            origin="lower",
+            cmap=cmap,
             extent=(*drawn(names[0], bounds[0]), *drawn(names[1], bounds[1])),
-            vmin=-0.5, vmax=len(labels) - 0.5, interpolation="nearest", aspect="auto",
-        )  # fmt: skip
+            vmin=-0.5,
+            vmax=len(labels) - 0.5,
+            interpolation="nearest",
+            aspect="auto",
+        )
         x, y = drawn(names[0], gx), drawn(names[1], gy)
         ax.contour(x, y, (kind >= 0).astype(float), levels=[0.5], colors="k", linewidths=1.0)
         near = np.abs(targets[:, 2] - value) <= half_slab
@@ -117,7 +122,7 @@ def plot_coverage(plan: Plan, path: str | Path, *, format: str | None = None) ->
     legend.legend(handles=handles, loc="center left", frameon=False)
     legend.text(
         0.55, 0.5, _summary_text(plan), transform=legend.transAxes, va="center", family="monospace"
-    )  # fmt: skip
+    )
     fig.suptitle(
         f"plan {plan.spec.name!r}: {len(plan)} targets, "
         f"{'isotropic' if plan.spec.isotropic else 'anisotropic'} "

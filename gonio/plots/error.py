@@ -120,9 +120,13 @@ def _map(
 ) -> ErrorMap:
     a, b = axes
     mean_square, x_edges, y_edges, _ = binned_statistic_2d(
-        coords[:, a], coords[:, b], np.square(log_error), statistic="mean",
-        bins=BINS, range=[bounds[a], bounds[b]],
-    )  # fmt: skip
+        coords[:, a],
+        coords[:, b],
+        np.square(log_error),
+        statistic="mean",
+        bins=BINS,
+        range=[bounds[a], bounds[b]],
+    )
     rms = np.ma.masked_invalid(np.sqrt(mean_square))
     return ErrorMap(axes, np.asarray(x_edges), np.asarray(y_edges), rms)
 

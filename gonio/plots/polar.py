@@ -163,8 +163,13 @@ def draw(data: Polar, path: str | Path, *, format: str | None = None) -> None:
         deg = np.degrees(c.theta_o)
         name = f"θi = {math.degrees(c.theta_i):g}°"
         shown = np.where(c.surface > FLOOR, c.surface, np.nan)
-        ax.plot(deg, np.where(c.supported, shown, np.nan), color=colour, lw=1.6,
-                label=f"{data.surface_label}, {name}")  # fmt: skip
+        ax.plot(
+            deg,
+            np.where(c.supported, shown, np.nan),
+            color=colour,
+            lw=1.6,
+            label=f"{data.surface_label}, {name}",
+        )
         ax.plot(deg, np.where(c.supported, np.nan, shown), color=colour, lw=1.0, ls=":")
         if c.truth is not None:
             truth = np.where(c.truth > FLOOR, c.truth, np.nan)
@@ -172,10 +177,16 @@ def draw(data: Polar, path: str | Path, *, format: str | None = None) -> None:
         if len(c.sample_f):
             lower = np.minimum(c.sample_sigma, c.sample_f - FLOOR * 0.5)
             ax.errorbar(
-                np.degrees(c.sample_theta_o), np.maximum(c.sample_f, FLOOR),
-                yerr=[np.maximum(lower, 0.0), c.sample_sigma], fmt="o", ms=3.5,
-                color=colour, ecolor=colour, capsize=2.0, lw=0.8,
-            )  # fmt: skip
+                np.degrees(c.sample_theta_o),
+                np.maximum(c.sample_f, FLOOR),
+                yerr=[np.maximum(lower, 0.0), c.sample_sigma],
+                fmt="o",
+                ms=3.5,
+                color=colour,
+                ecolor=colour,
+                capsize=2.0,
+                lw=0.8,
+            )
     ax.set_yscale("log")
     ax.set_xlabel("θo (degrees; > 0: the far side of the normal, the mirror at θo = θi)")
     ax.set_ylabel("f (sr⁻¹)")

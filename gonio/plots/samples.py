@@ -89,10 +89,18 @@ def coverage(
             colour = (f - t) / np.maximum(np.abs(t), FLOOR)
             colour_label = "relative residual (f − truth) / |truth| (some σ = 0)"
     return Coverage(
-        wi=wi, wo=wo, coords=coords, names=tuple(names), bounds=bounds, colour=colour,
-        colour_by=colour_by, colour_label=colour_label, parametrization=p.name,
-        theta_max=theta_max, title=title,
-    )  # fmt: skip
+        wi=wi,
+        wo=wo,
+        coords=coords,
+        names=tuple(names),
+        bounds=bounds,
+        colour=colour,
+        colour_by=colour_by,
+        colour_label=colour_label,
+        parametrization=p.name,
+        theta_max=theta_max,
+        title=title,
+    )
 
 
 def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None:
@@ -107,8 +115,16 @@ def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None
     width, height = FIGSIZE
     fig = plt.figure(figsize=FIGSIZE)
     # A fixed layout (inches from the edges): constrained layout costs seconds here.
-    grid = fig.add_gridspec(2, 3, left=0.8 / width, right=1 - 1.6 / width, bottom=0.6 / height,
-                            top=1 - 0.8 / height, wspace=0.3, hspace=0.3)  # fmt: skip
+    grid = fig.add_gridspec(
+        2,
+        3,
+        left=0.8 / width,
+        right=1 - 1.6 / width,
+        bottom=0.6 / height,
+        top=1 - 0.8 / height,
+        wspace=0.3,
+        hspace=0.3,
+    )
     dots = None
     for j, (w, name) in enumerate(((data.wi, "ωi (light)"), (data.wo, "ωo (detector)"))):
         ax = fig.add_subplot(grid[0, j])
@@ -121,8 +137,9 @@ def draw(data: Coverage, path: str | Path, *, format: str | None = None) -> None
     for j, (a, b) in enumerate(PROJECTIONS[len(data.names)]):
         ax = fig.add_subplot(grid[1, j])
         x, y = data.names[a], data.names[b]
-        dots = ax.scatter(drawn(x, data.coords[:, a]), drawn(y, data.coords[:, b]),
-                          c=data.colour, s=8.0, **style)  # fmt: skip
+        dots = ax.scatter(
+            drawn(x, data.coords[:, a]), drawn(y, data.coords[:, b]), c=data.colour, s=8.0, **style
+        )
         ax.set_xlim(*drawn(x, data.bounds[a]))
         ax.set_ylim(*drawn(y, data.bounds[b]))
         ax.set_xlabel(label(x))

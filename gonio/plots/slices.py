@@ -143,23 +143,32 @@ def draw(data: Slices, path: str | Path, *, format: str | None = None) -> None:
 
     # A fixed layout (inches from the edges): constrained layout costs seconds here.
     width, height = figure_size(data)
-    fig, axes = plt.subplots(len(data.rows), len(data.rows[0]), figsize=(width, height),
-                             squeeze=False)  # fmt: skip
-    fig.subplots_adjust(left=0.7 / width, right=1 - 1.5 / width, bottom=0.5 / height,
-                        top=1 - 0.9 / height, wspace=0.3, hspace=0.45)  # fmt: skip
+    fig, axes = plt.subplots(
+        len(data.rows), len(data.rows[0]), figsize=(width, height), squeeze=False
+    )
+    fig.subplots_adjust(
+        left=0.7 / width,
+        right=1 - 1.5 / width,
+        bottom=0.5 / height,
+        top=1 - 0.9 / height,
+        wspace=0.3,
+        hspace=0.45,
+    )
     image = None
     for row, ax_row in zip(data.rows, axes, strict=True):
         for s, ax in zip(row, ax_row, strict=True):
             x, y = drawn(s.names[0], s.x), drawn(s.names[1], s.y)
-            ax.pcolormesh(x, y, s.valid.astype(float), shading="nearest", cmap=background,
-                          vmin=0.0, vmax=1.0)  # fmt: skip
+            ax.pcolormesh(
+                x, y, s.valid.astype(float), shading="nearest", cmap=background, vmin=0.0, vmax=1.0
+            )
             shade = np.ma.masked_array(np.log10(np.maximum(np.nan_to_num(s.f), FLOOR)), s.masked)
             image = ax.pcolormesh(x, y, shade, shading="nearest", cmap="magma", vmin=lo, vmax=hi)
             lit = shade.compressed()
             inside = levels[(levels > lit.min()) & (levels < lit.max())] if lit.size else []
             if len(inside):  # else no iso-line crosses the slice
-                ax.contour(x, y, shade, levels=inside, colors="w", linewidths=0.6,
-                           linestyles="solid")  # fmt: skip
+                ax.contour(
+                    x, y, shade, levels=inside, colors="w", linewidths=0.6, linestyles="solid"
+                )
             ax.set_xlabel(label(s.names[0]))
             ax.set_ylabel(label(s.names[1]))
             third = f"{symbol(s.names[2])} = {math.degrees(s.angle):g}°"

@@ -154,8 +154,9 @@ def line_set(x: FloatArray, labels: np.ndarray | None = None) -> LineSet:
         _, dense = np.unique(np.where(given < 0, -1, given), return_inverse=True)
         dense = dense.ravel() - (1 if (given < 0).any() else 0)
         counts = np.bincount(dense[dense >= 0], minlength=1)
-        found = np.where((dense >= 0) & (counts[np.maximum(dense, 0)] >= MIN_LINE_SAMPLES),
-                         dense, -1)  # fmt: skip
+        found = np.where(
+            (dense >= 0) & (counts[np.maximum(dense, 0)] >= MIN_LINE_SAMPLES), dense, -1
+        )
         found = _renumbered(found)
     on = found >= 0
     lines = int(found.max()) + 1 if on.any() else 0

@@ -103,9 +103,13 @@ class Alignment:
 
     def __post_init__(self) -> None:
         for name in (
-            "zero_offset", "tilt", "tilt_azimuth", "height_mm", "light_pointing",
+            "zero_offset",
+            "tilt",
+            "tilt_azimuth",
+            "height_mm",
+            "light_pointing",
             "detector_pointing",
-        ):  # fmt: skip
+        ):
             value = _array(getattr(self, name))
             if not np.all(np.isfinite(value)):
                 raise ValueError(f"{name}: expected finite values")

@@ -181,6 +181,12 @@ def load_alignment(path: str | Path, raw: bytes | None = None) -> AlignmentFile:
 
 
 __all__ = [
-    "HEADER", "AlignmentFile", "FitRecord", "FittedParameter", "from_fit", "load_alignment",
-    "sha256", "text",
-]  # fmt: skip
+    "HEADER",
+    "AlignmentFile",
+    "FitRecord",
+    "FittedParameter",
+    "from_fit",
+    "load_alignment",
+    "sha256",
+    "text",
+]

@@ -54,9 +54,14 @@ def parameters(rig: Rig) -> tuple[str, ...]:
     ``detector_pointing_x``, ``detector_pointing_y``."""
     return (
         *(f"zero_offset.{name}" for name in rig.axes),
-        "tilt_x", "tilt_y", "height_mm",
-        "light_pointing_x", "light_pointing_y", "detector_pointing_x", "detector_pointing_y",
-    )  # fmt: skip
+        "tilt_x",
+        "tilt_y",
+        "height_mm",
+        "light_pointing_x",
+        "light_pointing_y",
+        "detector_pointing_x",
+        "detector_pointing_y",
+    )
 
 
 def as_alignment(rig: Rig, p: FloatArray) -> Alignment:
@@ -78,11 +83,15 @@ def vector(rig: Rig, alignment: Alignment) -> FloatArray:
     inverse of `as_alignment`."""
     a = alignment
     tilt = float(a.tilt)
-    return np.concatenate([
-        np.broadcast_to(a.zero_offset, (len(rig.axes),)),
-        [tilt * math.cos(float(a.tilt_azimuth)), tilt * math.sin(float(a.tilt_azimuth))],
-        [float(a.height_mm)], a.light_pointing, a.detector_pointing,
-    ]).astype(np.float64)  # fmt: skip
+    return np.concatenate(
+        [
+            np.broadcast_to(a.zero_offset, (len(rig.axes),)),
+            [tilt * math.cos(float(a.tilt_azimuth)), tilt * math.sin(float(a.tilt_azimuth))],
+            [float(a.height_mm)],
+            a.light_pointing,
+            a.detector_pointing,
+        ]
+    ).astype(np.float64)
 
 
 def stated_covariance(rig: Rig) -> FloatArray:
@@ -261,6 +270,13 @@ def _directions(
 
 
 __all__ = [
-    "AlignmentFit", "as_alignment", "fit", "miss", "parameters", "peak_at",
-    "peak_offsets", "stated_covariance", "vector",
-]  # fmt: skip
+    "AlignmentFit",
+    "as_alignment",
+    "fit",
+    "miss",
+    "parameters",
+    "peak_at",
+    "peak_offsets",
+    "stated_covariance",
+    "vector",
+]

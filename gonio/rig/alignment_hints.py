@@ -68,8 +68,9 @@ def effects(rig: Rig, to_alignment: object, count: int) -> FloatArray:
     return np.stack(columns, axis=1)
 
 
-def hints(rig: Rig, names: tuple[str, ...], undetermined: list[str], to_alignment: object
-          ) -> dict[str, str]:  # fmt: skip
+def hints(
+    rig: Rig, names: tuple[str, ...], undetermined: list[str], to_alignment: object
+) -> dict[str, str]:
     """Why each of the ``undetermined`` parameters is, and what would determine it (the
     module)."""
     columns = effects(rig, to_alignment, len(names))
@@ -84,8 +85,11 @@ def hints(rig: Rig, names: tuple[str, ...], undetermined: list[str], to_alignmen
         fitted, *_ = np.linalg.lstsq(others, columns[:, k], rcond=SPANNED)
         left = np.linalg.norm(columns[:, k] - others @ fitted) / np.linalg.norm(columns[:, k])
         if left < SPANNED:
-            alike = [n for n, c in zip(np.delete(np.array(names), k), fitted, strict=True)
-                     if abs(c) > SHARE]  # fmt: skip
+            alike = [
+                n
+                for n, c in zip(np.delete(np.array(names), k), fitted, strict=True)
+                if abs(c) > SHARE
+            ]
             out[name] = (
                 f"no scan separates it from {' and '.join(alike)}: it moves every measured "
                 f"direction as {'that does' if len(alike) == 1 else 'they do together'} "

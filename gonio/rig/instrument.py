@@ -8,7 +8,8 @@ standard are, beside where their chains put them (`gonio.rig.schema`).
   port, `SerialSwitchSpec`).
 - ``detector``: its collecting solid angle, exposure range, readout dead time, averaging
   limit and ``interface``: ``simulated``, ``serial`` (every field of
-  `drivers.serial_detector.SerialDetectorConfig`, `SerialInterfaceSpec`) or
+  `drivers.serial_detector.SerialDetectorConfig`, as the driver declares it:
+  `SerialInterfaceSpec`, `gonio.rig.driver_spec`) or
   ``pymeasure`` (a PyMeasure instrument class, `gonio.rig.lab_instrument`).
 - ``reference``: the Lambertian standard read for calibration, and where.
 
@@ -20,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -32,6 +33,7 @@ from drivers.serial_detector import (
 )
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
+from gonio.rig.driver_spec import DriverFields, driver_model
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 
 #: Lengths on the sample (mm): a micrometre to 10 m, beyond any laboratory rig.
@@ -39,12 +41,6 @@ LENGTH_RANGE_MM = (1e-3, 1e4)
 #: A point source's distance from the sample (mm): a millimetre (nearer, a lamp is no
 #: point) to 100 m.
 DISTANCE_RANGE_MM = (1.0, 1e5)
-#: A streaming detector's rates (Hz): a reading every 100 s to 10⁵ a second, beyond what
-#: a serial line carries (12 Mbaud of 16-byte lines is 75 000 lines a second).
-STREAM_RATE_RANGE_HZ = (0.01, 1e5)
-#: The largest count a detector's full scale may name: 10¹⁸, within float64's exact
-#: integers' reach of a 64-bit counter.
-MAX_FULL_SCALE = 1e18
 
 #: A command as the JSON Schema says it: not blank (`_check_command` checks the rest).
 Command = Annotated[str, InSchema(pattern=r"\S")]
@@ -53,7 +49,10 @@ Command = Annotated[str, InSchema(pattern=r"\S")]
 LINE_ENDINGS = {"lf": "\n", "crlf": "\r\n", "cr": "\r"}
 #: What a file may write for a line ending: a name or the characters.
 LineEnding = Literal["lf", "crlf", "cr", "\n", "\r\n", "\r"]
-LINE_ENDING = 'What ends a command: lf, crlf or cr (or the characters in double quotes: "\\r\\n").'
+#: What a line ending is, in the words of the serial detector's (`drivers.described`).
+LINE_ENDING = next(
+    f.metadata["doc"] for f in dataclasses.fields(SerialDetectorConfig) if f.name == "line_ending"
+)
 
 
 def _line_ending_name(v: Any) -> Any:
@@ -239,152 +238,37 @@ class SimulatedInterfaceSpec(Strict):
 
 _DRIVER_FIELDS = tuple(f.name for f in dataclasses.fields(SerialDetectorConfig))
 
-
-def _driver_default(name: str) -> Any:
-    field = next(f for f in dataclasses.fields(SerialDetectorConfig) if f.name == name)
-    return field.default
-
-
-def _stream_default(name: str) -> Any:
-    field = next(f for f in dataclasses.fields(SerialStreamConfig) if f.name == name)
-    return field.default
+if TYPE_CHECKING:
+    _StreamFields = DriverFields
+    _InterfaceFields = DriverFields
+else:
+    _StreamFields = driver_model("StreamFields", SerialStreamConfig)
 
 
-class SerialStreamSpec(Strict):
+class SerialStreamSpec(_StreamFields):
     """A serial detector's streaming mode: every field of `SerialStreamConfig`
     (docs/reference/serial_detector.md, "Streaming"), checked by the driver's rules."""
-
-    start: str = Field(
-        _stream_default("start"),
-        description="The command that starts the stream: a template of {rate_hz}, "
-        "{period_ms}, {period_us}, {integration_s}, {integration_ms} and {integration_us}.",
-    )
-    stop: str = Field(_stream_default("stop"), description="The command that stops it.")
-    line: str = Field(
-        _stream_default("line"),
-        description="A Python regex a whole data line matches: group value (required), "
-        "optional device_t (the device's time of the window's end), std, status, saturated.",
-    )
-    rate_hz: float = Field(
-        _stream_default("rate_hz"),
-        ge=STREAM_RATE_RANGE_HZ[0],
-        le=STREAM_RATE_RANGE_HZ[1],
-        description="The rate used when none is asked (Hz).",
-    )
-    max_rate_hz: float = Field(
-        _stream_default("max_rate_hz"),
-        ge=STREAM_RATE_RANGE_HZ[0],
-        le=STREAM_RATE_RANGE_HZ[1],
-        description="The highest rate it streams at (Hz).",
-    )
-    device_time_s: float = Field(
-        _stream_default("device_time_s"),
-        gt=0,
-        description="Seconds per unit of the device_t group (1e-3: milliseconds).",
-    )
-    latency_s: float = Field(
-        _stream_default("latency_s"),
-        ge=0,
-        description="The shortest delay from a window's end to its line's arrival (s), "
-        "subtracted from the host's stamps.",
-    )
-    starts_on_command: bool = Field(
-        _stream_default("starts_on_command"),
-        description="The device begins its first window when the start command arrives "
-        "(and, with a command_ack, acknowledges it then): the host stamps the windows "
-        "between when it sent the command and when the acknowledgement came back.",
-    )
 
     def config(self) -> SerialStreamConfig:
         """The driver's `SerialStreamConfig`."""
         return SerialStreamConfig(**self.model_dump())
 
 
-class SerialInterfaceSpec(Strict):
+if not TYPE_CHECKING:
+    _InterfaceFields = driver_model(
+        "InterfaceFields",
+        SerialDetectorConfig,
+        kind=("serial", "serial: a line-based detector on a serial port."),
+        types={"line_ending": Literal["lf", "crlf", "cr"], "stream": SerialStreamSpec | None},
+        defaults={"line_ending": _line_ending_name(SerialDetectorConfig.line_ending)},
+    )
+
+
+class SerialInterfaceSpec(_InterfaceFields):
     """A line-based serial detector: every field of `SerialDetectorConfig`, with its
     defaults (docs/reference/serial_detector.md), ``line_ending`` by name (``lf``, ``crlf``,
     ``cr``). Templates and regular expressions are checked by the driver's own rules
     when the rig is read, each mistake reported at its field."""
-
-    kind: Literal["serial"] = Field(description="serial: a line-based detector on a serial port.")
-    port: str = Field(min_length=1, description="The serial port, e.g. /dev/ttyACM0.")
-    baud: int = Field(_driver_default("baud"), gt=0, description="The baud rate.")
-    query: str = Field(
-        _driver_default("query"),
-        description="The command that asks for a reading: a template of {exposure_s}, "
-        "{exposure_ms}, {exposure_us} and {averages}.",
-    )
-    set_exposure: str | None = Field(
-        _driver_default("set_exposure"),
-        description="A command that sets the exposure, sent when its text changes (a template "
-        "of {exposure_s}, {exposure_ms}, {exposure_us}; none: the query carries it).",
-    )
-    response: str = Field(
-        _driver_default("response"),
-        description="A Python regex the whole answer line matches: group value (required), "
-        "optional status, saturated and std.",
-    )
-    line_ending: Literal["lf", "crlf", "cr"] = Field(
-        _line_ending_name(_driver_default("line_ending")),
-        description=LINE_ENDING,
-    )
-    timeout_s: float = Field(
-        _driver_default("timeout_s"),
-        gt=0,
-        description="The margin on every deadline (s): a query waits its exposure (times the "
-        "averages when the device averages) plus this, a command's acknowledgement this.",
-    )
-    retries: int = Field(
-        _driver_default("retries"),
-        ge=0,
-        description="Malformed answers tolerated per reading (the query is sent again).",
-    )
-    full_scale: float | None = Field(
-        _driver_default("full_scale"),
-        gt=0,
-        le=MAX_FULL_SCALE,
-        description="Counts at or above which a reading is saturated (none: no such limit).",
-    )
-    reset_banner: str | None = Field(
-        _driver_default("reset_banner"),
-        description="A Python regex of the line the device prints after a reset, e.g. ^READY.",
-    )
-    init: tuple[str, ...] = Field(
-        _driver_default("init"),
-        description="Commands sent after opening and after a reset (no template fields).",
-    )
-    settle_s: float = Field(
-        _driver_default("settle_s"),
-        ge=0,
-        description="After opening, wait up to this long for reset_banner, or exactly this "
-        "long without one (s).",
-    )
-    command_ack: str | None = Field(
-        _driver_default("command_ack"),
-        description="A Python regex an answer to every init and set_exposure command must match "
-        "(none: no answer is read).",
-    )
-    error_reply: str | None = Field(
-        _driver_default("error_reply"),
-        description="A Python regex of the line the device sends to refuse a command, e.g. ^ERR.",
-    )
-    saturated_status: str | None = Field(
-        _driver_default("saturated_status"),
-        description="A Python regex: a response's status group matching it is a saturated reading.",
-    )
-    device_averaging: bool = Field(
-        _driver_default("device_averaging"),
-        description="Send one query with {averages} and let the device average.",
-    )
-    max_line_bytes: int = Field(
-        _driver_default("max_line_bytes"),
-        ge=16,
-        description="The longest line read (bytes); longer input is discarded to the line's end.",
-    )
-    stream: SerialStreamSpec | None = Field(
-        None,
-        description="Its streaming mode, for measuring while moving (none: it does not stream).",
-    )
 
     @field_validator("line_ending", mode="before", json_schema_input_type=LineEnding)
     @classmethod
@@ -398,7 +282,8 @@ class SerialInterfaceSpec(Strict):
 
     def config(self) -> SerialDetectorConfig:
         """The driver's configuration; a `field_error` at the field the driver refuses."""
-        values = {name: getattr(self, name) for name in _DRIVER_FIELDS}
+        values = dict(self)
+        del values["kind"]
         values["line_ending"] = LINE_ENDINGS[self.line_ending]
         values["stream"] = None if self.stream is None else self.stream.config()
         try:

@@ -181,7 +181,7 @@ class Journal:
     def _connect(target: str, durable: bool, max_page_count: int | None) -> sqlite3.Connection:
         conn = sqlite3.connect(target, isolation_level=None, check_same_thread=False)
         conn.execute("PRAGMA journal_mode=WAL")
-        conn.execute(f"PRAGMA synchronous={'FULL' if durable else 'NORMAL'}")
+        _synchronous(conn, durable)
         if not durable:  # fewer, larger checkpoints: no stall every 1000 pages
             conn.execute("PRAGMA wal_autocheckpoint=16384")
         conn.execute("PRAGMA foreign_keys=ON")
@@ -314,6 +314,20 @@ class Journal:
                 f"{self.path}: cannot bring the run file up to date: {exc}"
             ) from None
 
+    def make_durable(self, durable: bool) -> None:
+        """Commit with ``synchronous=FULL`` (``durable``: a power loss loses nothing
+        committed) or ``NORMAL`` from now on; a resumed run learns which from its backend
+        after the file is opened."""
+        _synchronous(self.conn, durable)
+
+    def anything_recorded(self) -> bool:
+        """Whether the run holds a sample or an event other than its start."""
+        samples = self.conn.execute("SELECT COUNT(*) FROM samples").fetchone()[0]
+        events = self.conn.execute(
+            "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
+        ).fetchone()[0]
+        return bool(samples or events)
+
     def _meta_text(self, key: str) -> str:
         row = self.conn.execute("SELECT value FROM meta WHERE key = ?", (key,)).fetchone()
         if row is None:
@@ -439,6 +453,10 @@ class Journal:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _synchronous(conn: sqlite3.Connection, durable: bool) -> None:
+    conn.execute(f"PRAGMA synchronous={'FULL' if durable else 'NORMAL'}")
 
 
 def check_version(conn: sqlite3.Connection, path: Path) -> None:

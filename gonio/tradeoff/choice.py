@@ -195,9 +195,17 @@ def material_guess(spec: str, *, parametrization: str, isotropic: bool, rig: Rig
         )
     empty = np.zeros((0, 3))
     stub = Measured(
-        wi=empty, wo=empty, f=np.zeros(0), sigma=np.zeros(0), parametrization=parametrization,
-        isotropic=isotropic, rig=rig, scene_text=None, band="luminance", source="the plan",
-    )  # fmt: skip
+        wi=empty,
+        wo=empty,
+        f=np.zeros(0),
+        sigma=np.zeros(0),
+        parametrization=parametrization,
+        isotropic=isotropic,
+        rig=rig,
+        scene_text=None,
+        band="luminance",
+        source="the plan",
+    )
     return truth_from_spec(spec, stub)
 
 
@@ -355,10 +363,17 @@ def _predicted(
     ``material``, reconstructed by each of `METHODS` (the lower error counts)."""
     f = np.asarray(material.eval(plan.wi, plan.wo), dtype=np.float64)
     measured = Measured(
-        wi=plan.wi, wo=plan.wo, f=f, sigma=np.zeros_like(f),
-        parametrization=plan.spec.parametrization, isotropic=plan.spec.isotropic, rig=rig,
-        scene_text=None, band="luminance", source=plan.spec.name,
-    )  # fmt: skip
+        wi=plan.wi,
+        wo=plan.wo,
+        f=f,
+        sigma=np.zeros_like(f),
+        parametrization=plan.spec.parametrization,
+        isotropic=plan.spec.isotropic,
+        rig=rig,
+        scene_text=None,
+        band="luminance",
+        source=plan.spec.name,
+    )
     # linear: the unit box's diagonal as the support distance, so that the interpolant
     # answers wherever it is defined (inside the samples' hull); rbf: its own support.
     dims = len(plan.spec.coordinates())
@@ -366,9 +381,11 @@ def _predicted(
     for method in METHODS:
         try:
             candidate = reconstruct(
-                measured, method=method, extrapolate=EXTRAPOLATE,
+                measured,
+                method=method,
+                extrapolate=EXTRAPOLATE,
                 max_distance=math.sqrt(dims) if method == "linear" else None,
-            )  # fmt: skip
+            )
             every = evaluate(
                 candidate, material, rig, isotropic=plan.spec.isotropic, test_set=test_set
             ).regions["all"]

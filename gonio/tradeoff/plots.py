@@ -62,17 +62,36 @@ def plot_scene(
         mine = [r for r in timed if series(r) == name]
         if not mine:
             continue
-        ax.scatter([r[TIME] for r in mine], [r[metric] for r in mine], s=14, alpha=0.6,
-                   color=colours[name], label=name)  # fmt: skip
+        ax.scatter(
+            [r[TIME] for r in mine],
+            [r[metric] for r in mine],
+            s=14,
+            alpha=0.6,
+            color=colours[name],
+            label=name,
+        )
         front = [mine[i] for i in pareto_front(mine, metric)]
-        ax.step([r[TIME] for r in front], [r[metric] for r in front], where="post",
-                color=colours[name], lw=1.0)  # fmt: skip
+        ax.step(
+            [r[TIME] for r in front],
+            [r[metric] for r in front],
+            where="post",
+            color=colours[name],
+            lw=1.0,
+        )
     front = [timed[i] for i in pareto_front(timed, metric)]
     if front:
-        ax.scatter([r[TIME] for r in front], [r[metric] for r in front], s=70,
-                   facecolors="none", edgecolors="k", lw=1.2, label="front (all)")  # fmt: skip
-    _finish(ax, bool(timed), "simulated instrument time (s)", metric,
-            f"{scene}: {metric} against time")  # fmt: skip
+        ax.scatter(
+            [r[TIME] for r in front],
+            [r[metric] for r in front],
+            s=70,
+            facecolors="none",
+            edgecolors="k",
+            lw=1.2,
+            label="front (all)",
+        )
+    _finish(
+        ax, bool(timed), "simulated instrument time (s)", metric, f"{scene}: {metric} against time"
+    )
     _save(fig, paths[0])
     plt.close(fig)
 
@@ -82,8 +101,14 @@ def plot_scene(
         mine = [r for r in counted if series(r) == name]
         if not mine:
             continue
-        ax.scatter([r["measured"] for r in mine], [r[metric] for r in mine], s=14, alpha=0.5,
-                   color=colours[name], label=name)  # fmt: skip
+        ax.scatter(
+            [r["measured"] for r in mine],
+            [r[metric] for r in mine],
+            s=14,
+            alpha=0.5,
+            color=colours[name],
+            label=name,
+        )
         groups = list(dict.fromkeys((r["samples"], r.get("minutes")) for r in mine))
         points = sorted(
             (
@@ -99,8 +124,13 @@ def plot_scene(
             for g in groups
         )
         ax.plot([x for x, _ in points], [y for _, y in points], color=colours[name], lw=1.2)
-    _finish(ax, bool(counted), "samples measured", metric,
-            f"{scene}: {metric} against samples (medians)")  # fmt: skip
+    _finish(
+        ax,
+        bool(counted),
+        "samples measured",
+        metric,
+        f"{scene}: {metric} against samples (medians)",
+    )
     _save(fig, paths[1])
     plt.close(fig)
     return paths[0], paths[1]

@@ -109,11 +109,12 @@ def _measure(task: Task, walls: dict[str, float | None]) -> dict[str, Any]:
         measured.scene_truth(),
         rig,
         isotropic=plan.spec.isotropic,
-        test_set=_test_set(task.rig_path, task.rig_text, plan.spec.isotropic, task.test_pairs,
-                           task.test_seed),
+        test_set=_test_set(
+            task.rig_path, task.rig_text, plan.spec.isotropic, task.test_pairs, task.test_seed
+        ),
         candidate_label=f"{task.method} ({task.id})",
         only_supported=task.only_supported,
-    )  # fmt: skip
+    )
     walls["evaluate_wall_s"] = time.perf_counter() - started
     run_figures = figures(result.run)
     fly = plan.summary.fly

@@ -225,14 +225,15 @@ class Axes(Strict):
                 raise field_error(str(k), f"expected a positive count, got {value}")
             if info.field_name == "averages" and value > MAX_AVERAGES:
                 raise field_error(
-                    str(k), f"expected at most {MAX_AVERAGES} averages (each reading is "
+                    str(k),
+                    f"expected at most {MAX_AVERAGES} averages (each reading is "
                     f"simulated), got {value:,}",
-                )  # fmt: skip
+                )
             if info.field_name == "samples" and value > MAX_TARGETS:
                 raise field_error(
-                    str(k), f"expected at most {MAX_TARGETS:,} targets, got {value:,} "
-                    f"({WHY_MAX_TARGETS})",
-                )  # fmt: skip
+                    str(k),
+                    f"expected at most {MAX_TARGETS:,} targets, got {value:,} ({WHY_MAX_TARGETS})",
+                )
         return values
 
     @field_validator("exposure_s", "velocity_scale", "minutes", "blur_deg", "rate_hz")

@@ -8,14 +8,13 @@ adaptive plan's passes, and simulates a plan end to end.
 
 from gonio.workflows.preflight import Files, dry_run
 from gonio.workflows.session import SessionResult, resume, start
-from gonio.workflows.simulate import Result, measure_targets, simulate_plan
+from gonio.workflows.simulate import Result, simulate_plan
 
 __all__ = [
     "Files",
     "Result",
     "SessionResult",
     "dry_run",
-    "measure_targets",
     "resume",
     "simulate_plan",
     "start",

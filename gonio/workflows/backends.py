@@ -103,9 +103,13 @@ def simulated(rig: Rig, scene: Scene, seed: int | None, *, any_detector: bool = 
         )
     instrument = SimulatedInstrument(scene, rig, seed=seed)
     return Backend(
-        "simulated", instrument.devices(), instrument, RunTime(instrument.clock.now),
-        durable=False, calibrate_on_resume=False,
-    )  # fmt: skip
+        "simulated",
+        instrument.devices(),
+        instrument,
+        RunTime(instrument.clock.now),
+        durable=False,
+        calibrate_on_resume=False,
+    )
 
 
 def hardware(
@@ -133,9 +137,13 @@ def _with_simulated_detector(rig: Rig, scene: Scene, seed: int | None, clock: Cl
     )
     light = SimLightSource()
     detector = SimDetector(
-        scene, rig, bus.positions, clock=clock,
-        streams=Streams(scene.seed if seed is None else seed), light=light,
-    )  # fmt: skip
+        scene,
+        rig,
+        bus.positions,
+        clock=clock,
+        streams=Streams(scene.seed if seed is None else seed),
+        light=light,
+    )
     return Devices(bus, detector, clock, light, RehearsalSide(detector, bus.positions))
 
 

@@ -202,8 +202,15 @@ def needs_operator(backend: backends.Backend) -> bool:
     return isinstance(stage, backends.OperatorStage) and not stage.can_ask()
 
 
-def dry_run(plan: Plan, files: Files, *, scene: Scene | None, output: Path | None, overwrite: bool,
-            rehearse: bool = False) -> list[str]:  # fmt: skip
+def dry_run(
+    plan: Plan,
+    files: Files,
+    *,
+    scene: Scene | None,
+    output: Path | None,
+    overwrite: bool,
+    rehearse: bool = False,
+) -> list[str]:
     """Check what a run needs without moving anything; the lines to print (raises a
     `GonioError` at the first problem)."""
     rig = plan.rig

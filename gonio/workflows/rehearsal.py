@@ -67,9 +67,14 @@ def rehearsal_devices(
         interface = rig.spec.detector.interface
         serial = interface.kind == "serial"
         physics = SimDetector(
-            scene, rig, truth if interface.kind != "simulated" else bus.positions, clock=clock,
-            streams=streams, light=state, pose_at=truth_at,
-        )  # fmt: skip
+            scene,
+            rig,
+            truth if interface.kind != "simulated" else bus.positions,
+            clock=clock,
+            streams=streams,
+            light=state,
+            pose_at=truth_at,
+        )
         if isinstance(interface, PyMeasureInterfaceSpec):
             instrument = stack.enter_context(instrument_for(rig, interface, physics, clock))
             detector: Detector = pymeasure_detector(

@@ -31,7 +31,7 @@ from drivers.errors import DriverError
 from gonio import __version__
 from gonio.acquire.ending import Report
 from gonio.acquire.engine import Engine
-from gonio.acquire.progress import Observer, Unobserved
+from gonio.acquire.observer import Observer, Unobserved
 from gonio.acquire.runtime import utc_now
 from gonio.acquire.signals import StopRequests
 from gonio.analysis.measured import Measured
@@ -210,16 +210,25 @@ def start(
         backend.close()
         raise
     meta = _meta(
-        plan, files, kind, seed, started, speedup=speedup if rehearse else None,
+        plan,
+        files,
+        kind,
+        seed,
+        started,
+        speedup=speedup if rehearse else None,
         any_detector=force_simulated,
-    )  # fmt: skip
+    )
     stored = plan_bytes(plan)
     try:
         parse_plan(stored, "plan")  # a plan the journal could not give back is refused now
         with Journal.create(
-            output, meta, stored, durable=backend.durable, overwrite=overwrite,
+            output,
+            meta,
+            stored,
+            durable=backend.durable,
+            overwrite=overwrite,
             max_page_count=max_page_count,
-        ) as journal:  # fmt: skip
+        ) as journal:
             if on_ready is not None:
                 try:
                     on_ready()
@@ -235,20 +244,12 @@ def start(
             except DriverError:
                 # The devices could not be opened (port missing, busy, no permission):
                 # nothing moved and nothing was measured, so no run file is left behind.
-                if output is not None and not _anything_measured(journal):
+                if output is not None and not journal.anything_recorded():
                     journal.close()
                     remove_run_file(output)
                 raise
     finally:
         backend.close()
-
-
-def _anything_measured(journal: Journal) -> bool:
-    samples = journal.conn.execute("SELECT COUNT(*) FROM samples").fetchone()[0]
-    events = journal.conn.execute(
-        "SELECT COUNT(*) FROM events WHERE kind NOT IN ('start')"
-    ).fetchone()[0]
-    return bool(samples or events)
 
 
 def changed_files(run: Run, files: Files) -> list[str]:
@@ -303,9 +304,12 @@ def current_files(run: Run, plan: Path | None, rig: Path | None, scene: Path | N
         named = named_alignment(rig_path, aligned)
         stored = run.meta.get("alignment_text")
         alignment_text = (
-            read_bytes(named) if named.is_file()
-            else None if stored is None else str(stored).encode("utf-8")
-        )  # fmt: skip
+            read_bytes(named)
+            if named.is_file()
+            else None
+            if stored is None
+            else str(stored).encode("utf-8")
+        )
     return Files(plan_path, plan_text, rig_path, rig_text, scene_path, scene_text, alignment_text)
 
 
@@ -355,9 +359,14 @@ def resume(
         started = float(run.meta["started_unix"])
         speed = speedup or float(run.meta.get("speedup") or 50.0)
         backend = backends.build(
-            kind, rig, scene, seed, started, speedup=speed,
+            kind,
+            rig,
+            scene,
+            seed,
+            started,
+            speedup=speed,
             any_detector=bool(run.meta.get("any_detector")),
-        )  # fmt: skip
+        )
         try:
             hygiene.warn(preflight(run.plan, backend, files.plan_path, rig))
         except GonioError:
@@ -367,14 +376,19 @@ def resume(
             if on_ready is not None:
                 on_ready()
             journal.upgrade()
-            journal.conn.execute(f"PRAGMA synchronous={'FULL' if backend.durable else 'NORMAL'}")
+            journal.make_durable(backend.durable)
             if changed:
                 journal.start_session(utc_now(), {"forced": changed, "hashes": files.hashes()})
                 journal.end_session(utc_now(), "forced")
             return _run_engine(
-                journal, run.plan, backend, run, progress=progress or Unobserved(),
-                retry_skipped=retry_skipped, argv=argv or [],
-            )  # fmt: skip
+                journal,
+                run.plan,
+                backend,
+                run,
+                progress=progress or Unobserved(),
+                retry_skipped=retry_skipped,
+                argv=argv or [],
+            )
         finally:
             backend.close()
     finally:

@@ -1,7 +1,5 @@
 """A whole simulated session: the acquisition engine on the simulated backend (the
-same loop, journal and calibration as `gonio acquire`), and what it recovers; and a
-plan measured target by target on a `SimulatedInstrument` without the engine
-(`measure_targets`, checked against the vectorized `sim.virtual.simulate.simulate`).
+same loop, journal and calibration as `gonio acquire`), and what it recovers.
 
 `simulate_plan` runs `gonio.workflows.session.start` with the simulated backend into a
 run journal (in memory unless ``output`` names a file), then derives the BRDF from the
@@ -19,8 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from gonio.acquire.ending import Report
-from gonio.acquire.measure import measure_target
-from gonio.acquire.progress import Observer
+from gonio.acquire.observer import Observer
 from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
@@ -30,9 +27,6 @@ from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files
-from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.devices.position_error import planned_poses
-from sim.virtual.record import SimRun
 from sim.virtual.scene import Scene
 
 
@@ -101,14 +95,25 @@ def simulate_plan(
     scene as validated); ``output``: keep the run journal there."""
     if files is None:
         files = Files(
-            None, plan.plan_text, plan.rig.source, plan.rig.text, None, spec_text(scene),
+            None,
+            plan.plan_text,
+            plan.rig.source,
+            plan.rig.text,
+            None,
+            spec_text(scene),
             plan.rig.alignment_text,
-        )  # fmt: skip
+        )
     started = time.perf_counter()
     outcome = session.start(
-        plan, files, scene=scene, output=output, overwrite=overwrite, seed=seed,
-        progress=progress, force_simulated=True,
-    )  # fmt: skip
+        plan,
+        files,
+        scene=scene,
+        output=output,
+        overwrite=overwrite,
+        seed=seed,
+        progress=progress,
+        force_simulated=True,
+    )
     wall = time.perf_counter() - started
     run = outcome.run
     try:
@@ -133,55 +138,4 @@ def simulate_plan(
         wo=wo,
         true_wi=true_wi,
         true_wo=true_wo,
-    )
-
-
-def measure_targets(
-    instrument: SimulatedInstrument,
-    plan: Plan,
-    *,
-    start: int = 0,
-    stop: int | None = None,
-    prepare: bool = True,
-) -> SimRun:
-    """Measure targets ``start``…``stop`` of ``plan`` one by one with ``instrument``,
-    through the engine's step (`gonio.acquire.measure`; stream index = target index, so
-    a run resumed at ``start`` equals the tail of a full run once the motors are where
-    the full run had them). With ``prepare`` the detector first
-    computes the optics at the poses the plan will reach, vectorized
-    (`SimDetector.prepare`); the readings are the same either way."""
-    stop = len(plan) if stop is None else stop
-    if prepare:
-        _, expected, _ = planned_poses(
-            instrument.rig, plan.angles, instrument.scene, instrument.streams
-        )
-        instrument.detector.prepare(expected[start:stop])
-    axes, settle = instrument.rig.axes, instrument.rig.spec.settle_s
-    rows = [
-        measure_target(
-            instrument.devices(), i, dict(zip(axes, plan.angles[i].tolist(), strict=True)),
-            float(plan.exposure_s[i]), int(plan.averages[i]), settle_s=settle,
-        )
-        for i in range(start, stop)
-    ]  # fmt: skip
-    n = len(axes)
-    true = np.array([[m.true[a] for a in axes] for m in rows if m.true], dtype=np.float64)
-    true = true.reshape(-1, n)  # every row has its true pose: this backend is simulated
-    wi, wo = instrument.detector.chain.pairs(true)  # through the scene's misalignment
-    return SimRun(
-        index=np.arange(start, stop, dtype=np.int64),
-        commanded=plan.angles[start:stop],
-        read_back=np.array(
-            [[m.read_back[a] for a in axes] for m in rows], dtype=np.float64
-        ).reshape(-1, n),
-        true=true,
-        wi=wi,
-        wo=wo,
-        exposure_s=plan.exposure_s[start:stop],
-        averages=plan.averages[start:stop],
-        settled_s=np.array([m.settled_s for m in rows], dtype=np.float64),
-        end_s=np.array([m.reading.ended_s for m in rows], dtype=np.float64),
-        value=np.array([m.reading.value for m in rows], dtype=np.float64),
-        std=np.array([m.reading.std for m in rows], dtype=np.float64),
-        saturated=np.array([m.reading.saturated for m in rows], dtype=np.bool_),
     )

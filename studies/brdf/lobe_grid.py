@@ -1,8 +1,8 @@
-"""Grid checks of the lobe study (`gonio.brdf.lobe_study`): maxima over ψ by
+"""Grid checks of the lobes' errors (`gonio.brdf.lobe_errors`): maxima over ψ by
 a grid and zoom-ins, which check the exact epicentre maxima and give the absolute
 errors over the hemisphere, and the angle of the cosine-quadratic lobe's zero.
 
-Conventions as in `gonio.brdf.lobe_study`: c = cos ψ, n the shininess, F_B = cos^n ψ,
+Conventions as in `gonio.brdf.lobe_errors`: c = cos ψ, n the shininess, F_B = cos^n ψ,
 δ = |F − F_B| / F_B, Δ = |F − F_B|; angles in radians.
 """
 
@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from gonio.brdf import lobes
-from gonio.brdf.lobe_study import K_PRINTED, Lobe
+from gonio.brdf.lobe_errors import K_PRINTED, Lobe
 from gonio.types import ArrayLike, FloatArray
 
 

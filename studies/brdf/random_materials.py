@@ -26,8 +26,11 @@ def draw(seed: int) -> tuple[str, BrdfEval]:
         params |= {"fresnel": "schlick", "f0": float(rng.uniform(0.02, 0.08))}
         what = f"dielectric F0 {params['f0']:.3f}"
     else:
-        params |= {"fresnel": "conductor", "ior": float(rng.uniform(0.1, 2.0)),
-                   "k": float(rng.uniform(1.0, 8.0))}  # fmt: skip
+        params |= {
+            "fresnel": "conductor",
+            "ior": float(rng.uniform(0.1, 2.0)),
+            "k": float(rng.uniform(1.0, 8.0)),
+        }
         what = f"conductor n {params['ior']:.2f} k {params['k']:.2f}"
     text = f"GGX α {alpha:.3f}, {what}, kd {kd:.2f}"
     return text, brdf.create("cook_torrance", **params).eval

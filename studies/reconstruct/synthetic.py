@@ -108,9 +108,16 @@ def synthesize_adaptive(
     `gonio.workflows.adaptive.estimate`: the σs weight the fit) and valued too, survey
     first."""
     return adaptive_choice(
-        f, rig, parametrization, isotropic, n, seed=seed, adaptive=adaptive,
-        relative_sigma=relative_sigma, sigma_floor=sigma_floor,
-    )[0]  # fmt: skip
+        f,
+        rig,
+        parametrization,
+        isotropic,
+        n,
+        seed=seed,
+        adaptive=adaptive,
+        relative_sigma=relative_sigma,
+        sigma_floor=sigma_floor,
+    )[0]
 
 
 def adaptive_choice(

@@ -52,8 +52,15 @@ def synthesize_lines(
     wi, wo, label = wi[ok], wo[ok], label[valid][ok]
     value = np.asarray(f(wi, wo), dtype=np.float64)
     measured = Measured(
-        wi=wi, wo=wo, f=value, sigma=relative_sigma * np.abs(value),
-        parametrization="rusinkiewicz", isotropic=True, rig=rig, scene_text=None,
-        band="luminance", source=f"{lines} synthetic lines every {step_deg:g}°",
-    )  # fmt: skip
+        wi=wi,
+        wo=wo,
+        f=value,
+        sigma=relative_sigma * np.abs(value),
+        parametrization="rusinkiewicz",
+        isotropic=True,
+        rig=rig,
+        scene_text=None,
+        band="luminance",
+        source=f"{lines} synthetic lines every {step_deg:g}°",
+    )
     return measured, label

@@ -134,7 +134,7 @@ HOLD_S = 120.0
 
 
 class PipeProgress:
-    """A `gonio.acquire.progress.Observer` that writes ``t INDEX`` to a pipe for every
+    """A `gonio.acquire.observer.Observer` that writes ``t INDEX`` to a pipe for every
     target finished (called after its sample or skip was committed); with
     ``hold_after`` it waits, once it reported that many targets (over all sessions),
     for the signal the parent sends then, so the run cannot finish before it."""

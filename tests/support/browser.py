@@ -16,9 +16,14 @@ import pytest
 
 CHROMIUM = os.environ.get("GONIO_CHROMIUM", "/usr/bin/chromium")
 ARGS = [
-    "--no-sandbox", "--headless", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--no-first-run", "--disable-sync",
-]  # fmt: skip
+    "--no-sandbox",
+    "--headless",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--no-first-run",
+    "--disable-sync",
+]
 
 
 def why_not() -> str | None:
@@ -45,9 +50,12 @@ def chromium(profile: Path, width: int = 1280, height: int = 900) -> Iterator[An
 
     with sync_playwright() as p:
         context = p.chromium.launch_persistent_context(
-            str(profile), executable_path=CHROMIUM, args=ARGS, headless=True,
+            str(profile),
+            executable_path=CHROMIUM,
+            args=ARGS,
+            headless=True,
             viewport={"width": width, "height": height},
-        )  # fmt: skip
+        )
         try:
             yield context
         finally:

@@ -111,14 +111,29 @@ def calibration_events(
     k = np.arange(calibrations)
     start = np.asarray(1.0 + interval_s * k, dtype=np.float64)
     ref = simulate_standard(
-        rig, scene, pose, start, exposure_s, averages, CALIBRATION_INDEX + 2 * k,
-        seed=seed, optics=optics,
-    )  # fmt: skip
+        rig,
+        scene,
+        pose,
+        start,
+        exposure_s,
+        averages,
+        CALIBRATION_INDEX + 2 * k,
+        seed=seed,
+        optics=optics,
+    )
     dark_start = np.asarray(start + busy + rig.spec.settle_s, dtype=np.float64)
     off = simulate_standard(
-        rig, scene, pose, dark_start, exposure_s, averages, CALIBRATION_INDEX + 2 * k + 1,
-        seed=seed, light_on=False, optics=optics,
-    )  # fmt: skip
+        rig,
+        scene,
+        pose,
+        dark_start,
+        exposure_s,
+        averages,
+        CALIBRATION_INDEX + 2 * k + 1,
+        seed=seed,
+        light_on=False,
+        optics=optics,
+    )
     events = []
     for j in range(calibrations):
         data = {

@@ -17,8 +17,12 @@ def gonio_process(*args: str, timeout: float = 120) -> CliResult:
     """Run ``python -m gonio ARGS…`` from the repository's root."""
     done = subprocess.run(
         [sys.executable, "-m", "gonio", *args],
-        capture_output=True, text=True, timeout=timeout, cwd=ROOT, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=ROOT,
+        stdin=subprocess.DEVNULL,
+    )
     return CliResult(done.returncode, done.stdout, done.stderr)
 
 

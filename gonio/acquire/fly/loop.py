@@ -26,7 +26,7 @@ from drivers.stream import StreamReading
 from gonio.acquire.ending import EndSession, fault_data
 from gonio.acquire.fly.merge import Derived, RawSweep, derive
 from gonio.acquire.fly.run import run_sweep
-from gonio.acquire.progress import Observer
+from gonio.acquire.observer import Observer
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.runtime import RunTime
 from gonio.acquire.signals import StopRequests

@@ -85,8 +85,11 @@ def test_a_transient_fault_is_retried(
 def test_a_transient_fault_without_retries_skips_the_target(
     tmp_path: Path, run_files: Callable[..., RunFiles], watched: Watched
 ) -> None:
-    files = run_files(20, faults=[{"kind": "comm_error", "at": [6]}],
-                      acquisition={"on_fault": {"retries": 0, "then": "skip"}})  # fmt: skip
+    files = run_files(
+        20,
+        faults=[{"kind": "comm_error", "at": [6]}],
+        acquisition={"on_fault": {"retries": 0, "then": "skip"}},
+    )
     path = tmp_path / "run.sqlite"
     outcome = files.start(path)
     assert outcome.report.outcome == "completed" and outcome.report.skipped == 1
@@ -102,8 +105,11 @@ def test_a_transient_fault_aborts_when_the_plan_says_so(
     # (An injected fault fires on a sample's first attempt only, so retries would
     # succeed: the abort is shown with none.)
     path = tmp_path / "run.sqlite"
-    files = run_files(20, faults=[{"kind": "detector_error", "at": [8]}],
-                      acquisition={"on_fault": {"retries": 0, "then": "abort"}})  # fmt: skip
+    files = run_files(
+        20,
+        faults=[{"kind": "detector_error", "at": [8]}],
+        acquisition={"on_fault": {"retries": 0, "then": "abort"}},
+    )
     outcome = files.start(path)
     assert outcome.report.outcome == "aborted"
     run = outcome.run
@@ -118,11 +124,18 @@ def test_a_transient_fault_aborts_when_the_plan_says_so(
 @pytest.mark.parametrize(
     ("fault", "error"),
     [
-        ({"kind": "motor_fault", "at": [9], "axis": "detector_elevation",
-          "flags": ["overload", "overheating"]}, "MotorFault"),
+        (
+            {
+                "kind": "motor_fault",
+                "at": [9],
+                "axis": "detector_elevation",
+                "flags": ["overload", "overheating"],
+            },
+            "MotorFault",
+        ),
         ({"kind": "motion_timeout", "at": [9]}, "MotionTimeout"),
     ],
-)  # fmt: skip
+)
 def test_a_motor_fault_ends_the_run_resumable(
     fault: dict[str, Any],
     error: str,

@@ -23,12 +23,18 @@ from tests.conftest import CONFIGS
 
 
 def plan_spec(**exposure: object) -> PlanSpec:
-    return PlanSpec.model_validate({
-        "name": "t", "parametrization": "hybrid", "isotropic": True,
-        "sampling": {"strategy": "sobol", "target": 40, "seed": 0},
-        "exposure": {"seconds": 0.02, "averages": 1, **exposure},
-        "time_budget_s": 1, "max_moves": 0, "kicks": 0,
-    })  # fmt: skip
+    return PlanSpec.model_validate(
+        {
+            "name": "t",
+            "parametrization": "hybrid",
+            "isotropic": True,
+            "sampling": {"strategy": "sobol", "target": 40, "seed": 0},
+            "exposure": {"seconds": 0.02, "averages": 1, **exposure},
+            "time_budget_s": 1,
+            "max_moves": 0,
+            "kicks": 0,
+        }
+    )
 
 
 def lockin(rig: Rig, **detector: object) -> Scene:

@@ -61,9 +61,12 @@ def test_recover_measures_every_target_once_and_journals_each_step(
         (5, "detector_elevation", "diagnosed"),
         (5, "detector_elevation", "rebooted"),
         (5, "detector_elevation", "recovered"),
-        *[(t, "light_elevation", s) for t in (9, 14) for s in
-          ("diagnosed", "cooling", "cooled", "rebooted", "recovered")],
-    ]  # fmt: skip
+        *[
+            (t, "light_elevation", s)
+            for t in (9, 14)
+            for s in ("diagnosed", "cooling", "cooled", "rebooted", "recovered")
+        ],
+    ]
     events = run.of_kind("recovery")
     diagnosed = events[0].data
     assert diagnosed["flags"] == ["overload"] and diagnosed["recovery"] == 1
@@ -113,9 +116,13 @@ def ended_by_fault(files: RunFiles, path: Path, measured: int) -> Run:
 def test_more_recoveries_than_allowed_stop_resumable(
     tmp_path: Path, run_files: Callable[..., RunFiles]
 ) -> None:
-    files = run_files(20, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [3, 7, 12, 15], "axis": "detector_azimuth"},
-    ])  # fmt: skip
+    files = run_files(
+        20,
+        acquisition=RECOVER,
+        faults=[
+            {"kind": "motor_fault", "at": [3, 7, 12, 15], "axis": "detector_azimuth"},
+        ],
+    )
     path = tmp_path / "run.sqlite"
     run = ended_by_fault(files, path, 12)
     assert [s for t, _, s in steps(run) if t == 12] == ["diagnosed", "failed"]
@@ -132,9 +139,13 @@ def test_more_recoveries_than_allowed_stop_resumable(
 def test_a_position_that_disagrees_after_the_reboot_stops(
     tmp_path: Path, run_files: Callable[..., RunFiles]
 ) -> None:
-    files = run_files(20, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [6], "axis": "sample_rotation", "shift_deg": 180.0},
-    ])  # fmt: skip
+    files = run_files(
+        20,
+        acquisition=RECOVER,
+        faults=[
+            {"kind": "motor_fault", "at": [6], "axis": "sample_rotation", "shift_deg": 180.0},
+        ],
+    )
     run = ended_by_fault(files, tmp_path / "run.sqlite", 6)
     rebooted, failed = (e.data for e in run.of_kind("recovery")[1:])
     assert rebooted["step"] == "rebooted" and failed["step"] == "failed"
@@ -150,10 +161,19 @@ def test_a_motor_that_does_not_cool_in_time_stops(
     acquisition: dict[str, Any] = {
         "on_fault": {"motor": {"action": "recover", "cool_down_minutes": 1}}
     }
-    files = run_files(20, acquisition=acquisition, faults=[
-        {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"],
-         "for_s": 600},
-    ])  # fmt: skip
+    files = run_files(
+        20,
+        acquisition=acquisition,
+        faults=[
+            {
+                "kind": "motor_fault",
+                "at": [4],
+                "axis": "light_elevation",
+                "flags": ["overheating"],
+                "for_s": 600,
+            },
+        ],
+    )
     run = ended_by_fault(files, tmp_path / "run.sqlite", 4)
     assert [s for _, _, s in steps(run)] == ["diagnosed", "cooling", "failed"]
     assert "still 80 °C after 1 min" in run.of_kind("recovery")[-1].data["reason"]
@@ -162,9 +182,13 @@ def test_a_motor_that_does_not_cool_in_time_stops(
 def test_ctrl_c_while_a_motor_cools_pauses_and_the_resume_measures_the_target(
     tmp_path: Path, run_files: Callable[..., RunFiles], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    files = run_files(12, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
-    ])  # fmt: skip
+    files = run_files(
+        12,
+        acquisition=RECOVER,
+        faults=[
+            {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
+        ],
+    )
     sleep = ManualClock.sleep
 
     def ctrl_c_while_cooling(clock: ManualClock, seconds: float) -> None:
@@ -188,10 +212,18 @@ def test_ctrl_c_while_a_motor_cools_pauses_and_the_resume_measures_the_target(
 def test_an_electrical_shock_is_never_recovered(
     tmp_path: Path, run_files: Callable[..., RunFiles]
 ) -> None:
-    files = run_files(12, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [5], "axis": "detector_azimuth",
-         "flags": ["electrical_shock"]},
-    ])  # fmt: skip
+    files = run_files(
+        12,
+        acquisition=RECOVER,
+        faults=[
+            {
+                "kind": "motor_fault",
+                "at": [5],
+                "axis": "detector_azimuth",
+                "flags": ["electrical_shock"],
+            },
+        ],
+    )
     run = ended_by_fault(files, tmp_path / "run.sqlite", 5)
     assert [s for _, _, s in steps(run)] == ["diagnosed", "failed"]
     assert "never recovered unattended" in run.of_kind("recovery")[-1].data["reason"]
@@ -232,9 +264,13 @@ def test_a_value_the_journal_cannot_store_ends_the_run_aborted_and_ended(
 ) -> None:
     """Defence in depth: an event value no configuration bound caught (an infinity) ends
     the session ``aborted`` with a message naming it, never a run left not ended."""
-    files = run_files(12, acquisition=RECOVER, faults=[
-        {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
-    ])  # fmt: skip
+    files = run_files(
+        12,
+        acquisition=RECOVER,
+        faults=[
+            {"kind": "motor_fault", "at": [4], "axis": "light_elevation", "flags": ["overheating"]},
+        ],
+    )
     monkeypatch.setattr(recovery, "_condition", lambda health: {"temperature_c": math.inf})
     path = tmp_path / "run.sqlite"
     outcome = files.start(path)

@@ -101,9 +101,11 @@ def test_an_overload_a_supply_error_and_an_overheated_motor_recover_and_the_run_
         (3, "detector_elevation", "rebooted"),
         (3, "detector_elevation", "recovered"),
         *[(None, "sample_rotation", s) for s in ("diagnosed", "rebooted", "recovered")],
-        *[(6, "light_elevation", s) for s in
-          ("diagnosed", "cooling", "cooled", "rebooted", "recovered")],
-    ]  # fmt: skip
+        *[
+            (6, "light_elevation", s)
+            for s in ("diagnosed", "cooling", "cooled", "rebooted", "recovered")
+        ],
+    ]
     diagnosed = [e.data for e in run.of_kind("recovery") if e.data["step"] == "diagnosed"]
     assert diagnosed[0]["flags"] == ["overload"] and diagnosed[0]["load_pct"] == 0.0
     assert diagnosed[1]["flags"] == ["input_voltage"]

@@ -18,9 +18,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gonio.workflows.simulate import measure_targets
 from sim.virtual.devices.instrument import SimulatedInstrument
 from tests.support.acquire import RunFiles
+from tests.support.measure import measure_targets
 
 
 def test_each_stretch_between_calibrations_equals_the_simulators_run(

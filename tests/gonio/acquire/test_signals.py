@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from gonio.acquire import progress as progress_module
+from gonio.acquire import observer
 from gonio.cli import main
 from gonio.store.read import Run, open_run
 from gonio.workflows import session
@@ -35,7 +35,7 @@ def test_a_first_signal_finishes_the_sample_and_pauses(
     path = tmp_path / "run.sqlite"
 
     def acquire(progress: PipeProgress) -> int:
-        progress_module.for_stream = lambda quiet, stream=None: progress  # type: ignore[assignment]
+        observer.for_stream = lambda quiet, stream=None: progress  # type: ignore[assignment]
         return main(files.cli(path))
 
     capfd.readouterr()

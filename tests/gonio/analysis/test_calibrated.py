@@ -19,19 +19,27 @@ EXPOSURE = 0.05
 
 def reading(value: float, std: float, n: int = 16, start: float = 0.0) -> dict[str, Any]:
     return {
-        "value": value, "n": n, "saturated": False, "std": std, "exposure_s": EXPOSURE,
-        "started_s": start, "ended_s": start + 1.0,
-    }  # fmt: skip
+        "value": value,
+        "n": n,
+        "saturated": False,
+        "std": std,
+        "exposure_s": EXPOSURE,
+        "started_s": start,
+        "ended_s": start + 1.0,
+    }
 
 
 def events(ref: list[tuple[float, float]], dark: list[tuple[float, float]]) -> tuple[Event, ...]:
     out = []
     for k, ((r, rs), (d, ds)) in enumerate(zip(ref, dark, strict=True)):
         data = {
-            "albedo": 0.99, "source_kind": "collimated", "wi": [0.0, 0.0, 1.0],
+            "albedo": 0.99,
+            "source_kind": "collimated",
+            "wi": [0.0, 0.0, 1.0],
             "wo": [-math.sqrt(0.5), 0.0, math.sqrt(0.5)],
-            "reference": reading(r, rs, start=20.0 * k), "dark": reading(d, ds, start=20.0 * k + 1),
-        }  # fmt: skip
+            "reference": reading(r, rs, start=20.0 * k),
+            "dark": reading(d, ds, start=20.0 * k + 1),
+        }
         out.append(Event(k, 1, "calibration", None, 20.0 * k, "", data))
     return tuple(out)
 

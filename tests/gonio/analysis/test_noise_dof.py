@@ -38,9 +38,14 @@ RUNS = 4000
 
 def reading(value: float, std: float | None, n: int, start: float) -> dict[str, Any]:
     return {
-        "value": value, "n": n, "saturated": False, "std": std, "exposure_s": EXPOSURE,
-        "started_s": start, "ended_s": start + 1.0,
-    }  # fmt: skip
+        "value": value,
+        "n": n,
+        "saturated": False,
+        "std": std,
+        "exposure_s": EXPOSURE,
+        "started_s": start,
+        "ended_s": start + 1.0,
+    }
 
 
 def run_events(
@@ -50,11 +55,13 @@ def run_events(
     out = []
     for k, (value, std) in enumerate(ref):
         data = {
-            "albedo": 0.99, "source_kind": "collimated", "wi": [0.0, 0.0, 1.0],
+            "albedo": 0.99,
+            "source_kind": "collimated",
+            "wi": [0.0, 0.0, 1.0],
             "wo": [-math.sqrt(0.5), 0.0, math.sqrt(0.5)],
             "reference": reading(value, std, n, 20.0 * k),
             "dark": None if dark is None else reading(*dark[k], n, 20.0 * k + 1),
-        }  # fmt: skip
+        }
         out.append(Event(k, 1, "calibration", None, 20.0 * k, "", data))
     return tuple(out)
 
@@ -160,10 +167,14 @@ def test_the_values_do_not_depend_on_the_noise_model() -> None:
     bare = dataclasses.replace(series, noise_a=0.0, noise_b=0.0, rate_var=series.rate_var * 0.0)
     n = 5
     args = (
-        np.linspace(100.0, 9000.0, n), np.full(n, np.nan), np.ones(n, dtype=np.int64),
-        np.full(n, 0.1), np.tile([0.0, 0.0, 1.0], (n, 1)),
-        np.tile([-math.sqrt(0.5), 0.0, math.sqrt(0.5)], (n, 1)), np.linspace(0.0, 20.0, n),
-    )  # fmt: skip
+        np.linspace(100.0, 9000.0, n),
+        np.full(n, np.nan),
+        np.ones(n, dtype=np.int64),
+        np.full(n, 0.1),
+        np.tile([0.0, 0.0, 1.0], (n, 1)),
+        np.tile([-math.sqrt(0.5), 0.0, math.sqrt(0.5)], (n, 1)),
+        np.linspace(0.0, 20.0, n),
+    )
     f, sigma = series.brdf(*args)
     f_bare, sigma_bare = bare.brdf(*args)
     assert f.tobytes() == f_bare.tobytes()

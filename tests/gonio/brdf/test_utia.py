@@ -88,9 +88,12 @@ def round_trips(folder: Path) -> dict[str, brdf.BRDF]:
 
 
 nodes = st.tuples(
-    st.integers(0, 2), st.integers(0, NT - 1), st.integers(0, NP - 1),
-    st.integers(0, NT - 1), st.integers(0, NP - 1),
-)  # fmt: skip
+    st.integers(0, 2),
+    st.integers(0, NT - 1),
+    st.integers(0, NP - 1),
+    st.integers(0, NT - 1),
+    st.integers(0, NP - 1),
+)
 
 
 @SETTINGS
@@ -121,21 +124,27 @@ def test_between_nodes_within_the_corners(table, flat, cell, frac):
     """Quadrilinear: a weighted mean of the 16 corners (the φ corner after 352.5° is 0°)."""
     ti, pi, tv, pv = cell
     got = table.at(
-        (ti + frac[0]) * STEP_T, (pi + frac[1]) * STEP_P, (tv + frac[2]) * STEP_T,
+        (ti + frac[0]) * STEP_T,
+        (pi + frac[1]) * STEP_P,
+        (tv + frac[2]) * STEP_T,
         (pv + frac[3]) * STEP_P,
-    )  # fmt: skip
+    )
     values = flat.reshape(3, NT, NP, NT, NP)
-    corners = values[
-        :, [ti, ti + 1], :, :, :][:, :, [pi, (pi + 1) % NP], :, :][
-        :, :, :, [tv, tv + 1], :][..., [pv, (pv + 1) % NP]
-    ].reshape(3, -1)  # fmt: skip
+    corners = values[:, [ti, ti + 1], :, :, :][:, :, [pi, (pi + 1) % NP], :, :][
+        :, :, :, [tv, tv + 1], :
+    ][..., [pv, (pv + 1) % NP]].reshape(3, -1)
     weights = np.array(
         [
-            (1 - frac[0] if a == 0 else frac[0]) * (1 - frac[1] if b == 0 else frac[1])
-            * (1 - frac[2] if c == 0 else frac[2]) * (1 - frac[3] if d == 0 else frac[3])
-            for a in (0, 1) for b in (0, 1) for c in (0, 1) for d in (0, 1)
+            (1 - frac[0] if a == 0 else frac[0])
+            * (1 - frac[1] if b == 0 else frac[1])
+            * (1 - frac[2] if c == 0 else frac[2])
+            * (1 - frac[3] if d == 0 else frac[3])
+            for a in (0, 1)
+            for b in (0, 1)
+            for c in (0, 1)
+            for d in (0, 1)
         ]
-    )  # fmt: skip
+    )
     np.testing.assert_allclose(got, corners @ weights, rtol=1e-9)
     assert np.all(got >= corners.min(axis=1) * (1 - 1e-12))
     assert np.all(got <= corners.max(axis=1) * (1 + 1e-12))

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gonio.acquire.progress import Shown, for_stream
+from gonio.acquire.observer import Shown, for_stream
 from gonio.cli import main
 from gonio.planner import Plan
 from gonio.progress import Bar, Lines
@@ -25,9 +25,14 @@ Gonio = Callable[..., CliResult]
 def test_a_dry_run_checks_everything_and_writes_nothing(run_gonio: Gonio, tmp_path: Path) -> None:
     out = tmp_path / "run.sqlite"
     r = run_gonio(
-        "acquire", str(plan_file(tmp_path, target=20)), "--scene", str(scene_file(tmp_path)),
-        "-o", str(out), "--dry-run",
-    )  # fmt: skip
+        "acquire",
+        str(plan_file(tmp_path, target=20)),
+        "--scene",
+        str(scene_file(tmp_path)),
+        "-o",
+        str(out),
+        "--dry-run",
+    )
     assert r.returncode == 0, r.stderr
     assert "predicted duration" in r.stdout
     assert "  ok: targets: 20 within the axis limits" in r.stdout
@@ -36,8 +41,9 @@ def test_a_dry_run_checks_everything_and_writes_nothing(run_gonio: Gonio, tmp_pa
     assert "  ok: detector: answers" in r.stdout
     assert r.stdout.rstrip().endswith("dry run: nothing moved, nothing written")
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == [
-        "scene.yaml", "small.yaml"
-    ]  # fmt: skip
+        "scene.yaml",
+        "small.yaml",
+    ]
 
 
 def test_a_dry_run_with_an_operator_and_no_terminal_says_the_run_will_need_one(
@@ -55,8 +61,14 @@ def test_a_dry_run_with_an_operator_and_no_terminal_says_the_run_will_need_one(
 
     monkeypatch.setattr(backends, "build", operated)
     monkeypatch.setattr(sys, "stdin", io.StringIO(""))  # no terminal
-    args = ["acquire", str(plan_file(tmp_path, target=20)), "--scene",
-            str(scene_file(tmp_path)), "-o", str(tmp_path / "run.sqlite")]  # fmt: skip
+    args = [
+        "acquire",
+        str(plan_file(tmp_path, target=20)),
+        "--scene",
+        str(scene_file(tmp_path)),
+        "-o",
+        str(tmp_path / "run.sqlite"),
+    ]
     assert main([*args, "--dry-run"]) == 0
     assert "operator: the run will ask for the reference standard" in capsys.readouterr().out
     assert main(args) == 2
@@ -76,9 +88,15 @@ def test_a_hardware_rig_whose_port_is_missing_is_one_line_before_anything(
     out = tmp_path / "run.sqlite"
     plan = plan_file(tmp_path, target=5, acquisition="acquisition: {calibration: {dark: false}}\n")
     r = run_gonio(
-        "acquire", str(plan), "--rig", str(rig), "--scene", str(scene_file(tmp_path)),
-        "-o", str(out),
-    )  # fmt: skip
+        "acquire",
+        str(plan),
+        "--rig",
+        str(rig),
+        "--scene",
+        str(scene_file(tmp_path)),
+        "-o",
+        str(out),
+    )
     assert r.returncode == 2, r.stderr
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
     assert "ttyNOPE" in r.stderr, r.stderr
@@ -125,7 +143,7 @@ def test_progress_lines_when_not_a_terminal_and_a_bar_on_one(quick_plan: Plan) -
 
 
 def test_the_time_left_follows_the_measured_pace(quick_plan: Plan) -> None:
-    from gonio.acquire.progress import Pace
+    from gonio.acquire.observer import Pace
 
     plan = quick_plan
     pace = Pace(plan, np.arange(len(plan)))
@@ -142,9 +160,16 @@ def test_a_speedup_out_of_its_range_is_one_line(run_gonio: Gonio, tmp_path: Path
     plan = plan_file(tmp_path, target=5)
     for bad in ("-1", "0", "nan", "inf", "fast", "1e-300", "0.5", "1e300"):
         r = run_gonio(
-            "acquire", str(plan), "--scene", str(scene_file(tmp_path)),
-            "-o", str(tmp_path / "r.sqlite"), "--rehearse", "--speedup", bad,
-        )  # fmt: skip
+            "acquire",
+            str(plan),
+            "--scene",
+            str(scene_file(tmp_path)),
+            "-o",
+            str(tmp_path / "r.sqlite"),
+            "--rehearse",
+            "--speedup",
+            bad,
+        )
         assert r.returncode == 2, (bad, r.stderr)
         assert r.stderr.count("\n") == 1 and "--speedup" in r.stderr and "Traceback" not in r.stderr
         assert not (tmp_path / "r.sqlite").exists()

@@ -24,12 +24,16 @@ from tests.conftest import CONFIGS, CliResult
 
 TRUTH = {
     "zero_offset_deg": {
-        "light_elevation": 0.7, "detector_azimuth": -0.4, "detector_elevation": 0.5,
+        "light_elevation": 0.7,
+        "detector_azimuth": -0.4,
+        "detector_elevation": 0.5,
         "sample_rotation": 0.3,
     },
-    "tilt_deg": 0.5, "tilt_azimuth_deg": 40.0,
-    "light_pointing_deg": [0.3, -0.2], "detector_pointing_deg": [-0.25, 0.3],
-}  # fmt: skip
+    "tilt_deg": 0.5,
+    "tilt_azimuth_deg": 40.0,
+    "light_pointing_deg": [0.3, -0.2],
+    "detector_pointing_deg": [-0.25, 0.3],
+}
 ARCH = CONFIGS / "rigs" / "arch.yaml"
 
 

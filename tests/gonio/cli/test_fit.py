@@ -26,8 +26,9 @@ def runs(runs_dir: Path) -> dict[str, Path]:
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         out["matte"] = simulated_run(runs_dir, plan, scene_spec("matte", noise=True, seed=3))
         for j, band in enumerate("rgb"):
-            scene = scene_spec("glossy_metal", material=gold, effects=["shot_noise"], band=band,
-                               seed=30 + j)  # fmt: skip
+            scene = scene_spec(
+                "glossy_metal", material=gold, effects=["shot_noise"], band=band, seed=30 + j
+            )
             out[band] = simulated_run(runs_dir, plan, scene)
     return out
 

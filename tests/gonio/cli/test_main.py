@@ -23,15 +23,21 @@ Gonio = Callable[..., CliResult]
 
 def test_the_console_script_runs_and_its_exit_code_is_the_command_s() -> None:
     ok = subprocess.run(
-        [str(GONIO), "--version"], capture_output=True, text=True, timeout=60,
+        [str(GONIO), "--version"],
+        capture_output=True,
+        text=True,
+        timeout=60,
         stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+    )
     assert ok.returncode == 0
     assert ok.stdout.strip() == f"gonio {gonio.__version__}"
     bad = subprocess.run(
-        [str(GONIO), "frobnicate"], capture_output=True, text=True, timeout=60,
+        [str(GONIO), "frobnicate"],
+        capture_output=True,
+        text=True,
+        timeout=60,
         stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+    )
     assert bad.returncode == 2
     assert "Traceback" not in bad.stderr
     assert "invalid choice: 'frobnicate'" in bad.stderr
@@ -97,9 +103,12 @@ def test_a_closed_pipe_ends_quietly(args: list[str]) -> None:
     """`gonio plan … | head -1` with the reader gone before the first line: no
     BrokenPipeError traceback and no "Exception ignored" at exit, exit code 141 (or 0)."""
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gonio", *args], cwd=ROOT, stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        [sys.executable, "-m", "gonio", *args],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        stdin=subprocess.DEVNULL,
+    )
     assert proc.stdout is not None and proc.stderr is not None
     proc.stdout.close()  # the reader is gone before anything was written
     with proc.stderr:
@@ -112,8 +121,12 @@ def test_a_closed_pipe_in_a_real_shell_pipeline() -> None:
     """The same through ``| head -1``: the first line arrives, the rest is dropped."""
     r = subprocess.run(
         ["sh", "-c", f"'{sys.executable}' -m gonio tables | head -1; exit $(( 0 ))"],
-        cwd=ROOT, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.stdout.startswith("Parametrizations on named direction pairs")
     assert len(r.stdout.splitlines()) == 1
     assert r.stderr == ""
@@ -178,9 +191,13 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
     quickstart = ROOT / "configs" / "plans" / "quickstart.yaml"
     scene = quickstart.parents[1] / "scenes" / "matte.yaml"
     r = run_gonio(
-        "acquire", str(quickstart), "--scene", str(scene),
-        "-o", str(tmp_path / f"{long_name}.sqlite"),
-    )  # fmt: skip
+        "acquire",
+        str(quickstart),
+        "--scene",
+        str(scene),
+        "-o",
+        str(tmp_path / f"{long_name}.sqlite"),
+    )
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "File name too long" in r.stderr
 
 
@@ -194,9 +211,14 @@ def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None
     (sysexits' EX_IOERR), no traceback and no "Exception ignored" at exit."""
     with open("/dev/full", "w") as full:
         r = subprocess.run(
-            [sys.executable, "-m", "gonio", *args], cwd=ROOT, stdout=full,
-            stderr=subprocess.PIPE, text=True, timeout=60, stdin=subprocess.DEVNULL,
-        )  # fmt: skip
+            [sys.executable, "-m", "gonio", *args],
+            cwd=ROOT,
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=60,
+            stdin=subprocess.DEVNULL,
+        )
     assert r.returncode == 74, r.stderr
     assert r.stderr == "gonio: error: cannot write the standard output: No space left on device\n"
 
@@ -204,7 +226,11 @@ def test_a_full_standard_output_is_one_line_and_exit_74(args: list[str]) -> None
 def test_a_closed_standard_output_is_one_line_and_exit_74() -> None:
     r = subprocess.run(
         ["sh", "-c", f"'{sys.executable}' -m gonio schema plan >&-"],
-        cwd=ROOT, capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.returncode == 74, r.stderr
     assert r.stderr == "gonio: error: the standard output is closed\n"

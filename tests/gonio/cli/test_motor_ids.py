@@ -33,9 +33,17 @@ def test_ids_accepted(text: str, ids: list[int]) -> None:
         ("253", "motor IDs must be in 0…252, got '253'"),
         ("1-99999999999999999", "motor IDs must be in 0…252, got '1-99999999999999999'"),
     ],
-    ids=["open-range", "negative", "double-dash", "empty-item", "unicode-digit", "downward",
-         "too-large", "huge-range"],
-)  # fmt: skip
+    ids=[
+        "open-range",
+        "negative",
+        "double-dash",
+        "empty-item",
+        "unicode-digit",
+        "downward",
+        "too-large",
+        "huge-range",
+    ],
+)
 def test_ids_refused_in_one_line(run_gonio: Gonio, text: str, message: str) -> None:
     r = run_gonio("motors", "status", "--port", "/dev/null-port", "--ids", text)
     assert r.returncode == 2

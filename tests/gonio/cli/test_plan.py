@@ -108,10 +108,15 @@ def test_bounds_only_with_the_option(run_gonio: Gonio) -> None:
 
 def test_anisotropic_plan_with_the_other_rig(tmp_path: Path, run_gonio: Gonio) -> None:
     code, out, err = gonio_plan(
-        run_gonio, QUICK,
-        "--rig", str(CONFIGS / "rigs" / "in_plane.yaml"), "--plot", str(tmp_path / "c.png"),
-        "-o", str(tmp_path / "p.csv"),
-    )  # fmt: skip
+        run_gonio,
+        QUICK,
+        "--rig",
+        str(CONFIGS / "rigs" / "in_plane.yaml"),
+        "--plot",
+        str(tmp_path / "c.png"),
+        "-o",
+        str(tmp_path / "p.csv"),
+    )
     assert code == 0, err
     assert "rig 'in-plane-4axis'" in out
     assert (tmp_path / "c.png").stat().st_size > 10_000

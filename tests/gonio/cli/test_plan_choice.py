@@ -22,25 +22,46 @@ GOLD = str(CONFIGS / "scenes" / "glossy_metal_fly.yaml")
 def test_choice_on_glossy_gold(tmp_path: Path, run_gonio: Gonio) -> None:
     out_csv = tmp_path / "chosen.csv"
     r = run_gonio(
-        "plan", QUICK, "--budget-min", "1.5", "--material", GOLD, "--test-pairs", "1000",
-        "-o", str(out_csv),
-    )  # fmt: skip
+        "plan",
+        QUICK,
+        "--budget-min",
+        "1.5",
+        "--material",
+        GOLD,
+        "--test-pairs",
+        "1000",
+        "-o",
+        str(out_csv),
+    )
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
     assert lines[0] == (
         f"choice of plan for 1.5 min of instrument time, the material guess the material of {GOLD}"
     )
     assert lines[1].startswith("  predicted on 1000 test pairs (seed 14): ")
-    assert lines[3].split() == ["candidate", "motion", "time", "samples", "log-RMSE", "method",
-                                "coverage", "gap"]  # fmt: skip
+    assert lines[3].split() == [
+        "candidate",
+        "motion",
+        "time",
+        "samples",
+        "log-RMSE",
+        "method",
+        "coverage",
+        "gap",
+    ]
     rows = {}
     for line in lines[4:11]:
         name, rest = line[2:36].strip(), line[36:].split()
         rows[name] = rest
     assert list(rows) == [
-        "sobol, rusinkiewicz", "warped, rusinkiewicz", "detector arcs, 0.5°", "θh lines, 0.5°",
-        "θh lines, 1°", "θh lines, 1°, 50 filled", "as written: sobol, hybrid",
-    ]  # fmt: skip
+        "sobol, rusinkiewicz",
+        "warped, rusinkiewicz",
+        "detector arcs, 0.5°",
+        "θh lines, 0.5°",
+        "θh lines, 1°",
+        "θh lines, 1°, 50 filled",
+        "as written: sobol, hybrid",
+    ]
     chosen = [name for name, rest in rows.items() if rest[-1] == "chosen"]
     assert len(chosen) == 1 and chosen[0].startswith("θh lines")
     errors = {name: float(rest[3]) for name, rest in rows.items()}

@@ -27,9 +27,12 @@ def plan_stored(plan: Path, out: Path, *, held: bool = False) -> tuple[bytes, in
     continued again and again until it ends); the stored plan's bytes and the stops."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "gonio", "plan", str(plan), "-o", str(out)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
         stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+    )
     stops = 0
     try:
         while held and proc.poll() is None:

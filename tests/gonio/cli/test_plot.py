@@ -156,8 +156,9 @@ def test_a_format_matplotlib_cannot_write_and_a_missing_run(
     r = run_gonio("plot", str(run), "--kind", "slices", "-o", str(tmp_path / "f.xyz"))
     assert r.returncode == 2
     assert "-o " in r.stderr and "matplotlib cannot write '.xyz' figures" in r.stderr
-    r = run_gonio("plot", str(tmp_path / "none.sqlite"), "--kind", "coverage",
-                  "-o", str(tmp_path / "f.png"))  # fmt: skip
+    r = run_gonio(
+        "plot", str(tmp_path / "none.sqlite"), "--kind", "coverage", "-o", str(tmp_path / "f.png")
+    )
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 

@@ -164,8 +164,11 @@ def test_every_shipped_config_validates_as_the_loader_and_an_editor_read_it(path
     as_editor = yaml.load(text, Loader=Yaml12Loader)
     assert as_loader == as_editor, "the file means other values in YAML 1.1 and 1.2"
     checker = jsonschema.Draft202012Validator.FORMAT_CHECKER
-    errors = list(jsonschema.Draft202012Validator(schema(kind_of(path)), format_checker=checker)
-                  .iter_errors(as_loader))  # fmt: skip
+    errors = list(
+        jsonschema.Draft202012Validator(schema(kind_of(path)), format_checker=checker).iter_errors(
+            as_loader
+        )
+    )
     assert [f"{e.json_path}: {e.message}" for e in errors] == []
     assert loader_refusal(kind_of(path), as_loader, path) is None
 

@@ -33,9 +33,13 @@ Gonio = Callable[..., CliResult]
 def test_simulate_writes_the_run_and_recovers_the_brdf(run_gonio: Gonio, tmp_path: Path) -> None:
     out = tmp_path / "run.sqlite"
     r = run_gonio(
-        "simulate", str(CONFIGS / "plans" / "quick.yaml"),
-        "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-o", str(out),
-    )  # fmt: skip
+        "simulate",
+        str(CONFIGS / "plans" / "quick.yaml"),
+        "--scene",
+        str(CONFIGS / "scenes" / "matte.yaml"),
+        "-o",
+        str(out),
+    )
     assert r.returncode == 0, r.stderr
     assert "scene 'matte' (effects: shot_noise, read_noise, dark_current" in r.stdout
     assert f"wrote 500 samples to {out}" in r.stdout
@@ -51,9 +55,12 @@ def test_without_output_nothing_is_written_and_it_says_so(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     r = run_gonio(
-        "simulate", str(CONFIGS / "plans" / "quick.yaml"),
-        "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-q",
-    )  # fmt: skip
+        "simulate",
+        str(CONFIGS / "plans" / "quick.yaml"),
+        "--scene",
+        str(CONFIGS / "scenes" / "matte.yaml"),
+        "-q",
+    )
     assert r.returncode == 0, r.stderr
     assert "nothing written: give -o RUN.sqlite to keep the run file" in r.stdout
     assert list(tmp_path.iterdir()) == []
@@ -116,9 +123,13 @@ def test_a_scene_for_the_other_source_kind_is_one_line(run_gonio: Gonio) -> None
     assert f"{scene}:{line}: source.intensity_w_sr: the light of the rig file " in r.stderr
     assert "is collimated (light.kind); expected irradiance_w_m2" in r.stderr
     r = run_gonio(
-        "simulate", str(CONFIGS / "plans" / "quick.yaml"), "--scene", str(scene),
-        "--rig", str(CONFIGS / "rigs" / "arch_point.yaml"),
-    )  # fmt: skip
+        "simulate",
+        str(CONFIGS / "plans" / "quick.yaml"),
+        "--scene",
+        str(scene),
+        "--rig",
+        str(CONFIGS / "rigs" / "arch_point.yaml"),
+    )
     assert r.returncode == 0, r.stderr
     assert "on rig 'arch-point-4axis', scene 'seed000-specular' (effects: saturation)" in r.stdout
 
@@ -182,9 +193,14 @@ def test_a_material_file_relative_to_its_scene_is_found_from_any_folder(
     (folder / "s.yaml").write_text(text, encoding="utf-8")
     monkeypatch.chdir(tmp_path)
     r = run_gonio(
-        "simulate", str(plan_file(tmp_path, target=20)), "--scene", "scenes/s.yaml",
-        "-o", "run.sqlite", *effects,
-    )  # fmt: skip
+        "simulate",
+        str(plan_file(tmp_path, target=20)),
+        "--scene",
+        "scenes/s.yaml",
+        "-o",
+        "run.sqlite",
+        *effects,
+    )
     assert r.returncode == 0, r.stderr
     assert "recovered BRDF error" in r.stdout
 

@@ -91,8 +91,11 @@ def test_a_budget_beyond_a_day_is_refused_at_once_in_a_real_process(tmp_path: Pa
     sweep = write_sweep(tmp_path, axes={**SMALL["axes"], "minutes": [1_000_000]})
     r = subprocess.run(
         [str(GONIO), "tradeoff", str(sweep), "-o", str(tmp_path / "out"), "-q"],
-        capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=120,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.returncode == 2 and r.stdout == "" and "Traceback" not in r.stderr
     assert r.stderr.count("\n") == 1 and f"{sweep}:" in r.stderr
     assert "axes.minutes.0: expected at most 1440" in r.stderr
@@ -105,8 +108,11 @@ def test_a_sweep_whose_every_combination_failed_exits_1_saying_so(tmp_path: Path
     sweep = write_sweep(tmp_path, axes=axes)
     r = subprocess.run(
         [str(GONIO), "tradeoff", str(sweep), "-o", str(tmp_path / "out"), "-q", "-j", "1"],
-        capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.returncode == 1 and "Traceback" not in r.stderr
     assert r.stderr.count("\n") == 1, r.stderr
     assert r.stderr.startswith("gonio: all 2 combinations failed; the first: combination ")

@@ -50,8 +50,17 @@ def test_gonio_export_refuses_in_one_line_and_writes_nothing(
     run_file: Path, tmp_path: Path
 ) -> None:
     out = tmp_path / "out.txt"
-    line = refused(tmp_path, "export", str(run_file), "--format", "factored", "-o", str(out),
-                   "--outer", "100000")  # fmt: skip
+    line = refused(
+        tmp_path,
+        "export",
+        str(run_file),
+        "--format",
+        "factored",
+        "-o",
+        str(out),
+        "--outer",
+        "100000",
+    )
     assert line == (
         "gonio: error: export: argument --outer: expected a whole number of outer terms in "
         f"[1, {MAX_OUTER}], got '100000' (see gonio export --help)"

@@ -29,9 +29,13 @@ def few(runs_dir: Path) -> Path:
 
 @pytest.mark.parametrize(
     ("name", "options"),
-    [("rgl", Options()), ("merl", Options()), ("factored", Options()),
-     ("hdf5", Options(grid="hybrid"))],
-)  # fmt: skip
+    [
+        ("rgl", Options()),
+        ("merl", Options()),
+        ("factored", Options()),
+        ("hdf5", Options(grid="hybrid")),
+    ],
+)
 def test_a_run_of_fewer_samples_than_a_simplex_is_refused_in_every_grid_format(
     one_sample: Path, tmp_path: Path, name: str, options: Options
 ) -> None:
@@ -68,8 +72,9 @@ def test_allow_sparse_writes_it_with_a_warning_on_stderr(
     few: Path, tmp_path: Path, run_gonio: Callable[..., CliResult]
 ) -> None:
     out = tmp_path / "out.bsdf"
-    result = run_gonio("export", str(few), "--format", "rgl", "-o", str(out),
-                       "--allow-sparse", "-q")  # fmt: skip
+    result = run_gonio(
+        "export", str(few), "--format", "rgl", "-o", str(out), "--allow-sparse", "-q"
+    )
     assert result.returncode == 0 and out.stat().st_size > 0 and result.stdout == ""
     assert result.stderr.splitlines() == [
         "gonio: warning: the run's samples support 27.0% of the RGL pairs (4,459 of 16,512); "
@@ -79,8 +84,10 @@ def test_allow_sparse_writes_it_with_a_warning_on_stderr(
 
 
 def test_gonio_export_refuses_a_sparse_run_in_one_line(few: Path, tmp_path: Path) -> None:
-    line = refused(tmp_path, "export", str(few), "--format", "rgl", "-o",
-                   str(tmp_path / "out.bsdf"))  # fmt: skip
+    line = refused(
+        tmp_path, "export", str(few), "--format", "rgl", "-o", str(tmp_path / "out.bsdf")
+    )
     assert line.startswith("gonio: error: the run's samples support 27.0% of the RGL pairs")
-    assert line.endswith("expected at least 40% (measure more targets, or give --allow-sparse "
-                         "to export anyway)")  # fmt: skip
+    assert line.endswith(
+        "expected at least 40% (measure more targets, or give --allow-sparse to export anyway)"
+    )

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 import uvicorn
 
-from gonio.acquire import progress
+from gonio.acquire import observer
 from gonio.cli import main
 from gonio.live import server
 from tests.gonio.live.paced import Paced
@@ -62,8 +62,12 @@ def paced_acquire(args: list[str], seconds_per_target: float) -> subprocess.Pope
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     return subprocess.Popen(
         [sys.executable, "-m", "tests.gonio.live.paced", str(seconds_per_target), *args],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def printed_url(child: subprocess.Popen[str]) -> str:
@@ -87,7 +91,7 @@ def forked_acquire(args: list[str], seconds_per_target: float) -> int:
             os.dup2(devnull, 1)
             os.dup2(devnull, 2)
             sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115 (until _exit)
-            progress.for_stream = lambda quiet, stream=None: Paced(seconds_per_target)  # type: ignore[assignment]
+            observer.for_stream = lambda quiet, stream=None: Paced(seconds_per_target)  # type: ignore[assignment]
             code = main(args)
         finally:
             os._exit(code)

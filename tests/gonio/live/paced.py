@@ -11,7 +11,7 @@ from typing import IO
 
 import numpy as np
 
-from gonio.acquire import progress
+from gonio.acquire import observer
 from gonio.cli import main
 from gonio.planner.model import Plan
 
@@ -36,5 +36,5 @@ if __name__ == "__main__":
     def for_stream(quiet: bool, stream: IO[str] | None = None) -> Paced:
         return Paced(seconds)
 
-    progress.for_stream = for_stream  # type: ignore[assignment]
+    observer.for_stream = for_stream  # type: ignore[assignment]
     sys.exit(main(sys.argv[2:]))

@@ -83,17 +83,21 @@ def test_every_refusal_leaves_the_run_alone(
             status, _, _ = call(ctl, method="POST", body=pause, headers={"X-Gonio-Token": "x" * 43})
             assert status == 403
             status, _, hdrs = call(
-                ctl, method="POST", body=pause,
+                ctl,
+                method="POST",
+                body=pause,
                 headers={"X-Gonio-Token": token, "Origin": "http://evil.example"},
-            )  # fmt: skip
+            )
             assert status == 403
             status, _, hdrs = call(ctl, method="OPTIONS", headers={"Origin": "http://evil.example"})
             assert status == 405
             assert not any(k.lower().startswith("access-control") for k in hdrs)
             form = urllib.request.Request(
-                ctl, data=b"action=pause", method="POST",
+                ctl,
+                data=b"action=pause",
+                method="POST",
                 headers={"X-Gonio-Token": token, "Content-Type": "text/plain"},
-            )  # fmt: skip
+            )
             with pytest.raises(urllib.error.HTTPError) as refused:
                 urllib.request.urlopen(form, timeout=10)
             assert refused.value.code == 415
@@ -102,9 +106,11 @@ def test_every_refusal_leaves_the_run_alone(
                 status, _, _ = call(f"{base}/api/overview?run={name}")
                 assert status == 404, name
                 status, _, _ = call(
-                    f"{base}/api/control?run={name}", method="POST", body=pause,
+                    f"{base}/api/control?run={name}",
+                    method="POST",
+                    body=pause,
                     headers={"X-Gonio-Token": token},
-                )  # fmt: skip
+                )
                 assert status == 404, name
             status, _, _ = call(f"{base}/api/runs", headers={"Host": "evil.example:80"})
             assert status == 403
@@ -146,9 +152,11 @@ def test_control_of_a_run_not_being_acquired_is_refused(
     assert os.stat(control.token_path(path)).st_mode & 0o777 == 0o600
     with serve(server.Served(path)) as base:
         status, body, _ = call(
-            f"{base}/api/control?run=done.sqlite", method="POST", body={"action": "stop"},
+            f"{base}/api/control?run=done.sqlite",
+            method="POST",
+            body={"action": "stop"},
             headers={"X-Gonio-Token": token},
-        )  # fmt: skip
+        )
         assert status == 409 and "not being acquired" in body["error"]
         status, body, _ = call(f"{base}/api/overview?run=done.sqlite")
         assert status == 200 and body["state"] == "completed" and body["measured"] == 20
@@ -166,9 +174,10 @@ def test_control_of_a_run_not_being_acquired_is_refused(
 
 
 def test_a_non_loopback_bind_needs_a_token_for_every_request(
-    tmp_path: Path, serve: Callable[[server.Served], Iterator[str]],
+    tmp_path: Path,
+    serve: Callable[[server.Served], Iterator[str]],
     capsys: pytest.CaptureFixture[str],
-) -> None:  # fmt: skip
+) -> None:
     with pytest.raises(GonioError, match="needs a token"):
         server.Served(tmp_path, loopback=False)
     assert main(["serve", str(tmp_path), "--host", "0.0.0.0", "--port", "1"]) == 2

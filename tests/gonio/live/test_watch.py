@@ -40,9 +40,13 @@ def test_watch_in_a_terminal_and_piped(tmp_path: Path) -> None:
         control.post_request(path, "pause", "test")  # held while the view starts
         env = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100", "LINES": "30"}
         term = pexpect.spawn(
-            sys.executable, ["-m", "gonio", "watch", str(path), "--every", "0.3"],
-            env=env, dimensions=(30, 100), timeout=30, encoding="utf-8",
-        )  # fmt: skip
+            sys.executable,
+            ["-m", "gonio", "watch", str(path), "--every", "0.3"],
+            env=env,
+            dimensions=(30, 100),
+            timeout=30,
+            encoding="utf-8",
+        )
         term.expect(r"\[paused\]")
         term.expect(r"samples (\d+) of 60")
         first = int(term.match.group(1))
@@ -63,8 +67,12 @@ def test_watch_in_a_terminal_and_piped(tmp_path: Path) -> None:
         assert "\x1b[?25h" in (term.before or "")  # the cursor shown again
         piped = subprocess.run(
             [sys.executable, "-m", "gonio", "watch", str(path), "--every", "0.2"],
-            env=env, capture_output=True, text=True, timeout=60, check=True,
-        )  # fmt: skip
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=True,
+        )
         lines = piped.stdout.splitlines()
         assert lines[-1].startswith("run.sqlite: completed, 60/60 samples (100.0 %)")
         assert "\x1b" not in piped.stdout
@@ -87,9 +95,11 @@ def test_watch_in_a_terminal_and_piped(tmp_path: Path) -> None:
         assert int(target.split()[-1]) == int(run.samples["target"][k])
         angles = [float(v) for v in rest.split("f")[0].split()]
         expected = [
-            np.degrees(np.arccos(wi[k, 2])), np.degrees(np.arctan2(wi[k, 1], wi[k, 0])) % 360,
-            np.degrees(np.arccos(wo[k, 2])), np.degrees(np.arctan2(wo[k, 1], wo[k, 0])) % 360,
-        ]  # fmt: skip
+            np.degrees(np.arccos(wi[k, 2])),
+            np.degrees(np.arctan2(wi[k, 1], wi[k, 0])) % 360,
+            np.degrees(np.arccos(wo[k, 2])),
+            np.degrees(np.arctan2(wo[k, 1], wo[k, 0])) % 360,
+        ]
         assert angles == pytest.approx(expected, abs=0.051)
         f, sigma = (float(v) for v in rest.split(" f ")[1].split(" (t")[0].split(" ± "))
         assert f == pytest.approx(calibrated.brdf[k], rel=1e-3)

@@ -27,9 +27,9 @@ def test_the_budget_scales_with_the_width_and_the_root_of_the_tolerance() -> Non
 
 
 @pytest.mark.parametrize(
-    ("alpha", "tolerance"), [(0.0, 0.005), (-0.1, 0.005), (math.inf, 0.005), (0.1, 0.0),
-                             (0.1, 0.5), (0.1, math.nan)],
-)  # fmt: skip
+    ("alpha", "tolerance"),
+    [(0.0, 0.005), (-0.1, 0.005), (math.inf, 0.005), (0.1, 0.0), (0.1, 0.5), (0.1, math.nan)],
+)
 def test_bad_arguments_are_refused_in_one_line(alpha: float, tolerance: float) -> None:
     with pytest.raises(DomainError) as err:
         blur_budget_deg(alpha, tolerance)

@@ -278,9 +278,11 @@ def test_a_misspelt_key_is_named_on_its_line_with_the_closest_known_one(
     assert code == 2
     assert f"{path}:{at + 1}: sampling.strategi: unknown field; did you mean 'strategy'?" in err
     rig = tmp_path / "rig.yaml"
-    rig.write_text((CONFIGS / "rigs" / "arch.yaml").read_text().replace(
-        "    max_velocity_deg_s:", "    max_velocity_deg:", 1
-    ))  # fmt: skip
+    rig.write_text(
+        (CONFIGS / "rigs" / "arch.yaml")
+        .read_text()
+        .replace("    max_velocity_deg_s:", "    max_velocity_deg:", 1)
+    )
     with pytest.raises(ConfigError, match=r"did you mean 'max_velocity_deg_s'\?"):
         Rig.from_yaml(rig)
     path.write_text(text + "colour: red\n")
@@ -355,8 +357,11 @@ def test_real_process_exit_code_and_no_traceback(tmp_path: Path) -> None:
     path = write(tmp_path, edit(lambda d: d.update(parametrization="polar")))
     r = subprocess.run(
         [str(GONIO), "plan", str(path)],
-        capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=120,
+        stdin=subprocess.DEVNULL,
+    )
     assert r.returncode == 2
     assert r.stdout == ""
     assert "Traceback" not in r.stderr
@@ -378,12 +383,14 @@ def test_duplicate_key_is_refused(tmp_path: Path, run_gonio: Gonio) -> None:
     ("change", "field"),
     [
         (lambda d: d["exposure"].update(seconds=float("inf")), "exposure.seconds"),
-        (lambda d: d["sampling"].update(warps={"hbar": {"power": float("nan")}}),
-         "sampling.warps.hbar.power"),
+        (
+            lambda d: d["sampling"].update(warps={"hbar": {"power": float("nan")}}),
+            "sampling.warps.hbar.power",
+        ),
         (lambda d: d.update(time_budget_s=float("inf")), "time_budget_s"),
     ],
     ids=["infinite-exposure", "nan-warp", "infinite-budget"],
-)  # fmt: skip
+)
 def test_infinities_and_nans_are_refused(
     tmp_path: Path,
     run_gonio: Gonio,

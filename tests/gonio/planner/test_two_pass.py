@@ -45,18 +45,27 @@ def rig() -> Rig:
 
 
 def spec(target: int, survey: int, **options: object) -> PlanSpec:
-    return PlanSpec.model_validate({
-        "name": "adaptive", "parametrization": "rusinkiewicz", "kicks": 10,
-        "sampling": {"strategy": "adaptive", "target": target, "seed": 4,
-                     "adaptive": {"survey": survey, **options}},
-    })  # fmt: skip
+    return PlanSpec.model_validate(
+        {
+            "name": "adaptive",
+            "parametrization": "rusinkiewicz",
+            "kicks": 10,
+            "sampling": {
+                "strategy": "adaptive",
+                "target": target,
+                "seed": 4,
+                "adaptive": {"survey": survey, **options},
+            },
+        }
+    )
 
 
 def measured(f: BrdfEval, plan_or_rig: Plan | Rig, wi: np.ndarray, wo: np.ndarray) -> Measured:
     rig = plan_or_rig.rig if isinstance(plan_or_rig, Plan) else plan_or_rig
     values = np.asarray(f(wi, wo), dtype=np.float64)
-    return Measured(wi, wo, values, 0.01 * values, "rusinkiewicz", True, rig, None,
-                    "luminance", "test")  # fmt: skip
+    return Measured(
+        wi, wo, values, 0.01 * values, "rusinkiewicz", True, rig, None, "luminance", "test"
+    )
 
 
 def steering(m: Measured, plan: PlanSpec) -> BrdfEval:
@@ -119,8 +128,9 @@ def test_adaptive_beats_uniform_at_equal_count(rig: Rig) -> None:
     n = 500
     pairs = testset.draw(rig, isotropic=True, size=4000)
     # The second pass as `extend` plans it (`second_pass`), without the engine.
-    both = synthesize_adaptive(GLOSSY, rig, "rusinkiewicz", True, n, seed=4,
-                               adaptive={"survey": 128})  # fmt: skip
+    both = synthesize_adaptive(
+        GLOSSY, rig, "rusinkiewicz", True, n, seed=4, adaptive={"survey": 128}
+    )
     uniform = synthesize(GLOSSY, rig, "rusinkiewicz", True, n, seed=4)
     assert len(both) == len(uniform) == n
 

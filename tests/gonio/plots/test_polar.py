@@ -79,8 +79,15 @@ def test_the_lines_are_the_surface_and_the_truth_at_the_plotted_angles() -> None
     def truth(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.asarray(2.0 * lobe.eval(a, b))
 
-    data = polar.polar(lobe, (wi, wo, f, sigma), THETA_MAX, (0.0, 45.0), truth=truth,
-                       tolerance_deg=8.0, truth_label="twice")  # fmt: skip
+    data = polar.polar(
+        lobe,
+        (wi, wo, f, sigma),
+        THETA_MAX,
+        (0.0, 45.0),
+        truth=truth,
+        tolerance_deg=8.0,
+        truth_label="twice",
+    )
     assert [c.theta_i for c in data.curves] == [0.0, math.radians(45.0)]
     assert data.truth_label == "twice"
     for c in data.curves:
@@ -121,8 +128,9 @@ def test_the_figure_draws_the_curves_and_samples_and_is_a_png_of_its_size(
     lobe = Lobe()
     wi, wo = polar.in_plane(math.radians(30.0), np.radians([10.0, 30.0, 50.0]))
     f = lobe.eval(wi, wo)
-    data = polar.polar(lobe, (wi, wo, f, 0.1 * f), THETA_MAX, (30.0,), truth=lobe.eval,
-                       truth_label="the lobe")  # fmt: skip
+    data = polar.polar(
+        lobe, (wi, wo, f, 0.1 * f), THETA_MAX, (30.0,), truth=lobe.eval, truth_label="the lobe"
+    )
     figures = capture(monkeypatch, polar)
     path = tmp_path / "polar.png"
     polar.draw(data, path)

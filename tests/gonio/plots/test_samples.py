@@ -24,8 +24,9 @@ def pairs(rigs: dict[str, Rig]) -> testset.TestSet:
 def test_coloured_by_value(pairs: testset.TestSet) -> None:
     f = Lobe().eval(pairs.wi, pairs.wo)
     f[0] = 0.0  # below the floor: coloured as the floor, not −inf
-    data = samples.coverage((pairs.wi, pairs.wo, f, 0.1 * f), "hybrid", isotropic=True,
-                            theta_max=math.radians(80.0))  # fmt: skip
+    data = samples.coverage(
+        (pairs.wi, pairs.wo, f, 0.1 * f), "hybrid", isotropic=True, theta_max=math.radians(80.0)
+    )
     np.testing.assert_array_equal(data.coords, params.get("hybrid").forward_iso(pairs.wi, pairs.wo))
     assert data.names == ("hbar", "k", "phi_k_minus_phi_h")
     np.testing.assert_array_equal(data.colour[1:], np.log10(f[1:]))
@@ -37,8 +38,14 @@ def test_coloured_by_residual_in_sigma(pairs: testset.TestSet) -> None:
     t = lobe.eval(pairs.wi, pairs.wo)
     sigma = np.full(len(t), 0.02)
     f = t + sigma * np.linspace(-3.0, 3.0, len(t))
-    data = samples.coverage((pairs.wi, pairs.wo, f, sigma), "rusinkiewicz", isotropic=False,
-                            theta_max=1.0, colour_by="residual", truth=lobe.eval)  # fmt: skip
+    data = samples.coverage(
+        (pairs.wi, pairs.wo, f, sigma),
+        "rusinkiewicz",
+        isotropic=False,
+        theta_max=1.0,
+        colour_by="residual",
+        truth=lobe.eval,
+    )
     np.testing.assert_allclose(data.colour, np.linspace(-3.0, 3.0, len(t)), atol=1e-12)
     np.testing.assert_array_equal(
         data.coords, params.get("rusinkiewicz").forward(pairs.wi, pairs.wo)
@@ -59,7 +66,13 @@ def test_without_sigma_the_residual_is_relative(pairs: testset.TestSet) -> None:
     t = Lobe().eval(pairs.wi, pairs.wo)
     f = 1.1 * t
     sigma = np.where(np.arange(len(t)) % 2 == 0, 0.0, 0.1)
-    data = samples.coverage((pairs.wi, pairs.wo, f, sigma), "hybrid", isotropic=True,
-                            theta_max=1.0, colour_by="residual", truth=Lobe().eval)  # fmt: skip
+    data = samples.coverage(
+        (pairs.wi, pairs.wo, f, sigma),
+        "hybrid",
+        isotropic=True,
+        theta_max=1.0,
+        colour_by="residual",
+        truth=Lobe().eval,
+    )
     np.testing.assert_allclose(data.colour, 0.1, rtol=1e-12)
     assert data.colour_label.startswith("relative residual")

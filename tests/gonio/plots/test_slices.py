@@ -23,8 +23,10 @@ def data() -> slices.Slices:
 
 def test_one_row_per_parametrization_one_column_per_angle(data: slices.Slices) -> None:
     assert [[s.parametrization for s in row] for row in data.rows] == [
-        ["hybrid"] * 2, ["orthographic"] * 2, ["rusinkiewicz"] * 2
-    ]  # fmt: skip
+        ["hybrid"] * 2,
+        ["orthographic"] * 2,
+        ["rusinkiewicz"] * 2,
+    ]
     assert [s.angle for s in data.rows[0]] == [0.0, math.pi / 2]
     for row in data.rows:
         for s in row:

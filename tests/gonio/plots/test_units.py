@@ -43,10 +43,14 @@ def test_the_coordinates_named_for_angles_are_the_angles() -> None:
 def test_the_coverage_of_a_plan(
     parametrization: str, rigs: dict[str, Rig], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    spec = PlanSpec.model_validate({
-        "name": "units", "parametrization": parametrization,
-        "sampling": {"strategy": "sobol", "target": 60}, "kicks": 5,
-    })  # fmt: skip
+    spec = PlanSpec.model_validate(
+        {
+            "name": "units",
+            "parametrization": parametrization,
+            "sampling": {"strategy": "sobol", "target": 60},
+            "kicks": 5,
+        }
+    )
     plan = build(spec, rigs["arch"])
     monkeypatch.setattr(coverage, "RESOLUTION", 40)  # the shading is not what is checked
     figures = capture(monkeypatch, coverage)
@@ -69,20 +73,29 @@ def test_the_coverage_of_a_plan(
     ("parametrization", "isotropic"), [("rusinkiewicz", False), ("hybrid", True)]
 )
 def test_the_samples(
-    parametrization: str, isotropic: bool, pairs: testset.TestSet, tmp_path: Path,
+    parametrization: str,
+    isotropic: bool,
+    pairs: testset.TestSet,
+    tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
-) -> None:  # fmt: skip
+) -> None:
     f = Lobe().eval(pairs.wi, pairs.wo)
-    data = samples.coverage((pairs.wi, pairs.wo, f, 0.1 * f), parametrization,
-                            isotropic=isotropic, theta_max=math.radians(80.0))  # fmt: skip
+    data = samples.coverage(
+        (pairs.wi, pairs.wo, f, 0.1 * f),
+        parametrization,
+        isotropic=isotropic,
+        theta_max=math.radians(80.0),
+    )
     figures = capture(monkeypatch, samples)
     samples.draw(data, tmp_path / "samples.png")
     (fig,) = figures
     assert_angles_in_degrees(fig)
     for (a, b), ax in zip(samples.PROJECTIONS[len(data.names)], fig.axes[3:6], strict=True):  # type: ignore[attr-defined]
         (dots,) = ax.collections
-        expected = np.stack([drawn(data.names[a], data.coords[:, a]),
-                             drawn(data.names[b], data.coords[:, b])], axis=-1)  # fmt: skip
+        expected = np.stack(
+            [drawn(data.names[a], data.coords[:, a]), drawn(data.names[b], data.coords[:, b])],
+            axis=-1,
+        )
         np.testing.assert_array_equal(dots.get_offsets(), expected)
 
 

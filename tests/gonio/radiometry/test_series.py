@@ -61,9 +61,14 @@ def test_a_drift_that_bends_between_calibrations_divides_out():
     t = np.linspace(0.0, 2400.0, 997)
     exposure = 0.05
     f, _ = cal.brdf(
-        drift(t) * exposure, np.zeros(t.size), np.ones(t.size, dtype=int),
-        np.full(t.size, exposure), np.tile(ZENITH, (t.size, 1)), np.tile(AT_45, (t.size, 1)), t,
-    )  # fmt: skip
+        drift(t) * exposure,
+        np.zeros(t.size),
+        np.ones(t.size, dtype=int),
+        np.full(t.size, exposure),
+        np.tile(ZENITH, (t.size, 1)),
+        np.tile(AT_45, (t.size, 1)),
+        t,
+    )
     np.testing.assert_allclose(f, ALBEDO / math.pi, rtol=6e-5)
     inside = (t > 240) & (t < 2160)
     np.testing.assert_allclose(f[inside], ALBEDO / math.pi, rtol=1e-5)
@@ -126,9 +131,14 @@ def test_the_dark_rounding_error_counts_in_sigma_as_s_and_S_share_it():
     exposure, t = 0.1, np.array([50.0, 50.0])
     rates = np.array([1e5, 2.5e4])  # s = S, and s = S/4
     f, sigma = cal.brdf(
-        rates * exposure, np.zeros(2), np.full(2, 16), np.full(2, exposure),
-        np.tile(ZENITH, (2, 1)), np.tile(AT_45, (2, 1)), t,
-    )  # fmt: skip
+        rates * exposure,
+        np.zeros(2),
+        np.full(2, 16),
+        np.full(2, exposure),
+        np.tile(ZENITH, (2, 1)),
+        np.tile(AT_45, (2, 1)),
+        t,
+    )
     assert sigma[0] == 0.0
     assert sigma[1] / f[1] == pytest.approx(10.0 * (1e5 - 2.5e4) / (1e5 * 2.5e4))
 
@@ -150,16 +160,22 @@ def test_blocks_of_samples_give_the_whole_runs_values(monkeypatch: pytest.Monkey
     give the values and σ of one block (to rounding: the products sum in another order)."""
     t_cal = np.arange(0.0, 2401.0, 120.0)
     cal = series(
-        t_cal, drift(t_cal), dark_rounding=np.full(t_cal.size, 3.0),
+        t_cal,
+        drift(t_cal),
+        dark_rounding=np.full(t_cal.size, 3.0),
         rate_var=np.full(t_cal.size, 4.0),
-    )  # fmt: skip
+    )
     rng = np.random.default_rng(5)
     t = np.sort(rng.uniform(0.0, 2400.0, 101))
     args = (
-        rng.uniform(1e3, 1e4, t.size), rng.uniform(1.0, 5.0, t.size),
-        np.full(t.size, 4), np.full(t.size, 0.05),
-        np.tile(ZENITH, (t.size, 1)), np.tile(AT_45, (t.size, 1)), t,
-    )  # fmt: skip
+        rng.uniform(1e3, 1e4, t.size),
+        rng.uniform(1.0, 5.0, t.size),
+        np.full(t.size, 4),
+        np.full(t.size, 0.05),
+        np.tile(ZENITH, (t.size, 1)),
+        np.tile(AT_45, (t.size, 1)),
+        t,
+    )
     whole = cal.brdf(*args)
     monkeypatch.setattr(series_module, "BLOCK_ENTRIES", 7 * t_cal.size)
     blocks = cal.brdf(*args)

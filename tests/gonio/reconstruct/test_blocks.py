@@ -90,6 +90,7 @@ def test_the_walk_out_of_flat_simplices_does_not_depend_on_the_batch() -> None:
     shuffled = np.empty_like(found)
     shuffled[order] = linear.locate(queries[order], nearest[order])
     assert np.array_equal(found, shuffled)
-    alone = np.concatenate([linear.locate(queries[k : k + 7], nearest[k : k + 7])
-                            for k in range(0, len(queries), 7)])  # fmt: skip
+    alone = np.concatenate(
+        [linear.locate(queries[k : k + 7], nearest[k : k + 7]) for k in range(0, len(queries), 7)]
+    )
     assert np.array_equal(found, alone)

@@ -51,8 +51,9 @@ def test_the_truth_itself_scores_zero_with_full_coverage(arch: Rig) -> None:
         def eval(self, wi: FloatArray, wo: FloatArray) -> FloatArray:
             return lambert(wi, wo) * (1 + wi[:, 2])
 
-    result = evaluate(Exact(), lambda wi, wo: lambert(wi, wo) * (1 + wi[:, 2]), arch,
-                      isotropic=True)  # fmt: skip
+    result = evaluate(
+        Exact(), lambda wi, wo: lambert(wi, wo) * (1 + wi[:, 2]), arch, isotropic=True
+    )
     assert result.test_pairs == testset.DEFAULT_SIZE and result.seed == testset.DEFAULT_SEED
     assert list(result.regions) == [ALL, *REGIONS]
     for region in result.regions.values():
@@ -93,8 +94,9 @@ def test_every_pair_is_scored_with_the_fill_outside_the_support(
 def test_only_supported_scores_the_pairs_inside_the_support(
     arch: Rig, pairs: testset.TestSet
 ) -> None:
-    result = evaluate(Filled(2.0), lambert, arch, isotropic=True, test_set=pairs,
-                      only_supported=True)  # fmt: skip
+    result = evaluate(
+        Filled(2.0), lambert, arch, isotropic=True, test_set=pairs, only_supported=True
+    )
     everything = result.regions[ALL]
     assert everything.pairs == len(pairs)
     assert everything.scores.count == np.count_nonzero(pairs.wi[:, 2] > math.cos(math.pi / 4))
@@ -114,8 +116,15 @@ def test_a_candidate_without_a_value_at_a_pair_it_is_scored_on_is_one_line(
     # Scaled declines where ωo is beyond 60°, inside its support and outside.
     for only in (False, True):
         with pytest.raises(GonioError) as err:
-            evaluate(Scaled(2.0), lambert, arch, isotropic=True, test_set=pairs,
-                     only_supported=only, candidate_label="twice")  # fmt: skip
+            evaluate(
+                Scaled(2.0),
+                lambert,
+                arch,
+                isotropic=True,
+                test_set=pairs,
+                only_supported=only,
+                candidate_label="twice",
+            )
         said = str(err.value)
         assert said.startswith("twice has no value at ") and "\n" not in said
         assert ("give it a fill" in said) != only
@@ -131,8 +140,7 @@ def test_a_truth_that_is_a_reconstruction_counts_only_where_it_is_defined(
         return np.where(wo[:, 0] > 0, np.inf, lambert(wi, wo))
 
     truth = Truth("a run's reconstruction", partial, supported)
-    result = evaluate(Filled(1.0), truth, arch, isotropic=True, test_set=pairs,
-                      only_supported=True)  # fmt: skip
+    result = evaluate(Filled(1.0), truth, arch, isotropic=True, test_set=pairs, only_supported=True)
     assert result.truth == "a run's reconstruction"
     kept = (pairs.wi[:, 0] > 0) & (pairs.wo[:, 0] <= 0)
     assert result.regions[ALL].pairs == np.count_nonzero(kept)
@@ -159,15 +167,20 @@ def _only_rest() -> testset.TestSet:
 
 
 def test_json_and_table_say_the_same_and_mark_empty_regions(arch: Rig) -> None:
-    result = evaluate(Filled(2.0), lambert, arch, isotropic=True, test_set=_only_rest(),
-                      candidate_label="twice")  # fmt: skip
+    result = evaluate(
+        Filled(2.0), lambert, arch, isotropic=True, test_set=_only_rest(), candidate_label="twice"
+    )
     assert isinstance(result, Evaluation)
     data = json.loads(json.dumps(result.to_json(), allow_nan=False))
     assert data["candidate"] == "twice" and data["test_set"] == {"pairs": 2, "seed": 0}
     assert data["only_supported"] is False and data["fill"] is None  # both supported
     assert data["regions"]["rest"]["pairs"] == data["regions"]["rest"]["scored"] == 2
-    assert data["regions"]["mirror"] == {"pairs": 0, "coverage": None, "scored": 0,
-                                         **dict.fromkeys(METRICS)}  # fmt: skip
+    assert data["regions"]["mirror"] == {
+        "pairs": 0,
+        "coverage": None,
+        "scored": 0,
+        **dict.fromkeys(METRICS),
+    }
     lines = result.table().splitlines()
     assert lines[0] == "twice vs truth"
     assert lines[2] == "scored: every pair; coverage: the share inside the support"

@@ -42,9 +42,14 @@ def test_colour_parameters_take_a_value_per_channel_geometry_is_shared():
     family = parse("lambert+ggx")
     slots = family.slots(rgb=True)
     assert [s.name(family.terms) for s in slots] == [
-        "lambert.albedo[r]", "lambert.albedo[g]", "lambert.albedo[b]",
-        "ggx.alpha", "ggx.f0[r]", "ggx.f0[g]", "ggx.f0[b]",
-    ]  # fmt: skip
+        "lambert.albedo[r]",
+        "lambert.albedo[g]",
+        "lambert.albedo[b]",
+        "ggx.alpha",
+        "ggx.f0[r]",
+        "ggx.f0[g]",
+        "ggx.f0[b]",
+    ]
     model = family.model(slots, [0.1, 0.2, 0.3, 0.2, 0.5, 0.6, 0.7])
     assert model.is_rgb
     value = model.eval([0.0, 0.0, 1.0], [0.0, 0.6, 0.8])

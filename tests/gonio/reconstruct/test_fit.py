@@ -92,10 +92,13 @@ def test_glossy_conductor_rgb_parameters_are_recovered(runs_dir):
     """Gold seen in three bands (three runs, independent noise): α shared, the complex
     index per channel."""
     runs = [
-        measure(runs_dir, long_plan(), scene_spec(
-            "glossy_metal", material=GOLD, effects=NOISE, band=band, seed=20 + j))
+        measure(
+            runs_dir,
+            long_plan(),
+            scene_spec("glossy_metal", material=GOLD, effects=NOISE, band=band, seed=20 + j),
+        )
         for j, band in enumerate("rgb")
-    ]  # fmt: skip
+    ]
     parts = [realizations(Measured.from_run(run)) for run in runs]
     shared = [shared_parts(run) for run in runs]
     fits = [
@@ -194,7 +197,8 @@ def test_a_sum_of_two_lobes_is_fitted_jointly(runs_dir):
 
 
 def test_too_few_samples_is_one_line(matte):
-    few = replace(matte[0], wi=matte[0].wi[:3], wo=matte[0].wo[:3], f=matte[0].f[:3],
-                  sigma=matte[0].sigma[:3])  # fmt: skip
+    few = replace(
+        matte[0], wi=matte[0].wi[:3], wo=matte[0].wo[:3], f=matte[0].f[:3], sigma=matte[0].sigma[:3]
+    )
     with pytest.raises(GonioError, match="3 samples cannot fit 3 free parameters"):
         fit(few, "lambert+ggx")

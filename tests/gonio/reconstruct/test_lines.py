@@ -104,8 +104,13 @@ def test_outside_the_lines_nothing_is_defined(layout: tuple[FloatArray, np.ndarr
 def glossy_lines(arch: Rig) -> tuple[Measured, np.ndarray, BRDF]:
     from gonio import brdf
 
-    gold = brdf.create("cook_torrance", alpha=0.05, fresnel="conductor",
-                       ior=[0.18, 0.42, 1.37], k=[3.42, 2.35, 1.77])  # fmt: skip
+    gold = brdf.create(
+        "cook_torrance",
+        alpha=0.05,
+        fresnel="conductor",
+        ior=[0.18, 0.42, 1.37],
+        k=[3.42, 2.35, 1.77],
+    )
     measured, label = synthesize_lines(lambda wi, wo: gold.eval(wi, wo).mean(-1), arch, 64, 0.5)
     return measured, label, gold
 
@@ -136,8 +141,12 @@ def test_lines_are_refused_in_one_line_without_lines(matte_iso: Measured) -> Non
         reconstruct(matte_iso, method="lines")
     assert "\n" not in str(err.value)
     with pytest.raises(GonioError, match="not lines of isotropic 'spherical'"):
-        reconstruct(matte_iso, method="lines", parametrization="spherical",
-                    lines=np.arange(len(matte_iso)) // 50)  # fmt: skip
+        reconstruct(
+            matte_iso,
+            method="lines",
+            parametrization="spherical",
+            lines=np.arange(len(matte_iso)) // 50,
+        )
 
 
 def test_rbf_on_too_few_lines_is_one_line(

@@ -28,10 +28,17 @@ def measured_of(
     pairs = testset.draw(rig, isotropic=isotropic, size=n, seed=seed)
     values = np.asarray(f(pairs.wi, pairs.wo))  # type: ignore[operator]
     return Measured(
-        wi=pairs.wi, wo=pairs.wo, f=values, sigma=np.zeros_like(values),
-        parametrization="hybrid", isotropic=isotropic, rig=rig, scene_text=None,
-        band="rgb" if values.ndim == 2 else "luminance", source="synthetic",
-    )  # fmt: skip
+        wi=pairs.wi,
+        wo=pairs.wo,
+        f=values,
+        sigma=np.zeros_like(values),
+        parametrization="hybrid",
+        isotropic=isotropic,
+        rig=rig,
+        scene_text=None,
+        band="rgb" if values.ndim == 2 else "luminance",
+        source="synthetic",
+    )
 
 
 @pytest.fixture(scope="module")

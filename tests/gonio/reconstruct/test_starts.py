@@ -23,10 +23,13 @@ def _measured(model: brdf.BRDF, n: int = 4000) -> Measured:
 
 
 def test_the_moment_estimate_reads_the_roughness_and_the_weights():
-    truth = brdf.create("sum", components=[
-        {"name": "lambert", "albedo": 0.4},
-        {"name": "cook_torrance", "distribution": "beckmann", "alpha": 0.15, "f0": 0.5},
-    ])  # fmt: skip
+    truth = brdf.create(
+        "sum",
+        components=[
+            {"name": "lambert", "albedo": 0.4},
+            {"name": "cook_torrance", "distribution": "beckmann", "alpha": 0.15, "f0": 0.5},
+        ],
+    )
     family = parse("lambert+beckmann")
     slots = family.slots(rgb=False)
     first = starts(family, slots, _measured(truth), count=3, seed=0)

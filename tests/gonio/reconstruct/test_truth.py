@@ -55,8 +55,13 @@ def test_a_run_on_hardware_has_no_default_truth(measured: Measured) -> None:
 def test_a_model_with_rgb_values_is_seen_through_the_band(
     measured: Measured, pairs: testset.TestSet
 ) -> None:
-    model = brdf.create("cook_torrance", alpha=0.05, fresnel="conductor",
-                        ior=[0.18, 0.42, 1.37], k=[3.42, 2.35, 1.77])  # fmt: skip
+    model = brdf.create(
+        "cook_torrance",
+        alpha=0.05,
+        fresnel="conductor",
+        ior=[0.18, 0.42, 1.37],
+        k=[3.42, 2.35, 1.77],
+    )
     rgb = model.eval(pairs.wi, pairs.wo)
     luminance = truth_from_spec(GLOSSY, measured)
     assert luminance.label == f"the model {GLOSSY}"

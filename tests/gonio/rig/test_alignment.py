@@ -132,10 +132,13 @@ def test_small_errors_move_the_directions_linearly(name: str, seed: int) -> None
 
     def scaled(k: float) -> Alignment:
         return Alignment(
-            zero_offset=k * p.zero_offset, tilt=k * p.tilt, tilt_azimuth=p.tilt_azimuth,
-            height_mm=k * p.height_mm, light_pointing=k * p.light_pointing,
+            zero_offset=k * p.zero_offset,
+            tilt=k * p.tilt,
+            tilt_azimuth=p.tilt_azimuth,
+            height_mm=k * p.height_mm,
+            light_pointing=k * p.light_pointing,
             detector_pointing=k * p.detector_pointing,
-        )  # fmt: skip
+        )
 
     base = rig.forward(q)
     one, two = rig.forward(q, scaled(eps)), rig.forward(q, scaled(2 * eps))

@@ -29,9 +29,12 @@ def peaks(truth: Alignment, rotations_deg: tuple[float, ...], rng: np.random.Gen
     detector's two joints located with `SIGMA` of noise."""
     theta = np.radians([10.0, 25.0, 40.0, 55.0, 70.0])[:, None]
     phi = np.radians(np.arange(0.0, 360.0, 60.0))[None, :]
-    wi = np.stack(np.broadcast_arrays(
-        np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)
-    ), axis=-1).reshape(-1, 3)  # fmt: skip
+    wi = np.stack(
+        np.broadcast_arrays(
+            np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)
+        ),
+        axis=-1,
+    ).reshape(-1, 3)
     out = []
     for rotation in np.radians(rotations_deg):
         c, s = math.cos(rotation), math.sin(rotation)
@@ -63,10 +66,15 @@ def truth_vector(truth: Alignment) -> np.ndarray:
     the rig file reads it (the stage's own offset, which a mirror cannot see, turns it)."""
     azimuth = float(truth.tilt_azimuth + truth.zero_offset[RIG.axes.index("sample_rotation")])
     tilt = float(truth.tilt)
-    return np.concatenate([
-        truth.zero_offset, [tilt * math.cos(azimuth), tilt * math.sin(azimuth)],
-        [float(truth.height_mm)], truth.light_pointing, truth.detector_pointing,
-    ])  # fmt: skip
+    return np.concatenate(
+        [
+            truth.zero_offset,
+            [tilt * math.cos(azimuth), tilt * math.sin(azimuth)],
+            [float(truth.height_mm)],
+            truth.light_pointing,
+            truth.detector_pointing,
+        ]
+    )
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -87,8 +95,10 @@ def test_every_determined_parameter_is_recovered_within_its_errors(seed: int) ->
     # what acts alike is fitted as one: the light's elevation offset with its pointing
     # about the same axis, the detector's likewise
     names = list(result.names)
-    for axis, pointing in (("light_elevation", "light_pointing_y"),
-                           ("detector_elevation", "detector_pointing_y")):  # fmt: skip
+    for axis, pointing in (
+        ("light_elevation", "light_pointing_y"),
+        ("detector_elevation", "detector_pointing_y"),
+    ):
         i, j = names.index(f"zero_offset.{axis}"), names.index(pointing)
         assert not ok[i] and not ok[j]
         assert abs(result.values[i] + result.values[j] - expected[i] - expected[j]) < D(0.03)

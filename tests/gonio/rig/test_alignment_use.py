@@ -87,9 +87,11 @@ def test_the_cli_refuses_a_bad_reference_with_exit_2(run_gonio: Gonio, tmp_path:
     rig = aligned_rig(tmp_path)
     (tmp_path / "align.yaml").unlink()
     plan = tmp_path / "plan.yaml"
-    plan.write_text((CONFIGS / "plans" / "quick.yaml").read_text().replace(
-        "rig: ../rigs/arch.yaml", f"rig: {rig}"
-    ))  # fmt: skip
+    plan.write_text(
+        (CONFIGS / "plans" / "quick.yaml")
+        .read_text()
+        .replace("rig: ../rigs/arch.yaml", f"rig: {rig}")
+    )
     r = run_gonio("plan", str(plan), "-o", str(tmp_path / "plan.csv"))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "alignment: cannot read the alignment file" in r.stderr
@@ -99,10 +101,11 @@ def test_a_run_stores_the_alignment_and_info_shows_it(run_gonio: Gonio, tmp_path
     rig = aligned_rig(tmp_path)
     plan = tmp_path / "plan.yaml"
     plan.write_text(
-        (CONFIGS / "plans" / "quick.yaml").read_text()
+        (CONFIGS / "plans" / "quick.yaml")
+        .read_text()
         .replace("rig: ../rigs/arch.yaml", f"rig: {rig}")
         .replace("target: 500", "target: 40")
-    )  # fmt: skip
+    )
     out = tmp_path / "run.sqlite"
     r = run_gonio(
         "simulate", str(plan), "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-o", str(out)
@@ -133,8 +136,10 @@ def test_a_run_stores_the_alignment_and_info_shows_it(run_gonio: Gonio, tmp_path
     plain = tmp_path / "plain.csv"
     assert run_gonio("export", str(out), "--format", "csv", "-o", str(plain)).returncode == 0
     assert csv.read_text() != plain.read_text()
-    for command in (("evaluate", str(out)), ("export", str(out), "--format", "csv", "-o",
-                    str(tmp_path / "x.csv"))):  # fmt: skip
+    for command in (
+        ("evaluate", str(out)),
+        ("export", str(out), "--format", "csv", "-o", str(tmp_path / "x.csv")),
+    ):
         bad = run_gonio(*command, "--alignment", str(tmp_path / "nowhere.yaml"))
         assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
         assert "nowhere.yaml" in bad.stderr
@@ -147,10 +152,11 @@ def test_the_alignment_is_part_of_what_a_run_is_made_from(run_gonio: Gonio, tmp_
     rig = aligned_rig(tmp_path)
     plan = tmp_path / "plan.yaml"
     plan.write_text(
-        (CONFIGS / "plans" / "quick.yaml").read_text()
+        (CONFIGS / "plans" / "quick.yaml")
+        .read_text()
         .replace("rig: ../rigs/arch.yaml", f"rig: {rig}")
         .replace("target: 500", "target: 30")
-    )  # fmt: skip
+    )
     out = tmp_path / "run.sqlite"
     scene = str(CONFIGS / "scenes" / "matte.yaml")
     r = run_gonio("acquire", str(plan), "--scene", scene, "-o", str(out))
@@ -178,10 +184,11 @@ def test_the_alignment_is_part_of_what_a_run_is_made_from(run_gonio: Gonio, tmp_
 def test_info_says_none_without_an_alignment(run_gonio: Gonio, tmp_path: Path) -> None:
     plan = tmp_path / "plan.yaml"
     plan.write_text(
-        (CONFIGS / "plans" / "quick.yaml").read_text()
+        (CONFIGS / "plans" / "quick.yaml")
+        .read_text()
         .replace("rig: ../rigs/arch.yaml", f"rig: {CONFIGS / 'rigs' / 'arch.yaml'}")
         .replace("target: 500", "target: 40")
-    )  # fmt: skip
+    )
     out = tmp_path / "run.sqlite"
     r = run_gonio(
         "simulate", str(plan), "--scene", str(CONFIGS / "scenes" / "matte.yaml"), "-o", str(out)

@@ -23,8 +23,15 @@ def sphere(rng: np.random.Generator, n: int) -> FloatArray:
     """Directions (n, 3) uniform on the sphere, with the normal and the horizon among them."""
     w = rng.normal(size=(n, 3))
     w /= np.linalg.norm(w, axis=1, keepdims=True)
-    w[:7] = [[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [-0.0, 0.0, 1.0],
-             [0.6, 0.8, 0.0], [0.0, 0.0, -1.0], [0.28, 0.0, 0.96]]  # fmt: skip
+    w[:7] = [
+        [0.0, 0.0, 1.0],
+        [1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [-0.0, 0.0, 1.0],
+        [0.6, 0.8, 0.0],
+        [0.0, 0.0, -1.0],
+        [0.28, 0.0, 0.96],
+    ]
     return w
 
 

@@ -91,11 +91,16 @@ def test_every_driver_field_can_be_set_from_yaml() -> None:
         "device_averaging": True,
         "max_line_bytes": 256,
         "stream": SerialStreamConfig(
-            start="GO {period_us:d}", stop="HALT", line=r"(?P<value>\S+) (?P<device_t>\d+)",
-            rate_hz=50.0, max_rate_hz=500.0, device_time_s=1e-6, latency_s=0.002,
+            start="GO {period_us:d}",
+            stop="HALT",
+            line=r"(?P<value>\S+) (?P<device_t>\d+)",
+            rate_hz=50.0,
+            max_rate_hz=500.0,
+            device_time_s=1e-6,
+            latency_s=0.002,
             starts_on_command=True,
         ),
-    }  # fmt: skip
+    }
     assert set(given) == driver_fields
     for f in dataclasses.fields(SerialDetectorConfig):  # none is the default: each is carried
         assert given[f.name] != f.default, f.name
@@ -125,8 +130,11 @@ def test_the_shipped_rigs_instrument_sections(arch_point: Rig, rigs: dict[str, R
     for rig in (*rigs.values(), arch_point):
         d = rig.spec.detector
         assert (d.aperture_sr, d.exposure_range_s, d.readout_s, d.max_averages) == (
-            1e-5, (1e-4, 60.0), 0.0, 64,
-        )  # fmt: skip
+            1e-5,
+            (1e-4, 60.0),
+            0.0,
+            64,
+        )
         assert d.interface.kind == "simulated"
         assert rig.spec.light.switch == NoSwitchSpec(kind="none")
         assert (rig.spec.reference.albedo, rig.spec.constraints.detector_fov_mm) == (0.99, 25)

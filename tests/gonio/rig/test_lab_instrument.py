@@ -46,12 +46,17 @@ def test_a_preset_needs_only_the_class_and_the_resource(instrument: str) -> None
 
 
 def test_fields_override_the_preset() -> None:
-    spec = PyMeasureInterfaceSpec.model_validate({
-        "kind": "pymeasure", "instrument": SR830, "resource": "GPIB0::8::INSTR",
-        "reading": "x", "settings": {"filter_slope": 12, "sensitivity": 0.01},
-        "exposure": {"kind": "time_constant", "property": "time_constant", "settle_tau": 7},
-        "dark_subtracted": False,
-    })  # fmt: skip
+    spec = PyMeasureInterfaceSpec.model_validate(
+        {
+            "kind": "pymeasure",
+            "instrument": SR830,
+            "resource": "GPIB0::8::INSTR",
+            "reading": "x",
+            "settings": {"filter_slope": 12, "sensitivity": 0.01},
+            "exposure": {"kind": "time_constant", "property": "time_constant", "settle_tau": 7},
+            "dark_subtracted": False,
+        }
+    )
     config = spec.config()
     assert config.reading == "x" and not config.dark_subtracted
     assert config.settings == (("filter_slope", 12), ("sensitivity", 0.01))
@@ -159,8 +164,15 @@ def test_a_misspelled_setting_stops_gonio_plan_in_one_line(tmp_path: Path) -> No
     rig = tmp_path / "rig.yaml"
     text = (RIGS / "arch_lockin.yaml").read_text()
     rig.write_text(text.replace("{filter_slope: 24}", "{filter_slpe: 24}"))
-    line = refused(tmp_path, "plan", "configs/plans/quick.yaml", "--rig", str(rig), "-o",
-                   str(tmp_path / "plan.csv"))  # fmt: skip
+    line = refused(
+        tmp_path,
+        "plan",
+        "configs/plans/quick.yaml",
+        "--rig",
+        str(rig),
+        "-o",
+        str(tmp_path / "plan.csv"),
+    )
     assert line == (
         f"gonio: error: {rig}:72: detector.interface.settings.filter_slpe: SR830 has no "
         "property 'filter_slpe'; did you mean 'filter_slope'?"

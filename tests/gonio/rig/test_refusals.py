@@ -302,8 +302,10 @@ def test_the_view_refusal_in_its_place(arch_point: Rig) -> None:
     25° of azimuth hit the low light arm)."""
     wi, wo = direction(60.0, 0.0), direction(63.0, 0.0)
     assert failing(arch_point, wi, wo) == {
-        Reason.BLIND_SPOT, Reason.VIEW_OFF_SAMPLE, Reason.COLLISION
-    }  # fmt: skip
+        Reason.BLIND_SPOT,
+        Reason.VIEW_OFF_SAMPLE,
+        Reason.COLLISION,
+    }
     assert reason(arch_point, wi, wo) == Reason.BLIND_SPOT
     wi, wo = direction(60.0, 0.0), direction(70.0, 10.0)
     assert failing(arch_point, wi, wo) == {Reason.VIEW_OFF_SAMPLE, Reason.COLLISION}

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.acquire import progress as progress_module
+from gonio.acquire import observer
 from gonio.cli import main
 from gonio.store.read import Run, open_run
 from gonio.workflows import session
@@ -86,7 +86,7 @@ def test_a_file_size_limit_ends_gonio_acquire_with_exit_3(
     def limited(progress: PipeProgress) -> int:
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # writes past the limit fail (EFBIG)
         resource.setrlimit(resource.RLIMIT_FSIZE, (96 * 1024, resource.RLIM_INFINITY))
-        progress_module.for_stream = lambda quiet, stream=None: progress  # type: ignore[assignment]
+        observer.for_stream = lambda quiet, stream=None: progress  # type: ignore[assignment]
         return main(files.cli(path))
 
     child = acquire_in_child(limited)

@@ -69,7 +69,8 @@ def reference(tmp_path_factory: pytest.TempPathFactory) -> Reference:
     sweep, out = write_sweep(folder), folder / "out"
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
-        code = main(["tradeoff", str(sweep), "-o", str(out), "-j", "1", "-q",
-                     "--target-error", str(TARGET)])  # fmt: skip
+        code = main(
+            ["tradeoff", str(sweep), "-o", str(out), "-j", "1", "-q", "--target-error", str(TARGET)]
+        )
     assert code == 0, printed.getvalue()
     return Reference(sweep, out, printed.getvalue())

@@ -23,8 +23,17 @@ def test_a_dask_cluster_gives_the_rows_of_the_local_run(
     with LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster:
-        code = main(["tradeoff", str(reference.sweep), "-o", str(out), "-q",
-                     "--scheduler", cluster.scheduler_address])  # fmt: skip
+        code = main(
+            [
+                "tradeoff",
+                str(reference.sweep),
+                "-o",
+                str(out),
+                "-q",
+                "--scheduler",
+                cluster.scheduler_address,
+            ]
+        )
     assert code == 0
     assert rows_of(out) == rows_of(reference.out)
 
@@ -36,8 +45,14 @@ def test_an_unreachable_scheduler_is_one_line(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
-    result = run_gonio("tradeoff", str(reference.sweep), "-o", str(tmp_path / "out"),
-                       "--scheduler", "tcp://127.0.0.1:1")  # fmt: skip
+    result = run_gonio(
+        "tradeoff",
+        str(reference.sweep),
+        "-o",
+        str(tmp_path / "out"),
+        "--scheduler",
+        "tcp://127.0.0.1:1",
+    )
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and "cannot reach the scheduler" in result.stderr
 
@@ -45,7 +60,8 @@ def test_an_unreachable_scheduler_is_one_line(
 def test_a_scheduler_that_is_no_address_is_one_line(
     reference: Reference, tmp_path: Path, run_gonio: Callable[..., CliResult]
 ) -> None:
-    result = run_gonio("tradeoff", str(reference.sweep), "-o", str(tmp_path / "out"),
-                       "--scheduler", "nonsense")  # fmt: skip
+    result = run_gonio(
+        "tradeoff", str(reference.sweep), "-o", str(tmp_path / "out"), "--scheduler", "nonsense"
+    )
     assert result.returncode == 2 and result.stderr.count("\n") == 1
     assert "expected an address tcp://HOST:PORT" in result.stderr

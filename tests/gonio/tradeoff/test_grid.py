@@ -72,8 +72,12 @@ def test_the_effects_a_combination_models(tmp_path: Path) -> None:
     without = resolved_effects(Without(without=["shot_noise", "footprint"]), scene)
     assert set(without) == set(scene.effects) - {"shot_noise", "footprint"}
     effects = [["aperture_integration"], {"without": ["saturation"]}, "none"]
-    labels = {t.inputs["effects"] for t in load_sweep(write_sweep(
-        tmp_path, scenes=[glossy], axes={**AXES, "effects": effects})).tasks}  # fmt: skip
+    labels = {
+        t.inputs["effects"]
+        for t in load_sweep(
+            write_sweep(tmp_path, scenes=[glossy], axes={**AXES, "effects": effects})
+        ).tasks
+    }
     assert labels == {"aperture_integration", "without:saturation", "none"}
 
 

@@ -43,8 +43,11 @@ def test_each_motion_takes_its_own_axes_once(tmp_path: Path) -> None:
     (fly,) = [t for t in sweep.tasks if t.inputs["blur_deg"] == 1.0]
     assert fly.budget_s == pytest.approx(30.0)
     assert fly.plan["sampling"]["strategy"] == "fly"
-    assert fly.plan["sampling"]["fly"] == {"segment": "detector_arc", "rate_hz": 100.0,
-                                           "blur_deg": 1.0}  # fmt: skip
+    assert fly.plan["sampling"]["fly"] == {
+        "segment": "detector_arc",
+        "rate_hz": 100.0,
+        "blur_deg": 1.0,
+    }
 
 
 def test_a_stop_and_go_sweep_keeps_its_ids(tmp_path: Path) -> None:

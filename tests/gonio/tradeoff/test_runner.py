@@ -17,8 +17,7 @@ from tests.gonio.tradeoff.conftest import SMALL, write_sweep
 def test_a_refused_combination_is_a_row_with_the_reason(tmp_path: Path) -> None:
     """A combination the planner refuses (the sweep file refuses such counts itself, so the
     task is edited after loading, as a plan no sweep file can write)."""
-    axes = {**SMALL["axes"], "parametrization": ["hybrid"], "sampling": ["sobol"],
-            "samples": [100]}  # fmt: skip
+    axes = {**SMALL["axes"], "parametrization": ["hybrid"], "sampling": ["sobol"], "samples": [100]}
     task = load_sweep(write_sweep(tmp_path, axes=axes)).tasks[0]
     task.plan["sampling"]["target"] = 2_000_000
     row = run(task)
@@ -33,8 +32,13 @@ def test_an_adaptive_combination_counts_both_passes(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(adaptive, "MEASURE_PAIRS", 1 << 15)  # a faster density
-    axes = {**SMALL["axes"], "parametrization": ["rusinkiewicz"], "sampling": ["adaptive"],
-            "samples": [60], "method": ["linear"]}  # fmt: skip
+    axes = {
+        **SMALL["axes"],
+        "parametrization": ["rusinkiewicz"],
+        "sampling": ["adaptive"],
+        "samples": [60],
+        "method": ["linear"],
+    }
     sweep = load_sweep(write_sweep(tmp_path, axes=axes, adaptive={"survey": 24, "model": "survey"}))
     (task,) = sweep.tasks
     assert task.plan["sampling"]["adaptive"]["model"] == "survey"

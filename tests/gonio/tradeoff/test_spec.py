@@ -88,8 +88,10 @@ def test_a_warp_for_spherical_or_an_exclusion_makes_it_valid(tmp_path: Path) -> 
         )
     )
     assert [(t.inputs["parametrization"], t.inputs["sampling"]) for t in excluded.tasks] == [
-        ("spherical", "sobol"), ("hybrid", "sobol"), ("hybrid", "warped")
-    ]  # fmt: skip
+        ("spherical", "sobol"),
+        ("hybrid", "sobol"),
+        ("hybrid", "warped"),
+    ]
 
 
 def test_the_shipped_quick_sweep_has_at_least_200_combinations() -> None:

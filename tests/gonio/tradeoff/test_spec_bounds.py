@@ -18,18 +18,24 @@ FLY_AXES = {"motion": ["fly"], "minutes": [5.0]}
 
 # (axes changed, the field refused, expected words)
 CASES: list[tuple[dict[str, Any], str, str]] = [
-    ({"minutes": [1e-9]}, "axes.minutes.0",
-     "expected at least 0.00417 min, the time of one sample on this rig (0.25 s"),
+    (
+        {"minutes": [1e-9]},
+        "axes.minutes.0",
+        "expected at least 0.00417 min, the time of one sample on this rig (0.25 s",
+    ),
     ({"minutes": [1_000_000]}, "axes.minutes.0", "expected at most 1440 (a day"),
     ({**FLY_AXES, "blur_deg": [1e-9]}, "axes.blur_deg.0", "expected at least 0.01 (below"),
-    ({**FLY_AXES, "blur_deg": [0.5, 0.015]}, "axes.blur_deg.1",
-     "expected at least 0.0254° for detector_arc (the quantization of detector_elevation's"),
+    (
+        {**FLY_AXES, "blur_deg": [0.5, 0.015]},
+        "axes.blur_deg.1",
+        "expected at least 0.0254° for detector_arc (the quantization of detector_elevation's",
+    ),
     ({**FLY_AXES, "rate_hz": [0.01]}, "axes.rate_hz.0", "expected at least 1 (below one"),
     ({"velocity_scale": [1e-9]}, "axes.velocity_scale.0", "expected at least 0.01 (a hundredth"),
     ({"velocity_scale": [1e6]}, "axes.velocity_scale.0", "expected at most 100"),
     ({"averages": [10**6]}, "axes.averages.0", "expected at most 1000 averages"),
     ({"exposure_s": [1e6]}, "axes.exposure_s.0", "expected at most 3600"),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(("axes", "field", "expected"), CASES, ids=[c[1] for c in CASES])

@@ -96,8 +96,11 @@ def test_a_killed_sweep_keeps_its_finished_rows_and_resumes(
     sweep, out = write_sweep(tmp_path), tmp_path / "out"
     child = subprocess.Popen(
         [sys.executable, "-m", "gonio", "tradeoff", str(sweep), "-o", str(out), "-j", "2", "-q"],
-        cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
     results = out / "results.jsonl"
     deadline = time.monotonic() + 60
     try:

@@ -100,11 +100,11 @@ def test_the_direction_error_is_each_directions_own_turn(
 def test_the_truth_is_compared_in_the_estimates_gauge(bench: ModuleType, rig: Rig) -> None:
     truth = AlignmentSpec(
         zero_offset_deg={"sample_rotation": 0.3, "detector_azimuth": -0.4},
-        tilt_deg=0.5, tilt_azimuth_deg=40.0,
-    )  # fmt: skip
+        tilt_deg=0.5,
+        tilt_azimuth_deg=40.0,
+    )
     estimate = AlignmentSpec(zero_offset_deg={"sample_rotation": 0.1})
-    values = dict(zip(bench.parameters(rig), bench.truth_vector(rig, truth, estimate),
-                      strict=True))  # fmt: skip
+    values = dict(zip(bench.parameters(rig), bench.truth_vector(rig, truth, estimate), strict=True))
     assert math.degrees(values["zero_offset.sample_rotation"]) == pytest.approx(0.1)
     assert math.degrees(values["zero_offset.detector_azimuth"]) == pytest.approx(-0.4)
     assert math.degrees(values["tilt_x"]) == pytest.approx(0.5 * math.cos(math.radians(40.2)))

@@ -15,10 +15,17 @@ RATE_HZ = 100.0
 
 def record(arrivals: np.ndarray, device_t: np.ndarray) -> StreamRecord:
     trace = StreamTrace(
-        command="START 100", rate_hz=RATE_HZ, integration_s=0.01, sent_s=0.0,
-        start_acknowledged_s=None, stop_sent_s=None, stop_acknowledged_s=None,
-        data_lines=len(arrivals), lines_after_ack=0, longest_line_bytes=20,
-    )  # fmt: skip
+        command="START 100",
+        rate_hz=RATE_HZ,
+        integration_s=0.01,
+        sent_s=0.0,
+        start_acknowledged_s=None,
+        stop_sent_s=None,
+        stop_acknowledged_s=None,
+        data_lines=len(arrivals),
+        lines_after_ack=0,
+        longest_line_bytes=20,
+    )
     return StreamRecord(trace, arrivals, device_t)
 
 

@@ -21,12 +21,13 @@ from gonio.rig import AlignmentSpec
 from gonio.rig.model import Rig
 from gonio.types import FloatArray
 from gonio.workflows.rehearsal import rehearsal_devices
-from gonio.workflows.simulate import measure_targets, simulate_plan
+from gonio.workflows.simulate import simulate_plan
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import simulate
 from tests.conftest import CONFIGS
 from tests.sim.virtual.test_simulate import small_plan
+from tests.support.measure import measure_targets
 
 SCENES = CONFIGS / "scenes"
 GLOSSY = load_scene(SCENES / "glossy_metal.yaml")

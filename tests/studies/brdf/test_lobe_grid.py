@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from gonio.brdf import lobe_study as ls
+from gonio.brdf import lobe_errors as ls
 from gonio.brdf import lobes
 from studies.brdf import lobe_grid as lg
 

@@ -1,4 +1,4 @@
-"""gonio.brdf.lobe_study: Romanyuk et al.'s equation 12 and error figures, recomputed.
+"""gonio.brdf.lobe_errors: Romanyuk et al.'s equation 12 and error figures, recomputed.
 
 The paper is Romanyuk et al.'s modified cosine-quadratic reflectance model.
 
@@ -19,7 +19,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from scipy import integrate
 
-from gonio.brdf import lobe_study as ls
+from gonio.brdf import lobe_errors as ls
 from gonio.brdf import lobes
 from studies.brdf import lobe_grid as lg
 

@@ -1,4 +1,5 @@
-"""Romanyuk et al.'s modified cosine-quadratic model recomputed with gonio's own lobes.
+"""The errors of Romanyuk et al.'s modified cosine-quadratic lobes against cos^n ψ,
+recomputed with gonio's own lobes (`gonio.brdf.lobes`).
 
 Conventions: c = cos ψ, n the shininess; the "epicentre zone" is ψ ≤ lim(n) =
 acos(exp(−K/n)) with the paper's printed K = 0.511. The relative error of a lobe F

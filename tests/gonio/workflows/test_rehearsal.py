@@ -45,9 +45,17 @@ def test_a_rehearsed_run_journals_what_the_emulated_instrument_did(
 ) -> None:
     out = tmp_path / "rehearsal.sqlite"
     result = run_gonio(
-        "acquire", str(PLAN), "--scene", str(SCENE), "--rehearse", "--speedup", SPEEDUP,
-        "-o", str(out), "-q",
-    )  # fmt: skip
+        "acquire",
+        str(PLAN),
+        "--scene",
+        str(SCENE),
+        "--rehearse",
+        "--speedup",
+        SPEEDUP,
+        "-o",
+        str(out),
+        "-q",
+    )
     assert result.returncode == 0, result.stderr
     assert "rehearsal backend" in result.stdout
     run = open_run(out)

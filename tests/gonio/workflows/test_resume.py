@@ -104,8 +104,11 @@ def test_stopped_and_resumed_equals_uninterrupted(
 def test_resume_measures_exactly_the_missing_targets(
     tmp_path: Path, run_files: Callable[..., RunFiles], stops: list[StopRequests]
 ) -> None:
-    files = run_files(40, faults=[{"kind": "comm_error", "at": [5]}],
-                      acquisition={"on_fault": {"retries": 0, "then": "skip"}})  # fmt: skip
+    files = run_files(
+        40,
+        faults=[{"kind": "comm_error", "at": [5]}],
+        acquisition={"on_fault": {"retries": 0, "then": "skip"}},
+    )
     path = tmp_path / "run.sqlite"
     with pytest.raises(RunInterrupted):
         files.start(path, progress=StopAfter(12, stops))

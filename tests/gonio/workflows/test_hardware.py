@@ -39,10 +39,16 @@ def bench(tmp_path: Path) -> Iterator[tuple[Rig, SerialLamp, SerialPhotometer]]:
                 **_photometer_fields(photometer),
             }
             data["light"]["switch"] = {
-                "kind": "serial", "port": lamp.path, "on_command": "ON", "off_command": "OFF",
-                "ack": "^OK$", "query_command": "STATE?", "on_reply": "^ON$",
-                "off_reply": "^OFF$", "timeout_s": 0.5,
-            }  # fmt: skip
+                "kind": "serial",
+                "port": lamp.path,
+                "on_command": "ON",
+                "off_command": "OFF",
+                "ack": "^OK$",
+                "query_command": "STATE?",
+                "on_reply": "^ON$",
+                "off_reply": "^OFF$",
+                "timeout_s": 0.5,
+            }
             path = tmp_path / "rig.yaml"
             path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
             yield Rig.from_yaml(path), lamp, photometer
@@ -54,13 +60,19 @@ def _photometer_fields(photometer: SerialPhotometer) -> dict[str, object]:
     config = photometer.config()
     endings = {"\n": "lf", "\r\n": "crlf", "\r": "cr"}
     return {
-        "port": config.port, "baud": config.baud, "query": config.query,
-        "set_exposure": config.set_exposure, "response": config.response,
-        "line_ending": endings[config.line_ending], "timeout_s": config.timeout_s,
-        "reset_banner": config.reset_banner, "init": list(config.init),
-        "command_ack": config.command_ack, "error_reply": config.error_reply,
+        "port": config.port,
+        "baud": config.baud,
+        "query": config.query,
+        "set_exposure": config.set_exposure,
+        "response": config.response,
+        "line_ending": endings[config.line_ending],
+        "timeout_s": config.timeout_s,
+        "reset_banner": config.reset_banner,
+        "init": list(config.init),
+        "command_ack": config.command_ack,
+        "error_reply": config.error_reply,
         "saturated_status": config.saturated_status,
-    }  # fmt: skip
+    }
 
 
 def test_the_rig_file_alone_drives_the_whole_hardware_path(
