@@ -5,7 +5,7 @@ clock, one run seed and the scene's injected faults.
 the `drivers.devices.Devices` (the contract), and the instrument itself is
 their `drivers.base.Simulated` side (which sample comes next, sample or reference on the
 stage, the true joint angles, snapshots for resume). `sim.virtual.simulate.simulate` computes
-a whole run vectorized; `gonio.workflows.simulate.measure_targets` measures the same
+a whole run vectorized; `tests.support.measure.measure_targets` measures the same
 run target by target through the engine's own step.
 """
 
