@@ -26,6 +26,7 @@ from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
+from gonio.scene import Scene
 from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
@@ -33,7 +34,6 @@ from gonio.workflows.preflight import Files
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.devices.position_error import planned_poses
 from sim.virtual.record import SimRun
-from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -16,10 +16,10 @@ import pytest
 from gonio.acquire.fly import derive, run_sweep
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.store import open_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 pytestmark = pytest.mark.pty

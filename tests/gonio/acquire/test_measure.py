@@ -12,9 +12,9 @@ from drivers.errors import LimitError
 from gonio.acquire.measure import measure_target
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.workflows.simulate import measure_targets
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 MATTE = load_scene(CONFIGS / "scenes" / "matte.yaml")

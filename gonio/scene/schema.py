@@ -28,8 +28,8 @@ from pydantic import (
 from gonio.brdf.material import MaterialSpec
 from gonio.config import ConfigError, Strict, field_error, load
 from gonio.rig import Rig
-from sim.virtual.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec
-from sim.virtual.faults import FaultRule
+from gonio.scene.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec
+from gonio.scene.faults import FaultRule
 
 
 class SourceSpec(Strict):
@@ -227,7 +227,7 @@ class Scene(Strict):
     )
     faults: tuple[FaultRule, ...] = Field(
         (), description="Faults injected into the simulated devices."
-    )  # `sim.virtual.faults`
+    )  # `gonio.scene.faults`
     seed: int = Field(0, ge=0, description="The seed of every random draw of the simulation.")
 
     @model_validator(mode="before")
