@@ -14,6 +14,7 @@ from gonio.scene.faults import (
 )
 from gonio.scene.schema import (
     RIG_FIELDS,
+    Band,
     DetectorSpec,
     Scene,
     SourceSpec,
@@ -27,6 +28,7 @@ __all__ = [
     "RIG_FIELDS",
     "STREAM_GAP",
     "STREAM_GAP_FROM",
+    "Band",
     "DetectorSpec",
     "EffectName",
     "EffectsSpec",

@@ -74,6 +74,9 @@ class SourceSpec(Strict):
 #: whose squares (variances) stay finite.
 MAX_ELECTRONS = 1e18
 
+#: The colour bands a detector may see an RGB material in.
+Band = Literal["luminance", "r", "g", "b"]
+
 
 class DetectorSpec(Strict):
     """The simulated sensor behind the rig's detector optics: how light becomes a
@@ -112,9 +115,7 @@ class DetectorSpec(Strict):
         description="adc: electrons the sensor holds; it maps to the ADC's top code.",
     )
     adc_bits: int = Field(16, ge=1, le=32, description="adc: the ADC's resolution (bits).")
-    band: Literal["luminance", "r", "g", "b"] = Field(
-        "luminance", description="The colour band an RGB material is seen in."
-    )
+    band: Band = Field("luminance", description="The colour band an RGB material is seen in.")
     time_constant_s: float | None = Field(
         None,
         gt=0,
