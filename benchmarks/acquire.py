@@ -39,11 +39,11 @@ from _machine import describe
 
 from gonio.planner import load_plan_source
 from gonio.planner.model import Plan
+from gonio.scene import Scene
 from gonio.store.journal import Journal
 from gonio.store.schema import samples_table
 from gonio.workflows import session
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import Scene
 from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -73,7 +73,7 @@ def conductor(alpha: float) -> BrdfEval:
 
 def scene_material(name: str) -> BrdfEval:
     from gonio.radiometry.bands import band_eval
-    from sim.virtual.scene import load_scene
+    from gonio.scene import load_scene
 
     return band_eval(
         load_scene(ROOT / "configs/scenes" / f"{name}.yaml").material.model(), "luminance"

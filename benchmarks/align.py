@@ -66,10 +66,10 @@ from gonio.rig import Rig
 from gonio.rig.alignment_file import AlignmentFile, load_alignment
 from gonio.rig.alignment_fit import miss, parameters, vector
 from gonio.rig.alignment_spec import AlignmentSpec
+from gonio.scene import Scene, load_scene
 from gonio.types import FloatArray
 from gonio.workflows.align import ScanSettings, nominal_poses, reachable
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCH = ROOT / "configs" / "rigs" / "arch.yaml"

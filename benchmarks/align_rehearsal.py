@@ -34,8 +34,8 @@ from drivers.errors import DriverError
 from gonio.errors import GonioError
 from gonio.rig import Rig
 from gonio.rig.alignment_fit import fit
+from gonio.scene import load_scene
 from gonio.workflows import align
-from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 RIG = ROOT / "configs" / "rigs" / "arch_serial.yaml"

@@ -40,8 +40,8 @@ from _machine import describe
 
 from gonio.acquire.reference import reference_pose
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from sim.virtual.devices.detector import sensor_of
-from sim.virtual.scene import Scene
 from sim.virtual.simulate import expected_rate
 from tests.support.calibration import calibration_events, scale_errors
 from tests.support.runs import RIGS, scene_spec

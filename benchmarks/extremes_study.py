@@ -35,7 +35,7 @@ from gonio.plots import require_matplotlib
 from gonio.rig import sensitivity
 from gonio.rig.model import Rig
 from gonio.rig.solution import Reason
-from sim.virtual.scene import load_scene
+from gonio.scene import load_scene
 from studies.params.accuracy import PATH_DISTANCES, PathRow, measured_errors, path_study
 
 ROOT = Path(__file__).resolve().parent.parent

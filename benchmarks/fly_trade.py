@@ -77,11 +77,11 @@ from gonio.reconstruct.evaluate import evaluate
 from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import region_masks
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.tradeoff.grid import Sweep, load_sweep, scaled_rig
 from gonio.tradeoff.store import open_store
 from gonio.tradeoff.sweep import run_sweep
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SWEEPS = ROOT / "configs" / "sweeps"

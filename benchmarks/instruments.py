@@ -40,10 +40,10 @@ from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source
 from gonio.planner.stored import plan_bytes
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
+from gonio.scene import load_scene
 from gonio.store.journal import Journal
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.peers.visa_instruments import EMULATORS, FULL_SCALE
-from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"

@@ -32,8 +32,8 @@ from gonio.radiometry.bands import band_eval
 from gonio.reconstruct import evaluate, reconstruct, testset
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.types import BrdfEval
-from sim.virtual.scene import load_scene
 from studies.reconstruct.synthetic_lines import synthesize_lines
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -34,9 +34,9 @@ from gonio.planner import build, load_plan
 from gonio.planner.schema import ExposureSpec
 from gonio.progress import hms
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.workflows.simulate import simulate_plan
 from sim.virtual.physics.lockin import ENBW_TAU
-from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 SEEDS = (1, 2, 3)

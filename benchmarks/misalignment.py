@@ -42,8 +42,8 @@ from gonio.reconstruct import evaluate, testset
 from gonio.reconstruct.naive import NaiveReconstruction
 from gonio.reconstruct.truth import truth_from_spec
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import Scene, load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {"glossy metal": "glossy_metal.yaml", "matte": "matte.yaml"}

@@ -37,9 +37,9 @@ from gonio.planner import build, load_plan
 from gonio.rig import constraints
 from gonio.rig.model import Rig
 from gonio.rig.solution import Reason
+from gonio.scene import load_scene
 from gonio.types import BoolArray, FloatArray
 from gonio.workflows.simulate import Result, simulate_plan
-from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 NOISE = ["shot_noise", "read_noise", "dark_current", "quantization", "saturation"]

@@ -61,7 +61,7 @@ RUNS = 2
 
 def scene_f(name: str) -> BrdfEval:
     from gonio.radiometry.bands import band_eval
-    from sim.virtual.scene import load_scene
+    from gonio.scene import load_scene
 
     scene = load_scene(SCENES / f"{name}.yaml")
     return band_eval(scene.material.model(), scene.detector.band)

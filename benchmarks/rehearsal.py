@@ -58,9 +58,9 @@ from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
 from gonio.planner.stored import plan_bytes
 from gonio.rig.travel import TravelModel
+from gonio.scene import load_scene
 from gonio.store import Journal, open_run
 from gonio.workflows.rehearsal import rehearsal_devices
-from sim.virtual.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"

@@ -23,10 +23,9 @@ from _machine import describe
 from gonio import brdf, radiometry
 from gonio.planner import build, load_plan
 from gonio.planner.model import Plan
+from gonio.scene import EffectsSpec, Scene, load_scene
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.effects import EffectsSpec
 from sim.virtual.record import SimRun
-from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import simulate
 from tests.support.measure import measure_targets
 

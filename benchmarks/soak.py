@@ -42,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 
 from gonio.rig.model import Rig
-from sim.virtual.scene import load_scene
+from gonio.scene import load_scene
 from tests.soak import (
     ROOT,
     Journal,

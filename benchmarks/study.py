@@ -55,8 +55,8 @@ from gonio.reconstruct.regions import NAMES as REGIONS
 from gonio.reconstruct.regions import regions
 from gonio.reconstruct.result import Reconstruction
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.types import BrdfEval
-from sim.virtual.scene import load_scene
 from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 
 ROOT = Path(__file__).resolve().parent.parent

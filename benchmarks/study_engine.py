@@ -272,9 +272,9 @@ def timing(args: argparse.Namespace) -> None:
     from gonio.planner.builder import build
     from gonio.planner.schema import PlanSpec
     from gonio.rig.model import Rig
+    from gonio.scene import load_scene
     from gonio.tradeoff.spec import EFFECT_NAMES
     from gonio.workflows.simulate import simulate_plan
-    from sim.virtual.scene import load_scene
 
     root = Path(__file__).resolve().parent.parent
     rig = Rig.from_yaml(root / "configs/rigs/arch.yaml")

@@ -3,21 +3,17 @@ on pseudo-terminals (`sim.peers`) over one clock (`sim.clock`); `sim.rehearsal` 
 rig's hardware path on the peers."""
 
 from sim.virtual import (
-    Scene,
     SimDetector,
     SimLightSource,
     SimMotorBus,
     SimulatedInstrument,
-    load_scene,
     simulate,
 )
 
 __all__ = [
-    "Scene",
     "SimDetector",
     "SimLightSource",
     "SimMotorBus",
     "SimulatedInstrument",
-    "load_scene",
     "simulate",
 ]

@@ -121,8 +121,8 @@ def cmd_align(args: argparse.Namespace) -> int:
     from gonio.rig import Rig
     from gonio.rig.alignment_file import from_fit, text
     from gonio.rig.alignment_fit import fit
+    from gonio.scene import load_scene
     from gonio.workflows import align, align_check, backends
-    from sim.virtual.scene import load_scene
 
     rig = Rig.from_yaml(args.rig)
     kind = backends.kind_of(rig, args.rehearse)

@@ -16,8 +16,8 @@ from pydantic import BaseModel
 from gonio.config_schema import json_schema
 from gonio.planner.schema import PlanSpec
 from gonio.rig.schema import RigSpec
+from gonio.scene import Scene
 from gonio.tradeoff.spec import SweepSpec
-from sim.virtual.scene import Scene
 
 #: Each kind of file: (the model that loads it, the schema's title).
 KINDS: dict[str, tuple[type[BaseModel], str]] = {

@@ -1,6 +1,6 @@
 """`AlignmentSpec`: a misalignment as a file gives it (degrees, millimetres, axes by
 name), turned into the kinematics' `Alignment` for a rig's axes. A scene's
-``misalignment`` effect is one (`sim.virtual.scene`)."""
+``misalignment`` effect is one (`gonio.scene`)."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ standard are, beside where their chains put them (`gonio.rig.schema`).
   ``pymeasure`` (a PyMeasure instrument class, `gonio.rig.lab_instrument`).
 - ``reference``: the Lambertian standard read for calibration, and where.
 
-A value here is never repeated in a scene file (`sim.virtual.scene` refuses it).
+A value here is never repeated in a scene file (`gonio.scene` refuses it).
 """
 
 from __future__ import annotations

@@ -31,6 +31,7 @@ from gonio.planner.fly.limits import blur_floor_deg
 from gonio.planner.schema import FlySpec, PlanSpec, Warp
 from gonio.rig.model import Rig
 from gonio.rig.schema import RigSpec
+from gonio.scene import EffectsSpec, load_scene
 from gonio.tradeoff.spec import (
     AXIS_NAMES,
     FLY,
@@ -45,8 +46,6 @@ from gonio.tradeoff.spec import (
     Without,
     effects_label,
 )
-from sim.virtual.effects import EffectsSpec
-from sim.virtual.scene import load_scene
 
 #: The most combinations one sweep may hold (a few seconds each: weeks of CPU).
 MAX_COMBINATIONS = 100_000

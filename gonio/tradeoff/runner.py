@@ -33,9 +33,9 @@ from gonio.reconstruct.methods import reconstruction
 from gonio.reconstruct.metrics import METRICS, REGIONS
 from gonio.reconstruct.testset import TestSet
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.tradeoff.grid import Task
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 
 #: The figures of a row after its inputs: the target the plan asked (fitted under a
 #: time budget), counts, predicted and simulated instrument time (s), why the ordering

@@ -36,7 +36,7 @@ from gonio.reconstruct import methods
 from gonio.reconstruct.evaluate import DEFAULT_FILL
 from gonio.reconstruct.metrics import METRICS
 from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
-from sim.virtual.effects import EffectsSpec
+from gonio.scene import EffectsSpec
 
 #: Strategies a sweep may name: the planner's own, and ``warped`` (Sobol with the
 #: sweep's ``warps`` for the parametrization).
@@ -66,7 +66,7 @@ RATE_RANGE = (MIN_RATE_HZ, 10_000.0)
 #: The longest exposure: a plan's (`gonio.planner.schema.ExposureSpec`).
 MAX_EXPOSURE_S = 3600.0
 
-#: The effects of a scene that a sweep may toggle: those `sim.virtual.scene.EffectsSpec` models.
+#: The effects of a scene that a sweep may toggle: those `gonio.scene.EffectsSpec` models.
 EFFECT_NAMES: tuple[str, ...] = tuple(EffectsSpec.model_fields)
 #: ``effects`` values: the scene's own effects, or none at all.
 SCENE, NONE = "scene", "none"

@@ -37,10 +37,10 @@ from gonio.acquire import TargetReading, measure_target
 from gonio.errors import GonioError
 from gonio.rig import Rig
 from gonio.rig.alignment_fit import peak_at
+from gonio.scene import Scene
 from gonio.types import FloatArray
 from gonio.workflows import align_fly, backends
 from gonio.workflows.backends import BackendKind
-from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -27,13 +27,13 @@ from gonio.acquire.reference import Stage
 from gonio.acquire.runtime import RunTime, wall_offset
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.workflows.hardware import hardware_devices
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene
 
 BackendKind = Literal["simulated", "hardware", "rehearsal"]
 

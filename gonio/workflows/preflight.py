@@ -26,9 +26,9 @@ from gonio.planner.model import Plan, content_hash, sha256
 from gonio.planner.schema import PlanSpec
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.workflows import backends, hygiene, stream_check
 from gonio.workflows.backends import BackendKind
-from sim.virtual.scene import Scene
 
 #: Journal bytes per sample, measured on the shipped plans (with a simulated
 #: snapshot), for the disk-space check of a dry run; doubled there for the WAL.

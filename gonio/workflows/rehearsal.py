@@ -17,6 +17,7 @@ from drivers.devices import Devices
 from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.workflows.hardware import (
     dynamixel_bus,
     light_switch,
@@ -36,7 +37,6 @@ from sim.rehearsal import (
 )
 from sim.virtual.devices.detector import LightState, SimDetector, SimLightSource
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene
 
 
 @contextmanager

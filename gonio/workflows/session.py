@@ -42,13 +42,13 @@ from gonio.planner.stored import parse_plan, plan_bytes
 from gonio.planner.two_pass import Survey, extend
 from gonio.rig.model import Rig, named_alignment
 from gonio.rig.schema import RigSpec
+from gonio.scene import Scene, load_scene
 from gonio.store.journal import Journal, JournalError, remove_run_file
 from gonio.store.read import Run, read_run
 from gonio.workflows import backends, hygiene
 from gonio.workflows.adaptive import estimate
 from gonio.workflows.backends import BackendKind
 from gonio.workflows.preflight import Files, check_output, check_scene, preflight, refuse_fly
-from sim.virtual.scene import Scene, load_scene
 
 
 def load_scene_file(path: Path, rig: Rig) -> tuple[Scene, bytes]:

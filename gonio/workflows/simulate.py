@@ -23,11 +23,11 @@ from gonio.analysis.summary import measured_pairs, truth_of
 from gonio.config import spec_text
 from gonio.errors import GonioError
 from gonio.planner.model import Plan
+from gonio.scene import Scene
 from gonio.store.read import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files
-from sim.virtual.scene import Scene
 
 
 @dataclass(frozen=True)

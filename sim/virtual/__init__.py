@@ -3,15 +3,12 @@ material through the radiometric chain (`physics`), the faults a scene injects
 (`faults`) and the same run vectorized (`simulate`)."""
 
 from sim.virtual.devices import SimDetector, SimLightSource, SimMotorBus, SimulatedInstrument
-from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import simulate
 
 __all__ = [
-    "Scene",
     "SimDetector",
     "SimLightSource",
     "SimMotorBus",
     "SimulatedInstrument",
-    "load_scene",
     "simulate",
 ]

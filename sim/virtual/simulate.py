@@ -17,6 +17,7 @@ import numpy as np
 
 from drivers.base import StageTarget
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.types import FloatArray
 from sim.virtual.devices.detector import sensor_of
 from sim.virtual.devices.position_error import planned_poses
@@ -24,7 +25,6 @@ from sim.virtual.physics import lockin, sensor
 from sim.virtual.physics.optics import SceneOptics
 from sim.virtual.physics.streams import Streams
 from sim.virtual.record import SimRun
-from sim.virtual.scene import Scene
 
 
 class Targets(Protocol):

@@ -14,10 +14,10 @@ from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.wire import poll_bytes, sync_read_bytes
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.peers.dynamixel.emulator import DxlEmulator, Fault
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 AXES = [

@@ -30,8 +30,8 @@ from hypothesis import strategies as st
 from gonio.config import SHOWN_PROBLEMS, ConfigError
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.tradeoff.grid import load_sweep
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 #: CPU seconds one case may take (loading a config takes milliseconds). CPU time, not the

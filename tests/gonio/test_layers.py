@@ -14,7 +14,14 @@ HEAVY = ("serial", "dynamixel_sdk", "sim")
 
 @pytest.mark.parametrize(
     "package",
-    ["gonio.planner", "gonio.rig", "gonio.store", "gonio.analysis", "gonio.reconstruct"],
+    [
+        "gonio.planner",
+        "gonio.rig",
+        "gonio.scene",
+        "gonio.store",
+        "gonio.analysis",
+        "gonio.reconstruct",
+    ],
 )
 def test_planning_and_analysis_load_neither_the_serial_stack_nor_the_simulator(
     package: str,

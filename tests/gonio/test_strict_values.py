@@ -15,7 +15,7 @@ import yaml
 from gonio.config import ConfigError
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
-from sim.virtual.scene import load_scene
+from gonio.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 Gonio = Callable[..., CliResult]

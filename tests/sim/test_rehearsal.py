@@ -18,11 +18,11 @@ from drivers.serial_detector.detector import SerialDetector
 from gonio.acquire.measure import measure_target
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS, RIG_FILES
 
 pytestmark = pytest.mark.pty

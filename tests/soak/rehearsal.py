@@ -42,13 +42,13 @@ import yaml
 
 from gonio.rig.instrument import SerialSwitchSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from sim.clock import ScaledClock
 from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.peers.dynamixel.faults import Fault
 from sim.rehearsal import emulated_bus, emulated_pose, lamp_for, photometer_for
 from sim.virtual.devices.detector import SimDetector
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene
 from tests.soak.children import kill_when
 from tests.soak.journal import connect, finished, integrity
 from tests.soak.loop import Session

@@ -10,8 +10,9 @@ from typing import Literal
 
 import numpy as np
 
+from gonio.scene import MOTOR_KINDS, FaultRule
 from sim.virtual.devices.detector import DETECTOR_KINDS
-from sim.virtual.faults import MOTOR_KINDS, FaultInjector, FaultRule
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import FAULT, Streams
 from tests.soak.journal import Event, Journal
 from tests.soak.loop import Soak

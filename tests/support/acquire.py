@@ -23,9 +23,9 @@ import yaml
 
 from gonio.planner.files import PlanSource, load_plan_source
 from gonio.planner.model import Plan
+from gonio.scene import Scene
 from gonio.store.read import Run
 from gonio.workflows import session
-from sim.virtual.scene import Scene
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 ARCH = CONFIGS / "rigs" / "arch.yaml"
@@ -291,6 +291,6 @@ def acquire(
 
 
 def load(scene_path: Path) -> Scene:
-    from sim.virtual.scene import load_scene
+    from gonio.scene import load_scene
 
     return load_scene(scene_path)

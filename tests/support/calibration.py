@@ -30,12 +30,12 @@ from gonio.analysis.calibrated import calibration_series
 from gonio.analysis.shared import calibration_error
 from gonio.radiometry.series import CalibrationSeries, student_variance
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.store.read import Event
 from gonio.types import FloatArray
 from sim.virtual.devices.detector import sensor_of
 from sim.virtual.physics.optics import SceneOptics
 from sim.virtual.physics.sensor import Summary
-from sim.virtual.scene import Scene
 from sim.virtual.simulate import expected_rate, simulate_standard
 
 

@@ -41,11 +41,11 @@ from drivers.stream import StreamReading
 from drivers.values import Reading
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 from gonio.rig.model import Rig
-from sim.virtual.faults import STREAM_GAP, STREAM_GAP_FROM, FaultInjector
+from gonio.scene import STREAM_GAP, STREAM_GAP_FROM, Scene
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics import lockin, sensor
 from sim.virtual.physics.optics import SceneOptics
 from sim.virtual.physics.streams import TIMING, Streams
-from sim.virtual.scene import Scene
 
 DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
 #: The injected faults a stream meets.

@@ -18,13 +18,13 @@ import numpy as np
 from drivers.base import StageTarget
 from drivers.devices import Devices, Resource
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.devices.motors import MotorState, SimMotorBus
 from sim.virtual.devices.position_error import planned_poses
 from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene
 
 
 class SimulatedInstrument(Resource):

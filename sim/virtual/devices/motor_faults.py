@@ -14,7 +14,8 @@ import math
 
 from drivers.errors import CommError, DriverError, MotorFault
 from drivers.values import Health
-from sim.virtual.faults import MOTOR_KINDS, FaultInjector, FaultRule
+from gonio.scene import MOTOR_KINDS, FaultRule
+from sim.virtual.faults import FaultInjector
 
 #: Temperature (°C) and supply voltage (V) of a healthy simulated motor.
 NOMINAL_TEMPERATURE_C = 35.0

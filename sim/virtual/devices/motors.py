@@ -60,13 +60,13 @@ from drivers.trajectory import (
 )
 from drivers.values import Health, Recovered, StampedPositions
 from gonio.rig.model import Rig
+from gonio.scene import FaultRule, PositionErrorSpec
 from gonio.types import FloatArray
 from sim.clock import ManualClock
 from sim.virtual.devices.motion import JointPath, profile_duration, profile_position
 from sim.virtual.devices.motor_faults import MotorFaults
 from sim.virtual.devices.position_error import MotorState, PositionModel
-from sim.virtual.effects import PositionErrorSpec
-from sim.virtual.faults import FaultInjector, FaultRule
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics import streams as streams_module
 
 __all__ = ["MotorState", "PositionModel", "SimMotorBus", "profile_duration", "profile_position"]

@@ -11,10 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio.rig.model import Rig
+from gonio.scene import PositionErrorSpec, Scene
 from gonio.types import FloatArray
-from sim.virtual.effects import PositionErrorSpec
 from sim.virtual.physics import streams as streams_module
-from sim.virtual.scene import Scene
 
 
 class PositionModel:

@@ -38,9 +38,9 @@ import numpy as np
 
 from drivers.pymeasure.config import SETTLE_TAU, settle_tau
 from gonio.radiometry import ELEMENTARY_CHARGE
+from gonio.scene import DetectorSpec
 from gonio.types import FloatArray
 from sim.virtual.physics.streams import LOCKIN_X, LOCKIN_Y, Streams
-from sim.virtual.scene import DetectorSpec
 
 #: The equivalent noise bandwidth × τ of 1–4 cascaded RC stages.
 ENBW_TAU = {6: 1 / 4, 12: 1 / 8, 18: 3 / 32, 24: 5 / 64}

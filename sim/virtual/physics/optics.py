@@ -38,8 +38,8 @@ from drivers.base import StageTarget
 from gonio import brdf, radiometry
 from gonio.radiometry.bands import band_eval
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.types import BrdfEval, FloatArray
-from sim.virtual.scene import Scene
 
 
 def source_of(scene: Scene, rig: Rig) -> radiometry.Source:

@@ -25,6 +25,7 @@ from drivers.dynamixel.wire import setpoint_period
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
 from gonio.rig.model import Rig
+from gonio.scene import FaultRule, load_scene
 from sim.clock import ManualClock, ScaledClock
 from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.peers.dynamixel.faults import Fault
@@ -33,9 +34,8 @@ from sim.peers.serial_photometer import STREAM_CONFIG, SerialPhotometer
 from sim.peers.visa_instruments import EMULATORS, FULL_SCALE
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.devices.motors import SimMotorBus
-from sim.virtual.faults import FaultInjector, FaultRule
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 #: The motor faults every bus must survive the same way.

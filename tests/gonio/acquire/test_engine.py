@@ -125,7 +125,7 @@ def test_a_target_outside_the_limits_is_skipped_never_commanded(tmp_path: Path) 
     angles[6, 1] = 1e3
     bad = dataclasses.replace(plan, angles=angles)
     files = session.Files(source.path, source.text, source.rig.source, source.rig.text)
-    from sim.virtual.scene import load_scene
+    from gonio.scene import load_scene
 
     scene = load_scene(scene_file(tmp_path), source.rig)
     out = tmp_path / "run.sqlite"
@@ -146,7 +146,7 @@ def test_a_plan_that_cannot_be_stored_is_refused_before_anything_moves(tmp_path:
     angles = plan.angles.copy()
     angles[2, 1] = math.nan
     files = session.Files(source.path, source.text, source.rig.source, source.rig.text)
-    from sim.virtual.scene import load_scene
+    from gonio.scene import load_scene
 
     scene = load_scene(scene_file(tmp_path), source.rig)
     out = tmp_path / "run.sqlite"

@@ -17,10 +17,10 @@ from gonio.acquire.fly import derive, run_sweep
 from gonio.acquire.fly.merge import SLOW_POLL
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.store import open_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 pytestmark = pytest.mark.pty

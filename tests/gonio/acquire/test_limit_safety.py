@@ -24,10 +24,10 @@ from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source
 from gonio.planner.model import ARRAYS, Plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.store.journal import Journal
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, RIG_FILES
 
 pytestmark = pytest.mark.pty

@@ -17,8 +17,8 @@ from gonio.errors import GonioError
 from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 
 

@@ -12,8 +12,8 @@ from drivers.errors import LimitError
 from gonio.acquire.measure import measure_target
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.support.measure import measure_targets
 

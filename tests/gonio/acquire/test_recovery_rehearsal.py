@@ -20,13 +20,13 @@ from gonio.acquire.runtime import RunTime
 from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
 from gonio.planner.stored import plan_bytes
+from gonio.scene import load_scene
 from gonio.store.journal import Journal
 from gonio.store.read import Run, read_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.peers.dynamixel.faults import Fault
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.support.acquire import ARCH, plan_yaml
 

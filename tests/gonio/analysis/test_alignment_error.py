@@ -17,9 +17,9 @@ from gonio.planner import build, load_plan
 from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, FitRecord, text
 from gonio.rig.sensitivity import alignment_brdf_sigma
+from gonio.scene import load_scene
 from gonio.store.read import Run
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.support.alignment import fit_record
 

@@ -12,8 +12,8 @@ from gonio.analysis import calibrate
 from gonio.analysis.falloff import has_falloff
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.workflows.simulate import Result, simulate_plan
-from sim.virtual.scene import load_scene
 from tests.support.runs import SCENES, plan_spec
 
 NOISE = ["shot_noise", "read_noise", "dark_current", "quantization", "saturation"]

@@ -15,9 +15,9 @@ from gonio.analysis.lamp_distance import distance_ratio
 from gonio.planner import build, load_plan
 from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, text
+from gonio.scene import load_scene
 from gonio.store.read import Run
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 HEIGHT_MM = 0.5

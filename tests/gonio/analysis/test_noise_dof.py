@@ -25,8 +25,8 @@ from gonio.errors import GonioError
 from gonio.planner.policies import CalibrationSpec
 from gonio.radiometry.series import student_variance
 from gonio.rig.model import Rig
+from gonio.scene import Scene
 from gonio.store.read import Event
-from sim.virtual.scene import Scene
 from tests.support.calibration import scale_errors
 from tests.support.runs import scene_spec
 

@@ -15,8 +15,8 @@ from gonio.analysis import Measured, calibrate, realigned
 from gonio.planner import build, load_plan
 from gonio.rig import AlignmentSpec, Rig
 from gonio.rig.alignment_file import AlignmentFile, text
+from gonio.scene import load_scene
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 #: The alignment the simulated rig really has and its alignment file says.

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from gonio.rig.model import Rig
-from sim.virtual.scene import Scene
+from gonio.scene import Scene
 from tests.support.calibration import scale_errors
 from tests.support.runs import scene_spec
 

@@ -15,7 +15,7 @@ from gonio.analysis.measured import Measured
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.radiometry.bands import band_eval
-from sim.virtual.scene import load_scene
+from gonio.scene import load_scene
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 HALF_PI = np.pi / 2

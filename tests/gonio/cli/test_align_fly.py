@@ -21,8 +21,8 @@ import yaml
 from gonio.cli import main
 from gonio.rig import Rig
 from gonio.rig.alignment_file import load_alignment
+from gonio.scene import load_scene
 from gonio.workflows import align, backends
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 from tests.gonio.cli.test_align import ARCH, TRUTH, mirror_scene
 

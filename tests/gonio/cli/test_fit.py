@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import yaml
 
-from sim.virtual.scene import Scene
+from gonio.scene import Scene
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 

@@ -27,8 +27,8 @@ from gonio.cli.schema import KINDS, schema, shipped
 from gonio.config import ConfigError, dotted, located, untagged
 from gonio.planner.files import load_plan_source
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.tradeoff.grid import load_sweep
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 from tools.reference_config import (
     FOLDERS,

@@ -19,9 +19,9 @@ from gonio.export.factored import Resolution
 from gonio.export.factored import export as export_factored
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.store import open_run
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 from tests.support.acquire import plan_file
 from tests.support.process import gonio_process

@@ -24,9 +24,9 @@ from gonio.reconstruct import testset
 from gonio.reconstruct.build import reconstruct
 from gonio.reconstruct.evaluate import evaluate
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.types import BrdfEval
 from gonio.workflows.adaptive import estimate
-from sim.virtual.scene import load_scene
 from studies.brdf import random_materials
 from studies.reconstruct.synthetic import adaptive_choice, synthesize
 

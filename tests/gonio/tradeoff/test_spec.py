@@ -11,8 +11,8 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.planner.schema import PlanSpec
+from gonio.scene import load_scene
 from gonio.tradeoff.grid import load_sweep
-from sim.virtual.scene import load_scene
 from tests.gonio.tradeoff.conftest import SMALL, write_sweep
 
 AXES: dict[str, Any] = SMALL["axes"]

@@ -22,12 +22,12 @@ from gonio.planner.model import Plan
 from gonio.planner.stored import plan_bytes
 from gonio.radiometry.bands import band_eval
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.store import open_run
 from gonio.store.journal import Journal
 from gonio.store.read import read_run
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS, CliResult
 
 pytestmark = pytest.mark.pty

@@ -14,8 +14,8 @@ from gonio.acquire.reference import reference_pose
 from gonio.cli.render import render_summary
 from gonio.planner import build, load_plan
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.workflows.simulate import simulate_plan
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 

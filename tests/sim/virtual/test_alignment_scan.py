@@ -16,7 +16,7 @@ from gonio.errors import GonioError
 from gonio.rig.alignment_file import from_fit, load_alignment, text
 from gonio.rig.alignment_fit import AlignmentFit, fit, peak_at, peak_offsets, stated_covariance
 from gonio.rig.model import Rig
-from sim.virtual.scene import load_scene
+from gonio.scene import load_scene
 from sim.virtual.simulate import simulate
 from tests.conftest import CONFIGS
 from tests.sim.virtual.test_misalignment import Sweep, misaligned

@@ -10,10 +10,10 @@ from gonio.acquire.measure import measure_target
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.rig.model import Rig
+from gonio.scene import FaultRule, Scene, load_scene
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.faults import FaultInjector, FaultRule
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 
 MATTE = load_scene(CONFIGS / "scenes" / "matte.yaml")

@@ -19,11 +19,11 @@ from gonio.analysis.summary import measured_pairs
 from gonio.config import ConfigError
 from gonio.rig import AlignmentSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.types import FloatArray
 from gonio.workflows.rehearsal import rehearsal_devices
 from gonio.workflows.simulate import simulate_plan
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import simulate
 from tests.conftest import CONFIGS
 from tests.sim.virtual.test_simulate import small_plan

@@ -16,9 +16,8 @@ from gonio.config import ConfigError
 from gonio.planner import build
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
-from sim.virtual.effects import EffectsSpec
+from gonio.scene import RIG_FIELDS, EffectsSpec, Scene, load_scene
 from sim.virtual.physics.optics import SceneOptics
-from sim.virtual.scene import RIG_FIELDS, Scene, load_scene
 from sim.virtual.simulate import simulate
 from tests.conftest import CONFIGS
 

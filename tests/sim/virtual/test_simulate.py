@@ -17,11 +17,11 @@ from gonio.planner.files import load_plan_source
 from gonio.planner.model import Plan
 from gonio.planner.schema import PlanSpec
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from gonio.workflows.simulate import simulate_plan
 from sim.clock import ManualClock
 from sim.virtual.devices.instrument import SimulatedInstrument
 from sim.virtual.physics.optics import SceneOptics
-from sim.virtual.scene import Scene, load_scene
 from sim.virtual.simulate import expected_rate, simulate, simulate_standard
 from tests.conftest import CONFIGS
 from tests.support.measure import measure_targets

@@ -12,8 +12,8 @@ import pytest
 from drivers.errors import DetectorError
 from gonio import radiometry
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 from tests.support.rigs import rig_with
 

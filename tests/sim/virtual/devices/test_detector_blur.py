@@ -14,10 +14,10 @@ import yaml
 
 from gonio.config import ConfigError
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, blur_nodes, gauss_legendre
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 
 GLOSSY = load_scene(CONFIGS / "scenes" / "glossy_metal.yaml")

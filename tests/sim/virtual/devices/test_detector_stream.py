@@ -11,10 +11,10 @@ import pytest
 from drivers.errors import DetectorError, StreamNotSupported
 from drivers.stream import can_stream
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, SimLightSource
 from sim.virtual.physics.streams import Streams
-from sim.virtual.scene import Scene, load_scene
 from tests.conftest import CONFIGS
 
 MATTE = load_scene(CONFIGS / "scenes" / "matte.yaml")

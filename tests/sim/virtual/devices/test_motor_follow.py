@@ -16,10 +16,10 @@ from drivers.errors import MotionTimeout, MotorFault
 from drivers.trajectory import SETTLE_TIMEOUT_S, Trajectory
 from drivers.values import StampedPositions
 from gonio.rig.model import Rig
+from gonio.scene import FaultRule, PositionErrorSpec
 from sim.clock import ManualClock
 from sim.virtual.devices.motors import SimMotorBus
-from sim.virtual.effects import PositionErrorSpec
-from sim.virtual.faults import FaultInjector, FaultRule
+from sim.virtual.faults import FaultInjector
 from sim.virtual.physics.streams import Streams
 
 START = [0.6, -0.4, 0.8, 1.2]

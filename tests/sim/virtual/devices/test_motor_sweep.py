@@ -9,9 +9,9 @@ import pytest
 
 from drivers.dynamixel.wire import poll_seconds
 from gonio.rig.model import Rig
+from gonio.scene import PositionErrorSpec
 from sim.clock import ManualClock
 from sim.virtual.devices.motors import SimMotorBus, profile_duration, profile_position
-from sim.virtual.effects import PositionErrorSpec
 from sim.virtual.physics.streams import Streams
 
 TARGET = [0.6, -1.0, 0.8, 1.5]

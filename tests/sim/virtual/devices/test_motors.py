@@ -11,9 +11,9 @@ import pytest
 
 from drivers.errors import DriverError, LimitError, MotionTimeout
 from gonio.rig.model import Rig
+from gonio.scene import PositionErrorSpec
 from sim.clock import ManualClock
 from sim.virtual.devices.motors import SimMotorBus, profile_position
-from sim.virtual.effects import PositionErrorSpec
 from sim.virtual.physics.streams import Streams
 from tests.support.rigs import angle_between
 

@@ -9,10 +9,10 @@ import pytest
 
 from gonio.acquire.measure import measure_target
 from gonio.rig.model import Rig
+from gonio.scene import load_scene
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
 from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.scene import load_scene
 from tests.conftest import CONFIGS
 
 SCENES = CONFIGS / "scenes"

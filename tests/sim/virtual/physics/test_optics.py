@@ -10,8 +10,8 @@ import numpy as np
 
 from gonio import radiometry
 from gonio.rig.model import Rig
+from gonio.scene import Scene, load_scene
 from sim.virtual.physics.optics import SceneOptics
-from sim.virtual.scene import Scene, load_scene
 from tests.support.rigs import direction, rig_with
 
 SCENES = Path(__file__).resolve().parents[4] / "configs" / "scenes"

@@ -28,8 +28,8 @@ from pydantic import (
 from gonio.brdf.material import MaterialSpec
 from gonio.config import ConfigError, Strict, field_error, load
 from gonio.rig import Rig
-from sim.virtual.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec
-from sim.virtual.faults import FaultRule
+from gonio.scene.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec
+from gonio.scene.faults import FaultRule
 
 
 class SourceSpec(Strict):
@@ -74,6 +74,9 @@ class SourceSpec(Strict):
 #: whose squares (variances) stay finite.
 MAX_ELECTRONS = 1e18
 
+#: The colour bands a detector may see an RGB material in.
+Band = Literal["luminance", "r", "g", "b"]
+
 
 class DetectorSpec(Strict):
     """The simulated sensor behind the rig's detector optics: how light becomes a
@@ -112,9 +115,7 @@ class DetectorSpec(Strict):
         description="adc: electrons the sensor holds; it maps to the ADC's top code.",
     )
     adc_bits: int = Field(16, ge=1, le=32, description="adc: the ADC's resolution (bits).")
-    band: Literal["luminance", "r", "g", "b"] = Field(
-        "luminance", description="The colour band an RGB material is seen in."
-    )
+    band: Band = Field("luminance", description="The colour band an RGB material is seen in.")
     time_constant_s: float | None = Field(
         None,
         gt=0,
@@ -227,7 +228,7 @@ class Scene(Strict):
     )
     faults: tuple[FaultRule, ...] = Field(
         (), description="Faults injected into the simulated devices."
-    )  # `sim.virtual.faults`
+    )  # `gonio.scene.faults`
     seed: int = Field(0, ge=0, description="The seed of every random draw of the simulation.")
 
     @model_validator(mode="before")
