@@ -59,6 +59,7 @@ from drivers.dynamixel.control_table import (
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
 from drivers.dynamixel.models import MODEL_NAMES, model
+from drivers.dynamixel.owed import LateCounts
 from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
 from drivers.errors import (
     MOTION_FAULTS,
@@ -140,6 +141,11 @@ class DynamixelBus(Condition, Resource):
     @property
     def is_open(self) -> bool:
         return bool(self._link.is_open)
+
+    @property
+    def late_counts(self) -> LateCounts:
+        """The link's syncs after replies a timeout gave up on (`DynamixelLink.late_counts`)."""
+        return self._link.late_counts
 
     def limits(self) -> dict[str, tuple[float, float]]:
         """Each axis's configured range (rad)."""
