@@ -54,6 +54,8 @@ MAX_LATENCY_MS = 1.0
 STATUS_RETURN_LEVEL = 2
 #: Microseconds per unit of the Return Delay Time register.
 US_PER_RETURN_DELAY_UNIT = 2
+#: How many times a motor's READs are asked while their statuses come back only late.
+READ_ROUNDS = 3
 #: Where the udev rule goes.
 UDEV_FILE = "/etc/udev/rules.d/99-dynamixel.rules"
 
@@ -136,6 +138,27 @@ def _model_name(number: int) -> str:
     return f"{name} (model number {number})" if name else f"model number {number}"
 
 
+def _identity(link: DynamixelLink, motor_id: int) -> tuple[int, int, int] | None:
+    """Firmware Version, Status Return Level and Return Delay Time of a motor that
+    answers PING; None if no READ of it is answered (Status Return Level 0). A READ
+    whose status did come, only past every attempt's timeout (a loaded host: the link's
+    syncs discarded it), is asked again, up to `READ_ROUNDS` times in all; then its
+    `CommError` propagates."""
+    names = ("firmware_version", "status_return_level", "return_delay_time")
+    for round_ in range(READ_ROUNDS):
+        seen = link.late_counts.discarded
+        try:
+            firmware, level, delay = (link.read(motor_id, n, alerts=False) for n in names)
+        except CommError:
+            if link.late_counts.discarded == seen:
+                return None  # not a status came back
+            if round_ == READ_ROUNDS - 1:
+                raise
+            continue
+        return firmware, level, delay
+    return None
+
+
 def motor_findings(
     link: DynamixelLink, axes: Sequence[Expected], adapter_ms: float
 ) -> list[Finding]:
@@ -179,11 +202,8 @@ def motor_findings(
                     f"{field}.motor_model: {model} to accept it",
                 )
             )
-        try:
-            firmware = link.read(axis.motor_id, "firmware_version", alerts=False)
-            level = link.read(axis.motor_id, "status_return_level", alerts=False)
-            delay = link.read(axis.motor_id, "return_delay_time", alerts=False)
-        except CommError:
+        identity = _identity(link, axis.motor_id)
+        if identity is None:
             out.append(
                 Finding(
                     "problem",
@@ -193,6 +213,7 @@ def motor_findings(
                 )
             )
             continue
+        firmware, level, delay = identity
         if axis.firmware is not None and firmware != axis.firmware:
             out.append(
                 Finding(
