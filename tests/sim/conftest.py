@@ -104,9 +104,18 @@ def raw_link() -> Iterator[Callable[[DxlEmulator], RawLink]]:
         link.close()
 
 
+#: The SDK's LATENCY_TIMER (ms) for plain SDK ports on an emulator: their timeouts are
+#: 2 × it + 2 ms + the reply's wire time, and a plain SDK call has no retries. A pty has
+#: no adapter to wait for, so its timer only bounds how long a loaded machine may hold
+#: the emulator's answer: 150 gives 302 ms (each expected timeout costs that).
+SDK_LATENCY_TIMER = 150
+
+
 @pytest.fixture
-def sdk_port(latency_timer: int) -> Iterator[Callable[[DxlEmulator], Any]]:
-    """Factory: an open SDK PortHandler on an emulator, at the emulator's rate."""
+def sdk_port(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[DxlEmulator], Any]]:
+    """Factory: an open SDK PortHandler on an emulator, at the emulator's rate (the SDK's
+    LATENCY_TIMER pinned to `SDK_LATENCY_TIMER` for the test)."""
+    monkeypatch.setattr(sdk.port_handler, "LATENCY_TIMER", SDK_LATENCY_TIMER)
     ports: list[Any] = []
 
     def make(emu: DxlEmulator, baud: int | None = None) -> Any:
