@@ -6,13 +6,15 @@ beside ``--busy`` processes that spin on the CPU (8 on the 2-core machine: a loa
 average near 9). Prints each round's passes, failures (by name) and wall time; all
 green is the requirement.
 
-The pty tests run ahead of the spinning processes (`tests.support.priority`: nice -20
-as root, as CI runs, and their session's scheduling group raised where the kernel groups
-processes by session); the spinning processes run at the priority this script has, each
-in a session of its own (as other jobs on a shared host would). Each
-round's pytest runs at that nice value too (as root), its collection included, so that
-a round's wall time is its tests' rather than the import of 50 test modules beside the
-spinning processes; a failed test is listed with the first line of its error.
+Each spinning process runs in a session of its own, at the priority this script has (as
+other jobs on a shared host would). Each round's pytest runs in a session of its own
+too, ahead of them where this user may say so (as root, as CI runs): at nice -20, and
+where the kernel groups processes by session (autogroup, which gives every session an
+equal share of the CPU whatever its processes' nice values) its session's group at
+nice -20 as well (`tests.support.priority`). The emulators it starts, in its threads or
+as processes, inherit both; so do its collection and imports, so that a round's wall
+time is its tests' rather than the import of 50 test modules beside the spinning
+processes. A failed test is listed with the first line of its error.
 
 Run: .venv/bin/python benchmarks/load_suite.py [--rounds 10] [--busy 8]
 """
@@ -36,7 +38,7 @@ import _report
 from _busy import spinning
 from _machine import describe
 
-from tests.support.priority import REAL_TIME_NICE
+from tests.support.priority import REAL_TIME_NICE, set_autogroup_nice
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The tests a round runs.
@@ -55,10 +57,12 @@ def files() -> list[str]:
 
 
 def ahead() -> None:
-    """In the round's process before it runs pytest: the real-time tests' nice value,
-    where this user may set it."""
+    """In the round's process, in its new session, before it runs pytest: the real-time
+    tests' nice value, for the process and its session's group, where this user may set
+    them."""
     with contextlib.suppress(PermissionError):
         os.setpriority(os.PRIO_PROCESS, 0, REAL_TIME_NICE)
+        set_autogroup_nice(REAL_TIME_NICE)
 
 
 def stop(signum: int, frame: FrameType | None) -> None:
@@ -72,7 +76,7 @@ def one_round(paths: list[str]) -> tuple[int, int, list[str], float]:
         [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", MARKERS,
          "-rf", *paths],
         cwd=ROOT, capture_output=True, text=True, stdin=subprocess.DEVNULL,
-        preexec_fn=ahead, env={**os.environ, "COLUMNS": "400"},
+        preexec_fn=ahead, start_new_session=True, env={**os.environ, "COLUMNS": "400"},
     )  # fmt: skip
     wall = time.perf_counter() - started
     summary = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""

@@ -52,6 +52,7 @@ from drivers.dynamixel.control_table import (
 )
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.owed import LateCounts
 from drivers.dynamixel.setup import MotorSetup, axis_named
 from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
 from drivers.errors import (
@@ -141,6 +142,11 @@ class DynamixelBus(Resource):
     @property
     def is_open(self) -> bool:
         return bool(self._link.is_open)
+
+    @property
+    def late_counts(self) -> LateCounts:
+        """The link's syncs after replies a timeout gave up on (`DynamixelLink.late_counts`)."""
+        return self._link.late_counts
 
     def limits(self) -> dict[str, tuple[float, float]]:
         """Each axis's configured range (rad)."""

@@ -12,11 +12,13 @@ import pytest
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.hygiene import (
+    Expected,
     Finding,
     access_finding,
     blocking,
     check_bus,
     latency_finding,
+    motor_findings,
 )
 from drivers.dynamixel.latency import (
     DEFAULT_LATENCY_MS,
@@ -25,6 +27,7 @@ from drivers.dynamixel.latency import (
     assumed_adapter_ms,
     return_delay_budget_us,
 )
+from drivers.dynamixel.link import DynamixelLink
 from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.peers.dynamixel.faults import Fault
 
@@ -167,3 +170,28 @@ def test_without_expectations_any_known_model_passes(emulator: Emulator) -> None
     assert [f.level for f in motors[2]] == ["warning"]
     assert "axes.axis2.motor_model: 1234" in motors[2][0].text
     assert not blocking(findings)
+
+
+def test_reads_answered_only_past_their_timeouts_are_not_status_return_level_0(
+    emulator: Emulator,
+) -> None:
+    """A motor whose READ statuses come past the attempts' timeouts (as on a loaded
+    host) did answer READ: asked again, it is checked as any other, not reported as
+    Status Return Level 0 (whose READs never come back, as the test above shows)."""
+    emu = emulator(ids=(1,))
+    emu.motors[1].set("return_delay_time", 0)
+
+    class LateAfterPing(DynamixelLink):
+        """The real link; the motor's next two statuses (a READ's and its sync's) are
+        sent 80 ms late once its PING is answered: the READ fails both attempts."""
+
+        def ping(self, motor_id: int) -> int:
+            model = super().ping(motor_id)
+            emu.inject(Fault.LATE, motor_id=motor_id, count=2, delay_ms=80.0)
+            return model
+
+    with LateAfterPing(emu.path, 57_600, retries=1, latency_ms=0.0) as link:
+        findings = motor_findings(link, [Expected(1, "axis1", 1020, 46)], 0.0)
+        assert link.late_counts.discarded >= 1  # the late READ status did come
+    assert [f.level for f in findings] == ["ok"], findings
+    assert emu.stats.late == 2

@@ -48,6 +48,9 @@ def set_autogroup_nice(nice: int) -> bool:
 
 #: The session group's nice value when the suite started (what `ahead` restores).
 SESSION_NICE = autogroup_nice()
+#: The process's nice value when the suite started: the priority its tests run at
+#: unless raised (a benchmark may start the whole suite at another).
+SUITE_NICE = os.getpriority(os.PRIO_PROCESS, 0)
 
 
 @contextlib.contextmanager

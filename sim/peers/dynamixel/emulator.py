@@ -106,6 +106,12 @@ class DxlEmulator:
         self.wire_time = wire_time
         self.return_delay = return_delay
         self._lock = threading.RLock()
+        #: Notified each time the serving thread has served what it read (`wait_served`).
+        self._served = threading.Condition(self._lock)
+        #: Bytes read from the host and written to it since creation (`totals`), and
+        #: whether the serving thread is serving bytes it has read.
+        self._heard = self._said = 0
+        self._serving = False
         models = model if isinstance(model, Mapping) else dict.fromkeys(ids, model)
         if set(models) != set(ids):
             raise ValueError(f"models {dict(models)} must name exactly the ids {ids}")
@@ -173,6 +179,22 @@ class DxlEmulator:
         """A snapshot of the traffic counters."""
         with self._lock:
             return dataclasses.replace(self._stats, instructions=Counter(self._stats.instructions))
+
+    def totals(self) -> tuple[int, int]:
+        """Bytes read from the host and bytes written to it since the emulator was made
+        (running totals: `reset_stats` leaves them)."""
+        with self._lock:
+            return self._heard, self._said
+
+    def wait_served(self, heard: int, timeout: float) -> bool:
+        """Wait until the emulator has read ``heard`` bytes from the host in all (the
+        first of `totals`) and served every packet among them, their replies written to
+        the pty (late ones included); False if ``timeout`` (s) passed first. A host
+        that knows what it sent then knows every byte the bus will answer with."""
+        with self._served:
+            return self._served.wait_for(
+                lambda: self._heard >= heard and not self._serving, timeout
+            )
 
     def reset_stats(self) -> None:
         with self._lock:
@@ -276,18 +298,26 @@ class DxlEmulator:
             arrived = time.perf_counter()
             with self._lock:
                 self._stats.bytes_in += len(data)
+                self._heard += len(data)
                 if self._transcript is not None:
                     self._transcript.append(("rx", data))
                 if self._silent:
                     reader.clear()
+                    self._served.notify_all()
                     continue
-            reader.feed(data)
-            more = True
-            while more:
-                try:
-                    more = self._next(reader, arrived)
-                except Exception as exc:  # keep serving; tests look at .error
-                    self.error = exc
+                self._serving = True
+            try:
+                reader.feed(data)
+                more = True
+                while more:
+                    try:
+                        more = self._next(reader, arrived)
+                    except Exception as exc:  # keep serving; tests look at .error
+                        self.error = exc
+            finally:
+                with self._lock:
+                    self._serving = False
+                    self._served.notify_all()
 
     def _next(self, reader: PacketReader, arrived: float) -> bool:
         """Serve the next complete packet in ``reader`` (False when there is none)."""
@@ -372,6 +402,7 @@ class DxlEmulator:
         with self._lock:
             self._stats.packets_out += 1
             self._stats.bytes_out += len(raw)
+            self._said += len(raw)
             if self._transcript is not None:
                 self._transcript.append(("tx", raw))
         view, master = memoryview(raw), self._pty.master

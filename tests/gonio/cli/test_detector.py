@@ -154,8 +154,10 @@ VIOLATIONS = {
         "stop_acknowledged",
         "no command_ack",
     ),
+    # 25 ms late: the check allows the command's measured round trip (a loaded host
+    # lengthens it) and 2.5 ms more, so 6 ms goes unseen behind a 3.5 ms round trip
     "a late first window": (
-        StreamQuirks(start_delay_s=0.006),
+        StreamQuirks(start_delay_s=0.025),
         {},
         "starts_on_command",
         "after the command arrives",

@@ -438,6 +438,24 @@ def test_fast_sync_read_with_a_lost_block_is_truncated(emulator: Emulator, raw_l
     assert len(reply) == 8 + 8  # header and ID 1's block; the LEN still promises ID 2's
 
 
+def test_a_raw_exchange_waits_until_the_emulator_has_served_it(
+    emulator: Emulator, raw_link: Link
+) -> None:
+    """A reply sent 150 ms late (past any fixed read window a raw test would pick) is
+    the exchange's answer: the link waits until the emulator says it has served the
+    packet, then reads exactly what it wrote; a packet without a reply reads nothing."""
+    emu = emulator((1,))
+    link = raw_link(emu)
+    ping = instruction_packet(1, Instruction.PING)
+    emu.inject(Fault.LATE, motor_id=1, delay_ms=150.0)
+    start = time.monotonic()
+    assert [(p.id, p.error, p.params) for p in link.packets(ping)] == [(1, 0, hx("FC 03 2E"))]
+    assert time.monotonic() - start >= 0.15
+    assert emu.stats.late == 1
+    assert link.packets(instruction_packet(2, Instruction.PING)) == []  # no motor 2
+    assert emu.totals() == (20, 14)  # two pings heard, one reply said
+
+
 def test_a_stale_reply_comes_before_the_answer(emulator: Emulator, raw_link: Link) -> None:
     emu = emulator((1,))
     link = raw_link(emu)
