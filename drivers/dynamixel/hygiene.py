@@ -54,8 +54,8 @@ MAX_LATENCY_MS = 1.0
 STATUS_RETURN_LEVEL = 2
 #: Microseconds per unit of the Return Delay Time register.
 US_PER_RETURN_DELAY_UNIT = 2
-#: The rounds of READ, each after a PING, a motor must leave unanswered to be taken as
-#: at Status Return Level 0 (not a reply the host was too busy to take in time).
+#: The rounds of READ, each after a PING, a motor must leave unanswered (no status back,
+#: not even late) to be taken as at Status Return Level 0.
 READ_ROUNDS = 3
 #: Where the udev rule goes.
 UDEV_FILE = "/etc/udev/rules.d/99-dynamixel.rules"
@@ -141,20 +141,23 @@ def _model_name(number: int) -> str:
 
 def _status_registers(link: DynamixelLink, motor_id: int) -> tuple[int, int, int] | None:
     """(Firmware Version, Status Return Level, Return Delay Time) of a motor that answered
-    PING; None when READ went unanswered `READ_ROUNDS` times, each after a PING (a
-    motor at Status Return Level 0 answers every PING and no READ; a host too loaded
-    to take a reply in time misses some of either)."""
+    PING; None when READ went unanswered `READ_ROUNDS` times, each after a PING, and no
+    status of it came back even late (a motor at Status Return Level 0 answers every PING
+    and no READ). A host too loaded to take a reply in time misses some of either: a
+    READ whose status came only past every attempt's timeout (the link's syncs discarded
+    it) is asked again, and after the last round its `CommError` propagates."""
+    names = ("firmware_version", "status_return_level", "return_delay_time")
+    discarded = link.late_counts.discarded
     for round_ in range(READ_ROUNDS):
         try:
             if round_:
                 link.ping(motor_id)
-            return (
-                link.read(motor_id, "firmware_version", alerts=False),
-                link.read(motor_id, "status_return_level", alerts=False),
-                link.read(motor_id, "return_delay_time", alerts=False),
-            )
+            firmware, level, delay = (link.read(motor_id, n, alerts=False) for n in names)
         except CommError:
+            if round_ == READ_ROUNDS - 1 and link.late_counts.discarded != discarded:
+                raise
             continue
+        return firmware, level, delay
     return None
 
 

@@ -183,11 +183,15 @@ def test_reads_answered_only_past_their_timeouts_are_not_status_return_level_0(
 
     class LateAfterPing(DynamixelLink):
         """The real link; the motor's next two statuses (a READ's and its sync's) are
-        sent 80 ms late once its PING is answered: the READ fails both attempts."""
+        sent 80 ms late once its first PING is answered: that READ fails both attempts."""
+
+        pinged = False
 
         def ping(self, motor_id: int) -> int:
             model = super().ping(motor_id)
-            emu.inject(Fault.LATE, motor_id=motor_id, count=2, delay_ms=80.0)
+            if not self.pinged:
+                emu.inject(Fault.LATE, motor_id=motor_id, count=2, delay_ms=80.0)
+                self.pinged = True
             return model
 
     with LateAfterPing(emu.path, 57_600, retries=1, latency_ms=0.0) as link:
