@@ -116,6 +116,7 @@ class SerialPhotometer:
         self._quirk_rng = random.Random(seed + 1)
         self._stream_index = 0  # data lines of the running stream so far
         self._stop_after: int | None = None  # lines still sent after an acknowledged STOP
+        self._stop_ack_due = 0.0  # time.monotonic() that acknowledgement is sent
 
         self._server = LineServer(
             "photometer",
@@ -307,13 +308,17 @@ class SerialPhotometer:
                 if self._stream is not None and self._windows_signal is not None:
                     self._send_windows_locked(now)  # the windows ended before it
                 quirks, streaming = self._quirks, self._stream is not None
+                ack_s = quirks.stop_ack_delay_s if streaming else 0.0
+                delay += ack_s or 0.0
                 if streaming and quirks.lines_after_stop_ack:
+                    # lines of windows ending after the OK is sent: a window overdue on a
+                    # busy host goes out before the OK and is not one of them
                     self._stop_after = quirks.lines_after_stop_ack
+                    self._stop_ack_due = start + delay
                 else:
                     self._stream, self._stream_gen = None, self._stream_gen + 1
-                if streaming and quirks.stop_ack_delay_s is None:
+                if ack_s is None:
                     return
-                delay += quirks.stop_ack_delay_s or 0.0 if streaming else 0.0
                 answer = "OK"
             elif name == "STREAM":
                 answer = self._start_stream_locked(args, start + delay)
@@ -439,8 +444,8 @@ class SerialPhotometer:
         else:
             data = _line(f"ERR signal failed: {type(window).__name__}")
         self._server.output_locked(data)
-        if self._stop_after is not None:  # still streaming after an acknowledged STOP
-            self._stop_after -= 1
+        if self._stop_after is not None and event.due > self._stop_ack_due:
+            self._stop_after -= 1  # a line after the acknowledged STOP
             if self._stop_after <= 0:
                 self._stream, self._stream_gen, self._stop_after = None, self._stream_gen + 1, None
                 return
