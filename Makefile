@@ -56,13 +56,16 @@ pytest: $(VENV)/.installed-test browser warm
 
 # What every test process would otherwise redo: the sources and the installed packages
 # byte-compiled (where PYTHONDONTWRITEBYTECODE is set, as on the machines this project is
-# built on, each process the tests start compiled them again) and the planner's numba
+# built on, each process the tests start compiled them again), the planner's numba
 # kernels compiled into their on-disk cache (some seconds, once, not in each worker at the
-# same time).
+# same time), and the test modules as pytest rewrites their asserts, by one collection
+# that may write them (each worker reads them: its collection 8 CPU-s instead of 17).
 warm: $(VENV)/.installed-test
 	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests \
 		"$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" >/dev/null
 	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
+	@out=$$(PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
+		|| { echo "$$out"; exit 1; }
 
 
 # The browser tests (tests/gonio/live/test_browser.py) drive Debian's Chromium: installed
