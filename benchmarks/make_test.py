@@ -1,10 +1,9 @@
 """The whole `make test` from a clean clone, as CI runs it: `git clone` of the committed
 tree into a temporary folder, then `CI=true make test` there with no standard input
-(a new virtual environment, the install of the test and docs extras, not byte-compiled;
-then side by side ruff, mypy and the import contracts, the documentation site's strict
-build, and the warm-up: the sources and the installed packages byte-compiled and the
-planner's numba kernels compiled into their cache; then the test suite on three workers,
-whose site tests open the site just built). Prints the wall time of each stage and the
+(a new virtual environment, the install of the test and docs extras; then side by side
+ruff, mypy and the import contracts, the documentation site's strict build, and the
+warm-up: the sources byte-compiled and the planner's numba kernels compiled into their
+cache; then the test suite on three workers). Prints the wall time of each stage and the
 suite's own summary line; the budget is 4 minutes on the 2-core machine, install
 included.
 
