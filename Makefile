@@ -16,8 +16,10 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(PIP) install -e .
 	touch $@
 
+# --no-compile: pip would byte-compile every installed file (~12 000, half its time, on one
+# core); `warm` compiles them on every core, beside the linters and the site.
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(PIP) install -e '.[test,docs,instruments]'
+	$(PIP) install --no-compile -e '.[test,docs,instruments]'
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
@@ -47,16 +49,23 @@ docs: $(VENV)/.installed-docs
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
 # by CPU-bound tests from the other two.
+# BUILT_SITE: a site `make docs` has just built, which the site's browser tests open
+# instead of building their own (`make test` passes it; alone, they build one).
 pytest: $(VENV)/.installed-test browser warm
-	$(BIN)/python -m pytest -q -n 3 --dist loadgroup
+	GONIO_BUILT_SITE=$(BUILT_SITE) $(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
-# What every test process would otherwise redo: the sources byte-compiled (where
-# PYTHONDONTWRITEBYTECODE is set, as on the machines this project is built on, each
-# process the tests start compiled them again) and the planner's numba kernels compiled
-# into their on-disk cache (some seconds, once, not in each worker at the same time).
+# What every test process would otherwise redo: the sources and the installed packages
+# byte-compiled (where PYTHONDONTWRITEBYTECODE is set, as on the machines this project is
+# built on, each process the tests start compiled them again), the planner's numba
+# kernels compiled into their on-disk cache (some seconds, once, not in each worker at the
+# same time), and the test modules as pytest rewrites their asserts, by one collection
+# that may write them (each worker reads them: its collection 8 CPU-s instead of 17).
 warm: $(VENV)/.installed-test
-	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
+	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests \
+		"$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" >/dev/null
 	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
+	@out=$$(PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
+		|| { echo "$$out"; exit 1; }
 
 
 # The browser tests (tests/gonio/live/test_browser.py) drive Debian's Chromium: installed
@@ -73,7 +82,7 @@ browser:
 test: $(VENV)/.installed-test
 	@echo "checks: the linters, the site and the warm-up side by side"
 	@$(MAKE) --no-print-directory -j3 -O lint docs warm
-	@$(MAKE) --no-print-directory pytest
+	@$(MAKE) --no-print-directory pytest BUILT_SITE=$(CURDIR)/site
 
 # Every benchmark, one after another, each writing its page docs/results/<script>.md (and
 # docs/results/index.md) with the command, the machine, the date, the load and the wall

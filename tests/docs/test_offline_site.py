@@ -1,9 +1,9 @@
 """The documentation site as the README says to read it: built by mkdocs (``--strict``, once
-for the module, into a temporary folder) and opened from the file system
-(``file://…/index.html``) in headless Chromium with every network request refused. Three
-links are followed (each lands on its page, not a folder's listing), a search finds pages,
-and wide tables and code blocks scroll in their own box at 1280 px (the page never scrolls
-sideways, nothing runs under the table of contents)."""
+for the module, into a temporary folder, or the one `make test` has just built) and opened
+from the file system (``file://…/index.html``) in headless Chromium with every network
+request refused. Three links are followed (each lands on its page, not a folder's
+listing), a search finds pages, and wide tables and code blocks scroll in their own box at
+1280 px (the page never scrolls sideways, nothing runs under the table of contents)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,12 @@ pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("built-site")]
 
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The site as ``make docs`` builds it, into a temporary folder."""
+    """The site as ``make docs`` builds it, into a temporary folder; or the one it has just
+    built, where ``GONIO_BUILT_SITE`` names it (as `make test` does after its checks)."""
+    built = os.environ.get("GONIO_BUILT_SITE")
+    if built:
+        assert (Path(built) / "index.html").is_file(), f"no site built in {built}"
+        return Path(built)
     out = tmp_path_factory.mktemp("site")
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONPATH": str(ROOT)}
     done = subprocess.run(
