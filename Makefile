@@ -84,56 +84,57 @@ test: $(VENV)/.installed-test
 	@$(MAKE) --no-print-directory -j3 -O lint docs warm
 	@$(MAKE) --no-print-directory pytest BUILT_SITE=$(CURDIR)/site
 
-# Every benchmark, one after another, each writing its page docs/results/<script>.md (and
-# docs/results/index.md) with the command, the machine, the date, the load and the wall
-# time, besides printing it (`--no-page`: print only). Fast ones first; about 45 min on
+# Every speed benchmark (benchmarks/) and accuracy study (studies/), one after another,
+# each writing its page docs/results/<script>.md (and docs/results/index.md) with the
+# command, the machine, the date, the load and the wall time, besides printing it
+# (`--no-page`: print only). Fast ones first; about 45 min on
 # the 2-core machine, of which planner.py takes about 25 (LKH-3's tours, a plan of a million)
 # and load_suite.py about 25 (the real-time tests ten times beside busy processes).
 bench: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/params.py --repeat 11
-	$(BIN)/python benchmarks/extremes.py --near-horizon 4000
-	$(BIN)/python benchmarks/extremes_study.py
-	$(BIN)/python benchmarks/lobes.py
+	$(BIN)/python studies/extremes.py --near-horizon 4000
+	$(BIN)/python studies/extremes_study.py
+	$(BIN)/python studies/lobes.py
 	$(BIN)/python benchmarks/bus.py
 	$(BIN)/python benchmarks/bus_retries.py
 	$(BIN)/python benchmarks/fly_bus.py
 	$(BIN)/python benchmarks/trajectory_bus.py
 	$(BIN)/python benchmarks/fly_rehearsal.py --runs 3
-	$(BIN)/python benchmarks/fly_blur.py
+	$(BIN)/python studies/fly_blur.py
 	$(BIN)/python benchmarks/stream.py
 	$(BIN)/python benchmarks/handoff.py --load 3
 	$(BIN)/python benchmarks/rehearsal.py --runs 5
 	$(BIN)/python benchmarks/instruments.py
-	$(BIN)/python benchmarks/lockin.py
+	$(BIN)/python studies/lockin.py
 	$(BIN)/python benchmarks/simulator.py
 	$(BIN)/python benchmarks/acquire.py
 	$(BIN)/python benchmarks/soak.py
 	$(BIN)/python benchmarks/live.py --screenshot docs/img/live-page.png
-	$(BIN)/python benchmarks/fit.py
-	$(BIN)/python benchmarks/calibration.py
-	$(BIN)/python benchmarks/evaluation.py
+	$(BIN)/python studies/fit.py
+	$(BIN)/python studies/calibration.py
+	$(BIN)/python studies/evaluation.py
 	$(BIN)/python benchmarks/reconstruct.py
 	$(BIN)/python benchmarks/reconstruct.py --transforms
-	$(BIN)/python benchmarks/line_reconstruction.py
-	$(BIN)/python benchmarks/factored.py
+	$(BIN)/python studies/line_reconstruction.py
+	$(BIN)/python studies/factored.py
 	$(BIN)/python benchmarks/export.py
-	$(BIN)/python benchmarks/point_source.py
-	$(BIN)/python benchmarks/misalignment.py
-	$(BIN)/python benchmarks/align.py
-	$(BIN)/python benchmarks/utia.py
-	$(BIN)/python benchmarks/rgl.py
+	$(BIN)/python studies/point_source.py
+	$(BIN)/python studies/misalignment.py
+	$(BIN)/python studies/align.py
+	$(BIN)/python studies/utia.py
+	$(BIN)/python studies/rgl.py
 	$(BIN)/python benchmarks/plots.py
 	$(BIN)/python benchmarks/tradeoff.py
-	$(BIN)/python benchmarks/accuracy.py
-	$(BIN)/python benchmarks/adaptive.py --targets 250 500 1000 2000 4000 --random 10
-	$(BIN)/python benchmarks/adaptive.py --scenes glossy --targets 250 500 1000 2000 4000 \
+	$(BIN)/python studies/accuracy.py
+	$(BIN)/python studies/adaptive.py --targets 250 500 1000 2000 4000 --random 10
+	$(BIN)/python studies/adaptive.py --scenes glossy --targets 250 500 1000 2000 4000 \
 		--random 10 --random-first 12
-	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
+	$(BIN)/python studies/adaptive.py --scenes brushed --targets 500 1000 2000 \
 		--adaptive-in rusinkiewicz
-	$(BIN)/python benchmarks/adaptive.py --scenes brushed --targets 500 1000 2000 \
+	$(BIN)/python studies/adaptive.py --scenes brushed --targets 500 1000 2000 \
 		--adaptive-in rusinkiewicz --model survey
-	$(BIN)/python benchmarks/adaptive_weights.py
-	$(BIN)/python benchmarks/adaptive_limit.py
+	$(BIN)/python studies/adaptive_weights.py
+	$(BIN)/python studies/adaptive_limit.py
 	$(BIN)/python benchmarks/planner.py
 	$(BIN)/python benchmarks/fly_plan.py
 	$(BIN)/python benchmarks/load_suite.py
@@ -151,22 +152,22 @@ bench-studies: $(VENV)/.installed-test
 		$(BIN)/gonio tradeoff configs/sweeps/study_$$s.yaml -o runs/study_$$s -j 1 -q || exit 1; \
 	done
 	$(BIN)/gonio tradeoff configs/sweeps/study_adaptive.yaml -o runs/study_adaptive_engine -j 1 -q
-	$(BIN)/python benchmarks/study_engine.py exposure --runs runs/study_exposure
-	$(BIN)/python benchmarks/study_engine.py effects --runs runs/study_effects
-	$(BIN)/python benchmarks/study_engine.py adaptive --runs runs/study_adaptive_engine
-	$(BIN)/python benchmarks/study_engine.py timing
-	$(BIN)/python benchmarks/study.py lobes
-	$(BIN)/python benchmarks/study.py budget --scenes matte glossy_metal seed000_specular
-	$(BIN)/python benchmarks/study.py where --scenes seed000_specular glossy_metal matte \
+	$(BIN)/python studies/study_engine.py exposure --runs runs/study_exposure
+	$(BIN)/python studies/study_engine.py effects --runs runs/study_effects
+	$(BIN)/python studies/study_engine.py adaptive --runs runs/study_adaptive_engine
+	$(BIN)/python studies/study_engine.py timing
+	$(BIN)/python studies/study.py lobes
+	$(BIN)/python studies/study.py budget --scenes matte glossy_metal seed000_specular
+	$(BIN)/python studies/study.py where --scenes seed000_specular glossy_metal matte \
 		--methods linear
-	$(BIN)/python benchmarks/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03 0.05 0.1
-	$(BIN)/python benchmarks/study_engine.py uniform --runs runs/study_uniform \
+	$(BIN)/python studies/study.py curves -o runs/study --targets 0.001 0.003 0.01 0.03 0.05 0.1
+	$(BIN)/python studies/study_engine.py uniform --runs runs/study_uniform \
 		runs/study_seed000 runs/study_brushed --curves runs/study/curves.csv --method rbf \
 		--targets 0.001 0.003 0.01 0.03 0.05 0.1 \
 		--img docs/img
-	$(BIN)/python benchmarks/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
+	$(BIN)/python studies/study.py curves -o runs/study_adaptive --sampling sobol adaptive \
 		--params rusinkiewicz hybrid --targets 0.001 0.003 0.01 0.03
-	$(BIN)/python benchmarks/fly_trade.py --runs runs/fly_trade
+	$(BIN)/python studies/fly_trade.py --runs runs/fly_trade
 
 clean:
 	rm -rf $(VENV) site .mypy_cache .ruff_cache .pytest_cache .hypothesis .import_linter_cache

@@ -1,4 +1,5 @@
-"""Each benchmark writes its own results page, docs/results/<name>.md, and the index.
+"""Each benchmark (benchmarks/) and each study (studies/) writes its own results page,
+docs/results/<name>.md, and the index.
 
 A script ends with ``report.run(main, __file__, __doc__, title=...)``: its output still
 goes to the terminal, and once ``main`` returns the page is written with a header (the
@@ -30,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
 NO_PAGE = "--no-page"
 #: The marker line of a generated page (the index and the tests look for it).
-MARKER = "<!-- Written by benchmarks/{script} through benchmarks/_report.py: run it again, "
+MARKER = "<!-- Written by {script} through benchmarks/_report.py: run it again, "
 #: Header fields, in order (tests/test_results_pages.py reads them).
 FIELDS = ("Script", "Command", "Machine", "Date", "Load average", "Wall time")
 _FIGURE = "\x00figure\x00"
@@ -41,7 +42,7 @@ class Header:
     """What a page says of its run: everything but the output."""
 
     title: str
-    script: str  # the file name in benchmarks/
+    script: str  # the script's path from the repository root, e.g. benchmarks/bus.py
     about: str  # what it measures (markdown)
     command: str
     machine: str
@@ -66,11 +67,11 @@ def about(doc: str | None) -> str:
 
 
 def command(argv: Sequence[str], script: str) -> str:
-    """The command line as run from the repository root."""
+    """The command line as run from the repository root (``script``: its path from there)."""
     exe = Path(sys.executable)
     venv = ROOT / ".venv"
     python = str(Path(".venv") / exe.relative_to(venv)) if exe.is_relative_to(venv) else "python"
-    return shlex.join([python, f"benchmarks/{script}", *argv])
+    return shlex.join([python, script, *argv])
 
 
 def load_average() -> str:
@@ -89,7 +90,7 @@ def duration(seconds: float) -> str:
 
 
 def render_header(h: Header) -> str:
-    values = (f"`benchmarks/{h.script}`", f"`{h.command}`", h.machine, h.date, h.load, h.wall)
+    values = (f"`{h.script}`", f"`{h.command}`", h.machine, h.date, h.load, h.wall)
     fields = "\n".join(f"- **{k}:** {v}" for k, v in zip(FIELDS, values, strict=True))
     return (
         f"# {h.title}\n\n"
@@ -235,7 +236,8 @@ def run(
         sys.argv = [sys.argv[0], *(a for a in argv if a != NO_PAGE)]
         main()
         return
-    script = Path(file).name
+    path = Path(file).resolve()
+    script = path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else path.name
     name = page_name(script, argv, part)
     suffix = variant(argv) if variant else None
     if suffix:
@@ -303,8 +305,9 @@ def index(folder: Path | None = None) -> str:
     lines = [
         "# Results",
         "",
-        "Each page below is written by the benchmark script it names: `make bench` runs them,",
-        "`make bench-studies` the study's (study.py, study_engine.py: the `gonio tradeoff`",
+        "Each page below is written by the script it names, a speed benchmark in benchmarks/",
+        "or an accuracy study in studies/: `make bench` runs them, `make bench-studies` the",
+        "trade-off study's (studies/study.py, studies/study_engine.py: the `gonio tradeoff`",
         "sweeps first). The command, the machine, the date, the load on the shared machine",
         "and the wall time are in each page's header; the tables and figures are what the",
         "script printed. This list is written with the pages.",

@@ -1,6 +1,6 @@
-"""The noise-free curves pages have their figure: benchmarks/_curves_figure.py reads every
+"""The noise-free curves pages have their figure: studies/_curves_figure.py reads every
 row of a page's tables back, draws one panel per scene with one line per plan, and links
-the figure where benchmarks/study.py prints it (once, however often it runs)."""
+the figure where studies/study.py prints it (once, however often it runs)."""
 
 from __future__ import annotations
 
@@ -15,22 +15,23 @@ import pytest
 from tests.support.figures import png_size
 
 ROOT = Path(__file__).resolve().parents[1]
-BENCHMARKS = ROOT / "benchmarks"
+STUDIES = ROOT / "studies"
 PAGES = sorted((ROOT / "docs" / "results").glob("study-curves*.md"))
 
 
 @pytest.fixture(scope="module")
 def curves() -> ModuleType:
-    sys.path.insert(0, str(BENCHMARKS))
+    saved = list(sys.path)
+    sys.path.insert(0, str(STUDIES))
     try:
         spec = importlib.util.spec_from_file_location(
-            "_curves_figure", BENCHMARKS / "_curves_figure.py"
+            "_curves_figure", STUDIES / "_curves_figure.py"
         )
         assert spec is not None and spec.loader is not None
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
     finally:
-        sys.path.remove(str(BENCHMARKS))
+        sys.path[:] = saved
     return module
 
 

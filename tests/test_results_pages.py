@@ -1,6 +1,7 @@
 """The results pages: benchmarks/_report.py writes the header every page has, and every page
-in docs/results/ comes from a script in benchmarks/ that `make bench` (or `make
-bench-studies`) runs, with the index listing exactly the pages present."""
+in docs/results/ comes from a script in benchmarks/ (a speed benchmark) or studies/ (an
+accuracy study) that `make bench` (or `make bench-studies`) runs, with the index listing
+exactly the pages present."""
 
 from __future__ import annotations
 
@@ -35,7 +36,8 @@ def report() -> ModuleType:
 
 
 def bench_scripts() -> set[str]:
-    """The scripts the Makefile's bench and bench-studies recipes run."""
+    """The scripts the Makefile's bench and bench-studies recipes run, as paths from the
+    repository root."""
     text = (ROOT / "Makefile").read_text(encoding="utf-8").replace("\\\n", " ")
     scripts: set[str] = set()
     target = None
@@ -43,7 +45,7 @@ def bench_scripts() -> set[str]:
         if match := re.match(r"^([\w-]+):", line):
             target = match.group(1)
         elif line.startswith("\t") and target in {"bench", "bench-studies"}:
-            scripts.update(re.findall(r"benchmarks/(\w+\.py)", line))
+            scripts.update(re.findall(r"\b(?:benchmarks|studies)/\w+\.py", line))
     return scripts
 
 
@@ -107,13 +109,13 @@ def test_a_part_and_a_variant_name_their_own_page(report: ModuleType) -> None:
 def test_every_page_names_a_script_that_make_bench_runs(report: ModuleType, page: Path) -> None:
     head = report.read_header(page)
     assert all(head[key] for key in ("Title", *report.FIELDS)), head
-    script = head["Script"].strip("`").removeprefix("benchmarks/")
-    assert (BENCHMARKS / script).is_file()
+    script = head["Script"].strip("`")
+    assert (ROOT / script).is_file()
     assert script in bench_scripts()
     for link in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page.read_text(encoding="utf-8")):
         assert (page.parent / link).is_file(), link
     # What the page says it measures is the script's docstring as it is now.
-    doc = ast.get_docstring(ast.parse((BENCHMARKS / script).read_text(encoding="utf-8")))
+    doc = ast.get_docstring(ast.parse((ROOT / script).read_text(encoding="utf-8")))
     assert f"\n\n{report.about(doc)}\n\n" in page.read_text(encoding="utf-8"), (
         f"{page.name}: the script's docstring changed; run it again"
     )

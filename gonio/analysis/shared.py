@@ -12,7 +12,7 @@ reading and every sample, moves sample i by (s_i − S)/(S s_i)·δ of its value
 dark-subtracted rate: it enters s_i and S alike), a last column of the weights.
 
 Over many simulated runs the scale error this predicts is the one measured
-(`benchmarks/calibration.py`, docs/results/calibration.md).
+(`studies/calibration.py`, docs/results/calibration.md).
 """
 
 from __future__ import annotations

@@ -24,7 +24,7 @@ Beyond θ = 75° it is **constant in θ** (clamped to the 75° nodes; the publis
 extrapolates the 60°–75° slope linearly up to 90°). At the nodes it returns the stored
 values (to float64 rounding of the angles). Between nodes its error is that of linear
 interpolation on a 15° × 7.5° grid, ≈ (h²/8)·Σ|∂²f/∂x²| at a lobe's peak: ≈ 0.021/α² of
-the peak for GGX of roughness α. Measured (benchmarks/utia.py, docs/results/utia.md; both
+the peak for GGX of roughness α. Measured (studies/utia.py, docs/results/utia.md; both
 θ ≤ 75°, largest error over the peak): Lambert exact; GGX α 0.3: 0.22, α 0.5: 0.088,
 α 0.8: 0.043 (stated bound 0.06, tested); anisotropic GGX αx 0.3, αy 0.6: 0.13 (stated
 bound 0.15, tested). A lobe narrower than α ≈ 0.3 is not resolved by the grid.

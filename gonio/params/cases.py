@@ -1,6 +1,6 @@
 """Named extreme configurations and samplers of pairs near them.
 
-Used by the tests, the accuracy study (benchmarks/extremes.py, docs) and `gonio tables`.
+Used by the tests, the accuracy study (studies/extremes.py, docs) and `gonio tables`.
 Every sampler returns float64 unit directions (unit to float64 rounding) in the
 closed upper hemisphere, shape (n, 3) each; ``distance`` is how far, in radians, the
 pair is moved off the extreme (0 gives the extreme itself with random generic

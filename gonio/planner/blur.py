@@ -4,7 +4,7 @@ bias of mid-time attribution to stay within a tolerance, from the lobe's GGX wid
 A reading taken while moving averages the BRDF over the arc its directions travel
 during the integration (the smear, ° = angular velocity × integration) and is attributed
 to the pose at the window's middle. Over a GGX lobe of width α that bias grows as
-(smear / α)²; benchmarks/fly_blur.py measures it on the simulator's optics (a detector arc
+(smear / α)²; studies/fly_blur.py measures it on the simulator's optics (a detector arc
 in the plane of incidence, α from 0.02 to 0.5, windows anywhere on the lobe, peak and
 flanks) and fits the largest smear for a bias within ``tolerance`` as
 
@@ -25,7 +25,7 @@ import math
 
 from gonio.errors import DomainError
 
-#: K of smear_max = K · α · √tolerance (°), fitted by benchmarks/fly_blur.py.
+#: K of smear_max = K · α · √tolerance (°), fitted by studies/fly_blur.py.
 BLUR_K_DEG = 233.0
 #: The full width at half maximum (°, of the reflected direction) of a GGX lobe per unit
 #: α, for a small α: the half vector's half width α · √(√2 − 1), doubled on reflection,

@@ -25,7 +25,7 @@ outright: the survey's own Sobol sequence continued, so that the whole plan is t
 uniform Sobol plan of its seed (`gonio.planner.two_pass`).
 
 `MARGIN` is well above 1 because the model overrates what a plan reconstructed by rbf
-gains, the more so the rougher the lobe: benchmarks/adaptive.py prints G beside the
+gains, the more so the rougher the lobe: studies/adaptive.py prints G beside the
 measured gain and beside what a plan forced to adapt gives (docs/results/adaptive.md).
 On rough conductors with no diffuse part, where uniform Rusinkiewicz is already close
 to the best density and the rbf's error does not follow the curvature law, a predicted

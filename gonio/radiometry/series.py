@@ -19,7 +19,7 @@ source's drift cancels in s/S(t). The interpolation is linear in the readings (S
 bends between calibrations (a lamp's slow oscillation), which a straight line cuts
 through: the line's error, −S''·(t − t_k)(t_k+1 − t)/2, averages −S''Δ²/12 over an
 interval Δ and keeps its sign over half a period of the drift, so it adds up over a run
-instead of averaging out (`benchmarks/calibration.py` measures both).
+instead of averaging out (`studies/calibration.py` measures both).
 
 Uncertainty (1σ): the variance of C is the sample's own spread std²/n when it averaged
 n ≥ 2 exposures, else the calibration's noise model var(C) = a + b·max(C − d·e, 0) per

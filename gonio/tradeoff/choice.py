@@ -54,7 +54,7 @@ STOP_PER_S, FLY_PER_S = 1.0, 20.0
 #: must be for it to be chosen. The prediction knows no noise, blur or jitter, which
 #: weigh more the lower the error: on the matte scene at 15 minutes θh lines were
 #: predicted 1.2× lower than warped stop-and-go and measured 1.3× higher; on the glossy
-#: gold predicted 41× and measured 16× lower (benchmarks/fly_trade.py).
+#: gold predicted 41× and measured 16× lower (studies/fly_trade.py).
 MARGIN = 2.0
 #: The reconstructions each candidate is predicted with (its lower error counts: a
 #: run is reconstructed the way that serves it best; rbf refuses data on too few lines,

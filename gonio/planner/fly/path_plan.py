@@ -83,7 +83,7 @@ def line_density(spec: PlanSpec, rig: Rig) -> Density:
     and its θh extent, `LINE_OVERHEAD_S`, `LINE_SPEED`). The error Σ w e² ρ^(−2) at a
     time Σ c ρ is least for ρ ∝ (w e² / c)^(1/3); a share `LINE_FLOOR` is uniform.
     Without one: ρ ∝ 1 / cos θd (up to `GRAZING_THETA_D`): the glossy and the matte
-    scenes' errors sit at grazing θd (measured: benchmarks/fly_trade.py)."""
+    scenes' errors sit at grazing θd (measured: studies/fly_trade.py)."""
     shape3 = (LINE_CELLS,) * 3
     w = measure_density(rig, "rusinkiewicz", True, shape3).reshape(shape3)
     reached = w.sum(axis=0) > 0  # (θd, φd) cells some test pair reaches

@@ -2,7 +2,7 @@
 gain, falls back to uniform where the error is flat or the steering estimate does not
 explain the survey, and the uniform fallback is the uniform Sobol plan itself; on the
 shipped scenes and on materials drawn at random from the model families its log-RMSE is
-at most 1.05× the best uniform plan's (a small version of benchmarks/adaptive.py)."""
+at most 1.05× the best uniform plan's (a small version of studies/adaptive.py)."""
 
 from __future__ import annotations
 
@@ -130,7 +130,7 @@ def scene(stem: str) -> BrdfEval:
     return band_eval(loaded.material.model(), "luminance")
 
 
-#: Named cases: the shipped isotropic scenes (benchmarks/adaptive.py also has the
+#: Named cases: the shipped isotropic scenes (studies/adaptive.py also has the
 #: anisotropic brushed metal), a rough conductor with no diffuse part, and materials
 #: drawn at random from the model families.
 CASES = {

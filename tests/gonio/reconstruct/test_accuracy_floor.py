@@ -1,6 +1,6 @@
 """The accuracy floor: on noise-free samples of a uniform plan, in every
 parametrization, the reconstruction is at least as accurate as the naive grid a user
-would write in an afternoon (benchmarks/accuracy.py has the full table)."""
+would write in an afternoon (studies/accuracy.py has the full table)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""benchmarks/align.py's helpers: its random misalignments have the sizes its page
+"""studies/align.py's helpers: its random misalignments have the sizes its page
 states, and its direction error sees what the optics see and nothing a mirror cannot
 (the sample stage's zero offset, moved into the tilt's azimuth, turns the sample frame
 about its normal and nothing else)."""
@@ -18,20 +18,21 @@ from gonio.rig import Rig
 from gonio.rig.alignment_spec import AlignmentSpec
 from tests.conftest import CONFIGS
 
-BENCHMARK = Path(__file__).resolve().parents[3] / "benchmarks" / "align.py"
+STUDY = Path(__file__).resolve().parents[3] / "studies" / "align.py"
 
 
 @pytest.fixture(scope="module")
 def bench() -> ModuleType:
-    sys.path.insert(0, str(BENCHMARK.parent))  # as when run: its `_report` beside it
+    saved = list(sys.path)  # the study puts benchmarks/ (its `_report`) on the path
+    sys.path.insert(0, str(STUDY.parent))  # as when run
     try:
-        spec = importlib.util.spec_from_file_location("align_benchmark", BENCHMARK)
+        spec = importlib.util.spec_from_file_location("align_study", STUDY)
         assert spec is not None and spec.loader is not None
         module = importlib.util.module_from_spec(spec)
         sys.modules[spec.name] = module  # its dataclasses look their module up
         spec.loader.exec_module(module)
     finally:
-        sys.path.remove(str(BENCHMARK.parent))
+        sys.path[:] = saved
     return module
 
 

@@ -20,7 +20,7 @@ the shipped scenes, a rough conductor with no diffuse part, and ``--random`` mat
 drawn from the model families (`studies.brdf.random_materials`, seeds 0 … N − 1: GGX
 α 0.03–0.5, dielectric or conductor, with or without a Lambertian part).
 
-Run: .venv/bin/python benchmarks/adaptive.py [--scenes ggx0.1 ...] [--targets 500 1000 2000 4000]
+Run: .venv/bin/python studies/adaptive.py [--scenes ggx0.1 ...] [--targets 500 1000 2000 4000]
 [--methods linear rbf] [--survey 128] [--floor 0.2] [--edge 0.0] [--model survey]
 [--random 10] [--sigma-floor 1.0]
 """
@@ -32,6 +32,7 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 

@@ -5,7 +5,7 @@ test set.
 
 Plans at each count, each reconstructed the same way:
 
-    uniform    Sobol, the best uniform plan of benchmarks/adaptive.py
+    uniform    Sobol, the best uniform plan of studies/adaptive.py
     shipped    the adaptive strategy as shipped: a 128-target survey, a lambert+beckmann
                fit of it steering one second pass (`synthesize_adaptive`)
     own error  a 64-target survey, then passes doubling the samples, each placed by the
@@ -31,7 +31,7 @@ E_c^(1/(1+2β)) give Σ E_c (v_c/s_c)^(2β) = (Σ (E_c v_c^(2β))^(1/(1+2β)))^(
 uniform error over that is the largest gain a density can give at that count (finer
 cells see more of the error's concentration, and a noisier estimate of it).
 
-Run: .venv/bin/python benchmarks/adaptive_limit.py [--alpha 0.1] [--counts 250 ... 4000]
+Run: .venv/bin/python studies/adaptive_limit.py [--alpha 0.1] [--counts 250 ... 4000]
 [--plans shipped 'own error' oracle] (about 15 minutes on 2 cores)
 """
 
@@ -43,6 +43,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 

@@ -1,6 +1,6 @@
 """The factored representation of Lawrence et al. 2004: error, time, sampling.
 
-Run: ``.venv/bin/python benchmarks/factored.py`` (about 2 minutes on 2 cores). Prints
+Run: ``.venv/bin/python studies/factored.py`` (about 2 minutes on 2 cores). Prints
 the machine; the relative Frobenius error of the intensity matrix (outer J terms, all
 J·K terms, RGB with the colour factors) and the time of each factorization at the
 default resolution; the export time and file sizes; the sampler's speed; per view
@@ -14,9 +14,12 @@ gonio writes it), the paper's literal f cos θo, and the paper's literal term se
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import numpy as np

@@ -13,7 +13,7 @@ samples; "support" is the share inside it, "inside" the log-RMSE over those pair
 `lines` uses the line structure (found from the coordinates), `rbf` stretches θh to the
 lines' spacing on such data, `linear` is the Delaunay interpolation of every sample.
 
-Run: .venv/bin/python benchmarks/line_reconstruction.py [--lines 100 300] [--steps 0.5 0.2]
+Run: .venv/bin/python studies/line_reconstruction.py [--lines 100 300] [--steps 0.5 0.2]
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report

@@ -14,7 +14,7 @@ vary from target to target (the plan's exposures scaled by the expected signal
 within 5 to 80 ms): the standard deviation of (f − truth)/σ per seed. Then the settle time and the
 equivalent noise bandwidth per filter slope.
 
-Run: .venv/bin/python benchmarks/lockin.py
+Run: .venv/bin/python studies/lockin.py
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe

@@ -1,7 +1,7 @@
 """Romanyuk et al.'s modified cosine-quadratic lobes: accuracy next to speed.
 
 Accuracy against F_B = cos^n ψ, next to numpy evaluation speed. Run:
-``.venv/bin/python benchmarks/lobes.py`` (about 10 s). Prints the machine, the
+``.venv/bin/python studies/lobes.py`` (about 10 s). Prints the machine, the
 recomputed equation 12, the epicentre relative errors over n, the candidate readings
 of the "4.5-fold" claim, the absolute errors over the hemisphere, the zero-crossing
 and inflexion checks, and ns per value for each lobe (10^6 values, best of repeats).
@@ -22,6 +22,7 @@ import numpy as np
 import scipy
 from scipy import integrate, optimize
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report

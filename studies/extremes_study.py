@@ -8,7 +8,7 @@ the shipped arch and in-plane rigs, the joint errors (one encoder tick through e
 gear, σ = tick/√12, and the brushed_metal scene's repeatability) propagated into each
 parametrization's coordinates and into a GGX BRDF value (gonio.rig.sensitivity).
 Prints the markdown tables of docs/explanations/extremes.md and writes docs/img/extremes_*.png.
-Run: .venv/bin/python benchmarks/extremes_study.py [--samples N] [--bound] [--no-plots]
+Run: .venv/bin/python studies/extremes_study.py [--samples N] [--bound] [--no-plots]
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report

@@ -13,7 +13,7 @@ rbf) over the adaptive plan's (Rusinkiewicz, rbf), the survey's σ either
 and the geometric mean over the seeds; then the fit each σ model gives of the first
 seed's 128-target survey. The engine's runs use the detector's own σ.
 
-Run: .venv/bin/python benchmarks/adaptive_weights.py [--scenes ggx0.1 glossy_metal ...]
+Run: .venv/bin/python studies/adaptive_weights.py [--scenes ggx0.1 glossy_metal ...]
 [--counts 500 1000 4000] [--seeds 3 4 5]   (about 5 minutes per scene on one core)
 """
 
@@ -24,6 +24,7 @@ import math
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 

@@ -3,7 +3,7 @@ the shipped scenes (their noise on), reconstructed by `gonio.reconstruct.naive` 
 against their scene by `gonio.reconstruct.evaluate` on the default test set, with the
 time each step takes.
 
-Run: .venv/bin/python benchmarks/evaluation.py [--targets 300 1000 3000]
+Run: .venv/bin/python studies/evaluation.py [--targets 300 1000 3000]
 """
 
 from __future__ import annotations
@@ -11,10 +11,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import yaml

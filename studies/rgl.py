@@ -1,7 +1,7 @@
 """RGL material files (Dupuy & Jakob 2018): round-trip error of analytic models, and
 Mitsuba 3's rendering of an export.
 
-Run: ``.venv/bin/python benchmarks/rgl.py`` (about a minute on 2 cores). Prints the
+Run: ``.venv/bin/python studies/rgl.py`` (about a minute on 2 cores). Prints the
 machine; per model and resolution (incident elevations × warped samples per side),
 the error of f read back from the file written by `gonio.export.rgl` against the
 model at 20 000 random pairs (uniform in solid angle) with both elevations at most
@@ -23,6 +23,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import numpy as np

@@ -7,7 +7,7 @@ measures). Every method answers every pair: the naive grid fills by its nearest 
 others by `extrapolate="nearest"`. Then the sample count each (parametrization, method)
 needs for log-RMSE 0.01, interpolated log-log between the counts measured.
 
-Run: .venv/bin/python benchmarks/accuracy.py [--alphas 0.05 0.1 0.3]
+Run: .venv/bin/python studies/accuracy.py [--alphas 0.05 0.1 0.3]
 [--targets 500 1000 2000 5000 10000 30000] [--methods naive linear rbf]
 """
 
@@ -18,6 +18,7 @@ import math
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import itertools

@@ -17,7 +17,7 @@ recovered BRDF without and with the analysis's correction of the lamp's spot fal
 BRDF varying over its spread of incidence, divided out; the correction's own error in
 σ). |error|/σ is per target; its 95th percentile is within 2 where the σ are right.
 
-Run: .venv/bin/python benchmarks/point_source.py
+Run: .venv/bin/python studies/point_source.py
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe

@@ -4,7 +4,7 @@ method; marker: uniform or adaptive sampling), the error targets dotted.
 
 `study.py curves` (and `report`) draws it from curves.csv's rows before its tables. Where
 those rows are not at hand, the page's own tables hold them (to the four decimals
-printed): ``python benchmarks/_curves_figure.py docs/results/study-curves.md`` draws the
+printed): ``python studies/_curves_figure.py docs/results/study-curves.md`` draws the
 figure from them and puts its link where `study.py` prints it, the rest of the page as
 it was.
 """

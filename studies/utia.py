@@ -10,7 +10,7 @@ peak the grid implies, (h²/8)·Σ|∂²f/∂x²|/f over the four axes, ≈ 0.02
 docs/img/utia_slices.png: the model and its table along the plane of incidence and along
 φv.
 
-Run: .venv/bin/python benchmarks/utia.py [--pairs 200000]
+Run: .venv/bin/python studies/utia.py [--pairs 200000]
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe

@@ -17,7 +17,7 @@ On the peak: the window centred on the specular direction. Over the lobe: the la
 near it). The rule: for each α and tolerance, the largest smear whose bias over the lobe
 stays within the tolerance (bisection); a window's bias grows as smear², so the rule is
 fitted as smear_max = K · α · √tolerance (`gonio.planner.blur.blur_budget_deg`).
-Run: .venv/bin/python benchmarks/fly_blur.py
+Run: .venv/bin/python studies/fly_blur.py
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 

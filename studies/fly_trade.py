@@ -36,11 +36,11 @@ on the linear reconstructions of the two runs over the test pairs (RMS over ever
 and over the mirror region of `gonio.reconstruct.regions`). The planner's default
 velocity rule,
 `gonio.planner.blur.blur_budget_of_width` (a plan naming its lobe's width), is the smear
-K · α · √tolerance with K = 233° from benchmarks/fly_blur.py; the last table shows the
+K · α · √tolerance with K = 233° from studies/fly_blur.py; the last table shows the
 largest smear measured within 0.5 % on every sample and on the recovered mirror region,
 and the K of each.
 
-Run: .venv/bin/python benchmarks/fly_trade.py [--runs runs/fly_trade] [--jobs 1]
+Run: .venv/bin/python studies/fly_trade.py [--runs runs/fly_trade] [--jobs 1]
      [--blur-readings 3000] [--img docs/img] [--stored-only]
 (a sweep's finished combinations, and the blur study's, are kept in --runs and not run
 again)
@@ -61,6 +61,7 @@ from typing import Any
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe

@@ -34,7 +34,7 @@ reconstruction's own error).
 The scan's instrument time is the simulated clock from the first reading to the last;
 its wall time is that of `gonio align` in-process.
 
-Run: .venv/bin/python benchmarks/align.py [--draws 20] [--point-draws 3] [--paired 5] [--quick]
+Run: .venv/bin/python studies/align.py [--draws 20] [--point-draws 3] [--paired 5] [--quick]
 """
 
 from __future__ import annotations
@@ -44,11 +44,14 @@ import contextlib
 import io
 import math
 import sqlite3
+import sys
 import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import numpy as np

@@ -4,7 +4,7 @@ For each parametrization, extreme (gonio.params.cases.EXTREMES) and distance (0,
 1e-12, 1e-9, 1e-6 rad), the worst measured round-trip error over N sampled pairs and
 the worst error that float64 coordinates impose there (half an ulp on each exact
 coordinate, mapped back exactly; mpmath). Prints markdown tables for
-docs/explanations/parametrizations.md. Run: .venv/bin/python benchmarks/extremes.py [--samples N]
+docs/explanations/parametrizations.md. Run: .venv/bin/python studies/extremes.py [--samples N]
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report

@@ -21,7 +21,7 @@ sqrt(ν/(ν − 2)) (the dark level drawn per seed, as in "dark drawn"). Then
 what isolates each cause: the dark reading's rounding bias in the shipped scenes, and
 the straight line's error on a noise-free drifting run.
 
-Run: .venv/bin/python benchmarks/calibration.py [--seeds 1000]
+Run: .venv/bin/python studies/calibration.py [--seeds 1000]
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.support
 import _report

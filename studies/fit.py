@@ -9,7 +9,7 @@ and the median reduced χ²; then χ²_red of Beckmann data fitted by other fami
 The tests (tests/gonio/reconstruct/test_fit.py) use interleaved subsets of one long
 run instead, to stay fast.
 
-Run: .venv/bin/python benchmarks/fit.py [--seeds 20] [--samples 150]
+Run: .venv/bin/python studies/fit.py [--seeds 20] [--samples 150]
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import numpy as np

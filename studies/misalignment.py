@@ -20,15 +20,18 @@ a reading is f cos θo (`gonio.radiometry.relative_geometry`), so an error δ in
 detector's elevation biases even a Lambertian reading by about tan θo · δ, the reference
 standard's at θo = 45° among them (a point source's reading carries cos θi instead).
 
-Run: .venv/bin/python benchmarks/misalignment.py [--targets 600]
+Run: .venv/bin/python studies/misalignment.py [--targets 600]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 
 import _report
 import numpy as np

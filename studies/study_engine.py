@@ -1,6 +1,6 @@
 """The shipped study's engine parts (docs/explanations/tradeoff.md "The study"): tables
 and figures from the results.csv of `gonio tradeoff` runs of configs/sweeps/study_*.yaml,
-with the noise-free curves of benchmarks/study.py placed on the instrument-time axis.
+with the noise-free curves of studies/study.py placed on the instrument-time axis.
 
     uniform   per scene and parametrization: instrument time and log-RMSE, noise on and
               off, against the samples measured; the instrument time fitted (t = floor·n
@@ -17,7 +17,7 @@ with the noise-free curves of benchmarks/study.py placed on the instrument-time 
               count (configs/sweeps/study_adaptive.yaml): log-RMSE noise on and off,
               the error ratio and the instrument time of each
 
-Run: .venv/bin/python benchmarks/study_engine.py uniform --runs DIR ... --curves
+Run: .venv/bin/python studies/study_engine.py uniform --runs DIR ... --curves
 runs/study/curves.csv [--img docs/img]; `exposure --runs DIR`; `effects --runs DIR`;
 `adaptive --runs DIR`.
 """
@@ -35,12 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from study import TARGETS, fmt_needed, needed
 
 COLOURS = {"hybrid": "C0", "rusinkiewicz": "C1", "orthographic": "C2", "spherical": "C3"}
-#: scene name in a sweep → the scene file stem of benchmarks/study.py
+#: scene name in a sweep → the scene file stem of studies/study.py
 STEMS = {
     "matte": "matte",
     "glossy-metal": "glossy_metal",
@@ -345,7 +346,7 @@ def main() -> None:
     parser.add_argument("--scenes", nargs="+", default=["matte", "glossy_metal"])
     parser.add_argument("--samples", type=int, default=1000, help="targets of `timing`")
     parser.add_argument("--repeats", type=int, default=3, help="runs of `timing`")
-    parser.add_argument("--curves", help="curves.csv of benchmarks/study.py")
+    parser.add_argument("--curves", help="curves.csv of studies/study.py")
     parser.add_argument("--method", default="linear", help="the curves' method")
     parser.add_argument("--img", help="write PNGs here")
     parser.add_argument("--targets", type=float, nargs="+", help="log-RMSE targets")

@@ -14,7 +14,7 @@ sweeps (configs/sweeps/study_*.yaml) give the noisy curves and the instrument ti
              samples) against Sobol plans of each parametrization
     lobes    Romanyuk et al.'s lobes as stand-ins for Blinn-Phong cos^n θh: time against error
 
-Run: .venv/bin/python benchmarks/study.py curves -o runs/study [--scenes matte ...]
+Run: .venv/bin/python studies/study.py curves -o runs/study [--scenes matte ...]
 [--counts 250 ... 30000] [--methods linear rbf] [--sampling sobol adaptive]
 [--adaptive-model survey]; `where`, `budget`, `lobes` likewise. `--sampling adaptive`:
 the two-pass plans of docs/explanations/adaptive.md
@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _report
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _curves_figure
