@@ -16,10 +16,8 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(PIP) install -e .
 	touch $@
 
-# --no-compile: pip would byte-compile every installed file (~12 000, half its time, on one
-# core); `warm` compiles them on every core, beside the linters and the site.
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(PIP) install --no-compile -e '.[test,docs,instruments]'
+	$(PIP) install -e '.[test,docs,instruments]'
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
@@ -54,15 +52,14 @@ docs: $(VENV)/.installed-docs
 pytest: $(VENV)/.installed-test browser warm
 	GONIO_BUILT_SITE=$(BUILT_SITE) $(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
-# What every test process would otherwise redo: the sources and the installed packages
-# byte-compiled (where PYTHONDONTWRITEBYTECODE is set, as on the machines this project is
-# built on, each process the tests start compiled them again), the planner's numba
-# kernels compiled into their on-disk cache (some seconds, once, not in each worker at the
-# same time), and the test modules as pytest rewrites their asserts, by one collection
-# that may write them (each worker reads them: its collection 8 CPU-s instead of 17).
+# What every test process would otherwise redo: the sources byte-compiled (where
+# PYTHONDONTWRITEBYTECODE is set, as on the machines this project is built on, each
+# process the tests start compiled them again), the planner's numba kernels compiled
+# into their on-disk cache (some seconds, once, not in each worker at the same time),
+# and the test modules as pytest rewrites their asserts, by one collection that may
+# write them (each worker reads them: its collection 8 CPU-s instead of 17).
 warm: $(VENV)/.installed-test
-	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests \
-		"$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')" >/dev/null
+	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
 	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
 	@out=$$(PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
 		|| { echo "$$out"; exit 1; }
