@@ -16,6 +16,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Self
 
 from sim.peers.pty_host import PtyHost
 
@@ -200,3 +201,36 @@ class LineServer:
                     self._on_tick(event)
                 else:
                     self.output_locked(event.data, linked=event.linked)
+
+
+class ServedPeer:
+    """A peer served on a pty by the `LineServer` it owns: the life cycle every line
+    peer (photometer, lamp relay, VISA instrument) offers its users."""
+
+    def __init__(self, server: LineServer) -> None:
+        self._server = server
+
+    @property
+    def path(self) -> str:
+        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
+        return self._server.path
+
+    def start(self) -> str:
+        """Open the pty, start serving, and return the path a host opens."""
+        return self._server.start()
+
+    def stop(self) -> None:
+        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
+        self._server.stop()
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
+
+    @property
+    def error(self) -> BaseException | None:
+        """An unexpected exception that stopped the serving thread, if any."""
+        return self._server.error

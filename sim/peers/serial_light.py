@@ -17,13 +17,11 @@ rehearsal's dark reading really is dark.
 
 from __future__ import annotations
 
-from typing import Self
-
 from drivers.light import SerialLightConfig
-from sim.peers.line_server import LineServer
+from sim.peers.line_server import LineServer, ServedPeer
 
 
-class SerialLamp:
+class SerialLamp(ServedPeer):
     """A lamp behind a serial relay, off at power-up."""
 
     def __init__(
@@ -42,35 +40,10 @@ class SerialLamp:
         self._silent = False
         self._refuse = 0
         self._commands: list[str] = []
-        self._server = LineServer("lamp", self._handle, self._reset_locked)
+        super().__init__(LineServer("lamp", self._handle, self._reset_locked))
         self._lock = self._server.lock
 
-    # -- life cycle ---------------------------------------------------------------
-
-    @property
-    def path(self) -> str:
-        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
-        return self._server.path
-
-    def start(self) -> str:
-        """Open the pty, start serving, and return the path a host opens."""
-        return self._server.start()
-
-    def stop(self) -> None:
-        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
-        self._server.stop()
-
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.stop()
-
-    @property
-    def error(self) -> BaseException | None:
-        """An unexpected exception that stopped the serving thread, if any."""
-        return self._server.error
+    # -- configuration -------------------------------------------------------------
 
     def config(self, **overrides: object) -> SerialLightConfig:
         """The driver configuration that speaks this protocol."""

@@ -11,10 +11,10 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Self
+from typing import Any
 
 from drivers.serial_detector import SerialDetectorConfig
-from sim.peers.line_server import Event, LineServer
+from sim.peers.line_server import Event, LineServer, ServedPeer
 from sim.peers.serial_photometer.protocol import (
     BANNER,
     IDENTITY,
@@ -47,7 +47,7 @@ class _Faults:
     late: deque[float] = field(default_factory=deque)
 
 
-class SerialPhotometer:
+class SerialPhotometer(ServedPeer):
     """A photometer on a pseudo-terminal.
 
     ``signal`` is a constant rate in counts per second (the reading is rate × exposure)
@@ -118,12 +118,14 @@ class SerialPhotometer:
         self._stop_after: int | None = None  # lines still sent after an acknowledged STOP
         self._stop_ack_due = 0.0  # time.monotonic() that acknowledgement is sent
 
-        self._server = LineServer(
-            "photometer",
-            self._handle,
-            self._reset_locked,
-            self._tick_locked,
-            reset_on_open=reset_on_open,
+        super().__init__(
+            LineServer(
+                "photometer",
+                self._handle,
+                self._reset_locked,
+                self._tick_locked,
+                reset_on_open=reset_on_open,
+            )
         )
         self._lock = self._server.lock
         self._faults = _Faults()
@@ -138,33 +140,6 @@ class SerialPhotometer:
         self._stream_ends: list[float] = []  # time.monotonic() of each DAT line's window end
         self._t0 = time.monotonic()  # the device's clock starts at zero here
         self._server.link_latency_s = quirks.link_latency_s
-
-    # -- life cycle ---------------------------------------------------------------
-
-    @property
-    def path(self) -> str:
-        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
-        return self._server.path
-
-    def start(self) -> str:
-        """Open the pty, start serving, and return the path a host opens."""
-        return self._server.start()
-
-    def stop(self) -> None:
-        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
-        self._server.stop()
-
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.stop()
-
-    @property
-    def error(self) -> BaseException | None:
-        """An unexpected exception that stopped the serving thread, if any."""
-        return self._server.error
 
     # -- configuration -------------------------------------------------------------
 

@@ -10,9 +10,8 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Self
 
-from sim.peers.line_server import LineServer
+from sim.peers.line_server import LineServer, ServedPeer
 from sim.peers.visa_instruments.registers import EventStatus, Refused
 
 #: The reading of one integration of t seconds, in the instrument's unit.
@@ -27,7 +26,7 @@ class _Faults:
     late: deque[float] = field(default_factory=deque)
 
 
-class EmulatedInstrument:
+class EmulatedInstrument(ServedPeer):
     """An instrument's command set on a pseudo-terminal (subclasses: the dialects).
 
     ``signal(t)`` is the reading of an integration of ``t`` s; ``speedup``: an
@@ -53,37 +52,10 @@ class EmulatedInstrument:
         self.status = EventStatus()
         # The pty's slave end is not held: until a host opens it no process has it open
         # (``fuser``/``lsof`` name none), as a real instrument's port.
-        self._server = LineServer(
-            type(self).__name__, self._handle, self._reset_locked, hold_slave=False
+        super().__init__(
+            LineServer(type(self).__name__, self._handle, self._reset_locked, hold_slave=False)
         )
         self._lock = self._server.lock
-
-    # -- life cycle ---------------------------------------------------------------
-
-    @property
-    def path(self) -> str:
-        """The pty device a host opens (e.g. ``/dev/pts/3``)."""
-        return self._server.path
-
-    def start(self) -> str:
-        """Open the pty, start serving, and return the path a host opens."""
-        return self._server.start()
-
-    def stop(self) -> None:
-        """Stop serving and close the pty (a host still holding it sees an I/O error)."""
-        self._server.stop()
-
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.stop()
-
-    @property
-    def error(self) -> BaseException | None:
-        """An unexpected exception that stopped the serving thread, if any."""
-        return self._server.error
 
     # -- inspection and faults ------------------------------------------------------------
 
