@@ -14,3 +14,7 @@ class UnknownNameError(GonioError, KeyError):
 
     def __str__(self) -> str:  # KeyError quotes its argument; we want the plain message.
         return str(self.args[0]) if self.args else ""
+
+
+class ConfigError(GonioError):
+    """A configuration file that cannot be used; the message is one line per problem."""

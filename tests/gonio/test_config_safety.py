@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from gonio import config
 from gonio.config import ConfigError, read_yaml
+from gonio.config import yaml_files as config
 from gonio.planner.files import load_plan_source
 from tests.conftest import CONFIGS, CliResult
 

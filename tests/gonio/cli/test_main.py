@@ -185,7 +185,7 @@ def test_a_path_the_kernel_refuses_is_one_line(run_gonio: Gonio, tmp_path: Path)
     plan.write_text(f"name: p\nrig: {long_name}.yaml\nsampling: {{strategy: sobol, target: 10}}\n")
     r = run_gonio("plan", str(plan))
     assert r.returncode == 2 and r.stderr.count("\n") == 1
-    # The path is shown cut in the middle (gonio.config.shown_path), its end kept.
+    # The path is shown cut in the middle (gonio.config.yaml_files.shown_path), its end kept.
     assert "rrr.yaml: cannot read the file: File name too long" in r.stderr
     assert len(r.stderr) < 600
     quickstart = ROOT / "configs" / "plans" / "quickstart.yaml"
