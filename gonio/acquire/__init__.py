@@ -55,7 +55,7 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
 WHERE = {
     "Engine": "engine",
     "MotorRecovery": "recovery",
-    "Observer": "progress",
+    "Observer": "observer",
     "Outcome": "ending",
     "Report": "ending",
     "RunInterrupted": "signals",
@@ -66,7 +66,7 @@ WHERE = {
     "Suspender": "suspenders",
     "TargetReading": "measure",
     "TemperatureCeiling": "suspenders",
-    "Unobserved": "progress",
+    "Unobserved": "observer",
     "geometry_label": "reference",
     "measure_target": "measure",
     "read_standard": "reference",
