@@ -37,13 +37,11 @@ import _report
 import numpy as np
 from _machine import describe
 
-from gonio.planner import load_plan_source
-from gonio.planner.model import Plan
+from gonio.planner import Plan, load_plan_source
 from gonio.scene import Scene
-from gonio.store.journal import Journal
-from gonio.store.schema import samples_table
+from gonio.store import Journal, samples_table
 from gonio.workflows import session
-from sim.virtual.devices.instrument import SimulatedInstrument
+from sim.virtual import SimulatedInstrument
 from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -32,8 +32,7 @@ from _machine import describe
 
 from drivers.errors import DriverError
 from gonio.errors import GonioError
-from gonio.rig import Rig
-from gonio.rig.alignment_fit import fit
+from gonio.rig import Rig, fit
 from gonio.scene import load_scene
 from gonio.workflows import align
 

@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
-from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from sim.peers.dynamixel.emulator import DxlEmulator
 

@@ -30,8 +30,8 @@ import _report
 from _machine import describe
 from bus import AXES, two_rate_table  # the four axes benchmarks/bus.py times
 
+from drivers.dynamixel import poll_bytes, poll_seconds
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.dynamixel.wire import poll_bytes, poll_seconds
 from drivers.values import StampedPositions
 from sim.peers.dynamixel.emulator import DxlEmulator
 

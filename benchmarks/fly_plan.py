@@ -29,9 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
-from gonio.planner import Plan, build
-from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.planner import Plan, PlanSpec, build
+from gonio.rig import Rig
 
 ROOT = Path(__file__).resolve().parent.parent
 RIGS = {"arch": ROOT / "configs/rigs/arch.yaml", "in-plane": ROOT / "configs/rigs/in_plane.yaml"}

@@ -33,17 +33,15 @@ from _machine import describe
 from rehearsal import Timer, Window
 
 from drivers.base import SystemClock
-from drivers.pymeasure.config import SETTLE_TAU
+from drivers.pymeasure import SETTLE_TAU
 from drivers.pymeasure.detector import PyMeasureDetector
-from gonio.acquire.engine import Engine
-from gonio.acquire.runtime import RunTime
-from gonio.planner.files import load_plan_source
-from gonio.planner.stored import plan_bytes
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
+from gonio.acquire import Engine, RunTime
+from gonio.planner import load_plan_source, plan_bytes
+from gonio.rig import PyMeasureInterfaceSpec
 from gonio.scene import load_scene
-from gonio.store.journal import Journal
-from gonio.workflows.rehearsal import rehearsal_devices
-from sim.peers.visa_instruments import EMULATORS, FULL_SCALE
+from gonio.store import Journal
+from gonio.workflows import rehearsal_devices
+from sim.peers import EMULATORS, FULL_SCALE
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"

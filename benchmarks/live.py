@@ -57,14 +57,9 @@ from _machine import describe
 from acquire import engine as acquire_engine  # benchmarks/acquire.py
 
 from gonio.cli import main as gonio
-from gonio.live import derived
-from gonio.live.model import LiveRun
-from gonio.live.views import values
-from gonio.planner import load_plan_source
-from gonio.planner.model import ARRAYS, Plan
-from gonio.planner.stored import plan_bytes
-from gonio.store.journal import Journal
-from gonio.store.read import open_run
+from gonio.live import LiveRun, derived, values
+from gonio.planner import ARRAYS, Plan, load_plan_source, plan_bytes
+from gonio.store import Journal, open_run
 from gonio.workflows import session
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -42,12 +42,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
-from gonio.planner import Plan, build, lkh, load_plan
-from gonio.planner.ordering import compile_kernels, default_kicks
-from gonio.planner.schema import PlanSpec
-from gonio.planner.search import path_time
+from gonio.planner import (
+    Plan,
+    PlanSpec,
+    build,
+    compile_kernels,
+    default_kicks,
+    lkh,
+    load_plan,
+    path_time,
+)
 from gonio.progress import hms
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 
 ROOT = Path(__file__).resolve().parent.parent
 RIGS = {name: ROOT / f"configs/rigs/{name}.yaml" for name in ("arch", "in_plane", "arch_point")}

@@ -43,10 +43,8 @@ from _machine import describe
 from scipy.interpolate import LinearNDInterpolator
 
 from gonio.blocks import blockwise
-from gonio.reconstruct import transforms
-from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.result import EVALUATION_BLOCK, Reconstruction
-from gonio.rig.model import Rig
+from gonio.reconstruct import EVALUATION_BLOCK, Reconstruction, reconstruct, transforms
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
 from studies.reconstruct.synthetic import placed, synthesize
 
@@ -60,7 +58,7 @@ RUNS = 2
 
 
 def scene_f(name: str) -> BrdfEval:
-    from gonio.radiometry.bands import band_eval
+    from gonio.radiometry import band_eval
     from gonio.scene import load_scene
 
     scene = load_scene(SCENES / f"{name}.yaml")

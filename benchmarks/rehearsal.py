@@ -51,16 +51,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 from _machine import describe
 
-from drivers.dynamixel.wire import DEFAULT_RETURN_DELAY_S, step_seconds
-from gonio.acquire.engine import Engine
-from gonio.acquire.runtime import RunTime
-from gonio.planner.files import load_plan_source
-from gonio.planner.model import Plan
-from gonio.planner.stored import plan_bytes
-from gonio.rig.travel import TravelModel
+from drivers.dynamixel import DEFAULT_RETURN_DELAY_S, step_seconds
+from gonio.acquire import Engine, RunTime
+from gonio.planner import Plan, load_plan_source, plan_bytes
+from gonio.rig import TravelModel
 from gonio.scene import load_scene
 from gonio.store import Journal, open_run
-from gonio.workflows.rehearsal import rehearsal_devices
+from gonio.workflows import rehearsal_devices
 
 ROOT = Path(__file__).resolve().parents[1]
 PLAN = ROOT / "configs" / "plans" / "rehearsal.yaml"

@@ -21,12 +21,9 @@ import numpy as np
 from _machine import describe
 
 from gonio import brdf, radiometry
-from gonio.planner import build, load_plan
-from gonio.planner.model import Plan
+from gonio.planner import Plan, build, load_plan
 from gonio.scene import EffectsSpec, Scene, load_scene
-from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.record import SimRun
-from sim.virtual.simulate import simulate
+from sim.virtual import SimRun, SimulatedInstrument, simulate
 from tests.support.measure import measure_targets
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -41,7 +41,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import load_scene
 from tests.soak import (
     ROOT,

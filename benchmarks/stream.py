@@ -25,7 +25,7 @@ from _machine import describe
 
 from drivers.serial_detector.detector import SerialDetector
 from drivers.stream import restamped
-from sim.peers.serial_photometer import STREAM_CONFIG, SerialPhotometer
+from sim.peers import STREAM_CONFIG, SerialPhotometer
 
 RATES_HZ = (100.0, 500.0, 1000.0)
 #: The data line without its timestamp: the host stamps arrivals only.

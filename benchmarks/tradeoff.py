@@ -20,9 +20,7 @@ import _report
 import numpy as np
 from _machine import describe
 
-from gonio.tradeoff import runner
-from gonio.tradeoff.grid import Sweep, load_sweep
-from gonio.tradeoff.sweep import run_sweep
+from gonio.tradeoff import Sweep, load_sweep, run_sweep, runner
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "sweeps" / "quick.yaml"

@@ -34,8 +34,8 @@ import _report
 from _machine import describe
 from bus import AXES, two_rate_table  # the four axes benchmarks/bus.py times
 
+from drivers.dynamixel import setpoint_period, setpoint_seconds, sync_write_bytes
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.dynamixel.wire import setpoint_period, setpoint_seconds, sync_write_bytes
 from drivers.trajectory import Trajectory
 from drivers.values import StampedPositions
 from sim.peers.dynamixel.emulator import DxlEmulator

@@ -31,19 +31,21 @@ from typing import Any
 import numpy as np
 
 from drivers.base import StageTarget
-from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel import AxisConfig
 from gonio.config import ConfigError
-from gonio.rig.instrument import SerialSwitchSpec
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
-from gonio.rig.model import Rig
+from gonio.rig import PyMeasureInterfaceSpec, Rig, SerialSwitchSpec
 from sim.clock import ScaledClock, TimeSource
+from sim.peers import (
+    EMULATORS,
+    FULL_SCALE,
+    SR830,
+    EmulatedInstrument,
+    SerialLamp,
+    SerialPhotometer,
+    mismatch,
+)
 from sim.peers.dynamixel.emulator import DxlEmulator
-from sim.peers.serial_light import SerialLamp
-from sim.peers.serial_photometer import SerialPhotometer
-from sim.peers.serial_photometer.protocol import mismatch
-from sim.peers.visa_instruments import EMULATORS, FULL_SCALE, EmulatedInstrument
-from sim.peers.visa_instruments.sr830 import SR830
-from sim.virtual.devices.detector import SimDetector
+from sim.virtual import SimDetector
 
 Pose = Callable[[], dict[str, float]]
 PoseAt = Callable[[float], dict[str, float]]

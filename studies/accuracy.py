@@ -27,11 +27,8 @@ import _report
 from _machine import describe
 
 from gonio import brdf, params
-from gonio.reconstruct import testset
-from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.naive import NaiveReconstruction
-from gonio.rig.model import Rig
+from gonio.reconstruct import NaiveReconstruction, evaluate, reconstruct, testset
+from gonio.rig import Rig
 from studies.reconstruct.synthetic import synthesize
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -41,11 +41,9 @@ from _machine import describe
 from study import fmt_needed, needed
 
 from gonio import brdf, params
-from gonio.analysis.measured import Measured
-from gonio.reconstruct import testset
-from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.evaluate import evaluate
-from gonio.rig.model import Rig
+from gonio.analysis import Measured
+from gonio.reconstruct import evaluate, reconstruct, testset
+from gonio.rig import Rig
 from gonio.types import BrdfEval
 from studies.brdf import random_materials
 from studies.reconstruct.synthetic import adaptive_choice, synthesize
@@ -73,7 +71,7 @@ def conductor(alpha: float) -> BrdfEval:
 
 
 def scene_material(name: str) -> BrdfEval:
-    from gonio.radiometry.bands import band_eval
+    from gonio.radiometry import band_eval
     from gonio.scene import load_scene
 
     return band_eval(

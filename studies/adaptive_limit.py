@@ -54,17 +54,11 @@ from adaptive import ggx
 from scipy import ndimage
 
 from gonio import params
-from gonio.analysis.measured import Measured
-from gonio.brdf.geometry import pair
-from gonio.planner import adaptive
-from gonio.planner.placement import draw_kept
-from gonio.planner.schema import PlanSpec
-from gonio.planner.two_pass import draw_points
-from gonio.reconstruct import testset
-from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.fit import fit
-from gonio.rig.model import Rig
+from gonio.analysis import Measured
+from gonio.brdf import pair
+from gonio.planner import PlanSpec, adaptive, draw_kept, draw_points
+from gonio.reconstruct import evaluate, fit, reconstruct, testset
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
 from studies.reconstruct.synthetic import measured_at, placed, synthesize, synthesize_adaptive
 

@@ -33,8 +33,8 @@ from _machine import describe
 from adaptive import ggx
 from study import score, setting
 
-from gonio.reconstruct.fit import fit
-from gonio.rig.model import Rig
+from gonio.reconstruct import fit
+from gonio.rig import Rig
 from gonio.types import BrdfEval
 from studies.reconstruct.synthetic import synthesize, synthesize_adaptive
 

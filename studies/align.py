@@ -58,21 +58,21 @@ import numpy as np
 import yaml
 from _machine import describe
 
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.cli import main as gonio
 from gonio.planner import Plan, load_plan_source
-from gonio.reconstruct import testset
-from gonio.reconstruct.evaluate import DEFAULT_FILL, evaluate
-from gonio.reconstruct.methods import DEFAULT_METHOD, reconstruction
-from gonio.reconstruct.truth import truth_from_spec
-from gonio.rig import Rig
-from gonio.rig.alignment_file import AlignmentFile, load_alignment
-from gonio.rig.alignment_fit import miss, parameters, vector
-from gonio.rig.alignment_spec import AlignmentSpec
+from gonio.reconstruct import (
+    DEFAULT_FILL,
+    DEFAULT_METHOD,
+    evaluate,
+    reconstruction,
+    testset,
+    truth_from_spec,
+)
+from gonio.rig import AlignmentFile, AlignmentSpec, Rig, load_alignment, miss, parameters, vector
 from gonio.scene import Scene, load_scene
 from gonio.types import FloatArray
-from gonio.workflows.align import ScanSettings, nominal_poses, reachable
-from gonio.workflows.simulate import simulate_plan
+from gonio.workflows import ScanSettings, nominal_poses, reachable, simulate_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 ARCH = ROOT / "configs" / "rigs" / "arch.yaml"

@@ -39,11 +39,10 @@ import _report
 import numpy as np
 from _machine import describe
 
-from gonio.acquire.reference import reference_pose
-from gonio.rig.model import Rig
+from gonio.acquire import reference_pose
+from gonio.rig import Rig
 from gonio.scene import Scene
-from sim.virtual.devices.detector import sensor_of
-from sim.virtual.simulate import expected_rate
+from sim.virtual import expected_rate, sensor_of
 from tests.support.calibration import calibration_events, scale_errors
 from tests.support.runs import RIGS, scene_spec
 

@@ -23,11 +23,9 @@ import _report
 import yaml
 from _machine import describe
 
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.cli import main
-from gonio.reconstruct import evaluate, testset
-from gonio.reconstruct.naive import NaiveReconstruction
-from gonio.reconstruct.truth import truth_from_spec
+from gonio.reconstruct import NaiveReconstruction, evaluate, testset, truth_from_spec
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {"matte": "matte.yaml", "glossy metal": "glossy_metal.yaml"}
@@ -92,7 +90,7 @@ def main_() -> None:
 
 
 def _arch() -> Any:
-    from gonio.rig.model import Rig
+    from gonio.rig import Rig
 
     return Rig.from_yaml(ROOT / "configs/rigs/arch.yaml")
 

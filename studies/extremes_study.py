@@ -30,12 +30,9 @@ from _machine import describe
 
 from gonio import brdf, params
 from gonio.output import reserve_output
-from gonio.params import cases
-from gonio.params.conditioning import singular_values, tangent_jacobian
+from gonio.params import cases, singular_values, tangent_jacobian
 from gonio.plots import require_matplotlib
-from gonio.rig import sensitivity
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason
+from gonio.rig import Reason, Rig, sensitivity
 from gonio.scene import load_scene
 from studies.params.accuracy import PATH_DISTANCES, PathRow, measured_errors, path_study
 

@@ -26,9 +26,9 @@ import numpy as np
 from _machine import describe
 
 import gonio.brdf as brdf
-from gonio.brdf.quadrature import directional_albedo
-from gonio.export.factored import Resolution, export, factorize
-from gonio.params.cases import direction
+from gonio.brdf import directional_albedo
+from gonio.export import Resolution, export, factorize
+from gonio.params import direction
 
 GOLD = {
     "alpha": 0.2,

@@ -31,9 +31,8 @@ from _machine import describe
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.support
 
-from gonio.analysis.measured import Measured
-from gonio.analysis.shared import shared_error
-from gonio.reconstruct.fit import FitResult, fit
+from gonio.analysis import Measured, shared_error
+from gonio.reconstruct import FitResult, fit
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 NOISE = ["shot_noise", "read_noise"]

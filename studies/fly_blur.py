@@ -32,10 +32,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _report
 
-from gonio.planner.blur import BLUR_K_DEG, blur_budget_deg
-from gonio.rig.model import Rig
+from gonio.planner import BLUR_K_DEG, blur_budget_deg
+from gonio.rig import Rig
 from gonio.scene import Scene, load_scene
-from sim.virtual.physics.optics import SceneOptics
+from sim.virtual import SceneOptics
 
 ROOT = Path(__file__).resolve().parents[1]
 ALPHAS = (0.02, 0.05, 0.1, 0.2, 0.5)

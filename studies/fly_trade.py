@@ -67,22 +67,13 @@ import _report
 from _machine import describe
 
 from gonio import progress as planning
-from gonio.analysis.measured import Measured
-from gonio.analysis.summary import figures
-from gonio.planner.blur import BLUR_K_DEG, blur_budget_deg
-from gonio.planner.builder import build
-from gonio.planner.files import load_plan
-from gonio.planner.schema import PlanSpec
-from gonio.reconstruct import testset
-from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.metrics import region_masks
-from gonio.rig.model import Rig
+from gonio.analysis import Measured, figures
+from gonio.planner import BLUR_K_DEG, PlanSpec, blur_budget_deg, build, load_plan
+from gonio.reconstruct import evaluate, reconstruction, region_masks, testset
+from gonio.rig import Rig
 from gonio.scene import Scene, load_scene
-from gonio.tradeoff.grid import Sweep, load_sweep, scaled_rig
-from gonio.tradeoff.store import open_store
-from gonio.tradeoff.sweep import run_sweep
-from gonio.workflows.simulate import simulate_plan
+from gonio.tradeoff import Sweep, load_sweep, open_store, run_sweep, scaled_rig
+from gonio.workflows import simulate_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 SWEEPS = ROOT / "configs" / "sweeps"

@@ -29,10 +29,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # studies
 import _report
 from _machine import describe
 
-from gonio.radiometry.bands import band_eval
-from gonio.reconstruct import evaluate, reconstruct, testset
-from gonio.reconstruct.evaluate import DEFAULT_FILL
-from gonio.rig.model import Rig
+from gonio.radiometry import band_eval
+from gonio.reconstruct import DEFAULT_FILL, evaluate, reconstruct, testset
+from gonio.rig import Rig
 from gonio.scene import load_scene
 from gonio.types import BrdfEval
 from studies.reconstruct.synthetic_lines import synthesize_lines

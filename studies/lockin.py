@@ -31,13 +31,12 @@ import _report
 from _machine import describe
 
 from drivers.pymeasure import SETTLE_TAU
-from gonio.planner import build, load_plan
-from gonio.planner.schema import ExposureSpec
+from gonio.planner import ExposureSpec, build, load_plan
 from gonio.progress import hms
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import Scene, load_scene
-from gonio.workflows.simulate import simulate_plan
-from sim.virtual.physics.lockin import ENBW_TAU
+from gonio.workflows import simulate_plan
+from sim.virtual import ENBW_TAU
 
 ROOT = Path(__file__).resolve().parent.parent
 SEEDS = (1, 2, 3)

@@ -37,16 +37,12 @@ import _report
 import numpy as np
 from _machine import describe
 
-from gonio.analysis.measured import Measured
-from gonio.analysis.summary import truth_of
-from gonio.planner import build
-from gonio.planner.schema import PlanSpec
-from gonio.reconstruct import evaluate, testset
-from gonio.reconstruct.naive import NaiveReconstruction
-from gonio.reconstruct.truth import truth_from_spec
-from gonio.rig.model import Rig
+from gonio.analysis import Measured, truth_of
+from gonio.planner import PlanSpec, build
+from gonio.reconstruct import NaiveReconstruction, evaluate, testset, truth_from_spec
+from gonio.rig import Rig
 from gonio.scene import Scene, load_scene
-from gonio.workflows.simulate import simulate_plan
+from gonio.workflows import simulate_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {"glossy metal": "glossy_metal.yaml", "matte": "matte.yaml"}

@@ -35,12 +35,10 @@ from _machine import describe
 
 from gonio.analysis import calibrate
 from gonio.planner import build, load_plan
-from gonio.rig import constraints
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason
+from gonio.rig import Reason, Rig, constraints
 from gonio.scene import load_scene
 from gonio.types import BoolArray, FloatArray
-from gonio.workflows.simulate import Result, simulate_plan
+from gonio.workflows import Result, simulate_plan
 
 ROOT = Path(__file__).resolve().parent.parent
 NOISE = ["shot_noise", "read_noise", "dark_current", "quantization", "saturation"]

@@ -33,10 +33,10 @@ from _machine import describe
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import gonio.brdf as brdf
-from gonio.brdf.rgl import RglTable
-from gonio.export.rgl import SAMPLES, THETA_I, write
+from gonio.brdf import RglTable
+from gonio.export import SAMPLES, THETA_I, write
 from gonio.output import reserve_output
-from gonio.radiometry.bands import band_eval
+from gonio.radiometry import band_eval
 
 MODELS = (
     ("cook_torrance α=0.5, kd=0.2", {"alpha": 0.5, "kd": 0.2, "f0": 0.04}),

@@ -45,17 +45,12 @@ import _report
 from _machine import describe
 
 from gonio import brdf, params
-from gonio.analysis.measured import Measured
-from gonio.planner.placement import directions, place
-from gonio.planner.schema import PlanSpec
-from gonio.radiometry.bands import band_eval
-from gonio.reconstruct import testset
-from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.regions import NAMES as REGIONS
-from gonio.reconstruct.regions import regions
-from gonio.reconstruct.result import Reconstruction
-from gonio.rig.model import Rig
+from gonio.analysis import Measured
+from gonio.planner import PlanSpec, directions, place
+from gonio.radiometry import band_eval
+from gonio.reconstruct import NAMES as REGIONS
+from gonio.reconstruct import Reconstruction, evaluate, reconstruction, regions, testset
+from gonio.rig import Rig
 from gonio.scene import load_scene
 from gonio.types import BrdfEval
 from studies.reconstruct.synthetic import synthesize, synthesize_adaptive

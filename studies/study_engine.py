@@ -270,12 +270,11 @@ def timing(args: argparse.Namespace) -> None:
     import time
 
     from gonio import progress as planning
-    from gonio.planner.builder import build
-    from gonio.planner.schema import PlanSpec
-    from gonio.rig.model import Rig
+    from gonio.planner import PlanSpec, build
+    from gonio.rig import Rig
     from gonio.scene import load_scene
-    from gonio.tradeoff.spec import EFFECT_NAMES
-    from gonio.workflows.simulate import simulate_plan
+    from gonio.tradeoff import EFFECT_NAMES
+    from gonio.workflows import simulate_plan
 
     root = Path(__file__).resolve().parent.parent
     rig = Rig.from_yaml(root / "configs/rigs/arch.yaml")

@@ -11,5 +11,55 @@ checked without opening a port); the bus is `drivers.dynamixel.bus.DynamixelBus`
 """
 
 from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel.control_table import (
+    BAUD_RATES,
+    DRIVE_MODE_REVERSE,
+    EEPROM_END,
+    EXTENDED_POSITION_LIMIT,
+    FACTORY_BAUD,
+    HARDWARE_ERROR_BITS,
+    OPERATING_MODES,
+    RAD_PER_TICK,
+    TICKS_PER_REV,
+    Area,
+    Item,
+)
+from drivers.dynamixel.models import DEFAULT_MODEL, MODEL_NAMES, Model, model, model_number
+from drivers.dynamixel.wire import (
+    BITS_PER_BYTE,
+    DEFAULT_RETURN_DELAY_S,
+    poll_bytes,
+    poll_seconds,
+    setpoint_period,
+    setpoint_seconds,
+    step_seconds,
+    sync_write_bytes,
+)
 
-__all__ = ["AxisConfig"]
+__all__ = [
+    "BAUD_RATES",
+    "BITS_PER_BYTE",
+    "DEFAULT_MODEL",
+    "DEFAULT_RETURN_DELAY_S",
+    "DRIVE_MODE_REVERSE",
+    "EEPROM_END",
+    "EXTENDED_POSITION_LIMIT",
+    "FACTORY_BAUD",
+    "HARDWARE_ERROR_BITS",
+    "MODEL_NAMES",
+    "OPERATING_MODES",
+    "RAD_PER_TICK",
+    "TICKS_PER_REV",
+    "Area",
+    "AxisConfig",
+    "Item",
+    "Model",
+    "model",
+    "model_number",
+    "poll_bytes",
+    "poll_seconds",
+    "setpoint_period",
+    "setpoint_seconds",
+    "step_seconds",
+    "sync_write_bytes",
+]

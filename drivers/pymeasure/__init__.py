@@ -15,6 +15,7 @@ from drivers.pymeasure.config import (
     ExposureConfig,
     PyMeasureConfigError,
     PyMeasureDetectorConfig,
+    settle_tau,
     unknown_property,
 )
 from drivers.pymeasure.properties import PROPERTIES
@@ -27,5 +28,6 @@ __all__ = [
     "ExposureConfig",
     "PyMeasureConfigError",
     "PyMeasureDetectorConfig",
+    "settle_tau",
     "unknown_property",
 ]

@@ -66,12 +66,9 @@ from gonio.acquire.state import RunState, initial_state, latest_snapshot
 from gonio.acquire.suspenders import Suspender, health_suspenders
 from gonio.acquire.watch import ReadingWatch
 from gonio.errors import GonioError
-from gonio.planner.model import Plan
-from gonio.planner.policies import AcquisitionSpec
-from gonio.rig.model import Rig
-from gonio.store.journal import Journal, JournalError, dumps
-from gonio.store.read import Run
-from gonio.store.schema import commanded, coordinate, read_back
+from gonio.planner import AcquisitionSpec, Plan
+from gonio.rig import Rig
+from gonio.store import Journal, JournalError, Run, commanded, coordinate, dumps, read_back
 
 #: What ends a session early: each is journaled (`Engine._ending`), the session ended.
 _ENDINGS = (RunInterrupted, DriverError, EndSession, GonioError)

@@ -16,8 +16,8 @@ from gonio.acquire.runtime import RunTime
 from gonio.acquire.signals import StopRequests
 from gonio.acquire.state import RunState
 from gonio.acquire.suspenders import Step, Suspender, Suspension
-from gonio.planner.policies import HealthSpec
-from gonio.store.journal import dumps
+from gonio.planner import HealthSpec
+from gonio.store import dumps
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from typing import IO, Protocol
 import numpy as np
 
 from gonio import progress
-from gonio.planner.model import Plan
+from gonio.planner import Plan
 
 
 class Observer(Protocol):

@@ -46,9 +46,9 @@ from drivers.devices import Devices
 from drivers.errors import DriverError, MotorFault
 from drivers.values import Health
 from gonio.acquire.signals import RunInterrupted
-from gonio.planner.policies import MotorFaultSpec
-from gonio.rig.model import Rig
-from gonio.store.read import Run
+from gonio.planner import MotorFaultSpec
+from gonio.rig import Rig
+from gonio.store import Run
 
 T = TypeVar("T")
 

@@ -26,8 +26,7 @@ from gonio import radiometry
 from gonio.acquire.measure import TargetReading, measure_target, reading_fields
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason
+from gonio.rig import Reason, Rig
 from gonio.types import FloatArray
 
 

@@ -11,9 +11,8 @@ from typing import Any
 import numpy as np
 
 from gonio.acquire.schedule import Calibrations, Every
-from gonio.planner.policies import AcquisitionSpec
-from gonio.store.journal import dumps
-from gonio.store.read import Run
+from gonio.planner import AcquisitionSpec
+from gonio.store import Run, dumps
 
 
 @dataclass

@@ -19,7 +19,7 @@ from enum import Enum
 from typing import Protocol
 
 from drivers.values import Health
-from gonio.rig.schema import HealthLimitsSpec
+from gonio.rig import HealthLimitsSpec
 
 
 class Suspender(Protocol):

@@ -17,7 +17,7 @@ from typing import Any
 
 from drivers.base import Detector, phase_tolerance_deg, range_changes, reading_unit
 from drivers.values import Reading
-from gonio.store.read import Run
+from gonio.store import Run
 
 
 def phase_drift(phase_deg: float, reference_deg: float) -> float:

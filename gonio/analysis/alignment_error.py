@@ -19,9 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from gonio.analysis.estimate import Estimate
-from gonio.rig.alignment_fit import stated_covariance
-from gonio.rig.sensitivity import alignment_brdf_sigma
-from gonio.store.read import Run
+from gonio.rig import alignment_brdf_sigma, stated_covariance
+from gonio.store import Run
 from gonio.types import BoolArray, FloatArray
 
 

@@ -21,8 +21,8 @@ from gonio.analysis.alignment_error import with_alignment_error
 from gonio.analysis.falloff import spot_corrected
 from gonio.analysis.lamp_distance import distance_corrected
 from gonio.errors import GonioError
-from gonio.radiometry.series import CalibrationSeries, rounding_var, student_variance
-from gonio.store.read import Event, Run
+from gonio.radiometry import CalibrationSeries, rounding_var, student_variance
+from gonio.store import Event, Run
 from gonio.types import FloatArray
 
 

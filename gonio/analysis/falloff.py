@@ -27,10 +27,9 @@ import numpy as np
 
 from gonio.analysis.estimate import Estimate
 from gonio.analysis.scene import scene_effects
-from gonio.radiometry import DetectorOptics, PointSource, spot_ratio
-from gonio.radiometry.series import CalibrationSeries
-from gonio.rig.model import Rig
-from gonio.store.read import Run
+from gonio.radiometry import CalibrationSeries, DetectorOptics, PointSource, spot_ratio
+from gonio.rig import Rig
+from gonio.store import Run
 from gonio.types import BoolArray, FloatArray
 
 #: Spatial quadrature order of R_f (R_f − 1 is ≲ 1 %: this order's error is below 1e-12

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gonio.store.read import Run
+from gonio.store import Run
 from gonio.types import FloatArray
 
 

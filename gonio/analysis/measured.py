@@ -17,8 +17,8 @@ from gonio.analysis.calibrated import Calibrated, calibrate
 from gonio.analysis.realign import realigned
 from gonio.analysis.scene import scene_band, scene_truth
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
-from gonio.store.read import Run, open_run
+from gonio.rig import Rig
+from gonio.store import Run, open_run
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.rig.model import Rig
-from gonio.store.read import Run
+from gonio.rig import Rig
+from gonio.store import Run
 
 #: The sample columns of the recorded pair (`gonio.store.schema`).
 _PAIR_COLUMNS = ("wi_x", "wi_y", "wi_z", "wo_x", "wo_y", "wo_z")

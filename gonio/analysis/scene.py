@@ -18,10 +18,10 @@ from typing import Any
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
-from gonio.brdf.material import MaterialSpec
+from gonio.brdf import MaterialSpec
 from gonio.config import ConfigError, dotted, located, read_yaml
 from gonio.errors import GonioError
-from gonio.radiometry.bands import band_eval
+from gonio.radiometry import band_eval
 from gonio.rig import Alignment
 from gonio.scene import Band, DetectorSpec, EffectsSpec
 from gonio.types import BrdfEval

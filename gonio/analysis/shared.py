@@ -23,8 +23,8 @@ import numpy as np
 
 from gonio.analysis.calibrated import Calibrated, calibrate, readings
 from gonio.analysis.measured import kept
-from gonio.radiometry.series import CalibrationSeries
-from gonio.store.read import Run, open_run
+from gonio.radiometry import CalibrationSeries
+from gonio.store import Run, open_run
 from gonio.types import FloatArray
 
 

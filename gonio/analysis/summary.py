@@ -13,7 +13,7 @@ import numpy as np
 from gonio.analysis.calibrated import calibrate, is_level
 from gonio.analysis.scene import scene_alignment, scene_truth
 from gonio.errors import GonioError
-from gonio.store.read import Run
+from gonio.store import Run
 from gonio.types import FloatArray
 
 

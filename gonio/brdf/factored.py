@@ -33,8 +33,7 @@ from gonio.brdf.base import BRDF
 from gonio.brdf.geometry import Pair
 from gonio.directions import as_direction_pair, in_upper_hemisphere
 from gonio.errors import DomainError
-from gonio.params.cases import direction
-from gonio.params.spherical import polar
+from gonio.params import direction, polar
 from gonio.types import ArrayLike, FloatArray
 
 

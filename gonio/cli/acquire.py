@@ -15,8 +15,7 @@ from urllib.parse import quote
 
 from drivers.errors import DriverError
 from gonio import progress as planning
-from gonio.acquire import control, observer
-from gonio.acquire.signals import RunInterrupted
+from gonio.acquire import RunInterrupted, control, observer
 from gonio.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, arguments
 from gonio.cli.arguments import positive
 from gonio.config import ConfigError
@@ -103,7 +102,7 @@ def _resume_command(path: Path | None) -> str:
 def cmd_acquire(args: argparse.Namespace) -> int:
     from gonio.cli import run_table
     from gonio.cli.render import render_summary
-    from gonio.planner.files import load_plan_source
+    from gonio.planner import load_plan_source
     from gonio.workflows import preflight, session
 
     progress = observer.for_stream(args.quiet)

@@ -15,8 +15,7 @@ from typing import TYPE_CHECKING
 from gonio.cli import arguments
 
 if TYPE_CHECKING:  # imported when the command runs
-    from gonio.workflows.align import Scan
-    from gonio.workflows.align_check import Verdict
+    from gonio.workflows import Scan, Verdict
 
 #: Exit code of a check that ran and found the alignment no longer holds.
 EXIT_DRIFTED = 1
@@ -118,9 +117,7 @@ def cmd_align(args: argparse.Namespace) -> int:
 
     from gonio.config import ConfigError
     from gonio.output import reserve_output
-    from gonio.rig import Rig
-    from gonio.rig.alignment_file import from_fit, text
-    from gonio.rig.alignment_fit import fit
+    from gonio.rig import Rig, fit, from_fit, text
     from gonio.scene import load_scene
     from gonio.workflows import align, align_check, backends
 

@@ -20,11 +20,10 @@ from pathlib import Path
 
 import dynamixel_sdk as sdk
 
-from drivers.dynamixel.axis import AxisConfig
+from drivers.dynamixel import FACTORY_BAUD, AxisConfig
+from drivers.dynamixel import MODEL_NAMES as MODELS
 from drivers.dynamixel.bus import DynamixelBus
-from drivers.dynamixel.control_table import FACTORY_BAUD
 from drivers.dynamixel.link import DynamixelLink
-from drivers.dynamixel.models import MODEL_NAMES as MODELS
 from drivers.errors import CommError, DriverError
 from gonio.cli.arguments import finite_degrees, positive_seconds
 from gonio.config import ConfigError
@@ -126,14 +125,14 @@ def _timeout_option(p: argparse.ArgumentParser) -> None:
 
 
 def _rig_bus(args: argparse.Namespace) -> tuple[str, int, list[AxisConfig]]:
-    from gonio.rig.model import Rig
+    from gonio.rig import Rig
 
     rig = Rig.from_yaml(args.rig)
     return args.port or rig.spec.bus.port, rig.spec.bus.baud, rig.bus_axes()
 
 
 def _home(args: argparse.Namespace) -> dict[str, float]:
-    from gonio.rig.model import Rig
+    from gonio.rig import Rig
 
     rig = Rig.from_yaml(args.rig)
     return {name: float(angle) for name, angle in zip(rig.axes, rig.home, strict=True)}

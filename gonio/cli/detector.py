@@ -84,7 +84,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 def cmd_check_stream(args: argparse.Namespace) -> int:
     from gonio.output import reserve_output
     from gonio.rig import Rig
-    from gonio.workflows.stream_check import check_stream, verdict_path
+    from gonio.workflows import check_stream, verdict_path
 
     rig = Rig.from_yaml(args.rig)
     output = args.output or verdict_path(args.rig)

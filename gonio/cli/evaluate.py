@@ -8,9 +8,8 @@ import json
 from pathlib import Path
 
 from gonio.cli.arguments import add_alignment
-from gonio.reconstruct.evaluate import DEFAULT_FILL
-from gonio.reconstruct.methods import DEFAULT_METHOD, FILLS, NAIVE, names
-from gonio.reconstruct.methods import reconstruction as _reconstruction
+from gonio.reconstruct import DEFAULT_FILL, DEFAULT_METHOD, FILLS, NAIVE, names
+from gonio.reconstruct import reconstruction as _reconstruction
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -62,9 +61,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
-    from gonio.analysis.measured import Measured
-    from gonio.reconstruct.evaluate import evaluate
-    from gonio.reconstruct.truth import truth_from_spec
+    from gonio.analysis import Measured
+    from gonio.reconstruct import evaluate, truth_from_spec
 
     if args.parametrization is not None:
         from gonio import params

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from gonio.cli import arguments
-from gonio.reconstruct.methods import DEFAULT_METHOD, names
+from gonio.reconstruct import DEFAULT_METHOD, names
 
 #: The most grid points per coordinate the option takes; the memory the grid needs
 #: bounds it further (`gonio.export.check_options`).

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 from gonio.cli import arguments
 
 if TYPE_CHECKING:
-    from gonio.reconstruct.fit import FitResult
+    from gonio.reconstruct import FitResult
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -65,15 +65,12 @@ def _starts(text: str) -> int:
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from gonio.analysis.calibrated import calibrate
-    from gonio.analysis.measured import Measured
-    from gonio.analysis.realign import realigned
-    from gonio.analysis.shared import shared_error
-    from gonio.brdf.family import parse
+    from gonio.analysis import Measured, calibrate, realigned, shared_error
+    from gonio.brdf import parse
     from gonio.config import ConfigError
     from gonio.errors import GonioError
-    from gonio.reconstruct.fit import fit
-    from gonio.store.read import open_run
+    from gonio.reconstruct import fit
+    from gonio.store import open_run
 
     if len(args.runs) not in (1, 3):
         raise ConfigError(f"expected one run, or three (r, g, b bands); got {len(args.runs)}")
@@ -138,7 +135,7 @@ def material_yaml(result: FitResult, source: str) -> str:
     `GonioError` (one line) when it is not a valid material."""
     import yaml
 
-    from gonio.brdf.material import MaterialError, build
+    from gonio.brdf import MaterialError, build
     from gonio.errors import GonioError
 
     material = result.material()

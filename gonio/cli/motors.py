@@ -13,12 +13,16 @@ import argparse
 import math
 from pathlib import Path
 
-from drivers.dynamixel import hygiene
-from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.control_table import BAUD_RATES, FACTORY_BAUD, RAD_PER_TICK
+from drivers.dynamixel import (
+    BAUD_RATES,
+    FACTORY_BAUD,
+    RAD_PER_TICK,
+    AxisConfig,
+    hygiene,
+)
+from drivers.dynamixel import MODEL_NAMES as MODELS
 from drivers.dynamixel.latency import assumed_adapter_ms
 from drivers.dynamixel.link import DynamixelLink
-from drivers.dynamixel.models import MODEL_NAMES as MODELS
 from drivers.errors import CommError, DriverError
 from gonio.cli import EXIT_BAD_INPUT
 from gonio.config import ConfigError
@@ -139,7 +143,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
     axes: list[AxisConfig] = []
     port, bauds, rig_baud = args.port, args.baud, None
     if args.rig is not None:
-        from gonio.rig.model import Rig
+        from gonio.rig import Rig
 
         rig = Rig.from_yaml(args.rig)
         axes = rig.bus_axes()
@@ -189,7 +193,7 @@ def _status_target(args: argparse.Namespace) -> tuple[str, int, list[int], dict[
     axes: dict[int, AxisConfig] = {}
     port, baud, ids = args.port, args.baud, args.ids
     if args.rig is not None:
-        from gonio.rig.model import Rig
+        from gonio.rig import Rig
 
         rig = Rig.from_yaml(args.rig)
         axes = {a.motor_id: a for a in rig.bus_axes()}

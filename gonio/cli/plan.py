@@ -12,11 +12,8 @@ from gonio.cli.arguments import positive
 from gonio.cli.render import render_choice, render_summary
 from gonio.errors import GonioError
 from gonio.output import reserve_output
-from gonio.planner import Plan
-from gonio.planner.files import PlanSource, load_plan_source
-from gonio.planner.schema import MAX_PLAN_MINUTES
-from gonio.planner.stored import plan_bytes
-from gonio.workflows.preflight import refuse_fly_detector
+from gonio.planner import MAX_PLAN_MINUTES, Plan, PlanSource, load_plan_source, plan_bytes
+from gonio.workflows import refuse_fly_detector
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -129,7 +126,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
             stored.write_bytes(plan_bytes(plan))
             print(f"wrote {len(plan)} targets to {args.output}")
         if figure is not None:
-            from gonio.plots.coverage import plot_coverage
+            from gonio.plots import plot_coverage
 
             kind = args.plot.suffix.lower().removeprefix(".") or "png"
             figure.write_with(lambda path: plot_coverage(plan, path, format=kind))

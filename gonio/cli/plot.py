@@ -12,13 +12,12 @@ from typing import TYPE_CHECKING
 from gonio.cli.arguments import add_alignment, finite_degrees
 from gonio.config import ConfigError
 from gonio.output import reserve_output
-from gonio.plots.polar import DEFAULT_THETA_I_DEG
-from gonio.plots.slices import DEFAULT_ANGLES_DEG
-from gonio.reconstruct.methods import DEFAULT_METHOD, NAIVE, names
+from gonio.plots import DEFAULT_ANGLES_DEG, DEFAULT_THETA_I_DEG
+from gonio.reconstruct import DEFAULT_METHOD, NAIVE, names
 
 if TYPE_CHECKING:
-    from gonio.analysis.measured import Measured
-    from gonio.reconstruct.truth import Candidate, Truth
+    from gonio.analysis import Measured
+    from gonio.reconstruct import Candidate, Truth
 
 #: The figures, in the order of --help.
 KINDS = ("slices", "polar", "coverage", "error")
@@ -103,7 +102,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
         if given is not None and args.kind != kind:
             raise ConfigError(f"{flag} applies to --kind {kind}, not to --kind {args.kind}")
     if args.phi_k is not None:
-        from gonio.plots.slices import check_angles
+        from gonio.plots import check_angles
 
         check_angles(args.phi_k)
     if args.parametrization is not None:
@@ -111,7 +110,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
         params.get(args.parametrization)  # an unknown name fails before any work
     with reserve_output(args.output, "-o", inputs=[args.run]) as figure:
-        from gonio.analysis.measured import Measured
+        from gonio.analysis import Measured
 
         measured = Measured.from_run(str(args.run), alignment=args.alignment)
         draw = _FIGURES[args.kind](args, measured)
@@ -176,9 +175,7 @@ def _coverage(args: argparse.Namespace, measured: Measured) -> Drawing:
 
 def _error(args: argparse.Namespace, measured: Measured) -> Drawing:
     from gonio.plots import error
-    from gonio.reconstruct import testset
-    from gonio.reconstruct.evaluate import DEFAULT_FILL
-    from gonio.reconstruct.methods import reconstruction
+    from gonio.reconstruct import DEFAULT_FILL, reconstruction, testset
 
     truth = _truth(args, measured)
     # Every test pair, as `gonio evaluate` scores them: the fill outside the support.
@@ -208,14 +205,13 @@ _FIGURES: dict[str, Callable[[argparse.Namespace, Measured], Drawing]] = {
 
 
 def _surface(args: argparse.Namespace, measured: Measured) -> Candidate:
-    from gonio.reconstruct.methods import reconstruction
+    from gonio.reconstruct import reconstruction
 
     return reconstruction(measured, args.method, args.parametrization)
 
 
 def _truth(args: argparse.Namespace, measured: Measured) -> Truth:
-    from gonio.reconstruct.methods import reconstruction
-    from gonio.reconstruct.truth import truth_from_spec
+    from gonio.reconstruct import reconstruction, truth_from_spec
 
     return truth_from_spec(
         args.truth,

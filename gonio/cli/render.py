@@ -6,11 +6,10 @@ from typing import TYPE_CHECKING
 
 from gonio.planner import Plan, Summary
 from gonio.progress import hms
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
+from gonio.rig import PyMeasureInterfaceSpec
 
 if TYPE_CHECKING:  # the choice's module is imported only by the command that chooses
-    from gonio.tradeoff import Choice
-    from gonio.tradeoff.choice import Prediction
+    from gonio.tradeoff import Choice, Prediction
 
 
 def render_summary(plan: Plan) -> str:

@@ -9,10 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from gonio.acquire import recovery
-from gonio.analysis.calibrated import calibrate
-from gonio.analysis.summary import figures
+from gonio.analysis import calibrate, figures
 from gonio.progress import hms
-from gonio.store.read import Run
+from gonio.store import Run
 
 
 def render(run: Run, errors: dict[str, float | int] | None = None, *, title: bool = True) -> str:

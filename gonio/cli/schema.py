@@ -14,10 +14,10 @@ from typing import Any
 from pydantic import BaseModel
 
 from gonio.config_schema import json_schema
-from gonio.planner.schema import PlanSpec
-from gonio.rig.schema import RigSpec
+from gonio.planner import PlanSpec
+from gonio.rig import RigSpec
 from gonio.scene import Scene
-from gonio.tradeoff.spec import SweepSpec
+from gonio.tradeoff import SweepSpec
 
 #: Each kind of file: (the model that loads it, the schema's title).
 KINDS: dict[str, tuple[type[BaseModel], str]] = {

@@ -10,12 +10,11 @@ import stat
 from pathlib import Path
 
 from gonio.acquire import control
-from gonio.brdf.family import parse
+from gonio.brdf import parse
 from gonio.cli import arguments
 from gonio.config import ConfigError
-from gonio.live import listen
-from gonio.live.model import LiveRun
-from gonio.planner.placement import MAX_TARGETS
+from gonio.live import LiveRun, listen
+from gonio.planner import MAX_TARGETS
 
 
 def port(text: str) -> int:

@@ -19,13 +19,12 @@ import numpy as np
 
 from gonio import progress as planning
 from gonio.acquire import observer
-from gonio.analysis.summary import error_figures
+from gonio.analysis import error_figures
 from gonio.cli import arguments
 from gonio.cli.run_table import render
-from gonio.planner.files import load_plan_source
-from gonio.rig.constraints import footprint_ok, view_on_sample
-from gonio.workflows import preflight, session
-from gonio.workflows.simulate import Result, simulate_plan
+from gonio.planner import load_plan_source
+from gonio.rig import footprint_ok, view_on_sample
+from gonio.workflows import Result, preflight, session, simulate_plan
 
 #: Exit code of a simulated run that measured nothing (every target failed or the run
 #: ended before the first).

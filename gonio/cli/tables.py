@@ -10,7 +10,7 @@ import argparse
 import numpy as np
 
 from gonio import params
-from gonio.params.cases import NAMED_PAIRS, roundtrip_error
+from gonio.params import NAMED_PAIRS, roundtrip_error
 
 #: Coordinates printed in degrees (the rest are unitless norms).
 _ANGLE = {"theta_i", "phi_i", "theta_o", "phi_o", "theta_h", "phi_h", "theta_d", "phi_d", "phi_k"}

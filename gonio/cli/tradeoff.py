@@ -81,9 +81,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_tradeoff(args: argparse.Namespace) -> int:
-    from gonio.tradeoff.executors import check_address
-    from gonio.tradeoff.grid import load_sweep
-    from gonio.tradeoff.sweep import run_sweep
+    from gonio.tradeoff import check_address, load_sweep, run_sweep
 
     if args.scheduler is not None:
         check_address(args.scheduler)  # before anything runs, not after the connect timeout

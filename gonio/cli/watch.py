@@ -19,9 +19,7 @@ from pathlib import Path
 
 from gonio.cli.arguments import positive_seconds
 from gonio.errors import GonioError
-from gonio.live.model import LiveRun
-from gonio.live.terminal import line, screen
-from gonio.live.views import overview
+from gonio.live import LiveRun, line, overview, screen
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:

@@ -12,10 +12,12 @@ import importlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gonio import params
 from gonio.analysis import realigned
 from gonio.errors import GonioError, UnknownNameError
+from gonio.faces import lazy_face
 from gonio.output import reserve_output
 from gonio.store import open_run
 
@@ -187,6 +189,22 @@ def export(
     return summary
 
 
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.export.factored import Resolution as Resolution
+    from gonio.export.factored import factorize as factorize
+    from gonio.export.rgl import SAMPLES as SAMPLES
+    from gonio.export.rgl import THETA_I as THETA_I
+    from gonio.export.rgl import write as write
+
+#: The names of the face that load with their module when first used
+#: (`gonio.faces`), by module.
+WHERE = {
+    "Resolution": "factored",
+    "SAMPLES": "rgl",
+    "THETA_I": "rgl",
+    "factorize": "factored",
+    "write": "rgl",
+}
 __all__ = [
     "ALTA_PARAMS",
     "FORMATS",
@@ -194,11 +212,14 @@ __all__ = [
     "MAX_OUTER",
     "MERL_FILLS",
     "MIN_SUPPORTED",
+    "Options",
     "RGL_COLORS",
     "SUFFIXES",
-    "Options",
     "check_options",
     "export",
     "format_of",
     "names",
+    *WHERE,
 ]
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = lazy_face(__name__, WHERE)

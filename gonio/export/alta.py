@@ -32,11 +32,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.errors import GonioError
 from gonio.export.steps import step
 from gonio.output import PendingOutput
-from gonio.store.read import Run
+from gonio.store import Run
 from gonio.types import FloatArray
 
 if TYPE_CHECKING:

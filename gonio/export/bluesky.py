@@ -25,7 +25,7 @@ from gonio.errors import GonioError
 from gonio.export.columns import Column, sample_columns
 from gonio.export.steps import step
 from gonio.output import PendingOutput
-from gonio.store.read import Run
+from gonio.store import Run
 
 if TYPE_CHECKING:
     from gonio.export import Options

@@ -14,9 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from gonio import params
-from gonio.analysis.calibrated import calibrate
-from gonio.store import schema
-from gonio.store.read import Run
+from gonio.analysis import calibrate
+from gonio.store import Run, schema
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import numpy as np
 from gonio.export.columns import Column, sample_columns
 from gonio.export.steps import step
 from gonio.output import PendingOutput
-from gonio.store.read import Run
+from gonio.store import Run
 
 if TYPE_CHECKING:
     from gonio.export import Options

@@ -32,8 +32,8 @@ from gonio.brdf import factored_file as ff
 from gonio.errors import GonioError
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput, reserve_output
-from gonio.params.cases import direction
-from gonio.store.read import Run
+from gonio.params import direction
+from gonio.store import Run
 from gonio.types import Evaluable, FloatArray
 
 if TYPE_CHECKING:

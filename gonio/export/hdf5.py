@@ -35,9 +35,8 @@ from gonio.errors import GonioError
 from gonio.export.columns import coordinate_unit, sample_columns
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
-from gonio.planner.model import ARRAYS
-from gonio.planner.stored import plan_bytes
-from gonio.store.read import Run
+from gonio.planner import ARRAYS, plan_bytes
+from gonio.store import Run
 from gonio.types import Evaluable, FloatArray
 
 if TYPE_CHECKING:

@@ -26,7 +26,7 @@ from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
-from gonio.store.read import Run
+from gonio.store import Run
 from gonio.types import BoolArray, FloatArray, Surface
 
 if TYPE_CHECKING:

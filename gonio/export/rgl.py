@@ -44,13 +44,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gonio.brdf import rgl, tensor_file
-from gonio.brdf.marginal import Marginal2D, Table
+from gonio.brdf import Marginal2D, Table, rgl, tensor_file
 from gonio.errors import GonioError
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
-from gonio.radiometry.bands import LUMINANCE
-from gonio.store.read import Run
+from gonio.radiometry import LUMINANCE
+from gonio.store import Run
 from gonio.types import FloatArray, Surface
 
 if TYPE_CHECKING:

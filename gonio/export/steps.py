@@ -11,12 +11,11 @@ from contextlib import AbstractContextManager
 import numpy as np
 
 from gonio import progress
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.errors import GonioError
 from gonio.export import MIN_SUPPORTED
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.result import values_and_support
-from gonio.store.read import Run
+from gonio.reconstruct import reconstruction, values_and_support
+from gonio.store import Run
 from gonio.types import BoolArray, Evaluable, FloatArray, Surface
 
 #: Pairs evaluated at once by `evaluated`: each block advances its bar.

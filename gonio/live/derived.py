@@ -29,13 +29,12 @@ from typing import Any
 import numpy as np
 
 from gonio import params
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.brdf import BRDF
 from gonio.errors import GonioError
 from gonio.live.model import LiveRun
-from gonio.reconstruct import reconstruct
-from gonio.reconstruct.fit import fit
-from gonio.rig.model import Rig
+from gonio.reconstruct import fit, reconstruct
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 Values = Callable[[LiveRun, np.ndarray], tuple[FloatArray, FloatArray, str]]

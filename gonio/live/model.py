@@ -11,8 +11,7 @@ motor fault, an abort or a full disk: resumable too).
 
 from __future__ import annotations
 
-from gonio.store.follow import RunFollower, writer_holds
-from gonio.store.plan_view import PlanArrays, PlanInfo
+from gonio.store import PlanArrays, PlanInfo, RunFollower, writer_holds
 
 #: Outcomes of a session that ended on a fault (resumable all the same).
 _FAULTS = frozenset({"fault", "aborted", "journal"})

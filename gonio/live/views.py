@@ -12,12 +12,12 @@ from typing import Any
 import numpy as np
 import yaml
 
-from gonio.analysis.calibrated import calibration_series, is_level
+from gonio.analysis import calibration_series, is_level
 from gonio.brdf import BRDF
 from gonio.errors import GonioError
 from gonio.live.derived import Result, residuals, rounded
 from gonio.live.model import LiveRun
-from gonio.store.read import Event
+from gonio.store import Event
 from gonio.types import FloatArray
 
 #: Events the event log lists (health readings and calibrations have views of their own).

@@ -9,7 +9,10 @@ toward the light, radians, azimuths in [0, 2π). See docs/explanations/parametri
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from gonio.errors import UnknownNameError
+from gonio.faces import lazy_face
 from gonio.params.base import DOMAIN_TOLERANCE, Parametrization
 from gonio.params.hybrid import Hybrid
 from gonio.params.orthographic import Orthographic
@@ -36,4 +39,30 @@ def get(name: str) -> Parametrization:
         ) from None
 
 
-__all__ = ["DOMAIN_TOLERANCE", "Parametrization", "get", "names"]
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.params import cases as cases
+    from gonio.params.cases import NAMED_PAIRS as NAMED_PAIRS
+    from gonio.params.cases import direction as direction
+    from gonio.params.cases import roundtrip_error as roundtrip_error
+    from gonio.params.conditioning import condition_number as condition_number
+    from gonio.params.conditioning import pair_frame as pair_frame
+    from gonio.params.conditioning import singular_values as singular_values
+    from gonio.params.conditioning import tangent_jacobian as tangent_jacobian
+    from gonio.params.spherical import polar as polar
+
+#: The names of the face that load with their module when first used
+#: (`gonio.faces`), by module.
+WHERE = {
+    "NAMED_PAIRS": "cases",
+    "cases": "cases",
+    "condition_number": "conditioning",
+    "direction": "cases",
+    "pair_frame": "conditioning",
+    "polar": "spherical",
+    "roundtrip_error": "cases",
+    "singular_values": "conditioning",
+    "tangent_jacobian": "conditioning",
+}
+__all__ = ["DOMAIN_TOLERANCE", "Parametrization", "get", "names", *WHERE]
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = lazy_face(__name__, WHERE)

@@ -29,9 +29,9 @@ from scipy import ndimage
 from scipy.stats import qmc
 
 from gonio import params
-from gonio.brdf.base import LOG_FLOOR
+from gonio.brdf import LOG_FLOOR
 from gonio.directions import uniform_cap
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
 
 #: Cells per axis of the density grid, by dimension (3: isotropic, 4: anisotropic).

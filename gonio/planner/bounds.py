@@ -27,7 +27,7 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from gonio.planner.poses import Relaxed
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import FloatArray
 
 #: Pairs the staged Kruskal may hold in memory before it gives up on exactness.

@@ -33,8 +33,7 @@ from gonio.planner.ordering import (
 from gonio.planner.placement import directions, place, too_many
 from gonio.planner.poses import Relaxed
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason, Solution
+from gonio.rig import Reason, Rig, Solution
 from gonio.types import FloatArray
 
 #: Pairs the rig solves at a time.

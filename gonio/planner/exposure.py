@@ -9,7 +9,7 @@ import numpy as np
 from gonio.config import ConfigError, line_of, read_yaml
 from gonio.planner.schema import ExposureSpec, PlanSpec
 from gonio.radiometry import SourceKind, relative_geometry
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 

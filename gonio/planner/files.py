@@ -11,7 +11,7 @@ from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml
 from gonio.planner.builder import build
 from gonio.planner.model import Plan, content_hash
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ import numpy as np
 
 from gonio.planner.poses import choose
 from gonio.planner.search import path_time
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 #: Weights are written in this unit (s) and rounded to integers.

@@ -18,7 +18,7 @@ import numpy as np
 
 from gonio.planner.ordering import Ordering, Stop
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 #: Framing of `content_hash` (the version names the framing, not gonio's).

@@ -21,7 +21,7 @@ from gonio import progress
 from gonio.planner.jit import compiled
 from gonio.planner.moves import axis_time
 from gonio.planner.search import Metric
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 Ints = npt.NDArray[np.int64]

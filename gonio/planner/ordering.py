@@ -39,7 +39,7 @@ from gonio.planner.moves import EPSILON
 from gonio.planner.nearest import nearest_neighbour, nearest_others
 from gonio.planner.poses import Relaxed, choose
 from gonio.planner.search import Metric, Path, Stop, path_time
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 __all__ = [

@@ -14,7 +14,7 @@ from gonio import params, progress
 from gonio.config import ConfigError
 from gonio.planner import sampling
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 #: Sequence strategies draw in batches of this many points (a power of two for Sobol).

@@ -22,7 +22,7 @@ import numpy as np
 from gonio import progress
 from gonio.planner.jit import compiled
 from gonio.planner.nearest import nearest_others
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 TravelTime = Callable[[FloatArray, FloatArray], FloatArray]

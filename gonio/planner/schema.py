@@ -16,8 +16,7 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, model_validator
 
 from gonio import brdf, params
-from gonio.brdf import family
-from gonio.brdf.material import MaterialError, build, material_schema
+from gonio.brdf import MaterialError, build, family, material_schema
 from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.errors import GonioError

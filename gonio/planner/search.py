@@ -37,7 +37,7 @@ import numpy as np
 from gonio.planner.jit import compiled
 from gonio.planner.moves import EPSILON, Ints, cost, or_opt, times, two_opt, write
 from gonio.progress import Progress, Quiet
-from gonio.rig.travel import TravelModel
+from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
 #: Why a search stopped (only the last depends on the machine).

@@ -48,7 +48,7 @@ from gonio.planner.model import (
 )
 from gonio.planner.schema import PlanSpec
 from gonio.planner.sweeps_header import parse_sweeps, sweeps_header
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 
 #: The first line of every stored plan; the version names this layout.
 MAGIC = "# gonio-plan v1"

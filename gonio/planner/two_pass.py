@@ -30,7 +30,7 @@ from gonio.planner.model import Plan
 from gonio.planner.placement import draw_kept
 from gonio.planner.sampling import Sequence, to_box
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
 
 

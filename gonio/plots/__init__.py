@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from gonio.errors import GonioError
+from gonio.faces import lazy_face
 from gonio.types import BoolArray, FloatArray
 
 
@@ -143,12 +144,34 @@ def supported(surface: object, wi: FloatArray, wo: FloatArray) -> BoolArray:
     return np.asarray(fn(wi, wo), dtype=np.bool_).reshape(len(wi))
 
 
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.plots import error as error
+    from gonio.plots import polar as polar
+    from gonio.plots import samples as samples
+    from gonio.plots import slices as slices
+    from gonio.plots.coverage import plot_coverage as plot_coverage
+    from gonio.plots.polar import DEFAULT_THETA_I_DEG as DEFAULT_THETA_I_DEG
+    from gonio.plots.slices import DEFAULT_ANGLES_DEG as DEFAULT_ANGLES_DEG
+    from gonio.plots.slices import check_angles as check_angles
+
+#: The names of the face that load with their module when first used
+#: (`gonio.faces`), by module.
+WHERE = {
+    "DEFAULT_ANGLES_DEG": "slices",
+    "DEFAULT_THETA_I_DEG": "polar",
+    "check_angles": "slices",
+    "error": "error",
+    "plot_coverage": "coverage",
+    "polar": "polar",
+    "samples": "samples",
+    "slices": "slices",
+}
 __all__ = [
     "ANGLES",
     "DPI",
     "LABELS",
-    "SYMBOLS",
     "PlotUnavailable",
+    "SYMBOLS",
     "Surface",
     "check_figure_format",
     "drawn",
@@ -160,4 +183,7 @@ __all__ = [
     "supported",
     "symbol",
     "values",
+    *WHERE,
 ]
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = lazy_face(__name__, WHERE)

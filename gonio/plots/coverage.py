@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from gonio import params
-from gonio.planner.model import Plan
+from gonio.planner import Plan
 from gonio.plots import drawn, label, quantity, require_matplotlib, save, symbol
-from gonio.rig.solution import Reason
+from gonio.rig import Reason
 from gonio.types import FloatArray
 
 #: Pixels per side of each slice image.

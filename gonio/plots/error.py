@@ -30,8 +30,7 @@ from gonio.plots import (
     supported,
     values,
 )
-from gonio.reconstruct.metrics import REGIONS, Scores, region_masks, scores
-from gonio.reconstruct.testset import TestSet
+from gonio.reconstruct import REGIONS, Scores, TestSet, region_masks, scores
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 #: Bins per axis of the maps.

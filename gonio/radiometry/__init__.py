@@ -17,6 +17,9 @@ z = normal, pointing away from the surface: wi toward the light, wo toward the d
 Formulas, assumptions and measured accuracies: docs/explanations/radiometry.md.
 """
 
+from typing import TYPE_CHECKING
+
+from gonio.faces import lazy_face
 from gonio.radiometry.aperture import aperture_integral, cap_half_angle, weight_for
 from gonio.radiometry.calibration import ReferenceCalibration, relative_geometry
 from gonio.radiometry.footprint import footprint_fraction, seen_fits_sample
@@ -41,10 +44,26 @@ from gonio.radiometry.ideal import (
 )
 from gonio.radiometry.spatial import point_source_power, spot_ratio
 
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.radiometry.bands import LUMINANCE as LUMINANCE
+    from gonio.radiometry.bands import band_eval as band_eval
+    from gonio.radiometry.series import CalibrationSeries as CalibrationSeries
+    from gonio.radiometry.series import rounding_var as rounding_var
+    from gonio.radiometry.series import student_variance as student_variance
+
+#: The names of the face that load with their module when first used
+#: (`gonio.faces`), by module.
+WHERE = {
+    "CalibrationSeries": "series",
+    "LUMINANCE": "bands",
+    "band_eval": "bands",
+    "rounding_var": "series",
+    "student_variance": "series",
+}
 __all__ = [
-    "ELEMENTARY_CHARGE",
     "CollimatedSource",
     "DetectorOptics",
+    "ELEMENTARY_CHARGE",
     "PointSource",
     "ReferenceCalibration",
     "Source",
@@ -68,4 +87,7 @@ __all__ = [
     "spot_ratio",
     "view_weight",
     "weight_for",
+    *WHERE,
 ]
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = lazy_face(__name__, WHERE)

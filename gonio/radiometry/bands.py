@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gonio.brdf.base import BRDF
+from gonio.brdf import BRDF
 from gonio.types import BrdfEval
 
 #: Rec. 709 luminance weights: how a grey detector sees an RGB material.

@@ -29,7 +29,7 @@ import numpy as np
 
 from gonio.radiometry._checks import cosine, direction, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic, sector
-from gonio.rig.constraints import footprint_ok, view_on_sample
+from gonio.rig import footprint_ok, view_on_sample
 from gonio.types import ArrayLike, BoolArray, FloatArray
 
 #: cos θo floor for the seen ellipse (as in footprint_ok): a strip at exactly grazing

@@ -13,7 +13,7 @@ from typing import Protocol
 import numpy as np
 from scipy.spatial import QhullError
 
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.errors import GonioError, UnknownNameError
 from gonio.reconstruct import transforms
 from gonio.reconstruct.coordinates import Space, morton_order

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import BoolArray, FloatArray
 
 #: The default support distance in local nearest-neighbour spacings of the samples.

@@ -23,7 +23,7 @@ from gonio.reconstruct.metrics import METRICS, REGIONS, Scores, region_masks, sc
 from gonio.reconstruct.result import values_and_support
 from gonio.reconstruct.testset import TestSet
 from gonio.reconstruct.truth import Candidate, Truth
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 #: The row of every pair, before the regions.

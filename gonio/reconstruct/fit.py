@@ -28,11 +28,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from gonio.analysis.measured import Measured
-from gonio.analysis.shared import SharedError
-from gonio.brdf import BRDF
-from gonio.brdf.composite import spec_of
-from gonio.brdf.family import Family, parse
+from gonio.analysis import Measured, SharedError
+from gonio.brdf import BRDF, Family, parse, spec_of
 from gonio.errors import GonioError
 from gonio.reconstruct import regions as pair_regions
 from gonio.reconstruct.starts import starts as make_starts

@@ -15,7 +15,7 @@ from gonio.reconstruct.fit import fit
 from gonio.reconstruct.naive import NaiveReconstruction
 
 if TYPE_CHECKING:
-    from gonio.analysis.measured import Measured
+    from gonio.analysis import Measured
     from gonio.types import Surface
 
 #: The method of the naive reference (`gonio.reconstruct.naive`).

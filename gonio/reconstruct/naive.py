@@ -22,7 +22,7 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.ndimage import distance_transform_edt
 
 from gonio import params
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.errors import GonioError
 from gonio.types import BoolArray, FloatArray
 

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from gonio.brdf.geometry import pair
+from gonio.brdf import pair
 from gonio.types import ArrayLike, BoolArray
 
 #: Region names, in the order a pair is assigned to the first that holds it.

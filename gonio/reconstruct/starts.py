@@ -17,9 +17,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import nnls
 
-from gonio.analysis.measured import Measured
-from gonio.brdf.family import Family, Slot
-from gonio.brdf.geometry import pair
+from gonio.analysis import Measured
+from gonio.brdf import Family, Slot, pair
 from gonio.types import FloatArray
 
 #: Percentile of f taken as the diffuse level.

@@ -16,7 +16,7 @@ import numpy as np
 
 from gonio.directions import uniform_cap
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 #: Pairs in the default test set.

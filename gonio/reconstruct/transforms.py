@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gonio.brdf.base import LOG_FLOOR
+from gonio.brdf import LOG_FLOOR
 from gonio.errors import GonioError, UnknownNameError
 from gonio.types import BrdfEval, FloatArray
 

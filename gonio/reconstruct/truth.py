@@ -26,11 +26,10 @@ from typing import Any, Protocol
 import numpy as np
 import yaml
 
-from gonio.analysis.measured import Measured
-from gonio.brdf.base import BRDF
-from gonio.brdf.material import build
+from gonio.analysis import Measured
+from gonio.brdf import BRDF, build
 from gonio.errors import GonioError
-from gonio.radiometry.bands import band_eval
+from gonio.radiometry import band_eval
 from gonio.types import BoolArray, BrdfEval, FloatArray
 
 #: The default SPEC: the simulated run's own scene.

@@ -18,8 +18,7 @@ from typing import Literal
 
 import numpy as np
 
-from drivers.dynamixel.axis import AxisConfig
-from drivers.dynamixel.wire import step_seconds
+from drivers.dynamixel import AxisConfig, step_seconds
 from drivers.serial_detector import SerialDetectorConfig
 from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text

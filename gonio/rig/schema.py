@@ -12,8 +12,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from drivers.dynamixel.control_table import BAUD_RATES
-from drivers.dynamixel.models import MODEL_NAMES as MODELS
+from drivers.dynamixel import BAUD_RATES
+from drivers.dynamixel import MODEL_NAMES as MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.instrument import LENGTH_RANGE_MM, DetectorSpec, LightSpec, ReferenceSpec

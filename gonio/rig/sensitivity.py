@@ -41,9 +41,9 @@ from typing import Protocol
 
 import numpy as np
 
-from gonio.brdf.base import BRDF
+from gonio.brdf import BRDF
 from gonio.errors import DomainError
-from gonio.params.conditioning import pair_frame, tangent_jacobian
+from gonio.params import pair_frame, tangent_jacobian
 from gonio.rig.alignment_fit import as_alignment, stated_covariance, vector
 from gonio.rig.model import Rig
 from gonio.types import ArrayLike, FloatArray

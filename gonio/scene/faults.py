@@ -44,7 +44,7 @@ from pydantic import Field, field_validator, model_validator
 
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
-from gonio.rig.schema import JOINT_LIMIT_DEG
+from gonio.rig import JOINT_LIMIT_DEG
 
 FaultKind = Literal[
     "motor_fault",

@@ -25,7 +25,7 @@ from pydantic import (
     model_validator,
 )
 
-from gonio.brdf.material import MaterialSpec
+from gonio.brdf import MaterialSpec
 from gonio.config import ConfigError, Strict, field_error, load
 from gonio.rig import Rig
 from gonio.scene.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from gonio.planner.stored import parse_plan
+from gonio.planner import parse_plan
 from gonio.store import checks
 from gonio.store.journal import JournalError, check_version
 from gonio.store.plan_view import PlanArrays, PlanInfo, parse_in_background

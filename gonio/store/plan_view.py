@@ -17,9 +17,8 @@ from typing import Any
 import numpy as np
 
 from gonio.errors import GonioError
-from gonio.planner.model import Plan
-from gonio.planner.stored import parse_plan
-from gonio.rig.model import Rig
+from gonio.planner import Plan, parse_plan
+from gonio.rig import Rig
 from gonio.store import checks, readonly
 from gonio.store.read import check_plan, check_targets, decode_meta, refusing
 from gonio.types import FloatArray

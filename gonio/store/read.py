@@ -17,8 +17,7 @@ from typing import Any
 import numpy as np
 
 from gonio.config import ConfigError
-from gonio.planner.model import Plan
-from gonio.planner.stored import parse_plan
+from gonio.planner import Plan, parse_plan
 from gonio.store import checks, readonly
 from gonio.store.journal import JournalError, check_version
 from gonio.store.schema import (

@@ -33,14 +33,11 @@ from typing import Any
 import numpy as np
 
 from gonio import progress
-from gonio.analysis.measured import Measured
+from gonio.analysis import Measured
 from gonio.errors import GonioError
-from gonio.planner.model import Plan
-from gonio.planner.schema import PlanSpec, Warp
-from gonio.reconstruct import evaluate, reconstruct, testset
-from gonio.reconstruct.testset import TestSet
-from gonio.reconstruct.truth import SCENE, Truth, truth_from_spec
-from gonio.rig.model import Rig
+from gonio.planner import Plan, PlanSpec, Warp
+from gonio.reconstruct import SCENE, TestSet, Truth, evaluate, reconstruct, testset, truth_from_spec
+from gonio.rig import Rig
 from gonio.tradeoff.grid import sampling_fields
 from gonio.tradeoff.runner import fit_to_budget
 from gonio.tradeoff.spec import DEFAULT_WARPS, FLY, STOP, WARPED

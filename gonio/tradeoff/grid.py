@@ -27,10 +27,8 @@ from gonio.config import (
     read_yaml,
     spec_text,
 )
-from gonio.planner.fly.limits import blur_floor_deg
-from gonio.planner.schema import FlySpec, PlanSpec, Warp
-from gonio.rig.model import Rig
-from gonio.rig.schema import RigSpec
+from gonio.planner import FlySpec, PlanSpec, Warp, blur_floor_deg
+from gonio.rig import Rig, RigSpec
 from gonio.scene import EffectsSpec, load_scene
 from gonio.tradeoff.spec import (
     AXIS_NAMES,

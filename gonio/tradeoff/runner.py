@@ -20,22 +20,14 @@ from pathlib import Path
 from typing import Any
 
 from gonio import progress as planning
-from gonio.analysis.measured import Measured
-from gonio.analysis.summary import figures
+from gonio.analysis import Measured, figures
 from gonio.errors import GonioError
-from gonio.planner.builder import build
-from gonio.planner.model import Plan
-from gonio.planner.placement import MAX_TARGETS
-from gonio.planner.schema import PlanSpec
-from gonio.reconstruct import testset
-from gonio.reconstruct.evaluate import evaluate
-from gonio.reconstruct.methods import reconstruction
-from gonio.reconstruct.metrics import METRICS, REGIONS
-from gonio.reconstruct.testset import TestSet
-from gonio.rig.model import Rig
+from gonio.planner import MAX_TARGETS, Plan, PlanSpec, build
+from gonio.reconstruct import METRICS, REGIONS, TestSet, evaluate, reconstruction, testset
+from gonio.rig import Rig
 from gonio.scene import load_scene
 from gonio.tradeoff.grid import Task
-from gonio.workflows.simulate import simulate_plan
+from gonio.workflows import simulate_plan
 
 #: The figures of a row after its inputs: the target the plan asked (fitted under a
 #: time budget), counts, predicted and simulated instrument time (s), why the ordering

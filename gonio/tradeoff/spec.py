@@ -19,23 +19,21 @@ from pydantic.config import JsonDict
 from gonio import params
 from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
-from gonio.planner.placement import MAX_TARGETS, WHY_MAX_TARGETS
-from gonio.planner.policies import AcquisitionSpec
-from gonio.planner.schema import (
+from gonio.planner import (
     MAX_KICKS_GIVEN,
     MAX_MOVES,
     MAX_PLAN_MINUTES,
+    MAX_TARGETS,
     MIN_BLUR_DEG,
     MIN_RATE_HZ,
+    WHY_MAX_TARGETS,
+    AcquisitionSpec,
     AdaptiveSpec,
     PlanSpec,
     Strategy,
     Warp,
 )
-from gonio.reconstruct import methods
-from gonio.reconstruct.evaluate import DEFAULT_FILL
-from gonio.reconstruct.metrics import METRICS
-from gonio.reconstruct.testset import DEFAULT_SEED, DEFAULT_SIZE
+from gonio.reconstruct import DEFAULT_FILL, DEFAULT_SEED, DEFAULT_SIZE, METRICS, methods
 from gonio.scene import EffectsSpec
 
 #: Strategies a sweep may name: the planner's own, and ``warped`` (Sobol with the

@@ -12,7 +12,7 @@ from typing import Any
 
 from gonio.config import spec_text
 from gonio.output import reserve_output
-from gonio.planner.schema import PlanSpec
+from gonio.planner import PlanSpec
 from gonio.tradeoff.grid import Sweep
 from gonio.tradeoff.plots import slug
 

@@ -8,9 +8,8 @@ pairs, never the reconstruction that made it.
 
 from __future__ import annotations
 
-from gonio.analysis.measured import Measured
-from gonio.reconstruct.build import reconstruct
-from gonio.reconstruct.fit import fit
+from gonio.analysis import Measured
+from gonio.reconstruct import fit, reconstruct
 from gonio.types import BrdfEval
 
 #: The ``model`` that steers by the survey's own reconstruction instead of a fit.

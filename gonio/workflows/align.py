@@ -35,8 +35,7 @@ from drivers.devices import Devices
 from drivers.stream import can_stream
 from gonio.acquire import TargetReading, measure_target
 from gonio.errors import GonioError
-from gonio.rig import Rig
-from gonio.rig.alignment_fit import peak_at
+from gonio.rig import Rig, peak_at
 from gonio.scene import Scene
 from gonio.types import FloatArray
 from gonio.workflows import align_fly, backends

@@ -9,8 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.rig import Rig
-from gonio.rig.alignment_fit import as_alignment, miss, stated_covariance, vector
+from gonio.rig import Rig, as_alignment, miss, stated_covariance, vector
 from gonio.types import FloatArray
 from gonio.workflows.align import PEAK_SIGMA_DEG
 

@@ -30,10 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.devices import Devices
-from gonio.acquire.fly import poll_arrays, run_sweep
+from gonio.acquire import poll_arrays, run_sweep
 from gonio.errors import GonioError
-from gonio.planner.blur import blur_budget_of_width
-from gonio.planner.model import Sweeps
+from gonio.planner import Sweeps, blur_budget_of_width
 from gonio.rig import Rig
 from gonio.types import FloatArray
 

@@ -23,17 +23,14 @@ from typing import IO, Literal
 from drivers.base import Clock, StageTarget, SystemClock
 from drivers.devices import Devices
 from drivers.dynamixel.bus import DynamixelBus
-from gonio.acquire.reference import Stage
-from gonio.acquire.runtime import RunTime, wall_offset
+from gonio.acquire import RunTime, Stage, wall_offset
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import Scene
 from gonio.workflows.hardware import hardware_devices
 from gonio.workflows.rehearsal import rehearsal_devices
 from sim.rehearsal import RehearsalSide
-from sim.virtual.devices.detector import SimDetector, SimLightSource
-from sim.virtual.devices.instrument import SimulatedInstrument
-from sim.virtual.physics.streams import Streams
+from sim.virtual import SimDetector, SimLightSource, SimulatedInstrument, Streams
 
 BackendKind = Literal["simulated", "hardware", "rehearsal"]
 

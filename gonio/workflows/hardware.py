@@ -20,9 +20,7 @@ from drivers.dynamixel.bus import DynamixelBus
 from drivers.light.serial_switch import SerialLightSwitch
 from drivers.serial_detector.detector import SerialDetector
 from gonio.config import ConfigError
-from gonio.rig.instrument import SerialSwitchSpec
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
-from gonio.rig.model import Rig
+from gonio.rig import PyMeasureInterfaceSpec, Rig, SerialSwitchSpec
 
 if TYPE_CHECKING:
     from drivers.pymeasure.detector import PyMeasureDetector

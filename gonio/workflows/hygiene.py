@@ -15,7 +15,7 @@ from typing import IO
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.hygiene import Finding, blocking, check_bus
 from gonio.errors import GonioError
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.workflows.backends import Backend
 
 __all__ = ["Finding", "backend_findings", "rig_findings", "warn"]

@@ -18,14 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from drivers.base import dark_subtracted, reading_unit
-from gonio.acquire.reference import geometry_label, reference_pose
+from gonio.acquire import geometry_label, reference_pose
 from gonio.config import ConfigError
 from gonio.errors import GonioError
 from gonio.output import refuse_inputs
-from gonio.planner.model import Plan, content_hash, sha256
-from gonio.planner.schema import PlanSpec
-from gonio.rig.instrument import SerialInterfaceSpec
-from gonio.rig.model import Rig
+from gonio.planner import Plan, PlanSpec, content_hash, sha256
+from gonio.rig import Rig, SerialInterfaceSpec
 from gonio.scene import Scene
 from gonio.workflows import backends, hygiene, stream_check
 from gonio.workflows.backends import BackendKind

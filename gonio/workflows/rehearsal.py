@@ -14,9 +14,7 @@ from contextlib import ExitStack, contextmanager
 
 from drivers.base import Detector, LightSource
 from drivers.devices import Devices
-from gonio.rig.instrument import SerialSwitchSpec
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
-from gonio.rig.model import Rig
+from gonio.rig import PyMeasureInterfaceSpec, Rig, SerialSwitchSpec
 from gonio.scene import Scene
 from gonio.workflows.hardware import (
     dynamixel_bus,
@@ -35,8 +33,7 @@ from sim.rehearsal import (
     lamp_for,
     photometer_for,
 )
-from sim.virtual.devices.detector import LightState, SimDetector, SimLightSource
-from sim.virtual.physics.streams import Streams
+from sim.virtual import LightState, SimDetector, SimLightSource, Streams
 
 
 @contextmanager

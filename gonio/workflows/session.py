@@ -29,22 +29,14 @@ import numpy as np
 
 from drivers.errors import DriverError
 from gonio import __version__
-from gonio.acquire.ending import Report
-from gonio.acquire.engine import Engine
-from gonio.acquire.observer import Observer, Unobserved
-from gonio.acquire.runtime import utc_now
-from gonio.acquire.signals import StopRequests
-from gonio.analysis.measured import Measured
+from gonio.acquire import Engine, Observer, Report, StopRequests, Unobserved, utc_now
+from gonio.analysis import Measured
 from gonio.config import ConfigError, load, read_bytes
 from gonio.errors import GonioError
-from gonio.planner.model import Plan, sha256
-from gonio.planner.stored import parse_plan, plan_bytes
-from gonio.planner.two_pass import Survey, extend
-from gonio.rig.model import Rig, named_alignment
-from gonio.rig.schema import RigSpec
+from gonio.planner import Plan, Survey, extend, parse_plan, plan_bytes, sha256
+from gonio.rig import Rig, RigSpec, named_alignment
 from gonio.scene import Scene, load_scene
-from gonio.store.journal import Journal, JournalError, remove_run_file
-from gonio.store.read import Run, read_run
+from gonio.store import Journal, JournalError, Run, read_run, remove_run_file
 from gonio.workflows import backends, hygiene
 from gonio.workflows.adaptive import estimate
 from gonio.workflows.backends import BackendKind

@@ -16,15 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from gonio.acquire.ending import Report
-from gonio.acquire.observer import Observer
-from gonio.analysis.calibrated import Calibrated, calibrate
-from gonio.analysis.summary import measured_pairs, truth_of
+from gonio.acquire import Observer, Report
+from gonio.analysis import Calibrated, calibrate, measured_pairs, truth_of
 from gonio.config import spec_text
 from gonio.errors import GonioError
-from gonio.planner.model import Plan
+from gonio.planner import Plan
 from gonio.scene import Scene
-from gonio.store.read import Run
+from gonio.store import Run
 from gonio.types import FloatArray
 from gonio.workflows import session
 from gonio.workflows.preflight import Files

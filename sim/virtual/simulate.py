@@ -16,7 +16,7 @@ from typing import Protocol
 import numpy as np
 
 from drivers.base import StageTarget
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import Scene
 from gonio.types import FloatArray
 from sim.virtual.devices.detector import sensor_of

@@ -32,9 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gonio.brdf import BRDF, create
 from gonio.brdf import microfacet as mf
-from gonio.brdf.base import BRDF
-from gonio.brdf.registry import create
 from gonio.errors import DomainError
 from gonio.types import ArrayLike, BoolArray, FloatArray
 

@@ -10,10 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gonio.brdf.base import BRDF
-from gonio.brdf.models import blinn_normalization
-from gonio.brdf.quadrature import directional_albedo
-from gonio.brdf.registry import create
+from gonio.brdf import BRDF, blinn_normalization, create, directional_albedo
 
 #: Gold-like complex index at roughly 650, 550 and 450 nm (illustrative values).
 GOLD_IOR = (0.18, 0.42, 1.37)

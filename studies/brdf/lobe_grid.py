@@ -13,8 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gonio.brdf import lobes
-from gonio.brdf.lobe_errors import K_PRINTED, Lobe
+from gonio.brdf import K_PRINTED, Lobe, lobes
 from gonio.types import ArrayLike, FloatArray
 
 

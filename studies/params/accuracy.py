@@ -17,8 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.params import cases, get
-from gonio.params.conditioning import condition_number, singular_values, tangent_jacobian
+from gonio.params import cases, condition_number, get, singular_values, tangent_jacobian
 from gonio.types import FloatArray
 from studies.params import exact
 

@@ -17,14 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gonio import params
-from gonio.analysis.measured import Measured
-from gonio.planner.choice import MARGIN, Choice
-from gonio.planner.placement import directions, place
-from gonio.planner.schema import PlanSpec
-from gonio.planner.two_pass import Survey, second_pass
-from gonio.rig.model import Rig
+from gonio.analysis import Measured
+from gonio.planner import MARGIN, Choice, PlanSpec, Survey, directions, place, second_pass
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
-from gonio.workflows.adaptive import estimate
+from gonio.workflows import estimate
 
 if TYPE_CHECKING:
     from collections.abc import Mapping

@@ -12,8 +12,8 @@ import numpy as np
 from scipy.stats import qmc
 
 from gonio import params
-from gonio.analysis.measured import Measured
-from gonio.rig.model import Rig
+from gonio.analysis import Measured
+from gonio.rig import Rig
 from gonio.types import BrdfEval, FloatArray
 
 

@@ -30,10 +30,9 @@ from gonio.acquire.observer import Observer
 from gonio.acquire.recovery import MotorRecovery
 from gonio.acquire.runtime import RunTime
 from gonio.acquire.signals import StopRequests
-from gonio.planner.model import Plan
-from gonio.planner.policies import AcquisitionSpec
-from gonio.rig.model import Rig
-from gonio.store.journal import Journal
+from gonio.planner import AcquisitionSpec, Plan
+from gonio.rig import Rig
+from gonio.store import Journal
 from gonio.types import FloatArray
 
 

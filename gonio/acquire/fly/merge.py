@@ -44,7 +44,7 @@ import numpy as np
 
 from drivers.stream import StreamReading
 from drivers.values import StampedPositions
-from gonio.planner.model import Sweeps
+from gonio.planner import Sweeps
 from gonio.types import FloatArray
 
 #: A poll whose request-to-reply span exceeds this many times the sweep's median is not

@@ -24,7 +24,7 @@ from drivers.stream import StreamReading, restamped, streaming
 from drivers.trajectory import Trajectory
 from drivers.values import StampedPositions
 from gonio.acquire.fly.merge import RawSweep
-from gonio.planner.model import Sweeps
+from gonio.planner import Sweeps
 
 
 def run_sweep(

@@ -40,7 +40,7 @@ from gonio.planner.model import FlyFigures, Plan, Summary, Sweeps
 from gonio.planner.ordering import Joint, default_kicks, default_moves, order_jointly
 from gonio.planner.poses import choose
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from gonio.planner import placement, sampling
 from gonio.planner.fly.lines import box
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 #: Sobol points (kept where the rig reaches them) standing for the uniform density.

@@ -23,8 +23,7 @@ from pathlib import Path
 from gonio.config import ConfigError
 from gonio.planner.fly.lines import sweep_axis
 from gonio.planner.schema import FlySpec, PlanSpec
-from gonio.rig.model import Rig
-from gonio.rig.sensitivity import axis_errors
+from gonio.rig import Rig, axis_errors
 
 #: Peak memory (bytes) of planning per reading asked: at most 0.7 KB measured on the
 #: shipped arcs and θh lines at 200 000 readings (the streamed readings the thinning or

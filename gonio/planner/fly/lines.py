@@ -34,9 +34,7 @@ from gonio import params
 from gonio.config import ConfigError
 from gonio.planner import placement, sampling
 from gonio.planner.schema import FlySpec, PlanSpec
-from gonio.rig.constraints import separation
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason
+from gonio.rig import Reason, Rig, separation
 from gonio.types import FloatArray
 
 #: Anchor points drawn per batch (a power of two for Sobol).

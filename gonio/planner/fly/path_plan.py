@@ -50,8 +50,7 @@ from gonio.planner.fly.paths import (
 from gonio.planner.model import Plan, Sweeps
 from gonio.planner.ordering import nearest_neighbour
 from gonio.planner.schema import PlanSpec
-from gonio.rig.constraints import separation
-from gonio.rig.model import Rig
+from gonio.rig import Rig, separation
 from gonio.types import FloatArray
 
 #: A segment's forward trajectory, its θh per set-point and its readings.

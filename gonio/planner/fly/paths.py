@@ -33,13 +33,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.dynamixel.wire import setpoint_period
+from drivers.dynamixel import setpoint_period
 from drivers.errors import LimitError
 from drivers.trajectory import Trajectory, check_trajectory
 from gonio.planner.poses import choose
-from gonio.rig.constraints import separation
-from gonio.rig.model import Rig
-from gonio.rig.solution import Reason
+from gonio.rig import Reason, Rig, separation
 from gonio.types import FloatArray
 
 #: Step (rad) of θh on which a line's poses and rates are solved.

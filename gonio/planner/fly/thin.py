@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 from gonio.config import ConfigError
 from gonio.planner.fly.lines import ANCHOR_GAP, Laid, box, lay_out, plan_coords, sweep_axis
 from gonio.planner.schema import PlanSpec
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.types import FloatArray
 
 #: The refusal reason of readings the coverage thinning left out (streamed, not targets).

@@ -21,8 +21,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from gonio.rig import Rig
-from gonio.rig.instrument import SerialInterfaceSpec
+from gonio.rig import Rig, SerialInterfaceSpec
 from gonio.workflows.stream_check.figures import REQUIREMENTS, Limits, Requirement
 
 #: The verdict of ``RIG.yaml`` is ``RIG`` + this, in the same folder.

@@ -27,8 +27,7 @@ from dataclasses import dataclass, field
 from types import FrameType, TracebackType
 from typing import Self
 
-from drivers.dynamixel.control_table import BAUD_RATES
-from drivers.dynamixel.models import MODEL_NAMES, model_number
+from drivers.dynamixel import BAUD_RATES, MODEL_NAMES, model_number
 from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.peers.dynamixel.faults import Fault, FaultBook
 from sim.peers.dynamixel.instructions import FastChain, Reply, Response, handle

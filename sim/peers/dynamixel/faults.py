@@ -15,7 +15,7 @@ import random
 from dataclasses import dataclass
 from enum import Enum
 
-from drivers.dynamixel.control_table import HARDWARE_ERROR_BITS
+from drivers.dynamixel import HARDWARE_ERROR_BITS
 from sim.peers.dynamixel.instructions import FastChain, Response, fast_chain_bytes
 from sim.peers.dynamixel.motor import EmulatedMotor
 from sim.peers.dynamixel.protocol import status_packet

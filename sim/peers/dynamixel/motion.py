@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 from enum import IntEnum
 
-from drivers.dynamixel.control_table import TICKS_PER_REV
+from drivers.dynamixel import TICKS_PER_REV
 
 #: One Profile/Present Velocity unit (0.229 rev/min) in ticks/s.
 TICKS_PER_S_PER_VELOCITY_UNIT = 0.229 * TICKS_PER_REV / 60.0

@@ -30,7 +30,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 
-from drivers.dynamixel.control_table import (
+from drivers.dynamixel import (
     BAUD_RATES,
     DRIVE_MODE_REVERSE,
     EEPROM_END,

@@ -29,12 +29,7 @@ Items are checked in the order the packet reaches them and the first error wins.
 
 from __future__ import annotations
 
-from drivers.dynamixel.control_table import (
-    EXTENDED_POSITION_LIMIT,
-    OPERATING_MODES,
-    Area,
-    Item,
-)
+from drivers.dynamixel import EXTENDED_POSITION_LIMIT, OPERATING_MODES, Area, Item
 from sim.peers.dynamixel.protocol import StatusError
 from sim.peers.dynamixel.table import Table
 

@@ -15,8 +15,7 @@ of the table) may be mapped. How an emulated motor resolves the slots is in
 
 from __future__ import annotations
 
-from drivers.dynamixel.control_table import Item
-from drivers.dynamixel.models import DEFAULT_MODEL, Model, model
+from drivers.dynamixel import DEFAULT_MODEL, Item, Model, model
 
 #: The RAM items a Control Table Backup keeps besides the whole EEPROM area (e-manual,
 #: Protocol 2.0, "Control Table Backup"): velocity PI and position PID gains, the

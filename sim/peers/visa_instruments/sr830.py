@@ -21,7 +21,7 @@ import math
 from collections.abc import Callable
 from types import MappingProxyType
 
-from drivers.pymeasure.config import SETTLE_TAU
+from drivers.pymeasure import SETTLE_TAU
 from sim.peers.visa_instruments.base import Signal
 from sim.peers.visa_instruments.registers import (
     MISSING_PARAMETER,

@@ -36,11 +36,10 @@ import numpy as np
 from drivers.base import Clock, StageTarget
 from drivers.devices import Resource
 from drivers.errors import DetectorError, DeviceClosed, StreamNotSupported
-from drivers.pymeasure.config import PyMeasureDetectorConfig
+from drivers.pymeasure import PyMeasureDetectorConfig
 from drivers.stream import StreamReading
 from drivers.values import Reading
-from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
-from gonio.rig.model import Rig
+from gonio.rig import PyMeasureInterfaceSpec, Rig
 from gonio.scene import STREAM_GAP, STREAM_GAP_FROM, Scene
 from sim.virtual.faults import FaultInjector
 from sim.virtual.physics import lockin, sensor

@@ -17,7 +17,7 @@ import numpy as np
 
 from drivers.base import StageTarget
 from drivers.devices import Devices, Resource
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import Scene
 from sim.clock import ManualClock
 from sim.virtual.devices.detector import SimDetector, SimLightSource

@@ -42,7 +42,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from drivers.devices import Resource
-from drivers.dynamixel.wire import BITS_PER_BYTE, poll_seconds, sync_write_bytes
+from drivers.dynamixel import BITS_PER_BYTE, poll_seconds, sync_write_bytes
 from drivers.errors import (
     DeviceClosed,
     DriverError,
@@ -59,7 +59,7 @@ from drivers.trajectory import (
     tracking_error,
 )
 from drivers.values import Health, Recovered, StampedPositions
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import FaultRule, PositionErrorSpec
 from gonio.types import FloatArray
 from sim.clock import ManualClock

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gonio.rig.model import Rig
+from gonio.rig import Rig
 from gonio.scene import PositionErrorSpec, Scene
 from gonio.types import FloatArray
 from sim.virtual.physics import streams as streams_module

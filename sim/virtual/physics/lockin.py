@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.pymeasure.config import SETTLE_TAU, settle_tau
+from drivers.pymeasure import SETTLE_TAU, settle_tau
 from gonio.radiometry import ELEMENTARY_CHARGE
 from gonio.scene import DetectorSpec
 from gonio.types import FloatArray

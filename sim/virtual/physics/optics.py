@@ -36,8 +36,8 @@ import numpy as np
 
 from drivers.base import StageTarget
 from gonio import brdf, radiometry
-from gonio.radiometry.bands import band_eval
-from gonio.rig.model import Rig
+from gonio.radiometry import band_eval
+from gonio.rig import Rig
 from gonio.scene import Scene
 from gonio.types import BrdfEval, FloatArray
 
