@@ -85,7 +85,7 @@ def test_a_refused_figure_write_leaves_the_old_file_whole(
         Path(path).write_bytes(b"\x89PNG half")
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr("gonio.plots.coverage.plot_coverage", half_then_full)
+    monkeypatch.setattr("gonio.plots.plot_coverage", half_then_full)  # as gonio plan finds it
     r = run_gonio("plan", SMALL, "--plot", str(old))
     assert r.returncode == 2
     assert r.stderr == (
