@@ -71,7 +71,7 @@ from gonio.rig.alignment_fit import miss, parameters, vector
 from gonio.rig.alignment_spec import AlignmentSpec
 from gonio.scene import Scene, load_scene
 from gonio.types import FloatArray
-from gonio.workflows.align import ScanSettings, nominal_poses, reachable
+from gonio.workflows.align_plan import ScanSettings, nominal_poses, reachable
 from gonio.workflows.simulate import simulate_plan
 
 ROOT = Path(__file__).resolve().parents[1]

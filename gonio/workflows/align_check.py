@@ -12,7 +12,7 @@ import numpy as np
 from gonio.rig import Rig
 from gonio.rig.alignment_fit import as_alignment, miss, stated_covariance, vector
 from gonio.types import FloatArray
-from gonio.workflows.align import PEAK_SIGMA_DEG
+from gonio.workflows.align_plan import PEAK_SIGMA_DEG
 
 
 @dataclass(frozen=True)
