@@ -34,8 +34,12 @@ class StreamReading:
     ``started_s`` / ``ended_s`` the integration window on the host's clock (s),
     ``saturated`` whether the window hit the full scale, ``device_t_s`` the device's
     own timestamp of the window's end (s on the device's clock) when it sends one, else
-    None, and ``received_s`` when the host received the reading (s on the host's clock;
-    ``received_s − ended_s`` is the latency the stamps assume).
+    None, ``received_s`` when the host received the reading (s on the host's clock;
+    ``received_s − ended_s`` is the latency the stamps assume), and ``earliest_end_s`` the
+    earliest the window can have ended on the host's clock when the driver knows a bound
+    (a device whose first window begins when its start command arrives: not before the
+    command left), else None. The window's true end lies between ``earliest_end_s`` and
+    ``received_s``.
     """
 
     value: float
@@ -45,6 +49,7 @@ class StreamReading:
     saturated: bool = False
     device_t_s: float | None = None
     received_s: float | None = None
+    earliest_end_s: float | None = None
 
     @property
     def middle_s(self) -> float:

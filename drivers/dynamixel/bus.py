@@ -45,30 +45,17 @@ from drivers.base import Clock, SystemClock
 from drivers.devices import Resource
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.condition import Condition, ConditionContext
-from drivers.dynamixel.control_table import (
-    FACTORY_BAUD,
-    RAD_S_PER_VELOCITY_UNIT,
-    item,
-)
+from drivers.dynamixel.control_table import FACTORY_BAUD, RAD_S_PER_VELOCITY_UNIT
 from drivers.dynamixel.follow import SetpointPlan, SetpointStream
+from drivers.dynamixel.goals import Goals
 from drivers.dynamixel.link import DynamixelLink
 from drivers.dynamixel.owed import LateCounts
 from drivers.dynamixel.setup import MotorSetup, axis_named
 from drivers.dynamixel.wire import SETTLE_POLL_INTERVAL_S
-from drivers.errors import (
-    MOTION_FAULTS,
-    CommError,
-    DeviceClosed,
-    DriverError,
-    MotionTimeout,
-    TorqueOff,
-)
+from drivers.errors import MOTION_FAULTS, DeviceClosed, DriverError, TorqueOff
 from drivers.sweep import sweep_profile
 from drivers.trajectory import SETTLE_TIMEOUT_S, Followed, Trajectory
 from drivers.values import Health, Recovered, StampedPositions
-
-_MOVING = item("moving")
-_PRESENT = item("present_position")
 
 
 class DynamixelBus(Resource):
@@ -82,8 +69,10 @@ class DynamixelBus(Resource):
     ``clock`` stamps `poll_positions` and paces `wait_settled`'s polls (default the
     host's monotonic clock; a rehearsal passes its run's scaled clock, the motion's).
 
-    It holds the configuration it gives its motors (`drivers.dynamixel.setup`) and its
-    condition and recovery (`drivers.dynamixel.condition`).
+    It holds the configuration it gives its motors (`drivers.dynamixel.setup`), its
+    axes' goals and the reads that compare the axes with them (`drivers.dynamixel.goals`),
+    its set-point stream (`drivers.dynamixel.follow`) and its condition and recovery
+    (`drivers.dynamixel.condition`).
     """
 
     def __init__(
@@ -121,13 +110,13 @@ class DynamixelBus(Resource):
         self.reboot_timeout_s = reboot_timeout_s
         self.clock: Clock = clock if clock is not None else SystemClock()
         self.models: dict[str, str] = {}
-        self._goals: dict[str, int] = {}
+        self._goals = Goals(self._link, self._axes)
         self._torque_on = False
         #: Motors running a sweep's profile: the next `move_to` restores the configured one.
         self._swept: set[int] = set()
         self._setup = MotorSetup(self._link, self._axes)
         self._condition = Condition(
-            ConditionContext(self._link, self._axes, hold=self._hold, restore=self._restore)
+            ConditionContext(self._link, self._axes, hold=self._goals.hold, restore=self._restore)
         )
 
     # -- lifecycle ---------------------------------------------------------------------
@@ -253,13 +242,7 @@ class DynamixelBus(Resource):
             if self._swept:
                 self._setup.write_profiles(sorted(self._swept))
                 self._swept.clear()
-            self._send_goals(goals)
-
-    def _send_goals(self, goals: Mapping[str, int]) -> None:
-        self._link.sync_write(
-            "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
-        )
-        self._goals.update(goals)
+            self._goals.send(goals)
 
     def _goal_ticks(self, targets: Mapping[str, float]) -> dict[str, int]:
         """Goal registers of ``targets`` (rad); `LimitError` / `DriverError` first."""
@@ -310,7 +293,7 @@ class DynamixelBus(Resource):
             link = self._link
             link.sync_write("profile_acceleration", {m: r[1] for m, r in registers.items()})
             link.sync_write("profile_velocity", {m: r[0] for m, r in registers.items()})
-            self._send_goals(goals)
+            self._goals.send(goals)
         return commanded
 
     def follow(
@@ -329,33 +312,21 @@ class DynamixelBus(Resource):
         if not self._torque_on:
             raise TorqueOff("torque is off: call torque(True) before moving; nothing was sent")
         with self._holding_on_fault():
-            plan.check_start(self._state(), self.settle_ticks)
+            plan.check_start(self._goals.state(), self.settle_ticks)
         with self._holding_on_fault(BaseException):
             self._swept.update(plan.motor_ids)
-            self._goals.update(plan.last_goals())
+            self._goals.ticks.update(plan.last_goals())
             followed = self._stream.run(plan, self.clock, self.poll_positions, on_poll)
-            self._wait_settled(SETTLE_TIMEOUT_S)
-        return dataclasses.replace(followed, ended_s=self.clock.now())
-
-    def _state(self) -> dict[str, tuple[bool, int]]:
-        """{axis: (moving, present ticks)} from one SYNC_READ of Moving … Present Position."""
-        ids = [a.motor_id for a in self._axes.values()]
-        raw = self._link.sync_read(ids, _MOVING.name, _PRESENT.name)
-        offset = _PRESENT.address - _MOVING.address
-        out = {}
-        for name, axis in self._axes.items():
-            data = raw[axis.motor_id]
-            out[name] = (
-                bool(data[0]),
-                _PRESENT.decode(data[offset : offset + _PRESENT.size]),
+            self._goals.wait_settled(
+                SETTLE_TIMEOUT_S, self.clock, self.settle_ticks, self.poll_interval_s
             )
-        return out
+        return dataclasses.replace(followed, ended_s=self.clock.now())
 
     def positions(self) -> dict[str, float]:
         """Axis angles (rad) read back from the motors."""
         self._check_open()
         with self._holding_on_fault():
-            state = self._state()
+            state = self._goals.state()
         return {name: self._axes[name].to_rad(ticks) for name, (_, ticks) in state.items()}
 
     def poll_positions(self) -> StampedPositions:
@@ -364,21 +335,8 @@ class DynamixelBus(Resource):
         (the successful attempt's, after a retry). Safe while moving; `MotorFault` and
         `CommError` hold every answering axis before they propagate."""
         self._check_open()
-        ids = [a.motor_id for a in self._axes.values()]
         with self._holding_on_fault():
-            raw, request_s, reply_s = self._link.sync_read_stamped(
-                ids, _PRESENT.name, _PRESENT.name, self.clock.now
-            )
-        ticks = {name: _PRESENT.decode(raw[axis.motor_id]) for name, axis in self._axes.items()}
-        arrived = all(
-            abs(t - self._goals.get(name, t)) <= self.settle_ticks for name, t in ticks.items()
-        )
-        return StampedPositions(
-            {name: self._axes[name].to_rad(t) for name, t in ticks.items()},
-            request_s,
-            reply_s,
-            arrived,
-        )
+            return self._goals.poll(self.clock, self.settle_ticks)
 
     def wait_settled(self, timeout_s: float) -> None:
         """Return once no axis is moving and each is within ``settle_ticks`` of its goal
@@ -390,31 +348,7 @@ class DynamixelBus(Resource):
         """
         self._check_open()
         with self._holding_on_fault():
-            self._wait_settled(timeout_s)
-
-    def _wait_settled(self, timeout_s: float) -> None:
-        # On the motion's clock, as the polls are paced: a rehearsal's scaled time, a
-        # test's manual one (on the host's clock, a fast host polled a manual clock past
-        # the motion's end before the timeout).
-        deadline = self.clock.now() + timeout_s
-        while True:
-            state = self._state()
-            pending = {
-                name: (moving, ticks - self._goals.get(name, ticks))
-                for name, (moving, ticks) in state.items()
-                if moving or abs(ticks - self._goals.get(name, ticks)) > self.settle_ticks
-            }
-            if not pending:
-                return
-            if self.clock.now() >= deadline:
-                detail = ", ".join(
-                    f"{n} {'moving' if m else 'stopped'} {abs(d)} ticks from its goal"
-                    for n, (m, d) in pending.items()
-                )
-                raise MotionTimeout(
-                    f"axes did not settle within {timeout_s:g} s ({detail}); holding them"
-                )
-            self.clock.sleep(self.poll_interval_s)  # the motion's time: a rehearsal's scaled
+            self._goals.wait_settled(timeout_s, self.clock, self.settle_ticks, self.poll_interval_s)
 
     def stop(self) -> None:
         """Hold every axis that answers at its present position (clamped to its limits).
@@ -425,41 +359,7 @@ class DynamixelBus(Resource):
         names any axis that could not be held. Never raises `MotorFault`.
         """
         self._check_open()
-        self._hold(list(self._axes))
-
-    def _hold(self, names: Sequence[str]) -> dict[str, int]:
-        """Goal := present position (within limits) for ``names``, in one SYNC_WRITE; the
-        goals (ticks)."""
-        axes = [self._axes[n] for n in names]
-        present: dict[str, int] = {}
-        missing: dict[str, DriverError] = {}
-        try:
-            raw = self._link.sync_read(
-                [a.motor_id for a in axes], _PRESENT.name, _PRESENT.name, alerts=False
-            )
-            present = {a.name: _PRESENT.decode(raw[a.motor_id]) for a in axes}
-        except DriverError:
-            for axis in axes:  # hold whoever answers
-                try:
-                    present[axis.name] = self._link.read(axis.motor_id, _PRESENT.name, alerts=False)
-                except DriverError as exc:
-                    missing[axis.name] = exc
-        goals = {name: self._axes[name].clamp_ticks(ticks) for name, ticks in present.items()}
-        if goals:
-            self._link.sync_write(
-                "goal_position", {self._axes[n].motor_id: t for n, t in goals.items()}
-            )
-            self._goals.update(goals)
-        if missing:
-            first, cause = next(iter(missing.items()))
-            raise CommError(
-                f"could not hold {', '.join(missing)} (may still be moving; "
-                f"{', '.join(goals) or 'no other axis'} held): {cause}",
-                port=self.port,
-                motor_id=self._axes[first].motor_id,
-                result=cause.result if isinstance(cause, CommError) else None,
-            )
-        return goals
+        self._goals.hold(list(self._axes))
 
     def torque(self, on: bool) -> None:
         """Enable (after setting each goal to the present position) or disable torque."""

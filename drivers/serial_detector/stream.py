@@ -283,9 +283,11 @@ class Streaming:
         readings = []
         for value, std, saturated, device_t, received, clock in parsed:
             end = clock + stream.offset_s - cfg.latency_s
+            earliest = None
             if cfg.starts_on_command:  # between the start command's bounds
+                earliest = clock + stream.start_offset_s
                 end = min(end, clock + stream.ack_offset_s - cfg.latency_s)
-                end = max(end, clock + stream.start_offset_s)
+                end = max(end, earliest)
             end = max(end, stream.prev_ended + stream.integration_s)
             stream.prev_ended = end
             readings.append(
@@ -297,6 +299,7 @@ class Streaming:
                     saturated=saturated,
                     device_t_s=device_t,
                     received_s=received,
+                    earliest_end_s=earliest,
                 )
             )
         return readings

@@ -24,6 +24,7 @@ import weakref
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass, field
+from multiprocessing.process import BaseProcess
 from typing import Any
 
 import numpy as np
@@ -242,6 +243,7 @@ class Deriver:
     _running: set[str] = field(default_factory=set)
     _lock: threading.Lock = field(default_factory=threading.Lock)
     _pool: ProcessPoolExecutor | None = None
+    _workers: list[BaseProcess] = field(default_factory=list)  # the pool's, to end them
     generation: int = 0  # changes whenever a result lands
 
     def latest(self, key: str) -> Result | None:
@@ -273,7 +275,12 @@ class Deriver:
                 weakref.finalize(self, self._pool.shutdown, wait=False, cancel_futures=True)
             pool = self._pool
         try:
+            before = {p.pid for p in multiprocessing.active_children()}
             future = pool.submit(derive, inputs_of(live, self.values, spec=self.spec))
+            with self._lock:  # the pool starts its worker at its first job
+                self._workers += [
+                    p for p in multiprocessing.active_children() if p.pid not in before
+                ]
         except (GonioError, RuntimeError) as exc:  # the pool broke: a new one next time
             line = _line(exc)
             self._done(key, Result(live.measured, 0, self.spec, None, None, line, None, line))
@@ -285,11 +292,16 @@ class Deriver:
 
     def close(self) -> None:
         """Stop the worker: the jobs not begun are dropped, the one running ends with it
-        (`gonio serve`'s end)."""
+        (`gonio serve`'s end). The worker is killed, not asked: at nice 19 on a busy
+        machine, a fit it is running could take minutes to reach a point where it
+        would notice."""
         with self._lock:
             pool, self._pool = self._pool, None
+            workers, self._workers = self._workers, []
         if pool is not None:
             pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            worker.kill()
 
     def _result(self, future: Future[Result], measured: int) -> Result:
         try:

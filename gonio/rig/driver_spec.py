@@ -6,8 +6,9 @@ once, in the driver; the section changes only what a file writes differently (a 
 ending by name, a nested section's own model, a preset's field left out).
 
 A model class built on one is declared ``class Spec(Fields)`` with ``Fields`` the
-`driver_model` at run time and `DriverFields` for the type checker (which reads its
-fields as `Any`; the typed view is the driver's configuration, ``spec.config()``).
+`driver_model` at run time and, for the type checker, a `Strict` class declaring the
+few fields the program reads off the spec itself, typed as the model makes them (the
+rest is read through the driver's configuration, ``spec.config()``).
 """
 
 from __future__ import annotations
@@ -23,15 +24,6 @@ from pydantic_core import PydanticUndefined
 from gonio.config import Strict
 
 
-class DriverFields(Strict):
-    """What the type checker sees of a `driver_model`: a `Strict` model whose fields
-    (the driver's) read as `Any`."""
-
-    if typing.TYPE_CHECKING:
-
-        def __getattr__(self, name: str) -> Any: ...
-
-
 def driver_model(
     name: str,
     config: type[Any],
@@ -41,7 +33,7 @@ def driver_model(
     defaults: Mapping[str, Any] | None = None,
     optional: Iterable[str] = (),
     required: Iterable[str] = (),
-) -> type[DriverFields]:
+) -> type[Strict]:
     """A `Strict` model of the fields of the dataclass ``config``, in its order, each
     with its default, ``doc`` as the description and its bounds; first a ``kind`` field
     (``(tag, description)``: ``Literal[tag]``, required) when given. ``types``: a
@@ -74,7 +66,7 @@ def driver_model(
             default = PydanticUndefined
         field = Field(default, description=meta["doc"], **meta["bounds"])
         fields[f.name] = (annotation, field)
-    return create_model(name, __base__=DriverFields, __module__=__name__, **fields)
+    return create_model(name, __base__=Strict, __module__=__name__, **fields)
 
 
 def _items_bounded(annotation: Any, bounds: dict[str, Any]) -> Any:

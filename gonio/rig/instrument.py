@@ -33,7 +33,7 @@ from drivers.serial_detector import (
 )
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
-from gonio.rig.driver_spec import DriverFields, driver_model
+from gonio.rig.driver_spec import driver_model
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
 
 #: Lengths on the sample (mm): a micrometre to 10 m, beyond any laboratory rig.
@@ -239,8 +239,20 @@ class SimulatedInterfaceSpec(Strict):
 _DRIVER_FIELDS = tuple(f.name for f in dataclasses.fields(SerialDetectorConfig))
 
 if TYPE_CHECKING:
-    _StreamFields = DriverFields
-    _InterfaceFields = DriverFields
+
+    class _StreamFields(Strict):
+        """The fields of `SerialStreamConfig`'s `driver_model` read off the spec."""
+
+        max_rate_hz: float
+
+    class _InterfaceFields(Strict):
+        """The fields of the serial interface's `driver_model` read off the spec."""
+
+        kind: Literal["serial"]
+        line_ending: Literal["lf", "crlf", "cr"]
+        init: tuple[str, ...]
+        stream: SerialStreamSpec | None
+
 else:
     _StreamFields = driver_model("StreamFields", SerialStreamConfig)
 

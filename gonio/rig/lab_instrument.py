@@ -14,7 +14,7 @@ preset gives (`drivers.pymeasure.PRESET_FIELDS`) may be left out.
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import field_validator, model_validator
 
@@ -27,9 +27,9 @@ from drivers.pymeasure import (
     PyMeasureDetectorConfig,
     unknown_property,
 )
-from gonio.config import field_error
+from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
-from gonio.rig.driver_spec import DriverFields, driver_model
+from gonio.rig.driver_spec import driver_model
 
 #: The largest magnitude of a number a setting gives: above any instrument's frequency
 #: (a lock-in's reaches 500 kHz), range or count; and the smallest nonzero one: below any
@@ -53,8 +53,16 @@ _EXPONENT = re.compile(r"[-+]?[0-9]+[eE][-+]?[0-9]+")
 
 
 if TYPE_CHECKING:
-    _ExposureFields = DriverFields
-    _InterfaceFields = DriverFields
+
+    class _ExposureFields(Strict):
+        """`ExposureConfig`'s fields, none read off the spec."""
+
+    class _InterfaceFields(Strict):
+        """The fields of the PyMeasure interface's `driver_model` read off the spec."""
+
+        kind: Literal["pymeasure"]
+        instrument: str
+
 else:
     _ExposureFields = driver_model("ExposureFields", ExposureConfig, required=("kind",))
 

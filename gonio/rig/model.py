@@ -22,34 +22,19 @@ from drivers.dynamixel import AxisConfig, step_seconds
 from drivers.serial_detector import SerialDetectorConfig
 from gonio.blocks import blockwise
 from gonio.config import ConfigError, load, read_bytes, spec_text
-from gonio.rig import constraints, inverse
+from gonio.rig import inverse
 from gonio.rig.aligned_inverse import newton, pair_residual
 from gonio.rig.alignment import Alignment, Geometry, at_height
 from gonio.rig.alignment_file import AlignmentFile, load_alignment
 from gonio.rig.instrument import SerialInterfaceSpec
 from gonio.rig.kinematics import apply, apply_transposed, chain_rotation_of, rotate_z, skew
+from gonio.rig.refusals import Refusals
+from gonio.rig.rig_checks import check_chains, check_reachable
 from gonio.rig.schema import RigSpec
 from gonio.rig.solution import Reason, Solution, Solved
 from gonio.rig.travel import TravelModel
 from gonio.types import ArrayLike, BoolArray, FloatArray
 
-#: What each closed-form type needs the chains to be: (axis name, rotation axis).
-_EXPECTED_CHAINS = {
-    "arch": {
-        "light": [("light_elevation", (0, 1, 0))],
-        "detector": [("detector_azimuth", (0, 0, 1)), ("detector_elevation", (0, 1, 0))],
-        "sample": [("sample_rotation", (0, 0, 1))],
-    },
-    "in_plane": {
-        "light": [("light_arm", (0, 1, 0))],
-        "detector": [("detector_arm", (0, 1, 0))],
-        "sample": [("sample_tilt", (1, 0, 0)), ("sample_rotation", (0, 0, 1))],
-    },
-}
-
-
-#: Direction pairs probed when a rig is loaded, to refuse a rig that can measure nothing.
-PROBE_PAIRS = 4096
 #: An axis whose range is narrower than a turn by more than this (rad) holds at most one
 #: of an angle's representatives a turn apart, whatever the rounding of their sums.
 _TURN_MARGIN = 1e-9
@@ -62,7 +47,10 @@ def named_alignment(rig_path: Path | None, name: str) -> Path:
 
 
 class Rig:
-    """A rig: forward and inverse kinematics, constraints, and its motor axes."""
+    """A rig: forward and inverse kinematics, constraints, and its motor axes.
+
+    It holds its `Refusals` (`gonio.rig.refusals`: why a pair or a pose is refused);
+    a rig file's checks beyond its schema are `gonio.rig.rig_checks`'s."""
 
     def __init__(
         self,
@@ -76,7 +64,7 @@ class Rig:
         #: The rig file's bytes as read (what a plan's content hash covers); for a rig
         #: made from a spec in code, the spec as YAML (which reads back as the same spec).
         self.text = text if text is not None else spec_text(spec)
-        self._check_chains()
+        check_chains(spec, self._where)
         self.axes: tuple[str, ...] = tuple(spec.axes)
         #: The alignment file the rig file names (``alignment``; read from
         #: ``alignment_text`` when given, e.g. as a run stored it): its path, bytes, the
@@ -96,19 +84,10 @@ class Rig:
         #: The time a move takes at the rates the motors run (`motion_rates`).
         self.travel = TravelModel(*self.motion_rates())
         self.home = np.clip(np.zeros(len(a)), self.limits[:, 0], self.limits[:, 1])
-        c = spec.constraints
-        self.theta_max = math.radians(c.theta_max_deg)
-        self.min_separation = math.radians(c.min_separation_deg)
-        self._collisions = [
-            (
-                box.name,
-                {
-                    self.axes.index(n): (math.radians(lo), math.radians(hi))
-                    for n, (lo, hi) in box.ranges_deg.items()
-                },
-            )
-            for box in c.collisions
-        ]
+        #: Why a pair or a pose is refused: limits, keep-out boxes, the constraints.
+        self._refusals = Refusals(self.limits, spec.constraints, self.axes, self.source_kind)
+        self.theta_max = self._refusals.theta_max
+        self.min_separation = self._refusals.min_separation
         self._rotation_index = self.axes.index("sample_rotation")
         self._chains = {
             chain: (
@@ -118,7 +97,15 @@ class Rig:
             for chain in ("light", "detector", "sample")
         }
         self._pointing = {c: np.asarray(getattr(spec, c).pointing) for c in ("light", "detector")}
-        self._check_something_reachable()
+        check_reachable(
+            lambda wi, wo, isotropic: self.solve(wi, wo, isotropic=isotropic).reasons,
+            self._where,
+        )
+
+    @property
+    def _where(self) -> str:
+        """How a message names the rig file (its path, or "rig" for one made in code)."""
+        return str(self.source) if self.source else "rig"
 
     @classmethod
     def from_yaml(
@@ -134,7 +121,7 @@ class Rig:
     def _read_alignment(self, name: str, raw: bytes | None, given: bool = False) -> None:
         """Read the alignment file ``name`` (relative to the rig file, or as ``given``
         in place of the one it names)."""
-        where = str(self.source) if self.source else "rig"
+        where = self._where
         path = Path(name) if given else named_alignment(self.source, name)
         if raw is None:
             try:
@@ -171,43 +158,6 @@ class Rig:
         out = copy.copy(self)
         out._read_alignment(str(path), raw, given=True)
         return out
-
-    def _check_chains(self) -> None:
-        where = str(self.source) if self.source else "rig"
-        for chain, expected in _EXPECTED_CHAINS[self.spec.type].items():
-            spec = getattr(self.spec, chain)
-            got = [(n, tuple(round(c, 9) for c in self.spec.axes[n].axis)) for n in spec.axes]
-            if got != [(n, tuple(float(c) for c in v)) for n, v in expected]:
-                wanted = ", ".join(f"{n} about {v}" for n, v in expected)
-                raise ConfigError(f"{where}: {chain}.axes: a {self.spec.type} rig needs {wanted}")
-            if chain != "sample" and tuple(spec.pointing) != (0.0, 0.0, 1.0):
-                raise ConfigError(
-                    f"{where}: {chain}.pointing: a {self.spec.type} rig points along (0, 0, 1)"
-                )
-
-    def _check_something_reachable(self) -> None:
-        """`ConfigError` if the constraints refuse every one of `PROBE_PAIRS` direction
-        pairs spread over the hemisphere (a rig that can measure nothing)."""
-        rng = np.random.default_rng(0)
-        z = rng.uniform(0.0, 1.0, (2, PROBE_PAIRS))
-        phi = rng.uniform(0.0, 2.0 * np.pi, (2, PROBE_PAIRS))
-        r = np.sqrt(1.0 - z * z)
-        w = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
-        for isotropic in (False, True):
-            reasons = self.solve(w[0], w[1], isotropic=isotropic).reasons
-            if np.any(reasons == Reason.OK):
-                return
-        where = str(self.source) if self.source else "rig"
-        counts = ", ".join(
-            f"{r.label.replace('_', ' ')} {n}"
-            for r in Reason
-            if r != Reason.OK and (n := int(np.count_nonzero(reasons == r)))
-        )
-        raise ConfigError(
-            f"{where}: constraints: leave no direction pair measurable (of {PROBE_PAIRS} pairs "
-            f"spread over the hemisphere, refused: {counts}); expected constraints that "
-            "leave some of the hemisphere reachable"
-        )
 
     # -- kinematics --------------------------------------------------------------------
     def _chain(self, chain: str, angles: FloatArray) -> FloatArray:
@@ -377,20 +327,9 @@ class Rig:
             best = np.where(take, shifted, best)
         return best
 
-    def _inside_limits(self, columns: FloatArray) -> BoolArray:
-        """True where every axis's angle is inside its limits, for angles given by axis
-        (A, ...): ``columns[j]`` the angles of axis j."""
-        ok = np.ones(np.shape(columns[0]), dtype=np.bool_)
-        for j in range(len(self.axes)):
-            ok &= columns[j] >= self.limits[j, 0]
-            ok &= columns[j] <= self.limits[j, 1]
-        return ok
-
     def _collides(self, angles: FloatArray) -> BoolArray:
-        hit = np.zeros(angles.shape[:-1], dtype=np.bool_)
-        for _, box in self._collisions:
-            hit |= constraints.in_box(angles, box)
-        return hit
+        """True where joint angles (..., A) are inside a keep-out box (`Refusals`)."""
+        return self._refusals.collides(angles)
 
     def travel_time(self, p: FloatArray, q: FloatArray) -> FloatArray:
         """Time (s) to move every axis from p to q at once (`TravelModel.time`)."""
@@ -426,7 +365,7 @@ class Rig:
         # and the turned pair is measured instead (ω' = R_z(ψ) ω for the candidate's ψ).
         columns, psi, reached = self._columns(wi, wo, isotropic)
         angles_last = np.moveaxis(columns, 0, -1)  # (K', N, A), a view
-        limits_ok = self._inside_limits(columns)
+        limits_ok = self._refusals.inside_limits(columns)
         if reached is not None:
             limits_ok &= reached
         usable = limits_ok & ~self._collides(angles_last)
@@ -456,7 +395,7 @@ class Rig:
 
         def block(wi: FloatArray, wo: FloatArray) -> tuple[BoolArray, np.ndarray]:
             columns, _, reached = self._columns(wi, wo, isotropic)
-            limits_ok = self._inside_limits(columns)
+            limits_ok = self._refusals.inside_limits(columns)
             if reached is not None:
                 limits_ok &= reached
             usable = limits_ok & ~self._collides(np.moveaxis(columns, 0, -1))
@@ -472,7 +411,7 @@ class Rig:
         outside every keep-out box)."""
         angles = np.asarray(angles, dtype=np.float64).reshape(-1, len(self.axes))
         wi, wo = self.forward(angles, self.alignment)
-        limits_ok = self._inside_limits(angles.T)
+        limits_ok = self._refusals.inside_limits(angles.T)
         commandable = limits_ok & ~self._collides(angles)
         reasons = self._reasons(wi, wo, limits_ok[None, :], commandable[None, :])
         return reasons, commandable
@@ -480,37 +419,9 @@ class Rig:
     def _reasons(
         self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
     ) -> np.ndarray:
-        """Why each pair (N, 3) is refused (`Reason`; OK where it is not), given which of
-        its candidates (K, N) are within the limits and which are also collision-free."""
-        reasons = np.full(len(wi), Reason.OK, dtype=np.int8)
-        theta_max = (wi[:, 2] < math.cos(self.theta_max)) | (wo[:, 2] < math.cos(self.theta_max))
-        c = self.spec.constraints
-        # A collimated beam's lit ellipse must fit the sample and the view; a point source
-        # floods the sample plane, so the view itself must stay on the sample.
-        no_pair = np.zeros(len(wi), dtype=np.bool_)
-        footprint = (
-            no_pair
-            if c.beam_diameter_mm is None
-            else ~constraints.footprint_ok(
-                wi, wo, c.beam_diameter_mm, c.sample_diameter_mm, c.detector_fov_mm
-            )
-        )
-        off_sample = (
-            ~constraints.view_on_sample(wo, c.detector_fov_mm, c.sample_diameter_mm)
-            if self.source_kind == "point"
-            else no_pair
-        )
-        checks = [
-            (Reason.THETA_MAX, theta_max),
-            (Reason.BLIND_SPOT, constraints.separation(wi, wo) < self.min_separation),
-            (Reason.FOOTPRINT, footprint),
-            (Reason.VIEW_OFF_SAMPLE, off_sample),
-            (Reason.AXIS_LIMIT, ~limits_ok.any(axis=0)),
-            (Reason.COLLISION, ~usable.any(axis=0)),
-        ]
-        for reason, refused in reversed(checks):  # the first check that fails wins
-            reasons[refused] = reason
-        return reasons
+        """Why each pair (N, 3) is refused (`Refusals.reasons`), given which of its
+        candidates (K, N) are within the limits and which are also collision-free."""
+        return self._refusals.reasons(wi, wo, limits_ok, usable)
 
     # -- the instrument ------------------------------------------------------------------
     @property
@@ -540,9 +451,8 @@ class Rig:
         `ConfigError` unless the interface is ``serial``."""
         interface = self.spec.detector.interface
         if not isinstance(interface, SerialInterfaceSpec):
-            where = str(self.source) if self.source else "rig"
             raise ConfigError(
-                f"{where}: detector.interface: is {interface.kind!r}; expected 'serial' for "
+                f"{self._where}: detector.interface: is {interface.kind!r}; expected 'serial' for "
                 "a serial detector"
             )
         return interface.config()  # checked when the rig was read
@@ -581,22 +491,7 @@ class Rig:
         out = []
         for name, s in self.spec.axes.items():
             try:
-                config = AxisConfig(
-                    name=name,
-                    motor_id=s.motor_id,
-                    min_rad=math.radians(s.min_deg),
-                    max_rad=math.radians(s.max_deg),
-                    gear_ratio=s.gear_ratio,
-                    zero_offset_rad=math.radians(s.zero_offset_deg),
-                    direction=s.direction,
-                    mode=s.mode,
-                    profile_velocity_rad_s=math.radians(s.max_velocity_deg_s),
-                    profile_acceleration_rad_s2=math.radians(s.max_acceleration_deg_s2),
-                    model=s.motor_model_number(),
-                    firmware=s.motor_firmware,
-                )
+                out.append(s.axis_config(name))
             except ValueError as exc:
-                where = str(self.source) if self.source else "rig"
-                raise ConfigError(f"{where}: axes.{name}: {exc}") from None
-            out.append(config)
+                raise ConfigError(f"{self._where}: axes.{name}: {exc}") from None
         return tuple(out)

@@ -8,11 +8,12 @@ times seconds. Everything is converted to radians once, in `gonio.rig.model`.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from drivers.dynamixel import BAUD_RATES
+from drivers.dynamixel import BAUD_RATES, AxisConfig
 from drivers.dynamixel import MODEL_NAMES as MODELS
 from gonio.config import Strict, field_error
 from gonio.config_schema import InSchema
@@ -128,6 +129,24 @@ class AxisSpec(Strict):
         if isinstance(self.motor_model, str):
             return next(n for n, name in MODELS.items() if name == self.motor_model)
         return self.motor_model
+
+    def axis_config(self, name: str) -> AxisConfig:
+        """This axis, named ``name``, as the driver's `AxisConfig` (degrees to radians);
+        ValueError where the driver refuses it."""
+        return AxisConfig(
+            name=name,
+            motor_id=self.motor_id,
+            min_rad=math.radians(self.min_deg),
+            max_rad=math.radians(self.max_deg),
+            gear_ratio=self.gear_ratio,
+            zero_offset_rad=math.radians(self.zero_offset_deg),
+            direction=self.direction,
+            mode=self.mode,
+            profile_velocity_rad_s=math.radians(self.max_velocity_deg_s),
+            profile_acceleration_rad_s2=math.radians(self.max_acceleration_deg_s2),
+            model=self.motor_model_number(),
+            firmware=self.motor_firmware,
+        )
 
     @model_validator(mode="after")
     def _ordered_limits(self) -> AxisSpec:

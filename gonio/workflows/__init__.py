@@ -21,10 +21,10 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.workflows import session as session
     from gonio.workflows.adaptive import estimate as estimate
     from gonio.workflows.align import Scan as Scan
-    from gonio.workflows.align import ScanSettings as ScanSettings
-    from gonio.workflows.align import nominal_poses as nominal_poses
-    from gonio.workflows.align import reachable as reachable
     from gonio.workflows.align_check import Verdict as Verdict
+    from gonio.workflows.align_plan import ScanSettings as ScanSettings
+    from gonio.workflows.align_plan import nominal_poses as nominal_poses
+    from gonio.workflows.align_plan import reachable as reachable
     from gonio.workflows.preflight import refuse_fly_detector as refuse_fly_detector
     from gonio.workflows.rehearsal import rehearsal_devices as rehearsal_devices
     from gonio.workflows.stream_check import check_stream as check_stream
@@ -34,16 +34,16 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
 #: (`gonio.faces`), by module.
 WHERE = {
     "Scan": "align",
-    "ScanSettings": "align",
+    "ScanSettings": "align_plan",
     "Verdict": "align_check",
     "align": "align",
     "align_check": "align_check",
     "backends": "backends",
     "check_stream": "stream_check",
     "estimate": "adaptive",
-    "nominal_poses": "align",
+    "nominal_poses": "align_plan",
     "preflight": "preflight",
-    "reachable": "align",
+    "reachable": "align_plan",
     "refuse_fly_detector": "preflight",
     "rehearsal_devices": "rehearsal",
     "session": "session",

@@ -11,7 +11,7 @@ import numpy as np
 
 from gonio.rig import Rig, as_alignment, miss, stated_covariance, vector
 from gonio.types import FloatArray
-from gonio.workflows.align import PEAK_SIGMA_DEG
+from gonio.workflows.align_plan import PEAK_SIGMA_DEG
 
 
 @dataclass(frozen=True)

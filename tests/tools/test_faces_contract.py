@@ -4,6 +4,8 @@ every top-level module of gonio."""
 
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import sys
 import tomllib
 from collections.abc import Iterator
@@ -12,6 +14,9 @@ from pathlib import Path
 import grimp
 import pytest
 
+import drivers
+import gonio
+import sim
 from tools.faces_contract import FacesContract, face_names
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -93,3 +98,18 @@ def test_the_layers_contract_names_every_top_level_module_of_gonio() -> None:
         or (p / "__init__.py").is_file()
     }
     assert modules - _layered(layers) == set()
+
+
+def test_every_name_of_every_face_resolves() -> None:
+    """Each name a package's ``__all__`` offers is there when read, lazy ones from the
+    module their ``WHERE`` names (a name moved to another module and left in ``WHERE``
+    would fail only when first used)."""
+    missing = []
+    for root in (gonio, drivers, sim):
+        for info in pkgutil.walk_packages(root.__path__, f"{root.__name__}."):
+            if info.ispkg:
+                face = importlib.import_module(info.name)
+                missing += [
+                    f"{info.name}.{n}" for n in face.__all__ if not hasattr(face, n)
+                ]  # fmt: skip
+    assert not missing

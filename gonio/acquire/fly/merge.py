@@ -350,11 +350,18 @@ def window_numbers(device_t: list[float | None], period_s: float) -> np.ndarray:
 
 
 def stamp_slack(readings: list[StreamReading]) -> float:
-    """How late after its stamped end a window may have ended (s): the smallest
-    ``received_s − ended_s`` of the readings (a line cannot arrive before its window
-    ends); 0 without arrival times. A detector stamping from its start command
-    (``starts_on_command``) puts the truth between the stamp and the stamp + slack."""
-    late = [r.received_s - r.ended_s for r in readings if r.received_s is not None]
+    """The width (s) of the span the stream's windows are known to have ended in, one
+    offset for all: the smallest ``received_s − earliest_end_s`` of the readings (a line
+    cannot arrive before its window ends, nor a window end before the bound its driver
+    states), or of ``received_s − ended_s`` where no bound is stated; 0 without arrival
+    times. The stamps lie in that span: on a host slow to read every line (a loaded
+    one), the fastest line's arrival may still lie well after its window's end, and
+    the span says by how much at most."""
+    late = [
+        r.received_s - (r.ended_s if r.earliest_end_s is None else r.earliest_end_s)
+        for r in readings
+        if r.received_s is not None
+    ]
     return max(0.0, min(late)) if late else 0.0
 
 

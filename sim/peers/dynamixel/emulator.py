@@ -1,10 +1,12 @@
 """A byte-level Dynamixel Protocol 2.0 bus of X-series motors on a real pseudo-terminal.
 
 `DxlEmulator` holds a `sim.peers.pty_host.PtyHost` (the slave end kept open, to read
-the rate the host set with termios) and serves the master end from its thread: bytes are split into
-packets by `PacketReader`, executed by :func:`sim.peers.dynamixel.instructions.handle`, and the
-status packets are written back after the time they would take on the wire (10 bits
-per byte at the bus rate) and each motor's Return Delay Time. A motor whose Baud Rate
+the rate the host set with termios) and serves the master end from its thread: bytes are
+split into packets by `PacketReader`, executed by
+:func:`sim.peers.dynamixel.instructions.handle`, and the status packets are written back
+by its `sim.peers.dynamixel.line.Line` after the time they would take on the wire (10
+bits per byte at the bus rate) and each motor's Return Delay Time; its
+`sim.peers.dynamixel.traffic.Traffic` counts what crossed. A motor whose Baud Rate
 register differs from the host's tty rate neither hears nor answers. Faults can be
 injected: lost, corrupt or misaddressed replies, noise, a silent bus, hardware alerts.
 
@@ -14,24 +16,22 @@ Run standalone: ``python -m sim.dynamixel.emulator --ids 1,2,3,4 [--baud 57600]`
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import select
 import signal
 import sys
 import threading
 import time
-from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
 from types import FrameType, TracebackType
 from typing import Self
 
 from drivers.dynamixel import BAUD_RATES, MODEL_NAMES, model_number
 from sim.clock import ManualClock, ScaledClock, TimeSource
 from sim.peers.dynamixel.faults import Fault, FaultBook
-from sim.peers.dynamixel.instructions import FastChain, Reply, Response, handle
+from sim.peers.dynamixel.instructions import Reply, Response, handle
 from sim.peers.dynamixel.instructions import instruction_name as _name
+from sim.peers.dynamixel.line import BITS_PER_BYTE, Line
 from sim.peers.dynamixel.motor import EmulatedMotor
 from sim.peers.dynamixel.protocol import (
     BROADCAST_ID,
@@ -41,34 +41,19 @@ from sim.peers.dynamixel.protocol import (
     PacketReader,
     StatusError,
 )
+from sim.peers.dynamixel.traffic import BusStats, Traffic
 from sim.peers.dynamixel.tty import set_raw, tty_rate
 from sim.peers.pty_host import PtyHost
 
-__all__ = ["BusStats", "DxlEmulator", "EmulatedMotor", "Fault", "ManualClock", "main"]
-
-#: Bits on the wire per byte: start, 8 data, stop.
-BITS_PER_BYTE = 10
-
-
-@dataclass
-class BusStats:
-    """Traffic counters: packets and bytes each way, host packets with a bad CRC or with
-    an unstuffed FF FF FD, and host packets per instruction name (e.g.
-    ``instructions["SYNC_READ"]``)."""
-
-    packets_in: int = 0
-    packets_out: int = 0
-    bytes_in: int = 0
-    bytes_out: int = 0
-    crc_errors: int = 0
-    stuffing_errors: int = 0
-    #: Late status packets (`Fault.LATE`) sent, and those of them the host's next
-    #: packet had overtaken (it had given up waiting: the reply lands in a later
-    #: transaction).
-    late: int = 0
-    overtaken: int = 0
-    instructions: Counter[str] = field(default_factory=Counter)
-
+__all__ = [
+    "BITS_PER_BYTE",
+    "BusStats",
+    "DxlEmulator",
+    "EmulatedMotor",
+    "Fault",
+    "ManualClock",
+    "main",
+]
 
 # -- the emulator -------------------------------------------------------------------------
 
@@ -105,12 +90,6 @@ class DxlEmulator:
         self.wire_time = wire_time
         self.return_delay = return_delay
         self._lock = threading.RLock()
-        #: Notified each time the serving thread has served what it read (`wait_served`).
-        self._served = threading.Condition(self._lock)
-        #: Bytes read from the host and written to it since creation (`totals`), and
-        #: whether the serving thread is serving bytes it has read.
-        self._heard = self._said = 0
-        self._serving = False
         models = model if isinstance(model, Mapping) else dict.fromkeys(ids, model)
         if set(models) != set(ids):
             raise ValueError(f"models {dict(models)} must name exactly the ids {ids}")
@@ -126,15 +105,13 @@ class DxlEmulator:
             for i in ids
         ]
         self._faults = FaultBook()
-        #: perf_counter time at which the emulated line is free again (wire time on).
-        self._line_free = 0.0
         self._silent = False
-        self._stats = BusStats()
-        self._transcript: list[tuple[str, bytes]] | None = [] if record else None
+        self._traffic = Traffic(self._lock, record)
         self._pty = PtyHost(
             self._serve, "dxl-emulator", configure=lambda fd: set_raw(fd, baud), join_s=2.0
         )
         self._stopping = self._pty.stopping
+        self._line = Line(self._pty, self._lock, self._faults, self._traffic, baud, self.host_baud)
         #: The last exception raised while serving a packet (the thread keeps serving).
         self.error: BaseException | None = None
 
@@ -176,35 +153,28 @@ class DxlEmulator:
     @property
     def stats(self) -> BusStats:
         """A snapshot of the traffic counters."""
-        with self._lock:
-            return dataclasses.replace(self._stats, instructions=Counter(self._stats.instructions))
+        return self._traffic.snapshot()
 
     def totals(self) -> tuple[int, int]:
         """Bytes read from the host and bytes written to it since the emulator was made
         (running totals: `reset_stats` leaves them)."""
-        with self._lock:
-            return self._heard, self._said
+        return self._traffic.totals()
 
     def wait_served(self, heard: int, timeout: float) -> bool:
         """Wait until the emulator has read ``heard`` bytes from the host in all (the
         first of `totals`) and served every packet among them, their replies written to
         the pty (late ones included); False if ``timeout`` (s) passed first. A host
         that knows what it sent then knows every byte the bus will answer with."""
-        with self._served:
-            return self._served.wait_for(
-                lambda: self._heard >= heard and not self._serving, timeout
-            )
+        return self._traffic.wait_served(heard, timeout)
 
     def reset_stats(self) -> None:
-        with self._lock:
-            self._stats = BusStats()
+        self._traffic.reset_stats()
 
     @property
     def transcript(self) -> list[tuple[str, bytes]]:
         """``("rx", bytes)`` read from the host and ``("tx", bytes)`` written to it, in
         order (empty unless created with ``record=True``)."""
-        with self._lock:
-            return list(self._transcript or [])
+        return self._traffic.transcript()
 
     def goals_written(self) -> dict[int, list[int]]:
         """Every Goal Position value (ticks) the host has written to each motor, by ID,
@@ -296,15 +266,12 @@ class DxlEmulator:
                 continue
             arrived = time.perf_counter()
             with self._lock:
-                self._stats.bytes_in += len(data)
-                self._heard += len(data)
-                if self._transcript is not None:
-                    self._transcript.append(("rx", data))
+                self._traffic.heard(data)
                 if self._silent:
                     reader.clear()
-                    self._served.notify_all()
+                    self._traffic.serving(False)
                     continue
-                self._serving = True
+                self._traffic.serving(True)
             try:
                 reader.feed(data)
                 more = True
@@ -314,9 +281,7 @@ class DxlEmulator:
                     except Exception as exc:  # keep serving; tests look at .error
                         self.error = exc
             finally:
-                with self._lock:
-                    self._serving = False
-                    self._served.notify_all()
+                self._traffic.serving(False)
 
     def _next(self, reader: PacketReader, arrived: float) -> bool:
         """Serve the next complete packet in ``reader`` (False when there is none)."""
@@ -336,9 +301,10 @@ class DxlEmulator:
 
     def _on_packet(self, packet: Packet, arrived: float) -> None:
         with self._lock:
-            self._stats.packets_in += 1
+            stats = self._traffic.stats
+            stats.packets_in += 1
             if not packet.is_status:
-                self._stats.instructions[_name(packet.instruction)] += 1
+                stats.instructions[_name(packet.instruction)] += 1
             responses = handle(packet, self._listening())
         size = 10 + len(packet.params)
         self._transmit(responses, arrived, size)
@@ -348,11 +314,12 @@ class DxlEmulator:
         the addressed motor answers CRC error (3) and executes nothing."""
         packet_id = exc.packet_id
         with self._lock:
-            self._stats.packets_in += 1
+            stats = self._traffic.stats
+            stats.packets_in += 1
             if isinstance(exc, CRCError):
-                self._stats.crc_errors += 1
+                stats.crc_errors += 1
             else:
-                self._stats.stuffing_errors += 1
+                stats.stuffing_errors += 1
             responses: list[Response] = [
                 Reply(m, m.id, m.status_error(StatusError.CRC), b"", m.baud, m.return_delay)
                 for m in self._listening()
@@ -361,61 +328,10 @@ class DxlEmulator:
         self._transmit(responses, arrived, 10)
 
     def _transmit(self, responses: Sequence[Response], arrived: float, size_in: int) -> None:
-        """Write each response when it would have finished crossing the wire.
-
-        The line is shared: a host packet that arrives while earlier bytes (host packets
-        without replies, or replies) would still be on the wire starts after them.
-        """
-        if not self.wire_time:
-            due = arrived
-        else:
-            baud = _sender(responses[0]).baud if responses else (self.host_baud() or self.baud)
-            due = max(arrived, self._line_free) + size_in * BITS_PER_BYTE / baud
-        self._line_free = due
-        for response in responses:
-            sender = _sender(response)
-            with self._lock:
-                out = self._faults.encode(response)
-            due += sender.delay if self.return_delay else 0.0
-            if out is None:
-                continue
-            raw = out.raw
-            due += len(raw) * BITS_PER_BYTE / sender.baud if self.wire_time else 0.0
-            due += out.delay_s  # a late reply holds the line: nothing is served meanwhile
-            self._line_free = due
-            wait = due - time.perf_counter()
-            if wait > 0 and self._stopping.wait(wait):
-                return
-            if out.delay_s:
-                self._count_late()
-            self._write(raw)
-
-    def _count_late(self) -> None:
-        """Count a late reply about to leave, and whether the host has sent more since."""
-        overtaken = bool(select.select([self._pty.master], [], [], 0)[0])
-        with self._lock:
-            self._stats.late += 1
-            self._stats.overtaken += overtaken
-
-    def _write(self, raw: bytes) -> None:
-        with self._lock:
-            self._stats.packets_out += 1
-            self._stats.bytes_out += len(raw)
-            self._said += len(raw)
-            if self._transcript is not None:
-                self._transcript.append(("tx", raw))
-        view, master = memoryview(raw), self._pty.master
-        deadline = time.monotonic() + 1.0
-        while view and not self._stopping.is_set() and time.monotonic() < deadline:
-            try:
-                view = view[os.write(master, view) :]
-            except BlockingIOError:  # the host is not reading: wait, then give up
-                select.select([], [master], [], 0.05)
-
-
-def _sender(response: Response) -> Reply:
-    """The reply whose baud and return delay time ``response`` (a chain: its first block)."""
-    return response.blocks[0] if isinstance(response, FastChain) else response
+        """Write ``responses`` to the host as the line would (`Line.transmit`)."""
+        self._line.transmit(
+            responses, arrived, size_in, wire_time=self.wire_time, return_delay=self.return_delay
+        )
 
 
 # -- command line -------------------------------------------------------------------------

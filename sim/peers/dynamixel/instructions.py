@@ -29,7 +29,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from sim.peers.dynamixel.motor import BACKUP_RESTORE, BACKUP_STORE, EmulatedMotor
+from sim.peers.dynamixel.backup import BACKUP_RESTORE, BACKUP_STORE
+from sim.peers.dynamixel.motor import EmulatedMotor
 from sim.peers.dynamixel.protocol import (
     BROADCAST_ID,
     HEADER,

@@ -34,15 +34,16 @@ exposure time (plus ``reply_delay_s``), as on a real single-threaded device.
 
 The package: :mod:`~sim.peers.serial_photometer.protocol` (the device's fixed lines and the
 matching driver configuration), :mod:`~sim.peers.serial_photometer.device` (the photometer:
-its settings, faults and answers; the pty and the serving thread are its
-`sim.peers.line_server.LineServer`'s), :mod:`~sim.peers.serial_photometer.quirks` (the
+its settings, answers and stream; the pty and the serving thread are its
+`sim.peers.line_server.LineServer`'s), :mod:`~sim.peers.serial_photometer.sensor` (what
+an exposure reads), :mod:`~sim.peers.serial_photometer.faults` (the faults a test
+injects), :mod:`~sim.peers.serial_photometer.quirks` (the
 ways its stream can fall short of the requirements, for testing a qualification) and
 :mod:`~sim.peers.serial_photometer.cli` (the command line).
 """
 
 from sim.peers.serial_photometer.cli import main
 from sim.peers.serial_photometer.device import SerialPhotometer
-from sim.peers.serial_photometer.device import Signal as Signal
 from sim.peers.serial_photometer.protocol import (
     BANNER,
     MALFORMED_LINE,
@@ -52,6 +53,7 @@ from sim.peers.serial_photometer.protocol import (
 )
 from sim.peers.serial_photometer.protocol import IDENTITY as IDENTITY
 from sim.peers.serial_photometer.quirks import StreamQuirks
+from sim.peers.serial_photometer.sensor import Signal as Signal
 
 __all__ = [
     "BANNER",

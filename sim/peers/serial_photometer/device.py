@@ -1,31 +1,24 @@
-"""The simulated photometer itself: its settings, the faults a test injects, and how it
-answers each command (see the package docstring for the protocol)."""
+"""The simulated photometer itself: its settings and how it answers each command and
+streams (see the package docstring for the protocol). It holds its `Sensor` (what an
+exposure reads, `sim.peers.serial_photometer.sensor`) and the `Faults` a test injects
+(`sim.peers.serial_photometer.faults`)."""
 
 from __future__ import annotations
 
 import math
 import random
-import statistics
 import termios
 import time
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 from drivers.serial_detector import SerialDetectorConfig
 from sim.peers.line_server import Event, LineServer, ServedPeer
-from sim.peers.serial_photometer.protocol import (
-    BANNER,
-    IDENTITY,
-    MALFORMED_LINE,
-    _int_in,
-    _line,
-    default_config,
-)
+from sim.peers.serial_photometer.faults import Faults
+from sim.peers.serial_photometer.protocol import BANNER, IDENTITY, _int_in, _line, default_config
 from sim.peers.serial_photometer.quirks import CONFORMING, StreamQuirks
+from sim.peers.serial_photometer.sensor import Sensor, Signal
 
-Signal = float | Callable[[float], float]
 #: Stream windows' counts in one call: given the windows' starts and ends
 #: (`time.monotonic` s), their counts and saturated flags (one each).
 Windows = Callable[[list[float], list[float]], tuple[list[float], list[bool]]]
@@ -34,17 +27,6 @@ Windows = Callable[[list[float], list[float]], tuple[list[float], list[bool]]]
 BURST_S = 0.004
 #: The highest rate (Hz) the simulated photometer streams at.
 MAX_STREAM_RATE_HZ = 2000.0
-
-
-@dataclass
-class _Faults:
-    malformed: int = 0
-    silent: bool = False
-    reset_next: bool = False
-    slow_s: float = 0.0
-    garbage: int = 0
-    inject: deque[str] = field(default_factory=deque)
-    late: deque[float] = field(default_factory=deque)
 
 
 class SerialPhotometer(ServedPeer):
@@ -99,16 +81,12 @@ class SerialPhotometer(ServedPeer):
             raise ValueError(f"full_scale must be > 0 or None, got {full_scale!r}")
         if reset_on_open and not hasattr(termios, "TIOCPKT"):  # pragma: no cover
             raise ValueError("reset_on_open needs TIOCPKT, not available on this system")
-        self._signal = signal
-        self._noise_std = noise_std
-        self._dark = dark
-        self._full_scale = full_scale
+        self._sensor = Sensor(signal, noise_std, dark, full_scale, seed)
         self._reply_delay_s = reply_delay_s
         self._default_exposure_ms = default_exposure_ms
         self._boot_s = boot_s
         self._echo = echo
         self._speedup = float(speedup)
-        self._rng = random.Random(seed)
         self._windows_signal = windows
         self._stream_from = 0.0  # time.monotonic() the running stream's first window began
         self._stream_sent = 0  # windows of the running stream read so far
@@ -128,7 +106,7 @@ class SerialPhotometer(ServedPeer):
             )
         )
         self._lock = self._server.lock
-        self._faults = _Faults()
+        self._faults = Faults()
         self._exposure_ms = default_exposure_ms
         self._gain = 1
         self._busy_until = 0.0
@@ -252,7 +230,7 @@ class SerialPhotometer(ServedPeer):
     def clear(self) -> None:
         """Remove every fault."""
         with self._lock:
-            self._faults = _Faults()
+            self._faults = Faults()
 
     # -- the protocol ---------------------------------------------------------------
 
@@ -365,12 +343,13 @@ class SerialPhotometer(ServedPeer):
         try:
             counts, saturated = self._windows_signal(starts, ends)
             window: list[tuple[float, bool]] | Exception = [
-                self._scaled_locked(c, s) for c, s in zip(counts, saturated, strict=True)
+                self._sensor.scaled(c, s, self._gain)
+                for c, s in zip(counts, saturated, strict=True)
             ]
         except Exception as exc:  # a test's signal ran out of values, say
             window = exc
         for k, end in enumerate(ends):
-            faulty = self._fault_line_locked()
+            faulty = self._faults.line()
             if faulty is not None:
                 data = faulty
             elif isinstance(window, list):
@@ -394,7 +373,7 @@ class SerialPhotometer(ServedPeer):
         half = integration / self._speedup / 2
         if event.middle:
             try:
-                self._window = self._counts_locked(integration)
+                self._window = self._sensor.counts(integration, self._gain)
             except Exception as exc:  # a test's signal ran out of values, say
                 self._window = exc
             self._server.tick_locked(event.due + half, event.tick)
@@ -404,7 +383,7 @@ class SerialPhotometer(ServedPeer):
             self._stream = None
             return
         window, self._window = self._window, None
-        faulty = self._fault_line_locked()
+        faulty = self._faults.line()
         if faulty is not None:
             data = faulty
         elif isinstance(window, tuple):
@@ -427,23 +406,6 @@ class SerialPhotometer(ServedPeer):
         middle = event.due + self._quirks.next_period(period, self._quirk_rng) - half
         self._server.tick_locked(middle, event.tick, middle=True)
 
-    def _counts_locked(self, exposure_s: float) -> tuple[float, bool]:
-        """One exposure's counts (signal, noise, dark, gain) and whether it saturated."""
-        signal = self._signal
-        counts = float(signal(exposure_s)) if callable(signal) else signal * exposure_s
-        return self._scaled_locked(counts, False)
-
-    def _scaled_locked(self, counts: float, saturated: bool) -> tuple[float, bool]:
-        """Noise, dark and gain added to a signal's ``counts``; clipped at full scale."""
-        if saturated and self._full_scale is not None:
-            return self._full_scale, True
-        if self._noise_std:
-            counts += self._rng.gauss(0.0, self._noise_std)
-        counts = (counts + self._dark) * self._gain
-        if self._full_scale is not None and counts >= self._full_scale:
-            return self._full_scale, True
-        return counts, False
-
     def _measure_locked(self, args: list[str], start: float, delay: float) -> None:
         if len(args) > 2 or not all(_int_in(a, 1, 60_000) for a in args[:1]):
             self._server.schedule_locked(
@@ -464,39 +426,7 @@ class SerialPhotometer(ServedPeer):
             return
         done = start + duration + delay
         self._busy_until = done
-        faulty = self._fault_line_locked()
-        data = (
-            faulty if faulty is not None else _line(self._answer_locked(exposure_ms / 1000, count))
-        )
+        faulty = self._faults.line()
+        answer = self._sensor.answer(exposure_ms / 1000, count, self._gain)
+        data = faulty if faulty is not None else _line(answer)
         self._server.schedule_locked(done, data)
-
-    def _fault_line_locked(self) -> bytes | None:
-        """The line an injected fault sends instead of the next answer or stream line
-        (garbage, an injected line, a malformed one; each used once), or None."""
-        faults = self._faults
-        if faults.garbage:
-            data = (b"0123456789" * (faults.garbage // 10 + 1))[: faults.garbage]
-            faults.garbage = 0
-            return data
-        if faults.inject:
-            return _line(faults.inject.popleft())
-        if faults.malformed:
-            faults.malformed -= 1
-            return _line(MALFORMED_LINE)
-        return None
-
-    def _answer_locked(self, exposure_s: float, count: int) -> str:
-        values: list[float] = []
-        saturated = False
-        for _ in range(count):
-            try:
-                counts, sat = self._counts_locked(exposure_s)
-            except Exception as exc:  # a test's signal ran out of values, say
-                return f"ERR signal failed: {type(exc).__name__}"
-            saturated = saturated or sat
-            values.append(counts)
-        status = "SAT" if saturated else "OK"
-        if count == 1:
-            return f"VAL {values[0]!r} {status}"
-        mean, std = statistics.fmean(values), statistics.stdev(values)
-        return f"VAL {mean!r} {status} {std!r}"

@@ -12,7 +12,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gonio.acquire.fly import merge, ramp_gap
+from drivers.stream import StreamReading
+from gonio.acquire.fly import merge, ramp_gap, stamp_slack
 from gonio.acquire.fly.merge import RAMP_BIAS
 from gonio.planner.model import Sweeps
 
@@ -96,3 +97,22 @@ def test_the_ramp_gap_bounds_the_ramps_bend() -> None:
     slots, error = merged_against_truth(np.arange(0.0, 2 * RAMP_S + CRUISE_S + 0.05, gap))
     assert slots[0] == 0 and slots[-1] == round(CRUISE_S / PERIOD) - 1  # both edges
     assert error.max() <= RAMP_BIAS * V * PERIOD
+
+
+def test_the_stamp_slack_spans_what_a_host_late_for_every_line_cannot_know() -> None:
+    """A host that reads every line of a stream 12 ms after its window ended (a loaded
+    one) stamps each window from the fastest line, 12 ms late; with the start command's
+    bound 2 ms before the truth, the slack spans the 14 ms the truth may lie in, so the
+    timing σ it adds covers the bias. Without a stated bound, the slack is what the
+    stamps left before the arrivals."""
+    truth = 0.2 + 0.01 * np.arange(50)
+    readings = [
+        StreamReading(1.0, math.nan, t + 0.012 - 0.01, t + 0.012, received_s=t + 0.012,
+                      earliest_end_s=t - 0.002)
+        for t in truth.tolist()
+    ]  # fmt: skip
+    assert stamp_slack(readings) == pytest.approx(0.014)
+    bias = max(r.ended_s - t for r, t in zip(readings, truth.tolist(), strict=True))
+    assert bias <= stamp_slack(readings) + 1e-12
+    unbounded = [replace(r, earliest_end_s=None, received_s=r.ended_s + 0.001) for r in readings]
+    assert stamp_slack(unbounded) == pytest.approx(0.001)
