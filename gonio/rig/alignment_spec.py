@@ -10,7 +10,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field
 
-from gonio.config import Strict
+from gonio.config import Strict, excerpt
 from gonio.rig.alignment import Alignment
 
 #: The largest angular error (°): beyond 5° an axis or a sample is mis-assembled rather
@@ -73,7 +73,8 @@ class AlignmentSpec(Strict):
         an offset names another axis."""
         unknown = self.unknown_axes(axes)
         if unknown:
-            raise ValueError(f"zero_offset_deg: no axis {unknown[0]!r} (axes: {', '.join(axes)})")
+            known = ", ".join(axes)
+            raise ValueError(f"zero_offset_deg: no axis {excerpt(unknown[0])} (axes: {known})")
         return Alignment(
             zero_offset=np.radians([self.zero_offset_deg.get(a, 0.0) for a in axes]),
             tilt=np.radians(np.float64(self.tilt_deg)),

@@ -31,7 +31,7 @@ from drivers.serial_detector import (
     SerialDetectorValueError,
     SerialStreamConfig,
 )
-from gonio.config import Strict, field_error
+from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.driver_spec import driver_model
 from gonio.rig.lab_instrument import PyMeasureInterfaceSpec
@@ -72,7 +72,8 @@ def _check_pattern(field: str, pattern: str | None) -> None:
     try:
         re.compile(pattern)
     except re.error as exc:
-        raise field_error(field, f"{pattern!r} is not a valid regular expression: {exc}") from None
+        what = f"{excerpt(pattern)} is not a valid regular expression: {exc}"
+        raise field_error(field, what) from None
 
 
 def _check_command(field: str, command: str | None) -> None:
@@ -81,7 +82,7 @@ def _check_command(field: str, command: str | None) -> None:
     if not command.strip():
         raise field_error(field, "expected a command, got an empty string")
     if "\r" in command or "\n" in command or not command.isascii():
-        raise field_error(field, f"expected one line of ASCII text, got {command!r}")
+        raise field_error(field, f"expected one line of ASCII text, got {excerpt(command)}")
 
 
 # -- the light ---------------------------------------------------------------------------

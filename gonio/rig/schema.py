@@ -15,7 +15,7 @@ from pydantic import Field, field_validator, model_validator
 
 from drivers.dynamixel import BAUD_RATES, AxisConfig
 from drivers.dynamixel import MODEL_NAMES as MODELS
-from gonio.config import Strict, field_error
+from gonio.config import Strict, excerpt, field_error
 from gonio.config_schema import InSchema
 from gonio.rig.instrument import LENGTH_RANGE_MM, DetectorSpec, LightSpec, ReferenceSpec
 
@@ -343,7 +343,8 @@ class RigSpec(Strict):
         for chain in ("light", "detector", "sample"):
             for i, name in enumerate(getattr(self, chain).axes):
                 if name not in self.axes:
-                    raise field_error(f"{chain}.axes.{i}", f"{name!r} is not one of the axes")
+                    what = f"{excerpt(name)} is not one of the axes"
+                    raise field_error(f"{chain}.axes.{i}", what)
         for b, box in enumerate(self.constraints.collisions):
             where = f"constraints.collisions.{b}.ranges_deg"
             for name, (lo, hi) in box.ranges_deg.items():

@@ -26,7 +26,7 @@ from pydantic import (
 )
 
 from gonio.brdf import MaterialSpec
-from gonio.config import ConfigError, Strict, field_error, load
+from gonio.config import ConfigError, Strict, excerpt, field_error, load
 from gonio.rig import Rig
 from gonio.scene.effects import MAX_SOURCE_POWER, EffectName, EffectsSpec
 from gonio.scene.faults import FaultRule
@@ -279,7 +279,7 @@ class Scene(Strict):
         mismatch = source_mismatch(self.source, rig.source_kind, _rig_label(rig))
         if mismatch is not None:
             field, expected = mismatch
-            raise ConfigError(f"scene {self.name!r}: {field}: {expected}")
+            raise ConfigError(f"scene {excerpt(self.name)}: {field}: {expected}")
         misalignment = self.effects.misalignment
         unknown = [] if misalignment is None else misalignment.unknown_axes(rig.axes)
         if unknown:
