@@ -5,23 +5,33 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
+TEST_EXTRAS := [test,docs,instruments]
+MYPY_NICE ?= 0
 
-.PHONY: demo test lint docs pytest warm browser bench bench-studies clean
+# Installs the project with its extras $(1) into the venv: by uv (resolving in parallel,
+# byte-compiling on every core: about 20 s where pip takes 60-70 on the 2-core machine,
+# the same versions), itself installed by pip; by pip alone if uv cannot be had or fails.
+define install
+	{ $(PIP) install uv && $(BIN)/uv pip install -q --compile-bytecode \
+		--python $(BIN)/python -e '.$(1)'; } || $(PIP) install -e '.$(1)'
+endef
+
+.PHONY: demo test lint style typecheck docs pytest suite warm browser bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
 # Stamps re-run the install whenever pyproject.toml changes.
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(PIP) install -e .
+	$(call install,)
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(PIP) install -e '.[test,docs,instruments]'
+	$(call install,$(TEST_EXTRAS))
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
-	$(PIP) install -e '.[docs]'
+	$(call install,[docs])
 	touch $@ $(VENV)/.installed
 
 # The main job on the simulated rig, then what its run file holds and how well its
@@ -33,11 +43,15 @@ demo: $(VENV)/.installed
 	$(BIN)/gonio info runs/demo.sqlite
 	$(BIN)/gonio evaluate runs/demo.sqlite --method rbf
 
-lint: $(VENV)/.installed-test
+lint: style typecheck
+
+style: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	$(BIN)/mypy
 	$(BIN)/lint-imports
+
+typecheck: $(VENV)/.installed-test
+	nice -n $(MYPY_NICE) $(BIN)/mypy
 
 # The documentation site (mkdocs.yml) into site/; --strict makes a broken link, a missing
 # anchor or a page left out of the navigation an error.
@@ -50,6 +64,9 @@ docs: $(VENV)/.installed-docs
 # BUILT_SITE: a site `make docs` has just built, which the site's browser tests open
 # instead of building their own (`make test` passes it; alone, they build one).
 pytest: $(VENV)/.installed-test browser warm
+	@$(MAKE) --no-print-directory suite
+
+suite:
 	GONIO_BUILT_SITE=$(BUILT_SITE) $(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
 # What every test process would otherwise redo: the sources byte-compiled (where
@@ -75,11 +92,14 @@ browser:
 			chromium >/dev/null; } || echo "could not install chromium"; \
 	fi
 
-# The linters, the site and the warm-up side by side (once installed), then the suite.
+# Once installed: ruff and the import contracts, the site and the warm-up side by side;
+# then the suite with the type checker beside it, at a lower priority (its 30 CPU-s fill
+# the suite's waits on real time instead of holding the suite back).
 test: $(VENV)/.installed-test
-	@echo "checks: the linters, the site and the warm-up side by side"
-	@$(MAKE) --no-print-directory -j3 -O lint docs warm
-	@$(MAKE) --no-print-directory pytest BUILT_SITE=$(CURDIR)/site
+	@echo "checks: ruff, the import contracts, the site and the warm-up side by side"
+	@$(MAKE) --no-print-directory -j4 -O style docs warm browser
+	@echo "the suite, and mypy beside it"
+	@$(MAKE) --no-print-directory -j2 suite typecheck MYPY_NICE=10 BUILT_SITE=$(CURDIR)/site
 
 # Every speed benchmark (benchmarks/) and accuracy study (studies/), one after another,
 # each writing its page docs/results/<script>.md (and docs/results/index.md) with the
