@@ -1,7 +1,7 @@
-"""Scene files: the shipped scenes load; each mistake is one line naming the file, the
-line, the field and what was expected; a fact of the instrument given in a scene is
-refused with where it belongs in the rig file; a source power of the other kind than
-the rig's light is refused."""
+"""Scene files (`gonio.scene`): the shipped scenes load; each mistake is one line
+naming the file, the line, the field and what was expected; a fact of the instrument
+given in a scene is refused with where it belongs in the rig file; a source power of
+the other kind than the rig's light is refused."""
 
 from __future__ import annotations
 
