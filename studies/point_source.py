@@ -35,7 +35,7 @@ from _machine import describe
 
 from gonio.analysis import calibrate
 from gonio.planner import build, load_plan
-from gonio.rig import Reason, Rig, constraints
+from gonio.rig import Reason, Refusals, Rig, constraints
 from gonio.scene import load_scene
 from gonio.types import BoolArray, FloatArray
 from gonio.workflows import Result, simulate_plan
@@ -44,14 +44,14 @@ ROOT = Path(__file__).resolve().parent.parent
 NOISE = ["shot_noise", "read_noise", "dark_current", "quantization", "saturation"]
 
 
-class WithoutViewRefusal(Rig):
-    """The rig as planned before: a view off the sample is not a reason to refuse (the
-    pair falls through to the later checks, axis limits and collisions)."""
+class WithoutViewRefusals(Refusals):
+    """The refusals as planned before: a view off the sample is not a reason to refuse
+    (the pair falls through to the later checks, axis limits and collisions)."""
 
-    def _reasons(
+    def reasons(
         self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
     ) -> np.ndarray:
-        reasons = super()._reasons(wi, wo, limits_ok, usable)
+        reasons = super().reasons(wi, wo, limits_ok, usable)
         view = reasons == Reason.VIEW_OFF_SAMPLE
         later = np.where(
             ~limits_ok.any(axis=0),
@@ -60,6 +60,12 @@ class WithoutViewRefusal(Rig):
         )
         reasons[view] = later[view]
         return reasons
+
+
+class WithoutViewRefusal(Rig):
+    """The rig as planned before (`WithoutViewRefusals`)."""
+
+    refusals_type = WithoutViewRefusals
 
 
 def measure(rig: Rig, effects: list[str]) -> Result:

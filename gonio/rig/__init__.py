@@ -34,6 +34,7 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.rig.instrument import SerialSwitchSpec as SerialSwitchSpec
     from gonio.rig.lab_instrument import PyMeasureInterfaceSpec as PyMeasureInterfaceSpec
     from gonio.rig.model import named_alignment as named_alignment
+    from gonio.rig.refusals import Refusals as Refusals
     from gonio.rig.schema import JOINT_LIMIT_DEG as JOINT_LIMIT_DEG
     from gonio.rig.schema import HealthLimitsSpec as HealthLimitsSpec
     from gonio.rig.schema import RigSpec as RigSpec
@@ -43,6 +44,7 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
 #: The names of the face that load with their module when first used
 #: (`gonio.faces`), by module.
 WHERE = {
+    "Refusals": "refusals",
     "AlignmentFile": "alignment_file",
     "HealthLimitsSpec": "schema",
     "JOINT_LIMIT_DEG": "schema",

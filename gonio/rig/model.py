@@ -49,8 +49,12 @@ def named_alignment(rig_path: Path | None, name: str) -> Path:
 class Rig:
     """A rig: forward and inverse kinematics, constraints, and its motor axes.
 
-    It holds its `Refusals` (`gonio.rig.refusals`: why a pair or a pose is refused);
-    a rig file's checks beyond its schema are `gonio.rig.rig_checks`'s."""
+    It holds its `Refusals` (`gonio.rig.refusals`: why a pair or a pose is refused), of
+    the class ``refusals_type`` (a study may give other reasons: a subclass of `Rig`
+    that names a subclass of `Refusals`); a rig file's checks beyond its schema are
+    `gonio.rig.rig_checks`'s."""
+
+    refusals_type: type[Refusals] = Refusals
 
     def __init__(
         self,
@@ -85,7 +89,9 @@ class Rig:
         self.travel = TravelModel(*self.motion_rates())
         self.home = np.clip(np.zeros(len(a)), self.limits[:, 0], self.limits[:, 1])
         #: Why a pair or a pose is refused: limits, keep-out boxes, the constraints.
-        self._refusals = Refusals(self.limits, spec.constraints, self.axes, self.source_kind)
+        self._refusals = self.refusals_type(
+            self.limits, spec.constraints, self.axes, self.source_kind
+        )
         self.theta_max = self._refusals.theta_max
         self.min_separation = self._refusals.min_separation
         self._rotation_index = self.axes.index("sample_rotation")
@@ -373,7 +379,7 @@ class Rig:
         pick = np.argmin(cost, axis=0)
         rows = np.arange(len(wi))
         angles = np.ascontiguousarray(columns[:, pick, rows].T)
-        reasons = self._reasons(wi, wo, limits_ok, usable)
+        reasons = self._refusals.reasons(wi, wo, limits_ok, usable)
 
         measured_wi, measured_wo = wi, wo
         if reached is not None:  # what the rig, as it really is, measures at the poses
@@ -399,7 +405,7 @@ class Rig:
             if reached is not None:
                 limits_ok &= reached
             usable = limits_ok & ~self._collides(np.moveaxis(columns, 0, -1))
-            reasons = self._reasons(wi, wo, limits_ok, usable)
+            reasons = self._refusals.reasons(wi, wo, limits_ok, usable)
             return reasons == Reason.OK, reasons
 
         return blockwise(block, wi, wo)
@@ -413,15 +419,8 @@ class Rig:
         wi, wo = self.forward(angles, self.alignment)
         limits_ok = self._refusals.inside_limits(angles.T)
         commandable = limits_ok & ~self._collides(angles)
-        reasons = self._reasons(wi, wo, limits_ok[None, :], commandable[None, :])
+        reasons = self._refusals.reasons(wi, wo, limits_ok[None, :], commandable[None, :])
         return reasons, commandable
-
-    def _reasons(
-        self, wi: FloatArray, wo: FloatArray, limits_ok: BoolArray, usable: BoolArray
-    ) -> np.ndarray:
-        """Why each pair (N, 3) is refused (`Refusals.reasons`), given which of its
-        candidates (K, N) are within the limits and which are also collision-free."""
-        return self._refusals.reasons(wi, wo, limits_ok, usable)
 
     # -- the instrument ------------------------------------------------------------------
     @property
