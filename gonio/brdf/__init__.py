@@ -42,6 +42,7 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.brdf.material import material_schema as material_schema
     from gonio.brdf.models import blinn_normalization as blinn_normalization
     from gonio.brdf.quadrature import directional_albedo as directional_albedo
+    from gonio.brdf.quadrature import legendre as legendre
     from gonio.brdf.rgl import RglTable as RglTable
 
 #: The names of the face that load with their module when first used
@@ -60,6 +61,7 @@ WHERE = {
     "blinn_normalization": "models",
     "build": "material",
     "directional_albedo": "quadrature",
+    "legendre": "quadrature",
     "factored_file": "factored_file",
     "family": "family",
     "lobe_errors": "lobe_errors",

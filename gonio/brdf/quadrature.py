@@ -24,6 +24,7 @@ rules are refined. Lobes with a kink (the cut cosine-quadratic) converge to ~1e-
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -34,12 +35,21 @@ from gonio.types import ArrayLike, FloatArray
 _CHUNK = 32768
 
 
+@functools.cache
+def legendre(n: int) -> tuple[FloatArray, FloatArray]:
+    """The ``n``-point Gauss-Legendre nodes and weights on [−1, 1] (numpy's
+    ``leggauss``, an eigenvalue problem of size n), computed once per n: read-only."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def radial_rule(order: int = 16, levels: int = 16) -> tuple[FloatArray, FloatArray]:
     """Nodes t ∈ (0, 1) and weights of the composite Gauss-Legendre rule on [0, 1].
 
     Panels are dyadic toward both ends: [0, 2⁻ᴸ], …, [¼, ½], [½, ¾], …, [1 − 2⁻ᴸ, 1].
     """
-    x, w = np.polynomial.legendre.leggauss(order)
+    x, w = legendre(order)
     low = 2.0 ** -np.arange(levels, 0, -1, dtype=np.float64)  # 2⁻ᴸ … ½
     edges = np.concatenate([[0.0], low, 1.0 - low[-2::-1], [1.0]])
     a, b = edges[:-1, None], edges[1:, None]

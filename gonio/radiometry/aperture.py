@@ -26,6 +26,7 @@ from typing import Literal, TypeAlias
 
 import numpy as np
 
+from gonio.brdf import legendre
 from gonio.errors import DomainError
 from gonio.radiometry._checks import direction_pair, positive
 from gonio.radiometry.ideal import Source, source_kind
@@ -88,13 +89,13 @@ def aperture_integral(
     lead = a.shape[:-1]
     wi_flat, wo_flat = a.reshape(-1, 3), b.reshape(-1, 3)
 
-    x, wx = np.polynomial.legendre.leggauss(n_psi)
+    x, wx = legendre(n_psi)
     h_cap = omega_sr / (2.0 * math.pi)
     h = 0.5 * h_cap * (1.0 - x)  # 1 − cos ψ at the nodes, in (0, 1 − cos α)
     cos_psi, sin_psi = 1.0 - h, np.sqrt(h * (2.0 - h))
     w_psi = 0.5 * h_cap * wx  # Gauss-Legendre in cos ψ on an interval of length h_cap
     trapezoid = (np.arange(n_chi) + 0.5) * (2.0 * math.pi / n_chi) - math.pi
-    xg, wg = np.polynomial.legendre.leggauss(n_chi)
+    xg, wg = legendre(n_chi)
 
     block = max(1, _BLOCK // (n_psi * n_chi))
     out: list[FloatArray] = []

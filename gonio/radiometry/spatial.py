@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from gonio.brdf import legendre
 from gonio.errors import DomainError
 from gonio.radiometry._checks import cosine, direction_pair, positive
 from gonio.radiometry._ellipses import Form, azimuth, crossings, ellipse_form, quadratic
@@ -58,13 +59,13 @@ def _nodes(
     edges = np.sort(np.stack([*fixed, c1, c2, c1 + math.pi, c2 + math.pi], axis=-1), axis=-1)
     edges = np.concatenate([edges, np.full_like(co, 2.0 * math.pi)[:, None]], axis=-1)
     lo, hi = edges[:, :-1, None], edges[:, 1:, None]  # (P, 8, 1)
-    xa, wa = np.polynomial.legendre.leggauss(n_az)
+    xa, wa = legendre(n_az)
     beta = (0.5 * (lo + hi) + 0.5 * (hi - lo) * xa).reshape(len(co), -1)  # (P, 8 n_az)
     w_beta = (0.5 * (hi - lo) * wa).reshape(len(co), -1)
     cb, sb = np.cos(beta), np.sin(beta)
     q = np.maximum(quadratic(Form(*(v[:, None] for v in seen)), cb, sb), inv_r2)
     radius = 1.0 / np.sqrt(q)  # (P, 8 n_az)
-    xr, wr = np.polynomial.legendre.leggauss(n_r)
+    xr, wr = legendre(n_r)
     rho = 0.5 * radius[..., None] * (1.0 + xr)  # (P, 8 n_az, n_r)
     weight = w_beta[..., None] * 0.5 * radius[..., None] * wr * rho
     points = np.stack([rho * cb[..., None], rho * sb[..., None]], axis=-1)

@@ -39,6 +39,7 @@ from drivers.errors import DetectorError, DeviceClosed, StreamNotSupported
 from drivers.pymeasure import PyMeasureDetectorConfig
 from drivers.stream import StreamReading
 from drivers.values import Reading
+from gonio.brdf import legendre
 from gonio.rig import PyMeasureInterfaceSpec, Rig
 from gonio.scene import STREAM_GAP, STREAM_GAP_FROM, Scene
 from sim.virtual.faults import FaultInjector
@@ -64,7 +65,7 @@ def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     node: the middle, weight 1 exactly)."""
     if n == 1:
         return np.array([0.5]), np.array([1.0])
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = legendre(n)
     return 0.5 * (x + 1.0), 0.5 * w
 
 
