@@ -124,14 +124,17 @@ def test_a_fly_plan_acquires_on_the_rehearsal_path(
     assert len(run) >= 0.7 * len(run.plan)
     # The axes that do not sweep hold their commanded angles to a tick or two; the swept
     # one is read at mid-window, near its target (the velocity's register step drifts it
-    # along the sweep by at most a few readings' travel).
+    # along the sweep by at most a few readings' travel), within what its timing σ says
+    # (a loaded host answers its polls slowly: each position then belongs to a longer
+    # span of time, and the sample says so).
     rig = Rig.from_yaml(RIG)
     tick = np.array([a.resolution_rad for a in rig.bus_axes()])
     gap = np.abs(run.angles("read_back") - run.angles("commanded"))
     swept = np.abs(sweeps.velocity).max(axis=0) > 0
     assert np.all(gap[:, ~swept] <= 2 * tick[~swept])
     speed = float(np.abs(sweeps.velocity).max())
-    assert np.all(gap[:, swept] <= 5 * speed * sweeps.period_s)
+    timing = np.asarray(run.samples["timing_rad"], dtype=np.float64)
+    assert np.all(gap[:, swept] <= 5 * speed * sweeps.period_s + 6 * timing[:, None])
 
 
 def test_a_plan_of_theta_h_lines_acquires_on_the_rehearsal_path(
