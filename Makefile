@@ -8,12 +8,18 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check -q
 TEST_EXTRAS := [test,docs,instruments]
 MYPY_NICE ?= 0
 
-# Installs the project with its extras $(1) into the venv: by uv (resolving in parallel,
-# byte-compiling on every core: about 20 s where pip takes 60-70 on the 2-core machine,
-# the same versions), itself installed by pip; by pip alone if uv cannot be had or fails.
+# Python writes the byte code of what it imports (a machine may set
+# PYTHONDONTWRITEBYTECODE; then every process the tests start would compile numpy,
+# scipy and the package again): each module is compiled once, by the first process that
+# imports it, and only the modules something imports.
+unexport PYTHONDONTWRITEBYTECODE
+
+# Installs the project with its extras $(1) into the venv: by uv (resolving and
+# unpacking in parallel: about 10 s where pip takes 60-70 on the 2-core machine, the
+# same versions), itself installed by pip; by pip alone if uv cannot be had or fails.
 define install
-	{ $(PIP) install uv && $(BIN)/uv pip install -q --compile-bytecode \
-		--python $(BIN)/python -e '.$(1)'; } || $(PIP) install -e '.$(1)'
+	{ $(PIP) install uv && $(BIN)/uv pip install -q --python $(BIN)/python -e '.$(1)'; } \
+		|| $(PIP) install -e '.$(1)'
 endef
 
 .PHONY: demo test lint style typecheck docs pytest suite warm browser bench bench-studies clean
@@ -69,16 +75,14 @@ pytest: $(VENV)/.installed-test browser warm
 suite:
 	GONIO_BUILT_SITE=$(BUILT_SITE) $(BIN)/python -m pytest -q -n 3 --dist loadgroup
 
-# What every test process would otherwise redo: the sources byte-compiled (where
-# PYTHONDONTWRITEBYTECODE is set, as on the machines this project is built on, each
-# process the tests start compiled them again), the planner's numba kernels compiled
-# into their on-disk cache (some seconds, once, not in each worker at the same time),
-# and the test modules as pytest rewrites their asserts, by one collection that may
-# write them (each worker reads them: its collection 8 CPU-s instead of 17).
+# What every test process would otherwise redo, once: the planner's numba kernels
+# compiled into their on-disk cache (some seconds, not in each worker at the same time),
+# and, by one collection of the suite, the byte code of everything the tests import and
+# of the test modules as pytest rewrites their asserts (each worker reads them: its
+# collection 8 CPU-s instead of 17).
 warm: $(VENV)/.installed-test
-	$(BIN)/python -m compileall -q -j 0 gonio drivers sim studies tools tests >/dev/null
 	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
-	@out=$$(PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
+	@out=$$($(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
 		|| { echo "$$out"; exit 1; }
 
 
