@@ -131,10 +131,11 @@ def test_a_fly_plan_acquires_on_the_rehearsal_path(
     tick = np.array([a.resolution_rad for a in rig.bus_axes()])
     gap = np.abs(run.angles("read_back") - run.angles("commanded"))
     swept = np.abs(sweeps.velocity).max(axis=0) > 0
-    assert np.all(gap[:, ~swept] <= 2 * tick[~swept])
+    assert np.all(gap[:, ~swept] <= 2 * tick[~swept]), (gap[:, ~swept] / tick[~swept]).max()
     speed = float(np.abs(sweeps.velocity).max())
     timing = np.asarray(run.samples["timing_rad"], dtype=np.float64)
-    assert np.all(gap[:, swept] <= 5 * speed * sweeps.period_s + 6 * timing[:, None])
+    bound = 5 * speed * sweeps.period_s + 6 * timing[:, None]
+    assert np.all(gap[:, swept] <= bound), (gap[:, swept] / bound).max()
 
 
 def test_a_plan_of_theta_h_lines_acquires_on_the_rehearsal_path(
@@ -161,9 +162,12 @@ def test_a_plan_of_theta_h_lines_acquires_on_the_rehearsal_path(
     # every axis followed its trajectory: the read-back angles (the real DynamixelBus's
     # polls of the emulated motors, which the samples keep) near the planned ones, within
     # the tracking a loaded host allows (tens of mrad: docs/results/trajectory_bus.md)
-    # and one reading period's travel; a reading matched to a wrong slot would be off by
-    # several periods' travel
+    # and one reading period's travel, within what the readings' timing σ says (polls a
+    # loaded host answers slowly place each reading less surely); a reading matched to a
+    # wrong slot would be off by several periods' travel
     gap = np.abs(run.angles("read_back") - run.angles("commanded"))
     steps = [np.abs(np.diff(sweeps.set_points(k), axis=0)) for k in range(len(sweeps))]
     speed = np.concatenate(steps).max(axis=0) / sweeps.path_period_s
-    assert np.all(np.median(gap, axis=0) <= speed * sweeps.period_s + 0.06)
+    timing = float(np.median(np.asarray(run.samples["timing_rad"], dtype=np.float64)))
+    bound = speed * sweeps.period_s + 0.06 + 6 * timing
+    assert np.all(np.median(gap, axis=0) <= bound), np.median(gap, axis=0) / bound
