@@ -30,7 +30,9 @@ def test_the_reads_are_timed_at_the_interval_asked_and_the_interval_comes_back(
     bench = load_benchmark()
     before = sys.getswitchinterval()
     times, failed, budget_ms = bench.polls(bench.DEFAULT_SWITCH_INTERVAL_S, 5)
-    assert len(times) == 5 and failed == 0 and all(t > 0 for t in times)
+    # every read timed; a loaded host may let the unmodified SDK miss its budget on one
+    # (the benchmark counts those, which is what it measures), not on most
+    assert len(times) == 5 and failed <= 1 and all(t > 0 for t in times)
     # The SDK's budget for a 4-motor SYNC_READ of 4 bytes: (11 + 4) × 4 bytes on the
     # wire at the emulator's rate, plus 2 × LATENCY_TIMER + 2 ms.
     byte_ms = 1000.0 / 57_600 * 10
