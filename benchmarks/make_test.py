@@ -1,12 +1,14 @@
 """The whole `make test` from a clean clone, as CI runs it: `git clone` of the committed
 tree into a temporary folder, then `CI=true make test` there with no standard input
-(a new virtual environment, the install of the test and docs extras; then side by side
-ruff, mypy and the import contracts, the documentation site's strict build, and the
-warm-up: the sources byte-compiled, the planner's numba kernels compiled into their
-cache, and the test modules collected once so that pytest's assert rewriting is written
-for the workers; then the test suite on three workers, the site's browser tests opening
-the site just built). Prints the wall time of each stage and the suite's own summary
-line; the budget is 4 minutes on the 2-core machine, install included.
+(a new virtual environment and the install of the test and docs extras by uv, itself
+installed by pip; then side by side ruff and the import contracts, the documentation
+site's strict build, the browser's install where it is missing, and the warm-up: the
+planner's numba kernels compiled into their cache and the suite collected once, which
+writes the byte code of what the tests import and of the test modules as pytest
+rewrites their asserts; then the test suite on three workers, the site's browser tests
+opening the site just built, with mypy beside it at nice 10). Prints the wall time of
+each stage and the suite's own summary line; the budget is 4 minutes on the 2-core
+machine, install included.
 
 Run: .venv/bin/python benchmarks/make_test.py [--repeat N]
 """
