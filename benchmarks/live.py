@@ -63,9 +63,12 @@ from gonio.store import Journal, open_run
 from gonio.workflows import session
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # tests.support: the browser the browser tests drive
+from tests.support.browser import ARGS as BROWSER_ARGS  # noqa: E402
+from tests.support.browser import CHROMIUM  # noqa: E402
+
 GLOSSY = ROOT / "configs/scenes/glossy_metal.yaml"
 QUICKSTART = ROOT / "configs/plans/quickstart.yaml"
-CHROMIUM = "/usr/bin/chromium"
 
 
 def free_port() -> int:
@@ -186,20 +189,11 @@ def take_screenshot(url: str, base: str, path: Path) -> None:
     except ImportError:
         print("no screenshot: playwright is not installed")
         return
-    args = [
-        "--no-sandbox",
-        "--headless",
-        "--disable-gpu",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--no-first-run",
-        "--disable-sync",
-    ]
     with tempfile.TemporaryDirectory() as profile, sync_playwright() as p:
         context = p.chromium.launch_persistent_context(
             profile,
             executable_path=CHROMIUM,
-            args=args,
+            args=BROWSER_ARGS,
             headless=True,
             viewport={"width": 1300, "height": 1000},
         )
