@@ -18,4 +18,6 @@ def band_eval(model: BRDF, band: str) -> BrdfEval:
     if not model.is_rgb:
         return lambda wi, wo: np.asarray(model.eval(wi, wo), dtype=np.float64)
     weights = np.asarray(LUMINANCE) if band == "luminance" else np.eye(3)["rgb".index(band)]
-    return lambda wi, wo: np.asarray(model.eval(wi, wo) @ weights, dtype=np.float64)
+    # A sum per pair, not a matrix product: BLAS rounds a product's rows differently
+    # with their number, and a pair's value must not depend on its batch.
+    return lambda wi, wo: np.asarray((model.eval(wi, wo) * weights).sum(axis=-1), dtype=np.float64)

@@ -22,7 +22,9 @@ scene's ``motion_blur`` effect a window is instead the mean over Gauss–Legendr
 time of the power at the poses ``pose_at(t_k)`` (`blur_nodes`: as many as its smear
 needs); with ``timestamp_jitter`` the stamps it reports are the true window shifted by
 a latency and a Gaussian jitter from the sample's ``TIMING`` stream (the true windows
-kept in ``stream_truth``). A lock-in does not stream.
+kept in ``stream_truth``). A lock-in does not stream. The windows' optics are
+`sim.virtual.devices.windows.WindowOptics`'s, computed ahead in one pass where ``pose_at``
+gives the poses to come (``lookahead``).
 """
 
 from __future__ import annotations
@@ -39,9 +41,9 @@ from drivers.errors import DetectorError, DeviceClosed, StreamNotSupported
 from drivers.pymeasure import PyMeasureDetectorConfig
 from drivers.stream import StreamReading
 from drivers.values import Reading
-from gonio.brdf import legendre
 from gonio.rig import PyMeasureInterfaceSpec, Rig
 from gonio.scene import STREAM_GAP, STREAM_GAP_FROM, Scene
+from sim.virtual.devices.windows import WindowOptics
 from sim.virtual.faults import FaultInjector
 from sim.virtual.physics import lockin, sensor
 from sim.virtual.physics.optics import SceneOptics
@@ -50,23 +52,6 @@ from sim.virtual.physics.streams import TIMING, Streams
 DETECTOR_KINDS = frozenset({"detector_error", "saturated"})
 #: The injected faults a stream meets.
 STREAM_KINDS = frozenset({"stream_gap"})
-
-
-def blur_nodes(smear_deg: np.ndarray, max_step_deg: float, max_nodes: int) -> np.ndarray:
-    """Time nodes per window (N,) for windows whose joints travel ``smear_deg`` (N,) °:
-    ⌈smear / max_step⌉, at least 1 (a still window: its middle alone), at most
-    ``max_nodes``."""
-    n = np.ceil(np.asarray(smear_deg, dtype=np.float64) / max_step_deg - 1e-9)
-    return np.clip(n, 1, max_nodes).astype(np.int64)
-
-
-def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes in [0, 1] and weights summing to 1 of the n-point Gauss–Legendre rule (one
-    node: the middle, weight 1 exactly)."""
-    if n == 1:
-        return np.array([0.5]), np.array([1.0])
-    x, w = legendre(n)
-    return 0.5 * (x + 1.0), 0.5 * w
 
 
 class LightState(Protocol):
@@ -139,6 +124,7 @@ class SimDetector(Resource):
         light: LightState | None = None,
         faults: FaultInjector | None = None,
         pose_at: Callable[[float], Mapping[str, float]] | None = None,
+        lookahead: bool = False,
     ) -> None:
         self.scene = scene
         self.rig = rig
@@ -162,8 +148,6 @@ class SimDetector(Resource):
         #: A lock-in's readings (``detector.kind: lockin``): volts, no dark signal, a phase.
         self.lockin = scene.detector.kind == "lockin"
         self._phase: np.ndarray | None = None  # the last lock-in readings' phases (°)
-        #: The pose (joint angles) at a time on the clock, for a stream's windows.
-        self.pose_at = pose_at
         self._stream: tuple[float, float, float] | None = None  # (t0, period, integration)
         self._windows = 0  # windows of the running stream read so far
         #: The true windows (started, ended) on the clock of the running (or last)
@@ -171,6 +155,14 @@ class SimDetector(Resource):
         self.stream_truth: list[tuple[float, float]] = []
         #: Time nodes of each window read so far of the running (or last) stream.
         self.stream_nodes: list[int] = []
+        #: The windows' optics (``lookahead``: ``pose_at`` gives the poses to come).
+        self.windows = WindowOptics(self.chain, rig.axes, pose, pose_at, lookahead=lookahead)
+        self._ahead_until = 0  # windows of the running stream computed ahead
+
+    @property
+    def pose_at(self) -> Callable[[float], Mapping[str, float]] | None:
+        """The pose (joint angles) at a time on the clock, for a stream's windows."""
+        return self.windows.pose_at
 
     # -- Resource / Detector -------------------------------------------------------
     @property
@@ -246,6 +238,8 @@ class SimDetector(Resource):
         gap = self._faults.fired(self._sample, attempt, STREAM_KINDS) if self._faults else None
         self._gap = (STREAM_GAP_FROM, STREAM_GAP_FROM + STREAM_GAP) if gap else (0, 0)
         self.stream_truth, self.stream_nodes = [], []
+        self.windows.forget()
+        self._ahead_until = 0
 
     def read_stream(self, timeout_s: float = 0.0) -> list[StreamReading]:
         """The windows ended since the last call; with none, let up to ``timeout_s``
@@ -277,6 +271,12 @@ class SimDetector(Resource):
         if not len(k):
             return []
         self._windows = done
+        if self.windows.lookahead and done > self._ahead_until:
+            first = max(self._ahead_until, self._windows)
+            ahead = np.arange(first, first + self.windows.ahead_count(done - first))
+            ends = t0 + (ahead + 1) * period
+            self.windows.ahead(ends - integration, ends, self._target)
+            self._ahead_until = first + len(ahead)
         ended = t0 + (k + 1) * period
         started = ended - integration
         start = self._draws.get(self._sample, 0)
@@ -307,19 +307,6 @@ class SimDetector(Resource):
         z = self.streams.normal(index, TIMING, n, start=start)[0]
         return np.asarray(spec.latency_s + spec.sigma_s * z, dtype=np.float64)
 
-    def _poses(self, times: np.ndarray) -> np.ndarray:
-        """Joint angles (len(times), A) at clock times (rad), from ``pose_at`` (else the
-        pose of now)."""
-        axes = self.rig.axes
-        poses = []
-        for t in times.tolist():
-            pose = self.pose_at(t) if self.pose_at is not None else self._pose()
-            try:
-                poses.append([float(pose[name]) for name in axes])
-            except KeyError as exc:
-                raise DetectorError(f"the pose has no angle for axis {exc.args[0]!r}") from None
-        return np.array(poses, dtype=np.float64).reshape(len(times), len(axes))
-
     def window_counts(
         self, started: np.ndarray, ended: np.ndarray, integration: float
     ) -> tuple[np.ndarray, np.ndarray]:
@@ -338,25 +325,9 @@ class SimDetector(Resource):
         present sample's random streams: at the pose of each window's middle time, or
         with ``motion_blur`` the mean power over the window's time nodes."""
         middle = 0.5 * (started + ended)
-        blur = self.scene.effects.motion_blur
-        if blur is None or self.pose_at is None:
-            times, weights, owner = middle, np.ones(len(middle)), np.arange(len(middle))
-            nodes = np.ones(len(middle), dtype=np.int64)
-        else:
-            ends = self._poses(np.concatenate([started, middle, ended])).reshape(3, len(middle), -1)
-            travel = np.abs(ends[1] - ends[0]) + np.abs(ends[2] - ends[1])
-            nodes = blur_nodes(np.degrees(travel.max(axis=1)), blur.max_step_deg, blur.max_nodes)
-            rules = {n: gauss_legendre(n) for n in set(nodes.tolist())}
-            times = np.concatenate(
-                [
-                    [m] if n == 1 else a + (b - a) * rules[n][0]  # one node: the middle
-                    for a, m, b, n in zip(started, middle, ended, nodes.tolist(), strict=True)
-                ]
-            )
-            weights = np.concatenate([rules[n][1] for n in nodes.tolist()])
-            owner = np.repeat(np.arange(len(middle)), nodes)
+        times, weights, owner, nodes = self.windows.time_nodes(started, ended)
         self.stream_nodes += nodes.tolist()
-        _, _, geometric = self.chain.at_poses(self._poses(times), self._target)
+        geometric = self.windows.power(self.windows.poses(times), self._target)
         at_nodes = self.chain.power(geometric, times[:, None], light_on=self.light.is_on)[:, 0]
         if len(times) == len(middle):
             power = at_nodes[None, :]

@@ -63,6 +63,7 @@ class SimulatedInstrument(Resource):
             light=self.light,
             faults=injector,
             pose_at=self.bus.true_position_at,
+            lookahead=True,
         )
         self._devices = Devices(self.bus, self.detector, self.clock, self.light, self)
 

@@ -16,7 +16,8 @@ from gonio.config import ConfigError
 from gonio.rig.model import Rig
 from gonio.scene import Scene, load_scene
 from sim.clock import ManualClock
-from sim.virtual.devices.detector import SimDetector, blur_nodes, gauss_legendre
+from sim.virtual.devices.detector import SimDetector
+from sim.virtual.devices.windows import blur_nodes, gauss_legendre
 from sim.virtual.physics.streams import Streams
 from tests.conftest import CONFIGS
 
@@ -95,7 +96,7 @@ def test_a_linear_in_time_signal_has_its_middle_as_mean(rigs: dict[str, Rig]) ->
         )
     )
     pose_at = sweep(rig, 20.0, 300.0)
-    det.pose_at = pose_at
+    det.windows.pose_at = pose_at
     with det:
         det.start_stream(100.0, 0.008)
         det._clock.advance(0.05)  # type: ignore[attr-defined]
