@@ -22,7 +22,7 @@ define install
 		|| $(PIP) install -e '.$(1)'
 endef
 
-.PHONY: demo test lint style typecheck docs pytest suite warm browser bench bench-studies clean
+.PHONY: demo test lint style typecheck docs pytest suite warm warm-kernels warm-collect browser bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -80,8 +80,13 @@ suite:
 # and, by one collection of the suite, the byte code of everything the tests import and
 # of the test modules as pytest rewrites their asserts (each worker reads them: its
 # collection 8 CPU-s instead of 17).
-warm: $(VENV)/.installed-test
+# The two side by side (under make -j): neither needs the other.
+warm: warm-kernels warm-collect
+
+warm-kernels: $(VENV)/.installed-test
 	$(BIN)/python -c "from gonio.planner.ordering import compile_kernels; compile_kernels()"
+
+warm-collect: $(VENV)/.installed-test
 	@out=$$($(BIN)/python -m pytest -q --collect-only -p no:cacheprovider) \
 		|| { echo "$$out"; exit 1; }
 
