@@ -157,8 +157,9 @@ def latency_timer(monkeypatch: pytest.MonkeyPatch) -> int:
 
 
 #: Tests that talk to a pseudo-terminal (the emulated bus, the photometer, the lamp): the
-#: SDK busy-waits for replies in the test's thread while the device serves from another
-#: (`sim.peers.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
+#: test's thread waits for replies while the device serves from another (the unmodified
+#: SDK's own port spinning as it waits, the link's in `select`: `sdk_boundary.Port`;
+#: `sim.peers.responsive` keeps that hand-off short). They (and any test marked ``pty`` by
 #: hand) are marked ``pty`` and kept in one xdist group, so `make test` runs them one
 #: after another on a single worker (and one worker at a time raises its session's
 #: priority: `real_time_first`); the other workers' CPU-bound tests load the machine as

@@ -1,4 +1,4 @@
-"""Where our link meets ``dynamixel-sdk``: three corrections, applied at our boundary.
+"""Where our link meets ``dynamixel-sdk``: its corrections, applied at our boundary.
 
 The SDK is installed unmodified (from PyPI); `DynamixelLink` uses these two subclasses
 of its classes instead of the originals. Each override says which SDK behaviour it
@@ -34,6 +34,15 @@ replaces (checked against dynamixel-sdk 4.1.0, ``protocol2_packet_handler.py`` a
    are waiting after it: a reply the bus still owed to an earlier transaction. The
    link's sync reads check every expected ID exactly once, in order, the same way.
 
+5. **Waiting for a reply.** ``rxPacket`` calls ``readPort`` in a loop until the packet
+   is complete or its timeout has passed, and ``readPort`` reads what is there without
+   waiting (the port's timeout is 0): the loop spins for the whole reply time, a core
+   busy and, in Python, the interpreter's lock held, so a peer in the same process
+   (an emulator's thread, a UI) is starved of the very time it needs to answer. `Port`'s
+   ``readPort`` first waits until a byte is there or the packet's time is up (`select`,
+   which lets the other threads run) and then reads what is there, as the SDK's would:
+   the same bytes at the same moments, the same timeouts.
+
 A late reply of exactly the expected length and ID cannot be told from the answer by
 its bytes. The link therefore never starts a transaction while the bus may still owe
 a reply: after a failed or interrupted one it first *syncs* (`Syncer`): a READ whose
@@ -43,6 +52,7 @@ bytes keep their order on the bus, so nothing owed can come after it.
 
 from __future__ import annotations
 
+import select
 from typing import Any
 
 import dynamixel_sdk as sdk
@@ -90,6 +100,14 @@ class Port(sdk.PortHandler):  # type: ignore[misc]
     def setPacketTimeout(self, packet_length: int) -> None:
         self.packet_start_time = self.getCurrentTime()
         self.packet_timeout = self.tx_time_per_byte * packet_length + self.latency_timer * 2.0 + 2.0
+
+    def readPort(self, length: int) -> bytes:
+        """Up to ``length`` bytes: what is there once a byte is, or once the present
+        packet's time is up (nothing waits past it)."""
+        left_ms = self.packet_timeout - self.getTimeSinceStart()
+        if length > 0 and left_ms > 0 and not self.ser.in_waiting:
+            select.select([self.ser.fileno()], [], [], left_ms / 1000.0)
+        return bytes(self.ser.read(length))
 
 
 class PacketHandler(p2.Protocol2PacketHandler):  # type: ignore[misc]

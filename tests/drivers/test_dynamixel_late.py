@@ -10,12 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import dynamixel_sdk as sdk
 import pytest
 
 from drivers.dynamixel.axis import AxisConfig
 from drivers.dynamixel.bus import DynamixelBus
 from drivers.dynamixel.control_table import item
 from drivers.dynamixel.link import DynamixelLink
+from drivers.dynamixel.sdk_boundary import PacketHandler, Port
 from drivers.errors import CommError
 from sim.peers.dynamixel.emulator import DxlEmulator
 from sim.peers.dynamixel.faults import Fault
@@ -153,3 +155,37 @@ def test_the_bus_holds_and_reads_true_positions_after_late_replies(
         assert {m: emu.motors[m].get("goal_position") for m in ids} == {
             m: emu.motors[m].get("present_position") for m in ids
         }
+
+
+class CountingPort(Port):
+    """The link's port, counting the SDK's calls to read it."""
+
+    reads = 0
+
+    def readPort(self, length: int) -> bytes:
+        self.reads += 1
+        return super().readPort(length)
+
+
+def test_waiting_for_a_late_reply_does_not_spin(emulator: Emulator) -> None:
+    """The SDK's receive loop reads the port until the packet is whole or its time is up;
+    `Port.readPort` waits for a byte first, so a reply 1.5 latency timers late (within
+    its timeout) costs a few reads, where the SDK's own would spin through thousands."""
+    emu = emulator(ids=(1,))
+    emu.motors[1].set("current_limit", 1234)
+    timer = 20.0
+    port = CountingPort(emu.path, timer)
+    assert port.openPort() and port.setBaudRate(emu.baud)
+    try:
+        for late in (False, True):
+            if late:
+                emu.inject(Fault.LATE, motor_id=1, delay_ms=1.5 * timer)
+            port.reads = 0
+            value, result, error = PacketHandler().read2ByteTxRx(
+                port, 1, item("current_limit").address
+            )
+            assert (value, result, error) == (1234, sdk.COMM_SUCCESS, 0)
+            assert port.reads <= 12, (late, port.reads)
+    finally:
+        port.closePort()
+    assert emu.stats.late == 1
