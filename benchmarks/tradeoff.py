@@ -35,7 +35,10 @@ def rate(sweep: Sweep, mode: str, jobs: int) -> tuple[float, float, float]:
 
             started = time.perf_counter()
             with LocalCluster(
-                n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None
+                n_workers=jobs,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address="127.0.0.1:0",
             ) as cluster:
                 up = time.perf_counter() - started
                 outcome = run_sweep(sweep, out, scheduler=cluster.scheduler_address)

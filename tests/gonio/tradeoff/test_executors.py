@@ -21,7 +21,7 @@ def test_a_dask_cluster_gives_the_rows_of_the_local_run(
 ) -> None:
     out = tmp_path / "out"
     with LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0"
     ) as cluster:
         code = main(
             [
