@@ -8,51 +8,33 @@ keyword ``factory``: `create` passes itself, the user never does.
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from collections.abc import Callable
 
 from gonio.brdf.base import BRDF
-from gonio.brdf.characteristic import (
-    FresnelTestFunction,
-    GrazingTestFunction,
-    SpecularTestFunction,
-)
-from gonio.brdf.composite import Sum
-from gonio.brdf.cook_torrance import CookTorrance, GGXAnisotropic
-from gonio.brdf.factored import Factored
-from gonio.brdf.merl import MerlTable
-from gonio.brdf.models import (
-    BlinnPhong,
-    CosineQuadratic,
-    CosineQuadraticModified,
-    Lambert,
-    Phong,
-    SchlickLobe,
-)
-from gonio.brdf.rgl import RglTable
-from gonio.brdf.utia import UtiaTable
 from gonio.errors import DomainError, UnknownNameError
 
-_MODELS: dict[str, type[BRDF]] = {
-    cls.name: cls
-    for cls in (
-        Lambert,
-        Phong,
-        BlinnPhong,
-        CosineQuadratic,
-        CosineQuadraticModified,
-        SchlickLobe,
-        CookTorrance,
-        GGXAnisotropic,
-        FresnelTestFunction,
-        SpecularTestFunction,
-        GrazingTestFunction,
-        MerlTable,
-        UtiaTable,
-        RglTable,
-        Factored,
-        Sum,
-    )
+#: Model name → (module of `gonio.brdf`, class): a model's module is imported when the
+#: model is first asked for, so naming the models loads none of them (the microfacet
+#: models load scipy.special, the measured tables scipy.ndimage).
+_MODELS: dict[str, tuple[str, str]] = {
+    "lambert": ("models", "Lambert"),
+    "phong": ("models", "Phong"),
+    "blinn_phong": ("models", "BlinnPhong"),
+    "cosine_quadratic": ("models", "CosineQuadratic"),
+    "cosine_quadratic_modified": ("models", "CosineQuadraticModified"),
+    "schlick_lobe": ("models", "SchlickLobe"),
+    "cook_torrance": ("cook_torrance", "CookTorrance"),
+    "ggx_anisotropic": ("cook_torrance", "GGXAnisotropic"),
+    "fresnel_test_function": ("characteristic", "FresnelTestFunction"),
+    "specular_test_function": ("characteristic", "SpecularTestFunction"),
+    "grazing_test_function": ("characteristic", "GrazingTestFunction"),
+    "merl": ("merl", "MerlTable"),
+    "utia": ("utia", "UtiaTable"),
+    "rgl": ("rgl", "RglTable"),
+    "factored": ("factored", "Factored"),
+    "sum": ("composite", "Sum"),
 }
 
 
@@ -62,13 +44,15 @@ def names() -> list[str]:
 
 
 def model_class(name: str) -> type[BRDF]:
-    """The class registered as ``name``."""
+    """The class registered as ``name`` (its module imported on first use)."""
     try:
-        return _MODELS[name]
+        module, cls = _MODELS[name]
     except KeyError:
         raise UnknownNameError(
             f"unknown BRDF model {name!r}; expected one of {', '.join(_MODELS)}"
         ) from None
+    found: type[BRDF] = getattr(importlib.import_module(f"gonio.brdf.{module}"), cls)
+    return found
 
 
 def create(name: str, **params: object) -> BRDF:

@@ -7,13 +7,14 @@ import argparse
 import contextlib
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gonio.cli.arguments import positive
-from gonio.cli.render import render_choice, render_summary
 from gonio.errors import GonioError
-from gonio.output import reserve_output
-from gonio.planner import MAX_PLAN_MINUTES, Plan, PlanSource, load_plan_source, plan_bytes
-from gonio.workflows import refuse_fly_detector
+from gonio.planner import MAX_PLAN_MINUTES, load_plan_source
+
+if TYPE_CHECKING:
+    from gonio.planner import Plan, PlanSource
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: str) -> None:
@@ -100,6 +101,12 @@ def _pairs(text: str) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    # The command's modules, imported when it runs (not for --help); the builder (scipy,
+    # numba) and the backends (the refusal of a fly plan) load once the files are read.
+    from gonio.cli.render import render_summary
+    from gonio.output import reserve_output
+    from gonio.planner import plan_bytes
+
     _check_choice_options(args)
     if args.plot is not None:
         from gonio.plots import check_figure_format
@@ -117,6 +124,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
             figure = outputs.enter_context(reserve_output(args.plot, "--plot", inputs=inputs))
         source = load_plan_source(args.plan, args.rig)
         if args.budget_min is None:
+            from gonio.workflows import refuse_fly_detector
+
             refuse_fly_detector(source.spec, source.rig)  # before planning, not after it
             plan = source.build(bounds=args.bounds)
         else:
@@ -153,6 +162,7 @@ def _check_choice_options(args: argparse.Namespace) -> None:
 
 def _choose(args: argparse.Namespace, source: PlanSource) -> Plan:
     """The chosen plan for ``--budget-min`` and ``--material``, its candidates printed."""
+    from gonio.cli.render import render_choice
     from gonio.tradeoff import TEST_PAIRS, choose, material_guess
 
     spec, rig = source.spec, source.rig

@@ -81,7 +81,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser], help_: 
 
 
 def cmd_tradeoff(args: argparse.Namespace) -> int:
-    from gonio.tradeoff import check_address, load_sweep, run_sweep
+    from gonio.tradeoff import check_address, load_sweep
 
     if args.scheduler is not None:
         check_address(args.scheduler)  # before anything runs, not after the connect timeout
@@ -100,6 +100,8 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         f"{len(sweep.scenes)} scene(s), into {args.output} on {where}",
         flush=True,
     )
+    from gonio.tradeoff import run_sweep  # the simulator, the planner: once the file is read
+
     outcome = run_sweep(
         sweep,
         args.output,

@@ -32,8 +32,6 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.planner.model import sha256 as sha256
     from gonio.planner.ordering import compile_kernels as compile_kernels
     from gonio.planner.ordering import default_kicks as default_kicks
-    from gonio.planner.placement import MAX_TARGETS as MAX_TARGETS
-    from gonio.planner.placement import WHY_MAX_TARGETS as WHY_MAX_TARGETS
     from gonio.planner.placement import directions as directions
     from gonio.planner.placement import draw_kept as draw_kept
     from gonio.planner.placement import place as place
@@ -43,8 +41,10 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.planner.schema import MAX_KICKS_GIVEN as MAX_KICKS_GIVEN
     from gonio.planner.schema import MAX_MOVES as MAX_MOVES
     from gonio.planner.schema import MAX_PLAN_MINUTES as MAX_PLAN_MINUTES
+    from gonio.planner.schema import MAX_TARGETS as MAX_TARGETS
     from gonio.planner.schema import MIN_BLUR_DEG as MIN_BLUR_DEG
     from gonio.planner.schema import MIN_RATE_HZ as MIN_RATE_HZ
+    from gonio.planner.schema import WHY_MAX_TARGETS as WHY_MAX_TARGETS
     from gonio.planner.schema import AdaptiveSpec as AdaptiveSpec
     from gonio.planner.schema import ExposureSpec as ExposureSpec
     from gonio.planner.schema import FlySpec as FlySpec
@@ -76,7 +76,7 @@ WHERE = {
     "MAX_KICKS_GIVEN": "schema",
     "MAX_MOVES": "schema",
     "MAX_PLAN_MINUTES": "schema",
-    "MAX_TARGETS": "placement",
+    "MAX_TARGETS": "schema",
     "MIN_BLUR_DEG": "schema",
     "MIN_RATE_HZ": "schema",
     "MotorFaultSpec": "policies",
@@ -87,7 +87,7 @@ WHERE = {
     "Summary": "model",
     "Survey": "two_pass",
     "Sweeps": "model",
-    "WHY_MAX_TARGETS": "placement",
+    "WHY_MAX_TARGETS": "schema",
     "Warp": "schema",
     "adaptive": "adaptive",
     "blur_budget_deg": "blur",

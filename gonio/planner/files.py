@@ -7,8 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from gonio import planner  # its face: the builder (scipy, numba) loads when a plan is built
 from gonio.config import ConfigError, line_of, load, read_bytes, read_yaml
-from gonio.planner.builder import build
 from gonio.planner.model import Plan, content_hash
 from gonio.planner.schema import PlanSpec
 from gonio.rig import Rig
@@ -29,7 +29,9 @@ class PlanSource:
 
     def build(self, *, bounds: bool = False) -> Plan:
         """`build` with this file's text (so the plan carries its hash)."""
-        return build(self.spec, self.rig, where=str(self.path), bounds=bounds, text=self.text)
+        return planner.build(
+            self.spec, self.rig, where=str(self.path), bounds=bounds, text=self.text
+        )
 
 
 def load_plan_source(path: str | Path, rig_path: str | Path | None = None) -> PlanSource:

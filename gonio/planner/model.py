@@ -16,7 +16,7 @@ from typing import Literal
 
 import numpy as np
 
-from gonio.planner.ordering import Ordering, Stop
+from gonio.planner.ordered import Ordering, Stop
 from gonio.planner.schema import PlanSpec
 from gonio.rig import Rig
 from gonio.types import FloatArray

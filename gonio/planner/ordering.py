@@ -37,8 +37,9 @@ from gonio.planner import search
 from gonio.planner.bounds import MAX_PAIRS, mst_bound
 from gonio.planner.moves import EPSILON
 from gonio.planner.nearest import nearest_neighbour, nearest_others
+from gonio.planner.ordered import Ordering, Stop
 from gonio.planner.poses import Relaxed, choose
-from gonio.planner.search import Metric, Path, Stop, path_time
+from gonio.planner.search import Metric, Path, path_time
 from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
 
@@ -91,27 +92,6 @@ def default_moves(n: int) -> int:
 def default_kicks(n: int) -> int:
     """The budget of kicks (iterated local search) for ``n`` targets when none is given."""
     return min(KICKS_PER_TWO_TARGETS * n // 2, MAX_KICKS)
-
-
-@dataclass(frozen=True)
-class Ordering:
-    """``order`` indexes the targets in visiting order; times in seconds (moves only)."""
-
-    order: np.ndarray
-    travel_s: float  # the ordered path from the start
-    constructed_s: float  # the constructive order before improvement
-    given_s: float  # the targets in the order given
-    lower_bound_s: float  # the minimum spanning tree over the start and the targets
-    lower_bound_exact: bool  # False if memory forced a weaker bound
-    moves: int  # improving moves of the descent
-    converged: bool  # the descent ended with no improving move left
-    stopped: Stop = "converged"  # why the improvement ended
-    max_moves: int = 0  # the budget of improving moves it had
-    order_wall_s: float = 0.0  # wall time spent constructing and improving
-    bound_wall_s: float = 0.0  # wall time spent on the lower bound
-    kicks: int = 0  # kicks of the iterated local search tried
-    kicks_kept: int = 0  # … that shortened the path
-    max_kicks: int = 0  # the budget of kicks
 
 
 def neighbour_lists(model: TravelModel, points: FloatArray, k: int) -> np.ndarray:

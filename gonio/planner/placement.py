@@ -13,7 +13,8 @@ import numpy as np
 from gonio import params, progress
 from gonio.config import ConfigError
 from gonio.planner import sampling
-from gonio.planner.schema import PlanSpec
+from gonio.planner.schema import MAX_TARGETS as MAX_TARGETS  # builder reads the cap here
+from gonio.planner.schema import WHY_MAX_TARGETS, PlanSpec
 from gonio.rig import Rig
 from gonio.types import FloatArray
 
@@ -22,12 +23,6 @@ BATCH = 4096
 #: A plan asking for a target count stops drawing after this many points; a grid has at
 #: most this many cells.
 MAX_DRAWN = 4_000_000
-#: The most targets a plan may keep, and why (benchmarks/planner.py, table ``memory``).
-MAX_TARGETS = 1_000_000
-WHY_MAX_TARGETS = (
-    "planning needs about 4 KB of memory and 0.2 ms of CPU per target, and a million "
-    "targets are days of instrument time: split the acquisition into several plans"
-)
 
 
 def too_many(where: str, field: str, count: int) -> ConfigError:

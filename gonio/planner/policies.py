@@ -21,7 +21,7 @@ MAX_MINUTES = 7 * 24 * 60.0
 #: time constant of minutes, so a motor still hot after a day is not cooling.
 MAX_COOL_DOWN_MINUTES = 24 * 60.0
 #: The most targets between two calibrations or health checks: more than a plan holds
-#: (`gonio.planner.placement.MAX_TARGETS`, a million).
+#: (`gonio.planner.schema.MAX_TARGETS`, a million).
 MAX_EVERY_SAMPLES = 1_000_000
 #: The shortest and the longest health poll while paused (s): more often than ten times
 #: a second only loads the bus (and a simulated clock would poll without end), less often

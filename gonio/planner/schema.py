@@ -34,6 +34,12 @@ MAX_KICKS_GIVEN = 10**7
 #: The longest instrument time one plan is made for (minutes): a day; a longer campaign
 #: is several plans (and runs), each resumable on its own.
 MAX_PLAN_MINUTES = 1440.0
+#: The most targets a plan may keep, and why (benchmarks/planner.py, table ``memory``).
+MAX_TARGETS = 1_000_000
+WHY_MAX_TARGETS = (
+    "planning needs about 4 KB of memory and 0.2 ms of CPU per target, and a million "
+    "targets are days of instrument time: split the acquisition into several plans"
+)
 #: A plan's strategies: the stop-and-go ones, and fly (readings taken while the axes move).
 PlanStrategy = Literal["grid", "stratified", "sobol", "halton", "random", "adaptive", "fly"]
 
@@ -128,6 +134,12 @@ WHY_MAX_READINGS = (
 )
 
 
+def _flat_material(schema: dict[str, Any]) -> None:
+    """A material field's JSON Schema (`gonio.brdf.material_schema`, flat), written when
+    a schema is asked for: it reads every model's parameters, which loads their modules."""
+    schema.update(material_schema(nested=False))
+
+
 class FlySpec(Strict):
     """The fly strategy (docs/reference/planner.md, "Fly plans"): readings taken while one
     axis sweeps at constant velocity, ``rate_hz`` readings a second, each integrating
@@ -190,7 +202,7 @@ class FlySpec(Strict):
         description="theta_h_line only: the expected material (name, a gonio.brdf model, and "
         "its parameters beside it), whose variation across the lines sets their density over "
         "(θd, φd) (none: lines denser toward grazing θd, 1 / cos θd).",
-        json_schema_extra=material_schema(nested=False),
+        json_schema_extra=_flat_material,
     )  # checked by gonio.brdf.material
     fill: int = Field(
         0,
@@ -358,7 +370,7 @@ class AdaptSpec(Strict):
         min_length=1,
         description="The expected material: name (a gonio.brdf model) and its parameters "
         "beside it, e.g. {name: cook_torrance, alpha: 0.2, kd: 0.3}.",
-        json_schema_extra=material_schema(nested=False),
+        json_schema_extra=_flat_material,
     )  # checked by gonio.brdf.material
     min_s: float = Field(gt=0, description="The shortest exposure (s).")
     max_s: float = Field(gt=0, description="The longest exposure (s), at least min_s.")

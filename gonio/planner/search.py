@@ -30,18 +30,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
 from gonio.planner.jit import compiled
 from gonio.planner.moves import EPSILON, Ints, cost, or_opt, times, two_opt, write
+from gonio.planner.ordered import Stop
 from gonio.progress import Progress, Quiet
 from gonio.rig import TravelModel
 from gonio.types import BoolArray, FloatArray
-
-#: Why a search stopped (only the last depends on the machine).
-Stop = Literal["converged", "move budget", "time cap"]
 
 #: The longest segment a kick moves (targets).
 KICK_SPAN = 30

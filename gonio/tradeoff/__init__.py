@@ -11,40 +11,43 @@ guess: every candidate fitted to the budget, its error predicted by one model.
 from typing import TYPE_CHECKING
 
 from gonio.faces import lazy_face
-from gonio.tradeoff.choice import TEST_PAIRS, Choice, choose, material_guess
-from gonio.tradeoff.grid import Sweep, load_sweep
-from gonio.tradeoff.sweep import SweepResult, run_sweep
 
 if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.tradeoff import runner as runner
+    from gonio.tradeoff.choice import TEST_PAIRS as TEST_PAIRS
+    from gonio.tradeoff.choice import Choice as Choice
     from gonio.tradeoff.choice import Prediction as Prediction
+    from gonio.tradeoff.choice import choose as choose
+    from gonio.tradeoff.choice import material_guess as material_guess
     from gonio.tradeoff.executors import check_address as check_address
+    from gonio.tradeoff.grid import Sweep as Sweep
+    from gonio.tradeoff.grid import load_sweep as load_sweep
     from gonio.tradeoff.grid import scaled_rig as scaled_rig
     from gonio.tradeoff.spec import EFFECT_NAMES as EFFECT_NAMES
     from gonio.tradeoff.spec import SweepSpec as SweepSpec
     from gonio.tradeoff.store import open_store as open_store
+    from gonio.tradeoff.sweep import SweepResult as SweepResult
+    from gonio.tradeoff.sweep import run_sweep as run_sweep
 
 #: The names of the face that load with their module when first used
 #: (`gonio.faces`), by module.
 WHERE = {
+    "Choice": "choice",
     "EFFECT_NAMES": "spec",
     "Prediction": "choice",
+    "Sweep": "grid",
+    "SweepResult": "sweep",
     "SweepSpec": "spec",
+    "TEST_PAIRS": "choice",
     "check_address": "executors",
+    "choose": "choice",
+    "load_sweep": "grid",
+    "material_guess": "choice",
     "open_store": "store",
+    "run_sweep": "sweep",
     "runner": "runner",
     "scaled_rig": "grid",
 }
-__all__ = [
-    "Choice",
-    "Sweep",
-    "SweepResult",
-    "TEST_PAIRS",
-    "choose",
-    "load_sweep",
-    "material_guess",
-    "run_sweep",
-    *WHERE,
-]
+__all__ = list(WHERE)
 if not TYPE_CHECKING:
     __getattr__, __dir__ = lazy_face(__name__, WHERE)

@@ -22,8 +22,8 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any
 
+from gonio import tradeoff  # its face: the runner (planner, simulator) loads when a task runs
 from gonio.config import ConfigError, excerpt
-from gonio.tradeoff import runner
 from gonio.tradeoff.grid import Task
 
 Done = Callable[[dict[str, Any]], None]
@@ -40,7 +40,7 @@ AHEAD = 2
 def run_here(tasks: Sequence[Task], done: Done) -> None:
     """One after the other in this process."""
     for task in tasks:
-        done(runner.run(task))
+        done(tradeoff.runner.run(task))
 
 
 def run_local(tasks: Sequence[Task], jobs: int, done: Done) -> None:
@@ -53,7 +53,7 @@ def run_local(tasks: Sequence[Task], jobs: int, done: Done) -> None:
         try:
             while True:
                 for task in queue:
-                    pending.add(pool.submit(runner.run, task))
+                    pending.add(pool.submit(tradeoff.runner.run, task))
                     if len(pending) >= AHEAD * jobs:
                         break
                 if not pending:
@@ -105,7 +105,7 @@ def run_dask(
     except (OSError, TimeoutError, ValueError, MemoryError) as exc:
         raise ConfigError(f"--scheduler {scheduler}: cannot reach the scheduler: {exc}") from None
     with client:
-        futures = client.map(runner.run, list(tasks), pure=False)
+        futures = client.map(tradeoff.runner.run, list(tasks), pure=False)
         try:
             for future in distributed.as_completed(futures, loop=client.loop):
                 done(future.result())

@@ -8,9 +8,24 @@ that every axis follows: `paths` (a line's segments, time law, trajectory and re
 and `path_plan` (`build_paths`: their layout, order and timing).
 """
 
-from gonio.planner.fly.build import build_fly
-from gonio.planner.fly.lines import sweep_axis
-from gonio.planner.fly.path_plan import build_paths
-from gonio.planner.fly.thin import THINNED
+from typing import TYPE_CHECKING
 
-__all__ = ["THINNED", "build_fly", "build_paths", "sweep_axis"]
+from gonio.faces import lazy_face
+
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.planner.fly.build import build_fly as build_fly
+    from gonio.planner.fly.lines import sweep_axis as sweep_axis
+    from gonio.planner.fly.path_plan import build_paths as build_paths
+    from gonio.planner.fly.thin import THINNED as THINNED
+
+#: The names of the face that load with their module when first used (`gonio.faces`):
+#: checking a plan's limits (`limits`) loads no builder (scipy, numba).
+WHERE = {
+    "THINNED": "thin",
+    "build_fly": "build",
+    "build_paths": "path_plan",
+    "sweep_axis": "lines",
+}
+__all__ = list(WHERE)
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = lazy_face(__name__, WHERE)

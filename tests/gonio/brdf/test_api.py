@@ -40,6 +40,14 @@ def test_names_lists_every_required_model():
     assert all(isinstance(n, str) for n in brdf.names())
 
 
+def test_every_registered_name_is_its_class_name():
+    # The registry names each model without importing its module; the class it loads
+    # must be the BRDF of that name.
+    for name in brdf.names():
+        cls = model_class(name)
+        assert issubclass(cls, brdf.BRDF) and cls.name == name
+
+
 def test_every_registered_model_has_an_example():
     # Models read from a file (a `path` parameter) are tested with their own files.
     analytic = {

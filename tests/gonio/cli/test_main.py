@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from collections.abc import Callable
@@ -65,6 +66,59 @@ def test_help_lists_every_command_without_importing_them() -> None:
     for name, (_, help_) in COMMANDS.items():
         assert name in r.stdout and help_[:30] in " ".join(r.stdout.split())
     assert r.stdout.strip().endswith("HEAVY []")
+
+
+#: What a command's help, or a plan file it cannot read, never needs: the planner's and
+#: the models' scipy, the compiled search (numba), figures, the web server, Dask, the
+#: simulator.
+NOT_FOR_HELP = (
+    "scipy.special",
+    "scipy.stats",
+    "scipy.optimize",
+    "scipy.spatial",
+    "scipy.interpolate",
+    "numba",
+    "matplotlib",
+    "h5py",
+    "starlette",
+    "dask",
+    "sim",
+)
+#: The commands whose help loads none of `NOT_FOR_HELP`.
+LIGHT = ("plan", "acquire", "serve", "tradeoff", "align", "info", "fit", "motors", "detector")
+
+
+def test_the_light_commands_help_loads_no_heavy_module(tmp_path: Path) -> None:
+    """One interpreter runs each light command's help, then ``gonio plan`` on a missing
+    file; none of them loads scipy's heavy parts, numba, matplotlib, the web server, Dask
+    or the simulator (a regression costs each process the suite starts a second or two
+    of imports)."""
+    runs = [[name, "--help"] for name in LIGHT] + [["plan", str(tmp_path / "missing.yaml")]]
+    code = (
+        "import contextlib, io, json, sys\n"
+        "from gonio.cli import main\n"
+        "codes = []\n"
+        "for argv in json.loads(sys.argv[1]):\n"
+        "    out = io.StringIO()\n"
+        "    try:\n"
+        "        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):\n"
+        "            codes.append(main(argv))\n"
+        "    except SystemExit as exc:\n"
+        "        codes.append(exc.code)\n"
+        "heavy = sorted(m for m in json.loads(sys.argv[2]) if m in sys.modules)\n"
+        "print(json.dumps({'codes': codes, 'heavy': heavy}))\n"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(runs), json.dumps(NOT_FOR_HELP)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert r.returncode == 0, r.stderr
+    found = json.loads(r.stdout.splitlines()[-1])
+    assert found["codes"] == [0] * len(LIGHT) + [2], found
+    assert found["heavy"] == [], found
 
 
 def test_no_command_prints_help(run_gonio: Gonio) -> None:
