@@ -13,6 +13,7 @@ an unknown field with the closest known one (``did you mean 'sampling'?``).
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import types
 import typing
@@ -74,16 +75,17 @@ class Strict(BaseModel):
         if not isinstance(data, dict):
             return data
         for name, value in data.items():
-            field = cls.model_fields.get(name) if isinstance(name, str) else None
-            if field is None:
+            if not (isinstance(name, str) and name in cls.model_fields):
                 continue
-            kinds = _scalar_kinds(field.annotation)
+            kinds = _numeric_kinds(cls, name)
+            if kinds is None:  # no number in this field: nothing to check
+                continue
             for where, item in _leaves(name, value):
                 if isinstance(item, bool):
-                    if bool not in kinds and kinds & {int, float}:
+                    if bool not in kinds:
                         raise field_error(where, f"expected a number, not yes/no (got {item})")
                     continue
-                number = _as_number(item) if kinds & {int, float} else None
+                number = _as_number(item)
                 if number is not None:
                     if int in kinds and float not in kinds and abs(number) > MAX_INTEGER:
                         raise field_error(
@@ -134,6 +136,14 @@ def _leaves(path: str, value: Any, levels: int = 2) -> Iterator[tuple[str, Any]]
             yield from _leaves(f"{path}.{key}", item, levels - 1)
     else:
         yield path, value
+
+
+@functools.cache
+def _numeric_kinds(model: type[BaseModel], name: str) -> frozenset[Any] | None:
+    """The scalar types field ``name`` of ``model`` admits when a number is among them,
+    else None: computed once per model and field (each load validates the same fields)."""
+    kinds = _scalar_kinds(model.model_fields[name].annotation)
+    return frozenset(kinds) if kinds & {int, float} else None
 
 
 def _scalar_kinds(annotation: Any) -> set[Any]:

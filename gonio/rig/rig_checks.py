@@ -29,6 +29,10 @@ EXPECTED_CHAINS = {
 }
 #: Direction pairs probed when a rig is loaded, to refuse a rig that can measure nothing.
 PROBE_PAIRS = 4096
+#: The first of them probed alone: one reachable pair ends the check, and a rig that can
+#: measure anything reaches one of these (an aligned rig solves each pair by Newton
+#: steps, 0.2 s of CPU for all 4096).
+PROBE_FIRST = 64
 
 
 def check_chains(spec: RigSpec, where: str) -> None:
@@ -58,9 +62,10 @@ def check_reachable(
     r = np.sqrt(1.0 - z * z)
     w = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
     for isotropic in (False, True):
-        reasons = reasons_of(w[0], w[1], isotropic)
-        if np.any(reasons == Reason.OK):
-            return
+        for n in (PROBE_FIRST, PROBE_PAIRS):  # each pair is solved on its own
+            reasons = reasons_of(w[0, :n], w[1, :n], isotropic)
+            if np.any(reasons == Reason.OK):
+                return
     counts = ", ".join(
         f"{r.label.replace('_', ' ')} {n}"
         for r in Reason

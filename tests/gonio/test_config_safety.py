@@ -72,6 +72,18 @@ def test_deep_nesting_is_one_line(tmp_path: Path) -> None:
     assert "nested more than" in message
 
 
+@pytest.mark.timing
+def test_deep_nesting_is_refused_in_linear_time(tmp_path: Path) -> None:
+    # PyYAML's pure-Python scanner looks ahead over every open bracket at each one
+    # (0.2 s of CPU for 1000 on a line); libyaml's own bound refuses it in a millisecond
+    start = time.process_time()
+    for depth in range(1000, 1020):
+        message = refusal(tmp_path, "a: 1\nb: " + "[" * depth + "]" * depth + "\n")
+        expected = "nested more than 64 levels deep; expected a flatter document"
+        assert message == f"{tmp_path / 'hostile.yaml'}:2: {expected}"
+    assert time.process_time() - start < 1.0
+
+
 def test_nesting_through_aliases_counts(tmp_path: Path) -> None:
     lines = ["a0: &a0 [1]"] + [f"a{i}: &a{i} [[[[[[[[[[*a{i - 1}]]]]]]]]]]" for i in range(1, 8)]
     assert "nested more than" in refusal(tmp_path, "\n".join(lines) + "\n")

@@ -236,23 +236,29 @@ def _set(data: Any, at: tuple[int | str, ...], value: Any, delete: bool = False)
     return out
 
 
-def mutations(data: dict[str, Any]) -> Iterator[tuple[str, tuple[int | str, ...], Any]]:
-    """(what, where, mutated document) of every mutation of ``data``."""
+def mutations(
+    data: dict[str, Any],
+) -> Iterator[tuple[str, tuple[int | str, ...], Callable[[], Any]]]:
+    """(what, where, maker of the mutated document) of every mutation of ``data``: the
+    document is copied only when made (most mutations repeat one of an earlier base)."""
     for at, value in _nodes(data):
         if isinstance(value, dict):
+            unknown = {**value, "bogus_key": 1}
             yield (
                 "unknown key",
                 at,
-                (_set(data, at, {**value, "bogus_key": 1}) if at else {**value, "bogus_key": 1}),
+                functools.partial(_set, data, at, unknown)
+                if at
+                else (lambda unknown=unknown: unknown),
             )
         if not at:
             continue
         if isinstance(at[-1], str):
-            yield "missing", at, _set(data, at, None, delete=True)
+            yield "missing", at, functools.partial(_set, data, at, None, delete=True)
         if isinstance(value, list) and value:
-            yield "an item repeated", at, _set(data, at, [*value, value[0]])
+            yield "an item repeated", at, functools.partial(_set, data, at, [*value, value[0]])
         for other in REPLACEMENTS[type(value)]:
-            yield f"value {other!r}", at, _set(data, at, other)
+            yield f"value {other!r}", at, functools.partial(_set, data, at, other)
 
 
 def _bases() -> Iterator[tuple[str, Path, dict[str, Any]]]:
@@ -283,10 +289,11 @@ def test_the_schema_refuses_what_the_loader_refuses() -> None:
     depths: set[tuple[str, int]] = set()
     for kind, path, base in _bases():
         assert loader_refusal(kind, base, path) is None and not schema_refuses(kind, base), path
-        for what, at, mutated in mutations(base):
+        for what, at, make in mutations(base):
             if (kind, at, what) in seen:
                 continue
             seen.add((kind, at, what))
+            mutated = make()
             refusal = loader_refusal(kind, mutated, path)
             refused = schema_refuses(kind, mutated)
             where = f"{kind} {path.name} {what} at {'.'.join(map(str, at)) or '(top)'}"
