@@ -7,10 +7,15 @@ target density); beside it, the same figure for a uniform stop-and-go plan of as
 targets (a second Sobol sequence), the noise floor of a uniform plan of that size. A
 second figure: the largest empty ball (the largest distance, unit box, from a reference
 point to its nearest reading), the same for the uniform plan.
+
+The reference points are kept per rig (the rig object: its kinematics and alignment do
+not change) for each parametrization, isotropy and seed: every build of a fly plan
+needs them, and fitting a plan to a time budget builds it several times over.
 """
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,9 +33,25 @@ COVERAGE_POINTS = 1 << 15
 COVERAGE_BINS = {3: 8, 4: 5}
 
 
+#: Reference points of each rig, by (parametrization, isotropic, seed) (read-only).
+_REFERENCES: weakref.WeakKeyDictionary[Rig, dict[tuple[str, bool, int], FloatArray]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
 def reference(spec: PlanSpec, rig: Rig) -> FloatArray:
     """`COVERAGE_POINTS` Sobol points kept where the rig reaches them (the uniform
-    target density), scaled to the unit box."""
+    target density), scaled to the unit box (read-only: kept for the next call)."""
+    known = _REFERENCES.setdefault(rig, {})
+    key = (spec.parametrization, spec.isotropic, spec.sampling.seed)
+    if key not in known:
+        points = _reference(spec, rig)
+        points.setflags(write=False)
+        known[key] = points
+    return known[key]
+
+
+def _reference(spec: PlanSpec, rig: Rig) -> FloatArray:
     bounds = box(spec)
     d = len(bounds)
     stream = sampling.Sequence("sobol", d, spec.sampling.seed + 7919)
