@@ -5,13 +5,18 @@ on the command, a steady rate, device timestamps, the latency, the lines' wire t
 query answered afterwards) and writes the verdict beside the rig file, where hardware
 fly support reads it (`fly_refusal`).
 
-The package: :mod:`~gonio.workflows.stream_check.figures` (the requirements judged
-from what was seen: pure), :mod:`~gonio.workflows.stream_check.probe` (the streams,
-through the driver), :mod:`~gonio.workflows.stream_check.verdict` (the file and what fly
-support reads of it) and :mod:`~gonio.workflows.stream_check.check` (`check_stream`).
+The package: :mod:`~gonio.workflows.stream_check.figures` (the requirements, what is
+observed, a verdict), :mod:`~gonio.workflows.stream_check.judge` (the requirements
+judged from what was seen: pure), :mod:`~gonio.workflows.stream_check.probe` (the
+streams, through the driver), :mod:`~gonio.workflows.stream_check.verdict` (the file and
+what fly support reads of it) and :mod:`~gonio.workflows.stream_check.check`
+(`check_stream`, loaded when first used: reading a verdict, as fly support does, loads
+neither the probe nor the judging's scipy.stats).
 """
 
-from gonio.workflows.stream_check.check import check_stream
+from typing import TYPE_CHECKING
+
+from gonio.faces import lazy_face
 from gonio.workflows.stream_check.figures import REQUIREMENTS, Limits, Requirement
 from gonio.workflows.stream_check.verdict import (
     Verdict,
@@ -19,6 +24,13 @@ from gonio.workflows.stream_check.verdict import (
     read_verdict,
     verdict_path,
 )
+
+if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
+    from gonio.workflows.stream_check.check import check_stream as check_stream
+
+#: The names of the face that load with their module when first used (`gonio.faces`).
+WHERE = {"check_stream": "check"}
+__getattr__, __dir__ = lazy_face(__name__, WHERE)
 
 __all__ = [
     "REQUIREMENTS",

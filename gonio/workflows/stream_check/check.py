@@ -8,7 +8,8 @@ import datetime
 from drivers.serial_detector.detector import SerialDetector
 from gonio.config import ConfigError
 from gonio.rig import Rig, SerialInterfaceSpec
-from gonio.workflows.stream_check.figures import DEFAULT_LIMITS, Limits, assess
+from gonio.workflows.stream_check.figures import DEFAULT_LIMITS, Limits
+from gonio.workflows.stream_check.judge import assess
 from gonio.workflows.stream_check.probe import observe
 from gonio.workflows.stream_check.verdict import Verdict, interface_config
 

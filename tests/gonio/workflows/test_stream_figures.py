@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from drivers.serial_detector import StreamTrace
-from gonio.workflows.stream_check.figures import DEFAULT_LIMITS, StreamRecord, _steady, _timestamps
+from gonio.workflows.stream_check.figures import DEFAULT_LIMITS, StreamRecord
+from gonio.workflows.stream_check.judge import _steady, _timestamps
 
 RATE_HZ = 100.0
 
