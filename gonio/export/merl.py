@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gonio import params
 from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
+from gonio.params import DOMAIN_TOLERANCE
 from gonio.store import Run
 from gonio.types import BoolArray, FloatArray, Surface
 
@@ -47,12 +47,24 @@ class Table:
 
 def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
     """(ωi, ωo) (90, 90, 180, 3) at every bin's centre, and where that pair exists
-    (elsewhere the pair is a placeholder, ωi = ωo = n)."""
+    (elsewhere the pair is a placeholder, ωi = ωo = n).
+
+    Rusinkiewicz's inverse at φh = 0 (`gonio.params`' ``rusinkiewicz``, bit for bit):
+    d̂ = (sin θd cos φd, sin θd sin φd, cos θd) turned by θh about y, ωo its mirror
+    about ĥ; each angle's sine and cosine taken once along its own axis of the table
+    (270 + 180 values, not 1.46 million per coordinate), the pair exists where both z
+    components reach −`DOMAIN_TOLERANCE`."""
     theta_h, theta_d, phi_d = merl.bin_centres()
-    coords = np.stack(np.broadcast_arrays(theta_h, np.zeros(1), theta_d, phi_d), axis=-1)
-    p = params.get("rusinkiewicz")
-    ok = p.valid(coords)
-    wi, wo = p.inverse(np.where(ok[..., None], coords, 0.0))
+    st, ct = np.sin(theta_h), np.cos(theta_h)
+    sd, cd = np.sin(theta_d), np.cos(theta_d)
+    dx, dy = sd * np.cos(phi_d), sd * np.sin(phi_d)
+    a, b = st * cd, ct * cd
+    u, w = ct * dx, st * dx
+    zi, zo = b - w, b + w
+    ok = np.minimum(zi, zo) >= -DOMAIN_TOLERANCE
+    wi = np.stack(np.broadcast_arrays(u + a, dy, np.maximum(zi, 0.0)), axis=-1)
+    wo = np.stack(np.broadcast_arrays(a - u, -dy, np.maximum(zo, 0.0)), axis=-1)
+    wi[~ok] = wo[~ok] = (0.0, 0.0, 1.0)
     return wi, wo, ok
 
 
