@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gonio import params
 from gonio.brdf import merl
 from gonio.errors import GonioError
 from gonio.export.steps import evaluated, reconstructed, sparse_note, step
 from gonio.output import PendingOutput
+from gonio.params import DOMAIN_TOLERANCE
 from gonio.store import Run
 from gonio.types import BoolArray, FloatArray, Surface
 
@@ -47,40 +47,62 @@ class Table:
 
 def representative_pairs() -> tuple[FloatArray, FloatArray, BoolArray]:
     """(ωi, ωo) (90, 90, 180, 3) at every bin's centre, and where that pair exists
-    (elsewhere the pair is a placeholder, ωi = ωo = n)."""
+    (elsewhere the pair is a placeholder, ωi = ωo = n).
+
+    Rusinkiewicz's inverse at φh = 0 (`gonio.params`' ``rusinkiewicz``, bit for bit):
+    d̂ = (sin θd cos φd, sin θd sin φd, cos θd) turned by θh about y, ωo its mirror
+    about ĥ; each angle's sine and cosine taken once along its own axis of the table
+    (270 + 180 values, not 1.46 million per coordinate), the pair exists where both z
+    components reach −`DOMAIN_TOLERANCE`."""
     theta_h, theta_d, phi_d = merl.bin_centres()
-    coords = np.stack(np.broadcast_arrays(theta_h, np.zeros(1), theta_d, phi_d), axis=-1)
-    p = params.get("rusinkiewicz")
-    ok = p.valid(coords)
-    wi, wo = p.inverse(np.where(ok[..., None], coords, 0.0))
+    st, ct = np.sin(theta_h), np.cos(theta_h)
+    sd, cd = np.sin(theta_d), np.cos(theta_d)
+    dx, dy = sd * np.cos(phi_d), sd * np.sin(phi_d)
+    a, b = st * cd, ct * cd
+    u, w = ct * dx, st * dx
+    zi, zo = b - w, b + w
+    ok = np.minimum(zi, zo) >= -DOMAIN_TOLERANCE
+    wi = np.stack(np.broadcast_arrays(u + a, dy, np.maximum(zi, 0.0)), axis=-1)
+    wo = np.stack(np.broadcast_arrays(a - u, -dy, np.maximum(zo, 0.0)), axis=-1)
+    wi[~ok] = wo[~ok] = (0.0, 0.0, 1.0)
     return wi, wo, ok
 
 
 def fill(reconstruction: Surface, *, extrapolate: bool = False) -> Table:
     """The reconstruction evaluated at every bin (see the module docstring)."""
+    return _table(*_evaluated_bins(reconstruction), extrapolate=extrapolate)
+
+
+def _evaluated_bins(reconstruction: Surface) -> tuple[FloatArray, BoolArray, BoolArray]:
+    """The reconstruction at the bins that have a pair: values (M, 1 or 3) in sr⁻¹, where
+    those pairs lie (90, 90, 180) and whether each is supported (M,)."""
     with step("the bins' direction pairs"):
         wi, wo, ok = representative_pairs()
-    got, supported_at = evaluated(reconstruction, wi[ok], wo[ok], "filling the MERL table")
-    supported = np.zeros(ok.shape, dtype=bool)
-    supported[ok] = True if supported_at is None else supported_at
-    if got.shape == (int(ok.sum()),):
+    got, supported = evaluated(reconstruction, wi[ok], wo[ok], "filling the MERL table")
+    if got.ndim == 1:
         got = got[:, None]
     if got.shape[1:] not in ((1,), (3,)):
         raise GonioError(
             f"the reconstruction gave values of shape {got.shape}, expected one or three channels"
         )
-    f = np.zeros((*ok.shape, 3))
-    f[ok] = got  # a grey reconstruction broadcasts to the three channels
-    values = np.moveaxis(f, -1, 0)
-    keep = ok & (supported | extrapolate)
-    finite = np.all(np.isfinite(values), axis=0)
-    missing = ~(keep & finite)
+    return got, ok, np.ones(len(got), dtype=bool) if supported is None else supported
+
+
+def _table(got: FloatArray, ok: BoolArray, supported: BoolArray, *, extrapolate: bool) -> Table:
+    """The table of `_evaluated_bins`' values: each test made once per paired bin, and
+    a grey value written to the three channels."""
+    finite = np.all(np.isfinite(got), axis=1)
+    good = finite & (supported | extrapolate)
+    values = np.zeros((3, *ok.shape))
+    values[:, ok] = np.where(good[:, None], np.maximum(got, 0.0), 0.0).T
+    missing = np.ones(ok.shape, dtype=bool)
+    missing[ok] = ~good
     return Table(
-        values=np.where(missing[None], 0.0, np.maximum(values, 0.0)),
+        values=values,
         missing=missing,
         no_pair=int(np.count_nonzero(~ok)),
-        unsupported=int(np.count_nonzero(ok & ~supported)),
-        extrapolated=int(np.count_nonzero(ok & ~supported & finite)) if extrapolate else 0,
+        unsupported=int(np.count_nonzero(~supported)),
+        extrapolated=int(np.count_nonzero(~supported & finite)) if extrapolate else 0,
     )
 
 
@@ -92,10 +114,13 @@ def write(
     allow_sparse: bool = False,
 ) -> str:
     """Fill the table and write it to ``out``; the one-line summary (and a warning line
-    for a sparse run written with ``allow_sparse``; `sparse_note`)."""
-    table = fill(reconstruction, extrapolate=extrapolate)
-    paired = merl.BINS - table.no_pair
-    note = sparse_note(paired - table.unsupported, paired, "MERL bins", allow=allow_sparse)
+    for a sparse run written with ``allow_sparse``; `sparse_note`, asked before the
+    table is filled)."""
+    got, ok, supported = _evaluated_bins(reconstruction)
+    paired = int(np.count_nonzero(ok))
+    supported_count = int(np.count_nonzero(supported))
+    note = sparse_note(supported_count, paired, "MERL bins", allow=allow_sparse)
+    table = _table(got, ok, supported, extrapolate=extrapolate)
     with step(f"writing {merl.FILE_SIZE / 1e6:.0f} MB"):
         out.write_bytes(merl.to_bytes(table.values, table.missing))
     written = merl.BINS - int(np.count_nonzero(table.missing))

@@ -69,10 +69,13 @@ BLOCK_ENTRIES = 1 << 22
 _ROUNDING_TERMS = 2000
 
 
-def _spline_weights(knots: FloatArray, t: FloatArray) -> FloatArray:
+def _spline_weights(
+    knots: FloatArray, t: FloatArray, spline: CubicSpline | None = None
+) -> FloatArray:
     """(N, K) weights of the not-a-knot cubic spline through K ≥ 3 increasing ``knots``
     at ``t`` (inside them): the spline of each unit vector (Lagrange's parabola for 3,
-    which that spline is)."""
+    which that spline is); ``spline``: that spline of the unit vectors (`_unit_spline`), when
+    the caller has it."""
     if len(knots) == 3:
         x = knots
         basis = [
@@ -82,8 +85,14 @@ def _spline_weights(knots: FloatArray, t: FloatArray) -> FloatArray:
             for j in range(3)
         ]
         return np.asarray(np.stack(basis, axis=-1), dtype=np.float64)
-    spline = CubicSpline(knots, np.eye(len(knots)), bc_type="not-a-knot")
+    if spline is None:
+        spline = _unit_spline(knots)
     return np.asarray(spline(t), dtype=np.float64)
+
+
+def _unit_spline(knots: FloatArray) -> CubicSpline:
+    """The not-a-knot cubic spline of the K unit vectors through K > 3 ``knots``."""
+    return CubicSpline(knots, np.eye(len(knots)), bc_type="not-a-knot")
 
 
 def rounding_var(noise: ArrayLike) -> FloatArray:
@@ -150,7 +159,7 @@ class CalibrationSeries:
         if k == 1:
             return np.ones((*t.shape, 1))
         if spline and k >= 3 and self._spline_holds:
-            return _spline_weights(self.t, t)
+            return _spline_weights(self.t, t, self._basis)
         eye = np.eye(k)
         columns = [np.interp(t, self.t, eye[j]) for j in range(k)]
         return np.asarray(np.stack(columns, axis=-1), dtype=np.float64)
@@ -170,7 +179,14 @@ class CalibrationSeries:
             return False
         fractions = np.linspace(0.0, 1.0, 9)[1:-1]
         probe = (self.t[:-1, None] + np.diff(self.t)[:, None] * fractions).ravel()
-        return bool(np.max(np.sum(_spline_weights(self.t, probe) ** 2, axis=-1)) <= NOISE_GAIN)
+        gain = np.sum(_spline_weights(self.t, probe, self._basis) ** 2, axis=-1)
+        return bool(np.max(gain) <= NOISE_GAIN)
+
+    @cached_property
+    def _basis(self) -> CubicSpline | None:
+        """The spline of `_spline_weights` through the K readings' times, built once
+        (None for K ≤ 3: a parabola or a line needs none)."""
+        return _unit_spline(self.t) if len(self.t) > 3 and np.all(np.diff(self.t) > 0) else None
 
     def rate_at(self, t: ArrayLike) -> FloatArray:
         """S(t): the dark-subtracted reference rate (counts/s) at run times ``t`` (s)."""

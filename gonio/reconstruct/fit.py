@@ -8,7 +8,8 @@ its channel; a positive σ is raised to at least `SIGMA_FLOOR` × that median (a
 claiming near-exactness would otherwise own the fit). A run whose every σ is 0 is
 fitted unweighted (σ = 1: χ² is then only a scale).
 `scipy.optimize.least_squares` (trust-region reflective, bounded) runs from several
-starts (`gonio.reconstruct.starts`) and keeps the lowest χ².
+starts (`gonio.reconstruct.starts`) and keeps the lowest χ²; its Jacobian is by forward
+differences, the channels of a colour parameter stepped at once (`_jacobian`).
 
 Uncertainty: cov = (JᵀJ)⁻¹ · χ²_red with J the Jacobian of r at the optimum and
 χ²_red = χ²/(M − P) (M residuals, P free parameters), plus the error the values share
@@ -21,7 +22,7 @@ are √diag(cov).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,7 +30,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from gonio.analysis import Measured, SharedError
-from gonio.brdf import BRDF, Family, parse, spec_of
+from gonio.brdf import BRDF, Family, Slot, parse, spec_of
 from gonio.errors import GonioError
 from gonio.reconstruct import regions as pair_regions
 from gonio.reconstruct.starts import starts as make_starts
@@ -123,15 +124,29 @@ def fit(
     low = np.array([s.low for s in slots])
     high = np.array([s.high for s in slots])
 
+    last: list[tuple[FloatArray, FloatArray]] = []
+
     def residuals(x: FloatArray) -> FloatArray:
         value = family.model(slots, x).eval(measured.wi, measured.wo).reshape(f.shape)
-        return np.asarray(((value - f) / sigma).ravel(), dtype=np.float64)
+        r = np.asarray(((value - f) / sigma).ravel(), dtype=np.float64)
+        last[:] = [(np.array(x, dtype=np.float64), r)]
+        return r
+
+    def jacobian(x: FloatArray) -> FloatArray:
+        seen = last[0] if last and np.array_equal(last[0][0], x) else None
+        r = seen[1] if seen else residuals(x)
+        return _jacobian(residuals, x, r, slots, low, high, f.shape[1])
 
     best = None
     tried = make_starts(family, slots, measured, count=max(starts, 1), seed=seed)
     for x0 in tried:
         result = least_squares(
-            residuals, np.clip(x0, low, high), bounds=(low, high), x_scale="jac", method="trf"
+            residuals,
+            np.clip(x0, low, high),
+            jac=jacobian,
+            bounds=(low, high),
+            x_scale="jac",
+            method="trf",
         )
         if np.isfinite(result.cost) and (best is None or result.cost < best.cost):
             best = result
@@ -159,6 +174,46 @@ def fit(
         starts=len(tried),
         success=bool(best.success),
     )
+
+
+def _jacobian(
+    residuals: Callable[[FloatArray], FloatArray],
+    x: FloatArray,
+    r: FloatArray,
+    slots: tuple[Slot, ...],
+    low: FloatArray,
+    high: FloatArray,
+    channels: int,
+) -> FloatArray:
+    """The forward-difference Jacobian of ``residuals`` at ``x`` (whose residuals are
+    ``r``), with steps √ε·max(1, |x|) turned back or shortened at the bounds (the rule of
+    `scipy.optimize.least_squares`' default "2-point"), but the three channels of a
+    colour parameter stepped at once: each moves only its own channel's residuals, so
+    an RGB fit's Jacobian takes one evaluation per parameter, not per channel, and
+    every column is what stepping it alone gives."""
+    x = np.asarray(x, dtype=np.float64)
+    h = np.finfo(np.float64).eps ** 0.5 * np.where(x >= 0.0, 1.0, -1.0)
+    h = h * np.maximum(1.0, np.abs(x))
+    below, above = x - low, high - x
+    fitting = np.abs(h) <= np.maximum(below, above)
+    h = np.where(((x + h < low) | (x + h > high)) & fitting, -h, h)
+    h = np.where(~fitting, np.where(above >= below, above, -below), h)
+    groups: dict[tuple[int, str] | int, list[int]] = {}
+    for i, slot in enumerate(slots):
+        groups.setdefault(i if slot.channel is None else (slot.term, slot.param), []).append(i)
+    jac = np.zeros((len(r), len(slots)))
+    for members in groups.values():
+        stepped = x.copy()
+        stepped[members] = x[members] + h[members]
+        dr = residuals(stepped) - r
+        for i in members:
+            dx = stepped[i] - x[i]
+            c = slots[i].channel
+            if c is None:
+                jac[:, i] = dr / dx
+            else:
+                jac[c::channels, i] = dr[c::channels] / dx
+    return jac
 
 
 def _floored(sigma: FloatArray) -> FloatArray:

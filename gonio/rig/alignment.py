@@ -53,6 +53,7 @@ footprint tells it), and with a point source only by h / r.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -123,18 +124,19 @@ class Alignment:
         """The identity: the rig is as its file says."""
         return cls()
 
-    @property
+    @cached_property
     def is_none(self) -> bool:
         """True where every parameter is exactly 0 (the forward map is then the rig
-        file's, bit for bit)."""
+        file's, bit for bit); computed once (the fields are read-only)."""
         return not any(
             np.any(getattr(self, n))
             for n in ("zero_offset", "tilt", "height_mm", "light_pointing", "detector_pointing")
         )
 
-    @property
+    @cached_property
     def batch_shape(self) -> tuple[int, ...]:
-        """The leading axes the parameters broadcast to (() for one alignment)."""
+        """The leading axes the parameters broadcast to (() for one alignment); computed
+        once."""
         return np.broadcast_shapes(
             self.zero_offset.shape[:-1],
             self.tilt.shape,

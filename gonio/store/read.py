@@ -375,8 +375,9 @@ def sample_columns(
         raise checks.Bad(f"samples: column {missing[0]!r} missing")
     columns = {c.name: c for c in table}
     out: dict[str, np.ndarray] = {}
-    for j, name in enumerate(names):
-        cells = [r[j] for r in rows]
+    by_column = list(zip(*rows, strict=True)) if rows else [()] * len(names)
+    for name, cells_of in zip(names, by_column, strict=True):
+        cells = list(cells_of)
         column = columns.get(name, Column(name, "REAL", FLOAT64, nullable=True))
         values = _column(cells, column)
         if values is None:
@@ -390,19 +391,21 @@ def sample_columns(
 
 def _column(cells: list[Any], column: Column) -> np.ndarray | None:
     """The column's array, or None if a cell is not of its type."""
+    # The cells' types, gathered once (SQLite gives exactly int, float, str, bytes or None).
+    types = set(map(type, cells))
+    null = {type(None)} if column.nullable else set()
     if column.dtype == OBJECT:
-        ok = all(isinstance(c, str) or (c is None and column.nullable) for c in cells)
-        return np.array(cells, dtype=object) if ok else None
+        return np.array(cells, dtype=object) if types <= {str} | null else None
     if column.dtype != FLOAT64:  # whole numbers (a bool column stores 0/1)
-        if not all(type(c) is int for c in cells):
+        if not types <= {int}:
             return None
         try:
             return np.array(cells, dtype=INT64).astype(column.dtype)
         except OverflowError:
             return None
-    if not all(type(c) is float or type(c) is int or c is None for c in cells):
+    if not types <= {float, int, type(None)}:
         return None
-    values = np.array([np.nan if c is None else c for c in cells], dtype=np.float64)
+    values = np.array(cells, dtype=np.float64)  # None reads as NaN
     finite = np.isfinite(values) if not column.nullable else ~np.isinf(values)
     return values if finite.all() else None
 

@@ -12,7 +12,7 @@ import pytest
 from gonio import brdf, params
 from gonio.analysis.measured import Measured
 from gonio.cli import main
-from gonio.export.merl import fill, write
+from gonio.export.merl import fill, representative_pairs, write
 from gonio.output import reserve_output
 from gonio.reconstruct.methods import reconstruction
 
@@ -106,6 +106,16 @@ def test_bins_hold_the_model_at_their_centres_where_supported(table, sample):
     assert np.all(values[ok][~inside] < 0)  # outside the support: missing
     assert np.all(values[~ok] < 0)  # no pair (a direction below the horizon): missing
     assert inside.sum() > 5000 and (~inside).sum() > 5000 and (~ok).sum() > 1000
+
+
+def test_the_representative_pairs_are_the_parametrizations_inverse_bit_for_bit(sample):
+    wi, wo, ok = representative_pairs()
+    th, td, pd = (a[idx] for a, idx in zip(centre_reading(), sample, strict=True))
+    expected_wi, expected_wo, expected_ok = pairs_at(th, td, pd)
+    np.testing.assert_array_equal(ok[sample], expected_ok)
+    np.testing.assert_array_equal(wi[sample][expected_ok], expected_wi)
+    np.testing.assert_array_equal(wo[sample][expected_ok], expected_wo)
+    assert np.all(wi[~ok] == (0.0, 0.0, 1.0)) and np.all(wo[~ok] == (0.0, 0.0, 1.0))
 
 
 def test_the_centre_reading_maps_back_to_its_own_bin_the_edge_reading_not_always():

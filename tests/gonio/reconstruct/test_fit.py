@@ -24,11 +24,13 @@ from typing import Any
 import numpy as np
 import pytest
 
+from gonio.analysis import Calibrated, calibrate
 from gonio.analysis.measured import Measured
 from gonio.analysis.shared import SharedError, shared_error
 from gonio.errors import GonioError
 from gonio.reconstruct.fit import SIGMA_FLOOR, fit
 from gonio.reconstruct.regions import NAMES
+from gonio.store import Run, open_run
 from tests.support.runs import plan_spec, scene_spec, simulated_run
 
 REALIZATIONS = 20
@@ -51,15 +53,23 @@ def measure(folder: Path, plan: dict[str, Any], scene: dict[str, Any]) -> Path:
         return simulated_run(folder, plan, scene)
 
 
+def read(path: Path) -> tuple[Measured, list[SharedError]]:
+    """The run's samples and the shared calibration error of each of `realizations`,
+    from one reading and one calibration of the run file."""
+    run = open_run(path)
+    calibrated = calibrate(run)
+    return Measured.from_run(run, calibrated), shared_parts(run, calibrated)
+
+
 def realizations(measured: Measured) -> list[Measured]:
     """The K interleaved subsets of a long run (module docstring)."""
     k = REALIZATIONS
     return [measured.subset(slice(j, None, k)) for j in range(k)]
 
 
-def shared_parts(run: Path) -> list[SharedError]:
+def shared_parts(run: Run, calibrated: Calibrated) -> list[SharedError]:
     """The shared calibration error of each of `realizations`."""
-    error = shared_error(run)
+    error = shared_error(run, calibrated)
     return [error.take(slice(j, None, REALIZATIONS)) for j in range(REALIZATIONS)]
 
 
@@ -73,8 +83,7 @@ def coverage(fits: list[Any], truth: dict[str, float]) -> dict[str, float]:
 
 @pytest.fixture(scope="module")
 def matte(runs_dir: Path) -> tuple[Measured, list[SharedError]]:
-    run = measure(runs_dir, long_plan(), scene_spec("matte", effects=NOISE, seed=11))
-    return Measured.from_run(run), shared_parts(run)
+    return read(measure(runs_dir, long_plan(), scene_spec("matte", effects=NOISE, seed=11)))
 
 
 def test_matte_parameters_are_recovered_within_their_uncertainty(matte):
@@ -99,8 +108,9 @@ def test_glossy_conductor_rgb_parameters_are_recovered(runs_dir):
         )
         for j, band in enumerate("rgb")
     ]
-    parts = [realizations(Measured.from_run(run)) for run in runs]
-    shared = [shared_parts(run) for run in runs]
+    both = [read(run) for run in runs]
+    parts = [realizations(measured) for measured, _ in both]
+    shared = [errors for _, errors in both]
     fits = [
         fit(Measured.rgb(*rgb), "ggx:fresnel=conductor", starts=2, shared=errors)
         for rgb, errors in zip(zip(*parts, strict=True), zip(*shared, strict=True), strict=True)
@@ -117,7 +127,8 @@ def test_anisotropic_roughness_is_recovered(runs_dir):
         runs_dir, long_plan(isotropic=False), scene_spec("brushed_metal", effects=NOISE, seed=11)
     )
     spec = "ggx_anisotropic:fresnel=conductor,ior=1.2,k=7"
-    parts = zip(realizations(Measured.from_run(run)), shared_parts(run), strict=True)
+    measured, shared = read(run)
+    parts = zip(realizations(measured), shared, strict=True)
     fits = [fit(m, spec, starts=2, shared=e) for m, e in parts]
     truth = {"ggx_anisotropic.alpha_x": 0.05, "ggx_anisotropic.alpha_y": 0.25}
     assert min(coverage(fits, truth).values()) >= 0.9
