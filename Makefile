@@ -22,7 +22,7 @@ define install
 		|| $(PIP) install -e '.$(1)'
 endef
 
-.PHONY: demo test lint style typecheck docs pytest suite suite-when-ready warm warm-kernels warm-collect browser bench bench-studies clean
+.PHONY: demo test lint style typecheck docs pytest suite warm warm-kernels warm-collect browser bench bench-studies clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -60,24 +60,16 @@ typecheck: $(VENV)/.installed-test
 	nice -n $(MYPY_NICE) $(BIN)/mypy
 
 # The documentation site (mkdocs.yml) into site/; --strict makes a broken link, a missing
-# anchor or a page left out of the navigation an error. Built beside and then moved in,
-# so site/ is always a whole site (the browser tests may be waiting for it).
+# anchor or a page left out of the navigation an error.
 docs: $(VENV)/.installed-docs
-	rm -rf site.partial
-	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict -d site.partial
-	rm -rf site && mv site.partial site
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 # Three workers on two cores: the tests that talk to a pty run one after another on one
 # worker (their devices keep real time; see tests/conftest.py) and its waits are filled
 # by CPU-bound tests from the other two.
-# BUILT_SITE: where `make docs` builds the site beside the suite, which the site's
-# browser tests open once it is there instead of building their own (`make test` passes
-# it; alone, they build one).
+# BUILT_SITE: a site `make docs` has just built, which the site's browser tests open
+# instead of building their own (`make test` passes it; alone, they build one).
 pytest: $(VENV)/.installed-test browser warm
-	@$(MAKE) --no-print-directory suite
-
-# The suite once what it needs is ready: the warm-up and the browser.
-suite-when-ready: browser warm
 	@$(MAKE) --no-print-directory suite
 
 suite:
@@ -109,15 +101,14 @@ browser:
 			chromium >/dev/null; } || echo "could not install chromium"; \
 	fi
 
-# Once installed, side by side: ruff and the import contracts, the site, the type checker
-# (at a lower priority: its CPU fills the others' waits instead of holding them back) and
-# the warm-up, then the suite as soon as the warm-up is done; the two cores stay busy
-# from the install to the end. The site is built anew (the browser tests wait for it).
+# Once installed: ruff and the import contracts, the site and the warm-up side by side;
+# then the suite with the type checker beside it, at a lower priority (its 30 CPU-s fill
+# the suite's waits on real time instead of holding the suite back).
 test: $(VENV)/.installed-test
-	@rm -rf site
-	@echo "checks and the suite: ruff, the import contracts, the site, mypy and the warm-up side by side, the suite once warm"
-	@$(MAKE) --no-print-directory -j6 style docs typecheck suite-when-ready MYPY_NICE=10 \
-		BUILT_SITE=$(CURDIR)/site
+	@echo "checks: ruff, the import contracts, the site and the warm-up side by side"
+	@$(MAKE) --no-print-directory -j4 -O style docs warm browser
+	@echo "the suite, and mypy beside it"
+	@$(MAKE) --no-print-directory -j2 suite typecheck MYPY_NICE=10 BUILT_SITE=$(CURDIR)/site
 
 # Every speed benchmark (benchmarks/) and accuracy study (studies/), one after another,
 # each writing its page docs/results/<script>.md (and docs/results/index.md) with the

@@ -1,5 +1,5 @@
 """The documentation site as the README says to read it: built by mkdocs (``--strict``, once
-for the module, into a temporary folder, or the one `make test` builds beside the suite) and opened
+for the module, into a temporary folder, or the one `make test` has just built) and opened
 from the file system (``file://…/index.html``) in headless Chromium with every network
 request refused. Three links are followed (each lands on its page, not a folder's
 listing), a search finds pages, and wide tables and code blocks scroll in their own box at
@@ -11,7 +11,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -27,22 +26,13 @@ HARDWARE = "Hardware: Dynamixel arms and a serial detector"
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("built-site")]
 
 
-#: How long the tests wait for the site `make test` builds beside the suite (s): its
-#: strict build takes about 15 s on the 2-core machine.
-SITE_WAIT_S = 600.0
-
-
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The site as ``make docs`` builds it, into a temporary folder; or the one it builds
-    beside the suite, where ``GONIO_BUILT_SITE`` names it (as `make test` does): waited
-    for, since ``make docs`` moves a whole site in when its build is done."""
+    """The site as ``make docs`` builds it, into a temporary folder; or the one it has just
+    built, where ``GONIO_BUILT_SITE`` names it (as `make test` does after its checks)."""
     built = os.environ.get("GONIO_BUILT_SITE")
     if built:
-        index, deadline = Path(built) / "index.html", time.monotonic() + SITE_WAIT_S
-        while not index.is_file():
-            assert time.monotonic() < deadline, f"no site built in {built} in {SITE_WAIT_S} s"
-            time.sleep(0.5)
+        assert (Path(built) / "index.html").is_file(), f"no site built in {built}"
         return Path(built)
     out = tmp_path_factory.mktemp("site")
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONPATH": str(ROOT)}
