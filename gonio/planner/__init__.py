@@ -24,6 +24,9 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.planner.files import load_plan as load_plan
     from gonio.planner.files import load_plan_source as load_plan_source
     from gonio.planner.fly.limits import blur_floor_deg as blur_floor_deg
+    from gonio.planner.fly_spec import MIN_BLUR_DEG as MIN_BLUR_DEG
+    from gonio.planner.fly_spec import MIN_RATE_HZ as MIN_RATE_HZ
+    from gonio.planner.fly_spec import FlySpec as FlySpec
     from gonio.planner.model import ARRAYS as ARRAYS
     from gonio.planner.model import Plan as Plan
     from gonio.planner.model import Summary as Summary
@@ -42,12 +45,9 @@ if TYPE_CHECKING:  # the names for the type checker (`as`: re-exported)
     from gonio.planner.schema import MAX_MOVES as MAX_MOVES
     from gonio.planner.schema import MAX_PLAN_MINUTES as MAX_PLAN_MINUTES
     from gonio.planner.schema import MAX_TARGETS as MAX_TARGETS
-    from gonio.planner.schema import MIN_BLUR_DEG as MIN_BLUR_DEG
-    from gonio.planner.schema import MIN_RATE_HZ as MIN_RATE_HZ
     from gonio.planner.schema import WHY_MAX_TARGETS as WHY_MAX_TARGETS
     from gonio.planner.schema import AdaptiveSpec as AdaptiveSpec
     from gonio.planner.schema import ExposureSpec as ExposureSpec
-    from gonio.planner.schema import FlySpec as FlySpec
     from gonio.planner.schema import PlanSpec as PlanSpec
     from gonio.planner.schema import Strategy as Strategy
     from gonio.planner.schema import Warp as Warp
@@ -70,15 +70,15 @@ WHERE = {
     "BLUR_K_DEG": "blur",
     "Choice": "choice",
     "ExposureSpec": "schema",
-    "FlySpec": "schema",
+    "FlySpec": "fly_spec",
     "HealthSpec": "policies",
     "MARGIN": "choice",
     "MAX_KICKS_GIVEN": "schema",
     "MAX_MOVES": "schema",
     "MAX_PLAN_MINUTES": "schema",
     "MAX_TARGETS": "schema",
-    "MIN_BLUR_DEG": "schema",
-    "MIN_RATE_HZ": "schema",
+    "MIN_BLUR_DEG": "fly_spec",
+    "MIN_RATE_HZ": "fly_spec",
     "MotorFaultSpec": "policies",
     "Plan": "model",
     "PlanSource": "files",

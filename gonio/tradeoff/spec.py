@@ -58,7 +58,7 @@ MAX_MINUTES = MAX_PLAN_MINUTES
 VELOCITY_SCALES = (0.01, 100.0)
 #: The most readings averaged per target a sweep may ask (each one is simulated).
 MAX_AVERAGES = 1000
-#: The bounds of the fly axes: those of a fly plan's fields (`gonio.planner.schema.FlySpec`).
+#: The bounds of the fly axes: those of a fly plan's fields (`gonio.planner.fly_spec.FlySpec`).
 BLUR_RANGE = (MIN_BLUR_DEG, 30.0)
 RATE_RANGE = (MIN_RATE_HZ, 10_000.0)
 #: The longest exposure: a plan's (`gonio.planner.schema.ExposureSpec`).

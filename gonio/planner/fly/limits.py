@@ -22,7 +22,8 @@ from pathlib import Path
 
 from gonio.config import ConfigError
 from gonio.planner.fly.lines import sweep_axis
-from gonio.planner.schema import FlySpec, PlanSpec
+from gonio.planner.fly_spec import FlySpec
+from gonio.planner.schema import PlanSpec
 from gonio.rig import Rig, axis_errors
 
 #: Peak memory (bytes) of planning per reading asked: at most 0.7 KB measured on the

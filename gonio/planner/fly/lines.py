@@ -33,7 +33,8 @@ from scipy.spatial import cKDTree
 from gonio import params
 from gonio.config import ConfigError
 from gonio.planner import placement, sampling
-from gonio.planner.schema import FlySpec, PlanSpec
+from gonio.planner.fly_spec import FlySpec
+from gonio.planner.schema import PlanSpec
 from gonio.rig import Reason, Rig, separation
 from gonio.types import FloatArray
 
